@@ -1,0 +1,270 @@
+"""Every constant of the model (MODEL.md), in one frozen dataclass.
+
+Static settings (shapes, step counts, geometry, the condition) live in :class:`Config`
+and are closed over by the ``make_*``/phase functions. The values a researcher may sweep
+inside one compiled program (discount, trace decay, learning rates, exploration noise)
+are read from it by :meth:`Config.learning_params` into a :class:`LearningParams` pytree,
+which is passed as an argument and can be vmapped.
+
+Rows that MODEL.md marks "paper" are the paper's (Schembri, Mirolli & Baldassarre 2007,
+section 2); the rest are the values MODEL.md fixes where the paper is silent.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import NamedTuple
+
+CONDITIONS = ("LE-LS", "EE-LS", "EE-ES", "SLE")
+EVOLVED_CONDITIONS = ("LE-LS", "EE-LS", "EE-ES")
+
+#: Half the distance between parallel lines of the floor: 20*sqrt(3) cm for a = 40 cm.
+_S = 20.0 * math.sqrt(3.0)
+
+
+class ConfigError(ValueError):
+    """A configuration value is impossible; the message names the field."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Task:
+    """One adulthood task: start vertex and heading, target vertex (MODEL.md task table)."""
+
+    start: tuple[float, float]
+    heading_deg: float
+    target: tuple[float, float]
+
+    @property
+    def distance(self) -> float:
+        """Straight-line distance from start to target in cm."""
+        return math.dist(self.start, self.target)
+
+
+def paper_tasks() -> tuple[Task, ...]:
+    """The six tasks of MODEL.md (pairs 1-2 red, 3-4 green, 5-6 blue first edges)."""
+    s = _S
+    return (
+        Task((140.0, 200.0 - s), 0.0, (240.0, 200.0)),
+        Task((360.0, 200.0), 180.0, (240.0, 200.0 + 2 * s)),
+        Task((60.0, 200.0 + s), 60.0, (60.0, 200.0 + 3 * s)),
+        Task((200.0, 200.0 + 4 * s), 240.0, (120.0, 200.0 + 2 * s)),
+        Task((200.0, 200.0 - 4 * s), 120.0, (80.0, 200.0 - 2 * s)),
+        Task((300.0, 200.0 - s), 300.0, (300.0, 200.0 - 3 * s)),
+    )
+
+
+class LearningParams(NamedTuple):
+    """Dynamic learning values: a pytree of scalars, so sweeps can vmap over them."""
+
+    gamma: float
+    trace_lambda: float
+    eta_actor: float
+    eta_evaluator: float
+    eta_selector_actor: float
+    eta_selector_critic: float
+    noise_std: float
+
+
+@dataclasses.dataclass(frozen=True)
+class Config:
+    """All constants of the model, with the paper's (and MODEL.md's) values as defaults."""
+
+    # --- condition and life (paper: 150,000 + 600,000 steps; split into 6 tasks fixed here)
+    condition: str = "LE-LS"
+    num_experts: int = 3
+    childhood_steps: int = 150_000
+    task_steps: int = 100_000
+    trial_timeout: int = 200  # steps after a trial's start without reaching the target
+    num_bins: int = 100  # bins of the reward/selection curves of each phase
+
+    # --- arena and floor (fixed here)
+    arena_size: float = 400.0
+    edge_length: float = 40.0
+    tiling_origin: tuple[float, float] = (160.0, 200.0)  # a hexagon centre
+    line_half_width: float = 3.0  # a point is on an edge when within 3 cm of it
+    colour_tie_tolerance: float = 1e-4  # cm: distances this close count as an exact tie
+
+    # --- robot (paper: 30 cm disc, turn in [-30, 30] deg, move in [0, 2] cm)
+    robot_radius: float = 15.0
+    max_turn_deg: float = 30.0
+    max_speed: float = 2.0
+
+    # --- retina (paper: 24 x 8 cm patch, 6 x 2 points, RGB receptors)
+    retina_lateral: tuple[float, ...] = (-10.0, -6.0, -2.0, 2.0, 6.0, 10.0)
+    retina_forward: tuple[float, ...] = (17.0, 21.0)
+
+    # --- tasks (fixed here)
+    target_radius: float = 10.0
+    tasks: tuple[Task, ...] = dataclasses.field(default_factory=paper_tasks)
+
+    # --- learning (paper: gamma 0.99, eta 0.01, sigma 0.3; traces are an extension, off)
+    gamma: float = 0.99
+    trace_lambda: float = 0.0
+    eta_actor: float = 0.01
+    eta_evaluator: float = 0.01
+    eta_selector_actor: float = 0.01
+    eta_selector_critic: float = 0.01
+    noise_std: float = 0.3
+
+    # --- genetic algorithm (paper: 50 individuals, best 10 x 5 offspring, p = 0.1, U[-1, 1])
+    population_size: int = 50
+    num_generations: int = 100
+    num_parents: int = 10
+    mutation_prob: float = 0.1
+    mutation_scale: float = 1.0  # mutations are U[-scale, scale]
+    init_scale: float = 1.0  # generation-0 genes are U[-scale, scale]
+    num_elites: int = 0  # no elitism in the paper
+
+    def __post_init__(self):
+        _validate(self)
+
+    # ------------------------------------------------------------------ derived values
+    @property
+    def num_inputs(self) -> int:
+        """Retina size: points x 3 receptors (36 in the paper)."""
+        return 3 * len(self.retina_lateral) * len(self.retina_forward)
+
+    @property
+    def num_tasks(self) -> int:
+        return len(self.tasks)
+
+    @property
+    def num_lane_experts(self) -> int:
+        """Experts an individual of this condition has (SLE: one)."""
+        return 1 if self.condition == "SLE" else self.num_experts
+
+    @property
+    def num_genes(self) -> int:
+        """Genome length of the condition (111, 222, 333; 0 for SLE)."""
+        n = self.num_inputs + 1
+        k = self.num_experts
+        return {"LE-LS": k * n, "EE-LS": 2 * k * n, "EE-ES": 3 * k * n, "SLE": 0}[self.condition]
+
+    @property
+    def offspring_per_parent(self) -> int:
+        return self.population_size // self.num_parents
+
+    @property
+    def hex_apothem(self) -> float:
+        """Distance between a hexagon's centre and its edges (20*sqrt(3) cm)."""
+        return self.edge_length * math.sqrt(3.0) / 2.0
+
+    def steps_per_trip(self) -> tuple[int, ...]:
+        """ceil((distance - target radius) / max speed) for each task (48, 65, 30, ...)."""
+        return tuple(
+            math.ceil((t.distance - self.target_radius) / self.max_speed - 1e-9) for t in self.tasks
+        )
+
+    def theoretical_max(self) -> tuple[float, ...]:
+        """Reaches per task of a robot driving the straight line at full speed."""
+        return tuple(self.task_steps / n for n in self.steps_per_trip())
+
+    @property
+    def lifetime_steps(self) -> int:
+        """Steps one individual lives (childhood only in LE-LS) over all tasks."""
+        child = self.childhood_steps if self.condition == "LE-LS" else 0
+        return child + self.num_tasks * self.task_steps
+
+    def learning_params(self) -> LearningParams:
+        """The dynamic learning values as a pytree (see :class:`LearningParams`)."""
+        return LearningParams(*(getattr(self, f) for f in LearningParams._fields))
+
+    def replace(self, **changes) -> "Config":
+        """A copy with some fields changed (validated)."""
+        unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
+        if unknown:
+            raise ConfigError(f"unknown config field: {sorted(unknown)[0]}")
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict:
+        """A JSON-friendly dict of every field."""
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "Config":
+        """Inverse of :meth:`to_dict`; unknown fields are an error naming the field."""
+        data = dict(data)
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = set(data) - names
+        if unknown:
+            raise ConfigError(f"unknown config field: {sorted(unknown)[0]}")
+        if "tasks" in data:
+            data["tasks"] = tuple(
+                t if isinstance(t, Task) else Task(tuple(t["start"]), t["heading_deg"], tuple(t["target"]))
+                for t in data["tasks"]
+            )
+        for name in ("tiling_origin", "retina_lateral", "retina_forward"):
+            if name in data:
+                data[name] = tuple(data[name])
+        return cls(**data)
+
+
+#: Named presets. ``paper`` is full scale; ``small`` keeps the structure at a length a
+#: laptop CPU evolves in minutes (reduced scale: label results made with it as such).
+PRESETS: dict[str, dict] = {
+    "paper": {},
+    "small": dict(
+        childhood_steps=15_000,
+        task_steps=5_000,
+        num_bins=10,
+        population_size=20,
+        num_parents=4,
+        num_generations=10,
+    ),
+}
+
+
+def make_config(preset: str = "paper", **overrides) -> Config:
+    """A config from a named preset with some fields overridden."""
+    if preset not in PRESETS:
+        raise ConfigError(f"preset: unknown preset {preset!r} (choose from {', '.join(PRESETS)})")
+    return Config().replace(**{**PRESETS[preset], **overrides})
+
+
+def _validate(c: Config) -> None:
+    def fail(field: str, why: str):
+        raise ConfigError(f"{field}: {why} (got {getattr(c, field)!r})")
+
+    if c.condition not in CONDITIONS:
+        fail("condition", f"must be one of {', '.join(CONDITIONS)}")
+    positive_ints = ("num_experts", "task_steps", "trial_timeout", "num_bins", "population_size",
+                     "num_generations", "num_parents")
+    for name in positive_ints:
+        value = getattr(c, name)
+        if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+            fail(name, "must be a positive integer")
+    if not isinstance(c.childhood_steps, int) or c.childhood_steps < 0:
+        fail("childhood_steps", "must be a non-negative integer")
+    if c.task_steps % c.num_bins:
+        fail("task_steps", f"must be a multiple of num_bins={c.num_bins}")
+    if c.condition == "LE-LS" and (c.childhood_steps == 0 or c.childhood_steps % c.num_bins):
+        fail("childhood_steps", f"must be a positive multiple of num_bins={c.num_bins} for LE-LS")
+    if c.num_parents > c.population_size:
+        fail("num_parents", f"cannot exceed population_size={c.population_size}")
+    if c.population_size % c.num_parents:
+        fail("population_size", f"must be a multiple of num_parents={c.num_parents}")
+    if not 0 <= c.num_elites <= c.num_parents:
+        fail("num_elites", f"must be between 0 and num_parents={c.num_parents}")
+    if not 0.0 <= c.mutation_prob <= 1.0:
+        fail("mutation_prob", "must be in [0, 1]")
+    for name in ("mutation_scale", "init_scale", "noise_std"):
+        if getattr(c, name) < 0:
+            fail(name, "must be non-negative")
+    if not 0.0 <= c.gamma <= 1.0:
+        fail("gamma", "must be in [0, 1]")
+    if not 0.0 <= c.trace_lambda < 1.0:
+        fail("trace_lambda", "must be in [0, 1)")
+    for name in ("eta_actor", "eta_evaluator", "eta_selector_actor", "eta_selector_critic"):
+        if getattr(c, name) < 0:
+            fail(name, "must be non-negative")
+    for name in ("arena_size", "edge_length", "line_half_width", "robot_radius", "max_speed",
+                 "target_radius"):
+        if getattr(c, name) <= 0:
+            fail(name, "must be positive")
+    if 2 * c.robot_radius >= c.arena_size:
+        fail("robot_radius", "the robot must fit in the arena")
+    if not c.tasks:
+        fail("tasks", "needs at least one task")
+    if not c.retina_lateral or not c.retina_forward:
+        fail("retina_lateral", "the retina needs at least one point")

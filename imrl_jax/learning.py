@@ -1,0 +1,41 @@
+"""The learning rules of section 2 and MODEL.md "Learning": TD surprise, actor-critic updates, traces.
+
+Each rule is w += eta * delta * e, where e is the network's eligibility trace
+(e <- gamma * lambda * e + phi on the steps at which it learns; lambda = 0 gives the
+paper's one-step rules exactly). It is written as one SGD step of optax on the
+pseudo-gradient -delta * e.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import optax
+
+
+def td_error(reward, value, next_value, gamma, terminal):
+    """Surprise r + gamma V(x_t) - V(x_{t-1}); a terminal transition does not bootstrap."""
+    return reward + gamma * jnp.where(terminal, 0.0, next_value) - value
+
+
+def actor_features(action, output, xb):
+    """phi of an expert actor: ((a - o) * o * (1 - o)) outer x~ (moves o towards the action)."""
+    return ((action - output) * output * (1.0 - output))[:, None] * xb[None, :]
+
+
+def selector_features(k, selection, xb):
+    """phi of the selector actor: ((e_k - s) * s * (1 - s)) outer x~."""
+    e = jax.nn.one_hot(k, selection.shape[0], dtype=selection.dtype)
+    return ((e - selection) * selection * (1.0 - selection))[:, None] * xb[None, :]
+
+
+def accumulate(trace, phi, gamma, trace_lambda, learn):
+    """e <- gamma * lambda * e + phi where the network learns this step; unchanged elsewhere."""
+    return jnp.where(learn, gamma * trace_lambda * trace + phi, trace)
+
+
+def ascend(weights, trace, delta, eta):
+    """w += eta * delta * e, as an SGD step on the pseudo-gradient -delta * e."""
+    sgd = optax.sgd(eta)
+    updates, _ = sgd.update(-delta * trace, sgd.init(weights))
+    return optax.apply_updates(weights, updates)

@@ -1,0 +1,364 @@
+"""Lifetimes of section 2 and MODEL.md "Acting", "Learning", "Life": childhood and adulthood.
+
+One :func:`step` implements a control cycle for every phase; a static :class:`Phase` says
+which networks learn and from which reward. A phase is a ``lax.scan`` over bins of a scan
+over steps, returning only per-bin counts, so memory does not grow with its length.
+:func:`live` is one individual's whole life: LE-LS childhood as one continuous scan, then
+the tasks vmapped from the same frozen experts. :func:`simulate` records a per-step
+trajectory of one individual, for plots and for the reference tests.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from imrl_jax.arena import Pose, move, task_arrays
+from imrl_jax.config import Config, LearningParams
+from imrl_jax.learning import accumulate, actor_features, ascend, selector_features, td_error
+from imrl_jax.networks import Agent, act, decode, evaluate, reinforce, with_bias, zero_agent
+from imrl_jax.retina import observe
+
+
+class Phase(NamedTuple):
+    """Static description of a phase: who learns, from what, and whether there is a target."""
+
+    experts_learn: bool
+    selector_learns: bool
+    intrinsic: bool  # rewards: own reinforcer for experts, expert surprise for the selector
+    has_target: bool
+    noisy: bool  # actions get Gaussian noise annealed linearly to 0 over the phase
+
+
+CHILDHOOD = Phase(experts_learn=True, selector_learns=True, intrinsic=True, has_target=False, noisy=True)
+ADULT_LEARNING_SELECTOR = Phase(False, True, False, True, False)
+ADULT_EVOLVED_SELECTOR = Phase(False, False, False, True, False)
+ADULT_SINGLE_EXPERT = Phase(True, False, False, True, True)
+
+
+def adult_phase(condition: str) -> Phase:
+    """The adulthood phase of a condition (MODEL.md "Conditions")."""
+    return {"LE-LS": ADULT_LEARNING_SELECTOR, "EE-LS": ADULT_LEARNING_SELECTOR,
+            "EE-ES": ADULT_EVOLVED_SELECTOR, "SLE": ADULT_SINGLE_EXPERT}[condition]
+
+
+class Draws(NamedTuple):
+    """The random numbers of one step: expert choice u ~ U[0, 1) and action noise z ~ N(0, I2)."""
+
+    u: jnp.ndarray
+    z: jnp.ndarray
+
+
+class Traces(NamedTuple):
+    """Eligibility traces. Only the expert in control has a non-zero trace, so one suffices."""
+
+    actor: jnp.ndarray  # (2, n+1)
+    evaluator: jnp.ndarray  # (n+1,)
+    selector_actor: jnp.ndarray  # (K, n+1)
+    selector_critic: jnp.ndarray  # (n+1,)
+
+
+class Previous(NamedTuple):
+    """What step t-1 left for learning its transition at step t."""
+
+    xb: jnp.ndarray  # x~_{t-1}
+    k: jnp.ndarray  # expert in control
+    action: jnp.ndarray  # a_{t-1}, executed (noisy) action
+    output: jnp.ndarray  # o_{t-1}, actor output
+    selection: jnp.ndarray  # s_{t-1}, selector outputs used for the choice
+    valid: jnp.ndarray  # False at a phase start and after a timeout: nothing to learn
+    reward: jnp.ndarray  # extrinsic reward of the transition (1 on reaching the target)
+    terminal: jnp.ndarray  # the transition reached the target: no bootstrap
+
+
+class State(NamedTuple):
+    """Scan carry of a phase."""
+
+    agent: Agent
+    traces: Traces
+    pose: Pose
+    prev: Previous
+    trial_step: jnp.ndarray  # steps since the current trial started
+    t: jnp.ndarray  # step within the phase
+
+
+class TaskSpec(NamedTuple):
+    """Where a phase starts trials and where its target is (unused without a target)."""
+
+    start: Pose
+    target: jnp.ndarray
+
+
+class StepRecord(NamedTuple):
+    """What one step produced: the pose after it, the expert in control, its events."""
+
+    pose: Pose
+    k: jnp.ndarray
+    reached: jnp.ndarray
+    timeout: jnp.ndarray
+
+
+class Curves(NamedTuple):
+    """Per-bin counts of a phase."""
+
+    reaches: jnp.ndarray  # (bins,)
+    timeouts: jnp.ndarray  # (bins,)
+    selections: jnp.ndarray  # (bins, K): steps each expert was in control
+
+
+class LifetimeResult(NamedTuple):
+    """What one life returns: fitness, per-task reaches and binned curves, final weights."""
+
+    fitness: jnp.ndarray  # (): mean task performance
+    performance: jnp.ndarray  # (tasks,): reaches / theoretical maximum
+    reaches: jnp.ndarray  # (tasks,)
+    timeouts: jnp.ndarray  # (tasks,)
+    reward_curve: jnp.ndarray  # (tasks, bins): reaches per bin
+    adult_selections: jnp.ndarray  # (tasks, bins, K)
+    childhood_selections: jnp.ndarray  # (bins, K): zeros without childhood
+    agent: Agent  # after childhood (the experts adulthood starts from)
+    adult_agents: Agent  # (tasks, ...): the weights at the end of each task
+
+
+class LifetimeKeys(NamedTuple):
+    """The keys of one life, one per consumer."""
+
+    pose: jax.Array  # childhood start pose
+    childhood: jax.Array
+    tasks: jax.Array  # (tasks,)
+
+
+def draw(key: jax.Array, t) -> Draws:
+    """The random numbers of step t of a phase whose key is ``key``."""
+    key_u, key_z = jax.random.split(jax.random.fold_in(key, t))
+    return Draws(jax.random.uniform(key_u), jax.random.normal(key_z, (2,)))
+
+
+def draw_many(key: jax.Array, num_steps: int) -> Draws:
+    """The draws of steps 0 .. num_steps-1 (for the reference and tests)."""
+    return jax.vmap(draw, (None, 0))(key, jnp.arange(num_steps))
+
+
+def select(u, selection):
+    """Expert k with probability s_k / sum(s): the first k with u * sum(s) < cumsum(s)[k]."""
+    cumulative = jnp.cumsum(selection)
+    return jnp.sum(cumulative[:-1] <= u * cumulative[-1]).astype(jnp.int32)
+
+
+def lifetime_keys(key: jax.Array, num_tasks: int) -> LifetimeKeys:
+    """Split a life's key once per consumer."""
+    key_pose, key_child, key_adult = jax.random.split(key, 3)
+    return LifetimeKeys(key_pose, key_child, jax.random.split(key_adult, num_tasks))
+
+
+def random_pose(key: jax.Array, config: Config, dtype=jnp.float32) -> Pose:
+    """Uniform position in [r, size - r]^2 and uniform heading (childhood start)."""
+    key_pos, key_heading = jax.random.split(key)
+    r = config.robot_radius
+    pos = jax.random.uniform(key_pos, (2,), dtype, r, config.arena_size - r)
+    heading = jax.random.uniform(key_heading, (), dtype, 0.0, 2.0 * math.pi)
+    return Pose(pos, heading)
+
+
+def init_state(config: Config, agent: Agent, pose: Pose) -> State:
+    """A phase's first carry: zero traces, nothing to learn from, step 0."""
+    dtype = agent.actor.dtype
+    k, n = agent.selector_actor.shape
+    zeros = lambda *shape: jnp.zeros(shape, dtype)  # noqa: E731
+    return State(
+        agent=agent,
+        traces=Traces(zeros(2, n), zeros(n), zeros(k, n), zeros(n)),
+        pose=pose,
+        prev=Previous(zeros(n), jnp.int32(0), zeros(2), zeros(2), zeros(k), jnp.bool_(False),
+                      zeros(), jnp.bool_(False)),
+        trial_step=jnp.int32(0),
+        t=jnp.int32(0),
+    )
+
+
+def _set_row(matrix, k, row):
+    """matrix with row k replaced (a one-hot blend: cheap and vmap-friendly for small K)."""
+    mask = jax.nn.one_hot(k, matrix.shape[0], dtype=bool).reshape((-1,) + (1,) * (matrix.ndim - 1))
+    return jnp.where(mask, row[None], matrix)
+
+
+def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, phase_steps: int,
+         key: jax.Array, state: State) -> tuple[State, StepRecord]:
+    """One control cycle (MODEL.md "Acting, each time step t of a phase")."""
+    agent, traces, prev = state.agent, state.traces, state.prev
+    draws = draw(key, state.t)
+    gamma, lam = params.gamma, params.trace_lambda
+
+    # 1-2: observe, choose the expert.
+    xb = with_bias(observe(config, state.pose))
+    selection = act(agent.selector_actor, xb)
+    k = select(draws.u, selection) if selection.shape[0] > 1 else jnp.int32(0)
+    same = k == prev.k
+    # A transition cut by the timeout (or a phase start) is not learned and ends the traces.
+    ends = prev.terminal | ~prev.valid
+
+    # 3: learn from the transition t-1 -> t.
+    surprise = jnp.zeros((), xb.dtype)
+    if phase.experts_learn:
+        learn = prev.valid & same
+        kp = prev.k
+        v, w_actor = agent.evaluator[kp], agent.actor[kp]
+        reward = reinforce(agent.reinforcer[kp], xb) if phase.intrinsic else prev.reward
+        surprise = td_error(reward, evaluate(v, prev.xb), evaluate(v, xb), gamma, prev.terminal)
+        delta = jnp.where(learn, surprise, 0.0)
+        trace_v = accumulate(traces.evaluator, prev.xb, gamma, lam, learn)
+        trace_w = accumulate(traces.actor, actor_features(prev.action, prev.output, prev.xb),
+                             gamma, lam, learn)
+        agent = agent._replace(
+            evaluator=_set_row(agent.evaluator, kp, ascend(v, trace_v, delta, params.eta_evaluator)),
+            actor=_set_row(agent.actor, kp, ascend(w_actor, trace_w, delta, params.eta_actor)))
+        # The expert losing control (or the trial ending) drops its traces.
+        clear = ~same | ends
+        traces = traces._replace(evaluator=jnp.where(clear, 0.0, trace_v),
+                                 actor=jnp.where(clear, 0.0, trace_w))
+    if phase.selector_learns:
+        if phase.intrinsic:  # childhood: the surprise of the expert that kept control
+            learn, reward = prev.valid & same, surprise
+        else:
+            learn, reward = prev.valid, prev.reward
+        u_weights, s_weights = agent.selector_critic, agent.selector_actor
+        delta = td_error(reward, evaluate(u_weights, prev.xb), evaluate(u_weights, xb), gamma,
+                         prev.terminal)
+        delta = jnp.where(learn, delta, 0.0)
+        trace_u = accumulate(traces.selector_critic, prev.xb, gamma, lam, learn)
+        trace_s = accumulate(traces.selector_actor,
+                             selector_features(prev.k, prev.selection, prev.xb), gamma, lam, learn)
+        agent = agent._replace(
+            selector_critic=ascend(u_weights, trace_u, delta, params.eta_selector_critic),
+            selector_actor=ascend(s_weights, trace_s, delta, params.eta_selector_actor))
+        traces = traces._replace(selector_critic=jnp.where(ends, 0.0, trace_u),
+                                 selector_actor=jnp.where(ends, 0.0, trace_s))
+
+    # 4: act.
+    output = act(agent.actor[k], xb)
+    if phase.noisy:
+        sigma = params.noise_std * (1.0 - state.t / phase_steps)
+        action = jnp.clip(output + sigma * draws.z, 0.0, 1.0)
+    else:
+        action = output
+
+    # 5: move; reaching the target or the timeout starts a new trial.
+    pose = move(config, state.pose, action)
+    trial_step = state.trial_step + 1
+    if phase.has_target:
+        reached = jnp.sum((pose.pos - task.target) ** 2) <= config.target_radius ** 2
+        timeout = ~reached & (trial_step >= config.trial_timeout)
+        reset = reached | timeout
+        pose = jax.tree.map(lambda start, now: jnp.where(reset, start, now), task.start, pose)
+        trial_step = jnp.where(reset, 0, trial_step)
+    else:
+        reached = timeout = jnp.bool_(False)
+
+    prev = Previous(xb, k, action, output, selection, ~timeout, reached.astype(xb.dtype), reached)
+    state = State(agent, traces, pose, prev, trial_step, state.t + 1)
+    return state, StepRecord(pose, k, reached, timeout)
+
+
+def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningParams, task: TaskSpec,
+              state: State, num_steps: int) -> tuple[State, Curves]:
+    """Run a phase of ``num_steps`` steps as a scan over ``config.num_bins`` bins of steps."""
+    num_bins = config.num_bins
+    bin_steps = num_steps // num_bins
+    num_experts = state.agent.selector_actor.shape[0]
+
+    def one_step(carry, _):
+        state, counts = carry
+        state, record = step(config, phase, params, task, num_steps, key, state)
+        counts = Curves(counts.reaches + record.reached, counts.timeouts + record.timeout,
+                        counts.selections + jax.nn.one_hot(record.k, num_experts, dtype=jnp.int32))
+        return (state, counts), None
+
+    def one_bin(state, _):
+        counts = Curves(jnp.int32(0), jnp.int32(0), jnp.zeros((num_experts,), jnp.int32))
+        (state, counts), _ = jax.lax.scan(one_step, (state, counts), None, length=bin_steps)
+        return state, counts
+
+    return jax.lax.scan(one_bin, state, None, length=num_bins)
+
+
+def simulate(key: jax.Array, config: Config, phase: Phase, params: LearningParams, task: TaskSpec,
+             state: State, num_steps: int, phase_steps: int | None = None) -> tuple[State, StepRecord]:
+    """Run ``num_steps`` steps of one individual and record every step (plots, tests only)."""
+    phase_steps = num_steps if phase_steps is None else phase_steps
+
+    def one_step(state, _):
+        return step(config, phase, params, task, phase_steps, key, state)
+
+    return jax.lax.scan(one_step, state, None, length=num_steps)
+
+
+def task_spec(config: Config, index, dtype=jnp.float32) -> TaskSpec:
+    """The start pose and target of task ``index`` (an int or a traced index)."""
+    starts, targets, _ = task_arrays(config, dtype)
+    return TaskSpec(Pose(starts.pos[index], starts.heading[index]), targets[index])
+
+
+def childhood_task(config: Config, dtype=jnp.float32) -> TaskSpec:
+    """A placeholder task for childhood, which has no target."""
+    return TaskSpec(Pose(jnp.zeros((2,), dtype), jnp.zeros((), dtype)), jnp.zeros((2,), dtype))
+
+
+def adult_agent(config: Config, agent: Agent) -> Agent:
+    """The agent a task starts with: selector reset to 0 (SLE: its expert too, paper)."""
+    fresh = zero_agent(config, agent.actor.dtype)
+    if config.condition == "SLE":
+        return fresh
+    if config.condition == "EE-ES":
+        return agent  # nothing learns; the selector is evolved
+    return agent._replace(selector_actor=fresh.selector_actor, selector_critic=fresh.selector_critic)
+
+
+def live(key: jax.Array, config: Config, params: LearningParams, genome: jnp.ndarray) -> LifetimeResult:
+    """One individual's whole life: childhood (LE-LS), then every task from the same experts."""
+    keys = lifetime_keys(key, config.num_tasks)
+    agent = decode(config, genome)
+    dtype = agent.actor.dtype
+    num_experts = agent.selector_actor.shape[0]
+    childhood_selections = jnp.zeros((config.num_bins, num_experts), jnp.int32)
+    if config.condition == "LE-LS":
+        state = init_state(config, agent, random_pose(keys.pose, config, dtype))
+        state, curves = run_phase(keys.childhood, config, CHILDHOOD, params, childhood_task(config, dtype),
+                                  state, config.childhood_steps)
+        agent, childhood_selections = state.agent, curves.selections
+
+    phase = adult_phase(config.condition)
+
+    def live_task(task_key, index):
+        task = task_spec(config, index, dtype)
+        state = init_state(config, adult_agent(config, agent), task.start)
+        state, curves = run_phase(task_key, config, phase, params, task, state, config.task_steps)
+        return state.agent, curves
+
+    adult_agents, curves = jax.vmap(live_task)(keys.tasks, jnp.arange(config.num_tasks))
+    _, _, best = task_arrays(config, dtype)
+    reaches = curves.reaches.sum(-1)
+    performance = reaches / best
+    return LifetimeResult(
+        fitness=performance.mean(),
+        performance=performance,
+        reaches=reaches,
+        timeouts=curves.timeouts.sum(-1),
+        reward_curve=curves.reaches,
+        adult_selections=curves.selections,
+        childhood_selections=childhood_selections,
+        agent=agent,
+        adult_agents=adult_agents,
+    )
+
+
+def make_evaluate(config: Config):
+    """A jitted ``evaluate(key, params, genomes) -> LifetimeResult`` over a batch of individuals."""
+
+    def evaluate_population(key, params, genomes):
+        keys = jax.random.split(key, genomes.shape[0])
+        return jax.vmap(lambda k, g: live(k, config, params, g))(keys, genomes)
+
+    return jax.jit(evaluate_population)

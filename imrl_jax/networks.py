@@ -1,0 +1,88 @@
+"""The perceptrons of section 2 and MODEL.md "Networks": reinforcers, actors, evaluators, selector.
+
+Every perceptron reads the retina with a bias input, x~ = [x, 1]. Weights are grouped in
+an :class:`Agent` pytree; :func:`decode` turns a genome into the weights a condition evolves.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from imrl_jax.config import Config
+
+
+class Agent(NamedTuple):
+    """All weights of one individual: K experts and the selector (leading axis K = experts)."""
+
+    reinforcer: jnp.ndarray  # (K, n+1): r_k = 2 sigmoid(w.x~) - 1
+    actor: jnp.ndarray  # (K, 2, n+1): o = sigmoid(W x~)
+    evaluator: jnp.ndarray  # (K, n+1): V_k = v.x~
+    selector_actor: jnp.ndarray  # (K, n+1): s = sigmoid(S x~)
+    selector_critic: jnp.ndarray  # (n+1,): U = u.x~
+
+
+def with_bias(x: jnp.ndarray) -> jnp.ndarray:
+    """x~ = [x, 1]."""
+    return jnp.concatenate([x, jnp.ones((1,), x.dtype)])
+
+
+def reinforce(w: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:
+    """Internal reward in [-1, 1]: 2 sigmoid(w.x~) - 1."""
+    return 2.0 * jax.nn.sigmoid(w @ xb) - 1.0
+
+
+def act(weights: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:
+    """Sigmoid outputs of an actor (2 units) or of the selector (K units)."""
+    return jax.nn.sigmoid(weights @ xb)
+
+
+def evaluate(v: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:
+    """Linear evaluation v.x~ (an expert's evaluator or the selector's critic)."""
+    return v @ xb
+
+
+def zero_agent(config: Config, dtype=jnp.float32) -> Agent:
+    """An agent whose weights are all 0 (MODEL.md: learned weights start at 0)."""
+    k, n = config.num_lane_experts, config.num_inputs + 1
+    return Agent(
+        reinforcer=jnp.zeros((k, n), dtype),
+        actor=jnp.zeros((k, 2, n), dtype),
+        evaluator=jnp.zeros((k, n), dtype),
+        selector_actor=jnp.zeros((k, n), dtype),
+        selector_critic=jnp.zeros((n,), dtype),
+    )
+
+
+def decode(config: Config, genome: jnp.ndarray) -> Agent:
+    """The weights a genome encodes (MODEL.md "Conditions"); the rest start at 0.
+
+    LE-LS: the K reinforcers. EE-LS: the K actors. EE-ES: the K actors, then the selector
+    actor. SLE: nothing (genome of length 0).
+    """
+    if genome.shape != (config.num_genes,):
+        raise ValueError(f"genome: expected shape ({config.num_genes},) for {config.condition}, "
+                         f"got {genome.shape}")
+    agent = zero_agent(config, genome.dtype)
+    k, n = config.num_experts, config.num_inputs + 1
+    if config.condition == "LE-LS":
+        return agent._replace(reinforcer=genome.reshape(k, n))
+    if config.condition == "EE-LS":
+        return agent._replace(actor=genome.reshape(k, 2, n))
+    if config.condition == "EE-ES":
+        return agent._replace(actor=genome[: 2 * k * n].reshape(k, 2, n),
+                              selector_actor=genome[2 * k * n:].reshape(k, n))
+    return agent
+
+
+def encode(config: Config, agent: Agent) -> jnp.ndarray:
+    """Inverse of :func:`decode`: the genome of the evolved parts of an agent."""
+    if config.condition == "LE-LS":
+        return agent.reinforcer.reshape(-1)
+    if config.condition == "EE-LS":
+        return agent.actor.reshape(-1)
+    if config.condition == "EE-ES":
+        return jnp.concatenate([agent.actor.reshape(-1), agent.selector_actor.reshape(-1)])
+    return jnp.zeros((0,), agent.actor.dtype)
