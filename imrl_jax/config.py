@@ -83,7 +83,7 @@ class Config:
     edge_length: float = 40.0
     tiling_origin: tuple[float, float] = (160.0, 200.0)  # a hexagon centre
     line_half_width: float = 3.0  # a point is on an edge when within 3 cm of it
-    colour_tie_tolerance: float = 1e-4  # cm: distances this close count as an exact tie
+    colour_tie_tolerance: float = 1e-3  # cm: distances this close count as an exact tie
 
     # --- robot (paper: 30 cm disc, turn in [-30, 30] deg, move in [0, 2] cm)
     robot_radius: float = 15.0
