@@ -1,0 +1,185 @@
+"""A hand-written composition of three colour-following controllers (MODEL.md task table).
+
+This is not part of the model and nothing in it learns or evolves. It exists to show that
+the six tasks of MODEL.md are solvable with the retina and the kinematics that MODEL.md
+fixes (a 6 x 2 RGB retina 17-21 cm ahead, turns of at most 30 deg and moves of at most
+2 cm per step), and how well: MODEL.md reports 0.88-0.90 per task for a composition of
+perceptron colour-followers, the practical ceiling against which learned results compare.
+
+It is plain code, not perceptrons:
+
+* one **follower** per colour steers towards the centroid of the retina points that see
+  its colour (pure pursuit: turn by the angle of that centroid as seen from the robot's
+  centre, at most 30 deg) and always drives at full speed; when its colour is out of
+  sight it keeps the last turn it made;
+* a **route** per task is the sequence of edge colours from start to target. It is
+  derived from the task table: walk the zigzag from the start vertex along the start
+  heading, turning alternately left and right by 60 deg at every vertex, until the
+  target is reached (:func:`zigzag_route`). Edge colour follows edge direction, so after
+  a left turn red -> green -> blue -> red and after a right turn red -> blue -> green -> red;
+* the **composition** follows the route's current colour and moves on to the next one
+  when that colour appears in the retina (which happens only at the next junction, where
+  it is the branch to take), at least ``MIN_DWELL`` steps after the last switch (so the
+  end of the edge just left, still in view, does not count as the next junction).
+
+Everything is pure JAX (no Python control flow on traced values), so a run is one
+``lax.scan`` and runs for several tasks and routes are one ``vmap``. Trials end exactly as
+in the adult phase (:func:`imrl_jax.lifetime.step`): on coming within
+``config.target_radius`` of the target (a reach) or ``config.trial_timeout`` steps after
+the trial's start without reaching it, the robot is put back at the task's start pose
+and the route starts again.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from imrl_jax.arena import BLUE, GREEN, RED, Pose, move
+from imrl_jax.config import Config, Task
+from imrl_jax.lifetime import task_spec
+from imrl_jax.retina import observe
+
+#: Steps after a switch during which the next colour does not trigger another switch
+#: (20 cm: half an edge; consecutive junctions of a route are about 40 cm apart).
+MIN_DWELL = 10
+#: Forward distance (cm) at which a follower aims: the middle of the retina's two rows.
+AIM_DISTANCE = 19.0
+#: Longest route of any task, in edges (routes are padded to it).
+MAX_ROUTE = 8
+
+
+def edge_colour(heading_deg: float) -> int:
+    """Colour of an edge by its direction: 0 deg red, 60 deg green, 120 deg blue (mod 180)."""
+    direction = round(heading_deg / 60.0) % 3
+    return (RED, GREEN, BLUE)[direction]
+
+
+def zigzag_route(config: Config, task: Task) -> tuple[tuple[int, ...], str]:
+    """The colours of the edges from a task's start to its target, and the first turn.
+
+    Walks the zigzag of MODEL.md from the start vertex along the start heading, turning
+    alternately left and right by 60 deg, for every first turn and up to ``MAX_ROUTE``
+    edges, and returns the shortest walk that ends on the target.
+    """
+    a = config.edge_length
+    for edges in range(1, MAX_ROUTE + 1):
+        for first in ("L", "R"):
+            x, y = task.start
+            heading = task.heading_deg
+            colours = []
+            sign = 1.0 if first == "L" else -1.0
+            for i in range(edges):
+                if i:
+                    heading += sign * 60.0
+                    sign = -sign
+                colours.append(edge_colour(heading))
+                x += a * math.cos(math.radians(heading))
+                y += a * math.sin(math.radians(heading))
+            if math.dist((x, y), task.target) < 1e-6 * a:
+                return tuple(colours), first
+    raise ValueError(f"task {task} is not a zigzag of at most {MAX_ROUTE} edges")
+
+
+def route_table(config: Config) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """Routes of all tasks as arrays: colours (tasks, MAX_ROUTE) padded with -1, lengths."""
+    routes = [zigzag_route(config, t)[0] for t in config.tasks]
+    colours = jnp.asarray([r + (-1,) * (MAX_ROUTE - len(r)) for r in routes], jnp.int32)
+    return colours, jnp.asarray([len(r) for r in routes], jnp.int32)
+
+
+def follow(config: Config, x: jnp.ndarray, colour, last_turn) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """The follower of ``colour``: action (a0, a1) for retina input ``x``, and its turn (rad).
+
+    Turns towards the centroid of the points seeing the colour (at most ``max_turn``), or
+    by ``last_turn`` when the colour is out of sight; always full speed.
+    """
+    rows, lateral = len(config.retina_forward), len(config.retina_lateral)
+    seen = x.reshape(rows, lateral, 3)[:, :, colour]
+    offsets = jnp.asarray(config.retina_lateral, x.dtype)[None, :]
+    count = seen.sum()
+    centre = (seen * offsets).sum() / jnp.maximum(count, 1.0)
+    max_turn = math.radians(config.max_turn_deg)
+    turn = jnp.clip(jnp.arctan2(centre, AIM_DISTANCE), -max_turn, max_turn)
+    turn = jnp.where(count > 0, turn, last_turn)
+    action = jnp.stack([0.5 + turn / (2.0 * max_turn), jnp.ones((), x.dtype)])
+    return action, turn
+
+
+class ControllerState(NamedTuple):
+    """Scan carry of a controller run."""
+
+    pose: Pose
+    stage: jnp.ndarray  # index into the route of the colour being followed
+    dwell: jnp.ndarray  # steps since the last switch of stage
+    last_turn: jnp.ndarray  # the follower's last turn, kept while its colour is out of sight
+    trial_step: jnp.ndarray  # steps since the current trial started
+    reaches: jnp.ndarray
+
+
+def _run(config: Config, num_steps: int, task_index, route_index) -> jnp.ndarray:
+    """Reaches of the route of task ``route_index`` driven on task ``task_index``."""
+    task = task_spec(config, task_index)
+    colours, lengths = route_table(config)
+    route, length = colours[route_index], lengths[route_index]
+    dtype = task.start.pos.dtype
+
+    def one_step(state: ControllerState, _):
+        x = observe(config, state.pose)
+        # Switch to the route's next colour when it comes into view at the next junction.
+        has_next = state.stage + 1 < length
+        next_colour = route[jnp.minimum(state.stage + 1, MAX_ROUTE - 1)]
+        next_seen = x.reshape(-1, 3)[:, next_colour].sum() > 0
+        switch = has_next & next_seen & (state.dwell >= MIN_DWELL)
+        stage = state.stage + switch
+        dwell = jnp.where(switch, 0, state.dwell + 1)
+        action, turn = follow(config, x, route[stage], state.last_turn)
+        pose = move(config, state.pose, action)
+        # Trials end as in the adult phase (lifetime.step): a reach or the timeout.
+        trial_step = state.trial_step + 1
+        reached = jnp.sum((pose.pos - task.target) ** 2) <= config.target_radius ** 2
+        timeout = ~reached & (trial_step >= config.trial_timeout)
+        reset = reached | timeout
+        pose = jax.tree.map(lambda start, now: jnp.where(reset, start, now), task.start, pose)
+        new = ControllerState(
+            pose=pose,
+            stage=jnp.where(reset, 0, stage),
+            dwell=jnp.where(reset, 0, dwell),
+            last_turn=jnp.where(reset, 0.0, turn),
+            trial_step=jnp.where(reset, 0, trial_step),
+            reaches=state.reaches + reached,
+        )
+        return new, None
+
+    start = ControllerState(task.start, jnp.int32(0), jnp.int32(0), jnp.zeros((), dtype),
+                            jnp.int32(0), jnp.int32(0))
+    final, _ = jax.lax.scan(one_step, start, None, length=num_steps)
+    return final.reaches
+
+
+def run_controller(config: Config, task_index, num_steps: int, route_index=None) -> jnp.ndarray:
+    """Reaches of the composition on task ``task_index`` in ``num_steps`` steps.
+
+    ``route_index`` (default: the task's own) picks whose route the composition follows,
+    e.g. task 1's route on task 2 to check that one fixed controller cannot solve both
+    tasks of a pair. Jit- and vmap-friendly in both indices; ``num_steps`` is static.
+    """
+    route_index = task_index if route_index is None else route_index
+    return _run(config, num_steps, task_index, route_index)
+
+
+@functools.partial(jax.jit, static_argnums=(0, 1))
+def run_many(config: Config, num_steps: int, task_indices, route_indices) -> jnp.ndarray:
+    """Reaches of many (task, route) runs at once: one compilation, vmapped."""
+    return jax.vmap(lambda t, r: _run(config, num_steps, t, r))(task_indices, route_indices)
+
+
+def performance(config: Config, num_steps: int) -> jnp.ndarray:
+    """(tasks,) reaches / (num_steps / steps per trip) of every task on its own route."""
+    tasks = jnp.arange(config.num_tasks)
+    reaches = run_many(config, num_steps, tasks, tasks)
+    return reaches / (num_steps / jnp.asarray(config.steps_per_trip(), jnp.float32))
