@@ -240,7 +240,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
     # 4: act.
     output = act(agent.actor[k], xb)
     if phase.noisy:
-        sigma = params.noise_std * (1.0 - state.t / phase_steps)
+        sigma = params.noise_std * (1.0 - state.t.astype(xb.dtype) / phase_steps)
         action = jnp.clip(output + sigma * draws.z, 0.0, 1.0)
     else:
         action = output

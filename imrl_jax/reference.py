@@ -1,0 +1,451 @@
+"""Plain NumPy reference of one lifetime, written step by step from MODEL.md; slow, for tests and benchmarks.
+
+Everything here is float64 NumPy and ordinary Python loops, one time step at a time, so it
+can serve as an independent check of the JAX implementation. It follows MODEL.md literally:
+
+* the floor colour of a point is found by brute force, measuring the distance from the
+  point to every edge segment of the hexagons around it;
+* the retina samples that colour at its 12 points;
+* the robot turns, moves and is clamped to the walls;
+* each step picks an expert, learns from the previous transition, acts and moves.
+
+Public functions: :func:`floor_colour`, :func:`observe`, :func:`move`, :func:`run_phase`,
+:func:`live`. Weights are dicts of float64 arrays with keys ``reinforcer`` (K, 37),
+``actor`` (K, 2, 37), ``evaluator`` (K, 37), ``selector_actor`` (K, 37) and
+``selector_critic`` (37,).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+NO_COLOUR, RED, GREEN, BLUE = -1, 0, 1, 2
+
+PHASES = ("childhood", "adult-ls", "adult-es", "sle")
+
+WEIGHT_KEYS = ("reinforcer", "actor", "evaluator", "selector_actor", "selector_critic")
+
+
+# --------------------------------------------------------------------------- floor
+
+
+def _hexagon_centres(config):
+    """Centres of every hexagon that has an edge in (or near) the arena.
+
+    Centres are origin + i*(1.5 a, apothem) + j*(0, 2 apothem) for integers i, j
+    (MODEL.md: (160, 200) + i*(60, 20 sqrt 3) + j*(0, 40 sqrt 3) for a = 40).
+    """
+    a = config.edge_length
+    apothem = a * math.sqrt(3.0) / 2.0
+    ox, oy = config.tiling_origin
+    low, high = -2.0 * a, config.arena_size + 2.0 * a
+    centres = []
+    i_low = int(math.floor((low - ox) / (1.5 * a))) - 1
+    i_high = int(math.ceil((high - ox) / (1.5 * a))) + 1
+    for i in range(i_low, i_high + 1):
+        cx = ox + i * 1.5 * a
+        column_y = oy + i * apothem
+        j_low = int(math.floor((low - column_y) / (2.0 * apothem))) - 1
+        j_high = int(math.ceil((high - column_y) / (2.0 * apothem))) + 1
+        for j in range(j_low, j_high + 1):
+            cy = column_y + j * 2.0 * apothem
+            if low <= cx <= high and low <= cy <= high:
+                centres.append((cx, cy))
+    return centres
+
+
+def _edge_colour(start, end):
+    """Colour of an edge from its direction: 0 deg red, 60 deg green, 120 deg blue."""
+    angle = math.degrees(math.atan2(end[1] - start[1], end[0] - start[0])) % 180.0
+    sixties = int(round(angle / 60.0)) % 3
+    return {0: RED, 1: GREEN, 2: BLUE}[sixties]
+
+
+_EDGE_CACHE: dict = {}
+
+
+def _all_edges(config):
+    """Start points (E, 2), end points (E, 2), colours (E,) and hexagon centres (E, 2) of
+    the six edges of every hexagon around the arena (shared edges appear twice)."""
+    cache_key = (config.edge_length, tuple(config.tiling_origin), config.arena_size)
+    if cache_key not in _EDGE_CACHE:
+        a = config.edge_length
+        starts, ends, colours, centres = [], [], [], []
+        for cx, cy in _hexagon_centres(config):
+            vertices = [(cx + a * math.cos(math.radians(60.0 * k)), cy + a * math.sin(math.radians(60.0 * k)))
+                        for k in range(6)]
+            for k in range(6):
+                start, end = vertices[k], vertices[(k + 1) % 6]
+                starts.append(start)
+                ends.append(end)
+                colours.append(_edge_colour(start, end))
+                centres.append((cx, cy))
+        _EDGE_CACHE[cache_key] = (np.array(starts), np.array(ends), np.array(colours), np.array(centres))
+    return _EDGE_CACHE[cache_key]
+
+
+def _edges_near(config, p):
+    """(starts, ends, colours) of the edges of every hexagon whose centre is within two
+    edge lengths of p (this includes the hexagon that contains p, whose edges are the
+    nearest ones)."""
+    starts, ends, colours, centres = _all_edges(config)
+    near = np.hypot(centres[:, 0] - p[0], centres[:, 1] - p[1]) <= 2.0 * config.edge_length
+    return starts[near], ends[near], colours[near]
+
+
+def _distances_to_segments(p, starts, ends):
+    """Euclidean distance from point p to each segment starts[i]-ends[i]."""
+    d = ends - starts
+    length2 = np.sum(d * d, axis=1)
+    t = ((p[0] - starts[:, 0]) * d[:, 0] + (p[1] - starts[:, 1]) * d[:, 1]) / length2
+    t = np.clip(t, 0.0, 1.0)
+    closest_x = starts[:, 0] + t * d[:, 0]
+    closest_y = starts[:, 1] + t * d[:, 1]
+    return np.hypot(p[0] - closest_x, p[1] - closest_y)
+
+
+def floor_colour(config, p) -> int:
+    """Colour of the floor under point p = (x, y): -1 none, 0 red, 1 green, 2 blue.
+
+    The nearest edge segment decides; distances within ``colour_tie_tolerance`` of the
+    nearest count as a tie, won by red, then green, then blue. The point is on that edge
+    when its distance is <= ``line_half_width``. Strictly outside the arena: no colour.
+    """
+    x, y = float(p[0]), float(p[1])
+    if x < 0.0 or x > config.arena_size or y < 0.0 or y > config.arena_size:
+        return NO_COLOUR
+    starts, ends, colours = _edges_near(config, (x, y))
+    distances = _distances_to_segments((x, y), starts, ends)
+    nearest = distances.min()
+    if nearest > config.line_half_width:
+        return NO_COLOUR
+    tied = colours[distances <= nearest + config.colour_tie_tolerance]
+    for colour in (RED, GREEN, BLUE):
+        if colour in tied:
+            return colour
+    raise AssertionError("unreachable")
+
+
+# --------------------------------------------------------------------------- retina and body
+
+
+def observe(config, x, y, heading) -> np.ndarray:
+    """The retina: 3 binary receptors (R, G, B) per point, order [forward][lateral][RGB]."""
+    n_lat = len(config.retina_lateral)
+    retina = np.zeros(3 * n_lat * len(config.retina_forward), dtype=np.float64)
+    cos_h, sin_h = math.cos(heading), math.sin(heading)
+    for fi, f in enumerate(config.retina_forward):
+        for li, lateral in enumerate(config.retina_lateral):
+            px = x + f * cos_h + lateral * (-sin_h)
+            py = y + f * sin_h + lateral * cos_h
+            colour = floor_colour(config, (px, py))
+            if colour != NO_COLOUR:
+                retina[3 * (fi * n_lat + li) + colour] = 1.0
+    return retina
+
+
+def move(config, x, y, heading, a0, a1):
+    """Turn by (a0 - 0.5) * 2 * max_turn, then go max_speed * a1 forward, then clamp to the walls."""
+    heading = heading + (a0 - 0.5) * 2.0 * math.radians(config.max_turn_deg)
+    heading = float(np.mod(heading, 2.0 * math.pi))
+    x = x + config.max_speed * a1 * math.cos(heading)
+    y = y + config.max_speed * a1 * math.sin(heading)
+    low, high = config.robot_radius, config.arena_size - config.robot_radius
+    x = min(max(x, low), high)
+    y = min(max(y, low), high)
+    return x, y, heading
+
+
+# --------------------------------------------------------------------------- networks
+
+
+def _sigmoid(v):
+    return 1.0 / (1.0 + np.exp(-v))
+
+
+def _with_bias(x):
+    return np.concatenate([x, [1.0]])
+
+
+def _choose_expert(s, u):
+    """Expert k with probability s_k / sum(s): the first k with u * sum(s) < cumsum(s)[k]."""
+    cumulative = np.cumsum(s)
+    total = cumulative[-1]
+    k = 0
+    for j in range(len(s) - 1):
+        if cumulative[j] <= u * total:
+            k += 1
+    return k
+
+
+def _copy_weights(weights):
+    return {key: np.array(weights[key], dtype=np.float64, copy=True) for key in WEIGHT_KEYS}
+
+
+def zero_weights(config, num_experts):
+    """All weights 0 for ``num_experts`` experts (MODEL.md: learned weights start at 0)."""
+    n = config.num_inputs + 1
+    return {
+        "reinforcer": np.zeros((num_experts, n)),
+        "actor": np.zeros((num_experts, 2, n)),
+        "evaluator": np.zeros((num_experts, n)),
+        "selector_actor": np.zeros((num_experts, n)),
+        "selector_critic": np.zeros((n,)),
+    }
+
+
+def decode(config, genome):
+    """The weights a genome encodes for config.condition; the rest are 0."""
+    genome = np.asarray(genome, dtype=np.float64)
+    k, n = config.num_experts, config.num_inputs + 1
+    if config.condition == "SLE":
+        if genome.size != 0:
+            raise ValueError("SLE has no genome")
+        return zero_weights(config, 1)
+    weights = zero_weights(config, k)
+    if config.condition == "LE-LS":
+        weights["reinforcer"] = genome.reshape(k, n).copy()
+    elif config.condition == "EE-LS":
+        weights["actor"] = genome.reshape(k, 2, n).copy()
+    elif config.condition == "EE-ES":
+        weights["actor"] = genome[: 2 * k * n].reshape(k, 2, n).copy()
+        weights["selector_actor"] = genome[2 * k * n:].reshape(k, n).copy()
+    else:
+        raise ValueError(f"unknown condition {config.condition!r}")
+    return weights
+
+
+# --------------------------------------------------------------------------- one phase
+
+
+def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None) -> dict:
+    """Run one phase step by step (MODEL.md "Acting" and "Learning").
+
+    phase: "childhood", "adult-ls", "adult-es" or "sle". pose: (x, y, heading radians).
+    u (T,) uniform draws for the expert choice, z (T, 2) normal draws for the action noise.
+    task: task index for the adult phases (None in childhood). phase_steps: the length of
+    the noise annealing (default T). Returns the pose after each step, the experts chosen,
+    the reach/timeout flags, the final weights and the number of reaches.
+    """
+    if phase not in PHASES:
+        raise ValueError(f"unknown phase {phase!r}")
+    u = np.asarray(u, dtype=np.float64)
+    z = np.asarray(z, dtype=np.float64)
+    num_steps = u.shape[0]
+    if phase_steps is None:
+        phase_steps = num_steps
+
+    w = _copy_weights(weights)
+    num_experts = w["selector_actor"].shape[0]
+    n = w["selector_critic"].shape[0]
+
+    experts_learn = phase in ("childhood", "sle")
+    selector_learns = phase in ("childhood", "adult-ls")
+    noisy = phase in ("childhood", "sle")
+    has_target = phase != "childhood"
+
+    gamma = config.gamma
+    decay = config.gamma * config.trace_lambda
+
+    if has_target:
+        if task is None:
+            raise ValueError("adult phases need a task")
+        spec = config.tasks[task]
+        start = (float(spec.start[0]), float(spec.start[1]), math.radians(spec.heading_deg))
+        target = (float(spec.target[0]), float(spec.target[1]))
+    else:
+        start = None
+        target = None
+
+    x, y, heading = float(pose[0]), float(pose[1]), float(pose[2])
+
+    # Traces: one set for the expert in control, one for the selector; 0 at the phase start.
+    trace_v = np.zeros(n)
+    trace_w = np.zeros((2, n))
+    trace_u = np.zeros(n)
+    trace_s = np.zeros((num_experts, n))
+
+    # What the previous step left behind.
+    prev_valid = False
+    prev_xb = prev_a = prev_o = prev_s = None
+    prev_k = -1
+    prev_reached = False
+    trial_steps = 0
+
+    out_x = np.zeros(num_steps)
+    out_y = np.zeros(num_steps)
+    out_heading = np.zeros(num_steps)
+    out_k = np.zeros(num_steps, dtype=np.int64)
+    out_reached = np.zeros(num_steps, dtype=bool)
+    out_timeout = np.zeros(num_steps, dtype=bool)
+
+    for t in range(num_steps):
+        # 1. What the robot sees now.
+        xb = _with_bias(observe(config, x, y, heading))
+
+        # 2. The selector picks an expert (weights before this step's learning).
+        s = _sigmoid(w["selector_actor"] @ xb)
+        k = _choose_expert(s, u[t])
+
+        # 3. Learning from the transition t-1 -> t.
+        terminal = prev_valid and prev_reached
+        same_expert = prev_valid and k == prev_k
+        expert_delta = None
+        if prev_valid:
+            if experts_learn and same_expert:
+                kp = prev_k
+                if phase == "childhood":
+                    reward = 2.0 * _sigmoid(w["reinforcer"][kp] @ xb) - 1.0
+                else:
+                    reward = 1.0 if prev_reached else 0.0
+                value_now = w["evaluator"][kp] @ xb
+                value_prev = w["evaluator"][kp] @ prev_xb
+                if terminal:
+                    expert_delta = reward - value_prev
+                else:
+                    expert_delta = reward + gamma * value_now - value_prev
+                trace_v = decay * trace_v + prev_xb
+                slope = (prev_a - prev_o) * prev_o * (1.0 - prev_o)
+                trace_w = decay * trace_w + np.outer(slope, prev_xb)
+                w["evaluator"][kp] = w["evaluator"][kp] + config.eta_evaluator * expert_delta * trace_v
+                w["actor"][kp] = w["actor"][kp] + config.eta_actor * expert_delta * trace_w
+
+            selector_reward = None
+            if selector_learns:
+                if phase == "childhood":
+                    if same_expert:
+                        selector_reward = expert_delta
+                else:
+                    selector_reward = 1.0 if prev_reached else 0.0
+            if selector_reward is not None:
+                u_now = w["selector_critic"] @ xb
+                u_prev = w["selector_critic"] @ prev_xb
+                if terminal:
+                    selector_delta = selector_reward - u_prev
+                else:
+                    selector_delta = selector_reward + gamma * u_now - u_prev
+                trace_u = decay * trace_u + prev_xb
+                onehot = np.zeros(num_experts)
+                onehot[prev_k] = 1.0
+                slope = (onehot - prev_s) * prev_s * (1.0 - prev_s)
+                trace_s = decay * trace_s + np.outer(slope, prev_xb)
+                w["selector_critic"] = w["selector_critic"] + config.eta_selector_critic * selector_delta * trace_u
+                w["selector_actor"] = w["selector_actor"] + config.eta_selector_actor * selector_delta * trace_s
+
+        # Trace clears after this step's learning.
+        if (not prev_valid) or (not same_expert) or terminal:
+            trace_v = np.zeros(n)
+            trace_w = np.zeros((2, n))
+        if (not prev_valid) or terminal:
+            trace_u = np.zeros(n)
+            trace_s = np.zeros((num_experts, n))
+
+        # 4. Act with the expert in control (weights after this step's learning).
+        o = _sigmoid(w["actor"][k] @ xb)
+        # sigma_t = noise_std * (1 - t / phase_steps), in float64 like everything here.
+        sigma = config.noise_std * (1.0 - t / phase_steps) if noisy else 0.0
+        a = np.clip(o + sigma * z[t], 0.0, 1.0)
+
+        # 5. Turn, move, clamp; in adulthood check the target and the timeout.
+        x, y, heading = move(config, x, y, heading, float(a[0]), float(a[1]))
+        reached = False
+        timeout = False
+        if has_target:
+            trial_steps += 1
+            if math.hypot(x - target[0], y - target[1]) <= config.target_radius:
+                reached = True
+            elif trial_steps >= config.trial_timeout:
+                timeout = True
+            if reached or timeout:
+                x, y, heading = start
+                trial_steps = 0
+
+        out_x[t], out_y[t], out_heading[t] = x, y, heading
+        out_k[t] = k
+        out_reached[t] = reached
+        out_timeout[t] = timeout
+
+        prev_valid = not timeout
+        prev_xb, prev_k, prev_a, prev_o, prev_s = xb, k, a, o, s
+        prev_reached = reached
+
+    return {
+        "x": out_x,
+        "y": out_y,
+        "heading": out_heading,
+        "k": out_k,
+        "reached": out_reached,
+        "timeout": out_timeout,
+        "weights": w,
+        "reaches": int(out_reached.sum()),
+    }
+
+
+# --------------------------------------------------------------------------- one life
+
+
+def _task_pose(config, i):
+    spec = config.tasks[i]
+    return (float(spec.start[0]), float(spec.start[1]), math.radians(spec.heading_deg))
+
+
+def _reset_selector(weights):
+    w = _copy_weights(weights)
+    w["selector_actor"] = np.zeros_like(w["selector_actor"])
+    w["selector_critic"] = np.zeros_like(w["selector_critic"])
+    return w
+
+
+def live(config, genome, start_pose, childhood_u, childhood_z, task_u, task_z) -> dict:
+    """One whole life of config.condition (MODEL.md "Life" and "Conditions").
+
+    start_pose: childhood start (x, y, heading radians), used by LE-LS only.
+    childhood_u (childhood_steps,), childhood_z (childhood_steps, 2): childhood draws.
+    task_u (tasks, task_steps), task_z (tasks, task_steps, 2): the draws of each task.
+    """
+    condition = config.condition
+    weights = decode(config, genome)
+    if condition == "LE-LS":
+        child = run_phase(config, "childhood", weights, start_pose, childhood_u, childhood_z,
+                          task=None, phase_steps=config.childhood_steps)
+        grown = child["weights"]
+        adult_phase = "adult-ls"
+    elif condition == "EE-LS":
+        grown = weights
+        adult_phase = "adult-ls"
+    elif condition == "EE-ES":
+        grown = weights
+        adult_phase = "adult-es"
+    elif condition == "SLE":
+        grown = zero_weights(config, 1)
+        adult_phase = "sle"
+    else:
+        raise ValueError(f"unknown condition {condition!r}")
+
+    task_u = np.asarray(task_u, dtype=np.float64)
+    task_z = np.asarray(task_z, dtype=np.float64)
+    theoretical = config.theoretical_max()
+    reaches = np.zeros(config.num_tasks, dtype=np.int64)
+    task_weights = []
+    for i in range(config.num_tasks):
+        if adult_phase == "adult-ls":
+            start_weights = _reset_selector(grown)
+        elif adult_phase == "sle":
+            start_weights = zero_weights(config, 1)
+        else:
+            start_weights = _copy_weights(grown)
+        result = run_phase(config, adult_phase, start_weights, _task_pose(config, i), task_u[i], task_z[i],
+                           task=i, phase_steps=config.task_steps)
+        reaches[i] = result["reaches"]
+        task_weights.append(result["weights"])
+
+    performance = reaches / np.asarray(theoretical, dtype=np.float64)
+    return {
+        "reaches": reaches,
+        "performance": performance,
+        "fitness": float(performance.mean()),
+        "childhood_weights": _copy_weights(grown),
+        "task_weights": task_weights,
+    }

@@ -1,0 +1,155 @@
+"""The JAX lifetime against the plain NumPy reference, given the same random draws.
+
+Both run in float64 here, so they agree to ~1e-9 step after step; every window holds the
+events that matter (target reaches with resets, timeouts, wall contacts), and every
+condition is checked with the paper's rules and with the learning extensions (traces,
+other per-network rates).
+"""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from imrl_jax import lifetime as L
+from imrl_jax import reference
+from imrl_jax.arena import Pose
+from imrl_jax.config import Task
+from imrl_jax.networks import Agent, decode
+
+STEPS = 2000
+PAPER = {}
+EXTENDED = dict(trace_lambda=0.9, eta_actor=0.05, eta_evaluator=0.02, eta_selector_actor=0.5,
+                eta_selector_critic=0.003)
+#: One task whose target lies 40 cm straight ahead of the start, 85 cm from the east wall:
+#: reaches, timeouts and wall contacts all happen within a few hundred steps.
+SHORT_TASK = Task(start=(300.0, 200.0), heading_deg=0.0, target=(340.0, 200.0))
+
+
+def _hand_experts(n):
+    """Expert actors: 0 drives straight at full speed, 1 and 2 turn left / right slowly."""
+    actor = np.zeros((3, 2, n))
+    actor[0, 1, -1] = 6.0  # speed unit saturated: 2 cm per step
+    actor[1, 0, -1], actor[1, 1, -1] = 2.0, 0.5
+    actor[2, 0, -1], actor[2, 1, -1] = -2.0, 0.5
+    return actor
+
+
+def _to_numpy(agent: Agent) -> dict:
+    return {name: np.asarray(value, np.float64) for name, value in agent._asdict().items()}
+
+
+def _assert_weights_close(jax_agent: Agent, ref: dict):
+    for name, value in jax_agent._asdict().items():
+        np.testing.assert_allclose(np.asarray(value), ref[name], rtol=1e-8, atol=1e-10, err_msg=name)
+
+
+def _compare_phase(config, phase, phase_name, agent, pose, task_index, params, seed=0):
+    key = jax.random.key(seed)
+    draws = L.draw_many(key, STEPS)
+    task = L.childhood_task(config, jnp.float64) if task_index is None else L.task_spec(config, task_index, jnp.float64)
+    state = L.init_state(config, agent, pose)
+    final, record = jax.jit(L.simulate, static_argnums=(1, 2, 6))(key, config, phase, params, task, state, STEPS)
+    ref = reference.run_phase(config.replace(**params._asdict()), phase_name, _to_numpy(agent),
+                              (float(pose.pos[0]), float(pose.pos[1]), float(pose.heading)),
+                              np.asarray(draws.u), np.asarray(draws.z), task=task_index)
+    np.testing.assert_array_equal(np.asarray(record.k), ref["k"])
+    np.testing.assert_array_equal(np.asarray(record.reached), ref["reached"])
+    np.testing.assert_array_equal(np.asarray(record.timeout), ref["timeout"])
+    np.testing.assert_allclose(np.asarray(record.pose.pos[:, 0]), ref["x"], atol=1e-8)
+    np.testing.assert_allclose(np.asarray(record.pose.pos[:, 1]), ref["y"], atol=1e-8)
+    np.testing.assert_allclose(np.asarray(record.pose.heading), ref["heading"], atol=1e-8)
+    _assert_weights_close(final.agent, ref["weights"])
+    pos = np.asarray(record.pose.pos)
+    r = config.robot_radius
+    walls = np.sum((pos <= r + 1e-9) | (pos >= config.arena_size - r - 1e-9))
+    return dict(reaches=int(ref["reached"].sum()), timeouts=int(ref["timeout"].sum()), walls=int(walls),
+                switches=int(np.sum(ref["k"][1:] != ref["k"][:-1])))
+
+
+@pytest.mark.usefixtures("x64")
+@pytest.mark.parametrize("rules", [PAPER, EXTENDED], ids=["paper-rules", "traces-and-rates"])
+def test_childhood_matches_reference(tiny, rules):
+    config = tiny("LE-LS", childhood_steps=STEPS)
+    params = config.replace(**rules).learning_params()
+    n = config.num_inputs + 1
+    genome = jax.random.uniform(jax.random.key(7), (3 * n,), jnp.float64, -1.0, 1.0)
+    agent = decode(config, genome)
+    pose = Pose(jnp.array([40.0, 60.0]), jnp.array(math.pi))  # heading into the west wall
+    events = _compare_phase(config, L.CHILDHOOD, "childhood", agent, pose, None, params)
+    assert events["walls"] > 0 and events["switches"] > 100
+
+
+@pytest.mark.usefixtures("x64")
+@pytest.mark.parametrize("rules", [PAPER, EXTENDED], ids=["paper-rules", "traces-and-rates"])
+@pytest.mark.parametrize("condition", ["EE-LS", "EE-ES", "SLE"])
+def test_adult_phase_matches_reference(tiny, condition, rules):
+    config = tiny(condition, tasks=(SHORT_TASK,), task_steps=STEPS, num_bins=1)
+    params = config.replace(**rules).learning_params()
+    n = config.num_inputs + 1
+    if condition == "SLE":
+        agent = L.adult_agent(config, decode(config, jnp.zeros((0,), jnp.float64)))
+        phase, name = L.ADULT_SINGLE_EXPERT, "sle"
+    else:
+        agent = decode(config, jnp.zeros((config.num_genes,), jnp.float64))
+        agent = agent._replace(actor=jnp.asarray(_hand_experts(n)))
+        if condition == "EE-ES":
+            selector = jax.random.uniform(jax.random.key(3), (3, n), jnp.float64, -1.0, 1.0)
+            agent = agent._replace(selector_actor=selector)
+            phase, name = L.ADULT_EVOLVED_SELECTOR, "adult-es"
+        else:
+            phase, name = L.ADULT_LEARNING_SELECTOR, "adult-ls"
+    task = L.task_spec(config, 0, jnp.float64)
+    events = _compare_phase(config, phase, name, agent, task.start, 0, params)
+    assert events["reaches"] > 0 and events["timeouts"] > 0 and events["walls"] > 0, events
+
+
+@pytest.mark.usefixtures("x64")
+@pytest.mark.parametrize("rules", [PAPER, EXTENDED], ids=["paper-rules", "traces-and-rates"])
+@pytest.mark.parametrize("condition", ["LE-LS", "EE-LS", "EE-ES", "SLE"])
+def test_whole_life_matches_reference(tiny, condition, rules):
+    """live(): childhood, key splitting, selector resets, six tasks, fitness."""
+    config = tiny(condition, childhood_steps=600, task_steps=300, num_bins=1, **rules)
+    params = config.learning_params()
+    key = jax.random.key(11)
+    genome = jax.random.uniform(jax.random.key(12), (config.num_genes,), jnp.float64, -1.0, 1.0)
+    if condition in ("EE-LS", "EE-ES"):  # good experts make reaches likely
+        n = config.num_inputs + 1
+        genome = genome.at[: 6 * n].set(jnp.asarray(_hand_experts(n)).reshape(-1))
+    result = jax.jit(L.live, static_argnums=1)(key, config, params, genome)
+
+    keys = L.lifetime_keys(key, config.num_tasks)
+    pose = L.random_pose(keys.pose, config, jnp.float64)
+    child = L.draw_many(keys.childhood, config.childhood_steps)
+    tasks = jax.vmap(L.draw_many, (0, None))(keys.tasks, config.task_steps)
+    ref = reference.live(config, np.asarray(genome), (float(pose.pos[0]), float(pose.pos[1]), float(pose.heading)),
+                         np.asarray(child.u), np.asarray(child.z), np.asarray(tasks.u), np.asarray(tasks.z))
+    np.testing.assert_array_equal(np.asarray(result.reaches), ref["reaches"])
+    np.testing.assert_allclose(float(result.fitness), ref["fitness"], rtol=1e-12)
+    _assert_weights_close(result.agent, ref["childhood_weights"])
+    for t in range(config.num_tasks):
+        _assert_weights_close(jax.tree.map(lambda x: x[t], result.adult_agents), ref["task_weights"][t])
+
+
+def test_float32_lifetime_tracks_float64_reference(tiny):
+    """The default float32 program follows the float64 reference for 2,000 steps."""
+    config = tiny("EE-LS", tasks=(SHORT_TASK,), task_steps=STEPS, num_bins=1)
+    params = config.learning_params()
+    n = config.num_inputs + 1
+    agent = decode(config, jnp.zeros((config.num_genes,)))._replace(actor=jnp.asarray(_hand_experts(n), jnp.float32))
+    task = L.task_spec(config, 0)
+    key = jax.random.key(0)
+    final, record = jax.jit(L.simulate, static_argnums=(1, 2, 6))(
+        key, config, L.ADULT_LEARNING_SELECTOR, params, task, L.init_state(config, agent, task.start), STEPS)
+    draws = L.draw_many(key, STEPS)
+    ref = reference.run_phase(config, "adult-ls", _to_numpy(agent), (300.0, 200.0, 0.0),
+                              np.asarray(draws.u, np.float64), np.asarray(draws.z, np.float64), task=0)
+    np.testing.assert_array_equal(np.asarray(record.k), ref["k"])
+    np.testing.assert_array_equal(np.asarray(record.reached), ref["reached"])
+    np.testing.assert_allclose(np.asarray(record.pose.pos[:, 0]), ref["x"], atol=1e-3)
+    np.testing.assert_allclose(np.asarray(record.pose.pos[:, 1]), ref["y"], atol=1e-3)
+    for name, value in final.agent._asdict().items():
+        np.testing.assert_allclose(np.asarray(value), ref["weights"][name], rtol=1e-4, atol=1e-5, err_msg=name)
+    assert ref["reached"].sum() > 0
