@@ -135,3 +135,16 @@ def test_select_follows_pseudo_probabilities():
     u = jax.random.uniform(jax.random.key(0), (20_000,))
     counts = np.bincount(np.asarray(jax.vmap(L.select, (0, None))(u, s)), minlength=3) / 20_000
     np.testing.assert_allclose(counts, [0.2, 0.6, 0.2], atol=0.015)
+
+
+def test_paper_length_life_runs_on_cpu():
+    """A whole 750,000-step LE-LS life (150,000 childhood + 6 x 100,000) in one program."""
+    from imrl_jax.config import make_config
+
+    config = make_config("paper", condition="LE-LS")
+    genome = jax.random.uniform(jax.random.key(0), (config.num_genes,), minval=-1.0, maxval=1.0)
+    result = jax.jit(L.live, static_argnums=1)(jax.random.key(1), config, config.learning_params(), genome)
+    assert int(result.childhood_selections.sum()) == 150_000
+    np.testing.assert_array_equal(result.adult_selections.sum((-1, -2)), 100_000)
+    assert result.reward_curve.shape == (6, 100)
+    assert np.isfinite(np.asarray(result.agent.actor)).all()

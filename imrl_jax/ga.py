@@ -1,0 +1,87 @@
+"""The genetic algorithm of section 2 and MODEL.md "Genetic algorithm".
+
+Generation 0 is uniform in [-1, 1]; the best 10 of 50 individuals each produce 5
+offspring; each gene of an offspring is mutated with probability 0.1 by adding U[-1, 1].
+No elitism unless ``num_elites`` > 0 (then the first offspring of each of the best
+``num_elites`` parents is an unmutated copy). All functions are for one population and
+pure; :func:`make_generation` composes them with the lifetimes into one jitted step that
+is vmapped over independent seeds.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from imrl_jax.config import Config, LearningParams
+from imrl_jax.lifetime import LifetimeResult, live
+
+
+class GenerationStats(NamedTuple):
+    """What one generation of one seed reports."""
+
+    fitness: jnp.ndarray  # (P,) of every individual
+    performance: jnp.ndarray  # (P, tasks)
+    parents: jnp.ndarray  # (num_parents,) indices of the selected parents, best first
+
+
+def init_population(key: jax.Array, config: Config, dtype=jnp.float32) -> jnp.ndarray:
+    """Generation 0: (population, genes) uniform in [-init_scale, init_scale]."""
+    s = config.init_scale
+    return jax.random.uniform(key, (config.population_size, config.num_genes), dtype, -s, s)
+
+
+def select(fitness: jnp.ndarray, num_parents: int) -> jnp.ndarray:
+    """Indices of the ``num_parents`` fittest individuals, best first (ties: lower index)."""
+    return jax.lax.top_k(fitness, num_parents)[1]
+
+
+def mutate(key: jax.Array, config: Config, genomes: jnp.ndarray) -> jnp.ndarray:
+    """Add U[-scale, scale] to each gene with probability ``mutation_prob``."""
+    key_where, key_delta = jax.random.split(key)
+    where = jax.random.bernoulli(key_where, config.mutation_prob, genomes.shape)
+    s = config.mutation_scale
+    delta = jax.random.uniform(key_delta, genomes.shape, genomes.dtype, -s, s)
+    return jnp.where(where, genomes + delta, genomes)
+
+
+def reproduce(key: jax.Array, config: Config, population: jnp.ndarray, parents: jnp.ndarray) -> jnp.ndarray:
+    """The next population: ``offspring_per_parent`` mutated copies of each parent, in parent order."""
+    offspring = jnp.repeat(population[parents], config.offspring_per_parent, axis=0)
+    mutated = mutate(key, config, offspring)
+    if config.num_elites:
+        slot = jnp.arange(config.population_size)
+        elite = (slot % config.offspring_per_parent == 0) & (slot // config.offspring_per_parent < config.num_elites)
+        mutated = jnp.where(elite[:, None], offspring, mutated)
+    return mutated
+
+
+def generation_keys(key: jax.Array, generation) -> tuple[jax.Array, jax.Array]:
+    """The keys of one generation of a seed: lifetimes, reproduction."""
+    return tuple(jax.random.split(jax.random.fold_in(key, generation)))
+
+
+def evolve_step(key: jax.Array, config: Config, params: LearningParams, population: jnp.ndarray,
+                generation) -> tuple[jnp.ndarray, GenerationStats]:
+    """One generation of one seed: live every individual, select the best, reproduce."""
+    key_life, key_reproduce = generation_keys(key, generation)
+    lives = jax.random.split(key_life, config.population_size)
+    result: LifetimeResult = jax.vmap(lambda k, g: live(k, config, params, g))(lives, population)
+    parents = select(result.fitness, config.num_parents)
+    children = reproduce(key_reproduce, config, population, parents)
+    return children, GenerationStats(result.fitness, result.performance, parents)
+
+
+def make_generation(config: Config):
+    """A jitted ``generation(keys, params, populations, generation)`` vmapped over seeds.
+
+    ``keys`` (seeds,) are the seeds' own keys; ``populations`` (seeds, P, genes). Returns
+    the next populations and each seed's :class:`GenerationStats`.
+    """
+
+    def generation(keys, params, populations, index):
+        return jax.vmap(lambda k, p: evolve_step(k, config, params, p, index))(keys, populations)
+
+    return jax.jit(generation, donate_argnums=(2,))
