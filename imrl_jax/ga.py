@@ -84,4 +84,4 @@ def make_generation(config: Config):
     def generation(keys, params, populations, index):
         return jax.vmap(lambda k, p: evolve_step(k, config, params, p, index))(keys, populations)
 
-    return jax.jit(generation, donate_argnums=(2,))
+    return jax.jit(generation)

@@ -132,3 +132,33 @@ def plot_life(config: Config, childhood: dict | None, tasks: list[dict], path: s
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+CONDITION_STYLES = {"LE-LS": dict(color="black", lw=2.2), "EE-LS": dict(color="0.55", lw=1.8),
+                    "EE-ES": dict(color="black", lw=1.4, ls="--"), "SLE": dict(color="tab:blue", lw=1.4, ls=":")}
+
+
+def plot_fitness(best_by_condition: dict, path: str, title: str = "") -> None:
+    """Fig. 3a: best fitness per generation, mean over seeds with a +-1 std band.
+
+    ``best_by_condition`` maps a condition name to an array (generations, seeds).
+    """
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(5.5, 3.6))
+    for condition, best in best_by_condition.items():
+        best = np.asarray(best, float)
+        generations = np.arange(len(best))
+        mean, std = best.mean(1), best.std(1)
+        style = CONDITION_STYLES.get(condition, {})
+        ax.plot(generations, mean, label=condition, **style)
+        ax.fill_between(generations, mean - std, mean + std, color=style.get("color", "0.5"), alpha=0.15, lw=0)
+    ax.set_xlabel("generation")
+    ax.set_ylabel("best fitness")
+    ax.set_ylim(bottom=0)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    if title:
+        ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

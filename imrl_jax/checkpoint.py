@@ -1,0 +1,131 @@
+"""Checkpoints of an evolution run with orbax-checkpoint (the GA of section 2, made resumable).
+
+A checkpoint holds everything the next generation needs (the populations, the seeds' key
+data, the generation count, the history so far, the last evaluated population and its
+fitness) plus JSON metadata (config, package version, git commit). orbax writes each step
+into a temporary directory and renames it when complete, so a kill during a save leaves
+the previous checkpoint usable. :func:`restore_latest` falls back to an older step when
+the newest cannot be read, and says so.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+from typing import NamedTuple
+
+import jax
+import numpy as np
+
+import imrl_jax
+
+
+class History(NamedTuple):
+    """Per-generation statistics of every seed; rows past ``generation`` are NaN."""
+
+    best: np.ndarray  # (G, S) best fitness
+    mean: np.ndarray  # (G, S) mean fitness of the population
+    std: np.ndarray  # (G, S) standard deviation of the population's fitness
+    best_performance: np.ndarray  # (G, S, tasks) task performances of the best individual
+
+
+class RunState(NamedTuple):
+    """Everything an evolution carries from one generation to the next."""
+
+    generation: np.ndarray  # () generations done
+    populations: jax.Array  # (S, P, genes) to be evaluated next
+    evaluated: jax.Array  # (S, P, genes) the last evaluated populations
+    fitness: jax.Array  # (S, P) their fitness
+    key_data: np.ndarray  # (S, 2) jax.random.key_data of each seed's key
+    history: History
+
+
+def empty_history(num_generations: int, num_seeds: int, num_tasks: int) -> History:
+    nan = lambda *shape: np.full(shape, np.nan, np.float32)  # noqa: E731
+    return History(nan(num_generations, num_seeds), nan(num_generations, num_seeds),
+                   nan(num_generations, num_seeds), nan(num_generations, num_seeds, num_tasks))
+
+
+def git_commit() -> str:
+    """The git commit of the package source, or 'unknown' outside a git checkout."""
+    try:
+        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=os.path.dirname(os.path.abspath(__file__)),
+                             capture_output=True, text=True, timeout=5)
+        return out.stdout.strip() or "unknown"
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+
+
+def _ocp():
+    import orbax.checkpoint as ocp
+
+    return ocp
+
+
+class Checkpointer:
+    """Saves and restores :class:`RunState` under ``directory`` (one sub-directory per step)."""
+
+    def __init__(self, directory: str, keep: int = 3):
+        ocp = _ocp()
+        options = ocp.CheckpointManagerOptions(max_to_keep=keep, enable_async_checkpointing=False,
+                                               create=True)
+        self.directory = os.path.abspath(directory)
+        self.manager = ocp.CheckpointManager(self.directory, options=options)
+
+    def steps(self) -> list[int]:
+        """Generations with a complete checkpoint, oldest first."""
+        return sorted(self.manager.all_steps())
+
+    def save(self, state: RunState, meta: dict) -> None:
+        """Save the state after ``state.generation`` generations (blocks until written)."""
+        ocp = _ocp()
+        step = int(state.generation)
+        meta = {**meta, "generation": step, "version": imrl_jax.__version__, "git_commit": git_commit()}
+        self.manager.save(step, args=ocp.args.Composite(state=ocp.args.StandardSave(state._asdict()),
+                                                        meta=ocp.args.JsonSave(meta)), force=True)
+        self.manager.wait_until_finished()
+
+    def restore_latest(self, template: RunState, warn=print) -> tuple[RunState, dict] | None:
+        """The newest readable checkpoint (state shaped like ``template``), or None if none is.
+
+        An unreadable newer step is reported through ``warn`` and skipped.
+        """
+        ocp = _ocp()
+        abstract = jax.tree.map(ocp.utils.to_shape_dtype_struct, template._asdict())
+        for step in reversed(self.steps()):
+            try:
+                restored = self.manager.restore(step, args=ocp.args.Composite(
+                    state=ocp.args.StandardRestore(abstract), meta=ocp.args.JsonRestore()))
+                state = restored.state
+                history = state["history"]
+                history = History(**history) if isinstance(history, dict) else History(*history)
+                state["history"] = jax.tree.map(np.asarray, history)
+                state["generation"] = np.asarray(state["generation"])
+                state["key_data"] = np.asarray(state["key_data"])
+                state = RunState(**state)
+                if int(state.generation) != step or int(restored.meta.get("generation", -1)) != step:
+                    raise ValueError(f"generation recorded as {int(state.generation)}")
+                return state, dict(restored.meta)
+            except Exception as error:  # noqa: BLE001 - any failure means "unreadable"
+                reason = str(error).strip().splitlines()[0][:200] if str(error).strip() else type(error).__name__
+                warn(f"checkpoint {os.path.join(self.directory, str(step))} is unreadable ({reason}); "
+                     f"trying an older one")
+        return None
+
+    def close(self) -> None:
+        self.manager.close()
+
+
+def as_numpy(state: RunState) -> RunState:
+    """A host copy of a state (for writing outputs)."""
+    return jax.tree.map(np.asarray, state)
+
+
+def same_arrays(a, b) -> bool:
+    """Bitwise equality of two pytrees of arrays."""
+    leaves_a, leaves_b = jax.tree.leaves(a), jax.tree.leaves(b)
+    return len(leaves_a) == len(leaves_b) and all(
+        np.array_equal(np.asarray(x), np.asarray(y), equal_nan=True) for x, y in zip(leaves_a, leaves_b))
+
+
+__all__ = ["Checkpointer", "History", "RunState", "as_numpy", "empty_history", "git_commit", "same_arrays"]

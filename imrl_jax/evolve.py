@@ -1,0 +1,385 @@
+"""``python -m imrl_jax.evolve``: the paper's evolutions (section 2; Fig. 3a) as one program.
+
+    python -m imrl_jax.evolve --cond EE-LS --seeds 10 [--preset paper] [--out runs/EE-LS]
+
+Seeds are a batch axis: ``--seeds 10`` runs ten independent evolutions (seed 0..9, or
+``--first-seed``) in one jitted generation step, each reproducible from its own seed.
+The seeds x population axis is sharded over all devices (and, under ``jax.distributed``,
+over all processes). Every ``--checkpoint-every`` generations the run is checkpointed
+with orbax; ``--resume`` continues from the latest good checkpoint and ends bitwise
+where an uninterrupted run would. The run directory holds ``config.json``,
+``history.csv`` (best, mean, std and the best individual's task performances per seed
+per generation), ``fitness.png`` (best fitness, mean and std over seeds, as Fig. 3a),
+``final_population.npz`` and ``checkpoints/``; all are rewritten as the run goes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import io
+import json
+import os
+import sys
+import time
+from typing import Sequence
+
+import jax
+import numpy as np
+
+import imrl_jax
+from imrl_jax.checkpoint import Checkpointer, History, RunState, empty_history, git_commit
+from imrl_jax.config import CONDITIONS, EVOLVED_CONDITIONS, PRESETS, Config, ConfigError, make_config
+from imrl_jax.ga import init_population, make_generation
+from imrl_jax.progress import Progress
+
+
+class UsageError(Exception):
+    """Bad input: reported as one line, exit code 2, nothing written."""
+
+
+# ----------------------------------------------------------------------------- devices
+
+
+def make_mesh():
+    """A 1-D mesh over every device of every process."""
+    from jax.sharding import Mesh
+
+    return Mesh(np.asarray(jax.devices()), ("lanes",))
+
+
+def population_sharding(mesh, num_seeds: int, population_size: int):
+    """Shard the seeds axis if the devices divide it, else the population axis, else replicate."""
+    from jax.sharding import NamedSharding, PartitionSpec
+
+    n = mesh.devices.size
+    if num_seeds % n == 0:
+        spec = PartitionSpec("lanes")
+    elif population_size % n == 0:
+        spec = PartitionSpec(None, "lanes")
+    else:
+        spec = PartitionSpec()
+    return NamedSharding(mesh, spec)
+
+
+def to_global(array: np.ndarray, sharding) -> jax.Array:
+    """A global array from a host array every process holds in full."""
+    array = np.asarray(array)
+    return jax.make_array_from_callback(array.shape, sharding, lambda index: array[index])
+
+
+def to_host(array) -> np.ndarray:
+    """The full value of a (possibly multi-process) array on this host."""
+    if getattr(array, "is_fully_addressable", True):
+        return np.asarray(array)
+    from jax.experimental import multihost_utils
+
+    return np.asarray(multihost_utils.process_allgather(array, tiled=True))
+
+
+# ----------------------------------------------------------------------------- state
+
+
+def seed_keys(seeds: Sequence[int]) -> jax.Array:
+    """One typed key per seed."""
+    return jax.vmap(jax.random.key)(np.asarray(seeds, np.uint32))
+
+
+def initial_state(config: Config, seeds: Sequence[int], sharding) -> RunState:
+    """Generation 0 of every seed (drawn from the seed's own key)."""
+    keys = seed_keys(seeds)
+    init_keys = jax.vmap(lambda k: jax.random.fold_in(k, 0))(keys)
+    populations = np.asarray(jax.vmap(lambda k: init_population(k, config))(init_keys))
+    shape = populations.shape
+    history = empty_history(config.num_generations, len(seeds), config.num_tasks)
+    return RunState(
+        generation=np.asarray(0, np.int32),
+        populations=to_global(populations, sharding),
+        evaluated=to_global(np.zeros(shape, np.float32), sharding),
+        fitness=to_global(np.zeros(shape[:2], np.float32), sharding),
+        key_data=np.asarray(jax.random.key_data(keys)),
+        history=history,
+    )
+
+
+def evolution_keys(key_data: np.ndarray) -> jax.Array:
+    """The keys the generations of each seed draw from (distinct from the initial population's)."""
+    keys = jax.random.wrap_key_data(np.asarray(key_data))
+    return jax.vmap(lambda k: jax.random.fold_in(k, 1))(keys)
+
+
+def record(history: History, generation: int, fitness: np.ndarray, performance: np.ndarray) -> History:
+    """History with the statistics of one generation written in."""
+    best_index = np.argmax(fitness, axis=1)
+    seeds = np.arange(fitness.shape[0])
+    best, mean, std, best_perf = (np.array(h) for h in history)
+    best[generation] = fitness.max(1)
+    mean[generation] = fitness.mean(1)
+    std[generation] = fitness.std(1)
+    best_perf[generation] = performance[seeds, best_index]
+    return History(best, mean, std, best_perf)
+
+
+# ----------------------------------------------------------------------------- outputs
+
+
+def _write_atomic(path: str, data: bytes) -> None:
+    tmp = f"{path}.tmp-{os.getpid()}"
+    with open(tmp, "wb") as f:
+        f.write(data)
+    os.replace(tmp, path)
+
+
+def history_csv(history: History, generations: int, seeds: Sequence[int]) -> str:
+    """The history of the finished generations as CSV text."""
+    out = io.StringIO()
+    writer = csv.writer(out)
+    num_tasks = history.best_performance.shape[-1]
+    writer.writerow(["generation", "seed", "best", "mean", "std"] + [f"best_task{i + 1}" for i in range(num_tasks)])
+    for g in range(generations):
+        for s, seed in enumerate(seeds):
+            writer.writerow([g, seed] + [f"{float(history.best[g, s]):.6f}", f"{float(history.mean[g, s]):.6f}",
+                                         f"{float(history.std[g, s]):.6f}"]
+                            + [f"{float(p):.6f}" for p in history.best_performance[g, s]])
+    return out.getvalue()
+
+
+def write_outputs(out_dir: str, config: Config, seeds: Sequence[int], state: RunState) -> None:
+    """Rewrite history.csv, fitness.png and final_population.npz from a state."""
+    from imrl_jax.plotting import plot_fitness
+
+    done = int(state.generation)
+    _write_atomic(os.path.join(out_dir, "history.csv"), history_csv(state.history, done, seeds).encode())
+    buffer = io.BytesIO()
+    np.savez(buffer, seeds=np.asarray(seeds), generation=done, evaluated=to_host(state.evaluated),
+             fitness=to_host(state.fitness), next_population=to_host(state.populations))
+    _write_atomic(os.path.join(out_dir, "final_population.npz"), buffer.getvalue())
+    if done:
+        path = os.path.join(out_dir, "fitness.png")
+        plot_fitness({config.condition: state.history.best[:done]}, path + ".tmp.png",
+                     title=f"{config.condition}: best fitness, mean and std over {len(seeds)} seed(s)"
+                           + ("" if _is_paper_scale(config) else " (reduced scale)"))
+        os.replace(path + ".tmp.png", path)
+
+
+def _is_paper_scale(config: Config) -> bool:
+    paper = make_config("paper", condition=config.condition)
+    return all(getattr(config, f) == getattr(paper, f) for f in
+               ("childhood_steps", "task_steps", "population_size", "num_generations", "num_parents"))
+
+
+# ----------------------------------------------------------------------------- run
+
+
+def check_run_dir(out_dir: str, config: Config, seeds: Sequence[int], resume: bool) -> None:
+    """Refuse to overwrite another run; on resume refuse a changed config. Raises UsageError."""
+    config_path = os.path.join(out_dir, "config.json")
+    exists = os.path.exists(config_path)
+    if exists and not resume:
+        raise UsageError(f"{out_dir} already holds a run (config.json); pass --resume to continue it "
+                         f"or choose another --out")
+    if resume and not exists:
+        raise UsageError(f"--resume: {out_dir} holds no run to resume (no config.json)")
+    if os.path.exists(out_dir) and not os.path.isdir(out_dir):
+        raise UsageError(f"--out: {out_dir} is not a directory")
+    if exists:
+        try:
+            with open(config_path) as f:
+                saved = json.load(f)
+            saved_config = Config.from_dict(saved["config"])
+            saved_seeds = list(saved["seeds"])
+        except (OSError, ValueError, KeyError, TypeError) as error:
+            raise UsageError(f"{config_path} is unreadable ({error})") from None
+        if saved_seeds != list(seeds):
+            raise UsageError(f"--resume: seeds {list(seeds)} differ from the run's {saved_seeds}")
+        for field in dataclasses.fields(Config):
+            old, new = getattr(saved_config, field.name), getattr(config, field.name)
+            if old != new:
+                raise UsageError(f"--resume: config field {field.name} is {new!r} but the run in {out_dir} "
+                                 f"used {old!r}")
+
+
+def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bool = False,
+        checkpoint_every: int = 1, keep: int = 3, quiet: bool = False) -> RunState:
+    """Evolve ``config.condition`` for every seed into ``out_dir``; return the final state."""
+    if config.condition not in EVOLVED_CONDITIONS:
+        raise UsageError(f"--cond: {config.condition} is not evolved (it learns each task from scratch); "
+                         f"run it with: python -m imrl_jax.demo --condition SLE")
+    seeds = [int(s) for s in seeds]
+    if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
+        raise UsageError("--seeds: need at least one seed, all distinct and non-negative")
+    if checkpoint_every < 1:
+        raise UsageError("--checkpoint-every: must be at least 1")
+    check_run_dir(out_dir, config, seeds, resume)
+    if jax.process_count() > 1:  # every process checks before the leader writes
+        from jax.experimental import multihost_utils
+
+        multihost_utils.sync_global_devices("imrl_jax.evolve: run directory checked")
+    leader = jax.process_index() == 0
+    progress = Progress(config.num_generations, quiet=quiet or not leader)
+
+    mesh = make_mesh()
+    sharding = population_sharding(mesh, len(seeds), config.population_size)
+    state = initial_state(config, seeds, sharding)
+    os.makedirs(out_dir, exist_ok=True)
+    checkpointer = Checkpointer(os.path.join(out_dir, "checkpoints"), keep=keep)
+    meta = {"config": config.to_dict(), "seeds": seeds}
+    if resume:
+        restored = checkpointer.restore_latest(state, warn=progress.message)
+        if restored is None:
+            if checkpointer.steps():
+                raise UsageError(f"--resume: no readable checkpoint in {checkpointer.directory}")
+            progress.message(f"no checkpoint in {checkpointer.directory} yet: starting from generation 0")
+        else:
+            state, saved_meta = restored
+            if not np.array_equal(state.key_data, np.asarray(jax.random.key_data(seed_keys(seeds)))):
+                raise UsageError("--resume: the checkpoint's keys do not match the seeds")
+            progress = Progress(config.num_generations, done=int(state.generation), quiet=quiet or not leader)
+            progress.message(f"resuming {out_dir} after generation {int(state.generation)} "
+                             f"(checkpoint of commit {saved_meta.get('git_commit', 'unknown')[:12]})")
+    elif leader:
+        info = {**meta, "version": imrl_jax.__version__, "git_commit": git_commit(),
+                "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "devices": len(jax.devices()),
+                "processes": jax.process_count()}
+        _write_atomic(os.path.join(out_dir, "config.json"), json.dumps(info, indent=2).encode())
+
+    generation = make_generation(config)
+    keys = evolution_keys(state.key_data)
+    params = config.learning_params()
+    lane_steps = len(seeds) * config.population_size * config.lifetime_steps
+    for g in range(int(state.generation), config.num_generations):
+        start = time.perf_counter()
+        evaluated = state.populations
+        populations, stats = generation(keys, params, evaluated, g)
+        fitness, performance = to_host(stats.fitness), to_host(stats.performance)
+        seconds = time.perf_counter() - start
+        state = RunState(np.asarray(g + 1, np.int32), populations, evaluated, stats.fitness, state.key_data,
+                         record(state.history, g, fitness, performance))
+        progress.update(g + 1, float(fitness.max()), float(fitness.mean()), lane_steps / seconds)
+        if (g + 1) % checkpoint_every == 0 or g + 1 == config.num_generations:
+            checkpointer.save(state, meta)
+            if leader:
+                write_outputs(out_dir, config, seeds, state)
+    if leader:
+        write_outputs(out_dir, config, seeds, state)
+    checkpointer.close()
+    return state
+
+
+# ----------------------------------------------------------------------------- CLI
+
+
+def _parse_value(field: dataclasses.Field, text: str):
+    default = field.default if field.default is not dataclasses.MISSING else None
+    if isinstance(default, bool):
+        if text.lower() in ("1", "true", "yes"):
+            return True
+        if text.lower() in ("0", "false", "no"):
+            return False
+        raise ValueError(text)
+    if isinstance(default, int):
+        return int(text)
+    if isinstance(default, float):
+        return float(text)
+    if isinstance(default, str):
+        return text
+    raise ValueError("not settable from the command line")
+
+
+def build_config(args) -> Config:
+    """The config the command line asks for (raises UsageError naming the field)."""
+    overrides = {"condition": args.cond}
+    for flag, field in (("generations", "num_generations"), ("population", "population_size"),
+                        ("parents", "num_parents"), ("childhood_steps", "childhood_steps"),
+                        ("task_steps", "task_steps"), ("bins", "num_bins"), ("elites", "num_elites")):
+        value = getattr(args, flag)
+        if value is not None:
+            overrides[field] = value
+    fields = {f.name: f for f in dataclasses.fields(Config)}
+    for item in args.set or []:
+        name, sep, text = item.partition("=")
+        if not sep or name not in fields:
+            raise UsageError(f"--set {item}: expected FIELD=VALUE with a Config field name")
+        try:
+            overrides[name] = _parse_value(fields[name], text)
+        except ValueError:
+            raise UsageError(f"--set {item}: {name} cannot take the value {text!r}") from None
+    try:
+        return make_config(args.preset, **overrides)
+    except ConfigError as error:
+        raise UsageError(str(error)) from None
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="python -m imrl_jax.evolve",
+        description="Evolve one of the paper's conditions for several seeds at once "
+                    "(Schembri, Mirolli & Baldassarre 2007).",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--cond", required=True, metavar="{" + ",".join(EVOLVED_CONDITIONS) + "}",
+                   help="condition to evolve (SLE is not evolved)")
+    p.add_argument("--seeds", type=int, default=1, help="number of independent evolutions (seeds)")
+    p.add_argument("--first-seed", type=int, default=0, help="seed of the first evolution; the others follow")
+    p.add_argument("--preset", default="paper", choices=sorted(PRESETS),
+                   help="paper: full scale; small: reduced lengths for quick CPU checks")
+    p.add_argument("--generations", type=int, help="generations (paper: 100)")
+    p.add_argument("--population", type=int, help="population size (paper: 50)")
+    p.add_argument("--parents", type=int, help="best individuals that reproduce (paper: 10)")
+    p.add_argument("--elites", type=int, help="parents copied unmutated (paper: 0)")
+    p.add_argument("--childhood-steps", type=int, help="LE-LS childhood length (paper: 150000)")
+    p.add_argument("--task-steps", type=int, help="steps per adulthood task (paper: 100000)")
+    p.add_argument("--bins", type=int, help="bins of the per-task reward curves")
+    p.add_argument("--set", action="append", metavar="FIELD=VALUE",
+                   help="set any scalar Config field, e.g. --set trace_lambda=0.9 (repeatable)")
+    p.add_argument("--out", help="run directory (default: runs/COND)")
+    p.add_argument("--resume", action="store_true", help="continue the run in --out from its latest checkpoint")
+    p.add_argument("--checkpoint-every", type=int, default=1, help="generations between checkpoints")
+    p.add_argument("--keep", type=int, default=3, help="checkpoints kept")
+    p.add_argument("--quiet", action="store_true", help="no progress line (for logs)")
+    p.add_argument("--coordinator", help="multi-host: coordinator address host:port (or JAX_COORDINATOR_ADDRESS)")
+    p.add_argument("--num-processes", type=int, help="multi-host: number of processes (or JAX_NUM_PROCESSES)")
+    p.add_argument("--process-id", type=int, help="multi-host: this process's id (or JAX_PROCESS_ID)")
+    return p
+
+
+def init_distributed(args) -> None:
+    """Start jax.distributed when a coordinator is given by flag or environment."""
+    coordinator = args.coordinator or os.environ.get("JAX_COORDINATOR_ADDRESS")
+    if not coordinator:
+        return
+    num = args.num_processes if args.num_processes is not None else os.environ.get("JAX_NUM_PROCESSES")
+    pid = args.process_id if args.process_id is not None else os.environ.get("JAX_PROCESS_ID")
+    if num is None or pid is None:
+        raise UsageError("--coordinator needs --num-processes and --process-id (or JAX_NUM_PROCESSES, JAX_PROCESS_ID)")
+    if jax.default_backend() == "cpu" or os.environ.get("JAX_PLATFORMS", "") == "cpu":
+        jax.config.update("jax_cpu_collectives_implementation", "gloo")
+    jax.distributed.initialize(coordinator, int(num), int(pid))
+
+
+def main(argv=None) -> int:
+    args = parser().parse_args(argv)
+    try:
+        if args.cond not in CONDITIONS:
+            raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(EVOLVED_CONDITIONS)})")
+        if args.seeds < 1:
+            raise UsageError("--seeds: must be at least 1")
+        config = build_config(args)
+        out_dir = args.out or os.path.join("runs", args.cond)
+        init_distributed(args)
+        state = run(config, out_dir, range(args.first_seed, args.first_seed + args.seeds), resume=args.resume,
+                    checkpoint_every=args.checkpoint_every, keep=args.keep, quiet=args.quiet)
+    except UsageError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    if jax.process_index() == 0:
+        done = int(state.generation)
+        best = state.history.best[done - 1]
+        print(f"{config.condition}: {done} generations x {args.seeds} seed(s) done; final best fitness "
+              f"{float(best.mean()):.4f} (mean over seeds; per seed "
+              f"{', '.join(f'{b:.3f}' for b in best)}); outputs in {out_dir}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
