@@ -81,6 +81,8 @@ class Checkpointer:
         ocp = _ocp()
         step = int(state.generation)
         meta = {**meta, "generation": step, "version": imrl_jax.__version__, "git_commit": git_commit()}
+        if step in self.manager.all_steps():  # an unreadable step being redone after a fall-back
+            self.manager.delete(step)
         self.manager.save(step, args=ocp.args.Composite(state=ocp.args.StandardSave(state._asdict()),
                                                         meta=ocp.args.JsonSave(meta)), force=True)
         self.manager.wait_until_finished()

@@ -344,7 +344,12 @@ def parser() -> argparse.ArgumentParser:
 
 
 def init_distributed(args) -> None:
-    """Start jax.distributed when a coordinator is given by flag or environment."""
+    """Start jax.distributed when a coordinator is given by flag or environment.
+
+    Must run before anything starts a JAX backend (``jax.devices()``, any computation).
+    On CPU the processes' collectives (the sharded generation, ``process_allgather``,
+    barriers) go over gloo/TCP. Raises UsageError on bad flags or a failed start.
+    """
     coordinator = args.coordinator or os.environ.get("JAX_COORDINATOR_ADDRESS")
     if not coordinator:
         return
@@ -352,9 +357,25 @@ def init_distributed(args) -> None:
     pid = args.process_id if args.process_id is not None else os.environ.get("JAX_PROCESS_ID")
     if num is None or pid is None:
         raise UsageError("--coordinator needs --num-processes and --process-id (or JAX_NUM_PROCESSES, JAX_PROCESS_ID)")
-    if jax.default_backend() == "cpu" or os.environ.get("JAX_PLATFORMS", "") == "cpu":
-        jax.config.update("jax_cpu_collectives_implementation", "gloo")
-    jax.distributed.initialize(coordinator, int(num), int(pid))
+    try:
+        num, pid = int(num), int(pid)
+    except ValueError:
+        raise UsageError(f"--num-processes/--process-id: expected integers, got {num!r} and {pid!r}") from None
+    if num < 1 or not 0 <= pid < num:
+        raise UsageError(f"--process-id: must be in 0..{num - 1} (--num-processes {num}), got {pid}")
+    from jax._src import xla_bridge  # no public test for "backend started" that does not start it
+
+    if xla_bridge.backends_are_initialized():
+        raise UsageError("--coordinator: a JAX backend is already running in this process; "
+                         "jax.distributed must start first (call main() in a fresh process)")
+    # Not jax.default_backend() here: it would start the backend before jax.distributed.
+    # The flag only matters to the CPU backend (gloo is also JAX 0.10's default there).
+    jax.config.update("jax_cpu_collectives_implementation", "gloo")
+    try:
+        jax.distributed.initialize(coordinator, num, pid)
+    except (RuntimeError, ValueError) as error:
+        reason = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+        raise UsageError(f"jax.distributed.initialize({coordinator!r}, {num}, {pid}) failed: {reason}") from None
 
 
 def main(argv=None) -> int:
