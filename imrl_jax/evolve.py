@@ -63,10 +63,32 @@ def population_sharding(mesh, num_seeds: int, population_size: int):
     return NamedSharding(mesh, spec)
 
 
-def to_global(array: np.ndarray, sharding) -> jax.Array:
-    """A global array from a host array every process holds in full."""
+def replicated(mesh):
+    """The sharding of a value every device holds in full."""
+    from jax.sharding import NamedSharding, PartitionSpec
+
+    return NamedSharding(mesh, PartitionSpec())
+
+
+def to_global(array, sharding) -> jax.Array:
+    """A global array from a host value every process holds in full (typed PRNG keys too).
+
+    Under jax.distributed, jit wants global arrays: a host-local (uncommitted, one-device)
+    array is not one, so even the replicated inputs (the seeds' keys) go through here.
+    """
+    if isinstance(array, jax.Array) and jax.dtypes.issubdtype(array.dtype, jax.dtypes.prng_key):
+        impl = jax.random.key_impl(array)
+        return jax.random.wrap_key_data(to_global(np.asarray(jax.random.key_data(array)), sharding), impl=impl)
     array = np.asarray(array)
     return jax.make_array_from_callback(array.shape, sharding, lambda index: array[index])
+
+
+def sharded_axis(sharding) -> str:
+    """Which axis of the (seeds, population, ...) arrays ``sharding`` splits: seeds, population or none."""
+    spec = tuple(sharding.spec) + (None, None)
+    if sharding.mesh.devices.size == 1:
+        return "none"
+    return "seeds" if spec[0] else "population" if spec[1] else "none"
 
 
 def to_host(array) -> np.ndarray:
@@ -241,11 +263,11 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bo
     elif leader:
         info = {**meta, "version": imrl_jax.__version__, "git_commit": git_commit(),
                 "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "devices": len(jax.devices()),
-                "processes": jax.process_count()}
+                "processes": jax.process_count(), "sharded_axis": sharded_axis(sharding)}
         _write_atomic(os.path.join(out_dir, "config.json"), json.dumps(info, indent=2).encode())
 
     generation = make_generation(config)
-    keys = evolution_keys(state.key_data)
+    keys = to_global(evolution_keys(state.key_data), replicated(mesh))
     params = config.learning_params()
     lane_steps = len(seeds) * config.population_size * config.lifetime_steps
     for g in range(int(state.generation), config.num_generations):
@@ -258,13 +280,20 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bo
                          record(state.history, g, fitness, performance))
         progress.update(g + 1, float(fitness.max()), float(fitness.mean()), lane_steps / seconds)
         if (g + 1) % checkpoint_every == 0 or g + 1 == config.num_generations:
-            checkpointer.save(state, meta)
-            if leader:
-                write_outputs(out_dir, config, seeds, state)
-    if leader:
-        write_outputs(out_dir, config, seeds, state)
+            checkpointer.save(state, meta)  # every process: orbax saves collectively
+            _write_outputs_from_leader(out_dir, config, seeds, state, leader)
+    _write_outputs_from_leader(out_dir, config, seeds, state, leader)
     checkpointer.close()
     return state
+
+
+def _write_outputs_from_leader(out_dir: str, config: Config, seeds: Sequence[int], state: RunState,
+                               leader: bool) -> None:
+    """Gather the state on every process (to_host is a collective), then write on the leader."""
+    host = state._replace(populations=to_host(state.populations), evaluated=to_host(state.evaluated),
+                          fitness=to_host(state.fitness))
+    if leader:
+        write_outputs(out_dir, config, seeds, host)
 
 
 # ----------------------------------------------------------------------------- CLI
