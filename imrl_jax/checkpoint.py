@@ -118,16 +118,4 @@ class Checkpointer:
         self.manager.close()
 
 
-def as_numpy(state: RunState) -> RunState:
-    """A host copy of a state (for writing outputs)."""
-    return jax.tree.map(np.asarray, state)
-
-
-def same_arrays(a, b) -> bool:
-    """Bitwise equality of two pytrees of arrays."""
-    leaves_a, leaves_b = jax.tree.leaves(a), jax.tree.leaves(b)
-    return len(leaves_a) == len(leaves_b) and all(
-        np.array_equal(np.asarray(x), np.asarray(y), equal_nan=True) for x, y in zip(leaves_a, leaves_b))
-
-
-__all__ = ["Checkpointer", "History", "RunState", "as_numpy", "empty_history", "git_commit", "same_arrays"]
+__all__ = ["Checkpointer", "History", "RunState", "empty_history", "git_commit"]
