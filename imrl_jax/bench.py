@@ -1,12 +1,14 @@
-"""Benchmark of the lifetime: lane-steps per second of JAX and of the NumPy reference.
+"""Benchmarks of the lifetime kernel (section 2's lives) against the NumPy reference.
 
-    python -m imrl_jax.bench [--lanes 300] [--task-steps 2000] [--repeats 3] [--json PATH]
+    python -m imrl_jax.bench [--lanes 1,50,300,3000] [--steps 1000] [--repeats 5] [--json PATH]
 
-One lane is one individual on one task. The JAX side lives ``lanes / 6`` LE-LS individuals
-(a childhood of 1.5 x task steps, as in the paper's 150,000 : 100,000, then six tasks),
-so adulthood runs ``lanes`` lanes at once; every step an individual lives counts as one
-lane-step. The reference lives one individual of the same config step by step. Both are
-timed in the same run; the JAX figure is the median of ``repeats`` runs after compilation.
+One lane is one individual on one task (in childhood, one individual). For every phase
+(LE-LS childhood; the adult phases of LE-LS/EE-LS, EE-ES and SLE) and lane count, it
+reports lane-steps per second (median of ``repeats`` timed runs after compilation), the
+compile time and the compiled program's memory; then the NumPy reference on the same
+phase, and the speed-up measured in the same run. Last, the headline: a whole LE-LS life
+of ``300 / 6`` individuals (childhood 1.5 x task steps, six tasks) against the reference.
+On CPU the lanes are split over one XLA device per core (``--cpu-devices``).
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import argparse
 import json
 import os
 import platform
+import resource
 import statistics
 import sys
 import time
@@ -23,95 +26,195 @@ import jax
 import numpy as np
 
 from imrl_jax.config import make_config
-from imrl_jax.lifetime import draw_many, lifetime_keys, make_evaluate, random_pose
+from imrl_jax.devices import use_host_cores
+
+#: (name, condition, phase attribute of imrl_jax.lifetime, reference phase name)
+PHASES = (
+    ("LE-LS childhood", "LE-LS", "CHILDHOOD", "childhood"),
+    ("LE-LS/EE-LS adulthood", "EE-LS", "ADULT_LEARNING_SELECTOR", "adult-ls"),
+    ("EE-ES adulthood", "EE-ES", "ADULT_EVOLVED_SELECTOR", "adult-es"),
+    ("SLE adulthood", "SLE", "ADULT_SINGLE_EXPERT", "sle"),
+)
 
 
-def bench_jax(config, num_individuals: int, repeats: int) -> dict:
-    """Median lane-steps per second of ``make_evaluate`` on a population."""
+def _shard(array, lanes: int):
+    """Split the lane axis over the devices when they divide it."""
+    from jax.sharding import Mesh, NamedSharding, PartitionSpec
+
+    devices = jax.devices()
+    if lanes % len(devices):
+        return array
+    return jax.device_put(array, NamedSharding(Mesh(np.asarray(devices), ("lanes",)), PartitionSpec("lanes")))
+
+
+def _time(fn, *args, repeats: int) -> float:
+    """Median wall time of ``repeats`` calls (after one untimed call)."""
+    jax.block_until_ready(fn(*args))
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        jax.block_until_ready(fn(*args))
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def _lane_inputs(config, lanes: int):
+    genome_size = max(config.num_genes, 1)
+    genomes = jax.random.uniform(jax.random.key(1), (lanes, genome_size), minval=-1, maxval=1)[:, : config.num_genes]
+    keys = jax.random.split(jax.random.key(0), lanes)
+    return _shard(keys, lanes), _shard(genomes, lanes)
+
+
+def bench_phase(condition: str, phase_name: str, lanes: int, steps: int, repeats: int) -> dict:
+    """Lane-steps per second of one phase run for ``steps`` steps on ``lanes`` lanes."""
+    from imrl_jax import lifetime as L
+    from imrl_jax.networks import decode
+
+    config = make_config("paper", condition=condition, childhood_steps=steps, task_steps=steps, num_bins=1)
+    phase = getattr(L, phase_name)
+    params = config.learning_params()
+
+    def lane(key, genome):
+        agent = decode(config, genome)
+        if phase is L.CHILDHOOD:
+            task = L.childhood_task(config)
+            pose = L.random_pose(key, config)
+        else:
+            agent = L.adult_agent(config, agent)
+            task = L.task_spec(config, 0)
+            pose = task.start
+        state, curves = L.run_phase(key, config, phase, params, task, L.init_state(config, agent, pose), steps)
+        return curves.reaches, curves.selections
+
+    keys, genomes = _lane_inputs(config, lanes)
+    start = time.perf_counter()
+    compiled = jax.jit(jax.vmap(lane)).lower(keys, genomes).compile()
+    compile_s = time.perf_counter() - start
+    memory = compiled.memory_analysis()
+    seconds = _time(compiled, keys, genomes, repeats=repeats)
+    return {"lanes": lanes, "steps": steps, "seconds": seconds, "lane_steps_per_s": lanes * steps / seconds,
+            "compile_s": compile_s,
+            "program_bytes": int(memory.temp_size_in_bytes + memory.argument_size_in_bytes
+                                 + memory.output_size_in_bytes)}
+
+
+def bench_reference_phase(condition: str, reference_phase: str, steps: int) -> dict:
+    """Steps per second of the NumPy reference on one lane of the same phase."""
+    from imrl_jax import reference
+    from imrl_jax.lifetime import draw_many
+
+    config = make_config("paper", condition=condition, childhood_steps=steps, task_steps=steps, num_bins=1)
+    rng = np.random.default_rng(0)
+    weights = reference.decode(config, rng.uniform(-1, 1, config.num_genes))
+    draws = draw_many(jax.random.key(0), steps, config.draw_block)
+    task = None if reference_phase == "childhood" else 0
+    start_pose = (200.0, 200.0, 0.3) if task is None else (*config.tasks[0].start, np.radians(config.tasks[0].heading_deg))
+    start = time.perf_counter()
+    reference.run_phase(config, reference_phase, weights, start_pose, np.asarray(draws.u, np.float64),
+                        np.asarray(draws.z, np.float64), task=task)
+    seconds = time.perf_counter() - start
+    return {"steps": steps, "seconds": seconds, "lane_steps_per_s": steps / seconds}
+
+
+def bench_lifetime(lanes: int, task_steps: int, repeats: int) -> dict:
+    """The headline: whole LE-LS lives of ``lanes / 6`` individuals, and the reference's one life."""
+    from imrl_jax import reference
+    from imrl_jax.lifetime import draw_many, lifetime_keys, make_evaluate, random_pose
+
+    config = make_config("paper", condition="LE-LS", task_steps=task_steps, childhood_steps=task_steps * 3 // 2,
+                         num_bins=10)
+    individuals = max(1, lanes // config.num_tasks)
     evaluate = make_evaluate(config)
     params = config.learning_params()
-    genomes = jax.random.uniform(jax.random.key(1), (num_individuals, config.num_genes), minval=-1, maxval=1)
+    _, genomes = _lane_inputs(config, individuals)
+    key = jax.random.key(0)
     start = time.perf_counter()
-    jax.block_until_ready(evaluate(jax.random.key(0), params, genomes))
+    jax.block_until_ready(evaluate(key, params, genomes))
     compile_s = time.perf_counter() - start
-    times = []
-    for r in range(repeats):
-        start = time.perf_counter()
-        jax.block_until_ready(evaluate(jax.random.key(r + 1), params, genomes))
-        times.append(time.perf_counter() - start)
-    seconds = statistics.median(times)
-    lane_steps = num_individuals * config.lifetime_steps
-    return {"seconds": seconds, "compile_and_first_run_s": compile_s, "lane_steps": lane_steps,
-            "lane_steps_per_s": lane_steps / seconds}
+    seconds = _time(evaluate, key, params, genomes, repeats=repeats)
+    jax_rate = individuals * config.lifetime_steps / seconds
 
-
-def bench_reference(config) -> dict:
-    """Steps per second of the NumPy reference living one individual of ``config``."""
-    from imrl_jax import reference
-
-    key = jax.random.key(2)
     keys = lifetime_keys(key, config.num_tasks)
-    genome = np.asarray(jax.random.uniform(key, (config.num_genes,), minval=-1, maxval=1), np.float64)
+    genome = np.asarray(genomes[0], np.float64)
     pose = random_pose(keys.pose, config)
-    child = draw_many(keys.childhood, config.childhood_steps)
-    tasks = jax.vmap(draw_many, (0, None))(keys.tasks, config.task_steps)
-    start_pose = (*np.asarray(pose.pos, np.float64), float(pose.heading))
+    child = draw_many(keys.childhood, config.childhood_steps, config.draw_block)
+    tasks = jax.vmap(draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
     start = time.perf_counter()
-    reference.live(config, genome, start_pose, np.asarray(child.u, np.float64), np.asarray(child.z, np.float64),
+    reference.live(config, genome, (*np.asarray(pose.pos, np.float64), float(pose.heading)),
+                   np.asarray(child.u, np.float64), np.asarray(child.z, np.float64),
                    np.asarray(tasks.u, np.float64), np.asarray(tasks.z, np.float64))
-    seconds = time.perf_counter() - start
-    return {"seconds": seconds, "lane_steps": config.lifetime_steps,
-            "lane_steps_per_s": config.lifetime_steps / seconds}
+    reference_rate = config.lifetime_steps / (time.perf_counter() - start)
+    return {"individuals": individuals, "lanes": individuals * config.num_tasks,
+            "childhood_steps": config.childhood_steps, "task_steps": config.task_steps,
+            "seconds": seconds, "compile_and_first_run_s": compile_s, "lane_steps_per_s": jax_rate,
+            "reference_lane_steps_per_s": reference_rate, "speedup": jax_rate / reference_rate}
 
 
-def run(lanes: int, task_steps: int, repeats: int) -> dict:
-    """Measure both sides on the same work; return a JSON-friendly result."""
-    config = make_config("paper", condition="LE-LS", task_steps=task_steps,
-                         childhood_steps=task_steps * 3 // 2, num_bins=10)
-    num_individuals = max(1, lanes // config.num_tasks)
-    jax_result = bench_jax(config, num_individuals, repeats)
-    reference_result = bench_reference(config)
+def machine() -> dict:
     device = jax.devices()[0]
-    return {
-        "backend": jax.default_backend(),
-        "device": getattr(device, "device_kind", str(device)),
-        "cpu_count": os.cpu_count(),
-        "machine": platform.machine(),
-        "jax_version": jax.__version__,
-        "condition": config.condition,
-        "lanes": num_individuals * config.num_tasks,
-        "individuals": num_individuals,
-        "childhood_steps": config.childhood_steps,
-        "task_steps": config.task_steps,
-        "jax": jax_result,
-        "reference": reference_result,
-        "speedup": jax_result["lane_steps_per_s"] / reference_result["lane_steps_per_s"],
-    }
+    return {"backend": jax.default_backend(), "device": getattr(device, "device_kind", str(device)),
+            "num_devices": len(jax.devices()), "cpu_count": os.cpu_count(), "machine": platform.machine(),
+            "jax_version": jax.__version__}
+
+
+def run(lane_counts, steps: int, repeats: int, reference_steps: int, lifetime_lanes: int,
+        lifetime_task_steps: int, log=print) -> dict:
+    """Every measurement, as a JSON-friendly dict (also printed as a table through ``log``)."""
+    result = {**machine(), "phases": [], "repeats": repeats}
+    log(f"backend {result['backend']} ({result['device']} x {result['num_devices']}, {result['cpu_count']} cpus), "
+        f"jax {result['jax_version']}; medians of {repeats} runs")
+    log(f"{'phase':24s} {'lanes':>6s} {'lane-steps/s':>14s} {'vs reference':>12s} {'compile s':>9s} {'program MB':>10s}")
+    for name, condition, phase, reference_phase in PHASES:
+        ref = bench_reference_phase(condition, reference_phase, reference_steps)
+        for lanes in lane_counts:
+            row = bench_phase(condition, phase, lanes, steps, repeats)
+            row.update(phase=name, reference_lane_steps_per_s=ref["lane_steps_per_s"],
+                       speedup=row["lane_steps_per_s"] / ref["lane_steps_per_s"])
+            result["phases"].append(row)
+            log(f"{name:24s} {lanes:6d} {row['lane_steps_per_s']:14,.0f} {row['speedup']:11,.0f}x "
+                f"{row['compile_s']:9.1f} {row['program_bytes'] / 2**20:10.1f}")
+        log(f"{name + ' (reference)':24s} {1:6d} {ref['lane_steps_per_s']:14,.0f}")
+    life = bench_lifetime(lifetime_lanes, lifetime_task_steps, repeats)
+    result["lifetime"] = life
+    log(f"LE-LS whole life: {life['individuals']} individuals ({life['lanes']} adult lanes), childhood "
+        f"{life['childhood_steps']:,} + 6 x {life['task_steps']:,} steps: {life['lane_steps_per_s']:,.0f} "
+        f"lane-steps/s; reference {life['reference_lane_steps_per_s']:,.0f}; speed-up {life['speedup']:,.0f}x")
+    result["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    log(f"peak resident memory of this process: {result['peak_rss_mb']:.0f} MB")
+    return result
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m imrl_jax.bench", description=__doc__.split("\n")[0])
-    parser.add_argument("--lanes", type=int, default=300, help="adult lanes (individuals x 6 tasks)")
-    parser.add_argument("--task-steps", type=int, default=2000, help="steps per task (childhood 1.5x)")
-    parser.add_argument("--repeats", type=int, default=3, help="timed JAX runs after compilation")
-    parser.add_argument("--json", help="also write the result to this JSON file")
+    parser.add_argument("--lanes", default="1,50,300,3000", help="comma-separated lane counts")
+    parser.add_argument("--steps", type=int, default=1000, help="steps per timed phase run")
+    parser.add_argument("--repeats", type=int, default=5, help="timed runs after compilation (median)")
+    parser.add_argument("--reference-steps", type=int, default=500, help="steps of the reference per phase")
+    parser.add_argument("--lifetime-lanes", type=int, default=300, help="adult lanes of the whole-life benchmark")
+    parser.add_argument("--lifetime-task-steps", type=int, default=2000, help="steps per task of the whole life")
+    parser.add_argument("--cpu-devices", type=int, default=0, help="CPU devices (0: one per core)")
+    parser.add_argument("--json", help="also write the results to this JSON file")
     args = parser.parse_args(argv)
-    for name in ("lanes", "task_steps", "repeats"):
-        if getattr(args, name) < 1:
-            print(f"error: --{name.replace('_', '-')} must be at least 1", file=sys.stderr)
-            return 2
-    if args.task_steps % 10:
-        print("error: --task-steps must be a multiple of 10", file=sys.stderr)
+    try:
+        lane_counts = [int(n) for n in args.lanes.split(",")]
+    except ValueError:
+        lane_counts = []
+    if not lane_counts or min(lane_counts) < 1:
+        print(f"error: --lanes: expected positive integers separated by commas, got {args.lanes!r}", file=sys.stderr)
         return 2
-    result = run(args.lanes, args.task_steps, args.repeats)
-    j, r = result["jax"], result["reference"]
-    print(f"backend {result['backend']} ({result['device']}, {result['cpu_count']} cpus), jax {result['jax_version']}")
-    print(f"LE-LS lifetime: childhood {result['childhood_steps']:,} + 6 x {result['task_steps']:,} steps, "
-          f"{result['individuals']} individuals = {result['lanes']} adult lanes")
-    print(f"  jax        {j['lane_steps_per_s']:>14,.0f} lane-steps/s  (median of {args.repeats}, "
-          f"{j['seconds']:.3f} s; compile + first run {j['compile_and_first_run_s']:.1f} s)")
-    print(f"  reference  {r['lane_steps_per_s']:>14,.0f} lane-steps/s  (one individual, {r['seconds']:.1f} s)")
-    print(f"  speed-up   {result['speedup']:>14,.0f} x")
+    for name in ("steps", "repeats", "reference_steps", "lifetime_lanes", "lifetime_task_steps"):
+        if getattr(args, name) < 1:
+            print(f"error: --{name.replace('_', '-')}: must be at least 1", file=sys.stderr)
+            return 2
+    if args.lifetime_task_steps % 10:
+        print("error: --lifetime-task-steps: must be a multiple of 10", file=sys.stderr)
+        return 2
+    if args.cpu_devices < 0:
+        print("error: --cpu-devices: must be 0 (one per core) or more", file=sys.stderr)
+        return 2
+    use_host_cores(args.cpu_devices or None)
+    result = run(lane_counts, args.steps, args.repeats, args.reference_steps, args.lifetime_lanes,
+                 args.lifetime_task_steps)
     if args.json:
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
         with open(args.json, "w") as f:

@@ -77,6 +77,7 @@ class Config:
     task_steps: int = 100_000
     trial_timeout: int = 200  # steps after a trial's start without reaching the target
     num_bins: int = 100  # bins of the reward/selection curves of each phase
+    draw_block: int = 100  # steps whose random numbers are drawn in one call (sets the stream)
 
     # --- arena and floor (fixed here)
     arena_size: float = 400.0
@@ -228,7 +229,7 @@ def _validate(c: Config) -> None:
 
     if c.condition not in CONDITIONS:
         fail("condition", f"must be one of {', '.join(CONDITIONS)}")
-    positive_ints = ("num_experts", "task_steps", "trial_timeout", "num_bins", "population_size",
+    positive_ints = ("num_experts", "task_steps", "draw_block", "trial_timeout", "num_bins", "population_size",
                      "num_generations", "num_parents")
     for name in positive_ints:
         value = getattr(c, name)

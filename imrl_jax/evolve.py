@@ -30,6 +30,8 @@ import numpy as np
 
 import imrl_jax
 from imrl_jax.checkpoint import Checkpointer, History, RunState, empty_history, git_commit
+from imrl_jax.devices import (make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
+                              use_host_cores)
 from imrl_jax.config import CONDITIONS, EVOLVED_CONDITIONS, PRESETS, Config, ConfigError, make_config
 from imrl_jax.ga import init_population, make_generation
 from imrl_jax.progress import Progress
@@ -37,67 +39,6 @@ from imrl_jax.progress import Progress
 
 class UsageError(Exception):
     """Bad input: reported as one line, exit code 2, nothing written."""
-
-
-# ----------------------------------------------------------------------------- devices
-
-
-def make_mesh():
-    """A 1-D mesh over every device of every process."""
-    from jax.sharding import Mesh
-
-    return Mesh(np.asarray(jax.devices()), ("lanes",))
-
-
-def population_sharding(mesh, num_seeds: int, population_size: int):
-    """Shard the seeds axis if the devices divide it, else the population axis, else replicate."""
-    from jax.sharding import NamedSharding, PartitionSpec
-
-    n = mesh.devices.size
-    if num_seeds % n == 0:
-        spec = PartitionSpec("lanes")
-    elif population_size % n == 0:
-        spec = PartitionSpec(None, "lanes")
-    else:
-        spec = PartitionSpec()
-    return NamedSharding(mesh, spec)
-
-
-def replicated(mesh):
-    """The sharding of a value every device holds in full."""
-    from jax.sharding import NamedSharding, PartitionSpec
-
-    return NamedSharding(mesh, PartitionSpec())
-
-
-def to_global(array, sharding) -> jax.Array:
-    """A global array from a host value every process holds in full (typed PRNG keys too).
-
-    Under jax.distributed, jit wants global arrays: a host-local (uncommitted, one-device)
-    array is not one, so even the replicated inputs (the seeds' keys) go through here.
-    """
-    if isinstance(array, jax.Array) and jax.dtypes.issubdtype(array.dtype, jax.dtypes.prng_key):
-        impl = jax.random.key_impl(array)
-        return jax.random.wrap_key_data(to_global(np.asarray(jax.random.key_data(array)), sharding), impl=impl)
-    array = np.asarray(array)
-    return jax.make_array_from_callback(array.shape, sharding, lambda index: array[index])
-
-
-def sharded_axis(sharding) -> str:
-    """Which axis of the (seeds, population, ...) arrays ``sharding`` splits: seeds, population or none."""
-    spec = tuple(sharding.spec) + (None, None)
-    if sharding.mesh.devices.size == 1:
-        return "none"
-    return "seeds" if spec[0] else "population" if spec[1] else "none"
-
-
-def to_host(array) -> np.ndarray:
-    """The full value of a (possibly multi-process) array on this host."""
-    if getattr(array, "is_fully_addressable", True):
-        return np.asarray(array)
-    from jax.experimental import multihost_utils
-
-    return np.asarray(multihost_utils.process_allgather(array, tiled=True))
 
 
 # ----------------------------------------------------------------------------- state
@@ -366,6 +307,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--checkpoint-every", type=int, default=1, help="generations between checkpoints")
     p.add_argument("--keep", type=int, default=3, help="checkpoints kept")
     p.add_argument("--quiet", action="store_true", help="no progress line (for logs)")
+    p.add_argument("--cpu-devices", type=int, default=0,
+                   help="CPU devices to split the lanes over (0: one per core; ignored if XLA_FLAGS sets it)")
     p.add_argument("--coordinator", help="multi-host: coordinator address host:port (or JAX_COORDINATOR_ADDRESS)")
     p.add_argument("--num-processes", type=int, help="multi-host: number of processes (or JAX_NUM_PROCESSES)")
     p.add_argument("--process-id", type=int, help="multi-host: this process's id (or JAX_PROCESS_ID)")
@@ -416,6 +359,9 @@ def main(argv=None) -> int:
             raise UsageError("--seeds: must be at least 1")
         config = build_config(args)
         out_dir = args.out or os.path.join("runs", args.cond)
+        if args.cpu_devices < 0:
+            raise UsageError("--cpu-devices: must be 0 (one per core) or more")
+        use_host_cores(args.cpu_devices or None)
         init_distributed(args)
         state = run(config, out_dir, range(args.first_seed, args.first_seed + args.seeds), resume=args.resume,
                     checkpoint_every=args.checkpoint_every, keep=args.keep, quiet=args.quiet)

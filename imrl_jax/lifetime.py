@@ -83,6 +83,7 @@ class State(NamedTuple):
     prev: Previous
     trial_step: jnp.ndarray  # steps since the current trial started
     t: jnp.ndarray  # step within the phase
+    block: Draws  # the random numbers of the current block of steps
 
 
 class TaskSpec(NamedTuple):
@@ -131,15 +132,24 @@ class LifetimeKeys(NamedTuple):
     tasks: jax.Array  # (tasks,)
 
 
-def draw(key: jax.Array, t) -> Draws:
-    """The random numbers of step t of a phase whose key is ``key``."""
-    key_u, key_z = jax.random.split(jax.random.fold_in(key, t))
-    return Draws(jax.random.uniform(key_u), jax.random.normal(key_z, (2,)))
+def draw_block(key: jax.Array, block, block_steps: int, noisy: bool = True) -> Draws:
+    """The draws of steps block*B .. block*B + B-1 of a phase whose key is ``key``.
+
+    Random numbers are made ``block_steps`` at a time (one vectorised call instead of
+    one per step). Phases without action noise get zeros for z; the expert-choice
+    numbers are the same either way.
+    """
+    key_u, key_z = jax.random.split(jax.random.fold_in(key, block))
+    u = jax.random.uniform(key_u, (block_steps,))
+    z = jax.random.normal(key_z, (block_steps, 2)) if noisy else jnp.zeros((block_steps, 2), u.dtype)
+    return Draws(u, z)
 
 
-def draw_many(key: jax.Array, num_steps: int) -> Draws:
+def draw_many(key: jax.Array, num_steps: int, block_steps: int) -> Draws:
     """The draws of steps 0 .. num_steps-1 (for the reference and tests)."""
-    return jax.vmap(draw, (None, 0))(key, jnp.arange(num_steps))
+    num_blocks = -(-num_steps // block_steps)
+    blocks = jax.vmap(draw_block, (None, 0, None))(key, jnp.arange(num_blocks), block_steps)
+    return jax.tree.map(lambda x: x.reshape((-1,) + x.shape[2:])[:num_steps], blocks)
 
 
 def select(u, selection):
@@ -176,6 +186,7 @@ def init_state(config: Config, agent: Agent, pose: Pose) -> State:
                       zeros(), jnp.bool_(False)),
         trial_step=jnp.int32(0),
         t=jnp.int32(0),
+        block=Draws(zeros(config.draw_block), zeros(config.draw_block, 2)),
     )
 
 
@@ -189,7 +200,13 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
          key: jax.Array, state: State) -> tuple[State, StepRecord]:
     """One control cycle (MODEL.md "Acting, each time step t of a phase")."""
     agent, traces, prev = state.agent, state.traces, state.prev
-    draws = draw(key, state.t)
+    # t is the same for every lane (it is not batched under vmap), so this cond really
+    # skips the draw on the steps between blocks.
+    offset = state.t % config.draw_block
+    block = jax.lax.cond(offset == 0,
+                         lambda: draw_block(key, state.t // config.draw_block, config.draw_block, phase.noisy),
+                         lambda: state.block)
+    draws = Draws(block.u[offset], block.z[offset])
     gamma, lam = params.gamma, params.trace_lambda
 
     # 1-2: observe, choose the expert.
@@ -258,7 +275,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
         reached = timeout = jnp.bool_(False)
 
     prev = Previous(xb, k, action, output, selection, ~timeout, reached.astype(xb.dtype), reached)
-    state = State(agent, traces, pose, prev, trial_step, state.t + 1)
+    state = State(agent, traces, pose, prev, trial_step, state.t + 1, block)
     return state, StepRecord(pose, k, reached, timeout)
 
 

@@ -48,7 +48,7 @@ def _assert_weights_close(jax_agent: Agent, ref: dict):
 
 def _compare_phase(config, phase, phase_name, agent, pose, task_index, params, seed=0):
     key = jax.random.key(seed)
-    draws = L.draw_many(key, STEPS)
+    draws = L.draw_many(key, STEPS, config.draw_block)
     task = L.childhood_task(config, jnp.float64) if task_index is None else L.task_spec(config, task_index, jnp.float64)
     state = L.init_state(config, agent, pose)
     final, record = jax.jit(L.simulate, static_argnums=(1, 2, 6))(key, config, phase, params, task, state, STEPS)
@@ -122,8 +122,8 @@ def test_whole_life_matches_reference(tiny, condition, rules):
 
     keys = L.lifetime_keys(key, config.num_tasks)
     pose = L.random_pose(keys.pose, config, jnp.float64)
-    child = L.draw_many(keys.childhood, config.childhood_steps)
-    tasks = jax.vmap(L.draw_many, (0, None))(keys.tasks, config.task_steps)
+    child = L.draw_many(keys.childhood, config.childhood_steps, config.draw_block)
+    tasks = jax.vmap(L.draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
     ref = reference.live(config, np.asarray(genome), (float(pose.pos[0]), float(pose.pos[1]), float(pose.heading)),
                          np.asarray(child.u), np.asarray(child.z), np.asarray(tasks.u), np.asarray(tasks.z))
     np.testing.assert_array_equal(np.asarray(result.reaches), ref["reaches"])
@@ -143,7 +143,7 @@ def test_float32_lifetime_tracks_float64_reference(tiny):
     key = jax.random.key(0)
     final, record = jax.jit(L.simulate, static_argnums=(1, 2, 6))(
         key, config, L.ADULT_LEARNING_SELECTOR, params, task, L.init_state(config, agent, task.start), STEPS)
-    draws = L.draw_many(key, STEPS)
+    draws = L.draw_many(key, STEPS, config.draw_block)
     ref = reference.run_phase(config, "adult-ls", _to_numpy(agent), (300.0, 200.0, 0.0),
                               np.asarray(draws.u, np.float64), np.asarray(draws.z, np.float64), task=0)
     np.testing.assert_array_equal(np.asarray(record.k), ref["k"])
