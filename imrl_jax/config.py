@@ -78,6 +78,7 @@ class Config:
     trial_timeout: int = 200  # steps after a trial's start without reaching the target
     num_bins: int = 100  # bins of the reward/selection curves of each phase
     draw_block: int = 100  # steps whose random numbers are drawn in one call (sets the stream)
+    scan_unroll: int = 2  # steps per iteration of the step loop (speed only, same results)
 
     # --- arena and floor (fixed here)
     arena_size: float = 400.0
@@ -229,8 +230,8 @@ def _validate(c: Config) -> None:
 
     if c.condition not in CONDITIONS:
         fail("condition", f"must be one of {', '.join(CONDITIONS)}")
-    positive_ints = ("num_experts", "task_steps", "draw_block", "trial_timeout", "num_bins", "population_size",
-                     "num_generations", "num_parents")
+    positive_ints = ("num_experts", "task_steps", "draw_block", "scan_unroll", "trial_timeout", "num_bins",
+                     "population_size", "num_generations", "num_parents")
     for name in positive_ints:
         value = getattr(c, name)
         if not isinstance(value, int) or isinstance(value, bool) or value < 1:

@@ -295,7 +295,8 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
 
     def one_bin(state, _):
         counts = Curves(jnp.int32(0), jnp.int32(0), jnp.zeros((num_experts,), jnp.int32))
-        (state, counts), _ = jax.lax.scan(one_step, (state, counts), None, length=bin_steps)
+        (state, counts), _ = jax.lax.scan(one_step, (state, counts), None, length=bin_steps,
+                                          unroll=config.scan_unroll)
         return state, counts
 
     return jax.lax.scan(one_bin, state, None, length=num_bins)

@@ -148,3 +148,15 @@ def test_paper_length_life_runs_on_cpu():
     np.testing.assert_array_equal(result.adult_selections.sum((-1, -2)), 100_000)
     assert result.reward_curve.shape == (6, 100)
     assert np.isfinite(np.asarray(result.agent.actor)).all()
+
+
+def test_unrolling_the_step_loop_changes_nothing(tiny):
+    """scan_unroll is a speed knob: 1 and 3 steps per loop iteration give the same life."""
+    params = tiny().learning_params()
+    genome = _genomes(tiny("LE-LS"), 1)[0]
+    lives = [jax.jit(L.live, static_argnums=1)(jax.random.key(2), tiny("LE-LS", scan_unroll=u), params, genome)
+             for u in (1, 3)]
+    np.testing.assert_array_equal(lives[0].reaches, lives[1].reaches)
+    np.testing.assert_array_equal(lives[0].childhood_selections, lives[1].childhood_selections)
+    jax.tree.map(np.testing.assert_array_equal, lives[0].adult_agents,
+                 lives[1].adult_agents)
