@@ -24,11 +24,6 @@ class Agent(NamedTuple):
     selector_critic: jnp.ndarray  # (n+1,): U = u.x~
 
 
-def _dot(weights: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:
-    """weights @ x~ as a multiply and a sum: it fuses with its neighbours, a tiny dot does not."""
-    return jnp.sum(weights * xb, axis=-1)
-
-
 def with_bias(x: jnp.ndarray) -> jnp.ndarray:
     """x~ = [x, 1]."""
     return jnp.concatenate([x, jnp.ones((1,), x.dtype)])
@@ -36,17 +31,17 @@ def with_bias(x: jnp.ndarray) -> jnp.ndarray:
 
 def reinforce(w: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:
     """Internal reward in [-1, 1]: 2 sigmoid(w.x~) - 1."""
-    return 2.0 * jax.nn.sigmoid(_dot(w, xb)) - 1.0
+    return 2.0 * jax.nn.sigmoid(w @ xb) - 1.0
 
 
 def act(weights: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:
     """Sigmoid outputs of an actor (2 units) or of the selector (K units)."""
-    return jax.nn.sigmoid(_dot(weights, xb))
+    return jax.nn.sigmoid(weights @ xb)
 
 
 def evaluate(v: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:
     """Linear evaluation v.x~ (an expert's evaluator or the selector's critic)."""
-    return _dot(v, xb)
+    return v @ xb
 
 
 def zero_agent(config: Config, dtype=jnp.float32) -> Agent:

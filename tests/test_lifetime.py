@@ -116,7 +116,7 @@ def test_decode_encode_roundtrip(tiny):
 
 
 def test_lifetime_memory_does_not_grow_with_length(tiny):
-    """The compiled life needs the same memory for 1,000 and 600,000 adult steps."""
+    """The compiled life needs the same memory (to a few bytes) for 1,000 and 100,000 steps per task."""
     params = tiny().learning_params()
     sizes = []
     for steps in (1_000, 100_000):
@@ -125,7 +125,8 @@ def test_lifetime_memory_does_not_grow_with_length(tiny):
         compiled = jax.jit(L.live, static_argnums=1).lower(jax.random.key(0), config, params, genome).compile()
         memory = compiled.memory_analysis()
         sizes.append(memory.temp_size_in_bytes + memory.output_size_in_bytes)
-    assert sizes[1] == sizes[0]
+    # Keeping even one float per step would add 2.4 MB at this length; loop shapes may differ by bytes.
+    assert abs(sizes[1] - sizes[0]) < 4096, sizes
 
 
 def test_select_follows_pseudo_probabilities():
