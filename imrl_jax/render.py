@@ -1,0 +1,193 @@
+"""``python -m imrl_jax.render``: the best individual of an evolution on one task, animated (section 3, Fig. 1).
+
+    python -m imrl_jax.render RUN_DIR --task K --out FILE.gif [--steps 300] [--every 2] [--fps 20]
+
+RUN_DIR is a run directory of ``python -m imrl_jax.evolve`` (``config.json`` and
+``final_population.npz``). The individual is the fittest of all seeds in the last
+evaluated generation. It lives the very life that earned its fitness (the run's keys),
+which trains its experts in childhood (LE-LS) and its selector on every task; then it
+drives task K (1-6) from the weights it ended that task with, for ``--steps`` steps,
+recorded with :func:`imrl_jax.lifetime.simulate`. The animation shows the arena with the
+task, the path coloured by the expert in control, the robot with its retina patch, a
+zoom on the robot and the retina's 2 x 6 view. ``.gif`` is written with Pillow; ``.mp4``
+needs ffmpeg on PATH.
+
+Bad input (a missing or incomplete run directory, a task out of range, an unknown
+extension, an output that exists, without ``--overwrite``) gets a one-line error and exit
+code 2, and nothing is written. Only FILE is ever written (through a temporary file in
+its directory, renamed when complete).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import sys
+import time
+from typing import NamedTuple
+
+import numpy as np
+
+FORMATS = (".gif", ".mp4")
+
+
+class UsageError(Exception):
+    """Bad input: reported as one line, exit code 2, nothing written."""
+
+
+class Best(NamedTuple):
+    """The fittest individual of a run's last evaluated generation and where it came from."""
+
+    config: object  # Config
+    genome: np.ndarray
+    seed: int
+    index: int  # in its seed's population
+    generation: int  # 0-based generation it was evaluated in
+    fitness: float
+
+
+def load_run(run_dir: str):
+    """(config, seeds, arrays of final_population.npz) of a run directory; raises UsageError."""
+    from imrl_jax.config import Config, ConfigError
+
+    if not os.path.isdir(run_dir):
+        raise UsageError(f"RUN_DIR: {run_dir} is not a directory")
+    config_path = os.path.join(run_dir, "config.json")
+    population_path = os.path.join(run_dir, "final_population.npz")
+    for path in (config_path, population_path):
+        if not os.path.isfile(path):
+            raise UsageError(f"RUN_DIR: {run_dir} holds no {os.path.basename(path)} "
+                             f"(not a run of python -m imrl_jax.evolve?)")
+    try:
+        with open(config_path) as f:
+            saved = json.load(f)
+        config = Config.from_dict(saved["config"])
+        seeds = [int(s) for s in saved["seeds"]]
+    except (OSError, ValueError, KeyError, TypeError, ConfigError) as error:
+        raise UsageError(f"{config_path} is unreadable ({error})") from None
+    try:
+        with np.load(population_path) as data:
+            arrays = {name: data[name] for name in ("evaluated", "fitness", "generation")}
+    except (OSError, ValueError, KeyError) as error:
+        raise UsageError(f"{population_path} is unreadable ({error})") from None
+    if int(arrays["generation"]) < 1:
+        raise UsageError(f"{run_dir}: no generation has been evaluated yet")
+    if arrays["evaluated"].shape[:2] != arrays["fitness"].shape or arrays["fitness"].shape[0] != len(seeds):
+        raise UsageError(f"{population_path}: arrays do not match the {len(seeds)} seed(s) of config.json")
+    return config, seeds, arrays
+
+
+def best_individual(run_dir: str) -> Best:
+    """The fittest individual over all seeds of the last evaluated generation of a run."""
+    config, seeds, arrays = load_run(run_dir)
+    fitness = arrays["fitness"]
+    s, i = np.unravel_index(int(np.argmax(fitness)), fitness.shape)
+    return Best(config, arrays["evaluated"][s, i], seeds[s], int(i), int(arrays["generation"]) - 1,
+                float(fitness[s, i]))
+
+
+def life_key(config, seed: int, generation: int, index: int):
+    """The key of the life individual ``index`` of ``seed`` lived in ``generation`` of an evolve run."""
+    import jax
+
+    from imrl_jax.evolve import evolution_keys, seed_keys
+    from imrl_jax.ga import generation_keys
+
+    key = evolution_keys(np.asarray(jax.random.key_data(seed_keys([seed]))))[0]
+    key_life, _ = generation_keys(key, generation)
+    return jax.random.split(key_life, config.population_size)[index]
+
+
+def check_output(out_path: str, overwrite: bool = False) -> str:
+    """The output's extension after checking the path can be written; raises UsageError."""
+    ext = os.path.splitext(out_path)[1].lower()
+    if ext not in FORMATS:
+        raise UsageError(f"--out: unknown extension {ext or '(none)'!r} (use {' or '.join(FORMATS)})")
+    if ext == ".mp4" and shutil.which("ffmpeg") is None:
+        raise UsageError("--out: writing .mp4 needs ffmpeg on PATH (not found); write a .gif instead")
+    if os.path.isdir(out_path):
+        raise UsageError(f"--out: {out_path} is a directory")
+    if os.path.exists(out_path) and not overwrite:
+        raise UsageError(f"--out: {out_path} exists (pass --overwrite to replace it)")
+    return ext
+
+
+def run(run_dir: str, task: int, out_path: str, steps: int = 300, every: int = 2, fps: int = 20,
+        overwrite: bool = False) -> dict:
+    """Animate the best individual of ``run_dir`` on task ``task`` (1-based) into ``out_path``; return a summary."""
+    if steps < 1 or every < 1 or fps < 1:
+        raise UsageError("--steps, --every and --fps must be at least 1")
+    check_output(out_path, overwrite)
+    best = best_individual(run_dir)
+    config = best.config
+    if not 1 <= task <= config.num_tasks:
+        raise UsageError(f"--task: must be in 1..{config.num_tasks} (got {task})")
+
+    import jax
+    import jax.numpy as jnp
+
+    from imrl_jax.behaviour import task_trajectory
+    from imrl_jax.lifetime import live
+    from imrl_jax.plotting import write_animation
+
+    start = time.perf_counter()
+    params = config.learning_params()
+    key = life_key(config, best.seed, best.generation, best.index)
+    result = jax.jit(live, static_argnums=1)(key, config, params, jnp.asarray(best.genome, jnp.float32))
+    agent = jax.tree.map(lambda x: x[task - 1], result.adult_agents)
+    trajectory = task_trajectory(jax.random.fold_in(key, task), config, params, agent, task - 1, steps)
+
+    title = (f"{config.condition}, best individual of {os.path.basename(os.path.normpath(run_dir))} "
+             f"(seed {best.seed}, generation {best.generation}, fitness {best.fitness:.3f})\n"
+             f"task {task}: {steps} steps after its {config.task_steps:,}-step learning period")
+    directory = os.path.dirname(os.path.abspath(out_path))
+    os.makedirs(directory, exist_ok=True)
+    base, ext = os.path.splitext(os.path.basename(out_path))
+    tmp = os.path.join(directory, f".{base}.tmp-{os.getpid()}{ext}")
+    try:
+        frames = write_animation(config, trajectory, tmp, task=task - 1, every=every, fps=fps, title=title)
+        os.replace(tmp, out_path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+    return {"out": out_path, "frames": frames, "task": task, "seed": best.seed, "index": best.index,
+            "generation": best.generation, "fitness": best.fitness, "relived_fitness": float(result.fitness),
+            "task_performance": float(result.performance[task - 1]),
+            "reaches_in_animation": int(trajectory.reached.sum()), "seconds": time.perf_counter() - start}
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m imrl_jax.render",
+                                description="Animate the best individual of an evolve run on one task.",
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("run_dir", metavar="RUN_DIR", help="run directory of python -m imrl_jax.evolve")
+    p.add_argument("--task", type=int, required=True, help="task to show, 1-6")
+    p.add_argument("--out", required=True, help="animation file, .gif (or .mp4 with ffmpeg on PATH)")
+    p.add_argument("--steps", type=int, default=300, help="steps of the task to show")
+    p.add_argument("--every", type=int, default=2, help="one frame every this many steps")
+    p.add_argument("--fps", type=int, default=20, help="frames per second")
+    p.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
+    return p
+
+
+def main(argv=None) -> int:
+    args = parser().parse_args(argv)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    try:
+        summary = run(args.run_dir, args.task, args.out, args.steps, args.every, args.fps, args.overwrite)
+    except UsageError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    print(f"wrote {summary['out']}: {summary['frames']} frames of task {summary['task']} "
+          f"(best individual: seed {summary['seed']}, generation {summary['generation']}, fitness "
+          f"{summary['fitness']:.3f}, relived {summary['relived_fitness']:.3f}; "
+          f"{summary['reaches_in_animation']} reaches shown) in {summary['seconds']:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

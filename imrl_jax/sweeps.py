@@ -1,0 +1,304 @@
+"""Parameter sweeps of the learning rules (section 2 "Learning") and the GA (section 2 "Genetic algorithm").
+
+The values MODEL.md lets a researcher vary split in two kinds:
+
+* **dynamic** values are arguments of the compiled program, so a whole grid of them runs
+  as one ``vmap`` in one compilation: the :class:`~imrl_jax.config.LearningParams`
+  (discount ``gamma``, ``trace_lambda``, the four learning rates, the childhood noise
+  ``noise_std``; ``eta`` here sets all four rates at once, the paper's single rate) and
+  the GA's mutation (``mutation_prob``, ``mutation_scale``, see :class:`GAParams`);
+* **static** values fix shapes or loop lengths (``childhood_steps``, ``task_steps``,
+  ``num_experts``, ``population_size``, ...): every value is its own compilation
+  (:func:`evolve_static` loops over them and says so).
+
+A sweep point is a :class:`SweepPoint` (learning values + GA values); a :class:`Sweep`
+holds a batch of them with a leading axis V and the settings each one varies.
+:func:`make_evolution_sweep` runs a short evolution for every point and seed at once, with
+the same keys as ``python -m imrl_jax.evolve``: a one-point program at the config's own
+values (:func:`evolve_points`) gives exactly that command's run. A batch of several points
+is another compiled program, which rounds a few operations differently; over long lives
+such differences can send single lives elsewhere, so the same values in different batches
+agree statistically, not bit for bit (within one program they are reproducible).
+:func:`make_lifetime_sweep` lives one population under every point (the same keys for
+every point, so only the values differ).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import itertools
+from typing import Callable, NamedTuple, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from imrl_jax.config import Config, LearningParams
+from imrl_jax.ga import generation_keys, init_population, select
+from imrl_jax.lifetime import LifetimeResult, live
+
+#: Learning rates set together by the pseudo-field ``eta`` (the paper has one rate).
+ETA_FIELDS = ("eta_actor", "eta_evaluator", "eta_selector_actor", "eta_selector_critic")
+
+
+class GAParams(NamedTuple):
+    """The GA's dynamic values: per-gene mutation probability and the U[-scale, scale] size."""
+
+    mutation_prob: float
+    mutation_scale: float
+
+
+class SweepPoint(NamedTuple):
+    """One point of a sweep: learning values and GA values (a pytree of scalars)."""
+
+    params: LearningParams
+    ga: GAParams
+
+
+@dataclasses.dataclass(frozen=True)
+class Sweep:
+    """A batch of V points (leading axis V on every leaf) and what each one sets."""
+
+    points: SweepPoint
+    settings: tuple  # V dicts {field: value} of the fields the point varies
+
+    def __len__(self) -> int:
+        return len(self.settings)
+
+
+class EvolutionCurves(NamedTuple):
+    """What a short evolution reports per point and seed (leading axes (V, S) in a sweep)."""
+
+    best: jnp.ndarray  # (G,) best fitness of each generation
+    mean: jnp.ndarray  # (G,) mean fitness of each generation
+    best_performance: jnp.ndarray  # (G, tasks) task performances of each generation's best
+    best_reward_curve: jnp.ndarray  # (G, tasks, bins) reaches per bin of each generation's best
+    best_childhood_selections: jnp.ndarray  # (G, bins, K) steps each expert led in childhood
+    final_evaluated: jnp.ndarray  # (P, genes) the last evaluated population
+    final_fitness: jnp.ndarray  # (P,) its fitness
+
+
+DYNAMIC_FIELDS = LearningParams._fields + GAParams._fields + ("eta",)
+
+
+def point(config: Config, **values) -> SweepPoint:
+    """The sweep point of ``config`` with some dynamic values changed (``eta`` sets all four rates)."""
+    unknown = set(values) - set(DYNAMIC_FIELDS)
+    if unknown:
+        raise ValueError(f"not a dynamic field: {sorted(unknown)[0]} (choose from {', '.join(DYNAMIC_FIELDS)}; "
+                         f"static fields need one compilation per value: see evolve_static)")
+    values = dict(values)
+    if "eta" in values:
+        eta = values.pop("eta")
+        values = {**{f: eta for f in ETA_FIELDS}, **values}
+    changed = config.replace(**values)  # validates every value
+    params = changed.learning_params()
+    ga = GAParams(changed.mutation_prob, changed.mutation_scale)
+    return SweepPoint(jax.tree.map(lambda v: jnp.asarray(v, jnp.float32), params),
+                      jax.tree.map(lambda v: jnp.asarray(v, jnp.float32), ga))
+
+
+def stack(points: Sequence[SweepPoint]) -> SweepPoint:
+    """Points stacked along a new leading axis."""
+    return jax.tree.map(lambda *xs: jnp.stack(xs), *points)
+
+
+def from_settings(config: Config, settings: Sequence[dict]) -> Sweep:
+    """A sweep of the given settings, each a dict of dynamic fields changed from ``config``."""
+    settings = tuple(dict(s) for s in settings)
+    if not settings:
+        raise ValueError("a sweep needs at least one point")
+    return Sweep(stack([point(config, **s) for s in settings]), settings)
+
+
+def grid(config: Config, **values: Sequence[float]) -> Sweep:
+    """Every combination of the given values (a full factorial design)."""
+    names = list(values)
+    return from_settings(config, [dict(zip(names, combo)) for combo in itertools.product(*values.values())])
+
+
+def one_at_a_time(config: Config, values: dict) -> Sweep:
+    """Each field varied alone over its values, the others at the config's (V = total number of values)."""
+    return from_settings(config, [{name: v} for name, vs in values.items() for v in vs])
+
+
+def indices(sweep: Sweep, field: str) -> list[int]:
+    """The points of ``sweep`` that set ``field``, in order of its value."""
+    found = [i for i, s in enumerate(sweep.settings) if field in s]
+    return sorted(found, key=lambda i: sweep.settings[i][field])
+
+
+def pad(points: SweepPoint, size: int) -> SweepPoint:
+    """Points padded to ``size`` by repeating the last (to reuse a program compiled for ``size``)."""
+    n = jax.tree.leaves(points)[0].shape[0]
+    if n > size:
+        raise ValueError(f"{n} points do not fit a sweep of {size}")
+    return jax.tree.map(lambda x: jnp.concatenate([x, jnp.repeat(x[-1:], size - n, 0)]), points)
+
+
+def run_padded(fn: Callable, points: SweepPoint, size: int, *args):
+    """``fn(*args, points)`` with points padded to ``size``, results cut back to the real points."""
+    n = jax.tree.leaves(points)[0].shape[0]
+    out = fn(*args, pad(points, size))
+    return jax.tree.map(lambda x: x[:n], out)
+
+
+# ----------------------------------------------------------------------------- lifetimes
+
+
+def make_lifetime_sweep(config: Config):
+    """A jitted ``fn(key, genomes (P, genes), points (V,)) -> LifetimeResult`` with axes (V, P, ...).
+
+    Every point lives the same individuals with the same keys (common random numbers).
+    """
+
+    def lives(key, genomes, points):
+        keys = jax.random.split(key, genomes.shape[0])
+
+        def population(params):
+            return jax.vmap(lambda k, g: live(k, config, params, g))(keys, genomes)
+
+        return jax.vmap(population)(points.params)
+
+    return jax.jit(lives)
+
+
+# ----------------------------------------------------------------------------- evolution
+
+
+def mutate(key: jax.Array, genomes: jnp.ndarray, ga: GAParams) -> jnp.ndarray:
+    """:func:`imrl_jax.ga.mutate` with the probability and scale as (traceable) arguments."""
+    key_where, key_delta = jax.random.split(key)
+    where = jax.random.bernoulli(key_where, ga.mutation_prob, genomes.shape)
+    s = ga.mutation_scale
+    delta = jax.random.uniform(key_delta, genomes.shape, genomes.dtype, -s, s)
+    return jnp.where(where, genomes + delta, genomes)
+
+
+def reproduce(key: jax.Array, config: Config, ga: GAParams, population: jnp.ndarray,
+              parents: jnp.ndarray) -> jnp.ndarray:
+    """:func:`imrl_jax.ga.reproduce` with the mutation values of ``ga``."""
+    offspring = jnp.repeat(population[parents], config.offspring_per_parent, axis=0)
+    mutated = mutate(key, offspring, ga)
+    if config.num_elites:
+        slot = jnp.arange(config.population_size)
+        elite = (slot % config.offspring_per_parent == 0) & (slot // config.offspring_per_parent < config.num_elites)
+        mutated = jnp.where(elite[:, None], offspring, mutated)
+    return mutated
+
+
+def evolve_one(config: Config, num_generations: int, seed_key: jax.Array, sweep_point: SweepPoint) -> EvolutionCurves:
+    """A short evolution of one seed at one point, with the keys of ``python -m imrl_jax.evolve``."""
+    population = init_population(jax.random.fold_in(seed_key, 0), config)
+    key = jax.random.fold_in(seed_key, 1)
+    params = sweep_point.params
+
+    def generation(carry, g):
+        population, _, _ = carry
+        key_life, key_reproduce = generation_keys(key, g)
+        lives = jax.random.split(key_life, config.population_size)
+        result: LifetimeResult = jax.vmap(lambda k, genome: live(k, config, params, genome))(lives, population)
+        parents = select(result.fitness, config.num_parents)
+        children = reproduce(key_reproduce, config, sweep_point.ga, population, parents)
+        best = parents[0]
+        stats = (result.fitness.max(), result.fitness.mean(), result.performance[best],
+                 result.reward_curve[best], result.childhood_selections[best])
+        return (children, population, result.fitness), stats
+
+    start = (population, population, jnp.zeros((config.population_size,), population.dtype))
+    (_, evaluated, fitness), stats = jax.lax.scan(generation, start, jnp.arange(num_generations))
+    return EvolutionCurves(*stats, evaluated, fitness)
+
+
+def make_evolution_sweep(config: Config, num_generations: int | None = None):
+    """A jitted ``fn(seeds (S,), points (V,)) -> EvolutionCurves`` with axes (V, S, ...).
+
+    ``seeds`` are integers (the evolve command's ``--seeds``); generations default to
+    ``config.num_generations``. One compilation serves any points and seeds of the same counts.
+    """
+    num_generations = config.num_generations if num_generations is None else num_generations
+
+    def sweep(seeds, points):
+        keys = jax.vmap(jax.random.key)(seeds.astype(jnp.uint32))
+        per_seed = jax.vmap(lambda k, p: evolve_one(config, num_generations, k, p), (0, None))
+        return jax.vmap(lambda p: per_seed(keys, p))(points)
+
+    return jax.jit(sweep)
+
+
+@functools.lru_cache(maxsize=32)
+def cached_evolution_sweep(config: Config, num_generations: int | None = None):
+    """:func:`make_evolution_sweep`, built once per config (so its compilations are reused)."""
+    return make_evolution_sweep(config, num_generations)
+
+
+def evolve_points(config: Config, settings: Sequence[dict], seeds: Sequence[int]) -> list[EvolutionCurves]:
+    """Short evolutions at a few points, one after the other, with the config's one-point program.
+
+    The program is compiled once per config and shape (:func:`cached_evolution_sweep`), so
+    further calls with any values reuse it. Returns one :class:`EvolutionCurves` per
+    point, with axes (S, ...).
+    """
+    fn = cached_evolution_sweep(config)
+    return [jax.tree.map(lambda x: np.asarray(x[0]), fn(jnp.asarray(seeds), stack([point(config, **s)])))
+            for s in settings]
+
+
+def evolve_static(config: Config, field: str, values: Sequence, seeds: Sequence[int],
+                  **dynamic) -> list[EvolutionCurves]:
+    """Short evolutions for each value of a static field: one compilation per value.
+
+    Returns one :class:`EvolutionCurves` per value, with axes (S, ...) (shapes may differ
+    between values, e.g. genes with ``num_experts``). ``dynamic`` sets dynamic values.
+    A value equal to the config's reuses the program of :func:`evolve_points`.
+    """
+    return [evolve_points(config.replace(**{field: value}), [dynamic], seeds)[0] for value in values]
+
+
+# ----------------------------------------------------------------------------- curves
+
+
+def bin_maximum(config: Config) -> np.ndarray:
+    """(tasks,) the theoretical maximum of reaches in one bin of a task."""
+    return np.asarray(config.theoretical_max()) / config.num_bins
+
+
+def normalised_curve(config: Config, reward_curve) -> np.ndarray:
+    """Reaches per bin (..., tasks, bins) divided by the bin's theoretical maximum (task performance per bin)."""
+    return np.asarray(reward_curve, float) / bin_maximum(config)[:, None]
+
+
+def describe(settings: dict) -> str:
+    """A short label of a point's settings, e.g. ``eta=0.01, gamma=0.99``."""
+    return ", ".join(f"{k}={v:g}" if isinstance(v, (int, float)) else f"{k}={v}" for k, v in settings.items())
+
+
+def fields(sweep: Sweep) -> list[str]:
+    """The fields a sweep varies, in order of first appearance."""
+    return list(dict.fromkeys(name for s in sweep.settings for name in s))
+
+
+def summary(sweep: Sweep, curves: EvolutionCurves, generation: int = -1) -> dict:
+    """``{field: (values (n,), best fitness (n, seeds))}`` at a generation, for :func:`plotting.plot_sweep_summary`."""
+    best = np.asarray(curves.best)[..., generation]  # (V, S)
+    out = {}
+    for name in fields(sweep):
+        found = indices(sweep, name)
+        out[name] = (np.asarray([sweep.settings[i][name] for i in found], float), best[found])
+    return out
+
+
+def by_field(config: Config, sweep: Sweep, curves: EvolutionCurves, field: str,
+             generation: int = -1) -> tuple[dict, dict]:
+    """The points of one field as plot inputs: fitness curves and the best individuals' learning curves.
+
+    Returns ``({label: best fitness (seeds, G)}, {label: performance per bin (tasks, bins)})``,
+    the learning curves those of each generation's best at ``generation``, averaged over seeds.
+    """
+    fitness, learning = {}, {}
+    for i in indices(sweep, field):
+        label = describe(sweep.settings[i])
+        fitness[label] = np.asarray(curves.best[i])
+        learning[label] = normalised_curve(config, np.asarray(curves.best_reward_curve[i])[:, generation]).mean(0)
+    return fitness, learning

@@ -1,0 +1,63 @@
+"""``python -m imrl_jax.render``: a GIF of the best individual of a tiny run, and bad input."""
+
+import csv
+import os
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from imrl_jax import render
+
+
+def test_gif_of_the_best_individual(tiny_run, tmp_path):
+    out = tmp_path / "new" / "best.gif"
+    summary = render.run(tiny_run, 6, str(out), steps=12, every=2)
+    with Image.open(out) as image:
+        assert image.format == "GIF"
+        assert image.n_frames == 6 == summary["frames"]
+    assert os.listdir(out.parent) == ["best.gif"]  # the temporary file is gone
+
+    # The best individual over all seeds of the last generation, reliving the life that
+    # earned its fitness (the run's keys): same fitness, same task performances as history.csv.
+    with np.load(os.path.join(tiny_run, "final_population.npz")) as data:
+        fitness = data["fitness"]
+    assert summary["fitness"] == fitness.max() > 0
+    assert summary["relived_fitness"] == pytest.approx(summary["fitness"], abs=1e-6)
+    with open(os.path.join(tiny_run, "history.csv")) as f:
+        rows = [r for r in csv.DictReader(f) if int(r["seed"]) == summary["seed"]]
+    assert summary["task_performance"] == pytest.approx(float(rows[-1]["best_task6"]), abs=1e-5)
+
+
+def test_cli_writes_and_refuses_to_overwrite(tiny_run, tmp_path, capsys):
+    out = tmp_path / "a.gif"
+    out.write_bytes(b"keep me")
+    assert render.main([tiny_run, "--task", "1", "--out", str(out), "--steps", "2", "--every", "1"]) == 2
+    assert out.read_bytes() == b"keep me"
+    assert "exists" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("case", ["missing run", "not a run", "task 0", "task 7", "extension", "mp4 without ffmpeg",
+                                  "directory"])
+def test_bad_input(case, tiny_run, tmp_path, capsys, monkeypatch):
+    run_dir, task, out = tiny_run, "1", str(tmp_path / "x.gif")
+    if case == "missing run":
+        run_dir = str(tmp_path / "nothing")
+    elif case == "not a run":
+        run_dir = str(tmp_path / "empty")
+        os.makedirs(run_dir)
+    elif case in ("task 0", "task 7"):
+        task = case.split()[1]
+    elif case == "extension":
+        out = str(tmp_path / "x.avi")
+    elif case == "mp4 without ffmpeg":
+        out = str(tmp_path / "x.mp4")
+        monkeypatch.setattr(render.shutil, "which", lambda name: None)
+    elif case == "directory":
+        out = str(tmp_path / "dir.gif")
+        os.makedirs(out)
+    before = sorted(os.listdir(tmp_path))
+    assert render.main([run_dir, "--task", task, "--out", out, "--steps", "2"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: ") and "\n" not in err
+    assert sorted(os.listdir(tmp_path)) == before  # nothing written
