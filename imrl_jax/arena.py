@@ -25,68 +25,52 @@ class Pose(NamedTuple):
     heading: jnp.ndarray  # ()
 
 
-def _red_distance_sq(config: Config, x: jnp.ndarray, y: jnp.ndarray) -> jnp.ndarray:
-    """Squared distance from points (x, y) to the nearest red edge on the nearest red line."""
+def _red_distance_sq(config: Config, p: jnp.ndarray) -> jnp.ndarray:
+    """Squared distance from points ``p`` (..., 2) to the nearest red edge on the nearest red line."""
     a = config.edge_length
     h = config.hex_apothem
     ox, oy = config.tiling_origin
     # Horizontal edges lie on the lines y = oy + m*h; on line m they are segments of
     # length a centred every 3a, shifted by 1.5a per line.  Lines are 2h/sqrt(3) > 30 cm
     # apart, so for a point within a line width only its nearest line matters.
-    # floor and multiplications by constants vectorise on CPU; round, mod and / did not.
-    y = y - oy
-    m = jnp.floor(y * (1.0 / h) + 0.5)
-    dy = y - m * h
-    u = x - ox - 1.5 * a * m
-    u = u - 3.0 * a * jnp.floor(u * (1.0 / (3.0 * a))) - 1.5 * a
+    m = jnp.round((p[..., 1] - oy) / h)
+    dy = p[..., 1] - oy - m * h
+    u = p[..., 0] - ox - 1.5 * a - 1.5 * a * m
+    u = jnp.mod(u + 1.5 * a, 3.0 * a) - 1.5 * a
     dx = jnp.maximum(jnp.abs(u) - 0.5 * a, 0.0)
     return dx * dx + dy * dy
 
 
-def _colour_distances_sq(config: Config, p: jnp.ndarray) -> tuple[jnp.ndarray, ...]:
-    """Squared distances from points (..., 2) to the nearest red, green and blue edge.
-
-    Colour k's edges are the red ones turned by k*60 deg about a hexagon centre. Exact
-    where the distance is below half the spacing of parallel lines (about 17 cm), which
-    is all that colour decisions use.
-    """
-    ox, oy = config.tiling_origin
-    qx, qy = p[..., 0] - ox, p[..., 1] - oy
-    dists = []
-    for k in range(3):
-        c, s = math.cos(k * math.pi / 3), math.sin(k * math.pi / 3)
-        dists.append(_red_distance_sq(config, c * qx + s * qy + ox, -s * qx + c * qy + oy))
-    return tuple(dists)
-
-
 def colour_distances(config: Config, p: jnp.ndarray) -> jnp.ndarray:
-    """Distances (..., 3) from points (..., 2) to the nearest red, green and blue edge."""
-    return jnp.sqrt(jnp.stack(_colour_distances_sq(config, p), -1))
+    """Distances (..., 3) from points (..., 2) to the nearest red, green and blue edge.
+
+    Exact where the distance is below half the spacing of parallel lines (about 17 cm),
+    which is all that colour decisions use.
+    """
+    o = jnp.asarray(config.tiling_origin, dtype=p.dtype)
+    q = p - o
+    dists = []
+    for k in range(3):  # colour k's edges are the red ones turned by k*60 deg
+        c, s = math.cos(k * math.pi / 3), math.sin(k * math.pi / 3)
+        back = jnp.stack([c * q[..., 0] + s * q[..., 1], -s * q[..., 0] + c * q[..., 1]], -1)
+        dists.append(_red_distance_sq(config, back + o))
+    return jnp.sqrt(jnp.stack(dists, -1))
 
 
-def receptors(config: Config, p: jnp.ndarray) -> jnp.ndarray:
-    """Binary (R, G, B) receptors (..., 3) at points (..., 2): the one-hot floor colour.
+def floor_colour(config: Config, p: jnp.ndarray) -> jnp.ndarray:
+    """Colour index of the floor at points (..., 2): RED 0, GREEN 1, BLUE 2 or NONE -1.
 
     A point is on an edge within ``line_half_width``; the nearest edge wins and an exact
     tie (within ``colour_tie_tolerance``) goes to red, then green, then blue. Points
     outside the arena see no colour.
     """
-    red, green, blue = _colour_distances_sq(config, p)
-    nearest = jnp.minimum(jnp.minimum(red, green), blue)
-    # One square root per point: d <= d_min + tol  <=>  d^2 <= (d_min + tol)^2.
-    tie = jnp.square(jnp.sqrt(nearest) + config.colour_tie_tolerance)
-    is_red, is_green, is_blue = red <= tie, green <= tie, blue <= tie
-    size = config.arena_size
-    inside = (p[..., 0] >= 0.0) & (p[..., 0] <= size) & (p[..., 1] >= 0.0) & (p[..., 1] <= size)
-    on_line = (nearest <= config.line_half_width ** 2) & inside
-    one_hot = [on_line & is_red, on_line & is_green & ~is_red, on_line & is_blue & ~is_red & ~is_green]
-    return jnp.stack(one_hot, -1).astype(p.dtype)
-
-
-def floor_colour(config: Config, p: jnp.ndarray) -> jnp.ndarray:
-    """Colour index of the floor at points (..., 2): RED 0, GREEN 1, BLUE 2 or NONE -1."""
-    one_hot = receptors(config, p)
-    return jnp.where(jnp.any(one_hot > 0, -1), jnp.argmax(one_hot, -1), NONE).astype(jnp.int32)
+    d = colour_distances(config, p)
+    d_min = jnp.min(d, axis=-1, keepdims=True)
+    # argmax returns the first True: the tie order red, green, blue.
+    colour = jnp.argmax(d <= d_min + config.colour_tie_tolerance, axis=-1).astype(jnp.int32)
+    inside = jnp.all((p >= 0.0) & (p <= config.arena_size), axis=-1)
+    on_line = (d_min[..., 0] <= config.line_half_width) & inside
+    return jnp.where(on_line, colour, NONE)
 
 
 def move(config: Config, pose: Pose, action: jnp.ndarray) -> Pose:

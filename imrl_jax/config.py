@@ -78,7 +78,7 @@ class Config:
     trial_timeout: int = 200  # steps after a trial's start without reaching the target
     num_bins: int = 100  # bins of the reward/selection curves of each phase
     draw_block: int = 100  # steps whose random numbers are drawn in one call (sets the stream)
-    scan_unroll: int = 2  # steps per iteration of the step loop (speed only, same results)
+    scan_unroll: int = 1  # steps per iteration of the step loop (speed only, same results)
 
     # --- arena and floor (fixed here)
     arena_size: float = 400.0

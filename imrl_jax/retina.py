@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from imrl_jax.arena import Pose, receptors
+from imrl_jax.arena import Pose, floor_colour
 from imrl_jax.config import Config
 
 
@@ -22,4 +22,6 @@ def sample_points(config: Config, pose: Pose) -> jnp.ndarray:
 
 def observe(config: Config, pose: Pose) -> jnp.ndarray:
     """The 36-value input x: [forward row][lateral point][R, G, B], 1 where that colour is seen."""
-    return receptors(config, sample_points(config, pose)).reshape(-1)
+    colour = floor_colour(config, sample_points(config, pose))
+    one_hot = colour[..., None] == jnp.arange(3)
+    return one_hot.reshape(-1).astype(pose.pos.dtype)
