@@ -38,19 +38,26 @@ def select(fitness: jnp.ndarray, num_parents: int) -> jnp.ndarray:
     return jax.lax.top_k(fitness, num_parents)[1]
 
 
-def mutate(key: jax.Array, config: Config, genomes: jnp.ndarray) -> jnp.ndarray:
-    """Add U[-scale, scale] to each gene with probability ``mutation_prob``."""
+def mutate(key: jax.Array, config: Config, genomes: jnp.ndarray, mutation_prob=None,
+           mutation_scale=None) -> jnp.ndarray:
+    """Add U[-scale, scale] to each gene with probability ``mutation_prob``.
+
+    The probability and scale default to the config's; passed in, they may be traced
+    values (so a sweep can vmap over them).
+    """
+    prob = config.mutation_prob if mutation_prob is None else mutation_prob
+    s = config.mutation_scale if mutation_scale is None else mutation_scale
     key_where, key_delta = jax.random.split(key)
-    where = jax.random.bernoulli(key_where, config.mutation_prob, genomes.shape)
-    s = config.mutation_scale
+    where = jax.random.bernoulli(key_where, prob, genomes.shape)
     delta = jax.random.uniform(key_delta, genomes.shape, genomes.dtype, -s, s)
     return jnp.where(where, genomes + delta, genomes)
 
 
-def reproduce(key: jax.Array, config: Config, population: jnp.ndarray, parents: jnp.ndarray) -> jnp.ndarray:
+def reproduce(key: jax.Array, config: Config, population: jnp.ndarray, parents: jnp.ndarray,
+              mutation_prob=None, mutation_scale=None) -> jnp.ndarray:
     """The next population: ``offspring_per_parent`` mutated copies of each parent, in parent order."""
     offspring = jnp.repeat(population[parents], config.offspring_per_parent, axis=0)
-    mutated = mutate(key, config, offspring)
+    mutated = mutate(key, config, offspring, mutation_prob, mutation_scale)
     if config.num_elites:
         slot = jnp.arange(config.population_size)
         elite = (slot % config.offspring_per_parent == 0) & (slot // config.offspring_per_parent < config.num_elites)

@@ -35,7 +35,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from imrl_jax.config import Config, LearningParams
-from imrl_jax.ga import generation_keys, init_population, select
+from imrl_jax.ga import generation_keys, init_population, reproduce, select
 from imrl_jax.lifetime import LifetimeResult, live
 
 #: Learning rates set together by the pseudo-field ``eta`` (the paper has one rate).
@@ -167,27 +167,6 @@ def make_lifetime_sweep(config: Config):
 # ----------------------------------------------------------------------------- evolution
 
 
-def mutate(key: jax.Array, genomes: jnp.ndarray, ga: GAParams) -> jnp.ndarray:
-    """:func:`imrl_jax.ga.mutate` with the probability and scale as (traceable) arguments."""
-    key_where, key_delta = jax.random.split(key)
-    where = jax.random.bernoulli(key_where, ga.mutation_prob, genomes.shape)
-    s = ga.mutation_scale
-    delta = jax.random.uniform(key_delta, genomes.shape, genomes.dtype, -s, s)
-    return jnp.where(where, genomes + delta, genomes)
-
-
-def reproduce(key: jax.Array, config: Config, ga: GAParams, population: jnp.ndarray,
-              parents: jnp.ndarray) -> jnp.ndarray:
-    """:func:`imrl_jax.ga.reproduce` with the mutation values of ``ga``."""
-    offspring = jnp.repeat(population[parents], config.offspring_per_parent, axis=0)
-    mutated = mutate(key, offspring, ga)
-    if config.num_elites:
-        slot = jnp.arange(config.population_size)
-        elite = (slot % config.offspring_per_parent == 0) & (slot // config.offspring_per_parent < config.num_elites)
-        mutated = jnp.where(elite[:, None], offspring, mutated)
-    return mutated
-
-
 def evolve_one(config: Config, num_generations: int, seed_key: jax.Array, sweep_point: SweepPoint) -> EvolutionCurves:
     """A short evolution of one seed at one point, with the keys of ``python -m imrl_jax.evolve``."""
     population = init_population(jax.random.fold_in(seed_key, 0), config)
@@ -200,7 +179,7 @@ def evolve_one(config: Config, num_generations: int, seed_key: jax.Array, sweep_
         lives = jax.random.split(key_life, config.population_size)
         result: LifetimeResult = jax.vmap(lambda k, genome: live(k, config, params, genome))(lives, population)
         parents = select(result.fitness, config.num_parents)
-        children = reproduce(key_reproduce, config, sweep_point.ga, population, parents)
+        children = reproduce(key_reproduce, config, population, parents, *sweep_point.ga)
         best = parents[0]
         stats = (result.fitness.max(), result.fitness.mean(), result.performance[best],
                  result.reward_curve[best], result.childhood_selections[best])

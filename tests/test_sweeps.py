@@ -44,8 +44,8 @@ def test_reproduction_with_traced_mutation_values(tiny):
     parents = jnp.asarray([4, 1])
     ga_values = sweeps.point(config).ga
     expected = reproduce(jax.random.key(1), config, population, parents)
-    np.testing.assert_array_equal(sweeps.reproduce(jax.random.key(1), config, ga_values, population, parents), expected)
-    traced = jax.jit(lambda ga: sweeps.reproduce(jax.random.key(1), config, ga, population, parents))
+    np.testing.assert_array_equal(reproduce(jax.random.key(1), config, population, parents, *ga_values), expected)
+    traced = jax.jit(lambda ga: reproduce(jax.random.key(1), config, population, parents, *ga))
     np.testing.assert_array_equal(traced(ga_values), expected)
     more = traced(sweeps.point(config, mutation_prob=0.9).ga)
     assert (more != population[jnp.repeat(parents, 3)]).mean() > 0.5
