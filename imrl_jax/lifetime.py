@@ -70,8 +70,7 @@ class Previous(NamedTuple):
     output: jnp.ndarray  # o_{t-1}, actor output
     selection: jnp.ndarray  # s_{t-1}, selector outputs used for the choice
     valid: jnp.ndarray  # False at a phase start and after a timeout: nothing to learn
-    reward: jnp.ndarray  # extrinsic reward of the transition (1 on reaching the target)
-    terminal: jnp.ndarray  # the transition reached the target: no bootstrap
+    terminal: jnp.ndarray  # the transition reached the target: reward 1, no bootstrap
 
 
 class State(NamedTuple):
@@ -182,8 +181,7 @@ def init_state(config: Config, agent: Agent, pose: Pose) -> State:
         agent=agent,
         traces=Traces(zeros(2, n), zeros(n), zeros(k, n), zeros(n)),
         pose=pose,
-        prev=Previous(zeros(n), jnp.int32(0), zeros(2), zeros(2), zeros(k), jnp.bool_(False),
-                      zeros(), jnp.bool_(False)),
+        prev=Previous(zeros(n), jnp.int32(0), zeros(2), zeros(2), zeros(k), jnp.bool_(False), jnp.bool_(False)),
         trial_step=jnp.int32(0),
         t=jnp.int32(0),
         block=Draws(zeros(config.draw_block), zeros(config.draw_block, 2)),
@@ -216,6 +214,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
     same = k == prev.k
     # A transition cut by the timeout (or a phase start) is not learned and ends the traces.
     ends = prev.terminal | ~prev.valid
+    extrinsic = prev.terminal.astype(xb.dtype)  # the only extrinsic reward: 1 on reaching the target
 
     # 3: learn from the transition t-1 -> t.
     surprise = jnp.zeros((), xb.dtype)
@@ -223,7 +222,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
         learn = prev.valid & same
         kp = prev.k
         v, w_actor = agent.evaluator[kp], agent.actor[kp]
-        reward = reinforce(agent.reinforcer[kp], xb) if phase.intrinsic else prev.reward
+        reward = reinforce(agent.reinforcer[kp], xb) if phase.intrinsic else extrinsic
         surprise = td_error(reward, evaluate(v, prev.xb), evaluate(v, xb), gamma, prev.terminal)
         delta = jnp.where(learn, surprise, 0.0)
         trace_v = accumulate(traces.evaluator, prev.xb, gamma, lam, learn)
@@ -240,7 +239,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
         if phase.intrinsic:  # childhood: the surprise of the expert that kept control
             learn, reward = prev.valid & same, surprise
         else:
-            learn, reward = prev.valid, prev.reward
+            learn, reward = prev.valid, extrinsic
         u_weights, s_weights = agent.selector_critic, agent.selector_actor
         delta = td_error(reward, evaluate(u_weights, prev.xb), evaluate(u_weights, xb), gamma,
                          prev.terminal)
@@ -274,7 +273,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
     else:
         reached = timeout = jnp.bool_(False)
 
-    prev = Previous(xb, k, action, output, selection, ~timeout, reached.astype(xb.dtype), reached)
+    prev = Previous(xb, k, action, output, selection, ~timeout, reached)
     state = State(agent, traces, pose, prev, trial_step, state.t + 1, block)
     return state, StepRecord(pose, k, reached, timeout)
 
