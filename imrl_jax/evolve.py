@@ -211,7 +211,8 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bo
     keys = to_global(evolution_keys(state.key_data), replicated(mesh))
     params = config.learning_params()
     lane_steps = len(seeds) * config.population_size * config.lifetime_steps
-    for g in range(int(state.generation), config.num_generations):
+    first = int(state.generation)
+    for g in range(first, config.num_generations):
         start = time.perf_counter()
         evaluated = state.populations
         populations, stats = generation(keys, params, evaluated, g)
@@ -223,7 +224,8 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bo
         if (g + 1) % checkpoint_every == 0 or g + 1 == config.num_generations:
             checkpointer.save(state, meta)  # every process: orbax saves collectively
             _write_outputs_from_leader(out_dir, config, seeds, state, leader)
-    _write_outputs_from_leader(out_dir, config, seeds, state, leader)
+    if first == config.num_generations:  # a finished run resumed: its outputs are rewritten once
+        _write_outputs_from_leader(out_dir, config, seeds, state, leader)
     checkpointer.close()
     return state
 
