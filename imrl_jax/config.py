@@ -206,6 +206,9 @@ class Config:
 #: laptop CPU evolves in minutes (reduced scale: label results made with it as such).
 PRESETS: dict[str, dict] = {
     "paper": {},
+    # Paper scale with MODEL.md's learning extensions at the values that made an adult
+    # selector learn best in experiments/selector_sweep.py (experiments/results/selector_sweep).
+    "extension": dict(trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001),
     "small": dict(
         childhood_steps=15_000,
         task_steps=5_000,

@@ -183,3 +183,23 @@ def performance(config: Config, num_steps: int) -> jnp.ndarray:
     tasks = jnp.arange(config.num_tasks)
     reaches = run_many(config, num_steps, tasks, tasks)
     return reaches / (num_steps / jnp.asarray(config.steps_per_trip(), jnp.float32))
+
+
+def perceptron_followers(config: Config, turn_gain: float = 0.1, speed_bias: float = 6.0) -> jnp.ndarray:
+    """Expert actor weights (K, 2, n+1) that follow colour k: perceptrons, as an evolved expert could be.
+
+    Turn unit: weight ``turn_gain * l`` on the colour-k receptor at lateral offset l (cm,
+    positive = left), so the robot turns towards its colour and goes straight when it sees
+    none. Speed unit: bias ``speed_bias`` (sigmoid(6) = 0.998 of full speed). These are the
+    "ideal perceptron colour-followers" of MODEL.md's learning-extension measurements; as an
+    EE-LS genome (``.reshape(-1)``) they isolate how well the selector learns to compose them.
+    """
+    rows, lateral = len(config.retina_forward), len(config.retina_lateral)
+    n = config.num_inputs + 1
+    offsets = jnp.asarray(config.retina_lateral, jnp.float32)
+    actors = []
+    for k in range(config.num_experts):
+        turn = jnp.zeros((rows, lateral, 3), jnp.float32).at[:, :, k % 3].set(turn_gain * offsets[None, :])
+        speed = jnp.zeros((n,), jnp.float32).at[-1].set(speed_bias)
+        actors.append(jnp.stack([jnp.append(turn.reshape(-1), 0.0), speed]))
+    return jnp.stack(actors)

@@ -294,7 +294,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--seeds", type=int, default=1, help="number of independent evolutions (seeds)")
     p.add_argument("--first-seed", type=int, default=0, help="seed of the first evolution; the others follow")
     p.add_argument("--preset", default="paper", choices=sorted(PRESETS),
-                   help="paper: full scale; small: reduced lengths for quick CPU checks")
+                   help="paper: full scale; extension: paper scale with the learning extensions; small: reduced lengths for quick CPU checks")
     p.add_argument("--generations", type=int, help="generations (paper: 100)")
     p.add_argument("--population", type=int, help="population size (paper: 50)")
     p.add_argument("--parents", type=int, help="best individuals that reproduce (paper: 10)")

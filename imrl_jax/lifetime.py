@@ -279,15 +279,22 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
 
 
 def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningParams, task: TaskSpec,
-              state: State, num_steps: int) -> tuple[State, Curves]:
-    """Run a phase of ``num_steps`` steps as a scan over ``config.num_bins`` bins of steps."""
-    num_bins = config.num_bins
+              state: State, num_steps: int, phase_steps: int | None = None,
+              num_bins: int | None = None) -> tuple[State, Curves]:
+    """Run ``num_steps`` steps of a phase as a scan over bins of steps (``config.num_bins`` by default).
+
+    A phase may run in pieces: give each piece the whole phase's length as ``phase_steps``
+    (it sets the noise schedule) and the carried state; the pieces together are the same
+    computation as one call.
+    """
+    phase_steps = num_steps if phase_steps is None else phase_steps
+    num_bins = config.num_bins if num_bins is None else num_bins
     bin_steps = num_steps // num_bins
     num_experts = state.agent.selector_actor.shape[0]
 
     def one_step(carry, _):
         state, counts = carry
-        state, record = step(config, phase, params, task, num_steps, key, state)
+        state, record = step(config, phase, params, task, phase_steps, key, state)
         counts = Curves(counts.reaches + record.reached, counts.timeouts + record.timeout,
                         counts.selections + jax.nn.one_hot(record.k, num_experts, dtype=jnp.int32))
         return (state, counts), None

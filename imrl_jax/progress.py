@@ -14,19 +14,20 @@ def _clock(seconds: float) -> str:
 class Progress:
     """Redraws one line on a terminal, prints one line per update otherwise; silent if quiet."""
 
-    def __init__(self, total: int, done: int = 0, quiet: bool = False, stream=None):
-        self.total, self.start_done = total, done
+    def __init__(self, total: int, done: int = 0, quiet: bool = False, stream=None, unit: str = "gen"):
+        self.total, self.start_done, self.unit = total, done, unit
         self.quiet = quiet
         self.stream = stream or sys.stderr
         self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
         self.start = time.perf_counter()
 
-    def update(self, done: int, best: float, mean: float, lane_steps_per_s: float) -> str:
-        """Report that ``done`` of ``total`` generations are finished; return the line."""
+    def update(self, done: int, best: float, mean: float, lane_steps_per_s: float, scores: str | None = None) -> str:
+        """Report that ``done`` of ``total`` units (generations) are finished; return the line."""
         elapsed = time.perf_counter() - self.start
         rate = (done - self.start_done) / elapsed if elapsed > 0 else 0.0
         eta = (self.total - done) / rate if rate > 0 else float("nan")
-        line = (f"gen {done:>4d}/{self.total} | best {best:.4f} mean {mean:.4f} | "
+        scores = f"best {best:.4f} mean {mean:.4f}" if scores is None else scores
+        line = (f"{self.unit} {done:>4d}/{self.total} | {scores} | "
                 f"{_clock(elapsed)} elapsed, ETA {_clock(eta) if eta == eta else '?'} | "
                 f"{lane_steps_per_s / 1e6:.2f} M lane-steps/s")
         if not self.quiet:

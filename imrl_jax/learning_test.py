@@ -1,0 +1,348 @@
+"""``python -m imrl_jax.learning_test``: the paper's learning tests (section 3, Fig. 3b and 3c).
+
+    python -m imrl_jax.learning_test runs/EE-LS --out tests/EE-LS        # evolved individuals
+    python -m imrl_jax.learning_test --cond SLE --runs 10 --out tests/SLE  # SLE, from scratch
+
+From an evolution's run directory, the ``--best`` best individuals of each seed's last
+generation each live ``--tests`` fresh lives whose tasks last ``--task-steps`` cycles
+(paper: 10 best x 10 tests x 6 tasks x 1,000,000 cycles). A test is an ordinary life of
+the run's condition with longer tasks: LE-LS first lives a fresh childhood of the run's
+length, EE-ES does not learn, EE-LS's selector learns each task from zero. SLE is not
+evolved: its ``--runs`` x ``--best`` x ``--tests`` tests all start from scratch (the
+"runs" only group them like the evolved conditions' seeds).
+
+All tests are lanes of one jitted program. The task phase runs in ``--chunks`` pieces
+with the state carried between them (the same computation as one scan; memory does not
+grow with the test length) so that progress can be shown. Writes to ``--out``:
+``curve.csv`` (performance per bin: mean over all tests and per run), ``steady.json``
+(performance over the last ``--steady-steps`` cycles: mean over runs, best run, per run,
+per task; the command and git commit), ``curves.npz`` (every test's reaches per bin)
+and ``learning_curve.png``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import os
+import sys
+import time
+from typing import NamedTuple, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jax.sharding import NamedSharding, PartitionSpec
+
+from imrl_jax.checkpoint import git_commit
+from imrl_jax.devices import make_mesh, use_host_cores
+from imrl_jax.config import CONDITIONS, PRESETS, Config, ConfigError, LearningParams, make_config
+from imrl_jax.lifetime import (CHILDHOOD, State, adult_agent, adult_phase, childhood_task, init_state, lifetime_keys,
+                               random_pose, run_phase, task_spec)
+from imrl_jax.networks import decode
+from imrl_jax.progress import Progress
+
+
+class UsageError(Exception):
+    """Bad input: reported as one line, exit code 2, nothing written."""
+
+
+class TestState(NamedTuple):
+    """Where one test stands between chunks: the six task phases' carries and keys."""
+
+    states: State  # (tasks, ...)
+    keys: jax.Array  # (tasks,): each task phase's key
+    childhood_selections: jnp.ndarray  # (bins, K): zeros without childhood
+
+
+class TestCurves(NamedTuple):
+    """Per-bin counts of one chunk of every task of one test."""
+
+    reaches: jnp.ndarray  # (tasks, bins)
+    selections: jnp.ndarray  # (tasks, bins, K)
+
+
+def begin(key: jax.Array, config: Config, params: LearningParams, genome: jnp.ndarray) -> TestState:
+    """A test up to its first task step: LE-LS lives its childhood; every task starts as in :func:`live`."""
+    keys = lifetime_keys(key, config.num_tasks)
+    agent = decode(config, genome)
+    dtype = agent.actor.dtype
+    childhood_selections = jnp.zeros((config.num_bins, agent.selector_actor.shape[0]), jnp.int32)
+    if config.condition == "LE-LS":
+        state = init_state(config, agent, random_pose(keys.pose, config, dtype))
+        state, curves = run_phase(keys.childhood, config, CHILDHOOD, params, childhood_task(config, dtype),
+                                  state, config.childhood_steps)
+        agent, childhood_selections = state.agent, curves.selections
+
+    def start(index):
+        return init_state(config, adult_agent(config, agent), task_spec(config, index, dtype).start)
+
+    states = jax.vmap(start)(jnp.arange(config.num_tasks))
+    return TestState(states, keys.tasks, childhood_selections)
+
+
+def advance(config: Config, params: LearningParams, test: TestState, num_chunks: int) -> tuple[TestState, TestCurves]:
+    """One of ``num_chunks`` equal pieces of every task of a test."""
+    phase = adult_phase(config.condition)
+    dtype = test.states.agent.actor.dtype
+
+    def one_task(key, index, state):
+        state, curves = run_phase(key, config, phase, params, task_spec(config, index, dtype), state,
+                                  config.task_steps // num_chunks, phase_steps=config.task_steps,
+                                  num_bins=config.num_bins // num_chunks)
+        return state, TestCurves(curves.reaches, curves.selections)
+
+    states, curves = jax.vmap(one_task)(test.keys, jnp.arange(config.num_tasks), test.states)
+    return test._replace(states=states), curves
+
+
+def make_learning_test(config: Config, num_chunks: int):
+    """Jitted ``begin(keys, params, genomes)`` and ``advance(params, tests)`` over a batch of tests."""
+    if config.num_bins % num_chunks:
+        raise ConfigError(f"num_bins: {config.num_bins} bins cannot be split into {num_chunks} chunks")
+    begin_all = jax.jit(jax.vmap(lambda k, p, g: begin(k, config, p, g), (0, None, 0)))
+    advance_all = jax.jit(jax.vmap(lambda p, t: advance(config, p, t, num_chunks), (None, 0)), donate_argnums=1)
+    return begin_all, advance_all
+
+
+def run_tests(keys: jax.Array, config: Config, params: LearningParams, genomes, num_chunks: int = 1,
+              progress: Progress | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Every test (one key and genome each) to the end: reaches (tests, tasks, bins), selections (tests, tasks, bins, K)."""
+    begin_all, advance_all = make_learning_test(config, num_chunks)
+    # Split the tests over every device (one per CPU core in the CLI); pad to a multiple.
+    num_tests, num_devices = len(genomes), len(jax.devices())
+    pad = -num_tests % num_devices
+    genomes = np.concatenate([genomes, np.repeat(genomes[-1:], pad, 0)]) if pad else genomes
+    keys = jnp.concatenate([keys, keys[-1:].repeat(pad)]) if pad else keys
+    sharding = NamedSharding(make_mesh(), PartitionSpec("lanes"))
+    tests = begin_all(jax.device_put(keys, sharding), params, jax.device_put(np.asarray(genomes), sharding))
+    reaches, selections = [], []
+    start = time.perf_counter()
+    best = np.asarray(config.theoretical_max())
+    for chunk in range(num_chunks):
+        tests, curves = advance_all(params, tests)
+        reaches.append(np.asarray(curves.reaches)[:num_tests])
+        selections.append(np.asarray(curves.selections)[:num_tests])
+        if progress is not None:
+            recent = reaches[-1].sum(-1) / (best / num_chunks)  # (tests, tasks)
+            lane_steps = num_tests * config.num_tasks * (chunk + 1) * config.task_steps / num_chunks
+            progress.update(chunk + 1, 0.0, 0.0, lane_steps / (time.perf_counter() - start),
+                            scores=f"performance in this chunk {recent.mean():.4f}")
+    return np.concatenate(reaches, -1), np.concatenate(selections, -2)
+
+
+# ----------------------------------------------------------------------------- statistics
+
+
+def performance_curve(config: Config, reaches: np.ndarray) -> np.ndarray:
+    """Reaches per bin (..., tasks, bins) as task performance per bin (the paper's normalised reward)."""
+    per_bin = np.asarray(config.theoretical_max()) / config.num_bins
+    return np.asarray(reaches, float) / per_bin[:, None]
+
+
+def steady_bins(config: Config, steady_steps: int) -> int:
+    """Number of final bins that make up the last ``steady_steps`` cycles."""
+    bin_steps = config.task_steps // config.num_bins
+    if steady_steps % bin_steps or not 0 < steady_steps <= config.task_steps:
+        raise ConfigError(f"steady_steps: {steady_steps} is not a whole number of bins of {bin_steps} steps "
+                          f"within a task of {config.task_steps}")
+    return steady_steps // bin_steps
+
+
+def summarise(config: Config, reaches: np.ndarray, steady_steps: int) -> dict:
+    """Fig. 3c numbers from reaches (runs, best, tests, tasks, bins): steady state per run, mean, best run."""
+    curve = performance_curve(config, reaches)
+    steady = curve[..., -steady_bins(config, steady_steps):].mean(-1)  # (runs, best, tests, tasks)
+    per_run = steady.mean((1, 2, 3))
+    return dict(
+        steady_mean=float(per_run.mean()), steady_sd=float(per_run.std()), best_run=int(per_run.argmax()),
+        steady_best_run=float(per_run.max()), steady_per_run=[float(v) for v in per_run],
+        steady_per_task=[float(v) for v in steady.mean((0, 1, 2))],
+        whole_test_mean=float(curve.mean()),
+    )
+
+
+def curve_csv(config: Config, reaches: np.ndarray) -> str:
+    """Performance per bin: the mean over all tests, its sd over runs, and each run's mean."""
+    curve = performance_curve(config, reaches).mean((1, 2, 3))  # (runs, bins)
+    bin_steps = config.task_steps // config.num_bins
+    lines = ["bin,end_step,mean,sd_over_runs," + ",".join(f"run_{r}" for r in range(curve.shape[0]))]
+    for b in range(curve.shape[1]):
+        lines.append(f"{b},{(b + 1) * bin_steps},{curve[:, b].mean():.5f},{curve[:, b].std():.5f},"
+                     + ",".join(f"{v:.5f}" for v in curve[:, b]))
+    return "\n".join(lines) + "\n"
+
+
+# ----------------------------------------------------------------------------- command line
+
+
+def load_run(run_dir: str, num_best: int) -> tuple[Config, np.ndarray, np.ndarray]:
+    """A run's config, its seeds and the ``num_best`` best genomes (seeds, best, genes) of its last generation."""
+    config_path = os.path.join(run_dir, "config.json")
+    population_path = os.path.join(run_dir, "final_population.npz")
+    for path in (config_path, population_path):
+        if not os.path.isfile(path):
+            raise UsageError(f"{path}: not found (is {run_dir} an evolution's run directory?)")
+    try:
+        with open(config_path) as f:
+            config = Config.from_dict(json.load(f)["config"])
+        with np.load(population_path) as data:
+            seeds, generation = data["seeds"], int(data["generation"])
+            evaluated, fitness = data["evaluated"], data["fitness"]
+    except (ValueError, KeyError, OSError, ConfigError) as error:
+        raise UsageError(f"{run_dir}: unreadable run directory ({error})") from None
+    if generation < 1:
+        raise UsageError(f"{population_path}: no generation has been evaluated yet")
+    if not 1 <= num_best <= evaluated.shape[1]:
+        raise UsageError(f"--best: must be between 1 and the population size {evaluated.shape[1]}")
+    order = np.argsort(-fitness, axis=1, kind="stable")[:, :num_best]
+    return config, seeds, np.take_along_axis(evaluated, order[:, :, None], axis=1)
+
+
+def test_keys(seed: int, num_runs: int, num_best: int, num_tests: int) -> jax.Array:
+    """One key per (run, individual, test), all from ``seed``."""
+    return jax.random.split(jax.random.key(seed), num_runs * num_best * num_tests)
+
+
+def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, steady_steps: int, num_chunks: int,
+        seed: int = 0, quiet: bool = False, source: str = "", command: str = "") -> dict:
+    """Run the tests of ``genomes`` (runs, best, genes) and write the outputs; return the summary."""
+    num_runs, num_best = genomes.shape[:2]
+    steady_bins(config, steady_steps)
+    lanes = np.repeat(genomes.reshape(num_runs * num_best, -1), num_tests, axis=0)
+    progress = Progress(num_chunks, quiet=quiet, unit="chunk")
+    progress.message(f"{config.condition} learning test: {num_runs} run(s) x {num_best} best x {num_tests} test(s) x "
+                     f"{config.num_tasks} tasks = {lanes.shape[0] * config.num_tasks} lanes of {config.task_steps} cycles"
+                     + (f" after a {config.childhood_steps}-step childhood" if config.condition == "LE-LS" else ""))
+    start = time.perf_counter()
+    reaches, selections = run_tests(test_keys(seed, num_runs, num_best, num_tests), config, config.learning_params(),
+                                    lanes.astype(np.float32), num_chunks, progress)
+    seconds = time.perf_counter() - start
+    shape = (num_runs, num_best, num_tests)
+    reaches = reaches.reshape(shape + reaches.shape[1:])
+    selections = selections.reshape(shape + selections.shape[1:])
+    summary = dict(condition=config.condition, source=source, num_runs=num_runs, num_best=num_best,
+                   num_tests=num_tests, task_steps=config.task_steps, childhood_steps=config.childhood_steps,
+                   num_bins=config.num_bins, steady_steps=steady_steps, seed=seed,
+                   **summarise(config, reaches, steady_steps),
+                   seconds=round(seconds, 1), backend=jax.default_backend(), command=command, git_commit=git_commit(),
+                   config=config.to_dict())
+    os.makedirs(out_dir, exist_ok=True)
+    buffer = io.BytesIO()
+    np.savez_compressed(buffer, reaches=reaches.astype(np.int32), selections=selections.astype(np.int32))
+    _write(os.path.join(out_dir, "curves.npz"), buffer.getvalue())
+    _write(os.path.join(out_dir, "curve.csv"), curve_csv(config, reaches).encode())
+    _write_plot(config, reaches, os.path.join(out_dir, "learning_curve.png"))
+    _write(os.path.join(out_dir, "steady.json"), json.dumps(summary, indent=2).encode())  # last: marks completion
+    return summary
+
+
+def _write(path: str, data: bytes) -> None:
+    with open(path + ".tmp", "wb") as f:
+        f.write(data)
+    os.replace(path + ".tmp", path)
+
+
+def _write_plot(config: Config, reaches: np.ndarray, path: str) -> None:
+    from imrl_jax.plotting import new_figure, save
+
+    curve = performance_curve(config, reaches)
+    bin_steps = config.task_steps // config.num_bins
+    x = (np.arange(config.num_bins) + 1) * bin_steps
+    fig = new_figure(6.0, 3.6)
+    ax = fig.subplots()
+    per_run = curve.mean((1, 2, 3))
+    ax.fill_between(x, per_run.min(0), per_run.max(0), color="0.85", label="range over runs")
+    ax.plot(x, curve.mean((0, 1, 2, 3)), color="k", lw=2, label="mean of all tests")
+    ax.set_xlabel("cycles of the task")
+    ax.set_ylabel("performance per bin")
+    ax.set_ylim(0, 1)
+    ax.legend(fontsize=8)
+    ax.set_title(f"{config.condition} learning test ({reaches.shape[0]} x {reaches.shape[1]} x {reaches.shape[2]} "
+                 f"tests x {config.num_tasks} tasks)", fontsize=9)
+    save(fig, path + ".tmp.png")
+    os.replace(path + ".tmp.png", path)
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m imrl_jax.learning_test", description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("run_dir", nargs="?", help="an evolution's run directory (omit with --cond SLE)")
+    p.add_argument("--cond", help="SLE: test single-expert learning from scratch (no run directory)")
+    p.add_argument("--runs", type=int, default=10, help="SLE: groups of tests, like an evolution's seeds")
+    p.add_argument("--preset", default="paper", choices=sorted(PRESETS), help="SLE: the learning rules' preset")
+    p.add_argument("--childhood-steps", type=int, help="SLE: ignored; evolved runs keep their childhood")
+    p.add_argument("--set", action="append", metavar="FIELD=VALUE", help="SLE: set a Config field (repeatable)")
+    p.add_argument("--best", type=int, default=10, help="best individuals of each run's last generation")
+    p.add_argument("--tests", type=int, default=10, help="tests per individual")
+    p.add_argument("--task-steps", type=int, default=1_000_000, help="cycles per task")
+    p.add_argument("--bins", type=int, default=100, help="bins of the learning curve")
+    p.add_argument("--steady-steps", type=int, default=100_000, help="final cycles averaged for the steady state")
+    p.add_argument("--chunks", type=int, default=10, help="pieces the test runs in (progress lines)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the tests' keys")
+    p.add_argument("--out", required=True, help="output directory")
+    p.add_argument("--quiet", action="store_true")
+    p.add_argument("--cpu-devices", type=int, default=0, help="CPU devices (0: one per core)")
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    command = "python -m imrl_jax.learning_test " + " ".join(sys.argv[1:] if argv is None else argv)
+    try:
+        if os.path.exists(os.path.join(args.out, "steady.json")):
+            raise UsageError(f"--out: {args.out} already holds a learning test; choose another directory")
+        for name in ("best", "tests", "task_steps", "bins", "chunks", "runs"):
+            if getattr(args, name) < 1:
+                raise UsageError(f"--{name.replace('_', '-')}: must be at least 1")
+        if args.cond == "SLE":
+            if args.run_dir:
+                raise UsageError("run_dir: SLE is tested from scratch; give either a run directory or --cond SLE")
+            overrides = {}
+            for item in args.set or []:
+                name, sep, text = item.partition("=")
+                if not sep:
+                    raise UsageError(f"--set {item}: expected FIELD=VALUE")
+                overrides[name] = _number(text)
+            base = make_config(args.preset, condition="SLE", **overrides)
+            genomes = np.zeros((args.runs, args.best, 0), np.float32)
+            source = f"SLE from scratch, preset {args.preset}" + "".join(f", {s}" for s in args.set or [])
+        elif args.cond is not None and args.cond not in CONDITIONS:
+            raise UsageError(f"--cond: unknown condition {args.cond!r} (only SLE is tested without a run directory)")
+        else:
+            if not args.run_dir:
+                raise UsageError("run_dir: give an evolution's run directory, or --cond SLE")
+            base, seeds, genomes = load_run(args.run_dir, args.best)
+            if args.cond is not None and args.cond != base.condition:
+                raise UsageError(f"--cond: {args.run_dir} is a {base.condition} run, not {args.cond}")
+            source = os.path.abspath(args.run_dir)
+        config = base.replace(task_steps=args.task_steps, num_bins=args.bins)
+        if config.num_bins % args.chunks:
+            raise UsageError(f"--chunks: {args.bins} bins cannot be split into {args.chunks} chunks")
+        steady_bins(config, args.steady_steps)
+        use_host_cores(args.cpu_devices or None)
+        summary = run(config, genomes, args.out, num_tests=args.tests, steady_steps=args.steady_steps,
+                      num_chunks=args.chunks, seed=args.seed, quiet=args.quiet, source=source, command=command)
+    except (UsageError, ConfigError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    print(f"{summary['condition']}: steady state (last {args.steady_steps} cycles) {summary['steady_mean']:.4f} mean "
+          f"over {summary['num_runs']} run(s), best run {summary['steady_best_run']:.4f}; whole test "
+          f"{summary['whole_test_mean']:.4f}; outputs in {args.out}")
+    return 0
+
+
+def _number(text: str):
+    try:
+        return int(text)
+    except ValueError:
+        try:
+            return float(text)
+        except ValueError:
+            raise UsageError(f"--set: {text!r} is not a number") from None
+
+
+if __name__ == "__main__":
+    sys.exit(main())
