@@ -1,0 +1,94 @@
+"""Learning tests (Fig. 3b/3c): chunked tests equal whole lives, the statistics, the command line."""
+
+import json
+import os
+
+import jax
+import numpy as np
+import pytest
+
+from imrl_jax import learning_test
+from imrl_jax.ga import init_population
+from imrl_jax.lifetime import live
+
+
+@pytest.mark.parametrize("condition", ["LE-LS", "SLE"])
+def test_chunked_test_equals_one_life(tiny, condition):
+    """A test run in 2 chunks is the same computation as live() with the test's task length (counts bitwise)."""
+    config = tiny(condition, task_steps=400, num_bins=4)
+    keys = jax.random.split(jax.random.key(3), 2)
+    genomes = np.asarray(init_population(jax.random.key(4), config))[:2]
+    params = config.learning_params()
+    reaches, selections = learning_test.run_tests(keys, config, params, genomes, num_chunks=2)
+    whole = jax.vmap(lambda k, g: live(k, config, params, g))(keys, genomes)
+    assert reaches.shape == (2, config.num_tasks, 4)
+    np.testing.assert_array_equal(reaches, np.asarray(whole.reward_curve))
+    np.testing.assert_array_equal(selections, np.asarray(whole.adult_selections))
+    # The window is not trivial: the robots do reach targets in it (SLE's noisy expert at least).
+    if condition == "SLE":
+        assert reaches.sum() > 0
+
+
+def test_statistics_by_hand(tiny):
+    """Steady state = performance over the final bins, averaged per run; the best run is the highest."""
+    config = tiny("EE-LS", task_steps=400, num_bins=4)  # bins of 100 steps
+    per_bin_max = np.asarray(config.theoretical_max()) / 4  # reaches per bin at performance 1
+    reaches = np.zeros((2, 1, 1, 6, 4))
+    reaches[0, ..., 3] = 0.5 * per_bin_max  # run 0: 0.5 in the last bin, 0 before
+    reaches[1, ..., 2:] = 0.25 * per_bin_max[:, None]  # run 1: 0.25 in the last two bins
+    summary = learning_test.summarise(config, reaches, steady_steps=200)  # last 2 bins
+    assert summary["steady_per_run"] == pytest.approx([0.25, 0.25])
+    summary = learning_test.summarise(config, reaches, steady_steps=100)  # last bin
+    assert summary["steady_per_run"] == pytest.approx([0.5, 0.25])
+    assert summary["steady_mean"] == pytest.approx(0.375)
+    assert summary["best_run"] == 0 and summary["steady_best_run"] == pytest.approx(0.5)
+    assert summary["whole_test_mean"] == pytest.approx((0.5 + 0.5) / 8)
+    with pytest.raises(Exception, match="steady_steps"):
+        learning_test.steady_bins(config, 150)
+
+
+def test_command_line(tiny_run, tmp_path, capsys):
+    """The best individuals of each seed are tested; outputs agree with each other; reruns are refused."""
+    out = str(tmp_path / "test")
+    argv = [tiny_run, "--best", "2", "--tests", "2", "--task-steps", "400", "--bins", "4", "--steady-steps", "200",
+            "--chunks", "2", "--out", out, "--quiet"]
+    assert learning_test.main(argv) == 0
+    config, seeds, best = learning_test.load_run(tiny_run, 2)
+    with np.load(os.path.join(tiny_run, "final_population.npz")) as data:
+        fitness, evaluated = data["fitness"], data["evaluated"]
+    for s in range(len(seeds)):
+        top = np.sort(fitness[s])[::-1][:2]
+        chosen = [np.flatnonzero((evaluated[s] == g).all(1))[0] for g in best[s]]
+        np.testing.assert_array_equal(fitness[s][chosen], top)
+    with open(os.path.join(out, "steady.json")) as f:
+        summary = json.load(f)
+    with np.load(os.path.join(out, "curves.npz")) as data:
+        reaches = data["reaches"]
+    assert reaches.shape == (len(seeds), 2, 2, 6, 4)
+    test_config = config.replace(task_steps=400, num_bins=4)
+    assert summary["steady_mean"] == pytest.approx(learning_test.summarise(test_config, reaches, 200)["steady_mean"])
+    assert os.path.exists(os.path.join(out, "learning_curve.png"))
+    rows = open(os.path.join(out, "curve.csv")).read().splitlines()
+    assert len(rows) == 5 and rows[0].startswith("bin,end_step,mean")
+
+    before = {name: os.path.getmtime(os.path.join(out, name)) for name in os.listdir(out)}
+    assert learning_test.main(argv) == 2  # the output already holds a test: refused, nothing touched
+    assert "already holds a learning test" in capsys.readouterr().err
+    assert before == {name: os.path.getmtime(os.path.join(out, name)) for name in os.listdir(out)}
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["/nonexistent/run"], "config.json: not found"),
+    (["--cond", "SLE", "--bins", "10", "--chunks", "3"], "--chunks"),
+    (["--cond", "SLE", "--task-steps", "1000", "--bins", "10", "--steady-steps", "150"], "steady_steps"),
+    (["--cond", "XX"], "--cond"),
+    (["--cond", "SLE", "--set", "trace_lambda=2"], "trace_lambda"),
+    ([], "run_dir"),
+])
+def test_bad_input(tmp_path, capsys, argv, message):
+    """Bad input: one line naming the field or file, exit code 2, nothing written."""
+    out = tmp_path / "out"
+    assert learning_test.main([*argv, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and len(err.splitlines()) == 1
+    assert not out.exists()
