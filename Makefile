@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 OUT ?= out
 
-.PHONY: install demo test test-all bench clean
+.PHONY: install demo test test-all bench reproduce reproduce-cpu clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -28,6 +28,14 @@ test-all: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python -m imrl_jax.bench --json $(OUT)/bench.json
+
+# The paper's Fig. 3 and claims, both variants of the learning rules (experiments/reproduce.py).
+# Resumable: run the same target again after an interruption.
+reproduce: $(STAMP)
+	$(BIN)/python experiments/reproduce.py --scale paper
+
+reproduce-cpu: $(STAMP)
+	$(BIN)/python experiments/reproduce.py --scale cpu
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache
