@@ -1,0 +1,168 @@
+"""experiments/report.py: the claims' verdict rules on hand-made numbers; the report of a made-up results directory."""
+
+import json
+import math
+import os
+import sys
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "experiments"))
+import report  # noqa: E402
+from report import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY  # noqa: E402
+
+
+def test_measures():
+    best = np.array([[0.1, 0.2], [0.5, 0.6], [0.8, 0.8], [0.9, 1.0]])  # (generations, seeds)
+    np.testing.assert_allclose(report.final_best(best, last=2), [0.85, 0.9])
+    # final value of the mean curve (0.15, 0.55, 0.8, 0.95) over the last 2 = 0.875; 90 % = 0.7875
+    assert report.plateau_generation(best.mean(1), 0.9, last=2) == 2
+    assert report.plateau_generation(np.zeros(4)) is None
+    assert report.first_reach([10, 20, 30], [0.1, 0.5, 0.4], 0.45) == 20
+    assert report.first_reach([10, 20, 30], [0.1, 0.5, 0.4], 0.6) is None
+    before = np.zeros(6)
+    after = np.radians([10, 10, 10, -10, 0.5, 90])  # the last step is a reset, 0.5 deg is no turn
+    assert report.turn_consistency(before, after, [0, 0, 0, 0, 0, 1]) == pytest.approx(0.75)
+    assert report.turn_consistency(np.radians([359.0]), np.radians([3.0]), [0]) == 1.0  # across 0: a left turn
+    assert report.mean_speed([[0, 0], [0, 0]], [[3, 4], [9, 9]], [0, 1]) == 5.0
+
+
+def test_specialisation_score():
+    shares = np.array([[0.8, 0.1, 0.0, 0.1], [0.1, 0.6, 0.1, 0.2], [0.0, 0.1, 0.7, 0.2]])
+    assert report.specialisation_score(shares, [100, 100, 100]) == (3, ["red", "green", "blue"])
+    assert report.specialisation_score(shares[[0, 0, 2]], [100, 100, 100]) == (2, ["red", "red", "blue"])
+    assert report.specialisation_score(shares, [100, 100, 2])[1] == ["red", "green", None]  # too little control
+    assert report.specialisation_score(np.full((3, 4), np.nan), [0, 0, 0])[0] == 0
+
+
+def test_claims_1_to_4():
+    assert report.claim_evolvability({"LE-LS": 5, "EE-LS": 30, "EE-ES": 10})["verdict"] == HOLDS
+    assert report.claim_evolvability({"LE-LS": 6, "EE-LS": 30, "EE-ES": 10})["verdict"] == PARTLY  # 2 x 6 > 10
+    assert report.claim_evolvability({"LE-LS": 12, "EE-LS": 30, "EE-ES": 10})["verdict"] == PARTLY
+    assert report.claim_evolvability({"LE-LS": 30, "EE-LS": 30, "EE-ES": 10})["verdict"] == DOES_NOT
+    assert report.claim_evolvability({"LE-LS": None, "EE-LS": 30, "EE-ES": 10})["verdict"] == NOT_AVAILABLE
+
+    assert report.claim_reliability({"LE-LS": 0.01, "EE-LS": 0.1, "EE-ES": 0.05})["verdict"] == HOLDS
+    assert report.claim_reliability({"LE-LS": 0.07, "EE-LS": 0.1, "EE-ES": 0.05})["verdict"] == PARTLY
+    assert report.claim_reliability({"LE-LS": 0.2, "EE-LS": 0.1, "EE-ES": 0.05})["verdict"] == DOES_NOT
+
+    # d = 0.2; sd (ddof 1) 0.1 each over 4 seeds: se = sqrt(2 * 0.01 / 4) = 0.0707; 2 se = 0.141
+    le = np.array([0.5 - 0.1 * math.sqrt(3) / 2 * s for s in (1, -1, 1, -1)])  # mean 0.5, sd (ddof 1) 0.1
+    ee = le + 0.2
+    claim = report.claim_ee_ls_higher(ee, le)
+    assert claim["verdict"] == HOLDS
+    assert claim["numbers"]["standard_error"] == pytest.approx(math.sqrt(2 * 0.01 / 4))
+    assert report.claim_ee_ls_higher(le + 0.1, le)["verdict"] == PARTLY
+    assert report.claim_ee_ls_higher(le - 0.01, le)["verdict"] == DOES_NOT
+
+    assert report.claim_ee_es_about(0.45, 0.5, 0.9)["verdict"] == HOLDS  # ratio 0.9
+    assert report.claim_ee_es_about(0.3, 0.5, 0.9)["verdict"] == PARTLY  # ratio 0.6
+    assert report.claim_ee_es_about(0.45, 0.5, 0.6)["verdict"] == PARTLY
+    assert report.claim_ee_es_about(0.3, 0.5, 0.6)["verdict"] == DOES_NOT
+    assert report.claim_ee_es_about(0.45, 0.5, None)["verdict"] == PARTLY  # the path was not measured
+    assert report.claim_ee_es_about(None, None, None)["verdict"] == NOT_AVAILABLE
+
+
+def test_claim_5_learning_speed():
+    steps = np.arange(1, 11) * 1000
+    fast = np.array([0.2, 0.5, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6])  # reaches 0.54 at 3000
+    slow = np.linspace(0.05, 0.7, 10)  # reaches 0.54 at 8000 (0.555...)
+    steady = {"LE-LS": 0.6, "EE-LS": 0.6, "SLE": 0.7}
+    claim = report.claim_learning_speed({"LE-LS": (steps, fast), "EE-LS": (steps, fast), "SLE": (steps, slow)}, steady)
+    assert claim["verdict"] == HOLDS
+    assert claim["numbers"]["ratio"]["LE-LS"] == pytest.approx(8000 / 3000)
+    never = report.claim_learning_speed({"LE-LS": (steps, fast), "EE-LS": (steps, fast), "SLE": (steps, slow * 0.5)},
+                                        steady)
+    assert never["verdict"] == HOLDS and never["numbers"]["sle_never"] == {"LE-LS": True, "EE-LS": True}
+    same = report.claim_learning_speed({"LE-LS": (steps, fast), "EE-LS": (steps, slow), "SLE": (steps, slow)},
+                                       {"LE-LS": 0.6, "EE-LS": 0.7, "SLE": 0.7})
+    assert same["verdict"] == PARTLY  # x2.7 for LE-LS, x1 for EE-LS
+    assert report.claim_learning_speed({"LE-LS": (steps, slow), "EE-LS": (steps, slow), "SLE": (steps, fast)},
+                                       {"LE-LS": 0.6, "EE-LS": 0.6, "SLE": 0.6})["verdict"] == DOES_NOT
+    assert report.claim_learning_speed({"LE-LS": (steps, fast)}, steady)["verdict"] == NOT_AVAILABLE
+
+
+def test_claim_6_ordering():
+    claim = report.claim_ordering({"EE-LS": 0.8, "SLE": 0.7, "LE-LS": 0.5, "EE-ES": 0.3})
+    assert claim["verdict"] == HOLDS and claim["numbers"]["pairs_held"] == 6
+    claim = report.claim_ordering({"EE-LS": 0.6, "SLE": 0.7, "LE-LS": 0.5, "EE-ES": 0.3})  # SLE first
+    assert claim["verdict"] == PARTLY and not claim["numbers"]["pairs"]["EE-LS > SLE"]
+    assert claim["numbers"]["pairs_held"] == 5
+    claim = report.claim_ordering({"EE-LS": 0.1, "SLE": 0.2, "LE-LS": 0.5, "EE-ES": 0.3})  # LE-LS > EE-ES > SLE > EE-LS
+    assert claim["verdict"] == DOES_NOT and claim["numbers"]["pairs_held"] == 1
+    assert report.claim_ordering({"EE-LS": 0.1, "SLE": 0.2})["verdict"] == NOT_AVAILABLE
+
+
+def test_claim_7_specialisation():
+    assert report.claim_specialisation({"LE-LS": 3, "EE-LS": 3})["verdict"] == HOLDS
+    assert report.claim_specialisation({"LE-LS": 1, "EE-LS": 3})["verdict"] == PARTLY
+    assert report.claim_specialisation({"LE-LS": 3})["verdict"] == PARTLY  # EE-LS not measured
+    assert report.claim_specialisation({"LE-LS": 0, "EE-LS": 0})["verdict"] == DOES_NOT
+    assert report.claim_specialisation({})["verdict"] == NOT_AVAILABLE
+
+
+def _write_results(root, generations=8, seeds=(0, 1, 2)):
+    """A results directory in reproduce.py's layout with made-up numbers (no population: no behaviour)."""
+    plateau = {"LE-LS": 1, "EE-LS": 6, "EE-ES": 3}
+    final = {"LE-LS": 0.5, "EE-LS": 0.7, "EE-ES": 0.45}
+    for variant in ("paper", "extension"):
+        for condition in report.EVOLVED:
+            run_dir = report.evolution_dir(str(root), variant, condition)
+            os.makedirs(run_dir, exist_ok=True)
+            rows = ["generation,seed,best,mean,std," + ",".join(f"best_task{i}" for i in range(1, 7))]
+            for g in range(generations):
+                for s in seeds:
+                    best = final[condition] * min(1.0, (g + 1) / (plateau[condition] + 1))
+                    best += (0.01 if condition == "LE-LS" else 0.05) * (s - 1)
+                    rows.append(f"{g},{s},{best:.6f},{best / 2:.6f},0.1," + ",".join(["0.5"] * 6))
+            with open(os.path.join(run_dir, "history.csv"), "w") as f:
+                f.write("\n".join(rows) + "\n")
+            with open(os.path.join(run_dir, "config.json"), "w") as f:
+                json.dump({"seeds": list(seeds), "git_commit": "abc", "config": {"population_size": 50,
+                                                                                 "num_parents": 10}}, f)
+        steady = {"EE-LS": 0.8, "SLE": 0.7, "LE-LS": 0.5, "EE-ES": 0.3}
+        rise = {"EE-LS": 2, "LE-LS": 2, "SLE": 8, "EE-ES": 0}
+        for condition in report.TESTED:
+            out = report.test_dir(str(root), variant, condition)
+            os.makedirs(out, exist_ok=True)
+            level = steady[condition]
+            curve = [level * min(1.0, (b + 1) / (rise[condition] + 1)) for b in range(10)]
+            lines = ["bin,end_step,mean,sd_over_runs,run_0,run_1"]
+            lines += [f"{b},{(b + 1) * 100},{v:.5f},0.01,{v:.5f},{v:.5f}" for b, v in enumerate(curve)]
+            with open(os.path.join(out, "curve.csv"), "w") as f:
+                f.write("\n".join(lines) + "\n")
+            with open(os.path.join(out, "steady.json"), "w") as f:
+                json.dump(dict(steady_mean=level, steady_sd=0.02, steady_best_run=level + 0.02, best_run=1,
+                               steady_per_run=[level - 0.02, level + 0.02], steady_per_task=[level] * 6,
+                               whole_test_mean=float(np.mean(curve)), num_runs=2, num_best=2, num_tests=1,
+                               task_steps=1000, steady_steps=200, num_bins=10, git_commit="abc"), f)
+    sizes = dict(seeds=len(seeds), generations=generations, childhood_steps=30_000, task_steps=20_000, bins=20,
+                 best=2, tests=1, test_steps=1000, test_bins=10, steady_steps=200)
+    with open(os.path.join(root, "manifest.json"), "w") as f:
+        json.dump(dict(scale="cpu", sizes=sizes, variants=["paper", "extension"],
+                       stages={"evolve paper LE-LS": {"command": "python -m imrl_jax.evolve ...", "seconds": 1.0}},
+                       git_commit="abc"), f)
+
+
+def test_report_of_a_fabricated_results_directory(tmp_path):
+    results, doc, figures = tmp_path / "results", tmp_path / "docs" / "REPRODUCTION.md", tmp_path / "docs" / "fig"
+    _write_results(results)
+    (results / "discussion.md").write_text("Hand-written words.\n")
+    assert report.main([str(results), "--doc", str(doc), "--figures", str(figures), "--no-behaviour"]) == 0
+    for name in ("fig1_arena.png", "fig3a_paper.png", "fig3a_extension.png", "fig3b_paper.png", "fig3c.png",
+                 "summary.json", "claims.json", "specialisation.csv"):
+        assert (figures / name).is_file(), name
+    claims = json.loads((figures / "claims.json").read_text())
+    assert claims["scale"] == "cpu"
+    verdicts = {n: c["variants"]["paper"]["verdict"] for n, c in claims["claims"].items()}
+    # plateau generations LE-LS 1, EE-LS 5, EE-ES 3; sd over seeds 0.008 vs 0.04; EE-LS 0.58 vs LE-LS 0.5 with
+    # se 0.03; EE-ES / LE-LS = 0.45 / 0.5 = 0.9 (no path measured); SLE reaches 0.9 x 0.5 at 600 cycles (LE-LS:
+    # 300) and never 0.9 x 0.8; the exact order; no individual simulated
+    assert verdicts == {"1": HOLDS, "2": HOLDS, "3": HOLDS, "4": PARTLY, "5": HOLDS, "6": HOLDS, "7": NOT_AVAILABLE}
+    summary = json.loads((figures / "summary.json").read_text())
+    assert summary["evolution"]["paper"]["LE-LS"]["final_best_mean"] == pytest.approx(0.5)
+    text = doc.read_text()
+    assert "cpu scale" in text and "](fig/fig3a_paper.png)" in text
+    assert "## Discussion\n\nHand-written words." in text
+    assert "`make reproduce-cpu`" not in text  # the results are not in the default directory
