@@ -38,6 +38,8 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from reproduce import EVOLVED, SCALES, TESTED, VARIANTS, evolution_dir, test_dir  # noqa: E402
 
+from imrl_jax.learning_test import PAIR_LEVEL, pairs_both_ways  # noqa: E402
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 HOLDS, PARTLY, DOES_NOT, NOT_AVAILABLE = "holds", "partly", "does not hold", "n/a"
@@ -65,6 +67,7 @@ STEREOTYPED_TURNS = 0.75  # share of turning steps that turn the same way for a 
 TURN_THRESHOLD_DEG = 1.0  # smaller heading changes are not turns
 SPECIALISED_SHARE = 0.5  # an expert follows a colour: it sees it on more than half its readings
 MIN_CONTROL_SHARE = 0.05  # experts in control on fewer steps are not judged
+PAIRS_COMPOSED = 1 / 3  # "composes": at least this share of task pairs solved both ways
 STEADY_ORDER = ("EE-LS", "SLE", "LE-LS", "EE-ES")
 
 RULES = {
@@ -96,9 +99,12 @@ RULES = {
     7: f"For the best LE-LS and EE-LS individuals (the paper: \"particularly true\" of them), on their adult task "
        f"paths: an expert in control on at least {MIN_CONTROL_SHARE:.0%} of the steps is *specialised* when one "
        f"colour covers more than {SPECIALISED_SHARE:.0%} of its central receptors' readings (colour_shares); "
-       f"score = number of distinct colours among specialised experts (0-3). **holds** if the score is 3 for "
-       f"both; **partly** if it is at least 1 for one of them; **does not hold** otherwise. (Only the first "
-       f"half of the claim is measured; the composing selector shows in the paths.)",
+       f"score = number of distinct colours among specialised experts (0-3). Composition: the share of (learning "
+       f"test, task pair) in which both tasks of a pair reach a steady state of at least {PAIR_LEVEL:g} (the two "
+       f"tasks of a pair look the same up to the first junction and turn the other way there, so any fixed "
+       f"controller solves at most one: EE-ES is the control). **holds** if the score is 3 for both and the "
+       f"LE-LS or EE-LS share is at least {PAIRS_COMPOSED:.2f}; **partly** if a score is at least 1 or that share "
+       f"is reached; **does not hold** otherwise.",
 }
 
 #: What the paper reports for each claim (sections 3 and 4, Fig. 3).
@@ -109,7 +115,7 @@ PAPER = {
     4: "EE-ES at the level of LE-LS; circular path at full speed",
     5: "SLE needs nearly 4x the cycles",
     6: "EE-LS > SLE > LE-LS > EE-ES (Fig. 3c)",
-    7: "one colour per expert (direct observation)",
+    7: "one colour per expert; selector composes them per task (direct observation)",
 }
 
 PATH_STEPS = 1000  # steps each task is driven after its learning period (shares, stereotypy)
@@ -183,8 +189,26 @@ def load(results: str) -> dict:
             curve = read_curve(os.path.join(out_dir, "curve.csv"))
             if steady is not None and curve is not None:
                 data["tests"][variant, condition] = dict(dir=out_dir, steady=steady, steps=curve[0], mean=curve[1],
-                                                         sd=curve[2])
+                                                         sd=curve[2], pairs_both_ways=steady.get("pairs_both_ways"))
+                curves_path = os.path.join(out_dir, "curves.npz")
+                if os.path.exists(curves_path) and steady.get("steady_steps"):
+                    # Each test's steady state per task (curves.npz is not committed: the value is
+                    # kept in summary.json / claims.json for later reports).
+                    with np.load(curves_path) as saved:
+                        reaches = saved["reaches"].astype(float)
+                    bins = reaches.shape[-1]
+                    last = max(1, round(bins * steady["steady_steps"] / steady["task_steps"]))
+                    per_bin = np.asarray(_theoretical_max(steady)) / bins
+                    performance = reaches[..., -last:].mean(-1) / per_bin
+                    data["tests"][variant, condition]["pairs_both_ways"] = pairs_both_ways(performance)
+                    steady["pairs_both_ways"] = data["tests"][variant, condition]["pairs_both_ways"]
     return data
+
+
+def _theoretical_max(steady: dict) -> tuple:
+    from imrl_jax.config import Config
+
+    return Config.from_dict(steady["config"]).theoretical_max()
 
 
 # ----------------------------------------------------------------------------- measures (pure)
@@ -355,16 +379,21 @@ def claim_ordering(steady: dict, order=STEADY_ORDER) -> dict:
     return _claim(verdict, measured, pairs=pairs, pairs_held=held)
 
 
-def claim_specialisation(scores: dict) -> dict:
-    """Claim 7 from the specialisation score (0-3 distinct colours) of the best LE-LS and EE-LS individuals."""
+def claim_specialisation(scores: dict, pairs: dict | None = None) -> dict:
+    """Claim 7: specialisation score (0-3 colours) of the best LS individuals; pairs solved both ways in their tests."""
+    pairs = pairs or {}
     le, ee = scores.get("LE-LS"), scores.get("EE-LS")
     measured = f"distinct colours followed: LE-LS {_fmt(le)}/3, EE-LS {_fmt(ee)}/3"
+    if pairs:
+        measured += "; task pairs solved both ways: " + ", ".join(f"{c} {_fmt(v, 2)}" for c, v in pairs.items())
     if le is None and ee is None:
-        return _claim(NOT_AVAILABLE, measured, scores=scores)
+        return _claim(NOT_AVAILABLE, measured, scores=scores, pairs=pairs)
     known = [s for s in (le, ee) if s is not None]
-    verdict = HOLDS if len(known) == 2 and all(s == 3 for s in known) else PARTLY if any(s >= 1 for s in known) \
-        else DOES_NOT
-    return _claim(verdict, measured, scores=scores)
+    composed = [pairs[c] for c in ("LE-LS", "EE-LS") if pairs.get(c) is not None]
+    composes = bool(composed) and max(composed) >= PAIRS_COMPOSED
+    verdict = HOLDS if len(known) == 2 and all(s == 3 for s in known) and (composes or not pairs) \
+        else PARTLY if any(s >= 1 for s in known) or composes else DOES_NOT
+    return _claim(verdict, measured, scores=scores, pairs=pairs)
 
 
 # ----------------------------------------------------------------------------- best genomes and their behaviour
@@ -682,6 +711,7 @@ def measure(data: dict, lives: dict) -> dict:
                                                       "steady_per_run", "steady_per_task", "whole_test_mean",
                                                       "num_runs", "num_best", "num_tests", "task_steps",
                                                       "steady_steps", "num_bins")}
+            tests[condition]["pairs_both_ways"] = test.get("pairs_both_ways")
         get = lambda d, c, k: d[c][k] if c in d else None  # noqa: E731
         steady = {c: get(tests, c, "steady_mean") for c in TESTED}
         ee_es_life = lives.get(("paper", "EE-ES"))
@@ -701,7 +731,8 @@ def measure(data: dict, lives: dict) -> dict:
             5: claim_learning_speed({c: (data["tests"][variant, c]["steps"], data["tests"][variant, c]["mean"])
                                      for c in TESTED if (variant, c) in data["tests"]}, steady),
             6: claim_ordering(steady),
-            7: claim_specialisation(scores),
+            7: claim_specialisation(scores, {c: data["tests"][variant, c]["pairs_both_ways"] for c in EVOLVED
+                                             if data["tests"].get((variant, c), {}).get("pairs_both_ways") is not None}),
         }
         out[variant] = dict(evolution=evolution, learning_tests=tests, claims=claims)
     return out

@@ -135,6 +135,8 @@ def run_tests(keys: jax.Array, config: Config, params: LearningParams, genomes, 
 
 # ----------------------------------------------------------------------------- statistics
 
+PAIR_LEVEL = 0.2  # a task counts as solved in a test at this steady-state performance
+
 
 def performance_curve(config: Config, reaches: np.ndarray) -> np.ndarray:
     """Reaches per bin (..., tasks, bins) as task performance per bin (the paper's normalised reward)."""
@@ -161,7 +163,20 @@ def summarise(config: Config, reaches: np.ndarray, steady_steps: int) -> dict:
         steady_best_run=float(per_run.max()), steady_per_run=[float(v) for v in per_run],
         steady_per_task=[float(v) for v in steady.mean((0, 1, 2))],
         whole_test_mean=float(curve.mean()),
+        pairs_both_ways=pairs_both_ways(steady),
     )
+
+
+def pairs_both_ways(performance, level: float = PAIR_LEVEL) -> float:
+    """Share of (test, task pair) with both tasks of the pair at performance ``level`` or more.
+
+    ``performance`` (..., tasks): each test's steady state per task. Tasks 2i and 2i+1 look
+    the same up to their first junction and turn the other way there, so a fixed controller
+    solves at most one of them: solving both takes choices learned for each task.
+    """
+    performance = np.asarray(performance, float)
+    pairs = performance.reshape(performance.shape[:-1] + (-1, 2))
+    return float((pairs >= level).all(-1).mean())
 
 
 def curve_csv(config: Config, reaches: np.ndarray) -> str:

@@ -92,3 +92,11 @@ def test_bad_input(tmp_path, capsys, argv, message):
     err = capsys.readouterr().err.strip()
     assert message in err and len(err.splitlines()) == 1
     assert not out.exists()
+
+
+def test_pairs_both_ways_by_hand():
+    """Both tasks of a pair at the level count; one of them does not (what a fixed controller gets at best)."""
+    performance = np.array([[0.5, 0.3, 0.9, 0.1, 0.0, 0.0],   # pair 1 both ways; pair 2 one way; pair 3 none
+                            [0.2, 0.2, 0.2, 0.2, 0.19, 0.8]])  # pairs 1 and 2 (at the level), not 3
+    assert learning_test.pairs_both_ways(performance) == pytest.approx(3 / 6)
+    assert learning_test.pairs_both_ways(performance, level=0.25) == pytest.approx(1 / 6)

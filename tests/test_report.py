@@ -166,3 +166,11 @@ def test_report_of_a_fabricated_results_directory(tmp_path):
     assert "cpu scale" in text and "](fig/fig3a_paper.png)" in text
     assert "## Discussion\n\nHand-written words." in text
     assert "`make reproduce-cpu`" not in text  # the results are not in the default directory
+
+
+def test_claim_specialisation_with_composition():
+    """Claim 7 holds only with both halves: three colours and pairs solved both ways."""
+    assert report.claim_specialisation({"LE-LS": 3, "EE-LS": 3}, {"LE-LS": 0.5, "EE-LS": 0.1})["verdict"] == HOLDS
+    assert report.claim_specialisation({"LE-LS": 3, "EE-LS": 3}, {"LE-LS": 0.0, "EE-LS": 0.1})["verdict"] == PARTLY
+    assert report.claim_specialisation({"LE-LS": 0, "EE-LS": 0}, {"EE-LS": 0.5})["verdict"] == PARTLY
+    assert report.claim_specialisation({"LE-LS": 0, "EE-LS": 0}, {"EE-LS": 0.1})["verdict"] == DOES_NOT
