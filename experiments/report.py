@@ -38,7 +38,8 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from reproduce import EVOLVED, SCALES, TESTED, VARIANTS, evolution_dir, test_dir  # noqa: E402
 
-from imrl_jax.learning_test import PAIR_LEVEL, pairs_both_ways  # noqa: E402
+from imrl_jax.config import Config  # noqa: E402
+from imrl_jax.learning_test import PAIR_LEVEL, pairs_both_ways, performance_curve, steady_bins  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -191,24 +192,16 @@ def load(results: str) -> dict:
                 data["tests"][variant, condition] = dict(dir=out_dir, steady=steady, steps=curve[0], mean=curve[1],
                                                          sd=curve[2], pairs_both_ways=steady.get("pairs_both_ways"))
                 curves_path = os.path.join(out_dir, "curves.npz")
-                if os.path.exists(curves_path) and steady.get("steady_steps"):
-                    # Each test's steady state per task (curves.npz is not committed: the value is
-                    # kept in summary.json / claims.json for later reports).
+                if data["tests"][variant, condition]["pairs_both_ways"] is None and os.path.exists(curves_path):
+                    # Tests written before steady.json kept this number: recompute it from every
+                    # test's curves with the learning test's own statistics.
+                    config = Config.from_dict(steady["config"])
                     with np.load(curves_path) as saved:
-                        reaches = saved["reaches"].astype(float)
-                    bins = reaches.shape[-1]
-                    last = max(1, round(bins * steady["steady_steps"] / steady["task_steps"]))
-                    per_bin = np.asarray(_theoretical_max(steady)) / bins
-                    performance = reaches[..., -last:].mean(-1) / per_bin
-                    data["tests"][variant, condition]["pairs_both_ways"] = pairs_both_ways(performance)
-                    steady["pairs_both_ways"] = data["tests"][variant, condition]["pairs_both_ways"]
+                        performance = performance_curve(config, saved["reaches"])
+                    last = steady_bins(config, steady["steady_steps"])
+                    data["tests"][variant, condition]["pairs_both_ways"] = pairs_both_ways(
+                        performance[..., -last:].mean(-1))
     return data
-
-
-def _theoretical_max(steady: dict) -> tuple:
-    from imrl_jax.config import Config
-
-    return Config.from_dict(steady["config"]).theoretical_max()
 
 
 # ----------------------------------------------------------------------------- measures (pure)
@@ -487,8 +480,8 @@ def relive_best(config_dict: dict, best: dict) -> dict:
 # ----------------------------------------------------------------------------- figures
 
 
-def fig_fitness(evolutions: dict, title: str):
-    """Fig. 3a: best fitness per generation, mean over seeds with a +-1 sd band, one line per condition."""
+def _curves_figure(series: dict, title: str, xlabel: str, ylabel: str, integer_x: bool = False):
+    """Mean curves with a +-1 sd band, one per condition in the paper's line styles: {condition: (x, mean, sd, label)}."""
     from matplotlib.ticker import MaxNLocator
 
     from imrl_jax.plotting import CONDITION_STYLES, new_figure
@@ -496,37 +489,32 @@ def fig_fitness(evolutions: dict, title: str):
     fig = new_figure(5.6, 3.5)
     ax = fig.add_subplot()
     banded = set()
-    for condition, best in evolutions.items():
-        mean, sd = best.mean(1), best.std(1)
+    for condition, (x, mean, sd, label) in series.items():
         style = CONDITION_STYLES[condition]
-        generations = np.arange(len(mean))
-        ax.plot(generations, mean, label=f"{condition} ({best.shape[1]} seeds)", **style)
-        _band(ax, generations, mean, sd, style, banded)
+        ax.plot(x, mean, label=label, **style)
+        _band(ax, x, mean, sd, style, banded)
     ax.set_ylim(bottom=0)
-    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-    _style(ax, title, "generation", "best fitness")
+    if integer_x:
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    else:
+        ax.set_xlim(left=0)
+    _style(ax, title, xlabel, ylabel)
     ax.legend(fontsize=7)
     fig.tight_layout()
     return fig
+
+
+def fig_fitness(evolutions: dict, title: str):
+    """Fig. 3a: best fitness per generation, mean over seeds with a +-1 sd band, one line per condition."""
+    series = {c: (np.arange(len(best)), best.mean(1), best.std(1), f"{c} ({best.shape[1]} seeds)")
+              for c, best in evolutions.items()}
+    return _curves_figure(series, title, "generation", "best fitness", integer_x=True)
 
 
 def fig_learning(tests: dict, title: str):
     """Fig. 3b: performance per bin of the learning tests (mean over all tests, +-1 sd over runs), x in cycles."""
-    from imrl_jax.plotting import CONDITION_STYLES, new_figure
-
-    fig = new_figure(5.6, 3.5)
-    ax = fig.add_subplot()
-    banded = set()
-    for condition, test in tests.items():
-        style = CONDITION_STYLES[condition]
-        ax.plot(test["steps"], test["mean"], label=condition, **style)
-        _band(ax, test["steps"], test["mean"], test["sd"], style, banded)
-    ax.set_ylim(bottom=0)
-    ax.set_xlim(left=0)
-    _style(ax, title, "cycles of the task", "performance per bin")
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    return fig
+    series = {c: (t["steps"], t["mean"], t["sd"], c) for c, t in tests.items()}
+    return _curves_figure(series, title, "cycles of the task", "performance per bin")
 
 
 def fig_steady(steady: dict, variants: list[str], title: str):

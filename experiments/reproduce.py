@@ -68,8 +68,8 @@ def evolve_command(scale: dict, variant: str, condition: str, out_dir: str) -> l
                "--bins", str(scale["bins"]), "--out", out_dir]
     if "population" in scale:
         command += ["--population", str(scale["population"]), "--parents", str(scale["parents"])]
-    checkpoints = os.path.join(out_dir, "config.json")
-    return command + (["--resume"] if os.path.exists(checkpoints) else [])
+    started = os.path.exists(os.path.join(out_dir, "config.json"))
+    return command + (["--resume"] if started else [])
 
 
 def evolution_done(out_dir: str, scale: dict) -> bool:

@@ -76,10 +76,8 @@ def main(argv=None) -> int:
         writer.writeheader()
         writer.writerows({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
     best = max(rows, key=lambda r: r["performance"])
-    paper = next(r for r in rows if r["trace_lambda"] == 0 and r["eta_selector_actor"] == 0.01
-                 and r["eta_selector_critic"] == 0.01) if any(
-        r["trace_lambda"] == 0 and r["eta_selector_actor"] == 0.01 and r["eta_selector_critic"] == 0.01
-        for r in rows) else None
+    paper = next((r for r in rows if (r["trace_lambda"], r["eta_selector_actor"], r["eta_selector_critic"])
+                  == (0.0, 0.01, 0.01)), None)  # the paper's rules, when the grid holds them
     summary = dict(best=best, paper=paper, task_steps=args.task_steps, seeds=args.seeds, turn_gain=args.turn_gain,
                    seconds=round(seconds, 1), backend=jax.default_backend(),
                    command="python experiments/selector_sweep.py " + " ".join(argv if argv is not None else sys.argv[1:]),

@@ -259,6 +259,21 @@ def _parse_value(field: dataclasses.Field, text: str):
     raise ValueError("not settable from the command line")
 
 
+def parse_sets(items: Sequence[str] | None) -> dict:
+    """``--set FIELD=VALUE`` options as Config overrides, each value of its field's type (raises UsageError)."""
+    fields = {f.name: f for f in dataclasses.fields(Config)}
+    overrides = {}
+    for item in items or []:
+        name, sep, text = item.partition("=")
+        if not sep or name not in fields:
+            raise UsageError(f"--set {item}: expected FIELD=VALUE with a Config field name")
+        try:
+            overrides[name] = _parse_value(fields[name], text)
+        except ValueError:
+            raise UsageError(f"--set {item}: {name} cannot take the value {text!r}") from None
+    return overrides
+
+
 def build_config(args) -> Config:
     """The config the command line asks for (raises UsageError naming the field)."""
     overrides = {"condition": args.cond}
@@ -268,15 +283,7 @@ def build_config(args) -> Config:
         value = getattr(args, flag)
         if value is not None:
             overrides[field] = value
-    fields = {f.name: f for f in dataclasses.fields(Config)}
-    for item in args.set or []:
-        name, sep, text = item.partition("=")
-        if not sep or name not in fields:
-            raise UsageError(f"--set {item}: expected FIELD=VALUE with a Config field name")
-        try:
-            overrides[name] = _parse_value(fields[name], text)
-        except ValueError:
-            raise UsageError(f"--set {item}: {name} cannot take the value {text!r}") from None
+    overrides.update(parse_sets(args.set))
     try:
         return make_config(args.preset, **overrides)
     except ConfigError as error:

@@ -39,14 +39,9 @@ from jax.sharding import NamedSharding, PartitionSpec
 from imrl_jax.checkpoint import git_commit
 from imrl_jax.devices import make_mesh, use_host_cores
 from imrl_jax.config import CONDITIONS, PRESETS, Config, ConfigError, LearningParams, make_config
-from imrl_jax.lifetime import (CHILDHOOD, State, adult_agent, adult_phase, childhood_task, init_state, lifetime_keys,
-                               random_pose, run_phase, task_spec)
-from imrl_jax.networks import decode
+from imrl_jax.evolve import UsageError, _write_atomic, parse_sets
+from imrl_jax.lifetime import State, adult_phase, grow_up, lifetime_keys, run_phase, task_spec, task_start
 from imrl_jax.progress import Progress
-
-
-class UsageError(Exception):
-    """Bad input: reported as one line, exit code 2, nothing written."""
 
 
 class TestState(NamedTuple):
@@ -67,19 +62,8 @@ class TestCurves(NamedTuple):
 def begin(key: jax.Array, config: Config, params: LearningParams, genome: jnp.ndarray) -> TestState:
     """A test up to its first task step: LE-LS lives its childhood; every task starts as in :func:`live`."""
     keys = lifetime_keys(key, config.num_tasks)
-    agent = decode(config, genome)
-    dtype = agent.actor.dtype
-    childhood_selections = jnp.zeros((config.num_bins, agent.selector_actor.shape[0]), jnp.int32)
-    if config.condition == "LE-LS":
-        state = init_state(config, agent, random_pose(keys.pose, config, dtype))
-        state, curves = run_phase(keys.childhood, config, CHILDHOOD, params, childhood_task(config, dtype),
-                                  state, config.childhood_steps)
-        agent, childhood_selections = state.agent, curves.selections
-
-    def start(index):
-        return init_state(config, adult_agent(config, agent), task_spec(config, index, dtype).start)
-
-    states = jax.vmap(start)(jnp.arange(config.num_tasks))
+    agent, childhood_selections = grow_up(keys, config, params, genome)
+    states = jax.vmap(lambda index: task_start(config, agent, index))(jnp.arange(config.num_tasks))
     return TestState(states, keys.tasks, childhood_selections)
 
 
@@ -247,17 +231,11 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
     os.makedirs(out_dir, exist_ok=True)
     buffer = io.BytesIO()
     np.savez_compressed(buffer, reaches=reaches.astype(np.int32), selections=selections.astype(np.int32))
-    _write(os.path.join(out_dir, "curves.npz"), buffer.getvalue())
-    _write(os.path.join(out_dir, "curve.csv"), curve_csv(config, reaches).encode())
+    _write_atomic(os.path.join(out_dir, "curves.npz"), buffer.getvalue())
+    _write_atomic(os.path.join(out_dir, "curve.csv"), curve_csv(config, reaches).encode())
     _write_plot(config, reaches, os.path.join(out_dir, "learning_curve.png"))
-    _write(os.path.join(out_dir, "steady.json"), json.dumps(summary, indent=2).encode())  # last: marks completion
+    _write_atomic(os.path.join(out_dir, "steady.json"), json.dumps(summary, indent=2).encode())  # last: marks completion
     return summary
-
-
-def _write(path: str, data: bytes) -> None:
-    with open(path + ".tmp", "wb") as f:
-        f.write(data)
-    os.replace(path + ".tmp", path)
 
 
 def _write_plot(config: Config, reaches: np.ndarray, path: str) -> None:
@@ -288,7 +266,6 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--cond", help="SLE: test single-expert learning from scratch (no run directory)")
     p.add_argument("--runs", type=int, default=10, help="SLE: groups of tests, like an evolution's seeds")
     p.add_argument("--preset", default="paper", choices=sorted(PRESETS), help="SLE: the learning rules' preset")
-    p.add_argument("--childhood-steps", type=int, help="SLE: ignored; evolved runs keep their childhood")
     p.add_argument("--set", action="append", metavar="FIELD=VALUE", help="SLE: set a Config field (repeatable)")
     p.add_argument("--best", type=int, default=10, help="best individuals of each run's last generation")
     p.add_argument("--tests", type=int, default=10, help="tests per individual")
@@ -315,13 +292,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.cond == "SLE":
             if args.run_dir:
                 raise UsageError("run_dir: SLE is tested from scratch; give either a run directory or --cond SLE")
-            overrides = {}
-            for item in args.set or []:
-                name, sep, text = item.partition("=")
-                if not sep:
-                    raise UsageError(f"--set {item}: expected FIELD=VALUE")
-                overrides[name] = _number(text)
-            base = make_config(args.preset, condition="SLE", **overrides)
+            base = make_config(args.preset, **{**parse_sets(args.set), "condition": "SLE"})
             genomes = np.zeros((args.runs, args.best, 0), np.float32)
             source = f"SLE from scratch, preset {args.preset}" + "".join(f", {s}" for s in args.set or [])
         elif args.cond is not None and args.cond not in CONDITIONS:
@@ -347,16 +318,6 @@ def main(argv: Sequence[str] | None = None) -> int:
           f"over {summary['num_runs']} run(s), best run {summary['steady_best_run']:.4f}; whole test "
           f"{summary['whole_test_mean']:.4f}; outputs in {args.out}")
     return 0
-
-
-def _number(text: str):
-    try:
-        return int(text)
-    except ValueError:
-        try:
-            return float(text)
-        except ValueError:
-            raise UsageError(f"--set: {text!r} is not a number") from None
 
 
 if __name__ == "__main__":

@@ -340,25 +340,38 @@ def adult_agent(config: Config, agent: Agent) -> Agent:
     return agent._replace(selector_actor=fresh.selector_actor, selector_critic=fresh.selector_critic)
 
 
-def live(key: jax.Array, config: Config, params: LearningParams, genome: jnp.ndarray) -> LifetimeResult:
-    """One individual's whole life: childhood (LE-LS), then every task from the same experts."""
-    keys = lifetime_keys(key, config.num_tasks)
+def grow_up(keys: LifetimeKeys, config: Config, params: LearningParams, genome: jnp.ndarray):
+    """The experts adulthood starts from: the decoded genome after its childhood (LE-LS only).
+
+    Returns the agent and the childhood's selections per bin (zeros without childhood).
+    """
     agent = decode(config, genome)
     dtype = agent.actor.dtype
-    num_experts = agent.selector_actor.shape[0]
-    childhood_selections = jnp.zeros((config.num_bins, num_experts), jnp.int32)
+    childhood_selections = jnp.zeros((config.num_bins, agent.selector_actor.shape[0]), jnp.int32)
     if config.condition == "LE-LS":
         state = init_state(config, agent, random_pose(keys.pose, config, dtype))
         state, curves = run_phase(keys.childhood, config, CHILDHOOD, params, childhood_task(config, dtype),
                                   state, config.childhood_steps)
         agent, childhood_selections = state.agent, curves.selections
+    return agent, childhood_selections
+
+
+def task_start(config: Config, agent: Agent, index) -> State:
+    """The first carry of task ``index`` for the experts ``agent`` (selector reset as the condition says)."""
+    return init_state(config, adult_agent(config, agent), task_spec(config, index, agent.actor.dtype).start)
+
+
+def live(key: jax.Array, config: Config, params: LearningParams, genome: jnp.ndarray) -> LifetimeResult:
+    """One individual's whole life: childhood (LE-LS), then every task from the same experts."""
+    keys = lifetime_keys(key, config.num_tasks)
+    agent, childhood_selections = grow_up(keys, config, params, genome)
+    dtype = agent.actor.dtype
 
     phase = adult_phase(config.condition)
 
     def live_task(task_key, index):
-        task = task_spec(config, index, dtype)
-        state = init_state(config, adult_agent(config, agent), task.start)
-        state, curves = run_phase(task_key, config, phase, params, task, state, config.task_steps)
+        state, curves = run_phase(task_key, config, phase, params, task_spec(config, index, dtype),
+                                  task_start(config, agent, index), config.task_steps)
         return state.agent, curves
 
     adult_agents, curves = jax.vmap(live_task)(keys.tasks, jnp.arange(config.num_tasks))
