@@ -880,12 +880,16 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
 
 
 def _dirty() -> bool:
-    """Whether tracked files of the checkout differ from its commit (the commit alone would not remake the report)."""
+    """Whether the code that makes the report differs from its commit (the commit alone would not remake it).
+
+    Only the package and the experiment scripts count: the report's own outputs and the
+    results it reads are tracked files too, and rewriting them must not flag the report.
+    """
     import subprocess
 
     try:
-        out = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT, capture_output=True,
-                             text=True, timeout=10)
+        out = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", "imrl_jax",
+                              "experiments/*.py"], cwd=ROOT, capture_output=True, text=True, timeout=10)
         return bool(out.stdout.strip())
     except (OSError, subprocess.SubprocessError):
         return False
