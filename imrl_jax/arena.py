@@ -25,20 +25,36 @@ class Pose(NamedTuple):
     heading: jnp.ndarray  # ()
 
 
-def _red_distance_sq(config: Config, p: jnp.ndarray) -> jnp.ndarray:
-    """Squared distance from points ``p`` (..., 2) to the nearest red edge on the nearest red line."""
+def _red_distance_sq(config: Config, x: jnp.ndarray, y: jnp.ndarray) -> jnp.ndarray:
+    """Squared distance from points (x, y) to the nearest red edge on the nearest red line."""
     a = config.edge_length
     h = config.hex_apothem
     ox, oy = config.tiling_origin
     # Horizontal edges lie on the lines y = oy + m*h; on line m they are segments of
     # length a centred every 3a, shifted by 1.5a per line.  Lines are 2h/sqrt(3) > 30 cm
     # apart, so for a point within a line width only its nearest line matters.
-    m = jnp.round((p[..., 1] - oy) / h)
-    dy = p[..., 1] - oy - m * h
-    u = p[..., 0] - ox - 1.5 * a - 1.5 * a * m
-    u = jnp.mod(u + 1.5 * a, 3.0 * a) - 1.5 * a
+    m = jnp.round((y - oy) / h)
+    dy = y - oy - m * h
+    u = x - ox - 1.5 * a - 1.5 * a * m
+    # u minus the nearest multiple of 3a: exact (the difference is a multiple of u's ulp),
+    # and unlike jnp.mod (a per-element fmod call on CPU) it vectorises.
+    u = u - 3.0 * a * jnp.round(u / (3.0 * a))
     dx = jnp.maximum(jnp.abs(u) - 0.5 * a, 0.0)
     return dx * dx + dy * dy
+
+
+def _distances(config: Config, x: jnp.ndarray, y: jnp.ndarray) -> tuple[jnp.ndarray, ...]:
+    """Distances from points (x, y) to the nearest red, green and blue edge (one array each).
+
+    Separate coordinate arrays and elementwise work keep the retina one vectorised kernel.
+    """
+    ox, oy = config.tiling_origin
+    qx, qy = x - ox, y - oy
+    dists = []
+    for k in range(3):  # colour k's edges are the red ones turned by k*60 deg
+        c, s = math.cos(k * math.pi / 3), math.sin(k * math.pi / 3)
+        dists.append(jnp.sqrt(_red_distance_sq(config, c * qx + s * qy + ox, -s * qx + c * qy + oy)))
+    return tuple(dists)
 
 
 def colour_distances(config: Config, p: jnp.ndarray) -> jnp.ndarray:
@@ -47,14 +63,18 @@ def colour_distances(config: Config, p: jnp.ndarray) -> jnp.ndarray:
     Exact where the distance is below half the spacing of parallel lines (about 17 cm),
     which is all that colour decisions use.
     """
-    o = jnp.asarray(config.tiling_origin, dtype=p.dtype)
-    q = p - o
-    dists = []
-    for k in range(3):  # colour k's edges are the red ones turned by k*60 deg
-        c, s = math.cos(k * math.pi / 3), math.sin(k * math.pi / 3)
-        back = jnp.stack([c * q[..., 0] + s * q[..., 1], -s * q[..., 0] + c * q[..., 1]], -1)
-        dists.append(_red_distance_sq(config, back + o))
-    return jnp.sqrt(jnp.stack(dists, -1))
+    return jnp.stack(_distances(config, p[..., 0], p[..., 1]), -1)
+
+
+def floor_colour_xy(config: Config, x: jnp.ndarray, y: jnp.ndarray) -> jnp.ndarray:
+    """:func:`floor_colour` of points given as separate coordinate arrays x, y."""
+    red, green, blue = _distances(config, x, y)
+    d_min = jnp.minimum(jnp.minimum(red, green), blue)
+    # The nearest edge wins; an exact tie goes to red, then green, then blue.
+    near = d_min + config.colour_tie_tolerance
+    colour = jnp.where(red <= near, RED, jnp.where(green <= near, GREEN, BLUE)).astype(jnp.int32)
+    inside = (x >= 0.0) & (x <= config.arena_size) & (y >= 0.0) & (y <= config.arena_size)
+    return jnp.where((d_min <= config.line_half_width) & inside, colour, NONE)
 
 
 def floor_colour(config: Config, p: jnp.ndarray) -> jnp.ndarray:
@@ -64,20 +84,17 @@ def floor_colour(config: Config, p: jnp.ndarray) -> jnp.ndarray:
     tie (within ``colour_tie_tolerance``) goes to red, then green, then blue. Points
     outside the arena see no colour.
     """
-    d = colour_distances(config, p)
-    d_min = jnp.min(d, axis=-1, keepdims=True)
-    # argmax returns the first True: the tie order red, green, blue.
-    colour = jnp.argmax(d <= d_min + config.colour_tie_tolerance, axis=-1).astype(jnp.int32)
-    inside = jnp.all((p >= 0.0) & (p <= config.arena_size), axis=-1)
-    on_line = (d_min[..., 0] <= config.line_half_width) & inside
-    return jnp.where(on_line, colour, NONE)
+    return floor_colour_xy(config, p[..., 0], p[..., 1])
 
 
 def move(config: Config, pose: Pose, action: jnp.ndarray) -> Pose:
     """Turn by (a0 - 0.5) * 2 * max_turn, then advance max_speed * a1, then clamp to the walls."""
     turn = (action[0] - 0.5) * 2.0 * math.radians(config.max_turn_deg)
     # Keeping the heading in [0, 2pi) keeps float32 precise over 150,000 steps of turning.
-    heading = jnp.mod(pose.heading + turn, 2.0 * math.pi)
+    # The same values as jnp.mod (a turn is less than a full circle), without its fmod call.
+    heading = pose.heading + turn
+    full = jnp.asarray(2.0 * math.pi, heading.dtype)
+    heading = jnp.where(heading < 0.0, heading + full, jnp.where(heading >= full, heading - full, heading))
     step = config.max_speed * action[1]
     pos = pose.pos + step * jnp.stack([jnp.cos(heading), jnp.sin(heading)])
     r = config.robot_radius

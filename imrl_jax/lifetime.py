@@ -19,8 +19,8 @@ import jax.numpy as jnp
 from imrl_jax.arena import Pose, move, task_arrays
 from imrl_jax.config import Config, LearningParams
 from imrl_jax.learning import accumulate, actor_features, ascend, selector_features, td_error
-from imrl_jax.networks import Agent, act, decode, evaluate, reinforce, with_bias, zero_agent
-from imrl_jax.retina import observe
+from imrl_jax.networks import Agent, act, decode, evaluate_both, reinforce, with_bias, zero_agent
+from imrl_jax.retina import facing, observe
 
 
 class Phase(NamedTuple):
@@ -79,6 +79,7 @@ class State(NamedTuple):
     agent: Agent
     traces: Traces
     pose: Pose
+    facing: jnp.ndarray  # (cos, sin) of pose.heading, carried so it is computed once per step
     prev: Previous
     trial_step: jnp.ndarray  # steps since the current trial started
     t: jnp.ndarray  # step within the phase
@@ -181,6 +182,7 @@ def init_state(config: Config, agent: Agent, pose: Pose) -> State:
         agent=agent,
         traces=Traces(zeros(2, n), zeros(n), zeros(k, n), zeros(n)),
         pose=pose,
+        facing=facing(pose),
         prev=Previous(zeros(n), jnp.int32(0), zeros(2), zeros(2), zeros(k), jnp.bool_(False), jnp.bool_(False)),
         trial_step=jnp.int32(0),
         t=jnp.int32(0),
@@ -208,7 +210,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
     gamma, lam = params.gamma, params.trace_lambda
 
     # 1-2: observe, choose the expert.
-    xb = with_bias(observe(config, state.pose))
+    xb = with_bias(observe(config, state.pose, state.facing))
     selection = act(agent.selector_actor, xb)
     k = select(draws.u, selection) if selection.shape[0] > 1 else jnp.int32(0)
     same = k == prev.k
@@ -222,8 +224,9 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
         learn = prev.valid & same
         kp = prev.k
         v, w_actor = agent.evaluator[kp], agent.actor[kp]
-        reward = reinforce(agent.reinforcer[kp], xb) if phase.intrinsic else extrinsic
-        surprise = td_error(reward, evaluate(v, prev.xb), evaluate(v, xb), gamma, prev.terminal)
+        # Every reinforcer at once: a matrix-vector product is one fast kernel (see evaluate_both).
+        reward = reinforce(agent.reinforcer, xb)[kp] if phase.intrinsic else extrinsic
+        surprise = td_error(reward, *evaluate_both(v, prev.xb, xb), gamma, prev.terminal)
         delta = jnp.where(learn, surprise, 0.0)
         trace_v = accumulate(traces.evaluator, prev.xb, gamma, lam, learn)
         trace_w = accumulate(traces.actor, actor_features(prev.action, prev.output, prev.xb),
@@ -241,8 +244,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
         else:
             learn, reward = prev.valid, extrinsic
         u_weights, s_weights = agent.selector_critic, agent.selector_actor
-        delta = td_error(reward, evaluate(u_weights, prev.xb), evaluate(u_weights, xb), gamma,
-                         prev.terminal)
+        delta = td_error(reward, *evaluate_both(u_weights, prev.xb, xb), gamma, prev.terminal)
         delta = jnp.where(learn, delta, 0.0)
         trace_u = accumulate(traces.selector_critic, prev.xb, gamma, lam, learn)
         trace_s = accumulate(traces.selector_actor,
@@ -274,7 +276,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
         reached = timeout = jnp.bool_(False)
 
     prev = Previous(xb, k, action, output, selection, ~timeout, reached)
-    state = State(agent, traces, pose, prev, trial_step, state.t + 1, block)
+    state = State(agent, traces, pose, facing(pose), prev, trial_step, state.t + 1, block)
     return state, StepRecord(pose, k, reached, timeout)
 
 
