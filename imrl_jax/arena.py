@@ -43,17 +43,21 @@ def _red_distance_sq(config: Config, x: jnp.ndarray, y: jnp.ndarray) -> jnp.ndar
     return dx * dx + dy * dy
 
 
-def _distances(config: Config, x: jnp.ndarray, y: jnp.ndarray) -> tuple[jnp.ndarray, ...]:
+def _distances(config: Config, x: jnp.ndarray, y: jnp.ndarray, outside=None) -> tuple[jnp.ndarray, ...]:
     """Distances from points (x, y) to the nearest red, green and blue edge (one array each).
 
-    Separate coordinate arrays and elementwise work keep the retina one vectorised kernel.
+    Points where ``outside`` is True get an infinite distance. Separate coordinate arrays
+    and elementwise work keep the retina vectorised.
     """
     ox, oy = config.tiling_origin
     qx, qy = x - ox, y - oy
     dists = []
     for k in range(3):  # colour k's edges are the red ones turned by k*60 deg
         c, s = math.cos(k * math.pi / 3), math.sin(k * math.pi / 3)
-        dists.append(jnp.sqrt(_red_distance_sq(config, c * qx + s * qy + ox, -s * qx + c * qy + oy)))
+        d2 = _red_distance_sq(config, c * qx + s * qy + ox, -s * qx + c * qy + oy)
+        if outside is not None:
+            d2 = jnp.where(outside, jnp.inf, d2)
+        dists.append(jnp.sqrt(d2))
     return tuple(dists)
 
 
@@ -68,13 +72,16 @@ def colour_distances(config: Config, p: jnp.ndarray) -> jnp.ndarray:
 
 def floor_colour_xy(config: Config, x: jnp.ndarray, y: jnp.ndarray) -> jnp.ndarray:
     """:func:`floor_colour` of points given as separate coordinate arrays x, y."""
-    red, green, blue = _distances(config, x, y)
+    # Outside the arena is infinitely far from every edge. Folding this test into the
+    # distances (each an expensive kernel XLA computes once) keeps the pose out of the
+    # kernels that read the colours, which XLA would otherwise recompute it in.
+    outside = (x < 0.0) | (x > config.arena_size) | (y < 0.0) | (y > config.arena_size)
+    red, green, blue = _distances(config, x, y, outside)
     d_min = jnp.minimum(jnp.minimum(red, green), blue)
     # The nearest edge wins; an exact tie goes to red, then green, then blue.
     near = d_min + config.colour_tie_tolerance
     colour = jnp.where(red <= near, RED, jnp.where(green <= near, GREEN, BLUE)).astype(jnp.int32)
-    inside = (x >= 0.0) & (x <= config.arena_size) & (y >= 0.0) & (y <= config.arena_size)
-    return jnp.where((d_min <= config.line_half_width) & inside, colour, NONE)
+    return jnp.where(d_min <= config.line_half_width, colour, NONE)
 
 
 def floor_colour(config: Config, p: jnp.ndarray) -> jnp.ndarray:

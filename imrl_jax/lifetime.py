@@ -20,7 +20,7 @@ from imrl_jax.arena import Pose, move, task_arrays
 from imrl_jax.config import Config, LearningParams
 from imrl_jax.learning import accumulate, actor_features, ascend, selector_features, td_error
 from imrl_jax.networks import Agent, act, decode, evaluate_both, reinforce, with_bias, zero_agent
-from imrl_jax.retina import facing, observe
+from imrl_jax.retina import observe
 
 
 class Phase(NamedTuple):
@@ -79,7 +79,7 @@ class State(NamedTuple):
     agent: Agent
     traces: Traces
     pose: Pose
-    facing: jnp.ndarray  # (cos, sin) of pose.heading, carried so it is computed once per step
+    xb: jnp.ndarray  # x~ of pose: the retina of the pose, with the bias input
     prev: Previous
     trial_step: jnp.ndarray  # steps since the current trial started
     t: jnp.ndarray  # step within the phase
@@ -182,7 +182,7 @@ def init_state(config: Config, agent: Agent, pose: Pose) -> State:
         agent=agent,
         traces=Traces(zeros(2, n), zeros(n), zeros(k, n), zeros(n)),
         pose=pose,
-        facing=facing(pose),
+        xb=with_bias(observe(config, pose)),
         prev=Previous(zeros(n), jnp.int32(0), zeros(2), zeros(2), zeros(k), jnp.bool_(False), jnp.bool_(False)),
         trial_step=jnp.int32(0),
         t=jnp.int32(0),
@@ -210,7 +210,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
     gamma, lam = params.gamma, params.trace_lambda
 
     # 1-2: observe, choose the expert.
-    xb = with_bias(observe(config, state.pose, state.facing))
+    xb = state.xb
     selection = act(agent.selector_actor, xb)
     k = select(draws.u, selection) if selection.shape[0] > 1 else jnp.int32(0)
     same = k == prev.k
@@ -276,7 +276,9 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
         reached = timeout = jnp.bool_(False)
 
     prev = Previous(xb, k, action, output, selection, ~timeout, reached)
-    state = State(agent, traces, pose, facing(pose), prev, trial_step, state.t + 1, block)
+    # The retina of the next pose is carried: XLA then computes it once, where it would
+    # otherwise fuse a copy of it into every kernel that reads it.
+    state = State(agent, traces, pose, with_bias(observe(config, pose)), prev, trial_step, state.t + 1, block)
     return state, StepRecord(pose, k, reached, timeout)
 
 

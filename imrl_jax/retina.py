@@ -2,40 +2,36 @@
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
+import numpy as np
 
 from imrl_jax.arena import Pose, floor_colour_xy
 from imrl_jax.config import Config
 
 
-def facing(pose: Pose) -> jnp.ndarray:
-    """(cos, sin) of the heading: the unit vector the robot faces."""
-    return jnp.stack([jnp.cos(pose.heading), jnp.sin(pose.heading)])
-
-
-def sample_xy(config: Config, pose: Pose, direction: jnp.ndarray | None = None):
-    """World coordinates x, y (forward rows, lateral points) of the retina's sample points.
-
-    ``direction`` is :func:`facing` of the pose when the caller already has it: a lifetime
-    carries it so that XLA cannot fuse cos and sin into every sample point's kernel.
-    """
+def sample_xy(config: Config, pose: Pose) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """World coordinates x, y of the retina's sample points, forward row by forward row."""
     dtype = pose.pos.dtype
-    f = jnp.asarray(config.retina_forward, dtype)[:, None]
-    lat = jnp.asarray(config.retina_lateral, dtype)[None, :]
-    c, s = facing(pose) if direction is None else direction
-    # forward along (c, s); positive lateral offsets to the robot's left, (-s, c)
-    x = pose.pos[0] + f * c - lat * s
-    y = pose.pos[1] + f * s + lat * c
+    f, lat = np.meshgrid(config.retina_forward, config.retina_lateral, indexing="ij")
+    offsets = jnp.asarray(np.stack([f.ravel(), lat.ravel(), np.ones(f.size)]), dtype)  # (3, points)
+    c, s = jnp.cos(pose.heading), jnp.sin(pose.heading)
+    # forward along (c, s); positive lateral offsets to the robot's left, (-s, c).
+    # As a matrix product, XLA keeps the pose in a kernel of its own: elementwise, it would
+    # fuse cos and sin into the retina's kernels and compute them again for every point.
+    frame = jnp.stack([jnp.stack([c, -s, pose.pos[0]]), jnp.stack([s, c, pose.pos[1]])])
+    x, y = jnp.matmul(frame, offsets, precision=jax.lax.Precision.HIGHEST)
     return x, y
 
 
 def sample_points(config: Config, pose: Pose) -> jnp.ndarray:
     """World positions (forward rows, lateral points, 2) of the retina's sample points."""
-    return jnp.stack(sample_xy(config, pose), -1)
+    rows, points = len(config.retina_forward), len(config.retina_lateral)
+    return jnp.stack(sample_xy(config, pose), -1).reshape(rows, points, 2)
 
 
-def observe(config: Config, pose: Pose, direction: jnp.ndarray | None = None) -> jnp.ndarray:
+def observe(config: Config, pose: Pose) -> jnp.ndarray:
     """The 36-value input x: [forward row][lateral point][R, G, B], 1 where that colour is seen."""
-    colour = floor_colour_xy(config, *sample_xy(config, pose, direction))
+    colour = floor_colour_xy(config, *sample_xy(config, pose))
     one_hot = colour[..., None] == jnp.arange(3)
     return one_hot.reshape(-1).astype(pose.pos.dtype)
