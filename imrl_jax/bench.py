@@ -6,8 +6,9 @@ One lane is one individual on one task (in childhood, one individual). For every
 (LE-LS childhood; the adult phases of LE-LS/EE-LS, EE-ES and SLE) and lane count, it
 reports lane-steps per second (median of ``repeats`` timed runs after compilation), the
 compile time and the compiled program's memory; then the NumPy reference on the same
-phase, and the speed-up measured in the same run. Last, the headline: a whole LE-LS life
-of ``300 / 6`` individuals (childhood 1.5 x task steps, six tasks) against the reference.
+phase, and the speed-up measured in the same run. Last, the headline: whole LE-LS lives of
+``lanes / 6`` individuals (childhood 1.5 x task steps, six tasks) for each of
+``--lifetime-lanes`` (300 and 3,000 by default), against the reference's life.
 On CPU the lanes are split over one XLA device per core (``--cpu-devices``).
 """
 
@@ -157,7 +158,7 @@ def machine() -> dict:
             "jax_version": jax.__version__}
 
 
-def run(lane_counts, steps: int, repeats: int, reference_steps: int, lifetime_lanes: int,
+def run(lane_counts, steps: int, repeats: int, reference_steps: int, lifetime_lanes,
         lifetime_task_steps: int, log=print) -> dict:
     """Every measurement, as a JSON-friendly dict (also printed as a table through ``log``)."""
     result = {**machine(), "phases": [], "repeats": repeats}
@@ -174,11 +175,13 @@ def run(lane_counts, steps: int, repeats: int, reference_steps: int, lifetime_la
             log(f"{name:24s} {lanes:6d} {row['lane_steps_per_s']:14,.0f} {row['speedup']:11,.0f}x "
                 f"{row['compile_s']:9.1f} {row['program_bytes'] / 2**20:10.1f}")
         log(f"{name + ' (reference)':24s} {1:6d} {ref['lane_steps_per_s']:14,.0f}")
-    life = bench_lifetime(lifetime_lanes, lifetime_task_steps, repeats)
-    result["lifetime"] = life
-    log(f"LE-LS whole life: {life['individuals']} individuals ({life['lanes']} adult lanes), childhood "
-        f"{life['childhood_steps']:,} + 6 x {life['task_steps']:,} steps: {life['lane_steps_per_s']:,.0f} "
-        f"lane-steps/s; reference {life['reference_lane_steps_per_s']:,.0f}; speed-up {life['speedup']:,.0f}x")
+    result["lifetimes"] = []
+    for lanes in lifetime_lanes:
+        life = bench_lifetime(lanes, lifetime_task_steps, repeats)
+        result["lifetimes"].append(life)
+        log(f"LE-LS whole life: {life['individuals']} individuals ({life['lanes']} adult lanes), childhood "
+            f"{life['childhood_steps']:,} + 6 x {life['task_steps']:,} steps: {life['lane_steps_per_s']:,.0f} "
+            f"lane-steps/s; reference {life['reference_lane_steps_per_s']:,.0f}; speed-up {life['speedup']:,.0f}x")
     result["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     log(f"peak resident memory of this process: {result['peak_rss_mb']:.0f} MB")
     return result
@@ -190,30 +193,38 @@ def main(argv=None) -> int:
     parser.add_argument("--steps", type=int, default=1000, help="steps per timed phase run")
     parser.add_argument("--repeats", type=int, default=5, help="timed runs after compilation (median)")
     parser.add_argument("--reference-steps", type=int, default=500, help="steps of the reference per phase")
-    parser.add_argument("--lifetime-lanes", type=int, default=300, help="adult lanes of the whole-life benchmark")
+    parser.add_argument("--lifetime-lanes", default="300,3000",
+                        help="comma-separated adult lane counts of the whole-life benchmark (6 per individual)")
     parser.add_argument("--lifetime-task-steps", type=int, default=2000, help="steps per task of the whole life")
     parser.add_argument("--cpu-devices", type=int, default=0, help="CPU devices (0: one per core)")
     parser.add_argument("--json", help="also write the results to this JSON file")
     args = parser.parse_args(argv)
-    try:
-        lane_counts = [int(n) for n in args.lanes.split(",")]
-    except ValueError:
-        lane_counts = []
-    if not lane_counts or min(lane_counts) < 1:
-        print(f"error: --lanes: expected positive integers separated by commas, got {args.lanes!r}", file=sys.stderr)
-        return 2
-    for name in ("steps", "repeats", "reference_steps", "lifetime_lanes", "lifetime_task_steps"):
+    counts = {}
+    for name in ("lanes", "lifetime_lanes"):
+        text = getattr(args, name)
+        try:
+            counts[name] = [int(n) for n in text.split(",")]
+        except ValueError:
+            counts[name] = []
+        if not counts[name] or min(counts[name]) < 1:
+            print(f"error: --{name.replace('_', '-')}: expected positive integers separated by commas, got {text!r}",
+                  file=sys.stderr)
+            return 2
+    for name in ("steps", "repeats", "reference_steps", "lifetime_task_steps"):
         if getattr(args, name) < 1:
             print(f"error: --{name.replace('_', '-')}: must be at least 1", file=sys.stderr)
             return 2
     if args.lifetime_task_steps % 10:
         print("error: --lifetime-task-steps: must be a multiple of 10", file=sys.stderr)
         return 2
+    if args.json and os.path.isdir(args.json):
+        print(f"error: --json: {args.json} is a directory", file=sys.stderr)
+        return 2
     if args.cpu_devices < 0:
         print("error: --cpu-devices: must be 0 (one per core) or more", file=sys.stderr)
         return 2
     use_host_cores(args.cpu_devices or None)
-    result = run(lane_counts, args.steps, args.repeats, args.reference_steps, args.lifetime_lanes,
+    result = run(counts["lanes"], args.steps, args.repeats, args.reference_steps, counts["lifetime_lanes"],
                  args.lifetime_task_steps)
     if args.json:
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)

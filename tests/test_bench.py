@@ -1,0 +1,24 @@
+"""The benchmark command's input checks (the measurements themselves are not timed in tests)."""
+
+import pytest
+
+from imrl_jax import bench
+
+
+@pytest.mark.parametrize("argv, field", [
+    (["--lanes", "1,x"], "--lanes"),
+    (["--lanes", "0"], "--lanes"),
+    (["--lifetime-lanes", ""], "--lifetime-lanes"),
+    (["--lifetime-lanes", "300,-6"], "--lifetime-lanes"),
+    (["--steps", "0"], "--steps"),
+    (["--lifetime-task-steps", "15"], "--lifetime-task-steps"),
+])
+def test_bad_input_exits_2_naming_the_field(argv, field, capsys):
+    assert bench.main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"error: {field}") and "\n" not in err
+
+
+def test_json_path_that_is_a_directory_is_refused(tmp_path, capsys):
+    assert bench.main(["--json", str(tmp_path)]) == 2
+    assert "--json" in capsys.readouterr().err
