@@ -191,9 +191,8 @@ def init_state(config: Config, agent: Agent, pose: Pose) -> State:
 
 
 def _set_row(matrix, k, row):
-    """matrix with row k replaced (a one-hot blend: cheap and vmap-friendly for small K)."""
-    mask = jax.nn.one_hot(k, matrix.shape[0], dtype=bool).reshape((-1,) + (1,) * (matrix.ndim - 1))
-    return jnp.where(mask, row[None], matrix)
+    """matrix with row k replaced."""
+    return jax.lax.dynamic_update_index_in_dim(matrix, row, k, 0)
 
 
 def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, phase_steps: int,
