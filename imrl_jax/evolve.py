@@ -207,7 +207,7 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bo
                 "processes": jax.process_count(), "sharded_axis": sharded_axis(sharding)}
         _write_atomic(os.path.join(out_dir, "config.json"), json.dumps(info, indent=2).encode())
 
-    generation = make_generation(config)
+    generation = make_generation(config, sharding)
     keys = to_global(evolution_keys(state.key_data), replicated(mesh))
     params = config.learning_params()
     lane_steps = len(seeds) * config.population_size * config.lifetime_steps

@@ -81,14 +81,20 @@ def evolve_step(key: jax.Array, config: Config, params: LearningParams, populati
     return children, GenerationStats(result.fitness, result.performance, parents)
 
 
-def make_generation(config: Config):
+def make_generation(config: Config, sharding=None):
     """A jitted ``generation(keys, params, populations, generation)`` vmapped over seeds.
 
     ``keys`` (seeds,) are the seeds' own keys; ``populations`` (seeds, P, genes). Returns
-    the next populations and each seed's :class:`GenerationStats`.
+    the next populations and each seed's :class:`GenerationStats`. With ``sharding`` (of
+    the populations), the next populations keep it: otherwise XLA returns them replicated
+    (reproduction gathers parents across the population axis), and every later
+    generation would run unsharded, each device living every life.
     """
 
     def generation(keys, params, populations, index):
-        return jax.vmap(lambda k, p: evolve_step(k, config, params, p, index))(keys, populations)
+        children, stats = jax.vmap(lambda k, p: evolve_step(k, config, params, p, index))(keys, populations)
+        if sharding is not None:
+            children = jax.lax.with_sharding_constraint(children, sharding)
+        return children, stats
 
     return jax.jit(generation)
