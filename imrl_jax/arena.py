@@ -43,11 +43,12 @@ def _red_distance_sq(config: Config, x: jnp.ndarray, y: jnp.ndarray) -> jnp.ndar
     return dx * dx + dy * dy
 
 
-def _distances(config: Config, x: jnp.ndarray, y: jnp.ndarray, outside=None) -> tuple[jnp.ndarray, ...]:
+def _distances(config: Config, x: jnp.ndarray, y: jnp.ndarray, outside: jnp.ndarray) -> tuple[jnp.ndarray, ...]:
     """Distances from points (x, y) to the nearest red, green and blue edge (one array each).
 
-    Points where ``outside`` is True get an infinite distance. Separate coordinate arrays
-    and elementwise work keep the retina vectorised.
+    Exact where the distance is below half the spacing of parallel lines (about 17 cm),
+    which is all that colour decisions use. Points where ``outside`` is True get an
+    infinite distance.
     """
     ox, oy = config.tiling_origin
     qx, qy = x - ox, y - oy
@@ -55,19 +56,8 @@ def _distances(config: Config, x: jnp.ndarray, y: jnp.ndarray, outside=None) -> 
     for k in range(3):  # colour k's edges are the red ones turned by k*60 deg
         c, s = math.cos(k * math.pi / 3), math.sin(k * math.pi / 3)
         d2 = _red_distance_sq(config, c * qx + s * qy + ox, -s * qx + c * qy + oy)
-        if outside is not None:
-            d2 = jnp.where(outside, jnp.inf, d2)
-        dists.append(jnp.sqrt(d2))
+        dists.append(jnp.sqrt(jnp.where(outside, jnp.inf, d2)))
     return tuple(dists)
-
-
-def colour_distances(config: Config, p: jnp.ndarray) -> jnp.ndarray:
-    """Distances (..., 3) from points (..., 2) to the nearest red, green and blue edge.
-
-    Exact where the distance is below half the spacing of parallel lines (about 17 cm),
-    which is all that colour decisions use.
-    """
-    return jnp.stack(_distances(config, p[..., 0], p[..., 1]), -1)
 
 
 def floor_colour_xy(config: Config, x: jnp.ndarray, y: jnp.ndarray) -> jnp.ndarray:

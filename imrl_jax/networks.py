@@ -39,13 +39,8 @@ def act(weights: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:
     return jax.nn.sigmoid(weights @ xb)
 
 
-def evaluate(v: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:
-    """Linear evaluation v.x~ (an expert's evaluator or the selector's critic)."""
-    return v @ xb
-
-
 def evaluate_both(v: jnp.ndarray, xb_before: jnp.ndarray, xb_now: jnp.ndarray) -> jnp.ndarray:
-    """(v.x~_before, v.x~_now) as one matrix-vector product.
+    """Linear evaluations (v.x~_before, v.x~_now) (an evaluator's or the selector critic's), as one product.
 
     One product instead of two vector products: XLA's CPU backend runs a batch of
     matrix-vector products as one fast dot, but a batch of vector products as a slow
