@@ -226,9 +226,15 @@ def main(argv=None) -> int:
     if args.lifetime_task_steps % 10:
         print("error: --lifetime-task-steps: must be a multiple of 10", file=sys.stderr)
         return 2
-    if args.json and os.path.isdir(args.json):
-        print(f"error: --json: {args.json} is a directory", file=sys.stderr)
-        return 2
+    if args.json:  # checked before the measurements, which take minutes
+        if os.path.isdir(args.json):
+            print(f"error: --json: {args.json} is a directory", file=sys.stderr)
+            return 2
+        try:
+            os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
+        except OSError as error:
+            print(f"error: --json: cannot create the folder of {args.json}: {error.strerror}", file=sys.stderr)
+            return 2
     if args.cpu_devices < 0:
         print("error: --cpu-devices: must be 0 (one per core) or more", file=sys.stderr)
         return 2
@@ -236,9 +242,9 @@ def main(argv=None) -> int:
     result = run(counts["lanes"], args.steps, args.repeats, args.reference_steps, counts["lifetime_lanes"],
                  args.lifetime_task_steps)
     if args.json:
-        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-        with open(args.json, "w") as f:
-            json.dump(result, f, indent=2)
+        from imrl_jax.evolve import _write_atomic
+
+        _write_atomic(args.json, json.dumps(result, indent=2).encode())
     return 0
 
 

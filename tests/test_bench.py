@@ -22,3 +22,11 @@ def test_bad_input_exits_2_naming_the_field(argv, field, capsys):
 def test_json_path_that_is_a_directory_is_refused(tmp_path, capsys):
     assert bench.main(["--json", str(tmp_path)]) == 2
     assert "--json" in capsys.readouterr().err
+
+
+def test_json_path_under_a_file_is_refused_before_measuring(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("kept")
+    assert bench.main(["--json", str(blocker / "out.json")]) == 2
+    assert "--json" in capsys.readouterr().err
+    assert blocker.read_text() == "kept"
