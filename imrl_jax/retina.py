@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -14,14 +13,12 @@ def sample_xy(config: Config, pose: Pose) -> tuple[jnp.ndarray, jnp.ndarray]:
     """World coordinates x, y of the retina's sample points, forward row by forward row."""
     dtype = pose.pos.dtype
     f, lat = np.meshgrid(config.retina_forward, config.retina_lateral, indexing="ij")
-    offsets = jnp.asarray(np.stack([f.ravel(), lat.ravel(), np.ones(f.size)]), dtype)  # (3, points)
+    f, lat = jnp.asarray(f.ravel(), dtype), jnp.asarray(lat.ravel(), dtype)
     c, s = jnp.cos(pose.heading), jnp.sin(pose.heading)
     # forward along (c, s); positive lateral offsets to the robot's left, (-s, c).
-    # As a matrix product, XLA keeps the pose in a kernel of its own: elementwise, it would
-    # fuse cos and sin into the retina's kernels and compute them again for every point.
-    frame = jnp.stack([jnp.stack([c, -s, pose.pos[0]]), jnp.stack([s, c, pose.pos[1]])])
-    x, y = jnp.matmul(frame, offsets, precision=jax.lax.Precision.HIGHEST)
-    return x, y
+    # Elementwise, XLA fuses this into each colour's distance kernel, which costs less
+    # than a matrix product (a library call) now that x~ is carried (lifetime.State.xb).
+    return pose.pos[0] + f * c - lat * s, pose.pos[1] + f * s + lat * c
 
 
 def sample_points(config: Config, pose: Pose) -> jnp.ndarray:
