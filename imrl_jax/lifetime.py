@@ -241,7 +241,9 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
         if phase.intrinsic:  # childhood: the surprise of the expert that kept control
             learn, reward = prev.valid & same, surprise
         else:
-            learn, reward = prev.valid, extrinsic
+            # k >= 0 always holds; it orders this update after the choice of k, which reads
+            # the same selector weights, so that XLA can update them in place, not in a copy.
+            learn, reward = prev.valid & (k >= 0), extrinsic
         u_weights, s_weights = agent.selector_critic, agent.selector_actor
         delta = td_error(reward, *evaluate_both(u_weights, prev.xb, xb), gamma, prev.terminal)
         delta = jnp.where(learn, delta, 0.0)
