@@ -253,10 +253,12 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
         agent = agent._replace(
             selector_critic=ascend(u_weights, trace_u, delta, params.eta_selector_critic),
             selector_actor=ascend(s_weights, trace_s, delta, params.eta_selector_actor))
-        # 0 * (new weights) is 0 but orders the clearing after the updates that read the
-        # traces, so that XLA clears them in place instead of copying them each step.
-        traces = traces._replace(selector_critic=jnp.where(ends, 0.0 * agent.selector_critic, trace_u),
-                                 selector_actor=jnp.where(ends, 0.0 * agent.selector_actor, trace_s))
+        # 0 * sign(new weights) is 0 (infinite weights included) but orders the clearing
+        # after the updates that read the traces, so that XLA clears them in place
+        # instead of copying them each step.
+        traces = traces._replace(
+            selector_critic=jnp.where(ends, 0.0 * jnp.sign(agent.selector_critic), trace_u),
+            selector_actor=jnp.where(ends, 0.0 * jnp.sign(agent.selector_actor), trace_s))
 
     # 4: act.
     output = act(agent.actor[k], xb)
