@@ -242,9 +242,9 @@ def main(argv=None) -> int:
     result = run(counts["lanes"], args.steps, args.repeats, args.reference_steps, counts["lifetime_lanes"],
                  args.lifetime_task_steps)
     if args.json:
-        from imrl_jax.evolve import _write_atomic
+        from imrl_jax.evolve import write_atomic
 
-        _write_atomic(args.json, json.dumps(result, indent=2).encode())
+        write_atomic(args.json, json.dumps(result, indent=2).encode())
     return 0
 
 

@@ -87,7 +87,8 @@ def record(history: History, generation: int, fitness: np.ndarray, performance: 
 # ----------------------------------------------------------------------------- outputs
 
 
-def _write_atomic(path: str, data: bytes) -> None:
+def write_atomic(path: str, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file, so a reader never sees half of it."""
     tmp = f"{path}.tmp-{os.getpid()}"
     with open(tmp, "wb") as f:
         f.write(data)
@@ -113,11 +114,11 @@ def write_outputs(out_dir: str, config: Config, seeds: Sequence[int], state: Run
     from imrl_jax.plotting import plot_fitness
 
     done = int(state.generation)
-    _write_atomic(os.path.join(out_dir, "history.csv"), history_csv(state.history, done, seeds).encode())
+    write_atomic(os.path.join(out_dir, "history.csv"), history_csv(state.history, done, seeds).encode())
     buffer = io.BytesIO()
     np.savez(buffer, seeds=np.asarray(seeds), generation=done, evaluated=to_host(state.evaluated),
              fitness=to_host(state.fitness), next_population=to_host(state.populations))
-    _write_atomic(os.path.join(out_dir, "final_population.npz"), buffer.getvalue())
+    write_atomic(os.path.join(out_dir, "final_population.npz"), buffer.getvalue())
     if done:
         path = os.path.join(out_dir, "fitness.png")
         plot_fitness({config.condition: state.history.best[:done]}, path + ".tmp.png",
@@ -205,7 +206,7 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bo
         info = {**meta, "version": imrl_jax.__version__, "git_commit": git_commit(),
                 "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "devices": len(jax.devices()),
                 "processes": jax.process_count(), "sharded_axis": sharded_axis(sharding)}
-        _write_atomic(os.path.join(out_dir, "config.json"), json.dumps(info, indent=2).encode())
+        write_atomic(os.path.join(out_dir, "config.json"), json.dumps(info, indent=2).encode())
 
     generation = make_generation(config, sharding)
     keys = to_global(evolution_keys(state.key_data), replicated(mesh))

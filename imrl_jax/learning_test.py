@@ -39,7 +39,7 @@ from jax.sharding import NamedSharding, PartitionSpec
 from imrl_jax.checkpoint import git_commit
 from imrl_jax.devices import make_mesh, use_host_cores
 from imrl_jax.config import CONDITIONS, PRESETS, Config, ConfigError, LearningParams, make_config
-from imrl_jax.evolve import UsageError, _write_atomic, parse_sets
+from imrl_jax.evolve import UsageError, parse_sets, write_atomic
 from imrl_jax.lifetime import State, adult_phase, grow_up, lifetime_keys, run_phase, task_spec, task_start
 from imrl_jax.progress import Progress
 
@@ -231,10 +231,10 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
     os.makedirs(out_dir, exist_ok=True)
     buffer = io.BytesIO()
     np.savez_compressed(buffer, reaches=reaches.astype(np.int32), selections=selections.astype(np.int32))
-    _write_atomic(os.path.join(out_dir, "curves.npz"), buffer.getvalue())
-    _write_atomic(os.path.join(out_dir, "curve.csv"), curve_csv(config, reaches).encode())
+    write_atomic(os.path.join(out_dir, "curves.npz"), buffer.getvalue())
+    write_atomic(os.path.join(out_dir, "curve.csv"), curve_csv(config, reaches).encode())
     _write_plot(config, reaches, os.path.join(out_dir, "learning_curve.png"))
-    _write_atomic(os.path.join(out_dir, "steady.json"), json.dumps(summary, indent=2).encode())  # last: marks completion
+    write_atomic(os.path.join(out_dir, "steady.json"), json.dumps(summary, indent=2).encode())  # last: marks completion
     return summary
 
 
