@@ -64,7 +64,6 @@ class Traces(NamedTuple):
 class Previous(NamedTuple):
     """What step t-1 left for learning its transition at step t."""
 
-    xb: jnp.ndarray  # x~_{t-1}
     k: jnp.ndarray  # expert in control
     action: jnp.ndarray  # a_{t-1}, executed (noisy) action
     output: jnp.ndarray  # o_{t-1}, actor output
@@ -79,7 +78,7 @@ class State(NamedTuple):
     agent: Agent
     traces: Traces
     pose: Pose
-    xb: jnp.ndarray  # x~ of pose: the retina of the pose, with the bias input
+    xbs: jnp.ndarray  # (2, n+1): x~_t (the retina of pose, with the bias input) in row t % 2, x~_{t-1} in the other
     prev: Previous
     trial_step: jnp.ndarray  # steps since the current trial started
     t: jnp.ndarray  # step within the phase
@@ -182,8 +181,8 @@ def init_state(config: Config, agent: Agent, pose: Pose) -> State:
         agent=agent,
         traces=Traces(zeros(2, n), zeros(n), zeros(k, n), zeros(n)),
         pose=pose,
-        xb=with_bias(observe(config, pose)),
-        prev=Previous(zeros(n), jnp.int32(0), zeros(2), zeros(2), zeros(k), jnp.bool_(False), jnp.bool_(False)),
+        xbs=jnp.stack([with_bias(observe(config, pose)), zeros(n)]),
+        prev=Previous(jnp.int32(0), zeros(2), zeros(2), zeros(k), jnp.bool_(False), jnp.bool_(False)),
         trial_step=jnp.int32(0),
         t=jnp.int32(0),
         block=Draws(zeros(config.draw_block), zeros(config.draw_block, 2)),
@@ -193,6 +192,22 @@ def init_state(config: Config, agent: Agent, pose: Pose) -> State:
 def _set_row(matrix, k, row):
     """matrix with row k replaced."""
     return jax.lax.dynamic_update_index_in_dim(matrix, row, k, 0)
+
+
+def _row(matrix, k):
+    """Row k of matrix."""
+    return jax.lax.dynamic_index_in_dim(matrix, k, 0, keepdims=False)
+
+
+def _turns(values, now):
+    """(values[1 - now], values[now]): the evaluations of x~_{t-1} and x~_t from those of xbs's rows."""
+    return _row(values, 1 - now), _row(values, now)
+
+
+def _after(x, *arrays):
+    """x, computed after ``arrays``: it adds 0 * (whether an element of each is NaN), exactly 0."""
+    flags = sum(jnp.isnan(a.reshape(-1)[-1]).astype(x.dtype) for a in arrays)
+    return x + 0.0 * flags
 
 
 def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, phase_steps: int,
@@ -209,7 +224,9 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
     gamma, lam = params.gamma, params.trace_lambda
 
     # 1-2: observe, choose the expert.
-    xb = state.xb
+    # x~_t and x~_{t-1} take turns in the rows of xbs, so that no step copies one into the other.
+    now = state.t % 2
+    xb, prev_xb = _row(state.xbs, now), _row(state.xbs, 1 - now)
     selection = act(agent.selector_actor, xb)
     k = select(draws.u, selection) if selection.shape[0] > 1 else jnp.int32(0)
     same = k == prev.k
@@ -225,10 +242,10 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
         v, w_actor = agent.evaluator[kp], agent.actor[kp]
         # Every reinforcer at once: a matrix-vector product is one fast kernel (see evaluate_both).
         reward = reinforce(agent.reinforcer, xb)[kp] if phase.intrinsic else extrinsic
-        surprise = td_error(reward, *evaluate_both(v, prev.xb, xb), gamma, prev.terminal)
+        surprise = td_error(reward, *_turns(evaluate_both(v, state.xbs), now), gamma, prev.terminal)
         delta = jnp.where(learn, surprise, 0.0)
-        trace_v = accumulate(traces.evaluator, prev.xb, gamma, lam, learn)
-        trace_w = accumulate(traces.actor, actor_features(prev.action, prev.output, prev.xb),
+        trace_v = accumulate(traces.evaluator, prev_xb, gamma, lam, learn)
+        trace_w = accumulate(traces.actor, actor_features(prev.action, prev.output, prev_xb),
                              gamma, lam, learn)
         agent = agent._replace(
             evaluator=_set_row(agent.evaluator, kp, ascend(v, trace_v, delta, params.eta_evaluator)),
@@ -245,11 +262,11 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
             # the same selector weights, so that XLA can update them in place, not in a copy.
             learn, reward = prev.valid & (k >= 0), extrinsic
         u_weights, s_weights = agent.selector_critic, agent.selector_actor
-        delta = td_error(reward, *evaluate_both(u_weights, prev.xb, xb), gamma, prev.terminal)
+        delta = td_error(reward, *_turns(evaluate_both(u_weights, state.xbs), now), gamma, prev.terminal)
         delta = jnp.where(learn, delta, 0.0)
-        trace_u = accumulate(traces.selector_critic, prev.xb, gamma, lam, learn)
+        trace_u = accumulate(traces.selector_critic, prev_xb, gamma, lam, learn)
         trace_s = accumulate(traces.selector_actor,
-                             selector_features(prev.k, prev.selection, prev.xb), gamma, lam, learn)
+                             selector_features(prev.k, prev.selection, prev_xb), gamma, lam, learn)
         agent = agent._replace(
             selector_critic=ascend(u_weights, trace_u, delta, params.eta_selector_critic),
             selector_actor=ascend(s_weights, trace_s, delta, params.eta_selector_actor))
@@ -280,10 +297,13 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
     else:
         reached = timeout = jnp.bool_(False)
 
-    prev = Previous(xb, k, action, output, selection, ~timeout, reached)
+    prev = Previous(k, action, output, selection, ~timeout, reached)
     # The retina of the next pose is carried: XLA then computes it once, where it would
-    # otherwise fuse a copy of it into every kernel that reads it.
-    state = State(agent, traces, pose, with_bias(observe(config, pose)), prev, trial_step, state.t + 1, block)
+    # otherwise fuse a copy of it into every kernel that reads it. x~_{t+1} overwrites
+    # x~_{t-1}; made to follow the traces, the last to read x~_{t-1}, it is written in
+    # place, where XLA would otherwise copy xbs twice a step.
+    new_xb = _after(with_bias(observe(config, pose)), *traces)
+    state = State(agent, traces, pose, _set_row(state.xbs, 1 - now, new_xb), prev, trial_step, state.t + 1, block)
     return state, StepRecord(pose, k, reached, timeout)
 
 

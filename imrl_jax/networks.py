@@ -39,14 +39,14 @@ def act(weights: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:
     return jax.nn.sigmoid(weights @ xb)
 
 
-def evaluate_both(v: jnp.ndarray, xb_before: jnp.ndarray, xb_now: jnp.ndarray) -> jnp.ndarray:
-    """Linear evaluations (v.x~_before, v.x~_now) (an evaluator's or the selector critic's), as one product.
+def evaluate_both(v: jnp.ndarray, xbs: jnp.ndarray) -> jnp.ndarray:
+    """Linear evaluations v.x~ of both rows of xbs (an evaluator or the selector critic), as one product.
 
     One product instead of two vector products: XLA's CPU backend runs a batch of
     matrix-vector products as one fast dot, but a batch of vector products as a slow
     multiply-reduce.
     """
-    return jnp.stack([xb_before, xb_now]) @ v
+    return xbs @ v
 
 
 def zero_agent(config: Config, dtype=jnp.float32) -> Agent:
