@@ -84,6 +84,11 @@ def floor_colour(config: Config, p: jnp.ndarray) -> jnp.ndarray:
     return floor_colour_xy(config, p[..., 0], p[..., 1])
 
 
+def heading_vector(heading: jnp.ndarray) -> jnp.ndarray:
+    """(cos, sin) of a heading: the robot's forward direction."""
+    return jnp.stack([jnp.cos(heading), jnp.sin(heading)])
+
+
 def move(config: Config, pose: Pose, action: jnp.ndarray) -> Pose:
     """Turn by (a0 - 0.5) * 2 * max_turn, then advance max_speed * a1, then clamp to the walls."""
     turn = (action[0] - 0.5) * 2.0 * math.radians(config.max_turn_deg)
@@ -93,7 +98,7 @@ def move(config: Config, pose: Pose, action: jnp.ndarray) -> Pose:
     full = jnp.asarray(2.0 * math.pi, heading.dtype)
     heading = jnp.where(heading < 0.0, heading + full, jnp.where(heading >= full, heading - full, heading))
     step = config.max_speed * action[1]
-    pos = pose.pos + step * jnp.stack([jnp.cos(heading), jnp.sin(heading)])
+    pos = pose.pos + step * heading_vector(heading)
     r = config.robot_radius
     pos = jnp.clip(pos, r, config.arena_size - r)
     return Pose(pos, heading)

@@ -16,7 +16,7 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from imrl_jax.arena import Pose, move, task_arrays
+from imrl_jax.arena import Pose, heading_vector, move, task_arrays
 from imrl_jax.config import Config, LearningParams
 from imrl_jax.learning import accumulate, actor_features, ascend, selector_features, td_error
 from imrl_jax.networks import Agent, act, decode, evaluate_both, reinforce, with_bias, zero_agent
@@ -78,7 +78,10 @@ class State(NamedTuple):
     agent: Agent
     traces: Traces
     pose: Pose
-    xbs: jnp.ndarray  # (2, n+1): x~_t (the retina of pose, with the bias input) in row t % 2, x~_{t-1} in the other
+    # (cos, sin) of pose.heading. Carried, so that the retina's kernels read it rather
+    # than compute it again for each of their sample points.
+    direction: jnp.ndarray
+    xbs: jnp.ndarray  # (2, n+1): x~_t in row t % 2 (written by the step), x~_{t-1} in the other
     prev: Previous
     trial_step: jnp.ndarray  # steps since the current trial started
     t: jnp.ndarray  # step within the phase
@@ -181,7 +184,8 @@ def init_state(config: Config, agent: Agent, pose: Pose) -> State:
         agent=agent,
         traces=Traces(zeros(2, n), zeros(n), zeros(k, n), zeros(n)),
         pose=pose,
-        xbs=jnp.stack([with_bias(observe(config, pose)), zeros(n)]),
+        direction=heading_vector(pose.heading),
+        xbs=zeros(2, n),
         prev=Previous(jnp.int32(0), zeros(2), zeros(2), zeros(k), jnp.bool_(False), jnp.bool_(False)),
         trial_step=jnp.int32(0),
         t=jnp.int32(0),
@@ -204,12 +208,6 @@ def _turns(values, now):
     return _row(values, 1 - now), _row(values, now)
 
 
-def _after(x, *arrays):
-    """x, computed after ``arrays``: it adds 0 * (whether an element of each is NaN), exactly 0."""
-    flags = sum(jnp.isnan(a.reshape(-1)[-1]).astype(x.dtype) for a in arrays)
-    return x + 0.0 * flags
-
-
 def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, phase_steps: int,
          key: jax.Array, state: State) -> tuple[State, StepRecord]:
     """One control cycle (MODEL.md "Acting, each time step t of a phase")."""
@@ -224,9 +222,13 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
     gamma, lam = params.gamma, params.trace_lambda
 
     # 1-2: observe, choose the expert.
-    # x~_t and x~_{t-1} take turns in the rows of xbs, so that no step copies one into the other.
+    # x~_t and x~_{t-1} take turns in the rows of xbs, so that no step copies one into the
+    # other. x~_t overwrites x~_{t-2}, which nothing reads, so XLA writes it in place; and
+    # computed here from the carried pose, not at the end of the previous step, its kernels
+    # read the pose instead of computing the move again for every sample point.
     now = state.t % 2
-    xb, prev_xb = _row(state.xbs, now), _row(state.xbs, 1 - now)
+    xbs = _set_row(state.xbs, now, with_bias(observe(config, state.pose, state.direction)))
+    xb, prev_xb = _row(xbs, now), _row(xbs, 1 - now)
     selection = act(agent.selector_actor, xb)
     k = select(draws.u, selection) if selection.shape[0] > 1 else jnp.int32(0)
     same = k == prev.k
@@ -242,7 +244,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
         v, w_actor = agent.evaluator[kp], agent.actor[kp]
         # Every reinforcer at once: a matrix-vector product is one fast kernel (see evaluate_both).
         reward = reinforce(agent.reinforcer, xb)[kp] if phase.intrinsic else extrinsic
-        surprise = td_error(reward, *_turns(evaluate_both(v, state.xbs), now), gamma, prev.terminal)
+        surprise = td_error(reward, *_turns(evaluate_both(v, xbs), now), gamma, prev.terminal)
         delta = jnp.where(learn, surprise, 0.0)
         trace_v = accumulate(traces.evaluator, prev_xb, gamma, lam, learn)
         trace_w = accumulate(traces.actor, actor_features(prev.action, prev.output, prev_xb),
@@ -262,7 +264,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
             # the same selector weights, so that XLA can update them in place, not in a copy.
             learn, reward = prev.valid & (k >= 0), extrinsic
         u_weights, s_weights = agent.selector_critic, agent.selector_actor
-        delta = td_error(reward, *_turns(evaluate_both(u_weights, state.xbs), now), gamma, prev.terminal)
+        delta = td_error(reward, *_turns(evaluate_both(u_weights, xbs), now), gamma, prev.terminal)
         delta = jnp.where(learn, delta, 0.0)
         trace_u = accumulate(traces.selector_critic, prev_xb, gamma, lam, learn)
         trace_s = accumulate(traces.selector_actor,
@@ -298,12 +300,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
         reached = timeout = jnp.bool_(False)
 
     prev = Previous(k, action, output, selection, ~timeout, reached)
-    # The retina of the next pose is carried: XLA then computes it once, where it would
-    # otherwise fuse a copy of it into every kernel that reads it. x~_{t+1} overwrites
-    # x~_{t-1}; made to follow the traces, the last to read x~_{t-1}, it is written in
-    # place, where XLA would otherwise copy xbs twice a step.
-    new_xb = _after(with_bias(observe(config, pose)), *traces)
-    state = State(agent, traces, pose, _set_row(state.xbs, 1 - now, new_xb), prev, trial_step, state.t + 1, block)
+    state = State(agent, traces, pose, heading_vector(pose.heading), xbs, prev, trial_step, state.t + 1, block)
     return state, StepRecord(pose, k, reached, timeout)
 
 

@@ -5,19 +5,22 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from imrl_jax.arena import Pose, floor_colour_xy
+from imrl_jax.arena import Pose, floor_colour_xy, heading_vector
 from imrl_jax.config import Config
 
 
-def sample_xy(config: Config, pose: Pose) -> tuple[jnp.ndarray, jnp.ndarray]:
-    """World coordinates x, y of the retina's sample points, forward row by forward row."""
+def sample_xy(config: Config, pose: Pose, direction=None) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """World coordinates x, y of the retina's sample points, forward row by forward row.
+
+    ``direction`` is :func:`heading_vector` of the pose's heading, where the caller has it.
+    """
     dtype = pose.pos.dtype
     f, lat = np.meshgrid(config.retina_forward, config.retina_lateral, indexing="ij")
     f, lat = jnp.asarray(f.ravel(), dtype), jnp.asarray(lat.ravel(), dtype)
-    c, s = jnp.cos(pose.heading), jnp.sin(pose.heading)
+    c, s = heading_vector(pose.heading) if direction is None else direction
     # forward along (c, s); positive lateral offsets to the robot's left, (-s, c).
     # Elementwise, XLA fuses this into each colour's distance kernel, which costs less
-    # than a matrix product (a library call) now that x~ is carried (lifetime.State.xb).
+    # than a matrix product (a library call).
     return pose.pos[0] + f * c - lat * s, pose.pos[1] + f * s + lat * c
 
 
@@ -27,8 +30,11 @@ def sample_points(config: Config, pose: Pose) -> jnp.ndarray:
     return jnp.stack(sample_xy(config, pose), -1).reshape(rows, points, 2)
 
 
-def observe(config: Config, pose: Pose) -> jnp.ndarray:
-    """The 36-value input x: [forward row][lateral point][R, G, B], 1 where that colour is seen."""
-    colour = floor_colour_xy(config, *sample_xy(config, pose))
+def observe(config: Config, pose: Pose, direction=None) -> jnp.ndarray:
+    """The 36-value input x: [forward row][lateral point][R, G, B], 1 where that colour is seen.
+
+    ``direction`` is :func:`heading_vector` of the pose's heading, where the caller has it.
+    """
+    colour = floor_colour_xy(config, *sample_xy(config, pose, direction))
     one_hot = colour[..., None] == jnp.arange(3)
     return one_hot.reshape(-1).astype(pose.pos.dtype)
