@@ -1,0 +1,180 @@
+"""The speed of this checkout against an earlier git revision, in one process (the speed goals of the README).
+
+    python -m imrl_jax.compare REV [--phase adult|childhood|life] [--lanes 3000] [--steps 1000] [--pairs 20]
+
+On a shared machine one process's speed drifts by tens of percent within minutes, so two
+benchmark runs made minutes apart cannot show a change of 5%. This command compiles the
+same program from both versions in one process and alternates their timed runs (A B,
+then B A), so that both see the same machine. It prints the median lane-steps per second
+of each and the median ratio of the pairs (this checkout over REV), with how many pairs
+this checkout won.
+
+REV's package is taken with ``git archive`` and imported under another name; the programs
+are built from the public API that every recent revision has (``make_config``,
+``lifetime.run_phase``, ``lifetime.make_evaluate``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import io
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tarfile
+import tempfile
+import time
+
+PHASES = {"adult": ("LE-LS", "ADULT_LEARNING_SELECTOR"), "childhood": ("LE-LS", "CHILDHOOD"), "life": ("LE-LS", None)}
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def export_package(revision: str | None, name: str, into: str) -> str:
+    """Write imrl_jax of ``revision`` (None: this checkout) under ``into`` as package ``name``."""
+    target = os.path.join(into, name)
+    if revision is None:
+        shutil.copytree(os.path.join(REPO, "imrl_jax"), target, ignore=shutil.ignore_patterns("__pycache__"))
+    else:
+        archive = subprocess.run(["git", "-C", REPO, "archive", "--format=tar", revision, "imrl_jax"],
+                                 capture_output=True)
+        if archive.returncode:
+            raise ValueError(f"REV: git cannot export imrl_jax at {revision!r}: "
+                             f"{archive.stderr.decode().strip().splitlines()[-1] if archive.stderr else 'no output'}")
+        with tarfile.open(fileobj=io.BytesIO(archive.stdout)) as tar:
+            # The "data" filter (Python >= 3.11.4) refuses links and paths out of ``into``.
+            tar.extractall(into, **({"filter": "data"} if hasattr(tarfile, "data_filter") else {}))
+        os.rename(os.path.join(into, "imrl_jax"), target)
+    for folder, _, files in os.walk(target):
+        for file in files:
+            if file.endswith(".py"):
+                path = os.path.join(folder, file)
+                with open(path) as f:
+                    text = f.read()
+                with open(path, "w") as f:
+                    f.write(re.sub(r"\bimrl_jax\b", name, text))
+    return target
+
+
+def _shard(array, lanes: int):
+    import jax
+    import numpy as np
+    from jax.sharding import Mesh, NamedSharding, PartitionSpec
+
+    devices = jax.devices()
+    if lanes % len(devices):
+        return array
+    return jax.device_put(array, NamedSharding(Mesh(np.asarray(devices), ("lanes",)), PartitionSpec("lanes")))
+
+
+def build(package: str, phase: str, lanes: int, steps: int):
+    """(function, arguments, lane-steps per call) of one version's program, compiled and run once."""
+    import jax
+
+    config_module = importlib.import_module(package + ".config")
+    L = importlib.import_module(package + ".lifetime")
+    networks = importlib.import_module(package + ".networks")
+    condition, phase_name = PHASES[phase]
+    if phase == "life":
+        config = config_module.make_config("paper", condition=condition, task_steps=steps,
+                                           childhood_steps=steps * 3 // 2, num_bins=10)
+        individuals = max(1, lanes // config.num_tasks)
+        genomes = _shard(jax.random.uniform(jax.random.key(1), (individuals, config.num_genes), minval=-1, maxval=1),
+                         individuals)
+        fn = L.make_evaluate(config)
+        args = (jax.random.key(0), config.learning_params(), genomes)
+        work = individuals * config.lifetime_steps
+    else:
+        config = config_module.make_config("paper", condition=condition, childhood_steps=steps, task_steps=steps,
+                                           num_bins=1)
+        stage = getattr(L, phase_name)
+        params = config.learning_params()
+
+        def lane(key, genome):
+            agent = networks.decode(config, genome)
+            if stage is L.CHILDHOOD:
+                task, pose = L.childhood_task(config), L.random_pose(key, config)
+            else:
+                agent, task = L.adult_agent(config, agent), L.task_spec(config, 0)
+                pose = task.start
+            _, curves = L.run_phase(key, config, stage, params, task, L.init_state(config, agent, pose), steps)
+            return curves.reaches, curves.selections
+
+        genomes = jax.random.uniform(jax.random.key(1), (lanes, config.num_genes), minval=-1, maxval=1)
+        args = (_shard(jax.random.split(jax.random.key(0), lanes), lanes), _shard(genomes, lanes))
+        fn = jax.jit(jax.vmap(lane))
+        work = lanes * steps
+    jax.block_until_ready(fn(*args))
+    return fn, args, work
+
+
+def compare(revision: str, phase: str, lanes: int, steps: int, pairs: int, log=print) -> dict:
+    """Median rates of REV (a) and this checkout (b), and the median of the pairs' ratios b / a."""
+    import jax
+
+    with tempfile.TemporaryDirectory() as folder:
+        export_package(revision, "imrl_compare_a", folder)
+        export_package(None, "imrl_compare_b", folder)
+        sys.path.insert(0, folder)
+        try:
+            programs = [build(name, phase, lanes, steps) for name in ("imrl_compare_a", "imrl_compare_b")]
+        finally:
+            sys.path.remove(folder)
+            for module in [m for m in sys.modules if m.startswith("imrl_compare_")]:
+                del sys.modules[module]
+    rates = ([], [])
+    for i in range(pairs):
+        for which in ((0, 1) if i % 2 == 0 else (1, 0)):
+            fn, args, work = programs[which]
+            start = time.perf_counter()
+            jax.block_until_ready(fn(*args))
+            rates[which].append(work / (time.perf_counter() - start))
+        log(f"pair {i + 1}/{pairs}: {rates[0][-1] / 1e6:.2f} M vs {rates[1][-1] / 1e6:.2f} M lane-steps/s")
+    ratios = [b / a for a, b in zip(*rates)]
+    return {"revision": revision, "phase": phase, "lanes": lanes, "steps": steps, "pairs": pairs,
+            "base_lane_steps_per_s": statistics.median(rates[0]),
+            "lane_steps_per_s": statistics.median(rates[1]),
+            "median_ratio": statistics.median(ratios), "pairs_won": sum(r > 1 for r in ratios)}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m imrl_jax.compare", description=__doc__.split("\n")[0])
+    parser.add_argument("revision", metavar="REV", help="git revision to compare this checkout with")
+    parser.add_argument("--phase", choices=sorted(PHASES), default="adult",
+                        help="LE-LS adulthood, childhood, or whole lives of lanes / 6 individuals")
+    parser.add_argument("--lanes", type=int, default=3000, help="lanes (adult lanes for life)")
+    parser.add_argument("--steps", type=int, default=1000, help="steps per timed run (per task for life)")
+    parser.add_argument("--pairs", type=int, default=20, help="alternating pairs of timed runs")
+    parser.add_argument("--cpu-devices", type=int, default=0, help="CPU devices (0: one per core)")
+    args = parser.parse_args(argv)
+    for name in ("lanes", "steps", "pairs"):
+        if getattr(args, name) < 1:
+            print(f"error: --{name}: must be at least 1", file=sys.stderr)
+            return 2
+    if args.phase == "life" and args.steps % 10:
+        print("error: --steps: must be a multiple of 10 for --phase life (10 bins)", file=sys.stderr)
+        return 2
+    if args.cpu_devices < 0:
+        print("error: --cpu-devices: must be 0 (one per core) or more", file=sys.stderr)
+        return 2
+    check = subprocess.run(["git", "-C", REPO, "rev-parse", "--verify", "--quiet", args.revision + "^{commit}"],
+                           capture_output=True)
+    if check.returncode:
+        print(f"error: REV: {args.revision!r} is not a revision of {REPO}", file=sys.stderr)
+        return 2
+    from imrl_jax.devices import use_host_cores
+
+    use_host_cores(args.cpu_devices or None)
+    result = compare(args.revision, args.phase, args.lanes, args.steps, args.pairs)
+    print(f"{args.phase}, {args.lanes} lanes: {args.revision} {result['base_lane_steps_per_s'] / 1e6:.2f} M, "
+          f"this checkout {result['lane_steps_per_s'] / 1e6:.2f} M lane-steps/s (medians of {args.pairs}); "
+          f"ratio {result['median_ratio']:.3f} (median of pairs), this checkout faster in "
+          f"{result['pairs_won']}/{args.pairs}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
