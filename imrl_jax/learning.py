@@ -29,9 +29,16 @@ def selector_features(k, selection, xb):
     return ((e - selection) * selection * (1.0 - selection))[:, None] * xb[None, :]
 
 
-def accumulate(trace, phi, gamma, trace_lambda, learn):
-    """e <- gamma * lambda * e + phi where the network learns this step; unchanged elsewhere."""
-    return jnp.where(learn, gamma * trace_lambda * trace + phi, trace)
+def accumulate(trace, phi, gamma, trace_lambda, learn, ended=False):
+    """e <- gamma * lambda * e + phi where the network learns this step; unchanged elsewhere.
+
+    A trace that ``ended`` (at the previous step) is read as 0 first.
+    """
+    # Factors instead of jnp.where: XLA's CPU backend vectorises a multiply of a whole
+    # array by each lane's scalar, but not a select on each lane's flag (about 2x
+    # faster on the selector's trace). The same numbers, since traces are finite.
+    keep = jnp.where(learn, gamma * trace_lambda, 1.0) * jnp.where(ended, 0.0, 1.0)
+    return trace * keep + phi * jnp.asarray(learn, trace.dtype)
 
 
 def ascend(weights, trace, delta, eta):

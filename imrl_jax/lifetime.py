@@ -53,12 +53,18 @@ class Draws(NamedTuple):
 
 
 class Traces(NamedTuple):
-    """Eligibility traces. Only the expert in control has a non-zero trace, so one suffices."""
+    """Eligibility traces. Only the expert in control has a non-zero trace, so one suffices.
+
+    A trace that ends is not zeroed at once: its flag makes the next step read it as 0.
+    Zeroing it there would take one more pass over it, after the update that reads it.
+    """
 
     actor: jnp.ndarray  # (2, n+1)
     evaluator: jnp.ndarray  # (n+1,)
     selector_actor: jnp.ndarray  # (K, n+1)
     selector_critic: jnp.ndarray  # (n+1,)
+    experts_ended: jnp.ndarray  # (): the expert traces ended last step (read as 0)
+    selector_ended: jnp.ndarray  # (): the selector traces ended last step (read as 0)
 
 
 class Previous(NamedTuple):
@@ -182,7 +188,7 @@ def init_state(config: Config, agent: Agent, pose: Pose) -> State:
     zeros = lambda *shape: jnp.zeros(shape, dtype)  # noqa: E731
     return State(
         agent=agent,
-        traces=Traces(zeros(2, n), zeros(n), zeros(k, n), zeros(n)),
+        traces=Traces(zeros(2, n), zeros(n), zeros(k, n), zeros(n), jnp.bool_(False), jnp.bool_(False)),
         pose=pose,
         direction=heading_vector(pose.heading),
         xbs=zeros(2, n),
@@ -246,16 +252,14 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
         reward = reinforce(agent.reinforcer, xb)[kp] if phase.intrinsic else extrinsic
         surprise = td_error(reward, *_turns(evaluate_both(v, xbs), now), gamma, prev.terminal)
         delta = jnp.where(learn, surprise, 0.0)
-        trace_v = accumulate(traces.evaluator, prev_xb, gamma, lam, learn)
+        trace_v = accumulate(traces.evaluator, prev_xb, gamma, lam, learn, traces.experts_ended)
         trace_w = accumulate(traces.actor, actor_features(prev.action, prev.output, prev_xb),
-                             gamma, lam, learn)
+                             gamma, lam, learn, traces.experts_ended)
         agent = agent._replace(
             evaluator=_set_row(agent.evaluator, kp, ascend(v, trace_v, delta, params.eta_evaluator)),
             actor=_set_row(agent.actor, kp, ascend(w_actor, trace_w, delta, params.eta_actor)))
         # The expert losing control (or the trial ending) drops its traces.
-        clear = ~same | ends
-        traces = traces._replace(evaluator=jnp.where(clear, 0.0, trace_v),
-                                 actor=jnp.where(clear, 0.0, trace_w))
+        traces = traces._replace(evaluator=trace_v, actor=trace_w, experts_ended=~same | ends)
     if phase.selector_learns:
         if phase.intrinsic:  # childhood: the surprise of the expert that kept control
             learn, reward = prev.valid & same, surprise
@@ -266,18 +270,13 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
         u_weights, s_weights = agent.selector_critic, agent.selector_actor
         delta = td_error(reward, *_turns(evaluate_both(u_weights, xbs), now), gamma, prev.terminal)
         delta = jnp.where(learn, delta, 0.0)
-        trace_u = accumulate(traces.selector_critic, prev_xb, gamma, lam, learn)
-        trace_s = accumulate(traces.selector_actor,
-                             selector_features(prev.k, prev.selection, prev_xb), gamma, lam, learn)
+        trace_u = accumulate(traces.selector_critic, prev_xb, gamma, lam, learn, traces.selector_ended)
+        trace_s = accumulate(traces.selector_actor, selector_features(prev.k, prev.selection, prev_xb),
+                             gamma, lam, learn, traces.selector_ended)
         agent = agent._replace(
             selector_critic=ascend(u_weights, trace_u, delta, params.eta_selector_critic),
             selector_actor=ascend(s_weights, trace_s, delta, params.eta_selector_actor))
-        # 0 * sign(new weights) is 0 (infinite weights included) but orders the clearing
-        # after the updates that read the traces, so that XLA clears them in place
-        # instead of copying them each step.
-        traces = traces._replace(
-            selector_critic=jnp.where(ends, 0.0 * jnp.sign(agent.selector_critic), trace_u),
-            selector_actor=jnp.where(ends, 0.0 * jnp.sign(agent.selector_actor), trace_s))
+        traces = traces._replace(selector_critic=trace_u, selector_actor=trace_s, selector_ended=ends)
 
     # 4: act.
     output = act(agent.actor[k], xb)
