@@ -46,3 +46,13 @@ def ascend(weights, trace, delta, eta):
     sgd = optax.sgd(eta)
     updates, _ = sgd.update(-delta * trace, sgd.init(weights))
     return optax.apply_updates(weights, updates)
+
+
+def ascend_row(weights, row, trace, delta, eta):
+    """w[k] += eta * delta * e for the row k that the one-hot vector ``row`` picks; other rows unchanged."""
+    sgd = optax.sgd(eta)
+    updates, _ = sgd.update(-delta * trace, sgd.init(trace))
+    # A product with the one-hot instead of a row write: under vmap a row write is a
+    # scatter, a slow loop on XLA's CPU backend, and this is one vectorised pass. The
+    # same numbers while the weights are finite (the other rows get + 0).
+    return weights + row.reshape(row.shape + (1,) * trace.ndim) * updates

@@ -18,7 +18,7 @@ import jax.numpy as jnp
 
 from imrl_jax.arena import Pose, heading_vector, move, task_arrays
 from imrl_jax.config import Config, LearningParams
-from imrl_jax.learning import accumulate, actor_features, ascend, selector_features, td_error
+from imrl_jax.learning import accumulate, actor_features, ascend, ascend_row, selector_features, td_error
 from imrl_jax.networks import Agent, act, decode, evaluate_both, reinforce, with_bias, zero_agent
 from imrl_jax.retina import observe
 
@@ -247,17 +247,18 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
     if phase.experts_learn:
         learn = prev.valid & same
         kp = prev.k
-        v, w_actor = agent.evaluator[kp], agent.actor[kp]
-        # Every reinforcer at once: a matrix-vector product is one fast kernel (see evaluate_both).
+        held = jax.nn.one_hot(kp, agent.evaluator.shape[0], dtype=xb.dtype)  # the expert that held control
+        # Every reinforcer, and every evaluator, at once: a matrix-vector product is one
+        # fast kernel (see evaluate_both), where taking row kp first is a slow gather.
         reward = reinforce(agent.reinforcer, xb)[kp] if phase.intrinsic else extrinsic
-        surprise = td_error(reward, *_turns(evaluate_both(v, xbs), now), gamma, prev.terminal)
+        value_before, value_now = (agent.evaluator @ prev_xb)[kp], (agent.evaluator @ xb)[kp]
+        surprise = td_error(reward, value_before, value_now, gamma, prev.terminal)
         delta = jnp.where(learn, surprise, 0.0)
         trace_v = accumulate(traces.evaluator, prev_xb, gamma, lam, learn, traces.experts_ended)
         trace_w = accumulate(traces.actor, actor_features(prev.action, prev.output, prev_xb),
                              gamma, lam, learn, traces.experts_ended)
-        agent = agent._replace(
-            evaluator=_set_row(agent.evaluator, kp, ascend(v, trace_v, delta, params.eta_evaluator)),
-            actor=_set_row(agent.actor, kp, ascend(w_actor, trace_w, delta, params.eta_actor)))
+        agent = agent._replace(evaluator=ascend_row(agent.evaluator, held, trace_v, delta, params.eta_evaluator),
+                               actor=ascend_row(agent.actor, held, trace_w, delta, params.eta_actor))
         # The expert losing control (or the trial ending) drops its traces.
         traces = traces._replace(evaluator=trace_v, actor=trace_w, experts_ended=~same | ends)
     if phase.selector_learns:
