@@ -1,6 +1,6 @@
 """The speed of this checkout against an earlier git revision, in one process (the speed goals of the README).
 
-    python -m imrl_jax.compare REV [--phase adult|childhood|life] [--lanes 3000] [--steps 1000] [--pairs 20]
+    python -m imrl_jax.compare REV [--phase adult|adult-es|sle|childhood|life] [--lanes 3000] [--steps 1000] [--pairs 20]
 
 On a shared machine one process's speed drifts by tens of percent within minutes, so two
 benchmark runs made minutes apart cannot show a change of 5%. This command compiles the
@@ -29,7 +29,8 @@ import tarfile
 import tempfile
 import time
 
-PHASES = {"adult": ("LE-LS", "ADULT_LEARNING_SELECTOR"), "childhood": ("LE-LS", "CHILDHOOD"), "life": ("LE-LS", None)}
+PHASES = {"adult": ("LE-LS", "ADULT_LEARNING_SELECTOR"), "adult-es": ("EE-ES", "ADULT_EVOLVED_SELECTOR"),
+          "sle": ("SLE", "ADULT_SINGLE_EXPERT"), "childhood": ("LE-LS", "CHILDHOOD"), "life": ("LE-LS", None)}
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
@@ -103,7 +104,8 @@ def build(package: str, phase: str, lanes: int, steps: int):
             _, curves = L.run_phase(key, config, stage, params, task, L.init_state(config, agent, pose), steps)
             return curves.reaches, curves.selections
 
-        genomes = jax.random.uniform(jax.random.key(1), (lanes, config.num_genes), minval=-1, maxval=1)
+        genomes = jax.random.uniform(jax.random.key(1), (lanes, max(config.num_genes, 1)), minval=-1,
+                                     maxval=1)[:, :config.num_genes]
         args = (_shard(jax.random.split(jax.random.key(0), lanes), lanes), _shard(genomes, lanes))
         fn = jax.jit(jax.vmap(lane))
         work = lanes * steps
@@ -144,7 +146,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m imrl_jax.compare", description=__doc__.split("\n")[0])
     parser.add_argument("revision", metavar="REV", help="git revision to compare this checkout with")
     parser.add_argument("--phase", choices=sorted(PHASES), default="adult",
-                        help="LE-LS adulthood, childhood, or whole lives of lanes / 6 individuals")
+                        help="adulthood of LE-LS (adult), EE-ES or SLE, LE-LS childhood, or whole LE-LS lives "
+                             "of lanes / 6 individuals")
     parser.add_argument("--lanes", type=int, default=3000, help="lanes (adult lanes for life)")
     parser.add_argument("--steps", type=int, default=1000, help="steps per timed run (per task for life)")
     parser.add_argument("--pairs", type=int, default=20, help="alternating pairs of timed runs")
