@@ -15,6 +15,7 @@ On CPU the lanes are split over one XLA device per core (``--cpu-devices``).
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import os
 import platform
@@ -22,6 +23,7 @@ import resource
 import statistics
 import sys
 import time
+from typing import NamedTuple
 
 import jax
 import numpy as np
@@ -70,17 +72,33 @@ def _lane_inputs(config, lanes: int):
     return _shard(keys, lanes), _shard(genomes, lanes)
 
 
-def bench_phase(condition: str, phase_name: str, lanes: int, steps: int, repeats: int) -> dict:
-    """Lane-steps per second of one phase run for ``steps`` steps on ``lanes`` lanes."""
-    from imrl_jax import lifetime as L
-    from imrl_jax.networks import decode
+class Program(NamedTuple):
+    """A timed program: call ``fn(*args)``; each call does ``lane_steps`` lane-steps."""
 
-    config = make_config("paper", condition=condition, childhood_steps=steps, task_steps=steps, num_bins=1)
+    fn: object
+    args: tuple
+    lane_steps: int
+    config: object
+
+
+def _modules(package: str):
+    return (importlib.import_module(f"{package}.{name}") for name in ("config", "lifetime", "networks"))
+
+
+def phase_program(condition: str, phase_name: str, lanes: int, steps: int, package: str = "imrl_jax") -> Program:
+    """One phase (an attribute of lifetime, e.g. ``CHILDHOOD``) run for ``steps`` steps on ``lanes`` lanes.
+
+    ``package`` names the imrl_jax whose modules build it (``python -m imrl_jax.compare``
+    passes an earlier revision's, imported under another name).
+    """
+    config_module, L, networks = _modules(package)
+    config = config_module.make_config("paper", condition=condition, childhood_steps=steps, task_steps=steps,
+                                       num_bins=1)
     phase = getattr(L, phase_name)
     params = config.learning_params()
 
     def lane(key, genome):
-        agent = decode(config, genome)
+        agent = networks.decode(config, genome)
         if phase is L.CHILDHOOD:
             task = L.childhood_task(config)
             pose = L.random_pose(key, config)
@@ -91,14 +109,30 @@ def bench_phase(condition: str, phase_name: str, lanes: int, steps: int, repeats
         state, curves = L.run_phase(key, config, phase, params, task, L.init_state(config, agent, pose), steps)
         return curves.reaches, curves.selections
 
-    keys, genomes = _lane_inputs(config, lanes)
+    return Program(jax.jit(jax.vmap(lane)), _lane_inputs(config, lanes), lanes * steps, config)
+
+
+def lifetime_program(lanes: int, task_steps: int, package: str = "imrl_jax") -> Program:
+    """Whole LE-LS lives of ``lanes / 6`` individuals (childhood 1.5 x task steps); ``package`` as above."""
+    config_module, L, _ = _modules(package)
+    config = config_module.make_config("paper", condition="LE-LS", task_steps=task_steps,
+                                       childhood_steps=task_steps * 3 // 2, num_bins=10)
+    individuals = max(1, lanes // config.num_tasks)
+    _, genomes = _lane_inputs(config, individuals)
+    return Program(L.make_evaluate(config), (jax.random.key(0), config.learning_params(), genomes),
+                   individuals * config.lifetime_steps, config)
+
+
+def bench_phase(condition: str, phase_name: str, lanes: int, steps: int, repeats: int) -> dict:
+    """Lane-steps per second of one phase run for ``steps`` steps on ``lanes`` lanes."""
+    program = phase_program(condition, phase_name, lanes, steps)
     start = time.perf_counter()
-    compiled = jax.jit(jax.vmap(lane)).lower(keys, genomes).compile()
+    compiled = program.fn.lower(*program.args).compile()
     compile_s = time.perf_counter() - start
     memory = compiled.memory_analysis()
-    seconds, shortest = _time(compiled, keys, genomes, repeats=repeats)
-    return {"lanes": lanes, "steps": steps, "seconds": seconds, "lane_steps_per_s": lanes * steps / seconds,
-            "best_lane_steps_per_s": lanes * steps / shortest,
+    seconds, shortest = _time(compiled, *program.args, repeats=repeats)
+    return {"lanes": lanes, "steps": steps, "seconds": seconds, "lane_steps_per_s": program.lane_steps / seconds,
+            "best_lane_steps_per_s": program.lane_steps / shortest,
             "compile_s": compile_s,
             "program_bytes": int(memory.temp_size_in_bytes + memory.argument_size_in_bytes
                                  + memory.output_size_in_bytes)}
@@ -125,20 +159,16 @@ def bench_reference_phase(condition: str, reference_phase: str, steps: int) -> d
 def bench_lifetime(lanes: int, task_steps: int, repeats: int) -> dict:
     """The headline: whole LE-LS lives of ``lanes / 6`` individuals, and the reference's one life."""
     from imrl_jax import reference
-    from imrl_jax.lifetime import draw_many, lifetime_keys, make_evaluate, random_pose
+    from imrl_jax.lifetime import draw_many, lifetime_keys, random_pose
 
-    config = make_config("paper", condition="LE-LS", task_steps=task_steps, childhood_steps=task_steps * 3 // 2,
-                         num_bins=10)
-    individuals = max(1, lanes // config.num_tasks)
-    evaluate = make_evaluate(config)
-    params = config.learning_params()
-    _, genomes = _lane_inputs(config, individuals)
-    key = jax.random.key(0)
+    program = lifetime_program(lanes, task_steps)
+    config, (key, params, genomes) = program.config, program.args
+    individuals = genomes.shape[0]
     start = time.perf_counter()
-    jax.block_until_ready(evaluate(key, params, genomes))
+    jax.block_until_ready(program.fn(*program.args))
     compile_s = time.perf_counter() - start
-    seconds, shortest = _time(evaluate, key, params, genomes, repeats=repeats)
-    jax_rate = individuals * config.lifetime_steps / seconds
+    seconds, shortest = _time(program.fn, *program.args, repeats=repeats)
+    jax_rate = program.lane_steps / seconds
 
     keys = lifetime_keys(key, config.num_tasks)
     genome = np.asarray(genomes[0], np.float64)
@@ -153,7 +183,7 @@ def bench_lifetime(lanes: int, task_steps: int, repeats: int) -> dict:
     return {"individuals": individuals, "lanes": individuals * config.num_tasks,
             "childhood_steps": config.childhood_steps, "task_steps": config.task_steps,
             "seconds": seconds, "compile_and_first_run_s": compile_s, "lane_steps_per_s": jax_rate,
-            "best_lane_steps_per_s": individuals * config.lifetime_steps / shortest,
+            "best_lane_steps_per_s": program.lane_steps / shortest,
             "reference_lane_steps_per_s": reference_rate, "speedup": jax_rate / reference_rate}
 
 

@@ -9,15 +9,15 @@ then B A), so that both see the same machine. It prints the median lane-steps pe
 of each and the median ratio of the pairs (this checkout over REV), with how many pairs
 this checkout won.
 
-REV's package is taken with ``git archive`` and imported under another name; the programs
-are built from the public API that every recent revision has (``make_config``,
+REV's package is taken with ``git archive`` and imported under another name; both programs
+are built by this checkout's benchmark (``bench.phase_program``, ``bench.lifetime_program``)
+from each version's modules, through the API every recent revision has (``make_config``,
 ``lifetime.run_phase``, ``lifetime.make_evaluate``).
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
 import io
 import os
 import re
@@ -60,57 +60,18 @@ def export_package(revision: str | None, name: str, into: str) -> str:
     return target
 
 
-def _shard(array, lanes: int):
-    import jax
-    import numpy as np
-    from jax.sharding import Mesh, NamedSharding, PartitionSpec
-
-    devices = jax.devices()
-    if lanes % len(devices):
-        return array
-    return jax.device_put(array, NamedSharding(Mesh(np.asarray(devices), ("lanes",)), PartitionSpec("lanes")))
-
-
 def build(package: str, phase: str, lanes: int, steps: int):
-    """(function, arguments, lane-steps per call) of one version's program, compiled and run once."""
+    """One version's program (:class:`imrl_jax.bench.Program`), compiled and run once."""
     import jax
 
-    config_module = importlib.import_module(package + ".config")
-    L = importlib.import_module(package + ".lifetime")
-    networks = importlib.import_module(package + ".networks")
-    condition, phase_name = PHASES[phase]
+    from imrl_jax.bench import lifetime_program, phase_program
+
     if phase == "life":
-        config = config_module.make_config("paper", condition=condition, task_steps=steps,
-                                           childhood_steps=steps * 3 // 2, num_bins=10)
-        individuals = max(1, lanes // config.num_tasks)
-        genomes = _shard(jax.random.uniform(jax.random.key(1), (individuals, config.num_genes), minval=-1, maxval=1),
-                         individuals)
-        fn = L.make_evaluate(config)
-        args = (jax.random.key(0), config.learning_params(), genomes)
-        work = individuals * config.lifetime_steps
+        program = lifetime_program(lanes, steps, package)
     else:
-        config = config_module.make_config("paper", condition=condition, childhood_steps=steps, task_steps=steps,
-                                           num_bins=1)
-        stage = getattr(L, phase_name)
-        params = config.learning_params()
-
-        def lane(key, genome):
-            agent = networks.decode(config, genome)
-            if stage is L.CHILDHOOD:
-                task, pose = L.childhood_task(config), L.random_pose(key, config)
-            else:
-                agent, task = L.adult_agent(config, agent), L.task_spec(config, 0)
-                pose = task.start
-            _, curves = L.run_phase(key, config, stage, params, task, L.init_state(config, agent, pose), steps)
-            return curves.reaches, curves.selections
-
-        genomes = jax.random.uniform(jax.random.key(1), (lanes, max(config.num_genes, 1)), minval=-1,
-                                     maxval=1)[:, :config.num_genes]
-        args = (_shard(jax.random.split(jax.random.key(0), lanes), lanes), _shard(genomes, lanes))
-        fn = jax.jit(jax.vmap(lane))
-        work = lanes * steps
-    jax.block_until_ready(fn(*args))
-    return fn, args, work
+        program = phase_program(*PHASES[phase], lanes, steps, package)
+    jax.block_until_ready(program.fn(*program.args))
+    return program
 
 
 def compare(revision: str, phase: str, lanes: int, steps: int, pairs: int, log=print) -> dict:
@@ -130,10 +91,10 @@ def compare(revision: str, phase: str, lanes: int, steps: int, pairs: int, log=p
     rates = ([], [])
     for i in range(pairs):
         for which in ((0, 1) if i % 2 == 0 else (1, 0)):
-            fn, args, work = programs[which]
+            program = programs[which]
             start = time.perf_counter()
-            jax.block_until_ready(fn(*args))
-            rates[which].append(work / (time.perf_counter() - start))
+            jax.block_until_ready(program.fn(*program.args))
+            rates[which].append(program.lane_steps / (time.perf_counter() - start))
         log(f"pair {i + 1}/{pairs}: {rates[0][-1] / 1e6:.2f} M vs {rates[1][-1] / 1e6:.2f} M lane-steps/s")
     ratios = [b / a for a, b in zip(*rates)]
     return {"revision": revision, "phase": phase, "lanes": lanes, "steps": steps, "pairs": pairs,
