@@ -56,3 +56,16 @@ def ascend_row(weights, row, trace, delta, eta):
     # scatter, a slow loop on XLA's CPU backend, and this is one vectorised pass. The
     # same numbers while the weights are finite (the other rows get + 0).
     return weights + row.reshape(row.shape + (1,) * trace.ndim) * updates
+
+
+def pick_row(matrix, k):
+    """matrix[k], as the sum of its rows times a one-hot vector (see :func:`ascend_row`).
+
+    Under vmap a vectorised pass instead of a gather; the same numbers while the other
+    rows are finite.
+    """
+    onehot = jax.nn.one_hot(k, matrix.shape[0], dtype=matrix.dtype)
+    picked = onehot[0] * matrix[0]
+    for j in range(1, matrix.shape[0]):
+        picked = picked + onehot[j] * matrix[j]
+    return picked

@@ -18,7 +18,8 @@ import jax.numpy as jnp
 
 from imrl_jax.arena import Pose, heading_vector, move, task_arrays
 from imrl_jax.config import Config, LearningParams
-from imrl_jax.learning import accumulate, actor_features, ascend, ascend_row, selector_features, td_error
+from imrl_jax.learning import (accumulate, actor_features, ascend, ascend_row, pick_row, selector_features,
+                               td_error)
 from imrl_jax.networks import Agent, act, decode, evaluate_both, reinforce, with_bias, zero_agent
 from imrl_jax.retina import observe
 
@@ -214,18 +215,6 @@ def _turns(values, now):
     return _row(values, 1 - now), _row(values, now)
 
 
-def _pick(matrix, k):
-    """matrix[k], as a sum of its rows times a one-hot: under vmap a vectorised pass, not a gather.
-
-    The same numbers while the other rows are finite.
-    """
-    onehot = jax.nn.one_hot(k, matrix.shape[0], dtype=matrix.dtype)
-    picked = onehot[0] * matrix[0]
-    for j in range(1, matrix.shape[0]):
-        picked = picked + onehot[j] * matrix[j]
-    return picked
-
-
 def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, phase_steps: int,
          key: jax.Array, state: State) -> tuple[State, StepRecord]:
     """One control cycle (MODEL.md "Acting, each time step t of a phase")."""
@@ -292,7 +281,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
         traces = traces._replace(selector_critic=trace_u, selector_actor=trace_s, selector_ended=ends)
 
     # 4: act.
-    output = act(_pick(agent.actor, k), xb)
+    output = act(pick_row(agent.actor, k), xb)
     if phase.noisy:
         sigma = params.noise_std * (1.0 - state.t.astype(xb.dtype) / phase_steps)
         action = jnp.clip(output + sigma * draws.z, 0.0, 1.0)

@@ -40,7 +40,7 @@ def act(weights: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:
 
 
 def evaluate_both(v: jnp.ndarray, xbs: jnp.ndarray) -> jnp.ndarray:
-    """Linear evaluations v.x~ of both rows of xbs (an evaluator or the selector critic), as one product.
+    """The selector critic's evaluations u.x~ of both rows of xbs, as one product.
 
     One product instead of two vector products: XLA's CPU backend runs a batch of
     matrix-vector products as one fast dot, but a batch of vector products as a slow

@@ -4,8 +4,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from imrl_jax.learning import accumulate, ascend_row
-from imrl_jax.lifetime import _pick
+from imrl_jax.learning import accumulate, ascend_row, pick_row
 
 
 def test_accumulate_by_hand():
@@ -40,9 +39,9 @@ def test_ascend_row_changes_only_that_row():
     np.testing.assert_allclose(got[1], weights[1] + 0.05 * trace, rtol=1e-6)
 
 
-def test_pick_is_the_row_bit_for_bit():
+def test_pick_row_is_the_row_bit_for_bit():
     matrix = jax.random.normal(jax.random.key(4), (3, 2, 37))
     for k in range(3):
-        np.testing.assert_array_equal(_pick(matrix, k), matrix[k])
-    picked = jax.vmap(_pick)(jnp.stack([matrix] * 3), jnp.arange(3))
+        np.testing.assert_array_equal(pick_row(matrix, k), matrix[k])
+    picked = jax.vmap(pick_row)(jnp.stack([matrix] * 3), jnp.arange(3))
     np.testing.assert_array_equal(picked, matrix)
