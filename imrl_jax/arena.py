@@ -25,25 +25,29 @@ class Pose(NamedTuple):
     heading: jnp.ndarray  # ()
 
 
-def _red_distance_sq(config: Config, x: jnp.ndarray, y: jnp.ndarray) -> jnp.ndarray:
-    """Squared distance from points (x, y) to the nearest red edge on the nearest red line."""
+def _red_distance_sq(config: Config, x: jnp.ndarray, y: jnp.ndarray, round_even=jnp.round) -> jnp.ndarray:
+    """Squared distance from points (x, y) to the nearest red edge on the nearest red line.
+
+    ``round_even`` rounds half to even; the GPU kernel passes its own (see kernel.py).
+    """
     a = config.edge_length
     h = config.hex_apothem
     ox, oy = config.tiling_origin
     # Horizontal edges lie on the lines y = oy + m*h; on line m they are segments of
     # length a centred every 3a, shifted by 1.5a per line.  Lines are 2h/sqrt(3) > 30 cm
     # apart, so for a point within a line width only its nearest line matters.
-    m = jnp.round((y - oy) / h)
+    m = round_even((y - oy) / h)
     dy = y - oy - m * h
     u = x - ox - 1.5 * a - 1.5 * a * m
     # u minus the nearest multiple of 3a: exact (the difference is a multiple of u's ulp),
     # and unlike jnp.mod (a per-element fmod call on CPU) it vectorises.
-    u = u - 3.0 * a * jnp.round(u / (3.0 * a))
+    u = u - 3.0 * a * round_even(u / (3.0 * a))
     dx = jnp.maximum(jnp.abs(u) - 0.5 * a, 0.0)
     return dx * dx + dy * dy
 
 
-def _distances(config: Config, x: jnp.ndarray, y: jnp.ndarray, outside: jnp.ndarray) -> tuple[jnp.ndarray, ...]:
+def _distances(config: Config, x: jnp.ndarray, y: jnp.ndarray, outside: jnp.ndarray,
+               round_even=jnp.round) -> tuple[jnp.ndarray, ...]:
     """Distances from points (x, y) to the nearest red, green and blue edge (one array each).
 
     Exact where the distance is below half the spacing of parallel lines (about 17 cm),
@@ -55,18 +59,18 @@ def _distances(config: Config, x: jnp.ndarray, y: jnp.ndarray, outside: jnp.ndar
     dists = []
     for k in range(3):  # colour k's edges are the red ones turned by k*60 deg
         c, s = math.cos(k * math.pi / 3), math.sin(k * math.pi / 3)
-        d2 = _red_distance_sq(config, c * qx + s * qy + ox, -s * qx + c * qy + oy)
+        d2 = _red_distance_sq(config, c * qx + s * qy + ox, -s * qx + c * qy + oy, round_even)
         dists.append(jnp.sqrt(jnp.where(outside, jnp.inf, d2)))
     return tuple(dists)
 
 
-def floor_colour_xy(config: Config, x: jnp.ndarray, y: jnp.ndarray) -> jnp.ndarray:
-    """:func:`floor_colour` of points given as separate coordinate arrays x, y."""
+def floor_colour_xy(config: Config, x: jnp.ndarray, y: jnp.ndarray, round_even=jnp.round) -> jnp.ndarray:
+    """:func:`floor_colour` of points given as separate coordinate arrays x, y (``round_even``: half to even)."""
     # Outside the arena is infinitely far from every edge. Folding this test into the
     # distances (each an expensive kernel XLA computes once) keeps the pose out of the
     # kernels that read the colours, which XLA would otherwise recompute it in.
     outside = (x < 0.0) | (x > config.arena_size) | (y < 0.0) | (y > config.arena_size)
-    red, green, blue = _distances(config, x, y, outside)
+    red, green, blue = _distances(config, x, y, outside, round_even)
     d_min = jnp.minimum(jnp.minimum(red, green), blue)
     # The nearest edge wins; an exact tie goes to red, then green, then blue.
     near = d_min + config.colour_tie_tolerance

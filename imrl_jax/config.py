@@ -18,6 +18,7 @@ from typing import NamedTuple
 
 CONDITIONS = ("LE-LS", "EE-LS", "EE-ES", "SLE")
 EVOLVED_CONDITIONS = ("LE-LS", "EE-LS", "EE-ES")
+STEP_KERNELS = ("xla", "pallas")
 
 #: Half the distance between parallel lines of the floor: 20*sqrt(3) cm for a = 40 cm.
 _S = 20.0 * math.sqrt(3.0)
@@ -79,6 +80,9 @@ class Config:
     num_bins: int = 100  # bins of the reward/selection curves of each phase
     draw_block: int = 100  # steps whose random numbers are drawn in one call (sets the stream)
     scan_unroll: int = 1  # steps per iteration of the step loop (speed only, same results)
+    # "xla": each step is XLA operations; "pallas": each bin of steps is one GPU kernel
+    # (kernel.py; same results up to rounding, interpreted off a GPU).
+    step_kernel: str = "xla"
 
     # --- arena and floor (fixed here)
     arena_size: float = 400.0
@@ -233,6 +237,8 @@ def _validate(c: Config) -> None:
 
     if c.condition not in CONDITIONS:
         fail("condition", f"must be one of {', '.join(CONDITIONS)}")
+    if c.step_kernel not in STEP_KERNELS:
+        fail("step_kernel", f"must be one of {', '.join(STEP_KERNELS)}")
     positive_ints = ("num_experts", "task_steps", "draw_block", "scan_unroll", "trial_timeout", "num_bins",
                      "population_size", "num_generations", "num_parents")
     for name in positive_ints:

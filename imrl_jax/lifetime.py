@@ -312,8 +312,13 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
 
     A phase may run in pieces: give each piece the whole phase's length as ``phase_steps``
     (it sets the noise schedule) and the carried state; the pieces together are the same
-    computation as one call.
+    computation as one call. With ``config.step_kernel == "pallas"`` each bin is one
+    kernel (:func:`imrl_jax.kernel.run_phase`).
     """
+    if config.step_kernel == "pallas":
+        from imrl_jax import kernel  # imports this module
+
+        return kernel.run_phase(key, config, phase, params, task, state, num_steps, phase_steps, num_bins)
     phase_steps = num_steps if phase_steps is None else phase_steps
     num_bins = config.num_bins if num_bins is None else num_bins
     bin_steps = num_steps // num_bins

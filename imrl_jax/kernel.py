@@ -1,0 +1,411 @@
+"""The control cycle of section 2 (MODEL.md "Acting", "Learning") as one GPU kernel per bin of steps.
+
+:func:`run_phase` computes what :func:`imrl_jax.lifetime.run_phase` computes, with the
+same signature and results, but each bin of steps of a lane is one Pallas (Triton) kernel
+whose loop keeps the lane's weights, traces and pose in registers. On a GPU the XLA
+program runs each step as some 30 small kernels, one after the other, so a step costs
+tens of microseconds whatever the number of lanes; here a step is a few hundred
+instructions of one warp. The random numbers are the same stream as the XLA program's,
+drawn by XLA for a bin at a time and read by the kernel.
+
+Selected with ``Config.step_kernel = "pallas"``. Off a GPU the kernel runs in Pallas's
+interpreter (slow; for tests): float64 lives then agree with the XLA program to rounding.
+Each lane is one kernel instance; ``vmap`` (over tasks, individuals and seeds) makes the
+grid. Vectors are padded to powers of two (Triton's rule): experts K to Kp, x~ (n+1) to N.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from imrl_jax.arena import floor_colour_xy
+from imrl_jax.config import Config, LearningParams
+from imrl_jax.lifetime import Curves, Draws, Phase, Previous, State, TaskSpec, Traces, draw_block
+from imrl_jax.networks import Agent
+
+# Slots of the per-lane scalar vectors.
+_X, _Y, _HEADING, _COS, _SIN, _A0, _A1, _O0, _O1 = range(9)  # floats
+_K, _VALID, _TERMINAL, _TRIAL_STEP, _T, _EXPERTS_ENDED, _SELECTOR_ENDED = range(7)  # int32
+_NUM_FLOATS, _NUM_INTS = 16, 8
+# Rows of the packed weights and traces.
+_REINFORCER, _ACTOR0, _ACTOR1, _EVALUATOR, _SELECTOR = range(5)
+_TRACE_ACTOR0, _TRACE_ACTOR1, _TRACE_EVALUATOR, _TRACE_CRITIC = range(4)
+
+
+class Packed(NamedTuple):
+    """One lane's phase state in the kernel's padded layout (K -> Kp rows, n+1 -> N columns)."""
+
+    weights: jnp.ndarray  # (5, Kp, N): reinforcer, actor unit 0, actor unit 1, evaluator, selector actor
+    critic: jnp.ndarray  # (N,): selector critic
+    traces: jnp.ndarray  # (4, N): actor unit 0, actor unit 1, evaluator, selector critic
+    selector_trace: jnp.ndarray  # (Kp, N)
+    xbs: jnp.ndarray  # (2, N): x~_{t-1}, x~_{t-2}
+    selection: jnp.ndarray  # (Kp,): s_{t-1} (0 in padded rows)
+    floats: jnp.ndarray  # (16,): pose, (cos, sin), a_{t-1}, o_{t-1}
+    ints: jnp.ndarray  # (8,): k, valid, terminal, trial step, t, ended flags
+
+
+def _pow2(n: int) -> int:
+    return 1 << max(0, (n - 1).bit_length())
+
+
+def _pad(x, shape):
+    return jnp.pad(x, [(0, s - d) for s, d in zip(shape, x.shape)])
+
+
+def pack(state: State) -> Packed:
+    """The kernel's layout of a phase state."""
+    agent, traces, prev = state.agent, state.traces, state.prev
+    k, n = agent.selector_actor.shape
+    kp, big_n = _pow2(k), _pow2(n)
+    rows = lambda m: _pad(m, (kp, big_n))  # noqa: E731
+    vec = lambda v: _pad(v, (big_n,))  # noqa: E731
+    dtype = agent.actor.dtype
+    now = state.t % 2
+    xbs = jnp.stack([state.xbs[1 - now], state.xbs[now]])  # x~_{t-1}, x~_{t-2}
+    floats = jnp.stack([state.pose.pos[0], state.pose.pos[1], state.pose.heading, *state.direction,
+                        *prev.action, *prev.output]).astype(dtype)
+    ints = jnp.stack([prev.k, prev.valid, prev.terminal, state.trial_step, state.t, traces.experts_ended,
+                      traces.selector_ended]).astype(jnp.int32)
+    return Packed(
+        weights=jnp.stack([rows(agent.reinforcer), rows(agent.actor[:, 0]), rows(agent.actor[:, 1]),
+                           rows(agent.evaluator), rows(agent.selector_actor)]),
+        critic=vec(agent.selector_critic),
+        traces=jnp.stack([vec(traces.actor[0]), vec(traces.actor[1]), vec(traces.evaluator),
+                          vec(traces.selector_critic)]),
+        selector_trace=rows(traces.selector_actor),
+        xbs=jax.vmap(vec)(xbs),
+        selection=_pad(prev.selection, (kp,)),
+        floats=_pad(floats, (_NUM_FLOATS,)),
+        ints=_pad(ints, (_NUM_INTS,)),
+    )
+
+
+def unpack(packed: Packed, like: State, block: Draws) -> State:
+    """The phase state that ``packed`` holds (``like`` gives the shapes; ``block`` the current draws)."""
+    k, n = like.agent.selector_actor.shape
+    w, f, i = packed.weights, packed.floats, packed.ints
+    t = i[_T]
+    now = t % 2
+    # x~_t goes in row t % 2: at step t the last observation x~_{t-1} sits in row 1 - t % 2.
+    xbs = jnp.where(now == 0, packed.xbs[::-1], packed.xbs)[:, :n]
+    agent = Agent(
+        reinforcer=w[_REINFORCER, :k, :n],
+        actor=jnp.stack([w[_ACTOR0, :k, :n], w[_ACTOR1, :k, :n]], axis=1),
+        evaluator=w[_EVALUATOR, :k, :n],
+        selector_actor=w[_SELECTOR, :k, :n],
+        selector_critic=packed.critic[:n],
+    )
+    traces = Traces(
+        actor=packed.traces[jnp.array([_TRACE_ACTOR0, _TRACE_ACTOR1]), :n],
+        evaluator=packed.traces[_TRACE_EVALUATOR, :n],
+        selector_actor=packed.selector_trace[:k, :n],
+        selector_critic=packed.traces[_TRACE_CRITIC, :n],
+        experts_ended=i[_EXPERTS_ENDED] != 0,
+        selector_ended=i[_SELECTOR_ENDED] != 0,
+    )
+    prev = Previous(k=i[_K], action=f[jnp.array([_A0, _A1])], output=f[jnp.array([_O0, _O1])],
+                    selection=packed.selection[:k], valid=i[_VALID] != 0, terminal=i[_TERMINAL] != 0)
+    pose = like.pose._replace(pos=f[jnp.array([_X, _Y])], heading=f[_HEADING])
+    return State(agent, traces, pose, f[jnp.array([_COS, _SIN])], xbs, prev, i[_TRIAL_STEP], t, block)
+
+
+def retina_layout(config: Config, dtype=jnp.float32) -> jnp.ndarray:
+    """(4, N): for each entry of x~, its point's forward and lateral offset, its colour (3: none), its bias."""
+    forward, lateral = np.meshgrid(config.retina_forward, config.retina_lateral, indexing="ij")
+    n = config.num_inputs
+    big_n = _pow2(n + 1)
+    layout = np.zeros((4, big_n))
+    layout[0, :n] = np.repeat(forward.ravel(), 3)
+    layout[1, :n] = np.repeat(lateral.ravel(), 3)
+    layout[2] = 3.0
+    layout[2, :n] = np.tile(np.arange(3.0), n // 3)
+    layout[3, n] = 1.0
+    return jnp.asarray(layout, dtype)
+
+
+def round_even(x):
+    """Round half to even, from floor (which Triton has; it has no round-half-even)."""
+    # x - floor(x) is exact in floating point, so the tie test is exact.
+    low = jnp.floor(x)
+    frac = x - low
+    odd = low - 2.0 * jnp.floor(0.5 * low)
+    return jnp.where(frac > 0.5, low + 1.0, jnp.where(frac < 0.5, low, low + odd))
+
+
+def _dot_rows(matrix, vector):
+    """matrix @ vector, for a (rows, N) matrix."""
+    return jnp.sum(matrix * vector[None, :], axis=1)
+
+
+def _pick(values, k):
+    """values[k], as a masked sum (Triton has no gather)."""
+    return jnp.sum(jnp.where(jax.lax.broadcasted_iota(jnp.int32, values.shape, 0) == k, values, 0.0))
+
+
+class _Carry(NamedTuple):
+    weights: tuple  # the five (Kp, N) weight matrices, in Packed.weights order
+    critic: jnp.ndarray
+    traces: tuple  # the four (N,) traces, in Packed.traces order
+    selector_trace: jnp.ndarray
+    prev_xb: jnp.ndarray
+    before_xb: jnp.ndarray
+    selection: jnp.ndarray
+    floats: tuple  # x, y, heading, cos, sin, a0, a1, o0, o1
+    ints: tuple  # k, valid, terminal, trial_step, t, experts_ended, selector_ended (int32)
+    reaches: jnp.ndarray
+    timeouts: jnp.ndarray
+    selections: jnp.ndarray  # (Kp,) int32
+
+
+def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int, num_experts: int):
+    """The kernel body: ``num_steps`` steps of one lane (refs: inputs, then outputs)."""
+    max_turn = math.radians(config.max_turn_deg)
+    full = 2.0 * math.pi
+    r = config.robot_radius
+    size = config.arena_size
+
+    def kernel(layout_ref, params_ref, task_ref, u_ref, z_ref, weights_ref, critic_ref, traces_ref,
+               selector_trace_ref, xbs_ref, selection_ref, floats_ref, ints_ref,
+               weights_out, critic_out, traces_out, selector_trace_out, xbs_out, selection_out,
+               floats_out, ints_out, counts_out, selections_out):
+        dtype = weights_ref.dtype
+        gamma, lam, eta_actor, eta_evaluator, eta_selector_actor, eta_selector_critic, noise_std = (
+            params_ref[j] for j in range(len(LearningParams._fields)))
+        start_x, start_y, start_heading, target_x, target_y = (task_ref[j] for j in range(5))
+        start_cos, start_sin = jnp.cos(start_heading), jnp.sin(start_heading)
+        forward, lateral, colours, bias = (layout_ref[j] for j in range(4))
+        kp = selection_ref.shape[0]
+        rows = jax.lax.broadcasted_iota(jnp.int32, (kp,), 0)
+        expert_rows = rows < num_experts
+        zero, one = jnp.zeros((), dtype), jnp.ones((), dtype)
+
+        def observe(x, y, c, s):
+            colour = floor_colour_xy(config, x + forward * c - lateral * s, y + forward * s + lateral * c,
+                                     round_even)
+            return jnp.where(colour.astype(dtype) == colours, 1.0, 0.0).astype(dtype) + bias
+
+        def accumulate(trace, phi, learn, ended):
+            # Array operands: Triton's lowering of a select between two literals loses the type.
+            keep = jnp.where(learn, gamma * lam, one) * jnp.where(ended, zero, one)
+            return trace * keep + phi * learn.astype(dtype)
+
+        def one_step(i, carry: _Carry) -> _Carry:
+            reinforcer, actor0, actor1, evaluator, selector = carry.weights
+            trace_actor0, trace_actor1, trace_evaluator, trace_critic = carry.traces
+            x, y, heading, c, s, a0, a1, o0, o1 = carry.floats
+            prev_k, valid, terminal, trial_step, t, experts_ended, selector_ended = carry.ints
+            valid, terminal = valid != 0, terminal != 0
+            critic, selector_trace, prev_xb = carry.critic, carry.selector_trace, carry.prev_xb
+
+            # 1-2: observe, choose the expert (lifetime.select: the first k with u * sum(s) < cumsum(s)[k]).
+            xb = observe(x, y, c, s)
+            selection = jnp.where(expert_rows, jax.nn.sigmoid(_dot_rows(selector, xb)), 0.0)
+            if num_experts > 1:
+                u = u_ref[i]
+                cumulative, k = zero, jnp.int32(0)
+                partial = [_pick(selection, j) for j in range(num_experts)]
+                total = partial[0]
+                for j in range(1, num_experts):
+                    total = total + partial[j]
+                threshold = u * total
+                for j in range(num_experts - 1):
+                    cumulative = cumulative + partial[j]
+                    k = k + (cumulative <= threshold).astype(jnp.int32)
+            else:
+                k = jnp.int32(0)
+            same = k == prev_k
+            ends = terminal | ~valid
+            extrinsic = terminal.astype(dtype)
+            held = rows == prev_k
+
+            # 3: learn from the transition t-1 -> t.
+            surprise = zero
+            if phase.experts_learn:
+                learn = valid & same
+                if phase.intrinsic:
+                    reward = 2.0 * jax.nn.sigmoid(_pick(_dot_rows(reinforcer, xb), prev_k)) - 1.0
+                else:
+                    reward = extrinsic
+                value_before = _pick(_dot_rows(evaluator, prev_xb), prev_k)
+                value_now = _pick(_dot_rows(evaluator, xb), prev_k)
+                surprise = reward + gamma * jnp.where(terminal, 0.0, value_now) - value_before
+                delta = jnp.where(learn, surprise, 0.0)
+                ended = experts_ended != 0
+                trace_evaluator = accumulate(trace_evaluator, prev_xb, learn, ended)
+                trace_actor0 = accumulate(trace_actor0, ((a0 - o0) * o0 * (1.0 - o0)) * prev_xb, learn, ended)
+                trace_actor1 = accumulate(trace_actor1, ((a1 - o1) * o1 * (1.0 - o1)) * prev_xb, learn, ended)
+                row = held.astype(dtype)[:, None]
+                evaluator = evaluator + row * (eta_evaluator * (delta * trace_evaluator))[None, :]
+                actor0 = actor0 + row * (eta_actor * (delta * trace_actor0))[None, :]
+                actor1 = actor1 + row * (eta_actor * (delta * trace_actor1))[None, :]
+                experts_ended = (~same | ends).astype(jnp.int32)
+            if phase.selector_learns:
+                if phase.intrinsic:
+                    learn, reward = valid & same, surprise
+                else:
+                    learn, reward = valid, extrinsic
+                value_before = jnp.sum(critic * prev_xb)
+                value_now = jnp.sum(critic * xb)
+                delta = reward + gamma * jnp.where(terminal, 0.0, value_now) - value_before
+                delta = jnp.where(learn, delta, 0.0)
+                ended = selector_ended != 0
+                trace_critic = accumulate(trace_critic, prev_xb, learn, ended)
+                prev_selection = carry.selection
+                phi = ((held.astype(dtype) - prev_selection) * prev_selection * (1.0 - prev_selection))
+                selector_trace = accumulate(selector_trace, phi[:, None] * prev_xb[None, :], learn, ended)
+                critic = critic + eta_selector_critic * (delta * trace_critic)
+                selector = selector + eta_selector_actor * (delta * selector_trace)
+                selector_ended = ends.astype(jnp.int32)
+
+            # 4: act.
+            out0 = jax.nn.sigmoid(_pick(_dot_rows(actor0, xb), k))
+            out1 = jax.nn.sigmoid(_pick(_dot_rows(actor1, xb), k))
+            if phase.noisy:
+                sigma = noise_std * (1.0 - t.astype(dtype) / phase_steps)
+                act0 = jnp.clip(out0 + sigma * z_ref[0, i], 0.0, 1.0)
+                act1 = jnp.clip(out1 + sigma * z_ref[1, i], 0.0, 1.0)
+            else:
+                act0, act1 = out0, out1
+
+            # 5: move (arena.move); reaching the target or the timeout starts a new trial.
+            heading = heading + (act0 - 0.5) * 2.0 * max_turn
+            heading = jnp.where(heading < 0.0, heading + full, jnp.where(heading >= full, heading - full, heading))
+            c, s = jnp.cos(heading), jnp.sin(heading)
+            advance = config.max_speed * act1
+            x = jnp.clip(x + advance * c, r, size - r)
+            y = jnp.clip(y + advance * s, r, size - r)
+            trial_step = trial_step + 1
+            if phase.has_target:
+                reached = (x - target_x) ** 2 + (y - target_y) ** 2 <= config.target_radius ** 2
+                timeout = ~reached & (trial_step >= config.trial_timeout)
+                reset = reached | timeout
+                x, y = jnp.where(reset, start_x, x), jnp.where(reset, start_y, y)
+                heading = jnp.where(reset, start_heading, heading)
+                c, s = jnp.where(reset, start_cos, c), jnp.where(reset, start_sin, s)
+                trial_step = jnp.where(reset, 0, trial_step)
+            else:
+                # False, but computed: Triton's lowering cannot return a constant from the loop.
+                reached = timeout = trial_step < 0
+
+            return _Carry(
+                weights=(reinforcer, actor0, actor1, evaluator, selector),
+                critic=critic,
+                traces=(trace_actor0, trace_actor1, trace_evaluator, trace_critic),
+                selector_trace=selector_trace,
+                prev_xb=xb,
+                before_xb=prev_xb,
+                selection=selection,
+                floats=(x, y, heading, c, s, act0, act1, out0, out1),
+                ints=(k, (~timeout).astype(jnp.int32), reached.astype(jnp.int32), trial_step, t + 1,
+                      experts_ended, selector_ended),
+                reaches=carry.reaches + reached.astype(jnp.int32),
+                timeouts=carry.timeouts + timeout.astype(jnp.int32),
+                selections=carry.selections + (rows == k).astype(jnp.int32),
+            )
+
+        carry = _Carry(
+            weights=tuple(weights_ref[j] for j in range(5)),
+            critic=critic_ref[...],
+            traces=tuple(traces_ref[j] for j in range(4)),
+            selector_trace=selector_trace_ref[...],
+            prev_xb=xbs_ref[0],
+            before_xb=xbs_ref[1],
+            selection=selection_ref[...],
+            floats=tuple(floats_ref[j] for j in range(9)),
+            ints=tuple(ints_ref[j] for j in range(7)),
+            reaches=jnp.int32(0),
+            timeouts=jnp.int32(0),
+            selections=jnp.zeros((kp,), jnp.int32),
+        )
+        carry = jax.lax.fori_loop(0, num_steps, one_step, carry)
+        for j in range(5):
+            weights_out[j] = carry.weights[j]
+        critic_out[...] = carry.critic
+        for j in range(4):
+            traces_out[j] = carry.traces[j]
+        selector_trace_out[...] = carry.selector_trace
+        xbs_out[0] = carry.prev_xb
+        xbs_out[1] = carry.before_xb
+        selection_out[...] = carry.selection
+        for j, value in enumerate(carry.floats):
+            floats_out[j] = value
+        for j in range(9, _NUM_FLOATS):
+            floats_out[j] = zero
+        for j, value in enumerate(carry.ints):
+            ints_out[j] = value
+        for j in range(7, _NUM_INTS):
+            ints_out[j] = jnp.int32(0)
+        counts_out[0] = carry.reaches
+        counts_out[1] = carry.timeouts
+        selections_out[...] = carry.selections
+
+    return kernel
+
+
+def _interpret() -> bool:
+    """Run the kernel in Pallas's interpreter off a GPU (Triton kernels need one)."""
+    return jax.default_backend() != "gpu"
+
+
+def run_bin(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, phase_steps: int,
+            draws: Draws, packed: Packed, num_experts: int, interpret: bool | None = None):
+    """Steps ``len(draws.u)`` of one lane from ``packed``: the new state and (reaches, timeouts), selections."""
+    from jax.experimental import pallas as pl
+    from jax.experimental.pallas import triton as pltriton
+
+    dtype = packed.weights.dtype
+    num_steps = draws.u.shape[0]
+    params_vector = jnp.stack([jnp.asarray(p, dtype) for p in params])
+    task_vector = jnp.stack([task.start.pos[0], task.start.pos[1], task.start.heading,
+                             task.target[0], task.target[1]]).astype(dtype)
+    kp = packed.selection.shape[0]
+    out_shape = (*(jax.ShapeDtypeStruct(x.shape, x.dtype) for x in packed),
+                 jax.ShapeDtypeStruct((2,), jnp.int32), jax.ShapeDtypeStruct((kp,), jnp.int32))
+    call = pl.pallas_call(
+        _make_kernel(config, phase, phase_steps, num_steps, num_experts),
+        out_shape=out_shape,
+        interpret=_interpret() if interpret is None else interpret,
+        # One warp per lane: every reduction stays within the warp.
+        compiler_params=pltriton.CompilerParams(num_warps=1, num_stages=1),
+        name="imrl_steps",
+    )
+    *state, counts, selections = call(retina_layout(config, dtype), params_vector, task_vector,
+                                      draws.u.astype(dtype), draws.z.T.astype(dtype), *packed)
+    return Packed(*state), counts, selections
+
+
+def draw_range(key: jax.Array, start, num_steps: int, block_steps: int, noisy: bool) -> Draws:
+    """The draws of steps start .. start + num_steps - 1 of a phase (the XLA program's stream)."""
+    num_blocks = -(-num_steps // block_steps) + 1
+    first = start // block_steps
+    blocks = jax.vmap(lambda b: draw_block(key, first + b, block_steps, noisy))(jnp.arange(num_blocks))
+    flat = jax.tree.map(lambda x: x.reshape((-1,) + x.shape[2:]), blocks)
+    offset = start - first * block_steps
+    return jax.tree.map(lambda x: jax.lax.dynamic_slice_in_dim(x, offset, num_steps), flat)
+
+
+def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningParams, task: TaskSpec,
+              state: State, num_steps: int, phase_steps: int | None = None,
+              num_bins: int | None = None, interpret: bool | None = None) -> tuple[State, Curves]:
+    """:func:`imrl_jax.lifetime.run_phase`, each bin one kernel call (``interpret``: default off a GPU)."""
+    phase_steps = num_steps if phase_steps is None else phase_steps
+    num_bins = config.num_bins if num_bins is None else num_bins
+    bin_steps = num_steps // num_bins
+    num_experts = state.agent.selector_actor.shape[0]
+
+    def one_bin(packed, _):
+        draws = draw_range(key, packed.ints[_T], bin_steps, config.draw_block, phase.noisy)
+        packed, counts, selections = run_bin(config, phase, params, task, phase_steps, draws, packed, num_experts,
+                                             interpret)
+        return packed, Curves(counts[0], counts[1], selections[:num_experts])
+
+    packed, curves = jax.lax.scan(one_bin, pack(state), None, length=num_bins)
+    # The block of the last step, as the XLA program leaves it.
+    block = draw_block(key, (packed.ints[_T] - 1) // config.draw_block, config.draw_block, phase.noisy)
+    return unpack(packed, state, block), curves

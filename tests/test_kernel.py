@@ -1,0 +1,117 @@
+"""The Pallas step kernel (kernel.py) against the XLA step.
+
+On CPU the kernel runs in Pallas's interpreter: in float64 it must give the XLA program's
+events exactly and its weights to rounding. That it lowers to a Triton kernel for a GPU is
+checked by lowering for CUDA (compiling it needs a GPU).
+"""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from imrl_jax import kernel as K
+from imrl_jax import lifetime as L
+from imrl_jax.arena import Pose
+from imrl_jax.networks import decode
+from test_reference import EXTENDED, SHORT_TASK, _hand_experts
+
+STEPS = 2000
+
+
+def _assert_states_close(a: L.State, b: L.State):
+    leaves = zip(jax.tree_util.tree_leaves_with_path(a), jax.tree.leaves(b))
+    for (path, x), y in leaves:
+        if jax.dtypes.issubdtype(x.dtype, jax.dtypes.prng_key):
+            continue
+        np.testing.assert_allclose(np.asarray(y, np.float64), np.asarray(x, np.float64), rtol=1e-9, atol=1e-9,
+                                   err_msg=jax.tree_util.keystr(path))
+
+
+def test_round_even_rounds_half_to_even():
+    x = jnp.array([-2.5, -1.5, -0.5, 0.5, 1.5, 2.5, 2.4999998, 2.5000002, -3.7, 7.0, 1e6 + 0.5])
+    np.testing.assert_array_equal(np.asarray(K.round_even(x)), np.asarray(jnp.round(x)))
+
+
+@pytest.mark.usefixtures("x64")
+@pytest.mark.parametrize("condition", ["LE-LS", "EE-LS", "SLE"], ids=["childhood", "adult-LS", "SLE"])
+def test_phase_in_pieces_matches_xla(tiny, condition):
+    """A phase run by the kernel in two pieces, against XLA in one: every branch of the step.
+
+    Childhood (intrinsic rewards, noise, walls), a learning selector, and a single learning
+    expert (one expert, noise), the adult phases with reaches and timeouts.
+    """
+    config = tiny(condition, tasks=(SHORT_TASK,), childhood_steps=STEPS, task_steps=STEPS, num_bins=8, **EXTENDED)
+    params = config.learning_params()
+    n = config.num_inputs + 1
+    if condition == "LE-LS":
+        agent = decode(config, jax.random.uniform(jax.random.key(7), (3 * n,), jnp.float64, -1.0, 1.0))
+        phase, task = L.CHILDHOOD, L.childhood_task(config, jnp.float64)
+        pose = Pose(jnp.array([40.0, 60.0]), jnp.array(math.pi))  # heading into the west wall
+    else:
+        agent = L.adult_agent(config, decode(config, jnp.zeros((config.num_genes,), jnp.float64)))
+        if condition == "EE-LS":
+            agent = agent._replace(actor=jnp.asarray(_hand_experts(n)))
+        phase, task = L.adult_phase(condition), L.task_spec(config, 0, jnp.float64)
+        pose = task.start
+    state = L.init_state(config, agent, pose)
+    pallas = config.replace(step_kernel="pallas")
+
+    @jax.jit
+    def both(key, state):
+        whole = L.run_phase(key, config, phase, params, task, state, STEPS)
+        # 750 + 1250 steps: the second piece starts mid-way through a block of draws.
+        first = L.run_phase(key, pallas, phase, params, task, state, 750, STEPS, 3)
+        second = L.run_phase(key, pallas, phase, params, task, first[0], 1250, STEPS, 5)
+        return whole, (second[0], jax.tree.map(lambda a, b: jnp.concatenate([a, b]), first[1], second[1]))
+
+    (xla_state, xla_curves), (kernel_state, kernel_curves) = both(jax.random.key(1), state)
+    for name in L.Curves._fields:
+        np.testing.assert_array_equal(np.asarray(getattr(kernel_curves, name)),
+                                      np.asarray(getattr(xla_curves, name)), err_msg=name)
+    _assert_states_close(xla_state, kernel_state)
+    if condition != "LE-LS":
+        assert int(xla_curves.reaches.sum()) > 0 and int(xla_curves.timeouts.sum()) > 0
+    else:  # every expert takes control
+        assert np.all(np.asarray(xla_curves.selections).sum(0) > 0)
+
+
+@pytest.mark.slow
+@pytest.mark.usefixtures("x64")
+def test_life_matches_xla(tiny):
+    """A whole LE-LS life (childhood, six tasks vmapped) with step_kernel="pallas", against XLA."""
+    config = tiny("LE-LS", childhood_steps=1200, task_steps=300, num_bins=3, **EXTENDED)
+    params = config.learning_params()
+    genome = jax.random.uniform(jax.random.key(12), (config.num_genes,), jnp.float64, -1.0, 1.0)
+    live = jax.jit(L.live, static_argnums=1)
+    xla = live(jax.random.key(11), config, params, genome)
+    pallas = live(jax.random.key(11), config.replace(step_kernel="pallas"), params, genome)
+    for name in ("reaches", "timeouts", "reward_curve", "adult_selections", "childhood_selections"):
+        np.testing.assert_array_equal(np.asarray(getattr(pallas, name)), np.asarray(getattr(xla, name)),
+                                      err_msg=name)
+    for name in ("agent", "adult_agents"):
+        for x, y in zip(jax.tree.leaves(getattr(xla, name)), jax.tree.leaves(getattr(pallas, name))):
+            np.testing.assert_allclose(np.asarray(y), np.asarray(x), rtol=1e-9, atol=1e-9, err_msg=name)
+    assert int(xla.timeouts.sum()) > 0 and np.count_nonzero(xla.childhood_selections) == 3 * 3
+
+
+def test_kernel_lowers_to_triton_for_gpu(tiny):
+    """Childhood and adulthood kernels, vmapped over lanes, lower to Triton kernels for CUDA."""
+    config = tiny("LE-LS", childhood_steps=400, task_steps=200, num_bins=2)
+    params = config.learning_params()
+
+    def lanes(key, genome):
+        agent = decode(config, genome)
+        child = L.init_state(config, agent, Pose(jnp.array([40.0, 60.0]), jnp.array(math.pi)))
+        child, _ = K.run_phase(key, config, L.CHILDHOOD, params, L.childhood_task(config), child,
+                               config.childhood_steps, interpret=False)
+        adult = L.task_start(config, child.agent, 0)
+        return K.run_phase(key, config, L.ADULT_LEARNING_SELECTOR, params, L.task_spec(config, 0), adult,
+                           config.task_steps, interpret=False)
+
+    keys = jax.random.split(jax.random.key(0), 6).reshape(2, 3)
+    genomes = jnp.zeros((2, 3, config.num_genes))
+    text = jax.jit(jax.vmap(jax.vmap(lanes))).trace(keys, genomes).lower(lowering_platforms=("cuda",)).as_text()
+    assert text.count("__gpu$xla.gpu.triton") == 2
