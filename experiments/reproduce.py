@@ -2,6 +2,7 @@
 
     python experiments/reproduce.py --scale paper   # make reproduce: the paper's sizes
     python experiments/reproduce.py --scale cpu     # make reproduce-cpu: 1 h 44 min on 2 CPU cores (measured)
+    python experiments/reproduce.py --scale paper --kernel pallas   # on a GPU: the step as one kernel
 
 Two variants of the learning rules are run side by side: ``paper`` (the rules as written)
 and ``extension`` (MODEL.md's learning extensions at the values of the ``extension``
@@ -61,11 +62,15 @@ def test_dir(out: str, variant: str, condition: str) -> str:
     return os.path.join(out, variant, "test", condition)
 
 
-def evolve_command(scale: dict, variant: str, condition: str, out_dir: str) -> list[str]:
+def _kernel_options(kernel: str) -> list[str]:
+    return [] if kernel == "xla" else ["--set", f"step_kernel={kernel}"]
+
+
+def evolve_command(scale: dict, variant: str, condition: str, out_dir: str, kernel: str = "xla") -> list[str]:
     command = [sys.executable, "-m", "imrl_jax.evolve", "--cond", condition, "--preset", variant,
                "--seeds", str(scale["seeds"]), "--generations", str(scale["generations"]),
                "--childhood-steps", str(scale["childhood_steps"]), "--task-steps", str(scale["task_steps"]),
-               "--bins", str(scale["bins"]), "--out", out_dir]
+               "--bins", str(scale["bins"]), "--out", out_dir, *_kernel_options(kernel)]
     if "population" in scale:
         command += ["--population", str(scale["population"]), "--parents", str(scale["parents"])]
     started = os.path.exists(os.path.join(out_dir, "config.json"))
@@ -82,11 +87,12 @@ def evolution_done(out_dir: str, scale: dict) -> bool:
         return int(data["generation"]) >= scale["generations"]
 
 
-def test_command(scale: dict, variant: str, condition: str, run_dir: str, out_dir: str) -> list[str]:
+def test_command(scale: dict, variant: str, condition: str, run_dir: str, out_dir: str,
+                 kernel: str = "xla") -> list[str]:
     command = [sys.executable, "-m", "imrl_jax.learning_test"]
     if condition == "SLE":
-        command += ["--cond", "SLE", "--preset", variant, "--runs", str(scale["seeds"])]
-    else:
+        command += ["--cond", "SLE", "--preset", variant, "--runs", str(scale["seeds"]), *_kernel_options(kernel)]
+    else:  # the test runs with its evolution's config, step kernel included
         command += [run_dir]
     return command + ["--best", str(scale["best"]), "--tests", str(scale["tests"]),
                       "--task-steps", str(scale["test_steps"]), "--bins", str(scale["test_bins"]),
@@ -109,6 +115,8 @@ def main(argv=None) -> int:
     p.add_argument("--out", help="results directory (default: experiments/results/SCALE)")
     p.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated: paper, extension")
     p.add_argument("--no-report", action="store_true", help="skip experiments/report.py")
+    p.add_argument("--kernel", choices=("xla", "pallas"), default="xla",
+                   help="the step kernel (Config.step_kernel): pallas runs each bin of steps as one GPU kernel")
     args = p.parse_args(argv)
     scale = SCALES[args.scale]
     out = args.out or os.path.join("experiments", "results", args.scale)
@@ -119,7 +127,7 @@ def main(argv=None) -> int:
         return 2
     os.makedirs(out, exist_ok=True)
     manifest_path = os.path.join(out, "manifest.json")
-    manifest = dict(scale=args.scale, sizes=scale, variants=variants, stages={})
+    manifest = dict(scale=args.scale, sizes=scale, variants=variants, kernel=args.kernel, stages={})
     if os.path.exists(manifest_path):
         with open(manifest_path) as f:
             manifest["stages"] = json.load(f).get("stages", {})
@@ -135,7 +143,8 @@ def main(argv=None) -> int:
                     print(f"== evolve {variant} {condition}: done ({run_dir})")
                     continue
                 run_stage(f"evolve {'paper' if condition == 'EE-ES' else variant} {condition}",
-                          evolve_command(scale, "paper" if condition == "EE-ES" else variant, condition, run_dir),
+                          evolve_command(scale, "paper" if condition == "EE-ES" else variant, condition, run_dir,
+                                         args.kernel),
                           manifest, manifest_path)
         for variant in variants:
             for condition in TESTED:
@@ -145,7 +154,8 @@ def main(argv=None) -> int:
                     continue
                 shutil.rmtree(out_dir, ignore_errors=True)  # an interrupted test starts again
                 run_stage(f"learning test {variant} {condition}",
-                          test_command(scale, variant, condition, evolution_dir(out, variant, condition), out_dir),
+                          test_command(scale, variant, condition, evolution_dir(out, variant, condition), out_dir,
+                                       args.kernel),
                           manifest, manifest_path)
         if not args.no_report:
             report = [sys.executable, os.path.join(os.path.dirname(os.path.abspath(__file__)), "report.py"), out]

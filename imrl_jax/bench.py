@@ -1,6 +1,7 @@
 """Benchmarks of the lifetime kernel (section 2's lives) against the NumPy reference.
 
     python -m imrl_jax.bench [--lanes 1,50,300,3000] [--steps 1000] [--repeats 5] [--json PATH]
+                             [--kernel xla,pallas]
 
 One lane is one individual on one task (in childhood, one individual). For every phase
 (LE-LS childhood; the adult phases of LE-LS/EE-LS, EE-ES and SLE) and lane count, it
@@ -10,6 +11,9 @@ phase, and the speed-up measured in the same run. Last, the headline: whole LE-L
 ``lanes / 6`` individuals (childhood 1.5 x task steps, six tasks) for each of
 ``--lifetime-lanes`` (300 and 3,000 by default), against the reference's life.
 On CPU the lanes are split over one XLA device per core (``--cpu-devices``).
+``--kernel`` names the step kernels to measure (``Config.step_kernel``; default xla): on a
+GPU, ``--kernel xla,pallas`` measures both in one run. Off a GPU the Pallas kernel is
+interpreted, which measures nothing useful.
 """
 
 from __future__ import annotations
@@ -85,7 +89,13 @@ def _modules(package: str):
     return (importlib.import_module(f"{package}.{name}") for name in ("config", "lifetime", "networks"))
 
 
-def phase_program(condition: str, phase_name: str, lanes: int, steps: int, package: str = "imrl_jax") -> Program:
+def _kernel_field(step_kernel: str) -> dict:
+    # Only when not the default, so that revisions from before the field build too.
+    return {} if step_kernel == "xla" else {"step_kernel": step_kernel}
+
+
+def phase_program(condition: str, phase_name: str, lanes: int, steps: int, package: str = "imrl_jax",
+                  step_kernel: str = "xla") -> Program:
     """One phase (an attribute of lifetime, e.g. ``CHILDHOOD``) run for ``steps`` steps on ``lanes`` lanes.
 
     ``package`` names the imrl_jax whose modules build it (``python -m imrl_jax.compare``
@@ -93,7 +103,7 @@ def phase_program(condition: str, phase_name: str, lanes: int, steps: int, packa
     """
     config_module, L, networks = _modules(package)
     config = config_module.make_config("paper", condition=condition, childhood_steps=steps, task_steps=steps,
-                                       num_bins=1)
+                                       num_bins=1, **_kernel_field(step_kernel))
     phase = getattr(L, phase_name)
     params = config.learning_params()
 
@@ -112,20 +122,21 @@ def phase_program(condition: str, phase_name: str, lanes: int, steps: int, packa
     return Program(jax.jit(jax.vmap(lane)), _lane_inputs(config, lanes), lanes * steps, config)
 
 
-def lifetime_program(lanes: int, task_steps: int, package: str = "imrl_jax") -> Program:
+def lifetime_program(lanes: int, task_steps: int, package: str = "imrl_jax", step_kernel: str = "xla") -> Program:
     """Whole LE-LS lives of ``lanes / 6`` individuals (childhood 1.5 x task steps); ``package`` as above."""
     config_module, L, _ = _modules(package)
     config = config_module.make_config("paper", condition="LE-LS", task_steps=task_steps,
-                                       childhood_steps=task_steps * 3 // 2, num_bins=10)
+                                       childhood_steps=task_steps * 3 // 2, num_bins=10, **_kernel_field(step_kernel))
     individuals = max(1, lanes // config.num_tasks)
     _, genomes = _lane_inputs(config, individuals)
     return Program(L.make_evaluate(config), (jax.random.key(0), config.learning_params(), genomes),
                    individuals * config.lifetime_steps, config)
 
 
-def bench_phase(condition: str, phase_name: str, lanes: int, steps: int, repeats: int) -> dict:
+def bench_phase(condition: str, phase_name: str, lanes: int, steps: int, repeats: int,
+                step_kernel: str = "xla") -> dict:
     """Lane-steps per second of one phase run for ``steps`` steps on ``lanes`` lanes."""
-    program = phase_program(condition, phase_name, lanes, steps)
+    program = phase_program(condition, phase_name, lanes, steps, step_kernel=step_kernel)
     start = time.perf_counter()
     compiled = program.fn.lower(*program.args).compile()
     compile_s = time.perf_counter() - start
@@ -156,12 +167,12 @@ def bench_reference_phase(condition: str, reference_phase: str, steps: int) -> d
     return {"steps": steps, "seconds": seconds, "lane_steps_per_s": steps / seconds}
 
 
-def bench_lifetime(lanes: int, task_steps: int, repeats: int) -> dict:
+def bench_lifetime(lanes: int, task_steps: int, repeats: int, step_kernel: str = "xla") -> dict:
     """The headline: whole LE-LS lives of ``lanes / 6`` individuals, and the reference's one life."""
     from imrl_jax import reference
     from imrl_jax.lifetime import draw_many, lifetime_keys, random_pose
 
-    program = lifetime_program(lanes, task_steps)
+    program = lifetime_program(lanes, task_steps, step_kernel=step_kernel)
     config, (key, params, genomes) = program.config, program.args
     individuals = genomes.shape[0]
     start = time.perf_counter()
@@ -180,7 +191,7 @@ def bench_lifetime(lanes: int, task_steps: int, repeats: int) -> dict:
                    np.asarray(child.u, np.float64), np.asarray(child.z, np.float64),
                    np.asarray(tasks.u, np.float64), np.asarray(tasks.z, np.float64))
     reference_rate = config.lifetime_steps / (time.perf_counter() - start)
-    return {"individuals": individuals, "lanes": individuals * config.num_tasks,
+    return {"kernel": step_kernel, "individuals": individuals, "lanes": individuals * config.num_tasks,
             "childhood_steps": config.childhood_steps, "task_steps": config.task_steps,
             "seconds": seconds, "compile_and_first_run_s": compile_s, "lane_steps_per_s": jax_rate,
             "best_lane_steps_per_s": program.lane_steps / shortest,
@@ -195,32 +206,36 @@ def machine() -> dict:
 
 
 def run(lane_counts, steps: int, repeats: int, reference_steps: int, lifetime_lanes,
-        lifetime_task_steps: int, log=print) -> dict:
+        lifetime_task_steps: int, log=print, kernels=("xla",)) -> dict:
     """Every measurement, as a JSON-friendly dict (also printed as a table through ``log``)."""
-    result = {**machine(), "phases": [], "repeats": repeats}
+    result = {**machine(), "phases": [], "repeats": repeats, "kernels": list(kernels)}
     log(f"backend {result['backend']} ({result['device']} x {result['num_devices']}, {result['cpu_count']} cpus), "
         f"jax {result['jax_version']}; medians of {repeats} runs")
-    log(f"{'phase':24s} {'lanes':>6s} {'lane-steps/s':>14s} {'best run':>12s} {'vs reference':>12s} "
+    if "pallas" in kernels and result["backend"] != "gpu":
+        log("note: off a GPU the pallas kernel runs in Pallas's interpreter; its rows are not its speed")
+    log(f"{'phase':24s} {'kernel':>6s} {'lanes':>6s} {'lane-steps/s':>14s} {'best run':>12s} {'vs reference':>12s} "
         f"{'compile s':>9s} {'program MB':>10s}")
     for name, condition, phase, reference_phase in PHASES:
         ref = bench_reference_phase(condition, reference_phase, reference_steps)
-        for lanes in lane_counts:
-            row = bench_phase(condition, phase, lanes, steps, repeats)
-            row.update(phase=name, reference_lane_steps_per_s=ref["lane_steps_per_s"],
-                       speedup=row["lane_steps_per_s"] / ref["lane_steps_per_s"])
-            result["phases"].append(row)
-            log(f"{name:24s} {lanes:6d} {row['lane_steps_per_s']:14,.0f} {row['best_lane_steps_per_s']:12,.0f} "
-                f"{row['speedup']:11,.0f}x "
-                f"{row['compile_s']:9.1f} {row['program_bytes'] / 2**20:10.1f}")
-        log(f"{name + ' (reference)':24s} {1:6d} {ref['lane_steps_per_s']:14,.0f}")
+        for kernel in kernels:
+            for lanes in lane_counts:
+                row = bench_phase(condition, phase, lanes, steps, repeats, kernel)
+                row.update(phase=name, kernel=kernel, reference_lane_steps_per_s=ref["lane_steps_per_s"],
+                           speedup=row["lane_steps_per_s"] / ref["lane_steps_per_s"])
+                result["phases"].append(row)
+                log(f"{name:24s} {kernel:>6s} {lanes:6d} {row['lane_steps_per_s']:14,.0f} "
+                    f"{row['best_lane_steps_per_s']:12,.0f} {row['speedup']:11,.0f}x "
+                    f"{row['compile_s']:9.1f} {row['program_bytes'] / 2**20:10.1f}")
+        log(f"{name + ' (reference)':24s} {'':6s} {1:6d} {ref['lane_steps_per_s']:14,.0f}")
     result["lifetimes"] = []
-    for lanes in lifetime_lanes:
-        life = bench_lifetime(lanes, lifetime_task_steps, repeats)
-        result["lifetimes"].append(life)
-        log(f"LE-LS whole life: {life['individuals']} individuals ({life['lanes']} adult lanes), childhood "
-            f"{life['childhood_steps']:,} + 6 x {life['task_steps']:,} steps: {life['lane_steps_per_s']:,.0f} "
-            f"lane-steps/s (best run {life['best_lane_steps_per_s']:,.0f}); reference "
-            f"{life['reference_lane_steps_per_s']:,.0f}; speed-up {life['speedup']:,.0f}x")
+    for kernel in kernels:
+        for lanes in lifetime_lanes:
+            life = bench_lifetime(lanes, lifetime_task_steps, repeats, kernel)
+            result["lifetimes"].append(life)
+            log(f"LE-LS whole life ({kernel}): {life['individuals']} individuals ({life['lanes']} adult lanes), "
+                f"childhood {life['childhood_steps']:,} + 6 x {life['task_steps']:,} steps: "
+                f"{life['lane_steps_per_s']:,.0f} lane-steps/s (best run {life['best_lane_steps_per_s']:,.0f}); "
+                f"reference {life['reference_lane_steps_per_s']:,.0f}; speed-up {life['speedup']:,.0f}x")
     result["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     log(f"peak resident memory of this process: {result['peak_rss_mb']:.0f} MB")
     return result
@@ -236,8 +251,16 @@ def main(argv=None) -> int:
                         help="comma-separated adult lane counts of the whole-life benchmark (6 per individual)")
     parser.add_argument("--lifetime-task-steps", type=int, default=2000, help="steps per task of the whole life")
     parser.add_argument("--cpu-devices", type=int, default=0, help="CPU devices (0: one per core)")
+    parser.add_argument("--kernel", default="xla", help="comma-separated step kernels: xla, pallas (GPU)")
     parser.add_argument("--json", help="also write the results to this JSON file")
     args = parser.parse_args(argv)
+    from imrl_jax.config import STEP_KERNELS
+
+    kernels = args.kernel.split(",")
+    if not all(k in STEP_KERNELS for k in kernels):
+        print(f"error: --kernel: expected {' or '.join(STEP_KERNELS)}, separated by commas, got {args.kernel!r}",
+              file=sys.stderr)
+        return 2
     counts = {}
     for name in ("lanes", "lifetime_lanes"):
         text = getattr(args, name)
@@ -270,7 +293,7 @@ def main(argv=None) -> int:
         return 2
     use_host_cores(args.cpu_devices or None)
     result = run(counts["lanes"], args.steps, args.repeats, args.reference_steps, counts["lifetime_lanes"],
-                 args.lifetime_task_steps)
+                 args.lifetime_task_steps, kernels=kernels)
     if args.json:
         from imrl_jax.evolve import write_atomic
 

@@ -12,6 +12,7 @@ from imrl_jax import bench
     (["--lifetime-lanes", "300,-6"], "--lifetime-lanes"),
     (["--steps", "0"], "--steps"),
     (["--lifetime-task-steps", "15"], "--lifetime-task-steps"),
+    (["--kernel", "xla,triton"], "--kernel"),
 ])
 def test_bad_input_exits_2_naming_the_field(argv, field, capsys):
     assert bench.main(argv) == 2
