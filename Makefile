@@ -21,7 +21,7 @@ demo: $(STAMP)
 	$(BIN)/python -m imrl_jax.evolve --cond LE-LS --seeds 2 --preset small --out $(OUT)/demo/evolve
 
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q --durations=10
 
 test-all: $(STAMP)
 	$(BIN)/python -m pytest -q -m ""

@@ -3,10 +3,10 @@
 :func:`run_phase` computes what :func:`imrl_jax.lifetime.run_phase` computes, with the
 same signature and results, but each bin of steps of a lane is one Pallas (Triton) kernel
 whose loop keeps the lane's weights, traces and pose in registers. On a GPU the XLA
-program runs each step as some 30 small kernels, one after the other, so a step costs
-tens of microseconds whatever the number of lanes; here a step is a few hundred
-instructions of one warp. The random numbers are the same stream as the XLA program's,
-drawn by XLA for a bin at a time and read by the kernel.
+program runs each step as dozens of small kernels, one after the other, so a step costs
+their launches whatever the number of lanes; here a step is one iteration of a warp's
+loop. The random numbers are the same stream as the XLA program's, drawn by XLA for a
+bin at a time and read by the kernel.
 
 Selected with ``Config.step_kernel = "pallas"``. Off a GPU the kernel runs in Pallas's
 interpreter (slow; for tests): float64 lives then agree with the XLA program to rounding.

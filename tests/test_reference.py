@@ -106,19 +106,24 @@ def test_adult_phase_matches_reference(tiny, condition, rules):
     assert events["reaches"] > 0 and events["timeouts"] > 0 and events["walls"] > 0, events
 
 
+_live = jax.jit(L.live, static_argnums=1)
+
+
 @pytest.mark.usefixtures("x64")
 @pytest.mark.parametrize("rules", [PAPER, EXTENDED], ids=["paper-rules", "traces-and-rates"])
 @pytest.mark.parametrize("condition", ["LE-LS", "EE-LS", "EE-ES", "SLE"])
 def test_whole_life_matches_reference(tiny, condition, rules):
     """live(): childhood, key splitting, selector resets, six tasks, fitness."""
-    config = tiny(condition, childhood_steps=600, task_steps=300, num_bins=1, **rules)
+    # The rules are dynamic values (params): both variants share one compiled life.
+    program = tiny(condition, childhood_steps=600, task_steps=300, num_bins=1)
+    config = program.replace(**rules)
     params = config.learning_params()
     key = jax.random.key(11)
     genome = jax.random.uniform(jax.random.key(12), (config.num_genes,), jnp.float64, -1.0, 1.0)
     if condition in ("EE-LS", "EE-ES"):  # good experts make reaches likely
         n = config.num_inputs + 1
         genome = genome.at[: 6 * n].set(jnp.asarray(_hand_experts(n)).reshape(-1))
-    result = jax.jit(L.live, static_argnums=1)(key, config, params, genome)
+    result = _live(key, program, params, genome)
 
     keys = L.lifetime_keys(key, config.num_tasks)
     pose = L.random_pose(keys.pose, config, jnp.float64)
