@@ -375,8 +375,10 @@ def run_bin(config: Config, phase: Phase, params: LearningParams, task: TaskSpec
         compiler_params=pltriton.CompilerParams(num_warps=1, num_stages=1),
         name="imrl_steps",
     )
+    # Without noise the kernel reads no z: a stand-in spares the lanes x steps zeros.
+    z = draws.z.T.astype(dtype) if phase.noisy else jnp.zeros((2, 1), dtype)
     *state, counts, selections = call(retina_layout(config, dtype), params_vector, task_vector,
-                                      draws.u.astype(dtype), draws.z.T.astype(dtype), *packed)
+                                      draws.u.astype(dtype), z, *packed)
     return Packed(*state), counts, selections
 
 
