@@ -149,6 +149,8 @@ def _pick(values, k):
 
 
 class _Carry(NamedTuple):
+    """The kernel loop's carry: one lane's state, in registers, and the bin's counts."""
+
     weights: tuple  # the five (Kp, N) weight matrices, in Packed.weights order
     critic: jnp.ndarray
     traces: tuple  # the four (N,) traces, in Packed.traces order
@@ -188,7 +190,7 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
         def observe(x, y, c, s):
             colour = floor_colour_xy(config, x + forward * c - lateral * s, y + forward * s + lateral * c,
                                      round_even)
-            return jnp.where(colour.astype(dtype) == colours, 1.0, 0.0).astype(dtype) + bias
+            return (colour.astype(dtype) == colours).astype(dtype) + bias
 
         def accumulate(trace, phi, learn, ended):
             # Array operands: Triton's lowering of a select between two literals loses the type.
