@@ -168,19 +168,27 @@ def bench_reference_phase(condition: str, reference_phase: str, steps: int) -> d
 
 
 def bench_lifetime(lanes: int, task_steps: int, repeats: int, step_kernel: str = "xla") -> dict:
-    """The headline: whole LE-LS lives of ``lanes / 6`` individuals, and the reference's one life."""
-    from imrl_jax import reference
-    from imrl_jax.lifetime import draw_many, lifetime_keys, random_pose
-
+    """The headline: whole LE-LS lives of ``lanes / 6`` individuals (lane-steps per second)."""
     program = lifetime_program(lanes, task_steps, step_kernel=step_kernel)
-    config, (key, params, genomes) = program.config, program.args
+    config, genomes = program.config, program.args[2]
     individuals = genomes.shape[0]
     start = time.perf_counter()
     jax.block_until_ready(program.fn(*program.args))
     compile_s = time.perf_counter() - start
     seconds, shortest = _time(program.fn, *program.args, repeats=repeats)
-    jax_rate = program.lane_steps / seconds
+    return {"kernel": step_kernel, "individuals": individuals, "lanes": individuals * config.num_tasks,
+            "childhood_steps": config.childhood_steps, "task_steps": config.task_steps,
+            "seconds": seconds, "compile_and_first_run_s": compile_s,
+            "lane_steps_per_s": program.lane_steps / seconds, "best_lane_steps_per_s": program.lane_steps / shortest}
 
+
+def bench_reference_life(task_steps: int) -> float:
+    """Lane-steps per second of the NumPy reference living one life of the whole-life benchmark."""
+    from imrl_jax import reference
+    from imrl_jax.lifetime import draw_many, lifetime_keys, random_pose
+
+    program = lifetime_program(1, task_steps)
+    config, (key, _, genomes) = program.config, program.args
     keys = lifetime_keys(key, config.num_tasks)
     genome = np.asarray(genomes[0], np.float64)
     pose = random_pose(keys.pose, config)
@@ -190,12 +198,7 @@ def bench_lifetime(lanes: int, task_steps: int, repeats: int, step_kernel: str =
     reference.live(config, genome, (*np.asarray(pose.pos, np.float64), float(pose.heading)),
                    np.asarray(child.u, np.float64), np.asarray(child.z, np.float64),
                    np.asarray(tasks.u, np.float64), np.asarray(tasks.z, np.float64))
-    reference_rate = config.lifetime_steps / (time.perf_counter() - start)
-    return {"kernel": step_kernel, "individuals": individuals, "lanes": individuals * config.num_tasks,
-            "childhood_steps": config.childhood_steps, "task_steps": config.task_steps,
-            "seconds": seconds, "compile_and_first_run_s": compile_s, "lane_steps_per_s": jax_rate,
-            "best_lane_steps_per_s": program.lane_steps / shortest,
-            "reference_lane_steps_per_s": reference_rate, "speedup": jax_rate / reference_rate}
+    return config.lifetime_steps / (time.perf_counter() - start)
 
 
 def machine() -> dict:
@@ -228,9 +231,11 @@ def run(lane_counts, steps: int, repeats: int, reference_steps: int, lifetime_la
                     f"{row['compile_s']:9.1f} {row['program_bytes'] / 2**20:10.1f}")
         log(f"{name + ' (reference)':24s} {'':6s} {1:6d} {ref['lane_steps_per_s']:14,.0f}")
     result["lifetimes"] = []
+    reference_rate = bench_reference_life(lifetime_task_steps)
     for kernel in kernels:
         for lanes in lifetime_lanes:
             life = bench_lifetime(lanes, lifetime_task_steps, repeats, kernel)
+            life.update(reference_lane_steps_per_s=reference_rate, speedup=life["lane_steps_per_s"] / reference_rate)
             result["lifetimes"].append(life)
             log(f"LE-LS whole life ({kernel}): {life['individuals']} individuals ({life['lanes']} adult lanes), "
                 f"childhood {life['childhood_steps']:,} + 6 x {life['task_steps']:,} steps: "

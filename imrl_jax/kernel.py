@@ -24,7 +24,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from imrl_jax.arena import floor_colour_xy
+from imrl_jax import learning
 from imrl_jax.config import Config, LearningParams
+from imrl_jax.learning import selector_features, td_error
 from imrl_jax.lifetime import Curves, Draws, Phase, Previous, State, TaskSpec, Traces, draw_block
 from imrl_jax.networks import Agent
 
@@ -185,7 +187,7 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
         kp = selection_ref.shape[0]
         rows = jax.lax.broadcasted_iota(jnp.int32, (kp,), 0)
         expert_rows = rows < num_experts
-        zero, one = jnp.zeros((), dtype), jnp.ones((), dtype)
+        zero = jnp.zeros((), dtype)
 
         def observe(x, y, c, s):
             colour = floor_colour_xy(config, x + forward * c - lateral * s, y + forward * s + lateral * c,
@@ -193,9 +195,7 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
             return (colour.astype(dtype) == colours).astype(dtype) + bias
 
         def accumulate(trace, phi, learn, ended):
-            # Array operands: Triton's lowering of a select between two literals loses the type.
-            keep = jnp.where(learn, gamma * lam, one) * jnp.where(ended, zero, one)
-            return trace * keep + phi * learn.astype(dtype)
+            return learning.accumulate(trace, phi, gamma, lam, learn, ended)
 
         def one_step(i, carry: _Carry) -> _Carry:
             reinforcer, actor0, actor1, evaluator, selector = carry.weights
@@ -236,7 +236,7 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                     reward = extrinsic
                 value_before = _pick(_dot_rows(evaluator, prev_xb), prev_k)
                 value_now = _pick(_dot_rows(evaluator, xb), prev_k)
-                surprise = reward + gamma * jnp.where(terminal, 0.0, value_now) - value_before
+                surprise = td_error(reward, value_before, value_now, gamma, terminal)
                 delta = jnp.where(learn, surprise, 0.0)
                 ended = experts_ended != 0
                 trace_evaluator = accumulate(trace_evaluator, prev_xb, learn, ended)
@@ -254,13 +254,12 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                     learn, reward = valid, extrinsic
                 value_before = jnp.sum(critic * prev_xb)
                 value_now = jnp.sum(critic * xb)
-                delta = reward + gamma * jnp.where(terminal, 0.0, value_now) - value_before
+                delta = td_error(reward, value_before, value_now, gamma, terminal)
                 delta = jnp.where(learn, delta, 0.0)
                 ended = selector_ended != 0
                 trace_critic = accumulate(trace_critic, prev_xb, learn, ended)
-                prev_selection = carry.selection
-                phi = ((held.astype(dtype) - prev_selection) * prev_selection * (1.0 - prev_selection))
-                selector_trace = accumulate(selector_trace, phi[:, None] * prev_xb[None, :], learn, ended)
+                phi = selector_features(prev_k, carry.selection, prev_xb)
+                selector_trace = accumulate(selector_trace, phi, learn, ended)
                 critic = critic + eta_selector_critic * (delta * trace_critic)
                 selector = selector + eta_selector_actor * (delta * selector_trace)
                 selector_ended = ends.astype(jnp.int32)

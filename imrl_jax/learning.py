@@ -37,7 +37,9 @@ def accumulate(trace, phi, gamma, trace_lambda, learn, ended=False):
     # Factors instead of jnp.where: XLA's CPU backend vectorises a multiply of a whole
     # array by each lane's scalar, but not a select on each lane's flag (about 2x
     # faster on the selector's trace). The same numbers, since traces are finite.
-    keep = jnp.where(learn, gamma * trace_lambda, 1.0) * jnp.where(ended, 0.0, 1.0)
+    # (1 - ended rather than a select between two literals, whose type Triton's lowering
+    # loses: the GPU kernel uses this function too.)
+    keep = jnp.where(learn, gamma * trace_lambda, 1.0) * (1.0 - jnp.asarray(ended, trace.dtype))
     return trace * keep + phi * jnp.asarray(learn, trace.dtype)
 
 
