@@ -17,6 +17,12 @@ import math
 from typing import NamedTuple
 
 CONDITIONS = ("LE-LS", "EE-LS", "EE-ES", "SLE")
+#: How walls act in childhood: "clamp" (MODEL.md: the robot slides along them) or
+#: "respawn" (also put back at a random pose after ``wall_respawn_steps`` steps on a wall).
+CHILDHOOD_WALLS = ("clamp", "respawn")
+#: The childhood selector's reward: "surprise" (the paper: the surprise of the expert that
+#: kept control) or "progress" (that surprise minus a running mean of the expert's surprise).
+CHILDHOOD_SELECTOR_REWARDS = ("surprise", "progress")
 EVOLVED_CONDITIONS = ("LE-LS", "EE-LS", "EE-ES")
 STEP_KERNELS = ("xla", "pallas")
 
@@ -65,6 +71,16 @@ class LearningParams(NamedTuple):
     eta_selector_actor: float
     eta_selector_critic: float
     noise_std: float
+    childhood_trace_lambda: float
+    childhood_eta_selector_actor: float
+    childhood_eta_selector_critic: float
+    progress_rate: float
+
+    def in_childhood(self) -> "LearningParams":
+        """The values childhood learns with: its own trace decay and selector rates."""
+        return self._replace(trace_lambda=self.childhood_trace_lambda,
+                             eta_selector_actor=self.childhood_eta_selector_actor,
+                             eta_selector_critic=self.childhood_eta_selector_critic)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -113,6 +129,16 @@ class Config:
     eta_selector_critic: float = 0.01
     noise_std: float = 0.3
 
+    # --- childhood options (docs/CHILDHOOD.md). The defaults are the paper's rules (and
+    # MODEL.md's clamp); the childhood_* values apply in childhood in place of the adult ones.
+    childhood_walls: str = "clamp"
+    wall_respawn_steps: int = 20  # with "respawn": steps on a wall before a new random pose
+    childhood_selector_reward: str = "surprise"
+    progress_rate: float = 0.001  # with "progress": rate of each expert's running mean surprise
+    childhood_trace_lambda: float = 0.0
+    childhood_eta_selector_actor: float = 0.01
+    childhood_eta_selector_critic: float = 0.01
+
     # --- genetic algorithm (paper: 50 individuals, best 10 x 5 offspring, p = 0.1, U[-1, 1])
     population_size: int = 50
     num_generations: int = 100
@@ -121,6 +147,7 @@ class Config:
     mutation_scale: float = 1.0  # mutations are U[-scale, scale]
     init_scale: float = 1.0  # generation-0 genes are U[-scale, scale]
     num_elites: int = 0  # no elitism in the paper
+    lives_per_fitness: int = 1  # fitness as the mean of this many lives (the paper: 1)
 
     def __post_init__(self):
         _validate(self)
@@ -195,6 +222,12 @@ class Config:
         unknown = set(data) - names
         if unknown:
             raise ConfigError(f"unknown config field: {sorted(unknown)[0]}")
+        # Runs written before childhood had its own values learned with the adult ones.
+        for child, adult in (("childhood_trace_lambda", "trace_lambda"),
+                             ("childhood_eta_selector_actor", "eta_selector_actor"),
+                             ("childhood_eta_selector_critic", "eta_selector_critic")):
+            if child not in data and adult in data:
+                data[child] = data[adult]
         if "tasks" in data:
             data["tasks"] = tuple(
                 t if isinstance(t, Task) else Task(tuple(t["start"]), t["heading_deg"], tuple(t["target"]))
@@ -212,7 +245,14 @@ PRESETS: dict[str, dict] = {
     "paper": {},
     # Paper scale with MODEL.md's learning extensions at the values that made an adult
     # selector learn best in experiments/selector_sweep.py (experiments/results/selector_sweep).
-    "extension": dict(trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001),
+    # Its values drive childhood too (as when the preset was chosen and its runs were made).
+    "extension": dict(trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001,
+                      childhood_trace_lambda=0.98, childhood_eta_selector_actor=0.3,
+                      childhood_eta_selector_critic=0.001),
+    # The paper's rules in childhood (skills are learned there: docs/CHILDHOOD.md), a robot
+    # pinned on a wall in childhood put back at a random pose, the extension's selector in
+    # adulthood. The study's choice: experts follow one colour each, and they compose.
+    "skills": dict(trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001, childhood_walls="respawn"),
     "small": dict(
         childhood_steps=15_000,
         task_steps=5_000,
@@ -239,8 +279,17 @@ def _validate(c: Config) -> None:
         fail("condition", f"must be one of {', '.join(CONDITIONS)}")
     if c.step_kernel not in STEP_KERNELS:
         fail("step_kernel", f"must be one of {', '.join(STEP_KERNELS)}")
+    if c.childhood_walls not in CHILDHOOD_WALLS:
+        fail("childhood_walls", f"must be one of {', '.join(CHILDHOOD_WALLS)}")
+    if c.childhood_selector_reward not in CHILDHOOD_SELECTOR_REWARDS:
+        fail("childhood_selector_reward", f"must be one of {', '.join(CHILDHOOD_SELECTOR_REWARDS)}")
+    if c.step_kernel == "pallas" and c.childhood_walls != "clamp":
+        fail("childhood_walls", "the pallas step kernel supports only clamp")
+    if c.step_kernel == "pallas" and c.childhood_selector_reward != "surprise":
+        fail("childhood_selector_reward", "the pallas step kernel supports only surprise")
     positive_ints = ("num_experts", "task_steps", "draw_block", "scan_unroll", "trial_timeout", "num_bins",
-                     "population_size", "num_generations", "num_parents")
+                     "population_size", "num_generations", "num_parents", "wall_respawn_steps",
+                     "lives_per_fitness")
     for name in positive_ints:
         value = getattr(c, name)
         if not isinstance(value, int) or isinstance(value, bool) or value < 1:
@@ -264,9 +313,13 @@ def _validate(c: Config) -> None:
             fail(name, "must be non-negative")
     if not 0.0 <= c.gamma <= 1.0:
         fail("gamma", "must be in [0, 1]")
-    if not 0.0 <= c.trace_lambda < 1.0:
-        fail("trace_lambda", "must be in [0, 1)")
-    for name in ("eta_actor", "eta_evaluator", "eta_selector_actor", "eta_selector_critic"):
+    for name in ("trace_lambda", "childhood_trace_lambda"):
+        if not 0.0 <= getattr(c, name) < 1.0:
+            fail(name, "must be in [0, 1)")
+    if not 0.0 < c.progress_rate <= 1.0:
+        fail("progress_rate", "must be in (0, 1]")
+    for name in ("eta_actor", "eta_evaluator", "eta_selector_actor", "eta_selector_critic",
+                 "childhood_eta_selector_actor", "childhood_eta_selector_critic"):
         if getattr(c, name) < 0:
             fail(name, "must be non-negative")
     for name in ("arena_size", "edge_length", "line_half_width", "robot_radius", "max_speed",

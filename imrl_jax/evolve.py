@@ -211,7 +211,7 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bo
     generation = make_generation(config, sharding)
     keys = to_global(evolution_keys(state.key_data), replicated(mesh))
     params = config.learning_params()
-    lane_steps = len(seeds) * config.population_size * config.lifetime_steps
+    lane_steps = len(seeds) * config.population_size * config.lives_per_fitness * config.lifetime_steps
     first = int(state.generation)
     for g in range(first, config.num_generations):
         start = time.perf_counter()

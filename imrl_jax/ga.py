@@ -74,11 +74,25 @@ def evolve_step(key: jax.Array, config: Config, params: LearningParams, populati
                 generation) -> tuple[jnp.ndarray, GenerationStats]:
     """One generation of one seed: live every individual, select the best, reproduce."""
     key_life, key_reproduce = generation_keys(key, generation)
-    lives = jax.random.split(key_life, config.population_size)
-    result: LifetimeResult = jax.vmap(lambda k, g: live(k, config, params, g))(lives, population)
-    parents = select(result.fitness, config.num_parents)
+    fitness, performance = evaluate(key_life, config, params, population)
+    parents = select(fitness, config.num_parents)
     children = reproduce(key_reproduce, config, population, parents)
-    return children, GenerationStats(result.fitness, result.performance, parents)
+    return children, GenerationStats(fitness, performance, parents)
+
+
+def evaluate(key: jax.Array, config: Config, params: LearningParams,
+             population: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """Fitness (P,) and task performance (P, tasks) of a population: one life each (the paper),
+    or the mean of ``config.lives_per_fitness`` independent lives (a GA extension, less noisy)."""
+    lives = config.lives_per_fitness
+    if lives == 1:
+        keys = jax.random.split(key, config.population_size)
+        result: LifetimeResult = jax.vmap(lambda k, g: live(k, config, params, g))(keys, population)
+        return result.fitness, result.performance
+    keys = jax.random.split(key, (config.population_size, lives))
+    live_all = jax.vmap(lambda k, g: live(k, config, params, g), (0, None))
+    result = jax.vmap(live_all)(keys, population)
+    return result.fitness.mean(1), result.performance.mean(1)
 
 
 def make_generation(config: Config, sharding=None):

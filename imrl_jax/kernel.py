@@ -27,7 +27,7 @@ from imrl_jax.arena import floor_colour_xy
 from imrl_jax import learning
 from imrl_jax.config import Config, LearningParams
 from imrl_jax.learning import selector_features, td_error
-from imrl_jax.lifetime import Curves, Draws, Phase, Previous, State, TaskSpec, Traces, draw_block
+from imrl_jax.lifetime import Curves, Draws, Phase, Previous, State, TaskSpec, Traces, draw_block, phase_params
 from imrl_jax.networks import Agent
 
 # Slots of the per-lane scalar vectors.
@@ -114,7 +114,8 @@ def unpack(packed: Packed, like: State, block: Draws) -> State:
     prev = Previous(k=i[_K], action=f[jnp.array([_A0, _A1])], output=f[jnp.array([_O0, _O1])],
                     selection=packed.selection[:k], valid=i[_VALID] != 0, terminal=i[_TERMINAL] != 0)
     pose = like.pose._replace(pos=f[jnp.array([_X, _Y])], heading=f[_HEADING])
-    return State(agent, traces, pose, f[jnp.array([_COS, _SIN])], xbs, prev, i[_TRIAL_STEP], t, block)
+    return State(agent, traces, pose, f[jnp.array([_COS, _SIN])], xbs, prev, i[_TRIAL_STEP], t, block,
+                 like.pinned, like.baseline)
 
 
 def retina_layout(config: Config, dtype=jnp.float32) -> jnp.ndarray:
@@ -179,8 +180,10 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                weights_out, critic_out, traces_out, selector_trace_out, xbs_out, selection_out,
                floats_out, ints_out, counts_out, selections_out):
         dtype = weights_ref.dtype
-        gamma, lam, eta_actor, eta_evaluator, eta_selector_actor, eta_selector_critic, noise_std = (
-            params_ref[j] for j in range(len(LearningParams._fields)))
+        p = LearningParams(*(params_ref[j] for j in range(len(LearningParams._fields))))
+        gamma, lam, noise_std = p.gamma, p.trace_lambda, p.noise_std
+        eta_actor, eta_evaluator = p.eta_actor, p.eta_evaluator
+        eta_selector_actor, eta_selector_critic = p.eta_selector_actor, p.eta_selector_critic
         start_x, start_y, start_heading, target_x, target_y = (task_ref[j] for j in range(5))
         start_cos, start_sin = jnp.cos(start_heading), jnp.sin(start_heading)
         forward, lateral, colours, bias = (layout_ref[j] for j in range(4))
@@ -401,6 +404,7 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
     num_bins = config.num_bins if num_bins is None else num_bins
     bin_steps = num_steps // num_bins
     num_experts = state.agent.selector_actor.shape[0]
+    params = phase_params(phase, params)
 
     def one_bin(packed, _):
         draws = draw_range(key, packed.ints[_T], bin_steps, config.draw_block, phase.noisy)

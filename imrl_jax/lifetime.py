@@ -32,12 +32,25 @@ class Phase(NamedTuple):
     intrinsic: bool  # rewards: own reinforcer for experts, expert surprise for the selector
     has_target: bool
     noisy: bool  # actions get Gaussian noise annealed linearly to 0 over the phase
+    respawn: bool = False  # a robot on a wall for config.wall_respawn_steps steps gets a random pose
+    progress: bool = False  # childhood selector: surprise minus the expert's running mean surprise
 
 
 CHILDHOOD = Phase(experts_learn=True, selector_learns=True, intrinsic=True, has_target=False, noisy=True)
 ADULT_LEARNING_SELECTOR = Phase(False, True, False, True, False)
 ADULT_EVOLVED_SELECTOR = Phase(False, False, False, True, False)
 ADULT_SINGLE_EXPERT = Phase(True, False, False, True, True)
+
+
+def childhood_phase(config: Config) -> Phase:
+    """The childhood phase with the config's options (docs/CHILDHOOD.md; the paper's by default)."""
+    return CHILDHOOD._replace(respawn=config.childhood_walls == "respawn",
+                              progress=config.childhood_selector_reward == "progress")
+
+
+def phase_params(phase: Phase, params: LearningParams) -> LearningParams:
+    """The learning values a phase uses: childhood (intrinsic rewards) has its own."""
+    return params.in_childhood() if phase.intrinsic else params
 
 
 def adult_phase(condition: str) -> Phase:
@@ -47,10 +60,12 @@ def adult_phase(condition: str) -> Phase:
 
 
 class Draws(NamedTuple):
-    """The random numbers of one step: expert choice u ~ U[0, 1) and action noise z ~ N(0, I2)."""
+    """The random numbers of one step: expert choice u ~ U[0, 1), action noise z ~ N(0, I2),
+    and (phases with respawns only) a random pose's (x, y, heading) as U[0, 1)^3."""
 
     u: jnp.ndarray
     z: jnp.ndarray
+    spawn: jnp.ndarray | None = None
 
 
 class Traces(NamedTuple):
@@ -93,6 +108,8 @@ class State(NamedTuple):
     trial_step: jnp.ndarray  # steps since the current trial started
     t: jnp.ndarray  # step within the phase
     block: Draws  # the random numbers of the current block of steps
+    pinned: jnp.ndarray  # steps on a wall in a row (childhood with respawns)
+    baseline: jnp.ndarray  # (K,): each expert's running mean surprise (childhood "progress" reward)
 
 
 class TaskSpec(NamedTuple):
@@ -109,6 +126,7 @@ class StepRecord(NamedTuple):
     k: jnp.ndarray
     reached: jnp.ndarray
     timeout: jnp.ndarray
+    respawned: jnp.ndarray  # put at a random pose after too long on a wall
 
 
 class Curves(NamedTuple):
@@ -117,6 +135,7 @@ class Curves(NamedTuple):
     reaches: jnp.ndarray  # (bins,)
     timeouts: jnp.ndarray  # (bins,)
     selections: jnp.ndarray  # (bins, K): steps each expert was in control
+    respawns: jnp.ndarray | None = None  # (bins,): random poses after a wall (phases with respawns only)
 
 
 class LifetimeResult(NamedTuple):
@@ -141,23 +160,26 @@ class LifetimeKeys(NamedTuple):
     tasks: jax.Array  # (tasks,)
 
 
-def draw_block(key: jax.Array, block, block_steps: int, noisy: bool = True) -> Draws:
+def draw_block(key: jax.Array, block, block_steps: int, noisy: bool = True, spawn: bool = False) -> Draws:
     """The draws of steps block*B .. block*B + B-1 of a phase whose key is ``key``.
 
     Random numbers are made ``block_steps`` at a time (one vectorised call instead of
     one per step). Phases without action noise get zeros for z; the expert-choice
-    numbers are the same either way.
+    numbers are the same either way, and so are both with or without ``spawn`` draws.
     """
-    key_u, key_z = jax.random.split(jax.random.fold_in(key, block))
+    key_block = jax.random.fold_in(key, block)
+    key_u, key_z = jax.random.split(key_block)
     u = jax.random.uniform(key_u, (block_steps,))
     z = jax.random.normal(key_z, (block_steps, 2)) if noisy else jnp.zeros((block_steps, 2), u.dtype)
-    return Draws(u, z)
+    spawned = jax.random.uniform(jax.random.fold_in(key_block, 2), (block_steps, 3)) if spawn else None
+    return Draws(u, z, spawned)
 
 
-def draw_many(key: jax.Array, num_steps: int, block_steps: int) -> Draws:
+def draw_many(key: jax.Array, num_steps: int, block_steps: int, spawn: bool = False) -> Draws:
     """The draws of steps 0 .. num_steps-1 (for the reference and tests)."""
     num_blocks = -(-num_steps // block_steps)
-    blocks = jax.vmap(draw_block, (None, 0, None))(key, jnp.arange(num_blocks), block_steps)
+    blocks = jax.vmap(draw_block, (None, 0, None, None, None))(key, jnp.arange(num_blocks), block_steps, True,
+                                                               spawn)
     return jax.tree.map(lambda x: x.reshape((-1,) + x.shape[2:])[:num_steps], blocks)
 
 
@@ -197,7 +219,19 @@ def init_state(config: Config, agent: Agent, pose: Pose) -> State:
         trial_step=jnp.int32(0),
         t=jnp.int32(0),
         block=Draws(zeros(config.draw_block), zeros(config.draw_block, 2)),
+        pinned=jnp.int32(0),
+        baseline=zeros(k),
     )
+
+
+def for_phase(config: Config, phase: Phase, state: State) -> State:
+    """``state`` whose carried draws have the phase's structure (respawn draws only where used)."""
+    if phase.respawn and state.block.spawn is None:
+        return state._replace(block=state.block._replace(spawn=jnp.zeros((config.draw_block, 3),
+                                                                          state.block.u.dtype)))
+    if not phase.respawn and state.block.spawn is not None:
+        return state._replace(block=state.block._replace(spawn=None))
+    return state
 
 
 def _set_row(matrix, k, row):
@@ -223,9 +257,11 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
     # skips the draw on the steps between blocks.
     offset = state.t % config.draw_block
     block = jax.lax.cond(offset == 0,
-                         lambda: draw_block(key, state.t // config.draw_block, config.draw_block, phase.noisy),
+                         lambda: draw_block(key, state.t // config.draw_block, config.draw_block, phase.noisy,
+                                            phase.respawn),
                          lambda: state.block)
-    draws = Draws(block.u[offset], block.z[offset])
+    draws = jax.tree.map(lambda x: x[offset], block)
+    params = phase_params(phase, params)
     gamma, lam = params.gamma, params.trace_lambda
 
     # 1-2: observe, choose the expert.
@@ -262,9 +298,18 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
                                actor=ascend_row(agent.actor, held, trace_w, delta, params.eta_actor))
         # The expert losing control (or the trial ending) drops its traces.
         traces = traces._replace(evaluator=trace_v, actor=trace_w, experts_ended=~same | ends)
+    baseline = state.baseline
     if phase.selector_learns:
         if phase.intrinsic:  # childhood: the surprise of the expert that kept control
             learn, reward = prev.valid & same, surprise
+            if phase.progress:
+                # Learning progress, roughly: the surprise beyond what this expert usually
+                # gets, b_k <- b_k + rho (delta_k - b_k) on the steps it learns, so that an
+                # expert whose reinforcer merely pays more everywhere is not favoured.
+                held = jax.nn.one_hot(prev.k, baseline.shape[0], dtype=xb.dtype) * learn
+                before = jnp.sum(held * baseline)
+                reward = surprise - before
+                baseline = baseline + params.progress_rate * held * (surprise - baseline)
         else:
             # k >= 0 always holds; it orders this update after the choice of k, which reads
             # the same selector weights, so that XLA can update them in place, not in a copy.
@@ -291,6 +336,18 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
     # 5: move; reaching the target or the timeout starts a new trial.
     pose = move(config, state.pose, action)
     trial_step = state.trial_step + 1
+    pinned, respawned = state.pinned, jnp.bool_(False)
+    if phase.respawn:
+        # On a wall: the clamp holds the centre at the border. After wall_respawn_steps such
+        # steps in a row the robot is put at a random pose; like a timeout, nothing learns
+        # from that transition.
+        r, size = config.robot_radius, config.arena_size
+        on_wall = jnp.any((pose.pos <= r) | (pose.pos >= size - r))
+        pinned = jnp.where(on_wall, pinned + 1, 0)
+        respawned = pinned >= config.wall_respawn_steps
+        spawn = Pose(r + (size - 2.0 * r) * draws.spawn[:2], 2.0 * math.pi * draws.spawn[2])
+        pose = jax.tree.map(lambda fresh, now: jnp.where(respawned, fresh, now), spawn, pose)
+        pinned = jnp.where(respawned, 0, pinned)
     if phase.has_target:
         reached = jnp.sum((pose.pos - task.target) ** 2) <= config.target_radius ** 2
         timeout = ~reached & (trial_step >= config.trial_timeout)
@@ -300,9 +357,10 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
     else:
         reached = timeout = jnp.bool_(False)
 
-    prev = Previous(k, action, output, selection, ~timeout, reached)
-    state = State(agent, traces, pose, heading_vector(pose.heading), xbs, prev, trial_step, state.t + 1, block)
-    return state, StepRecord(pose, k, reached, timeout)
+    prev = Previous(k, action, output, selection, ~(timeout | respawned), reached)
+    state = State(agent, traces, pose, heading_vector(pose.heading), xbs, prev, trial_step, state.t + 1, block,
+                  pinned, baseline)
+    return state, StepRecord(pose, k, reached, timeout, respawned)
 
 
 def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningParams, task: TaskSpec,
@@ -322,17 +380,20 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
     phase_steps = num_steps if phase_steps is None else phase_steps
     num_bins = config.num_bins if num_bins is None else num_bins
     bin_steps = num_steps // num_bins
+    state = for_phase(config, phase, state)
     num_experts = state.agent.selector_actor.shape[0]
 
     def one_step(carry, _):
         state, counts = carry
         state, record = step(config, phase, params, task, phase_steps, key, state)
         counts = Curves(counts.reaches + record.reached, counts.timeouts + record.timeout,
-                        counts.selections + jax.nn.one_hot(record.k, num_experts, dtype=jnp.int32))
+                        counts.selections + jax.nn.one_hot(record.k, num_experts, dtype=jnp.int32),
+                        None if counts.respawns is None else counts.respawns + record.respawned)
         return (state, counts), None
 
     def one_bin(state, _):
-        counts = Curves(jnp.int32(0), jnp.int32(0), jnp.zeros((num_experts,), jnp.int32))
+        counts = Curves(jnp.int32(0), jnp.int32(0), jnp.zeros((num_experts,), jnp.int32),
+                        jnp.int32(0) if phase.respawn else None)
         (state, counts), _ = jax.lax.scan(one_step, (state, counts), None, length=bin_steps,
                                           unroll=config.scan_unroll)
         return state, counts
@@ -344,6 +405,7 @@ def simulate(key: jax.Array, config: Config, phase: Phase, params: LearningParam
              state: State, num_steps: int, phase_steps: int | None = None) -> tuple[State, StepRecord]:
     """Run ``num_steps`` steps of one individual and record every step (plots, tests only)."""
     phase_steps = num_steps if phase_steps is None else phase_steps
+    state = for_phase(config, phase, state)
 
     def one_step(state, _):
         return step(config, phase, params, task, phase_steps, key, state)
@@ -382,7 +444,7 @@ def grow_up(keys: LifetimeKeys, config: Config, params: LearningParams, genome: 
     childhood_selections = jnp.zeros((config.num_bins, agent.selector_actor.shape[0]), jnp.int32)
     if config.condition == "LE-LS":
         state = init_state(config, agent, random_pose(keys.pose, config, dtype))
-        state, curves = run_phase(keys.childhood, config, CHILDHOOD, params, childhood_task(config, dtype),
+        state, curves = run_phase(keys.childhood, config, childhood_phase(config), params, childhood_task(config, dtype),
                                   state, config.childhood_steps)
         agent, childhood_selections = state.agent, curves.selections
     return agent, childhood_selections

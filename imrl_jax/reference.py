@@ -220,14 +220,16 @@ def decode(config, genome):
 # --------------------------------------------------------------------------- one phase
 
 
-def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None) -> dict:
-    """Run one phase step by step (MODEL.md "Acting" and "Learning").
+def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, spawn=None) -> dict:
+    """Run one phase step by step (MODEL.md "Acting" and "Learning"; docs/CHILDHOOD.md options).
 
     phase: "childhood", "adult-ls", "adult-es" or "sle". pose: (x, y, heading radians).
-    u (T,) uniform draws for the expert choice, z (T, 2) normal draws for the action noise.
-    task: task index for the adult phases (None in childhood). phase_steps: the length of
-    the noise annealing (default T). Returns the pose after each step, the experts chosen,
-    the reach/timeout flags, the final weights and the number of reaches.
+    u (T,) uniform draws for the expert choice, z (T, 2) normal draws for the action noise,
+    spawn (T, 3) uniform draws of a random pose (childhood with config.childhood_walls
+    "respawn" only). task: task index for the adult phases (None in childhood).
+    phase_steps: the length of the noise annealing (default T). Returns the pose after each
+    step, the experts chosen, the reach/timeout/respawn flags, the final weights and the
+    number of reaches.
     """
     if phase not in PHASES:
         raise ValueError(f"unknown phase {phase!r}")
@@ -247,7 +249,17 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None) -
     has_target = phase != "childhood"
 
     gamma = config.gamma
-    decay = config.gamma * config.trace_lambda
+    childhood = phase == "childhood"
+    # Childhood learns with its own trace decay and selector rates.
+    decay = config.gamma * (config.childhood_trace_lambda if childhood else config.trace_lambda)
+    eta_selector_actor = config.childhood_eta_selector_actor if childhood else config.eta_selector_actor
+    eta_selector_critic = config.childhood_eta_selector_critic if childhood else config.eta_selector_critic
+    respawn = childhood and config.childhood_walls == "respawn"
+    progress = childhood and config.childhood_selector_reward == "progress"
+    if respawn:
+        spawn = np.asarray(spawn, dtype=np.float64)
+    baseline = np.zeros(num_experts)  # each expert's running mean surprise ("progress")
+    pinned = 0  # steps on a wall in a row ("respawn")
 
     if has_target:
         if task is None:
@@ -280,6 +292,7 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None) -
     out_k = np.zeros(num_steps, dtype=np.int64)
     out_reached = np.zeros(num_steps, dtype=bool)
     out_timeout = np.zeros(num_steps, dtype=bool)
+    out_respawned = np.zeros(num_steps, dtype=bool)
 
     for t in range(num_steps):
         # 1. What the robot sees now.
@@ -317,6 +330,9 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None) -
                 if phase == "childhood":
                     if same_expert:
                         selector_reward = expert_delta
+                        if progress:
+                            selector_reward = expert_delta - baseline[prev_k]
+                            baseline[prev_k] += config.progress_rate * (expert_delta - baseline[prev_k])
                 else:
                     selector_reward = 1.0 if prev_reached else 0.0
             if selector_reward is not None:
@@ -331,8 +347,8 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None) -
                 onehot[prev_k] = 1.0
                 slope = (onehot - prev_s) * prev_s * (1.0 - prev_s)
                 trace_s = decay * trace_s + np.outer(slope, prev_xb)
-                w["selector_critic"] = w["selector_critic"] + config.eta_selector_critic * selector_delta * trace_u
-                w["selector_actor"] = w["selector_actor"] + config.eta_selector_actor * selector_delta * trace_s
+                w["selector_critic"] = w["selector_critic"] + eta_selector_critic * selector_delta * trace_u
+                w["selector_actor"] = w["selector_actor"] + eta_selector_actor * selector_delta * trace_s
 
         # Trace clears after this step's learning.
         if (not prev_valid) or (not same_expert) or terminal:
@@ -352,6 +368,17 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None) -
         x, y, heading = move(config, x, y, heading, float(a[0]), float(a[1]))
         reached = False
         timeout = False
+        respawned = False
+        if respawn:
+            r, size = config.robot_radius, config.arena_size
+            on_wall = x <= r or x >= size - r or y <= r or y >= size - r
+            pinned = pinned + 1 if on_wall else 0
+            if pinned >= config.wall_respawn_steps:
+                respawned = True
+                pinned = 0
+                x = r + (size - 2.0 * r) * spawn[t, 0]
+                y = r + (size - 2.0 * r) * spawn[t, 1]
+                heading = 2.0 * math.pi * spawn[t, 2]
         if has_target:
             trial_steps += 1
             if math.hypot(x - target[0], y - target[1]) <= config.target_radius:
@@ -366,8 +393,9 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None) -
         out_k[t] = k
         out_reached[t] = reached
         out_timeout[t] = timeout
+        out_respawned[t] = respawned
 
-        prev_valid = not timeout
+        prev_valid = not (timeout or respawned)
         prev_xb, prev_k, prev_a, prev_o, prev_s = xb, k, a, o, s
         prev_reached = reached
 
@@ -378,6 +406,7 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None) -
         "k": out_k,
         "reached": out_reached,
         "timeout": out_timeout,
+        "respawned": out_respawned,
         "weights": w,
         "reaches": int(out_reached.sum()),
     }
@@ -398,18 +427,19 @@ def _reset_selector(weights):
     return w
 
 
-def live(config, genome, start_pose, childhood_u, childhood_z, task_u, task_z) -> dict:
+def live(config, genome, start_pose, childhood_u, childhood_z, task_u, task_z, childhood_spawn=None) -> dict:
     """One whole life of config.condition (MODEL.md "Life" and "Conditions").
 
     start_pose: childhood start (x, y, heading radians), used by LE-LS only.
-    childhood_u (childhood_steps,), childhood_z (childhood_steps, 2): childhood draws.
+    childhood_u (childhood_steps,), childhood_z (childhood_steps, 2): childhood draws;
+    childhood_spawn (childhood_steps, 3) with config.childhood_walls "respawn".
     task_u (tasks, task_steps), task_z (tasks, task_steps, 2): the draws of each task.
     """
     condition = config.condition
     weights = decode(config, genome)
     if condition == "LE-LS":
         child = run_phase(config, "childhood", weights, start_pose, childhood_u, childhood_z,
-                          task=None, phase_steps=config.childhood_steps)
+                          task=None, phase_steps=config.childhood_steps, spawn=childhood_spawn)
         grown = child["weights"]
         adult_phase = "adult-ls"
     elif condition == "EE-LS":

@@ -4,8 +4,8 @@ The values MODEL.md lets a researcher vary split in two kinds:
 
 * **dynamic** values are arguments of the compiled program, so a whole grid of them runs
   as one ``vmap`` in one compilation: the :class:`~imrl_jax.config.LearningParams`
-  (discount ``gamma``, ``trace_lambda``, the four learning rates, the childhood noise
-  ``noise_std``; ``eta`` here sets all four rates at once, the paper's single rate) and
+  (discount ``gamma``, ``trace_lambda``, the learning rates, the childhood noise
+  ``noise_std``; ``eta`` here sets every rate at once, childhood's included: the paper's single rate) and
   the GA's mutation (``mutation_prob``, ``mutation_scale``, see :class:`GAParams`);
 * **static** values fix shapes or loop lengths (``childhood_steps``, ``task_steps``,
   ``num_experts``, ``population_size``, ...): every value is its own compilation
@@ -39,7 +39,8 @@ from imrl_jax.ga import generation_keys, init_population, reproduce, select
 from imrl_jax.lifetime import LifetimeResult, live
 
 #: Learning rates set together by the pseudo-field ``eta`` (the paper has one rate).
-ETA_FIELDS = ("eta_actor", "eta_evaluator", "eta_selector_actor", "eta_selector_critic")
+ETA_FIELDS = ("eta_actor", "eta_evaluator", "eta_selector_actor", "eta_selector_critic",
+              "childhood_eta_selector_actor", "childhood_eta_selector_critic")
 
 
 class GAParams(NamedTuple):
@@ -83,7 +84,7 @@ DYNAMIC_FIELDS = LearningParams._fields + GAParams._fields + ("eta",)
 
 
 def point(config: Config, **values) -> SweepPoint:
-    """The sweep point of ``config`` with some dynamic values changed (``eta`` sets all four rates)."""
+    """The sweep point of ``config`` with some dynamic values changed (``eta`` sets every rate)."""
     unknown = set(values) - set(DYNAMIC_FIELDS)
     if unknown:
         raise ValueError(f"not a dynamic field: {sorted(unknown)[0]} (choose from {', '.join(DYNAMIC_FIELDS)}; "

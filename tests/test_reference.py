@@ -22,7 +22,11 @@ from imrl_jax.networks import Agent, decode
 STEPS = 2000
 PAPER = {}
 EXTENDED = dict(trace_lambda=0.9, eta_actor=0.05, eta_evaluator=0.02, eta_selector_actor=0.5,
-                eta_selector_critic=0.003)
+                eta_selector_critic=0.003, childhood_trace_lambda=0.8, childhood_eta_selector_actor=0.2,
+                childhood_eta_selector_critic=0.02)
+#: The childhood options of docs/CHILDHOOD.md (static: they change the program).
+CHILDHOOD_OPTIONS = dict(childhood_walls="respawn", wall_respawn_steps=5, childhood_selector_reward="progress",
+                         progress_rate=0.05)
 #: One task whose target lies 40 cm straight ahead of the start, 85 cm from the east wall:
 #: reaches, timeouts and wall contacts all happen within a few hundred steps.
 SHORT_TASK = Task(start=(300.0, 200.0), heading_deg=0.0, target=(340.0, 200.0))
@@ -48,16 +52,18 @@ def _assert_weights_close(jax_agent: Agent, ref: dict):
 
 def _compare_phase(config, phase, phase_name, agent, pose, task_index, params, seed=0):
     key = jax.random.key(seed)
-    draws = L.draw_many(key, STEPS, config.draw_block)
+    draws = L.draw_many(key, STEPS, config.draw_block, spawn=phase.respawn)
     task = L.childhood_task(config, jnp.float64) if task_index is None else L.task_spec(config, task_index, jnp.float64)
     state = L.init_state(config, agent, pose)
     final, record = jax.jit(L.simulate, static_argnums=(1, 2, 6))(key, config, phase, params, task, state, STEPS)
     ref = reference.run_phase(config.replace(**params._asdict()), phase_name, _to_numpy(agent),
                               (float(pose.pos[0]), float(pose.pos[1]), float(pose.heading)),
-                              np.asarray(draws.u), np.asarray(draws.z), task=task_index)
+                              np.asarray(draws.u), np.asarray(draws.z), task=task_index,
+                              spawn=None if draws.spawn is None else np.asarray(draws.spawn))
     np.testing.assert_array_equal(np.asarray(record.k), ref["k"])
     np.testing.assert_array_equal(np.asarray(record.reached), ref["reached"])
     np.testing.assert_array_equal(np.asarray(record.timeout), ref["timeout"])
+    np.testing.assert_array_equal(np.asarray(record.respawned), ref["respawned"])
     np.testing.assert_allclose(np.asarray(record.pose.pos[:, 0]), ref["x"], atol=1e-8)
     np.testing.assert_allclose(np.asarray(record.pose.pos[:, 1]), ref["y"], atol=1e-8)
     np.testing.assert_allclose(np.asarray(record.pose.heading), ref["heading"], atol=1e-8)
@@ -66,20 +72,22 @@ def _compare_phase(config, phase, phase_name, agent, pose, task_index, params, s
     r = config.robot_radius
     walls = np.sum((pos <= r + 1e-9) | (pos >= config.arena_size - r - 1e-9))
     return dict(reaches=int(ref["reached"].sum()), timeouts=int(ref["timeout"].sum()), walls=int(walls),
-                switches=int(np.sum(ref["k"][1:] != ref["k"][:-1])))
+                switches=int(np.sum(ref["k"][1:] != ref["k"][:-1])), respawns=int(ref["respawned"].sum()))
 
 
 @pytest.mark.usefixtures("x64")
+@pytest.mark.parametrize("options", [{}, CHILDHOOD_OPTIONS], ids=["paper-childhood", "respawn-and-progress"])
 @pytest.mark.parametrize("rules", [PAPER, EXTENDED], ids=["paper-rules", "traces-and-rates"])
-def test_childhood_matches_reference(tiny, rules):
-    config = tiny("LE-LS", childhood_steps=STEPS)
+def test_childhood_matches_reference(tiny, rules, options):
+    config = tiny("LE-LS", childhood_steps=STEPS, **options)
     params = config.replace(**rules).learning_params()
     n = config.num_inputs + 1
     genome = jax.random.uniform(jax.random.key(7), (3 * n,), jnp.float64, -1.0, 1.0)
     agent = decode(config, genome)
     pose = Pose(jnp.array([40.0, 60.0]), jnp.array(math.pi))  # heading into the west wall
-    events = _compare_phase(config, L.CHILDHOOD, "childhood", agent, pose, None, params)
+    events = _compare_phase(config, L.childhood_phase(config), "childhood", agent, pose, None, params)
     assert events["walls"] > 0 and events["switches"] > 100
+    assert (events["respawns"] > 0) == bool(options), events
 
 
 @pytest.mark.usefixtures("x64")

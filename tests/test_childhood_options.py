@@ -1,0 +1,120 @@
+"""The childhood options of docs/CHILDHOOD.md and the GA's mean of lives: semantics on hand-made cases.
+
+(Their agreement with the NumPy reference, step by step, is in test_reference.py.)
+"""
+
+import math
+import os
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from imrl_jax import evolve, ga
+from imrl_jax import lifetime as L
+from imrl_jax.arena import Pose
+from imrl_jax.config import ConfigError, make_config
+from imrl_jax.networks import decode
+
+
+def test_robot_pinned_on_a_wall_is_put_at_a_random_pose_after_n_steps(tiny):
+    """A straight driver at 2 cm/step from x = 20 heading west: on the wall (x = 15) from
+    its 3rd step (20 -> 18 -> 16 -> 15), so with N = 5 the 7th step (index 6) respawns it."""
+    config = tiny("EE-LS", childhood_walls="respawn", wall_respawn_steps=5)
+    n = config.num_inputs + 1
+    actor = np.zeros((3, 2, n), np.float32)
+    actor[:, 1, -1] = 30.0  # speed unit saturated: 2 cm per step, no turn
+    agent = decode(config, jnp.asarray(actor.reshape(-1)))
+    phase = L.Phase(experts_learn=False, selector_learns=False, intrinsic=False, has_target=False, noisy=False,
+                    respawn=True)
+    state = L.init_state(config, agent, Pose(jnp.array([20.0, 200.0]), jnp.array(math.pi)))
+    key = jax.random.key(0)
+    _, record = jax.jit(L.simulate, static_argnums=(1, 2, 6))(key, config, phase, config.learning_params(),
+                                                              L.childhood_task(config), state, 40)
+    respawned = np.flatnonzero(np.asarray(record.respawned))
+    assert respawned[0] == 6
+    x = np.asarray(record.pose.pos[:, 0])
+    np.testing.assert_allclose(x[:6], [18, 16, 15, 15, 15, 15], atol=1e-4)
+    # The new pose is the step's spawn draw, scaled to the arena.
+    draws = L.draw_many(key, 40, config.draw_block, spawn=True)
+    r, size = config.robot_radius, config.arena_size
+    np.testing.assert_allclose(np.asarray(record.pose.pos[6]), r + (size - 2 * r) * np.asarray(draws.spawn[6, :2]),
+                               rtol=1e-6)
+    np.testing.assert_allclose(float(record.pose.heading[6]), 2 * math.pi * float(draws.spawn[6, 2]), rtol=1e-6)
+    # Clamped (the default), the same robot stays on the wall.
+    clamped = config.replace(childhood_walls="clamp")
+    _, held = jax.jit(L.simulate, static_argnums=(1, 2, 6))(key, clamped, phase._replace(respawn=False),
+                                                           clamped.learning_params(), L.childhood_task(clamped),
+                                                           L.init_state(clamped, agent, state.pose), 40)
+    np.testing.assert_allclose(np.asarray(held.pose.pos[2:, 0]), 15.0)
+    assert not np.asarray(held.respawned).any()
+
+
+def test_paper_childhood_draws_are_unchanged_by_the_respawn_draws():
+    """The expert-choice and noise numbers of a block are the same with or without spawn draws."""
+    key = jax.random.key(5)
+    plain, spawn = L.draw_block(key, 3, 100), L.draw_block(key, 3, 100, spawn=True)
+    np.testing.assert_array_equal(plain.u, spawn.u)
+    np.testing.assert_array_equal(plain.z, spawn.z)
+    assert plain.spawn is None and spawn.spawn.shape == (100, 3)
+    assert float(spawn.spawn.min()) >= 0.0 and float(spawn.spawn.max()) < 1.0
+
+
+def test_childhood_learns_with_its_own_values_and_adulthood_with_the_adult_ones(tiny):
+    params = make_config("paper", trace_lambda=0.9, eta_selector_actor=0.5, childhood_eta_selector_critic=0.02,
+                         childhood_trace_lambda=0.3).learning_params()
+    child = L.phase_params(L.CHILDHOOD, params)
+    assert (child.trace_lambda, child.eta_selector_actor, child.eta_selector_critic) == (0.3, 0.01, 0.02)
+    assert L.phase_params(L.ADULT_LEARNING_SELECTOR, params) == params
+
+
+def test_fitness_as_the_mean_of_several_lives(tiny):
+    config = tiny("EE-LS", lives_per_fitness=2, population_size=2, num_parents=1)
+    params = config.learning_params()
+    genomes = jax.random.uniform(jax.random.key(1), (2, config.num_genes), minval=-1, maxval=1)
+    key = jax.random.key(2)
+    fitness, performance = jax.jit(ga.evaluate, static_argnums=1)(key, config, params, genomes)
+    keys = jax.random.split(key, (2, 2))
+    single = jax.jit(L.live, static_argnums=1)
+    for i in range(2):
+        lives = [single(keys[i, j], config, params, genomes[i]) for j in range(2)]
+        np.testing.assert_allclose(fitness[i], np.mean([float(life.fitness) for life in lives]), rtol=1e-6)
+        np.testing.assert_allclose(performance[i], np.mean([life.performance for life in lives], 0), rtol=1e-6)
+    one = config.replace(lives_per_fitness=1)
+    fitness_one, _ = jax.jit(ga.evaluate, static_argnums=1)(key, one, params, genomes)
+    expected = jax.vmap(lambda k, g: L.live(k, one, params, g).fitness)(jax.random.split(key, 2), genomes)
+    np.testing.assert_array_equal(fitness_one, expected)  # one life: the paper's evaluation, as before
+
+
+def test_extension_runs_written_before_childhood_values_relive_with_their_own_rules():
+    """A config.json without the childhood fields learned childhood with the adult values."""
+    old = make_config("extension").to_dict()
+    for name in ("childhood_trace_lambda", "childhood_eta_selector_actor", "childhood_eta_selector_critic"):
+        del old[name]
+    old["trace_lambda"] = 0.5
+    config = type(make_config()).from_dict(old)
+    assert config.childhood_trace_lambda == 0.5
+    assert config.childhood_eta_selector_actor == config.eta_selector_actor
+
+
+@pytest.mark.parametrize("setting, field", [
+    ("childhood_walls=bounce", "childhood_walls"),
+    ("wall_respawn_steps=0", "wall_respawn_steps"),
+    ("childhood_selector_reward=curiosity", "childhood_selector_reward"),
+    ("progress_rate=0", "progress_rate"),
+    ("childhood_trace_lambda=1", "childhood_trace_lambda"),
+    ("lives_per_fitness=-2", "lives_per_fitness"),
+])
+def test_bad_childhood_settings_exit_2_naming_the_field(tmp_path, capsys, setting, field):
+    out = tmp_path / "run"
+    code = evolve.main(["--cond", "LE-LS", "--preset", "small", "--set", setting, "--out", str(out), "--quiet"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert len(err.splitlines()) == 1 and field in err, err
+    assert not os.path.exists(out)
+
+
+def test_pallas_kernel_refuses_options_it_does_not_have():
+    with pytest.raises(ConfigError, match="childhood_walls"):
+        make_config("skills", step_kernel="pallas")
