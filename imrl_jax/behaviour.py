@@ -227,3 +227,140 @@ def shares_table(shares: np.ndarray, steps: np.ndarray) -> str:
         cells = " ".join(f"{v:8.2f}" if np.isfinite(v) else f"{'-':>8}" for v in row)
         lines.append(f"{e + 1:>7} {int(n):>7} {cells}")
     return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------- specialisation
+
+#: An expert follows colour c when, arriving at junctions where an edge of colour c leaves,
+#: it takes that edge at least this often (claim 7; docs/CHILDHOOD.md). A robot that always
+#: turns one way takes each colour half the time, so 0.75 needs the colour, not a side.
+FOLLOW_CHOICE = 0.75
+#: Advancing: at least this many cm in a step (half the top speed). A robot parked on a
+#: line sees its colour all the time without following it.
+FOLLOW_STEP = 1.0
+#: A junction counts as passed when the robot, having come within NEAR cm of the vertex,
+#: is FAR cm from it; the edge it took is the one nearest its direction from the vertex.
+_NEAR, _FAR = 12.0, 25.0
+
+
+class Specialisation(NamedTuple):
+    """What each expert does alone (no learning, no noise) from the same starts before junctions.
+
+    On this floor no colour runs straight: an edge is 40 cm long and ends at a junction
+    where the two other colours leave at +-60 deg. Following a colour therefore means taking
+    it at junctions, which is what composing experts in the tasks needs.
+    """
+
+    takes: np.ndarray  # (K, 3): share of junctions offering colour c at which the expert took c
+    passed: np.ndarray  # (K,): share of junctions the expert passed (took any edge, or went straight on)
+    following: np.ndarray  # (K, 3): share of steps with colour c under the retina's centre while advancing
+    speed: np.ndarray  # (K,): mean cm per step
+    turn: np.ndarray  # (K,): mean |turn| in degrees per step
+    followed: np.ndarray  # (K,): the colour each expert follows (RED 0, GREEN 1, BLUE 2) or -1
+
+    @property
+    def num_colours(self) -> int:
+        """How many distinct colours the experts follow."""
+        return len(set(int(c) for c in self.followed) - {-1})
+
+
+def probe_starts(config: Config, per_colour: int = 8) -> Pose:
+    """Fixed probe starts: ``per_colour`` per colour, at the middles of the edges of that colour
+    nearest the arena's centre, heading along the edge (both ways) towards a junction 20 cm
+    ahead. Poses with a leading axis of 3 * per_colour, colours in order R, G, B."""
+    a, h = config.edge_length, config.hex_apothem
+    ox, oy = config.tiling_origin
+    centre = config.arena_size / 2.0
+    span = int(config.arena_size // a) + 4
+    # Red edges are horizontal, centred at (ox + 1.5a + 1.5a m + 3a j, oy + m h) (arena.py);
+    # colour k's edges are the red ones turned by k * 60 deg about the hexagon centre (ox, oy).
+    red = np.array([(ox + 1.5 * a * (1 + m) + 3.0 * a * j, oy + m * h)
+                    for m in range(-span, span + 1) for j in range(-span, span + 1)], np.float64)
+    poses, headings = [], []
+    for k in range(3):
+        angle = k * np.pi / 3.0
+        c, s = np.cos(angle), np.sin(angle)
+        mid = np.stack([ox + c * (red[:, 0] - ox) - s * (red[:, 1] - oy),
+                        oy + s * (red[:, 0] - ox) + c * (red[:, 1] - oy)], -1)
+        nearest = mid[np.argsort(np.hypot(*(mid - centre).T), kind="stable")[: -(-per_colour // 2)]]
+        for i in range(per_colour):
+            poses.append(nearest[i // 2])
+            headings.append((angle + np.pi * (i % 2)) % (2.0 * np.pi))
+    return Pose(jnp.asarray(np.array(poses), jnp.float32), jnp.asarray(np.array(headings), jnp.float32))
+
+
+def junction_choices(config: Config, path: Trajectory) -> tuple[np.ndarray, np.ndarray]:
+    """Which edge each probe run took at the junction ahead of its start.
+
+    ``path`` has axes (..., starts, steps) and starts from :func:`probe_starts`. Returns the
+    colour taken (..., starts) (-1: none, e.g. straight on or never passed) and the two
+    colours offered there (starts, 2).
+    """
+    start, heading = path.seen_pos[..., 0, :], path.seen_heading[..., 0]
+    direction = np.stack([np.cos(heading), np.sin(heading)], -1)
+    vertex = start + 0.5 * config.edge_length * direction
+    offset = path.pos - vertex[..., None, :]
+    distance = np.hypot(offset[..., 0], offset[..., 1])
+    near = np.maximum.accumulate(distance <= _NEAR, axis=-1)
+    passed = near & (distance >= _FAR)
+    first = np.argmax(passed, axis=-1)
+    exit_offset = np.take_along_axis(offset, first[..., None, None], -2)[..., 0, :]
+    bearing = np.arctan2(exit_offset[..., 1], exit_offset[..., 0])
+    # The edges leaving the junction point at heading +- 60 deg; their colour is their direction mod 180.
+    outgoing = heading[..., None] + np.array([np.pi / 3.0, -np.pi / 3.0])
+    colours = np.round(np.mod(outgoing, np.pi) / (np.pi / 3.0)).astype(int) % 3
+    error = np.abs(np.angle(np.exp(1j * (bearing[..., None] - outgoing))))
+    nearest = error.argmin(-1)
+    taken = np.take_along_axis(colours, nearest[..., None], -1)[..., 0]
+    ok = passed.any(-1) & (error.min(-1) < np.pi / 6.0)
+    return np.where(ok, taken, -1), np.where(passed.any(-1), 1, 0), colours
+
+
+@functools.partial(jax.jit, static_argnums=(0, 3))
+def _probe_from(config, agent, poses, num_steps):
+    num_experts = agent.selector_actor.shape[0]
+    params = config.learning_params()
+    key = jax.random.key(0)  # unused: no choice is random under a forced selector, and no noise
+
+    def run(expert, pose):
+        state = init_state(config, force_expert(agent, expert), pose)
+        _, record = simulate(key, config, PROBE, params, childhood_task(config), state, num_steps)
+        return record
+
+    records = jax.vmap(jax.vmap(run, (None, 0)), (0, None))(jnp.arange(num_experts), poses)
+    starts = jax.tree.map(lambda x: jnp.broadcast_to(x, (num_experts,) + x.shape), poses)
+    return starts, records
+
+
+def specialisation(config: Config, agent: Agent, per_colour: int = 8, num_steps: int = 100) -> Specialisation:
+    """Drive each expert of ``agent`` alone from :func:`probe_starts` for ``num_steps`` steps and measure it."""
+    starts, records = _probe_from(config, agent, probe_starts(config, per_colour), num_steps)
+    path = _trajectory(starts, records)  # (K, starts, steps)
+    num_experts = path.k.shape[0]
+    taken, passed, offered = junction_choices(config, path)  # (K, S), (K, S), (K, S, 2)
+    takes = np.zeros((num_experts, 3))
+    for c in range(3):
+        available = (offered == c).any(-1)  # (K, S)
+        takes[:, c] = ((taken == c) & available).sum(-1) / np.maximum(available.sum(-1), 1)
+    colours = retina_colours(config, path.seen_pos, path.seen_heading)  # (K, S, T, rows, lateral)
+    central = colours[..., central_columns(config)].reshape(path.k.shape + (-1,))
+    seen = np.stack([(central == c).mean(-1) for c in (0, 1, 2)], -1)  # (K, S, T, 3)
+    advance = np.hypot(*np.moveaxis(path.pos - path.seen_pos, -1, 0))  # (K, S, T)
+    turn = np.angle(np.exp(1j * (path.heading - path.seen_heading)))
+    following = (seen * (advance >= FOLLOW_STEP)[..., None]).reshape(num_experts, -1, 3).mean(1)
+    followed = np.where(takes.max(1) >= FOLLOW_CHOICE, takes.argmax(1), -1)
+    return Specialisation(takes=takes, passed=passed.mean(-1), following=following,
+                          speed=advance.reshape(num_experts, -1).mean(1),
+                          turn=np.degrees(np.abs(turn)).reshape(num_experts, -1).mean(1), followed=followed)
+
+
+def specialisation_table(spec: Specialisation) -> str:
+    """:func:`specialisation` as a plain-text table (one row per expert)."""
+    names = ("red", "green", "blue")
+    lines = [f"{'expert':>7} {'follows':>8} " + " ".join(f"{'takes ' + c:>11}" for c in names)
+             + f" {'passed':>7} {'cm/step':>8} {'deg/step':>9}"]
+    for e in range(len(spec.followed)):
+        name = names[spec.followed[e]] if spec.followed[e] >= 0 else "-"
+        lines.append(f"{e + 1:>7} {name:>8} " + " ".join(f"{v:11.2f}" for v in spec.takes[e])
+                     + f" {spec.passed[e]:7.2f} {spec.speed[e]:8.2f} {spec.turn[e]:9.1f}")
+    return "\n".join(lines)
