@@ -1,0 +1,446 @@
+"""Why childhood does not teach skills, and what does (docs/CHILDHOOD.md).
+
+Stages (each writes into ``--out``, default ``experiments/results/childhood``):
+
+* ``hand``: childhood alone with hand-made colour reinforcers (reinforcer k pays for colour
+  k under the retina's centre, :func:`imrl_jax.behaviour.colour_reinforcers`) over the
+  factors: childhood length, how walls act, the selector's reward, the learning rules.
+  Each childhood is measured by the junction probes of :func:`imrl_jax.behaviour.specialisation`,
+  the experts' shares of control over its last quarter and the time on walls.
+  Writes ``hand.csv``, ``hand.json`` and ``hand.png``.
+* ``evolved``: the same probes on evolved best genomes (``--genomes`` npz files of
+  ``best_genomes.npz`` form, or run directories), after a fresh childhood for LE-LS.
+  Writes ``evolved.csv``.
+
+    python experiments/childhood_study.py hand
+    python experiments/childhood_study.py hand --lengths 30000 --seeds 2      # a quick look
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import itertools
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+#: The learning rules a childhood is tried with: the childhood values of LearningParams.
+RULES = {
+    "paper": dict(childhood_trace_lambda=0.0, childhood_eta_selector_actor=0.01, childhood_eta_selector_critic=0.01),
+    "extension": dict(childhood_trace_lambda=0.98, childhood_eta_selector_actor=0.3,
+                      childhood_eta_selector_critic=0.001),
+    # The selector does not learn: every expert gets a third of the steps, at random.
+    "uniform": dict(childhood_trace_lambda=0.0, childhood_eta_selector_actor=0.0, childhood_eta_selector_critic=0.0),
+}
+#: Samples of the pose (for the time on walls) and of control shares over a childhood.
+NUM_PIECES = 200
+
+
+def make_childhoods(config, num_pieces: int = NUM_PIECES, jit: bool = True):
+    """A jitted ``childhoods(keys, params, genome)`` over lanes: the agents after childhood and per-piece records.
+
+    Records per lane: steps each expert led in each piece (pieces, K), whether the robot is
+    on a wall at the end of each piece (pieces,), random poses after a wall per piece.
+    """
+    import jax
+    import jax.numpy as jnp
+
+    from imrl_jax.lifetime import (childhood_phase, childhood_task, for_phase, init_state, lifetime_keys,
+                                   random_pose, run_phase)
+    from imrl_jax.networks import decode
+
+    phase = childhood_phase(config)
+    piece_steps = config.childhood_steps // num_pieces
+    r, size = config.robot_radius, config.arena_size
+
+    def one(key, params, genome):
+        keys = lifetime_keys(key, config.num_tasks)
+        state = for_phase(config, phase, init_state(config, decode(config, genome), random_pose(keys.pose, config)))
+
+        def piece(state, _):
+            state, curves = run_phase(keys.childhood, config, phase, params, childhood_task(config), state,
+                                      piece_steps, phase_steps=config.childhood_steps, num_bins=1)
+            on_wall = jnp.any((state.pose.pos <= r + 1e-3) | (state.pose.pos >= size - r - 1e-3))
+            respawns = jnp.int32(0) if curves.respawns is None else curves.respawns[0]
+            return state, (curves.selections[0], on_wall, respawns)
+
+        state, records = jax.lax.scan(piece, state, None, length=num_pieces)
+        return state.agent, records
+
+    return jax.jit(jax.vmap(one, (0, 0, None))) if jit else one
+
+
+def measure(config, agent, selections, on_wall, respawns) -> dict:
+    """Probes and control shares of one childhood's result."""
+    from imrl_jax.behaviour import specialisation
+
+    spec = specialisation(config, agent)
+    quarter = selections[-len(selections) // 4:].sum(0)
+    control = quarter / max(quarter.sum(), 1)
+    own = np.diag(spec.takes)
+    return dict(
+        own_takes=float(own.mean()), own_min=float(own.min()),
+        own_followers=int(sum(int(spec.followed[k]) == k for k in range(3))),
+        num_colours=spec.num_colours, max_control=float(control.max()),
+        wall_share=float(on_wall.mean()), wall_last_quarter=float(on_wall[-len(on_wall) // 4:].mean()),
+        respawns=int(respawns.sum()), speed=float(spec.speed.mean()),
+        **{f"takes_{k + 1}_{c}": float(spec.takes[k, i]) for k in range(3) for i, c in enumerate("rgb")},
+        **{f"control_{k + 1}": float(control[k]) for k in range(3)},
+        **{f"followed_{k + 1}": int(spec.followed[k]) for k in range(3)},
+    )
+
+
+def stage_hand(args) -> int:
+    """Childhood alone with hand-made colour reinforcers, over the factors."""
+    import jax
+
+    from imrl_jax import sweeps
+    from imrl_jax.behaviour import colour_reinforcers
+    from imrl_jax.checkpoint import git_commit
+    from imrl_jax.config import make_config
+
+    lengths = [int(v) for v in args.lengths.split(",")]
+    walls = args.walls.split(",")
+    rewards = args.rewards.split(",")
+    rules = args.rules.split(",")
+    rows = []
+    start = time.perf_counter()
+    combos = list(itertools.product(lengths, walls, rewards))
+    for i, (length, wall, reward) in enumerate(combos):
+        config = make_config("paper", condition="LE-LS", childhood_steps=length, childhood_walls=wall,
+                             childhood_selector_reward=reward, wall_respawn_steps=args.respawn_steps)
+        genome = jax.numpy.asarray(colour_reinforcers(config))
+        lanes = [(rule, seed) for rule in rules for seed in range(args.seeds)]
+        points = sweeps.from_settings(config, [RULES[rule] for rule, _ in lanes]).points.params
+        keys = jax.vmap(lambda s: jax.random.fold_in(jax.random.key(args.key), s))(
+            jax.numpy.asarray([seed for _, seed in lanes]))
+        tick = time.perf_counter()
+        agents, (selections, on_wall, respawns) = make_childhoods(config)(keys, points, genome)
+        agents, selections, on_wall, respawns = jax.device_get((agents, selections, on_wall, respawns))
+        for j, (rule, seed) in enumerate(lanes):
+            agent = jax.tree.map(lambda x: x[j], agents)
+            row = dict(length=length, walls=wall, reward=reward, rules=rule, seed=seed)
+            row.update(measure(config, agent, selections[j], on_wall[j], respawns[j]))
+            rows.append(row)
+        done = time.perf_counter() - start
+        print(f"[{i + 1}/{len(combos)}] childhood {length:,} walls={wall} reward={reward}: {len(lanes)} lanes in "
+              f"{time.perf_counter() - tick:.0f} s; own-colour takes "
+              + ", ".join(f"{rule} {np.mean([r['own_takes'] for r in rows[-len(lanes):] if r['rules'] == rule]):.2f}"
+                          for rule in rules)
+              + f"; ETA {done / (i + 1) * (len(combos) - i - 1):.0f} s", flush=True)
+
+    os.makedirs(args.out, exist_ok=True)
+    write_csv(os.path.join(args.out, "hand.csv"), rows)
+    summary = dict(command="python experiments/childhood_study.py " + " ".join(sys.argv[1:]), git_commit=git_commit(),
+                   seconds=round(time.perf_counter() - start, 1), seeds=args.seeds,
+                   settings=summarise(rows, ("length", "walls", "reward", "rules")))
+    with open(os.path.join(args.out, "hand.json"), "w") as f:
+        json.dump(summary, f, indent=2)
+    plot_hand(rows, os.path.join(args.out, "hand.png"))
+    return 0
+
+
+def summarise(rows, keys) -> list[dict]:
+    """Means (and ranges) over seeds of each setting."""
+    out = []
+    for setting in sorted({tuple(r[k] for k in keys) for r in rows}, key=str):
+        group = [r for r in rows if tuple(r[k] for k in keys) == setting]
+        entry = dict(zip(keys, setting))
+        for name in ("own_takes", "own_followers", "num_colours", "max_control", "wall_share", "wall_last_quarter",
+                     "respawns", "speed"):
+            values = np.asarray([r[name] for r in group], float)
+            entry[name] = round(float(values.mean()), 3)
+            entry[name + "_range"] = [round(float(values.min()), 3), round(float(values.max()), 3)]
+        entry["seeds"] = len(group)
+        out.append(entry)
+    return out
+
+
+def write_csv(path: str, rows: list[dict]) -> None:
+    """Rows as CSV (floats with 4 decimals)."""
+    with open(path, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]), lineterminator="\n")
+        writer.writeheader()
+        writer.writerows({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
+
+
+def plot_hand(rows, path: str) -> None:
+    """Own colour taken, largest control share and time on walls of every setting (mean bars, seed dots)."""
+    from imrl_jax.plotting import new_figure, save
+
+    order = lambda values, first: sorted(set(values), key=lambda v: (v not in first, first.index(v) if v in first  # noqa: E731
+                                                                     else 0, v))
+    lengths = sorted({r["length"] for r in rows})
+    walls = order([r["walls"] for r in rows], ["clamp", "respawn"])
+    rewards = order([r["reward"] for r in rows], ["surprise", "progress"])
+    rules = order([r["rules"] for r in rows], list(RULES))
+    groups = [(length, wall, reward) for length in lengths for wall in walls for reward in rewards]
+    metrics = (("own_takes", "own colour taken at junctions", 0.5),
+               ("max_control", "largest control share, last quarter", 0.6),
+               ("wall_share", "share of time on a wall", None))
+    fig = new_figure(12.0, 1.2 + 0.42 * len(groups))
+    fig.subplots_adjust(left=0.17, right=0.98, top=1 - 0.9 / (1.2 + 0.42 * len(groups)), bottom=0.06, wspace=0.08)
+    axes = fig.subplots(1, len(metrics), sharey=True)
+    height = 0.8 / len(rules)
+    for ax, (name, title, target) in zip(axes, metrics):
+        for y, (length, wall, reward) in enumerate(groups):
+            for i, rule in enumerate(rules):
+                values = [r[name] for r in rows if (r["length"], r["walls"], r["reward"], r["rules"])
+                          == (length, wall, reward, rule)]
+                if not values:
+                    continue
+                yy = y - 0.4 + height * (i + 0.5)
+                ax.barh(yy, np.mean(values), height=height * 0.9, color=f"C{i}", alpha=0.55,
+                        label=rule if y == 0 else None)
+                ax.plot(values, [yy] * len(values), "k.", ms=2.5)
+        if target is not None:
+            ax.axvline(target, color="r", lw=0.8, ls="--")
+        for y in range(len(rewards) * len(walls), len(groups), len(rewards) * len(walls)):
+            ax.axhline(y - 0.5, color="0.5", lw=0.6)
+        ax.set_xlim(0, 1)
+        ax.set_title(title, fontsize=9)
+        ax.grid(axis="x", alpha=0.3)
+    axes[0].set_yticks(range(len(groups)), [f"{length // 1000}k steps, {wall}, {reward}"
+                                            for length, wall, reward in groups], fontsize=8)
+    axes[0].invert_yaxis()
+    axes[0].legend(title="childhood rules", fontsize=7, title_fontsize=7, loc="lower right")
+    fig.suptitle("Childhood alone with hand-made colour reinforcers: length, walls, selector reward, rules "
+                 f"({len({r['seed'] for r in rows})} seeds; dots: seeds; red: the study's targets)", fontsize=9)
+    save(fig, path)
+
+
+def stage_plot(args) -> int:
+    """Redraw hand.png from hand.csv."""
+    with open(os.path.join(args.out, "hand.csv")) as f:
+        rows = [{k: (float(v) if k not in ("walls", "reward", "rules") else v) for k, v in r.items()}
+                for r in csv.DictReader(f)]
+    for r in rows:
+        r["length"] = int(r["length"])
+    plot_hand(rows, os.path.join(args.out, "hand.png"))
+    return 0
+
+
+#: Adult learning rules whose composition ceiling the study measures (LearningParams values).
+CEILING_RULES = {
+    "paper": {},
+    "td0-fast-selector": dict(eta_selector_actor=3.0, eta_selector_critic=0.01),
+    "extension": dict(trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001),
+}
+
+
+def stage_ceiling(args) -> int:
+    """Ideal colour followers composed by a learning selector, per adult rule set and task length."""
+    import jax
+
+    from imrl_jax.checkpoint import git_commit
+    from imrl_jax.config import make_config
+    from imrl_jax.controllers import composition_ceiling
+
+    rows = []
+    for task_steps in [int(v) for v in args.task_steps.split(",")]:
+        for name, rules in CEILING_RULES.items():
+            config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **rules)
+            tick = time.perf_counter()
+            result = composition_ceiling(jax.random.key(args.key), config, args.lives)
+            fitness = np.asarray(result.fitness)
+            performance = np.asarray(result.performance).mean(0)
+            rows.append(dict(rules=name, task_steps=task_steps, lives=args.lives, fitness=float(fitness.mean()),
+                             fitness_sd=float(fitness.std()),
+                             **{f"task_{t + 1}": float(v) for t, v in enumerate(performance)}))
+            print(f"{name:>18} {task_steps:>7,} steps: ideal followers {fitness.mean():.3f} "
+                  f"(sd {fitness.std():.3f}, {time.perf_counter() - tick:.0f} s)", flush=True)
+    os.makedirs(args.out, exist_ok=True)
+    write_csv(os.path.join(args.out, "ceiling.csv"), rows)
+    with open(os.path.join(args.out, "ceiling.json"), "w") as f:
+        json.dump(dict(command="python experiments/childhood_study.py " + " ".join(sys.argv[1:]),
+                       git_commit=git_commit(), rules=CEILING_RULES, rows=rows), f, indent=2)
+    return 0
+
+
+def best_of_run(run_dir: str, num_best: int):
+    """A run's config, seeds, and per seed the ``num_best`` best genomes of its last evaluated generation and their fitness."""
+    from imrl_jax.config import Config
+
+    with open(os.path.join(run_dir, "config.json")) as f:
+        config = Config.from_dict(json.load(f)["config"])
+    population = os.path.join(run_dir, "final_population.npz")
+    if not os.path.isfile(population):
+        # A reproduction's run directory keeps its best genomes in best_genomes.npz, three levels up
+        # (RESULTS/VARIANT/evolve/COND), under VARIANT__COND__*.
+        parts = os.path.normpath(run_dir).split(os.sep)
+        prefix = f"{parts[-3]}__{parts[-1]}__"
+        with np.load(os.path.join(*parts[:-3], "best_genomes.npz")) as data:
+            return (config, data[prefix + "seeds"], data[prefix + "genomes"][:, :num_best],
+                    data[prefix + "fitness"][:, :num_best])
+    with np.load(population) as data:
+        seeds, evaluated, fitness = data["seeds"], data["evaluated"], data["fitness"]
+    order = np.argsort(-fitness, axis=1, kind="stable")[:, :num_best]
+    return (config, seeds, np.take_along_axis(evaluated, order[:, :, None], axis=1),
+            np.take_along_axis(fitness, order, axis=1))
+
+
+def grown_agents(config, genomes, key: int):
+    """The experts each genome ends childhood with (LE-LS: a fresh childhood each), and childhood records."""
+    import jax
+    import jax.numpy as jnp
+
+    from imrl_jax.networks import decode
+
+    genomes = jnp.asarray(genomes)
+    if config.condition != "LE-LS":
+        return jax.vmap(lambda g: decode(config, g))(genomes), None
+    keys = jax.random.split(jax.random.key(key), len(genomes))
+    one = make_childhoods(config, jit=False)
+    params = config.learning_params()
+    agents, records = jax.jit(jax.vmap(lambda k, g: one(k, params, g)))(keys, genomes)
+    return agents, jax.device_get(records)
+
+
+def stage_evolved(args) -> int:
+    """Probes of the best evolved individuals of run directories."""
+    import jax
+
+    from imrl_jax.behaviour import specialisation
+
+    rows = []
+    for run_dir in args.runs:
+        config, seeds, genomes, fitness = best_of_run(run_dir, args.best)
+        flat = genomes.reshape(-1, genomes.shape[-1])
+        tick = time.perf_counter()
+        agents, records = grown_agents(config, flat, args.key)
+        for i in range(len(flat)):
+            s, rank = divmod(i, args.best)
+            agent = jax.tree.map(lambda x: x[i], agents)
+            row = dict(run=os.path.basename(run_dir.rstrip("/")), seed=int(seeds[s]), rank=rank + 1,
+                       fitness=float(fitness[s, rank]))
+            if records is None:
+                spec = specialisation(config, agent)
+                row.update(num_colours=spec.num_colours, speed=float(spec.speed.mean()),
+                           **{f"followed_{k + 1}": int(spec.followed[k]) for k in range(3)},
+                           **{f"takes_{k + 1}_{c}": float(spec.takes[k, j]) for k in range(3)
+                              for j, c in enumerate("rgb")})
+            else:
+                row.update(measure(config, agent, *(x[i] for x in records)))
+            rows.append(row)
+        summary = [r["num_colours"] for r in rows[-len(flat):]]
+        print(f"{run_dir}: {len(flat)} individuals in {time.perf_counter() - tick:.0f} s; distinct colours followed "
+              f"{np.bincount(summary, minlength=4).tolist()} (individuals with 0, 1, 2, 3)", flush=True)
+    os.makedirs(args.out, exist_ok=True)
+    write_csv(os.path.join(args.out, args.name + ".csv"), rows)
+    return 0
+
+
+def stage_heritability(args) -> int:
+    """The best individuals of a run relived with fresh keys: how much of their fitness was luck."""
+    import jax
+
+    from imrl_jax.lifetime import make_evaluate
+
+    rows = []
+    for run_dir in args.runs:
+        config, seeds, genomes, fitness = best_of_run(run_dir, args.best)
+        config = config.replace(lives_per_fitness=1)
+        flat = np.repeat(genomes.reshape(-1, genomes.shape[-1]), args.lives, axis=0)
+        tick = time.perf_counter()
+        result = make_evaluate(config)(jax.random.key(args.key), config.learning_params(), flat)
+        relived = np.asarray(result.fitness).reshape(len(seeds), args.best, args.lives)
+        for s in range(len(seeds)):
+            for rank in range(args.best):
+                rows.append(dict(run=os.path.basename(run_dir.rstrip("/")), seed=int(seeds[s]), rank=rank + 1,
+                                 fitness=float(fitness[s, rank]), relived_mean=float(relived[s, rank].mean()),
+                                 relived_sd=float(relived[s, rank].std(ddof=1)),
+                                 **{f"life_{j + 1}": float(v) for j, v in enumerate(relived[s, rank])}))
+        group = rows[-len(seeds) * args.best:]
+        original = np.array([r["fitness"] for r in group])
+        mean = np.array([r["relived_mean"] for r in group])
+        print(f"{run_dir}: {len(group)} x {args.lives} lives in {time.perf_counter() - tick:.0f} s: fitness "
+              f"{original.mean():.3f} -> relived {mean.mean():.3f}; sd of one genome's lives "
+              f"{np.mean([r['relived_sd'] for r in group]):.3f}; corr {np.corrcoef(original, mean)[0, 1]:.2f}",
+              flush=True)
+    os.makedirs(args.out, exist_ok=True)
+    write_csv(os.path.join(args.out, "heritability.csv"), rows)
+    return 0
+
+
+#: The paper-length evolutions of the study (3 seeds x 30 generations; 150,000 + 6 x 100,000 steps).
+EVOLUTIONS = {
+    "LE-LS-skills": ["--cond", "LE-LS", "--preset", "skills"],
+    "LE-LS-extension": ["--cond", "LE-LS", "--preset", "extension"],
+    "LE-LS-skills-clamp": ["--cond", "LE-LS", "--preset", "skills", "--set", "childhood_walls=clamp"],
+    "EE-LS-extension": ["--cond", "EE-LS", "--preset", "extension"],
+    "LE-LS-skills-2lives": ["--cond", "LE-LS", "--preset", "skills", "--set", "lives_per_fitness=2",
+                            "--generations", "15"],
+    "LE-LS-paper": ["--cond", "LE-LS", "--preset", "paper"],
+}
+
+
+def stage_evolve(args) -> int:
+    """Run (or continue) the study's evolutions one after the other, each resumable."""
+    import subprocess
+
+    names = args.runs.split(",") if args.runs else list(EVOLUTIONS)
+    for name in names:
+        out = os.path.join(args.out, "evolve", name)
+        command = [sys.executable, "-m", "imrl_jax.evolve", *EVOLUTIONS[name], "--seeds", str(args.seeds)]
+        if "--generations" not in EVOLUTIONS[name]:
+            command += ["--generations", str(args.generations)]
+        command += ["--out", out, "--keep", "1"]
+        if os.path.isdir(os.path.join(out, "checkpoints")):
+            command.append("--resume")
+        print(f"== {name}: {' '.join(command[1:])}", flush=True)
+        code = subprocess.call(command)
+        if code:
+            return code
+    return 0
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    sub = p.add_subparsers(dest="stage", required=True)
+    hand = sub.add_parser("hand", help="childhood with hand-made colour reinforcers over the factors")
+    hand.add_argument("--out", default="experiments/results/childhood")
+    hand.add_argument("--lengths", default="30000,150000,600000", help="childhood lengths (steps)")
+    hand.add_argument("--walls", default="clamp,respawn")
+    hand.add_argument("--rewards", default="surprise,progress")
+    hand.add_argument("--rules", default="paper,extension,uniform", help=f"of {', '.join(RULES)}")
+    hand.add_argument("--respawn-steps", type=int, default=20)
+    hand.add_argument("--seeds", type=int, default=4)
+    hand.add_argument("--key", type=int, default=0)
+    evolve = sub.add_parser("evolve", help="the study's paper-length evolutions (resumable)")
+    evolve.add_argument("--out", default="experiments/results/childhood")
+    evolve.add_argument("--runs", default="", help=f"comma-separated, of {', '.join(EVOLUTIONS)} (default: all)")
+    evolve.add_argument("--seeds", type=int, default=3)
+    evolve.add_argument("--generations", type=int, default=30)
+    ceiling = sub.add_parser("ceiling", help="ideal colour followers composed, per adult rule set and task length")
+    ceiling.add_argument("--out", default="experiments/results/childhood")
+    ceiling.add_argument("--task-steps", default="20000,100000")
+    ceiling.add_argument("--lives", type=int, default=8)
+    ceiling.add_argument("--key", type=int, default=0)
+    evolved = sub.add_parser("evolved", help="probes of the best individuals of evolutions")
+    evolved.add_argument("runs", nargs="+", help="run directories")
+    evolved.add_argument("--out", default="experiments/results/childhood")
+    evolved.add_argument("--name", default="evolved", help="the CSV's name")
+    evolved.add_argument("--best", type=int, default=10)
+    evolved.add_argument("--key", type=int, default=1)
+    heritability = sub.add_parser("heritability", help="the best individuals relived with fresh keys")
+    heritability.add_argument("runs", nargs="+", help="run directories")
+    heritability.add_argument("--out", default="experiments/results/childhood")
+    heritability.add_argument("--best", type=int, default=10)
+    heritability.add_argument("--lives", type=int, default=4)
+    heritability.add_argument("--key", type=int, default=2)
+    plot = sub.add_parser("plot", help="redraw the figures from the CSVs")
+    plot.add_argument("--out", default="experiments/results/childhood")
+    args = p.parse_args(argv)
+    from imrl_jax.devices import use_host_cores
+
+    use_host_cores(1)
+    return {"hand": stage_hand, "evolve": stage_evolve, "ceiling": stage_ceiling, "evolved": stage_evolved,
+            "heritability": stage_heritability, "plot": stage_plot}[args.stage](args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
