@@ -207,7 +207,7 @@ def plot_hand(rows, path: str) -> None:
     axes[0].set_yticks(range(len(groups)), [f"{length // 1000}k steps, {wall}, {reward}"
                                             for length, wall, reward in groups], fontsize=8)
     axes[0].invert_yaxis()
-    axes[0].legend(title="childhood rules", fontsize=7, title_fontsize=7, loc="lower right")
+    axes[-1].legend(title="childhood rules", fontsize=7, title_fontsize=7, loc="lower right")
     fig.suptitle("Childhood alone with hand-made colour reinforcers: length, walls, selector reward, rules "
                  f"({len({r['seed'] for r in rows})} seeds; dots: seeds; red: the study's targets)", fontsize=9)
     save(fig, path)
@@ -366,14 +366,79 @@ def stage_heritability(args) -> int:
     return 0
 
 
+def stage_speed(args) -> int:
+    """Hand-made colour reinforcers with experts that start fast: does the speed the childhood
+    keeps decide what learned colour followers are worth in the tasks?"""
+    import jax
+    import jax.numpy as jnp
+
+    from imrl_jax.behaviour import colour_reinforcers, specialisation
+    from imrl_jax.checkpoint import git_commit
+    from imrl_jax.config import make_config
+    from imrl_jax.lifetime import (adult_phase, childhood_phase, childhood_task, for_phase, init_state,
+                                   lifetime_keys, random_pose, run_phase, task_spec, task_start)
+    from imrl_jax.arena import task_arrays
+    from imrl_jax.networks import decode
+
+    config = make_config(args.preset, condition="LE-LS")
+    params = config.learning_params()
+    genome = jnp.asarray(colour_reinforcers(config))
+    _, _, best = task_arrays(config)
+
+    def life(key, bias):
+        keys = lifetime_keys(key, config.num_tasks)
+        agent = decode(config, genome)
+        agent = agent._replace(actor=agent.actor.at[:, 1, -1].set(bias))  # the speed unit's bias
+        phase = childhood_phase(config)
+        state = for_phase(config, phase, init_state(config, agent, random_pose(keys.pose, config)))
+        state, _ = run_phase(keys.childhood, config, phase, params, childhood_task(config), state,
+                             config.childhood_steps)
+        grown = state.agent
+
+        def task(task_key, index):
+            _, curves = run_phase(task_key, config, adult_phase("LE-LS"), params, task_spec(config, index),
+                                  task_start(config, grown, index), config.task_steps)
+            return curves.reaches.sum()
+
+        reaches = jax.vmap(task)(keys.tasks, jnp.arange(config.num_tasks))
+        return grown, reaches / best
+
+    biases = [float(b) for b in args.biases.split(",")]
+    lanes = [(b, i) for b in biases for i in range(args.lives)]
+    keys = jax.random.split(jax.random.key(args.key), len(lanes))
+    tick = time.perf_counter()
+    grown, performance = jax.jit(jax.vmap(life))(keys, jnp.asarray([b for b, _ in lanes]))
+    performance = np.asarray(performance)
+    rows = []
+    for j, (bias, i) in enumerate(lanes):
+        spec = specialisation(config, jax.tree.map(lambda x: x[j], grown))
+        rows.append(dict(speed_bias=bias, life=i, fitness=float(performance[j].mean()),
+                         own_takes=float(np.diag(spec.takes).mean()), num_colours=spec.num_colours,
+                         speed=float(spec.speed.mean()),
+                         **{f"task_{t + 1}": float(v) for t, v in enumerate(performance[j])}))
+    for bias in biases:
+        group = [r for r in rows if r["speed_bias"] == bias]
+        print(f"speed bias {bias:g}: fitness {np.mean([r['fitness'] for r in group]):.3f}, own colour taken "
+              f"{np.mean([r['own_takes'] for r in group]):.2f}, {np.mean([r['speed'] for r in group]):.2f} cm/step",
+              flush=True)
+    print(f"{len(lanes)} lives in {time.perf_counter() - tick:.0f} s")
+    os.makedirs(args.out, exist_ok=True)
+    write_csv(os.path.join(args.out, "speed.csv"), rows)
+    with open(os.path.join(args.out, "speed.json"), "w") as f:
+        json.dump(dict(command="python experiments/childhood_study.py " + " ".join(sys.argv[1:]),
+                       git_commit=git_commit(), preset=args.preset), f, indent=2)
+    return 0
+
+
 #: The paper-length evolutions of the study (3 seeds x 30 generations; 150,000 + 6 x 100,000 steps).
 EVOLUTIONS = {
     "LE-LS-skills": ["--cond", "LE-LS", "--preset", "skills"],
+    "LE-LS-skills-no-speed-bias": ["--cond", "LE-LS", "--preset", "skills", "--set", "initial_speed_bias=0"],
     "LE-LS-extension": ["--cond", "LE-LS", "--preset", "extension"],
-    "LE-LS-skills-clamp": ["--cond", "LE-LS", "--preset", "skills", "--set", "childhood_walls=clamp"],
     "EE-LS-extension": ["--cond", "EE-LS", "--preset", "extension"],
     "LE-LS-skills-2lives": ["--cond", "LE-LS", "--preset", "skills", "--set", "lives_per_fitness=2",
                             "--generations", "15"],
+    "LE-LS-skills-clamp": ["--cond", "LE-LS", "--preset", "skills", "--set", "childhood_walls=clamp"],
     "LE-LS-paper": ["--cond", "LE-LS", "--preset", "paper"],
 }
 
@@ -432,6 +497,12 @@ def main(argv=None) -> int:
     heritability.add_argument("--best", type=int, default=10)
     heritability.add_argument("--lives", type=int, default=4)
     heritability.add_argument("--key", type=int, default=2)
+    speed = sub.add_parser("speed", help="hand-made colour reinforcers with experts that start fast")
+    speed.add_argument("--out", default="experiments/results/childhood")
+    speed.add_argument("--preset", default="skills")
+    speed.add_argument("--biases", default="0,2,4", help="initial bias of the actors' speed unit (0: the paper's)")
+    speed.add_argument("--lives", type=int, default=4)
+    speed.add_argument("--key", type=int, default=3)
     plot = sub.add_parser("plot", help="redraw the figures from the CSVs")
     plot.add_argument("--out", default="experiments/results/childhood")
     args = p.parse_args(argv)
@@ -439,7 +510,7 @@ def main(argv=None) -> int:
 
     use_host_cores(1)
     return {"hand": stage_hand, "evolve": stage_evolve, "ceiling": stage_ceiling, "evolved": stage_evolved,
-            "heritability": stage_heritability, "plot": stage_plot}[args.stage](args)
+            "heritability": stage_heritability, "plot": stage_plot, "speed": stage_speed}[args.stage](args)
 
 
 if __name__ == "__main__":

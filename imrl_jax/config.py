@@ -138,6 +138,9 @@ class Config:
     childhood_trace_lambda: float = 0.0
     childhood_eta_selector_actor: float = 0.01
     childhood_eta_selector_critic: float = 0.01
+    # Bias of the speed unit of every actor that is learned rather than evolved (LE-LS's
+    # experts, SLE's expert). MODEL.md starts every learned weight at 0: half speed.
+    initial_speed_bias: float = 0.0
 
     # --- genetic algorithm (paper: 50 individuals, best 10 x 5 offspring, p = 0.1, U[-1, 1])
     population_size: int = 50
@@ -250,9 +253,12 @@ PRESETS: dict[str, dict] = {
                       childhood_trace_lambda=0.98, childhood_eta_selector_actor=0.3,
                       childhood_eta_selector_critic=0.001),
     # The paper's rules in childhood (skills are learned there: docs/CHILDHOOD.md), a robot
-    # pinned on a wall in childhood put back at a random pose, the extension's selector in
-    # adulthood. The study's choice: experts follow one colour each, and they compose.
-    "skills": dict(trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001, childhood_walls="respawn"),
+    # pinned on a wall in childhood put back at a random pose, learned experts that start
+    # fast, the extension's selector in adulthood. The study's choice: experts follow one
+    # colour each, and they compose.
+    # Learned experts start near full speed (a retina-only reward never pays for speed).
+    "skills": dict(trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001, childhood_walls="respawn",
+                   initial_speed_bias=4.0),
     "small": dict(
         childhood_steps=15_000,
         task_steps=5_000,

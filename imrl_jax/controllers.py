@@ -41,7 +41,7 @@ import jax.numpy as jnp
 
 from imrl_jax.arena import BLUE, GREEN, RED, Pose, move
 from imrl_jax.config import Config, Task
-from imrl_jax.lifetime import task_spec
+from imrl_jax.lifetime import make_evaluate, task_spec
 from imrl_jax.retina import observe
 
 #: Steps after a switch during which the next colour does not trigger another switch
@@ -203,3 +203,18 @@ def perceptron_followers(config: Config, turn_gain: float = 0.1, speed_bias: flo
         speed = jnp.zeros((n,), jnp.float32).at[-1].set(speed_bias)
         actors.append(jnp.stack([jnp.append(turn.reshape(-1), 0.0), speed]))
     return jnp.stack(actors)
+
+
+def composition_ceiling(key: jax.Array, config: Config, num_lives: int = 8, turn_gain: float = 0.1):
+    """What composing ideal experts is worth: lives of EE-LS individuals whose experts are
+    :func:`perceptron_followers` and whose selector learns as in adulthood under ``config``'s
+    rules and task length. Returns the ``LifetimeResult`` of ``num_lives`` lives (fitness (lives,)).
+
+    Evolution climbs towards this when it makes experts that follow one colour each; an
+    evolved individual with unspecialised experts above it means composition does not pay
+    under those rules (docs/CHILDHOOD.md).
+    """
+    config = config.replace(condition="EE-LS")
+    genome = perceptron_followers(config, turn_gain).reshape(-1)
+    genomes = jnp.broadcast_to(genome, (num_lives,) + genome.shape)
+    return make_evaluate(config)(key, config.learning_params(), genomes)

@@ -50,11 +50,12 @@ def evaluate_both(v: jnp.ndarray, xbs: jnp.ndarray) -> jnp.ndarray:
 
 
 def zero_agent(config: Config, dtype=jnp.float32) -> Agent:
-    """An agent whose weights are all 0 (MODEL.md: learned weights start at 0)."""
+    """An agent before evolution and learning: weights 0 (MODEL.md), except the actors' speed
+    unit's bias, ``config.initial_speed_bias`` (0 by default; docs/CHILDHOOD.md)."""
     k, n = config.num_lane_experts, config.num_inputs + 1
     return Agent(
         reinforcer=jnp.zeros((k, n), dtype),
-        actor=jnp.zeros((k, 2, n), dtype),
+        actor=jnp.zeros((k, 2, n), dtype).at[:, 1, -1].set(config.initial_speed_bias),
         evaluator=jnp.zeros((k, n), dtype),
         selector_actor=jnp.zeros((k, n), dtype),
         selector_critic=jnp.zeros((n,), dtype),

@@ -185,11 +185,14 @@ def _copy_weights(weights):
 
 
 def zero_weights(config, num_experts):
-    """All weights 0 for ``num_experts`` experts (MODEL.md: learned weights start at 0)."""
+    """All weights 0 for ``num_experts`` experts (MODEL.md: learned weights start at 0), but
+    the actors' speed unit's bias: config.initial_speed_bias."""
     n = config.num_inputs + 1
+    actor = np.zeros((num_experts, 2, n))
+    actor[:, 1, -1] = config.initial_speed_bias
     return {
         "reinforcer": np.zeros((num_experts, n)),
-        "actor": np.zeros((num_experts, 2, n)),
+        "actor": actor,
         "evaluator": np.zeros((num_experts, n)),
         "selector_actor": np.zeros((num_experts, n)),
         "selector_critic": np.zeros((n,)),

@@ -118,3 +118,20 @@ def test_bad_childhood_settings_exit_2_naming_the_field(tmp_path, capsys, settin
 def test_pallas_kernel_refuses_options_it_does_not_have():
     with pytest.raises(ConfigError, match="childhood_walls"):
         make_config("skills", step_kernel="pallas")
+
+
+@pytest.mark.parametrize("condition", ["LE-LS", "EE-LS", "EE-ES", "SLE"])
+def test_learned_actors_start_with_the_speed_bias_and_evolved_ones_do_not(tiny, condition):
+    from imrl_jax import reference
+
+    config = tiny(condition, initial_speed_bias=2.5)
+    genome = jax.random.uniform(jax.random.key(4), (config.num_genes,), jnp.float32, -1.0, 1.0)
+    actor = np.asarray(decode(config, genome).actor)
+    np.testing.assert_allclose(actor, reference.decode(config, np.asarray(genome))["actor"], rtol=1e-6)
+    if condition in ("LE-LS", "SLE"):  # learned: zero but the speed unit's bias
+        expected = np.zeros_like(actor)
+        expected[:, 1, -1] = 2.5
+        np.testing.assert_array_equal(actor, expected)
+        assert np.all(np.asarray(L.adult_agent(config, decode(config, genome)).actor)[:, 1, -1] == 2.5)
+    else:  # evolved: the genome's
+        np.testing.assert_array_equal(actor.reshape(-1)[: actor.size], np.asarray(genome)[: actor.size])
