@@ -112,7 +112,8 @@ def stage_hand(args) -> int:
     combos = list(itertools.product(lengths, walls, rewards))
     for i, (length, wall, reward) in enumerate(combos):
         config = make_config("paper", condition="LE-LS", childhood_steps=length, childhood_walls=wall,
-                             childhood_selector_reward=reward, wall_respawn_steps=args.respawn_steps)
+                             childhood_selector_reward=reward, wall_respawn_steps=args.respawn_steps,
+                             initial_speed_bias=args.speed_bias)
         genome = jax.numpy.asarray(colour_reinforcers(config))
         lanes = [(rule, seed) for rule in rules for seed in range(args.seeds)]
         points = sweeps.from_settings(config, [RULES[rule] for rule, _ in lanes]).points.params
@@ -134,13 +135,13 @@ def stage_hand(args) -> int:
               + f"; ETA {done / (i + 1) * (len(combos) - i - 1):.0f} s", flush=True)
 
     os.makedirs(args.out, exist_ok=True)
-    write_csv(os.path.join(args.out, "hand.csv"), rows)
+    write_csv(os.path.join(args.out, args.name + ".csv"), rows)
     summary = dict(command="python experiments/childhood_study.py " + " ".join(sys.argv[1:]), git_commit=git_commit(),
                    seconds=round(time.perf_counter() - start, 1), seeds=args.seeds,
                    settings=summarise(rows, ("length", "walls", "reward", "rules")))
-    with open(os.path.join(args.out, "hand.json"), "w") as f:
+    with open(os.path.join(args.out, args.name + ".json"), "w") as f:
         json.dump(summary, f, indent=2)
-    plot_hand(rows, os.path.join(args.out, "hand.png"))
+    plot_hand(rows, os.path.join(args.out, args.name + ".png"))
     return 0
 
 
@@ -473,6 +474,8 @@ def main(argv=None) -> int:
     hand.add_argument("--rewards", default="surprise,progress")
     hand.add_argument("--rules", default="paper,extension,uniform", help=f"of {', '.join(RULES)}")
     hand.add_argument("--respawn-steps", type=int, default=20)
+    hand.add_argument("--speed-bias", type=float, default=0.0, help="initial bias of the actors' speed unit")
+    hand.add_argument("--name", default="hand", help="the name of the outputs (NAME.csv, .json, .png)")
     hand.add_argument("--seeds", type=int, default=4)
     hand.add_argument("--key", type=int, default=0)
     evolve = sub.add_parser("evolve", help="the study's paper-length evolutions (resumable)")
