@@ -9,7 +9,7 @@ and ``extension`` (MODEL.md's learning extensions at the values of the ``extensi
 preset, found by ``experiments/selector_sweep.py``). For each variant: the three evolved
 conditions (EE-ES learns nothing, so its evolution is the same under both variants and is
 run once, under ``paper``), then the learning tests of LE-LS, EE-LS, EE-ES and SLE. Then
-``experiments/report.py`` writes docs/REPRODUCTION.md and its figures.
+``python -m experiments.report`` writes docs/REPRODUCTION.md and its figures.
 
 Every stage is a command of the package, printed before it runs. A finished stage is
 skipped; an interrupted evolution resumes from its last checkpoint; an interrupted
@@ -100,10 +100,10 @@ def test_command(scale: dict, variant: str, condition: str, run_dir: str, out_di
                       "--out", out_dir]
 
 
-def run_stage(name: str, command: list[str], manifest: dict, manifest_path: str) -> None:
+def run_stage(name: str, command: list[str], manifest: dict, manifest_path: str, env: dict | None = None) -> None:
     print(f"\n== {name}\n$ {' '.join(command[1:] if command[0] == sys.executable else command)}", flush=True)
     start = time.perf_counter()
-    subprocess.run(command, check=True)
+    subprocess.run(command, check=True, env=env)
     manifest["stages"][name] = dict(command=" ".join(["python"] + command[1:]), seconds=round(time.perf_counter() - start, 1))
     with open(manifest_path, "w") as f:
         json.dump(manifest, f, indent=2)
@@ -114,7 +114,7 @@ def main(argv=None) -> int:
     p.add_argument("--scale", choices=sorted(SCALES), default="cpu")
     p.add_argument("--out", help="results directory (default: experiments/results/SCALE)")
     p.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated: paper, extension")
-    p.add_argument("--no-report", action="store_true", help="skip experiments/report.py")
+    p.add_argument("--no-report", action="store_true", help="skip the report (python -m experiments.report)")
     p.add_argument("--kernel", choices=("xla", "pallas"), default="xla",
                    help="the step kernel (Config.step_kernel): pallas runs each bin of steps as one GPU kernel")
     args = p.parse_args(argv)
@@ -158,8 +158,11 @@ def main(argv=None) -> int:
                                        args.kernel),
                           manifest, manifest_path)
         if not args.no_report:
-            report = [sys.executable, os.path.join(os.path.dirname(os.path.abspath(__file__)), "report.py"), out]
-            run_stage("report", report, manifest, manifest_path)
+            # The report is a module of the experiments package: the repository root goes on its path.
+            root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+            path = os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)
+            run_stage("report", [sys.executable, "-m", "experiments.report", out], manifest, manifest_path,
+                      env={**os.environ, "PYTHONPATH": path})
     except subprocess.CalledProcessError as error:
         print(f"error: stage failed with exit code {error.returncode}: {' '.join(error.cmd[1:])}", file=sys.stderr)
         return error.returncode or 1

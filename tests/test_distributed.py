@@ -11,14 +11,8 @@ import os
 
 import pytest
 
-from evolve_runs import Runs, assert_same_outputs, free_port, outputs, reference
-
-#: A 40 cm target makes reaches common at this tiny scale, so fitness is not all 0.
-COMMON = ("--generations", "2", "--parents", "2", "--task-steps", "300", "--bins", "1", "--set", "target_radius=40")
-CASES = {
-    "seeds": ("--seeds", "2", "--population", "4") + COMMON,
-    "population": ("--seeds", "1", "--population", "4") + COMMON,
-}
+from helpers import SHARDED_CASES as CASES
+from helpers import Runs, assert_same_outputs, free_port, outputs, reference
 
 
 @pytest.mark.parametrize("axis", ["seeds", pytest.param("population", marks=pytest.mark.slow)])

@@ -3,19 +3,17 @@
 import os
 import signal
 import subprocess
-import sys
 import time
 
 import numpy as np
 import pytest
+from helpers import evolve_args, evolve_command, read_population
 
 from imrl_jax import evolve
 
 
-
 def _tiny(seeds="2", task_steps="1000"):
-    return ["--cond", "EE-LS", "--seeds", seeds, "--preset", "small", "--population", "6", "--parents", "2",
-            "--task-steps", task_steps, "--bins", "2", "--quiet"]
+    return evolve_args(seeds=seeds, population=6, parents=2, task_steps=task_steps, bins=2)
 
 
 TINY = _tiny()
@@ -24,9 +22,7 @@ TINY = _tiny()
 def _outputs(out_dir):
     with open(os.path.join(out_dir, "history.csv")) as f:
         history = f.read()
-    with np.load(os.path.join(out_dir, "final_population.npz")) as data:
-        arrays = {name: data[name] for name in data.files}
-    return history, arrays
+    return history, read_population(out_dir)
 
 
 def _assert_same_outputs(a, b):
@@ -40,8 +36,8 @@ def _assert_same_outputs(a, b):
 
 def _cli(args, cwd):
     env = {**os.environ, "JAX_PLATFORMS": "cpu"}
-    return subprocess.Popen([sys.executable, "-m", "imrl_jax.evolve", *args], cwd=cwd, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return subprocess.Popen(evolve_command(args), cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
 
 
 @pytest.fixture(scope="module")

@@ -11,23 +11,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import EXTENDED, SHORT_TASK, assert_trees_close, hand_experts
 
 from imrl_jax import kernel as K
 from imrl_jax import lifetime as L
 from imrl_jax.arena import Pose
 from imrl_jax.networks import decode
-from test_reference import EXTENDED, SHORT_TASK, _hand_experts
 
 STEPS = 2000
-
-
-def _assert_states_close(a: L.State, b: L.State):
-    leaves = zip(jax.tree_util.tree_leaves_with_path(a), jax.tree.leaves(b))
-    for (path, x), y in leaves:
-        if jax.dtypes.issubdtype(x.dtype, jax.dtypes.prng_key):
-            continue
-        np.testing.assert_allclose(np.asarray(y, np.float64), np.asarray(x, np.float64), rtol=1e-9, atol=1e-9,
-                                   err_msg=jax.tree_util.keystr(path))
 
 
 def test_round_even_rounds_half_to_even():
@@ -53,7 +44,7 @@ def test_phase_in_pieces_matches_xla(tiny, condition):
     else:
         agent = L.adult_agent(config, decode(config, jnp.zeros((config.num_genes,), jnp.float64)))
         if condition == "EE-LS":
-            agent = agent._replace(actor=jnp.asarray(_hand_experts(n)))
+            agent = agent._replace(actor=jnp.asarray(hand_experts(n)))
         phase, task = L.adult_phase(condition), L.task_spec(config, 0, jnp.float64)
         pose = task.start
     state = L.init_state(config, agent, pose)
@@ -71,7 +62,7 @@ def test_phase_in_pieces_matches_xla(tiny, condition):
     for name in L.Curves._fields:
         np.testing.assert_array_equal(np.asarray(getattr(kernel_curves, name)),
                                       np.asarray(getattr(xla_curves, name)), err_msg=name)
-    _assert_states_close(xla_state, kernel_state)
+    assert_trees_close(kernel_state, xla_state, rtol=1e-9, atol=1e-9, cast=np.float64)
     if condition != "LE-LS":
         assert int(xla_curves.reaches.sum()) > 0 and int(xla_curves.timeouts.sum()) > 0
     else:  # every expert takes control
@@ -92,8 +83,7 @@ def test_life_matches_xla(tiny):
         np.testing.assert_array_equal(np.asarray(getattr(pallas, name)), np.asarray(getattr(xla, name)),
                                       err_msg=name)
     for name in ("agent", "adult_agents"):
-        for x, y in zip(jax.tree.leaves(getattr(xla, name)), jax.tree.leaves(getattr(pallas, name))):
-            np.testing.assert_allclose(np.asarray(y), np.asarray(x), rtol=1e-9, atol=1e-9, err_msg=name)
+        assert_trees_close(getattr(pallas, name), getattr(xla, name), rtol=1e-9, atol=1e-9, name=name)
     assert int(xla.timeouts.sum()) > 0 and np.count_nonzero(xla.childhood_selections) == 3 * 3
 
 

@@ -4,14 +4,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import assert_trees_close, random_genomes
 
 from imrl_jax import lifetime as L
 from imrl_jax.config import CONDITIONS
 from imrl_jax.networks import decode, encode
-
-
-def _genomes(config, n, seed=0):
-    return jax.random.uniform(jax.random.key(seed), (n, config.num_genes), minval=-1.0, maxval=1.0)
 
 
 @pytest.mark.parametrize("condition", CONDITIONS)
@@ -19,8 +16,8 @@ def test_population_shapes_dtypes_and_single_compile(tiny, condition):
     config = tiny(condition)
     evaluate = L.make_evaluate(config)
     params = config.learning_params()
-    result = evaluate(jax.random.key(0), params, _genomes(config, 3))
-    again = evaluate(jax.random.key(1), params, _genomes(config, 3, seed=1))
+    result = evaluate(jax.random.key(0), params, random_genomes(config, 3))
+    again = evaluate(jax.random.key(1), params, random_genomes(config, 3, seed=1))
     assert evaluate._cache_size() == 1  # new keys and genomes reuse the compiled program
     k = config.num_lane_experts
     tasks, bins = config.num_tasks, config.num_bins
@@ -45,7 +42,7 @@ def test_population_shapes_dtypes_and_single_compile(tiny, condition):
 def test_vmapped_population_equals_single_lives(tiny):
     config = tiny("LE-LS")
     params = config.learning_params()
-    genomes = _genomes(config, 2)
+    genomes = random_genomes(config, 2)
     key = jax.random.key(3)
     batch = L.make_evaluate(config)(key, params, genomes)
     keys = jax.random.split(key, 2)
@@ -61,7 +58,7 @@ def test_binned_phase_equals_step_by_step_loop(tiny):
     """run_phase (scan of scans with counts) = simulate (records) = a Python loop of steps."""
     config = tiny("EE-LS", task_steps=60, num_bins=3)
     params = config.learning_params()
-    agent = decode(config, _genomes(config, 1)[0])
+    agent = decode(config, random_genomes(config, 1)[0])
     task = L.task_spec(config, 2)
     state = L.init_state(config, L.adult_agent(config, agent), task.start)
     key = jax.random.key(5)
@@ -79,7 +76,7 @@ def test_binned_phase_equals_step_by_step_loop(tiny):
 
     np.testing.assert_array_equal(np.asarray(records.k), ks)
     for a, b in [(binned_state, sim_state), (sim_state, loop_state)]:
-        jax.tree.map(lambda x, y: np.testing.assert_allclose(x, y, rtol=1e-6, atol=1e-6), a, b)
+        assert_trees_close(a, b, rtol=1e-6, atol=1e-6)
     np.testing.assert_array_equal(curves.selections.sum(0), np.bincount(ks, minlength=3))
     np.testing.assert_array_equal(curves.reaches, np.asarray(records.reached).reshape(3, 20).sum(1))
 
@@ -89,7 +86,7 @@ def test_frozen_parts_stay_frozen(tiny):
     params = tiny().learning_params()
     for condition in ("EE-ES", "EE-LS", "LE-LS"):
         config = tiny(condition)
-        genome = _genomes(config, 1)[0]
+        genome = random_genomes(config, 1)[0]
         result = jax.jit(L.live, static_argnums=1)(jax.random.key(0), config, params, genome)
         for t in range(config.num_tasks):
             np.testing.assert_array_equal(result.adult_agents.actor[t], result.agent.actor)
@@ -108,7 +105,7 @@ def test_frozen_parts_stay_frozen(tiny):
 def test_decode_encode_roundtrip(tiny):
     for condition in ("LE-LS", "EE-LS", "EE-ES"):
         config = tiny(condition)
-        genome = _genomes(config, 1)[0]
+        genome = random_genomes(config, 1)[0]
         assert genome.shape == ({"LE-LS": 111, "EE-LS": 222, "EE-ES": 333}[condition],)
         np.testing.assert_array_equal(encode(config, decode(config, genome)), genome)
     with pytest.raises(ValueError, match="genome"):
@@ -154,7 +151,7 @@ def test_paper_length_life_runs_on_cpu():
 def test_unrolling_the_step_loop_changes_nothing(tiny):
     """scan_unroll is a speed knob: 1 and 3 steps per loop iteration give the same life."""
     params = tiny().learning_params()
-    genome = _genomes(tiny("LE-LS"), 1)[0]
+    genome = random_genomes(tiny("LE-LS"), 1)[0]
     lives = [jax.jit(L.live, static_argnums=1)(jax.random.key(2), tiny("LE-LS", scan_unroll=u), params, genome)
              for u in (1, 3)]
     np.testing.assert_array_equal(lives[0].reaches, lives[1].reaches)

@@ -12,33 +12,18 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import EXTENDED, SHORT_TASK, hand_experts
 
 from imrl_jax import lifetime as L
 from imrl_jax import reference
 from imrl_jax.arena import Pose
-from imrl_jax.config import Task
 from imrl_jax.networks import Agent, decode
 
 STEPS = 2000
 PAPER = {}
-EXTENDED = dict(trace_lambda=0.9, eta_actor=0.05, eta_evaluator=0.02, eta_selector_actor=0.5,
-                eta_selector_critic=0.003, childhood_trace_lambda=0.8, childhood_eta_selector_actor=0.2,
-                childhood_eta_selector_critic=0.02)
 #: The childhood options of docs/CHILDHOOD.md (static: they change the program).
 CHILDHOOD_OPTIONS = dict(childhood_walls="respawn", wall_respawn_steps=5, childhood_selector_reward="progress",
                          progress_rate=0.05)
-#: One task whose target lies 40 cm straight ahead of the start, 85 cm from the east wall:
-#: reaches, timeouts and wall contacts all happen within a few hundred steps.
-SHORT_TASK = Task(start=(300.0, 200.0), heading_deg=0.0, target=(340.0, 200.0))
-
-
-def _hand_experts(n):
-    """Expert actors: 0 drives straight at full speed, 1 and 2 turn left / right slowly."""
-    actor = np.zeros((3, 2, n))
-    actor[0, 1, -1] = 6.0  # speed unit saturated: 2 cm per step
-    actor[1, 0, -1], actor[1, 1, -1] = 2.0, 0.5
-    actor[2, 0, -1], actor[2, 1, -1] = -2.0, 0.5
-    return actor
 
 
 def _to_numpy(agent: Agent) -> dict:
@@ -102,7 +87,7 @@ def test_adult_phase_matches_reference(tiny, condition, rules):
         phase, name = L.ADULT_SINGLE_EXPERT, "sle"
     else:
         agent = decode(config, jnp.zeros((config.num_genes,), jnp.float64))
-        agent = agent._replace(actor=jnp.asarray(_hand_experts(n)))
+        agent = agent._replace(actor=jnp.asarray(hand_experts(n)))
         if condition == "EE-ES":
             selector = jax.random.uniform(jax.random.key(3), (3, n), jnp.float64, -1.0, 1.0)
             agent = agent._replace(selector_actor=selector)
@@ -130,7 +115,7 @@ def test_whole_life_matches_reference(tiny, condition, rules):
     genome = jax.random.uniform(jax.random.key(12), (config.num_genes,), jnp.float64, -1.0, 1.0)
     if condition in ("EE-LS", "EE-ES"):  # good experts make reaches likely
         n = config.num_inputs + 1
-        genome = genome.at[: 6 * n].set(jnp.asarray(_hand_experts(n)).reshape(-1))
+        genome = genome.at[: 6 * n].set(jnp.asarray(hand_experts(n)).reshape(-1))
     result = _live(key, program, params, genome)
 
     keys = L.lifetime_keys(key, config.num_tasks)
@@ -151,7 +136,7 @@ def test_float32_lifetime_tracks_float64_reference(tiny):
     config = tiny("EE-LS", tasks=(SHORT_TASK,), task_steps=STEPS, num_bins=1)
     params = config.learning_params()
     n = config.num_inputs + 1
-    agent = decode(config, jnp.zeros((config.num_genes,)))._replace(actor=jnp.asarray(_hand_experts(n), jnp.float32))
+    agent = decode(config, jnp.zeros((config.num_genes,)))._replace(actor=jnp.asarray(hand_experts(n), jnp.float32))
     task = L.task_spec(config, 0)
     key = jax.random.key(0)
     final, record = jax.jit(L.simulate, static_argnums=(1, 2, 6))(

@@ -1,67 +1,67 @@
-"""experiments/report.py: the claims' verdict rules on hand-made numbers; the report of a made-up results directory."""
+"""The report's claim rules on hand-made numbers (experiments.claims); the report of a made-up results directory."""
 
 import json
 import math
 import os
-import sys
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "experiments"))
-import report  # noqa: E402
-from report import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY  # noqa: E402
+from experiments import claims
+from experiments import reproduce
+from experiments.claims import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY
+from experiments.report import main
 
 
 def test_measures():
     best = np.array([[0.1, 0.2], [0.5, 0.6], [0.8, 0.8], [0.9, 1.0]])  # (generations, seeds)
-    np.testing.assert_allclose(report.final_best(best, last=2), [0.85, 0.9])
+    np.testing.assert_allclose(claims.final_best(best, last=2), [0.85, 0.9])
     # final value of the mean curve (0.15, 0.55, 0.8, 0.95) over the last 2 = 0.875; 90 % = 0.7875
-    assert report.plateau_generation(best.mean(1), 0.9, last=2) == 2
-    assert report.plateau_generation(np.zeros(4)) is None
-    assert report.first_reach([10, 20, 30], [0.1, 0.5, 0.4], 0.45) == 20
-    assert report.first_reach([10, 20, 30], [0.1, 0.5, 0.4], 0.6) is None
+    assert claims.plateau_generation(best.mean(1), 0.9, last=2) == 2
+    assert claims.plateau_generation(np.zeros(4)) is None
+    assert claims.first_reach([10, 20, 30], [0.1, 0.5, 0.4], 0.45) == 20
+    assert claims.first_reach([10, 20, 30], [0.1, 0.5, 0.4], 0.6) is None
     before = np.zeros(6)
     after = np.radians([10, 10, 10, -10, 0.5, 90])  # the last step is a reset, 0.5 deg is no turn
-    assert report.turn_consistency(before, after, [0, 0, 0, 0, 0, 1]) == pytest.approx(0.75)
-    assert report.turn_consistency(np.radians([359.0]), np.radians([3.0]), [0]) == 1.0  # across 0: a left turn
-    assert report.mean_speed([[0, 0], [0, 0]], [[3, 4], [9, 9]], [0, 1]) == 5.0
+    assert claims.turn_consistency(before, after, [0, 0, 0, 0, 0, 1]) == pytest.approx(0.75)
+    assert claims.turn_consistency(np.radians([359.0]), np.radians([3.0]), [0]) == 1.0  # across 0: a left turn
+    assert claims.mean_speed([[0, 0], [0, 0]], [[3, 4], [9, 9]], [0, 1]) == 5.0
 
 
 def test_specialisation_score():
     shares = np.array([[0.8, 0.1, 0.0, 0.1], [0.1, 0.6, 0.1, 0.2], [0.0, 0.1, 0.7, 0.2]])
-    assert report.specialisation_score(shares, [100, 100, 100]) == (3, ["red", "green", "blue"])
-    assert report.specialisation_score(shares[[0, 0, 2]], [100, 100, 100]) == (2, ["red", "red", "blue"])
-    assert report.specialisation_score(shares, [100, 100, 2])[1] == ["red", "green", None]  # too little control
-    assert report.specialisation_score(np.full((3, 4), np.nan), [0, 0, 0])[0] == 0
+    assert claims.specialisation_score(shares, [100, 100, 100]) == (3, ["red", "green", "blue"])
+    assert claims.specialisation_score(shares[[0, 0, 2]], [100, 100, 100]) == (2, ["red", "red", "blue"])
+    assert claims.specialisation_score(shares, [100, 100, 2])[1] == ["red", "green", None]  # too little control
+    assert claims.specialisation_score(np.full((3, 4), np.nan), [0, 0, 0])[0] == 0
 
 
 def test_claims_1_to_4():
-    assert report.claim_evolvability({"LE-LS": 5, "EE-LS": 30, "EE-ES": 10})["verdict"] == HOLDS
-    assert report.claim_evolvability({"LE-LS": 6, "EE-LS": 30, "EE-ES": 10})["verdict"] == PARTLY  # 2 x 6 > 10
-    assert report.claim_evolvability({"LE-LS": 12, "EE-LS": 30, "EE-ES": 10})["verdict"] == PARTLY
-    assert report.claim_evolvability({"LE-LS": 30, "EE-LS": 30, "EE-ES": 10})["verdict"] == DOES_NOT
-    assert report.claim_evolvability({"LE-LS": None, "EE-LS": 30, "EE-ES": 10})["verdict"] == NOT_AVAILABLE
+    assert claims.claim_evolvability({"LE-LS": 5, "EE-LS": 30, "EE-ES": 10})["verdict"] == HOLDS
+    assert claims.claim_evolvability({"LE-LS": 6, "EE-LS": 30, "EE-ES": 10})["verdict"] == PARTLY  # 2 x 6 > 10
+    assert claims.claim_evolvability({"LE-LS": 12, "EE-LS": 30, "EE-ES": 10})["verdict"] == PARTLY
+    assert claims.claim_evolvability({"LE-LS": 30, "EE-LS": 30, "EE-ES": 10})["verdict"] == DOES_NOT
+    assert claims.claim_evolvability({"LE-LS": None, "EE-LS": 30, "EE-ES": 10})["verdict"] == NOT_AVAILABLE
 
-    assert report.claim_reliability({"LE-LS": 0.01, "EE-LS": 0.1, "EE-ES": 0.05})["verdict"] == HOLDS
-    assert report.claim_reliability({"LE-LS": 0.07, "EE-LS": 0.1, "EE-ES": 0.05})["verdict"] == PARTLY
-    assert report.claim_reliability({"LE-LS": 0.2, "EE-LS": 0.1, "EE-ES": 0.05})["verdict"] == DOES_NOT
+    assert claims.claim_reliability({"LE-LS": 0.01, "EE-LS": 0.1, "EE-ES": 0.05})["verdict"] == HOLDS
+    assert claims.claim_reliability({"LE-LS": 0.07, "EE-LS": 0.1, "EE-ES": 0.05})["verdict"] == PARTLY
+    assert claims.claim_reliability({"LE-LS": 0.2, "EE-LS": 0.1, "EE-ES": 0.05})["verdict"] == DOES_NOT
 
     # d = 0.2; sd (ddof 1) 0.1 each over 4 seeds: se = sqrt(2 * 0.01 / 4) = 0.0707; 2 se = 0.141
     le = np.array([0.5 - 0.1 * math.sqrt(3) / 2 * s for s in (1, -1, 1, -1)])  # mean 0.5, sd (ddof 1) 0.1
     ee = le + 0.2
-    claim = report.claim_ee_ls_higher(ee, le)
+    claim = claims.claim_ee_ls_higher(ee, le)
     assert claim["verdict"] == HOLDS
     assert claim["numbers"]["standard_error"] == pytest.approx(math.sqrt(2 * 0.01 / 4))
-    assert report.claim_ee_ls_higher(le + 0.1, le)["verdict"] == PARTLY
-    assert report.claim_ee_ls_higher(le - 0.01, le)["verdict"] == DOES_NOT
+    assert claims.claim_ee_ls_higher(le + 0.1, le)["verdict"] == PARTLY
+    assert claims.claim_ee_ls_higher(le - 0.01, le)["verdict"] == DOES_NOT
 
-    assert report.claim_ee_es_about(0.45, 0.5, 0.9)["verdict"] == HOLDS  # ratio 0.9
-    assert report.claim_ee_es_about(0.3, 0.5, 0.9)["verdict"] == PARTLY  # ratio 0.6
-    assert report.claim_ee_es_about(0.45, 0.5, 0.6)["verdict"] == PARTLY
-    assert report.claim_ee_es_about(0.3, 0.5, 0.6)["verdict"] == DOES_NOT
-    assert report.claim_ee_es_about(0.45, 0.5, None)["verdict"] == PARTLY  # the path was not measured
-    assert report.claim_ee_es_about(None, None, None)["verdict"] == NOT_AVAILABLE
+    assert claims.claim_ee_es_about(0.45, 0.5, 0.9)["verdict"] == HOLDS  # ratio 0.9
+    assert claims.claim_ee_es_about(0.3, 0.5, 0.9)["verdict"] == PARTLY  # ratio 0.6
+    assert claims.claim_ee_es_about(0.45, 0.5, 0.6)["verdict"] == PARTLY
+    assert claims.claim_ee_es_about(0.3, 0.5, 0.6)["verdict"] == DOES_NOT
+    assert claims.claim_ee_es_about(0.45, 0.5, None)["verdict"] == PARTLY  # the path was not measured
+    assert claims.claim_ee_es_about(None, None, None)["verdict"] == NOT_AVAILABLE
 
 
 def test_claim_5_learning_speed():
@@ -69,37 +69,37 @@ def test_claim_5_learning_speed():
     fast = np.array([0.2, 0.5, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6])  # reaches 0.54 at 3000
     slow = np.linspace(0.05, 0.7, 10)  # reaches 0.54 at 8000 (0.555...)
     steady = {"LE-LS": 0.6, "EE-LS": 0.6, "SLE": 0.7}
-    claim = report.claim_learning_speed({"LE-LS": (steps, fast), "EE-LS": (steps, fast), "SLE": (steps, slow)}, steady)
+    claim = claims.claim_learning_speed({"LE-LS": (steps, fast), "EE-LS": (steps, fast), "SLE": (steps, slow)}, steady)
     assert claim["verdict"] == HOLDS
     assert claim["numbers"]["ratio"]["LE-LS"] == pytest.approx(8000 / 3000)
-    never = report.claim_learning_speed({"LE-LS": (steps, fast), "EE-LS": (steps, fast), "SLE": (steps, slow * 0.5)},
+    never = claims.claim_learning_speed({"LE-LS": (steps, fast), "EE-LS": (steps, fast), "SLE": (steps, slow * 0.5)},
                                         steady)
     assert never["verdict"] == HOLDS and never["numbers"]["sle_never"] == {"LE-LS": True, "EE-LS": True}
-    same = report.claim_learning_speed({"LE-LS": (steps, fast), "EE-LS": (steps, slow), "SLE": (steps, slow)},
+    same = claims.claim_learning_speed({"LE-LS": (steps, fast), "EE-LS": (steps, slow), "SLE": (steps, slow)},
                                        {"LE-LS": 0.6, "EE-LS": 0.7, "SLE": 0.7})
     assert same["verdict"] == PARTLY  # x2.7 for LE-LS, x1 for EE-LS
-    assert report.claim_learning_speed({"LE-LS": (steps, slow), "EE-LS": (steps, slow), "SLE": (steps, fast)},
+    assert claims.claim_learning_speed({"LE-LS": (steps, slow), "EE-LS": (steps, slow), "SLE": (steps, fast)},
                                        {"LE-LS": 0.6, "EE-LS": 0.6, "SLE": 0.6})["verdict"] == DOES_NOT
-    assert report.claim_learning_speed({"LE-LS": (steps, fast)}, steady)["verdict"] == NOT_AVAILABLE
+    assert claims.claim_learning_speed({"LE-LS": (steps, fast)}, steady)["verdict"] == NOT_AVAILABLE
 
 
 def test_claim_6_ordering():
-    claim = report.claim_ordering({"EE-LS": 0.8, "SLE": 0.7, "LE-LS": 0.5, "EE-ES": 0.3})
+    claim = claims.claim_ordering({"EE-LS": 0.8, "SLE": 0.7, "LE-LS": 0.5, "EE-ES": 0.3})
     assert claim["verdict"] == HOLDS and claim["numbers"]["pairs_held"] == 6
-    claim = report.claim_ordering({"EE-LS": 0.6, "SLE": 0.7, "LE-LS": 0.5, "EE-ES": 0.3})  # SLE first
+    claim = claims.claim_ordering({"EE-LS": 0.6, "SLE": 0.7, "LE-LS": 0.5, "EE-ES": 0.3})  # SLE first
     assert claim["verdict"] == PARTLY and not claim["numbers"]["pairs"]["EE-LS > SLE"]
     assert claim["numbers"]["pairs_held"] == 5
-    claim = report.claim_ordering({"EE-LS": 0.1, "SLE": 0.2, "LE-LS": 0.5, "EE-ES": 0.3})  # LE-LS > EE-ES > SLE > EE-LS
+    claim = claims.claim_ordering({"EE-LS": 0.1, "SLE": 0.2, "LE-LS": 0.5, "EE-ES": 0.3})  # LE-LS > EE-ES > SLE > EE-LS
     assert claim["verdict"] == DOES_NOT and claim["numbers"]["pairs_held"] == 1
-    assert report.claim_ordering({"EE-LS": 0.1, "SLE": 0.2})["verdict"] == NOT_AVAILABLE
+    assert claims.claim_ordering({"EE-LS": 0.1, "SLE": 0.2})["verdict"] == NOT_AVAILABLE
 
 
 def test_claim_7_specialisation():
-    assert report.claim_specialisation({"LE-LS": 3, "EE-LS": 3})["verdict"] == HOLDS
-    assert report.claim_specialisation({"LE-LS": 1, "EE-LS": 3})["verdict"] == PARTLY
-    assert report.claim_specialisation({"LE-LS": 3})["verdict"] == PARTLY  # EE-LS not measured
-    assert report.claim_specialisation({"LE-LS": 0, "EE-LS": 0})["verdict"] == DOES_NOT
-    assert report.claim_specialisation({})["verdict"] == NOT_AVAILABLE
+    assert claims.claim_specialisation({"LE-LS": 3, "EE-LS": 3})["verdict"] == HOLDS
+    assert claims.claim_specialisation({"LE-LS": 1, "EE-LS": 3})["verdict"] == PARTLY
+    assert claims.claim_specialisation({"LE-LS": 3})["verdict"] == PARTLY  # EE-LS not measured
+    assert claims.claim_specialisation({"LE-LS": 0, "EE-LS": 0})["verdict"] == DOES_NOT
+    assert claims.claim_specialisation({})["verdict"] == NOT_AVAILABLE
 
 
 def _write_results(root, generations=8, seeds=(0, 1, 2)):
@@ -107,8 +107,8 @@ def _write_results(root, generations=8, seeds=(0, 1, 2)):
     plateau = {"LE-LS": 1, "EE-LS": 6, "EE-ES": 3}
     final = {"LE-LS": 0.5, "EE-LS": 0.7, "EE-ES": 0.45}
     for variant in ("paper", "extension"):
-        for condition in report.EVOLVED:
-            run_dir = report.evolution_dir(str(root), variant, condition)
+        for condition in reproduce.EVOLVED:
+            run_dir = reproduce.evolution_dir(str(root), variant, condition)
             os.makedirs(run_dir, exist_ok=True)
             rows = ["generation,seed,best,mean,std," + ",".join(f"best_task{i}" for i in range(1, 7))]
             for g in range(generations):
@@ -123,8 +123,8 @@ def _write_results(root, generations=8, seeds=(0, 1, 2)):
                                                                                  "num_parents": 10}}, f)
         steady = {"EE-LS": 0.8, "SLE": 0.7, "LE-LS": 0.5, "EE-ES": 0.3}
         rise = {"EE-LS": 2, "LE-LS": 2, "SLE": 8, "EE-ES": 0}
-        for condition in report.TESTED:
-            out = report.test_dir(str(root), variant, condition)
+        for condition in reproduce.TESTED:
+            out = reproduce.test_dir(str(root), variant, condition)
             os.makedirs(out, exist_ok=True)
             level = steady[condition]
             curve = [level * min(1.0, (b + 1) / (rise[condition] + 1)) for b in range(10)]
@@ -149,7 +149,7 @@ def test_report_of_a_fabricated_results_directory(tmp_path):
     results, doc, figures = tmp_path / "results", tmp_path / "docs" / "REPRODUCTION.md", tmp_path / "docs" / "fig"
     _write_results(results)
     (results / "discussion.md").write_text("Hand-written words.\n")
-    assert report.main([str(results), "--doc", str(doc), "--figures", str(figures), "--no-behaviour"]) == 0
+    assert main([str(results), "--doc", str(doc), "--figures", str(figures), "--no-behaviour"]) == 0
     for name in ("fig1_arena.png", "fig3a_paper.png", "fig3a_extension.png", "fig3b_paper.png", "fig3c.png",
                  "summary.json", "claims.json", "specialisation.csv"):
         assert (figures / name).is_file(), name
@@ -170,7 +170,7 @@ def test_report_of_a_fabricated_results_directory(tmp_path):
 
 def test_claim_specialisation_with_composition():
     """Claim 7 holds only with both halves: three colours and pairs solved both ways."""
-    assert report.claim_specialisation({"LE-LS": 3, "EE-LS": 3}, {"LE-LS": 0.5, "EE-LS": 0.1})["verdict"] == HOLDS
-    assert report.claim_specialisation({"LE-LS": 3, "EE-LS": 3}, {"LE-LS": 0.0, "EE-LS": 0.1})["verdict"] == PARTLY
-    assert report.claim_specialisation({"LE-LS": 0, "EE-LS": 0}, {"EE-LS": 0.5})["verdict"] == PARTLY
-    assert report.claim_specialisation({"LE-LS": 0, "EE-LS": 0}, {"EE-LS": 0.1})["verdict"] == DOES_NOT
+    assert claims.claim_specialisation({"LE-LS": 3, "EE-LS": 3}, {"LE-LS": 0.5, "EE-LS": 0.1})["verdict"] == HOLDS
+    assert claims.claim_specialisation({"LE-LS": 3, "EE-LS": 3}, {"LE-LS": 0.0, "EE-LS": 0.1})["verdict"] == PARTLY
+    assert claims.claim_specialisation({"LE-LS": 0, "EE-LS": 0}, {"EE-LS": 0.5})["verdict"] == PARTLY
+    assert claims.claim_specialisation({"LE-LS": 0, "EE-LS": 0}, {"EE-LS": 0.1})["verdict"] == DOES_NOT

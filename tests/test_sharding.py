@@ -7,15 +7,8 @@ final_population.npz, bit for bit, as on one device, whichever axis it shards.
 
 import pytest
 
-from evolve_runs import Runs, assert_same_outputs, outputs, reference
-
-#: A 40 cm target makes reaches common at this tiny scale, so fitness is not all 0.
-COMMON = ("--generations", "2", "--parents", "2", "--task-steps", "300", "--bins", "1", "--set", "target_radius=40")
-#: 2 seeds: the devices divide the seeds axis. 1 seed of 4: they divide the population axis.
-CASES = {
-    "seeds": ("--seeds", "2", "--population", "4") + COMMON,
-    "population": ("--seeds", "1", "--population", "4") + COMMON,
-}
+from helpers import SHARDED_CASES as CASES
+from helpers import Runs, assert_same_outputs, outputs, reference
 
 
 @pytest.mark.parametrize("axis", sorted(CASES))
@@ -59,7 +52,7 @@ def test_next_populations_keep_their_sharding():
     import subprocess
     import sys
 
-    from evolve_runs import ROOT, environment
+    from helpers import ROOT, environment
 
     done = subprocess.run([sys.executable, "-c", KEEPS_SHARDING], cwd=ROOT, env=environment(devices=2),
                           capture_output=True, text=True, timeout=300)

@@ -4,6 +4,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import random_genomes
 
 from imrl_jax import behaviour, evolve, render, sweeps
 from imrl_jax.config import Config, ConfigError
@@ -40,7 +41,7 @@ def test_evolution_sweep_is_the_evolve_command(tiny_run):
 
 def test_reproduction_with_traced_mutation_values(tiny):
     config = tiny("EE-LS", population_size=6, num_parents=2, num_elites=1)
-    population = jax.random.uniform(jax.random.key(0), (6, config.num_genes), minval=-1, maxval=1)
+    population = random_genomes(config, 6)
     parents = jnp.asarray([4, 1])
     ga_values = sweeps.point(config).ga
     expected = reproduce(jax.random.key(1), config, population, parents)

@@ -1,9 +1,10 @@
-"""Helpers for the tests that run ``python -m imrl_jax.evolve`` in subprocesses.
+"""Helpers shared by the tests: tiny configs and command lines, tree and run comparisons, evolve subprocesses.
 
-Used by test_sharding.py (forced multi-device CPU) and test_distributed.py (two
-jax.distributed processes). Each run is a fresh interpreter, so the device count and
-jax.distributed can be chosen per run; they compare their outputs with the same command
-on one device in one process (:func:`reference`, computed once per pytest session).
+The evolve subprocesses serve test_sharding.py (forced multi-device CPU) and
+test_distributed.py (two jax.distributed processes). Each run is a fresh interpreter, so
+the device count and jax.distributed can be chosen per run; they compare their outputs
+with the same command on one device in one process (:func:`reference`, computed once per
+pytest session).
 """
 
 from __future__ import annotations
@@ -18,7 +19,10 @@ import sys
 import tempfile
 import time
 
+import jax
 import numpy as np
+
+from imrl_jax.config import Task, make_config
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 #: Seconds any one run may take before every process of the test is killed.
@@ -27,9 +31,81 @@ TIMEOUT = 240
 _DISTRIBUTED_ENV = ("JAX_COORDINATOR_ADDRESS", "JAX_NUM_PROCESSES", "JAX_PROCESS_ID")
 
 
+def tiny_config(condition: str = "LE-LS", **overrides):
+    """The paper's model with lifetimes of a few hundred steps."""
+    sizes = dict(childhood_steps=400, task_steps=200, num_bins=2, population_size=4, num_parents=2)
+    return make_config("paper", condition=condition, **{**sizes, **overrides})
+
+
+def evolve_args(cond: str = "EE-LS", preset: str = "small", **options) -> list[str]:
+    """Quiet ``imrl_jax.evolve`` arguments; ``task_steps=200`` becomes ``--task-steps 200``."""
+    args = ["--cond", cond, "--preset", preset]
+    for name, value in options.items():
+        args += [f"--{name.replace('_', '-')}", str(value)]
+    return args + ["--quiet"]
+
+
+def evolve_command(args) -> list[str]:
+    """The command line of ``python -m imrl_jax.evolve`` with ``args``, in this interpreter."""
+    return [sys.executable, "-m", "imrl_jax.evolve", *args]
+
+
+#: A tiny evolve run (2 seeds, 1 generation) for the render and sweep tests (EE-LS: it
+#: compiles in half the time of LE-LS, and they share everything these tests use).
+TINY_RUN = evolve_args(seeds=2, population=4, parents=2, generations=1, task_steps=200, childhood_steps=200, bins=1)
+
+#: Sharded runs (test_sharding, test_distributed). A 40 cm target makes reaches common at
+#: this tiny scale, so fitness is not all 0. 2 seeds: 2 devices divide the seeds axis;
+#: 1 seed of 4: they divide the population axis.
+SHARDED_COMMON = ("--generations", "2", "--parents", "2", "--task-steps", "300", "--bins", "1",
+                  "--set", "target_radius=40")
+SHARDED_CASES = {
+    "seeds": ("--seeds", "2", "--population", "4") + SHARDED_COMMON,
+    "population": ("--seeds", "1", "--population", "4") + SHARDED_COMMON,
+}
+
+EXTENDED = dict(trace_lambda=0.9, eta_actor=0.05, eta_evaluator=0.02, eta_selector_actor=0.5,
+                eta_selector_critic=0.003, childhood_trace_lambda=0.8, childhood_eta_selector_actor=0.2,
+                childhood_eta_selector_critic=0.02)
+#: One task whose target lies 40 cm straight ahead of the start, 85 cm from the east wall:
+#: reaches, timeouts and wall contacts all happen within a few hundred steps.
+SHORT_TASK = Task(start=(300.0, 200.0), heading_deg=0.0, target=(340.0, 200.0))
+
+
+def hand_experts(n):
+    """Expert actors: 0 drives straight at full speed, 1 and 2 turn left / right slowly."""
+    actor = np.zeros((3, 2, n))
+    actor[0, 1, -1] = 6.0  # speed unit saturated: 2 cm per step
+    actor[1, 0, -1], actor[1, 1, -1] = 2.0, 0.5
+    actor[2, 0, -1], actor[2, 1, -1] = -2.0, 0.5
+    return actor
+
+
+def random_genomes(config, n, seed=0):
+    """``n`` genomes of ``config``'s condition, uniform in [-1, 1]."""
+    return jax.random.uniform(jax.random.key(seed), (n, config.num_genes), minval=-1.0, maxval=1.0)
+
+
+def assert_trees_close(actual, desired, rtol: float, atol: float, cast=None, name: str = "") -> None:
+    """Leaf by leaf ``assert_allclose`` of two pytrees (PRNG keys skipped), each leaf named by its path."""
+    assert jax.tree.structure(actual) == jax.tree.structure(desired), name
+    leaves = zip(jax.tree_util.tree_leaves_with_path(actual), jax.tree.leaves(desired))
+    for (path, x), y in leaves:
+        if jax.dtypes.issubdtype(x.dtype, jax.dtypes.prng_key):
+            continue
+        np.testing.assert_allclose(np.asarray(x, cast), np.asarray(y, cast), rtol=rtol, atol=atol,
+                                   err_msg=name + jax.tree_util.keystr(path))
+
+
+def read_population(out_dir: str) -> dict:
+    """Every array of a run's final_population.npz."""
+    with np.load(os.path.join(out_dir, "final_population.npz")) as npz:
+        return {name: npz[name] for name in npz.files}
+
+
 def command(out_dir: str, args: tuple[str, ...]) -> list[str]:
-    return [sys.executable, "-m", "imrl_jax.evolve", "--cond", "EE-LS", "--preset", "small", "--quiet",
-            "--out", out_dir, *args]
+    """A quiet small-preset EE-LS evolve command writing to ``out_dir``."""
+    return evolve_command([*evolve_args(out=out_dir), *args])
 
 
 def environment(devices: int = 1) -> dict:
@@ -82,8 +158,7 @@ def outputs(out_dir: str) -> dict:
     """history.csv (bytes), every array of final_population.npz, and config.json of a run."""
     with open(os.path.join(out_dir, "history.csv"), "rb") as f:
         result = {"history.csv": f.read()}
-    with np.load(os.path.join(out_dir, "final_population.npz")) as npz:
-        result.update({name: npz[name] for name in npz.files})
+    result.update(read_population(out_dir))
     with open(os.path.join(out_dir, "config.json")) as f:
         result["config.json"] = json.load(f)
     return result
@@ -103,8 +178,7 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
-_scratch = tempfile.mkdtemp(prefix="imrl_evolve_runs-")
-atexit.register(shutil.rmtree, _scratch, ignore_errors=True)
+_scratch: list[str] = []
 _references: dict[tuple[str, ...], dict] = {}
 
 
@@ -117,7 +191,10 @@ class Runs:
     """
 
     def __init__(self):
-        self.dir = tempfile.mkdtemp(dir=_scratch)
+        if not _scratch:
+            _scratch.append(tempfile.mkdtemp(prefix="imrl_evolve_runs-"))
+            atexit.register(shutil.rmtree, _scratch[0], ignore_errors=True)
+        self.dir = tempfile.mkdtemp(dir=_scratch[0])
         self.jobs: list[Job] = []
         self._pending: dict[tuple[str, ...], str] = {}
 

@@ -1,0 +1,1 @@
+"""The reproduction pipeline, its report and the selector sweep: run from the repository root."""

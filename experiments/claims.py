@@ -1,0 +1,327 @@
+"""The seven claims' verdict rules: pure functions from measured numbers to a verdict, and the rules in words."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from experiments.reproduce import EVOLVED, TESTED
+from imrl_jax.learning_test import PAIR_LEVEL
+
+HOLDS, PARTLY, DOES_NOT, NOT_AVAILABLE = "holds", "partly", "does not hold", "n/a"
+
+#: The claims as MODEL.md states them ("The paper's claims to reproduce").
+CLAIMS = {
+    1: "LE-LS reaches its steady best fitness in about 10 generations; EE-LS and EE-ES need about 100.",
+    2: "LE-LS varies less across runs than EE-LS and EE-ES.",
+    3: "EE-LS ends with a higher best fitness than LE-LS.",
+    4: "EE-ES ends at about the best fitness of LE-LS, with a stereotyped (circular) path.",
+    5: "In learning tests, LE-LS and EE-LS learn much faster than SLE (SLE needs about 4x longer to reach "
+       "comparable performance).",
+    6: "Steady state: EE-LS > SLE > LE-LS > EE-ES.",
+    7: "Experts specialise in following one colour each; the selector composes them and picks a direction at "
+       "junctions.",
+}
+
+# The measures behind the verdicts; RULES below states them in words for the report.
+LAST_GENERATIONS = 5  # the final best fitness is the mean of this many last generations
+PLATEAU_FRACTION = 0.9  # a curve has reached its plateau at this fraction of its final value
+MUCH_FASTER = 2.0  # "much faster": at most half the generations or cycles
+ABOUT = (0.8, 1.25)  # "about the same": a ratio in this range
+NEARLY_ABOUT = (0.5, 2.0)
+STEREOTYPED_TURNS = 0.75  # share of turning steps that turn the same way for a "circular" path
+TURN_THRESHOLD_DEG = 1.0  # smaller heading changes are not turns
+SPECIALISED_SHARE = 0.5  # an expert follows a colour: it sees it on more than half its readings
+MIN_CONTROL_SHARE = 0.05  # experts in control on fewer steps are not judged
+PAIRS_COMPOSED = 1 / 3  # "composes": at least this share of task pairs solved both ways
+STEADY_ORDER = ("EE-LS", "SLE", "LE-LS", "EE-ES")
+
+RULES = {
+    1: f"Plateau generation = the first generation at which the best fitness (mean over seeds) reaches "
+       f"{PLATEAU_FRACTION:.0%} of its final value (mean of the last {LAST_GENERATIONS} generations). "
+       f"**holds** if LE-LS's is at most 1/{MUCH_FASTER:g} of both EE-LS's and EE-ES's and smaller than both; "
+       f"**partly** if it is smaller than one of them; **does not hold** otherwise. (At reduced scale the "
+       f"evolutions are shorter than the paper's 100 generations, so \"about 100\" shows as a plateau in the "
+       f"last generations or none.)",
+    2: f"Final best fitness of a seed = the mean of its last {LAST_GENERATIONS} generations' best fitness; "
+       f"spread = its standard deviation over seeds. **holds** if LE-LS's spread is smaller than both EE-LS's and "
+       f"EE-ES's; **partly** if smaller than one; **does not hold** otherwise.",
+    3: "Difference d = mean final best fitness of EE-LS minus that of LE-LS, standard error "
+       "se = sqrt(sd_EE-LS^2/n + sd_LE-LS^2/n) (sd over seeds, ddof 1). **holds** if d > 2 se; **partly** if "
+       "0 < d <= 2 se; **does not hold** if d <= 0.",
+    4: f"Ratio = mean final best fitness of EE-ES / that of LE-LS; \"about\" = ratio in [{ABOUT[0]}, {ABOUT[1]}]. "
+       f"Stereotypy = of the steps of the best EE-ES individual's task paths that turn by more than "
+       f"{TURN_THRESHOLD_DEG:g} deg, the share that turn the same way (1: always one way, as on a circle; "
+       f"about 0.5: zigzags). \"circular\" = stereotypy >= {STEREOTYPED_TURNS}. **holds** if both; **partly** if "
+       f"one; **does not hold** if neither.",
+    5: f"For LE-LS and EE-LS in turn: level = {PLATEAU_FRACTION:.0%} of the condition's steady state; cycles to "
+       f"it = the end of the first bin of the mean learning curve at or above the level, for the condition and "
+       f"for SLE; ratio = SLE's cycles / the condition's (infinite when SLE never gets there). **holds** if "
+       f"the ratio is >= {MUCH_FASTER:g} for both; **partly** if >= {MUCH_FASTER:g} for one or > 1 for both; "
+       f"**does not hold** otherwise. (The paper's ratio is about 4.)",
+    6: "Steady states (mean over runs) are compared in the six pairs the order EE-LS > SLE > LE-LS > EE-ES "
+       "implies. **holds** if all 6 pairs are in that order; **partly** if 4 or 5; **does not hold** if 3 or "
+       "fewer (3 of 6 is what an arbitrary order gets on average).",
+    7: f"For the best LE-LS and EE-LS individuals (the paper: \"particularly true\" of them), on their adult task "
+       f"paths: an expert in control on at least {MIN_CONTROL_SHARE:.0%} of the steps is *specialised* when one "
+       f"colour covers more than {SPECIALISED_SHARE:.0%} of its central receptors' readings (colour_shares); "
+       f"score = number of distinct colours among specialised experts (0-3). Composition: the share of (learning "
+       f"test, task pair) in which both tasks of a pair reach a steady state of at least {PAIR_LEVEL:g} (the two "
+       f"tasks of a pair look the same up to the first junction and turn the other way there, so any fixed "
+       f"controller solves at most one: EE-ES is the control). **holds** if the score is 3 for both and the "
+       f"LE-LS or EE-LS share is at least {PAIRS_COMPOSED:.2f}; **partly** if a score is at least 1 or that share "
+       f"is reached; **does not hold** otherwise.",
+}
+
+#: What the paper reports for each claim (sections 3 and 4, Fig. 3).
+PAPER = {
+    1: "LE-LS ~10, EE-LS and EE-ES ~100 generations",
+    2: "much smaller sd band for LE-LS (Fig. 3a)",
+    3: "EE-LS above LE-LS at generation 100",
+    4: "EE-ES at the level of LE-LS; circular path at full speed",
+    5: "SLE needs nearly 4x the cycles",
+    6: "EE-LS > SLE > LE-LS > EE-ES (Fig. 3c)",
+    7: "one colour per expert; selector composes them per task (direct observation)",
+}
+
+SEEN = ("red", "green", "blue", "nothing")
+
+
+# ----------------------------------------------------------------------------- measures
+
+
+def final_best(best: np.ndarray, last: int = LAST_GENERATIONS) -> np.ndarray:
+    """Each seed's final best fitness: the mean of the last ``last`` generations of best (generations, seeds)."""
+    best = np.asarray(best, float)
+    return best[-min(last, len(best)):].mean(0)
+
+
+def plateau_generation(curve, fraction: float = PLATEAU_FRACTION, last: int = LAST_GENERATIONS) -> int | None:
+    """The first generation at which ``curve`` reaches ``fraction`` of its final value (None if that is <= 0)."""
+    curve = np.asarray(curve, float)
+    final = curve[-min(last, len(curve)):].mean()
+    if not final > 0:
+        return None
+    # Some of the last generations are at least their mean, so the level is always reached.
+    return int(np.argmax(curve >= fraction * final))
+
+
+def first_reach(steps, curve, level: float) -> int | None:
+    """The end cycle of the first bin at which ``curve`` is at least ``level`` (None: never)."""
+    hits = np.flatnonzero(np.asarray(curve, float) >= level)
+    return int(np.asarray(steps)[hits[0]]) if len(hits) else None
+
+
+def turn_consistency(headings_before, headings_after, breaks,
+                     threshold_deg: float = TURN_THRESHOLD_DEG) -> float | None:
+    """Of the steps that turn by more than ``threshold_deg``, the share turning the more common way (None: no turns).
+
+    Steps after which the robot was put back at the start (``breaks``) are left out: their
+    heading change is the reset, not a turn.
+    """
+    turn = (np.asarray(headings_after, float) - np.asarray(headings_before, float) + math.pi) % (2 * math.pi) - math.pi
+    turning = turn[~np.asarray(breaks, bool) & (np.abs(turn) > math.radians(threshold_deg))]
+    if not len(turning):
+        return None
+    left = float((turning > 0).mean())
+    return max(left, 1.0 - left)
+
+
+def mean_speed(positions_before, positions_after, breaks) -> float | None:
+    """Mean distance moved per step (cm), leaving out the steps that ended with a reset to the start."""
+    moved = np.linalg.norm(np.asarray(positions_after, float) - np.asarray(positions_before, float), axis=-1)
+    moved = moved[~np.asarray(breaks, bool)]
+    return float(moved.mean()) if len(moved) else None
+
+
+def specialisation_score(shares, steps, min_share: float = MIN_CONTROL_SHARE,
+                         specialised: float = SPECIALISED_SHARE) -> tuple[int, list]:
+    """Distinct colours among specialised experts, and each expert's followed colour (None: not specialised).
+
+    ``shares`` (K, 4: red, green, blue, nothing) and ``steps`` (K,) as from
+    :func:`imrl_jax.behaviour.colour_shares`.
+    """
+    shares, steps = np.nan_to_num(np.asarray(shares, float)), np.asarray(steps, float)
+    total = max(steps.sum(), 1.0)
+    followed = []
+    for row, n in zip(shares, steps):
+        colour = int(np.argmax(row[:3]))
+        followed.append(SEEN[colour] if n / total >= min_share and row[colour] > specialised else None)
+    return len({c for c in followed if c is not None}), followed
+
+
+# ----------------------------------------------------------------------------- verdicts (numbers in, verdict out)
+
+
+def _claim(verdict: str, measured: str, **numbers) -> dict:
+    return dict(verdict=verdict, measured=measured, numbers=numbers)
+
+
+def _fmt(value, digits: int = 3) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, float) and math.isinf(value):
+        return "never"
+    return f"{value:.{digits}f}" if isinstance(value, float) else str(value)
+
+
+def claim_evolvability(plateau: dict) -> dict:
+    """Claim 1 from each evolved condition's plateau generation."""
+    le, others = plateau.get("LE-LS"), [plateau.get(c) for c in ("EE-LS", "EE-ES")]
+    measured = ", ".join(f"{c} {_fmt(plateau.get(c))}" for c in EVOLVED) + " (plateau generation)"
+    if le is None or any(o is None for o in others):
+        return _claim(NOT_AVAILABLE, measured, plateau=plateau)
+    faster = [le < o for o in others]
+    much = [f and MUCH_FASTER * le <= o for f, o in zip(faster, others)]
+    verdict = HOLDS if all(much) else PARTLY if any(faster) else DOES_NOT
+    return _claim(verdict, measured, plateau=plateau)
+
+
+def claim_reliability(spread: dict) -> dict:
+    """Claim 2 from each evolved condition's sd over seeds of the final best fitness."""
+    measured = ", ".join(f"{c} {_fmt(spread.get(c))}" for c in EVOLVED) + " (sd over seeds)"
+    le, others = spread.get("LE-LS"), [spread.get(c) for c in ("EE-LS", "EE-ES")]
+    if le is None or any(o is None for o in others):
+        return _claim(NOT_AVAILABLE, measured, spread=spread)
+    smaller = sum(le < o for o in others)
+    return _claim(HOLDS if smaller == 2 else PARTLY if smaller == 1 else DOES_NOT, measured, spread=spread)
+
+
+def claim_ee_ls_higher(ee_ls, le_ls) -> dict:
+    """Claim 3 from the per-seed final best fitness of EE-LS and LE-LS."""
+    if ee_ls is None or le_ls is None or not len(ee_ls) or not len(le_ls):
+        return _claim(NOT_AVAILABLE, "-")
+    ee_ls, le_ls = np.asarray(ee_ls, float), np.asarray(le_ls, float)
+    d = float(ee_ls.mean() - le_ls.mean())
+    var = lambda x: float(x.var(ddof=1)) / len(x) if len(x) > 1 else 0.0  # noqa: E731
+    se = math.sqrt(var(ee_ls) + var(le_ls))
+    verdict = HOLDS if d > 2 * se else PARTLY if d > 0 else DOES_NOT
+    return _claim(verdict, f"EE-LS {ee_ls.mean():.3f} vs LE-LS {le_ls.mean():.3f}: d = {d:+.3f}, se = {se:.3f}",
+                  difference=d, standard_error=se, ee_ls=float(ee_ls.mean()), le_ls=float(le_ls.mean()))
+
+
+def claim_ee_es_about(ee_es: float | None, le_ls: float | None, stereotypy: float | None,
+                      speed: float | None = None) -> dict:
+    """Claim 4 from the mean final best fitness of EE-ES and LE-LS and EE-ES's stereotypy (its speed is only shown)."""
+    ratio = ee_es / le_ls if ee_es is not None and le_ls is not None and le_ls > 0 else None
+    measured = (f"EE-ES / LE-LS final best fitness {_fmt(ee_es)} / {_fmt(le_ls)} = {_fmt(ratio, 2)}; "
+                f"stereotypy {_fmt(stereotypy, 2)}" + ("" if speed is None else f", speed {speed:.2f} cm/step"))
+    parts = [p for p in (None if ratio is None else ABOUT[0] <= ratio <= ABOUT[1],
+                         None if stereotypy is None else stereotypy >= STEREOTYPED_TURNS) if p is not None]
+    if not parts:
+        return _claim(NOT_AVAILABLE, measured, ratio=ratio, stereotypy=stereotypy)
+    verdict = HOLDS if len(parts) == 2 and all(parts) else PARTLY if any(parts) else DOES_NOT
+    return _claim(verdict, measured, ratio=ratio, stereotypy=stereotypy)
+
+
+def claim_learning_speed(curves: dict, steady: dict) -> dict:
+    """Claim 5 from the learning curves ``curves[c] = (end cycles, mean)`` and the steady states ``steady[c]``."""
+    ratios, cycles, texts = {}, {}, []
+    if "SLE" not in curves:
+        return _claim(NOT_AVAILABLE, "-")
+    for c in ("LE-LS", "EE-LS"):
+        if c not in curves or steady.get(c) is None or not steady[c] > 0:
+            continue
+        level = PLATEAU_FRACTION * steady[c]
+        own, sle = first_reach(*curves[c], level), first_reach(*curves["SLE"], level)
+        if own is None:  # only when curve.csv's rounding puts every bin under the level
+            continue
+        ratio = math.inf if sle is None else sle / own
+        ratios[c], cycles[c] = ratio, dict(level=level, cycles=own, sle_cycles=sle)
+        texts.append(f"{c} {own:,} vs SLE {'never' if sle is None else f'{sle:,}'} cycles to {level:.3f} "
+                     f"(x{_fmt(ratio, 1)})")
+    measured = "; ".join(texts) or "-"
+    numbers = dict(ratio={c: (None if math.isinf(r) else r) for c, r in ratios.items()},
+                   sle_never={c: math.isinf(r) for c, r in ratios.items()}, cycles=cycles)
+    if len(ratios) < 2:
+        return _claim(NOT_AVAILABLE, measured, **numbers)
+    much = sum(r >= MUCH_FASTER for r in ratios.values())
+    verdict = HOLDS if much == 2 else PARTLY if much == 1 or all(r > 1 for r in ratios.values()) else DOES_NOT
+    return _claim(verdict, measured, **numbers)
+
+
+def claim_ordering(steady: dict, order=STEADY_ORDER) -> dict:
+    """Claim 6 from the steady states (mean over runs) of the four conditions."""
+    if any(steady.get(c) is None for c in order):
+        return _claim(NOT_AVAILABLE, "-")
+    pairs = {f"{a} > {b}": bool(steady[a] > steady[b]) for i, a in enumerate(order) for b in order[i + 1:]}
+    held = sum(pairs.values())
+    ranked = sorted(order, key=lambda c: -steady[c])
+    ranked = ranked[0] + "".join(f" {'=' if steady[a] == steady[b] else '>'} {b}" for a, b in zip(ranked, ranked[1:]))
+    failed = [p for p, ok in pairs.items() if not ok]
+    measured = (f"{ranked} (" + ", ".join(f"{c} {steady[c]:.3f}" for c in order) + f"); {held}/6 pairs hold"
+                + (f"; not: {', '.join(failed)}" if failed else ""))
+    verdict = HOLDS if held == 6 else PARTLY if held >= 4 else DOES_NOT
+    return _claim(verdict, measured, pairs=pairs, pairs_held=held)
+
+
+def claim_specialisation(scores: dict, pairs: dict | None = None) -> dict:
+    """Claim 7: specialisation score (0-3 colours) of the best LS individuals; pairs solved both ways in their tests."""
+    pairs = pairs or {}
+    le, ee = scores.get("LE-LS"), scores.get("EE-LS")
+    measured = f"distinct colours followed: LE-LS {_fmt(le)}/3, EE-LS {_fmt(ee)}/3"
+    if pairs:
+        measured += "; task pairs solved both ways: " + ", ".join(f"{c} {_fmt(v, 2)}" for c, v in pairs.items())
+    if le is None and ee is None:
+        return _claim(NOT_AVAILABLE, measured, scores=scores, pairs=pairs)
+    known = [s for s in (le, ee) if s is not None]
+    composed = [pairs[c] for c in ("LE-LS", "EE-LS") if pairs.get(c) is not None]
+    composes = bool(composed) and max(composed) >= PAIRS_COMPOSED
+    verdict = HOLDS if len(known) == 2 and all(s == 3 for s in known) and (composes or not pairs) \
+        else PARTLY if any(s >= 1 for s in known) or composes else DOES_NOT
+    return _claim(verdict, measured, scores=scores, pairs=pairs)
+
+
+def measure(data: dict, lives: dict) -> dict:
+    """Every number of the report: per variant, the evolutions' and tests' statistics and the claims."""
+    out = {}
+    for variant in data["variants"]:
+        evolution = {}
+        for condition in EVOLVED:
+            run = data["evolutions"].get((variant, condition))
+            if run is None:
+                continue
+            final = final_best(run["best"])
+            evolution[condition] = dict(
+                final_best_mean=float(final.mean()), final_best_sd=float(final.std()),
+                final_best_per_seed=[float(v) for v in final], seeds=run["seeds"], generations=len(run["best"]),
+                last_generations_averaged=min(LAST_GENERATIONS, len(run["best"])),
+                plateau_generation=plateau_generation(run["best"].mean(1)),
+                best_per_generation_mean=[float(v) for v in run["best"].mean(1)],
+                best_per_generation_sd=[float(v) for v in run["best"].std(1)])
+        tests = {}
+        for condition in TESTED:
+            test = data["tests"].get((variant, condition))
+            if test is None:
+                continue
+            s = test["steady"]
+            tests[condition] = {k: s.get(k) for k in ("steady_mean", "steady_sd", "steady_best_run", "best_run",
+                                                      "steady_per_run", "steady_per_task", "whole_test_mean",
+                                                      "num_runs", "num_best", "num_tests", "task_steps",
+                                                      "steady_steps", "num_bins")}
+            tests[condition]["pairs_both_ways"] = test.get("pairs_both_ways")
+        get = lambda d, c, k: d[c][k] if c in d else None  # noqa: E731
+        steady = {c: get(tests, c, "steady_mean") for c in TESTED}
+        ee_es_life = lives.get(("paper", "EE-ES"))
+        scores = {}
+        for condition in ("LE-LS", "EE-LS"):
+            life = lives.get((variant, condition))
+            if life is not None:
+                scores[condition] = specialisation_score(life["shares"], life["steps"])[0]
+        claims = {
+            1: claim_evolvability({c: get(evolution, c, "plateau_generation") for c in EVOLVED}),
+            2: claim_reliability({c: get(evolution, c, "final_best_sd") for c in EVOLVED}),
+            3: claim_ee_ls_higher(get(evolution, "EE-LS", "final_best_per_seed"),
+                                  get(evolution, "LE-LS", "final_best_per_seed")),
+            4: claim_ee_es_about(get(evolution, "EE-ES", "final_best_mean"), get(evolution, "LE-LS", "final_best_mean"),
+                                 ee_es_life["stereotypy"] if ee_es_life else None,
+                                 ee_es_life["speed"] if ee_es_life else None),
+            5: claim_learning_speed({c: (data["tests"][variant, c]["steps"], data["tests"][variant, c]["mean"])
+                                     for c in TESTED if (variant, c) in data["tests"]}, steady),
+            6: claim_ordering(steady),
+            7: claim_specialisation(scores, {c: data["tests"][variant, c]["pairs_both_ways"] for c in EVOLVED
+                                             if data["tests"].get((variant, c), {}).get("pairs_both_ways") is not None}),
+        }
+        out[variant] = dict(evolution=evolution, learning_tests=tests, claims=claims)
+    return out

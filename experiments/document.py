@@ -1,0 +1,247 @@
+"""The markdown report (docs/REPRODUCTION.md) and its tables."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from experiments.claims import (CLAIMS, LAST_GENERATIONS, MIN_CONTROL_SHARE, PAPER, PLATEAU_FRACTION, RULES, SEEN,
+                                SPECIALISED_SHARE, _fmt, specialisation_score)
+from experiments.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEPS, PATH_STEPS
+from experiments.reproduce import SCALES, VARIANTS
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def scale_label(manifest: dict | None) -> str:
+    """The sizes the numbers were measured at, in one short line (every table and figure names it)."""
+    if not manifest:
+        return "unknown scale (no manifest.json)"
+    sizes = manifest.get("sizes", {})
+    number = lambda name: f"{sizes[name]:,}" if isinstance(sizes.get(name), int) else "?"  # noqa: E731
+    return (f"{manifest.get('scale', '?')} scale: {number('seeds')} seeds x {number('generations')} generations, "
+            f"lives of {number('childhood_steps')} + 6 x {number('task_steps')} steps, learning tests of "
+            f"{number('test_steps')} cycles per task")
+
+
+def sizes_table(data: dict) -> str:
+    """The run's sizes beside the paper's, with the fraction of the paper's where they differ."""
+    manifest = data["manifest"] or {}
+    sizes, paper = manifest.get("sizes", {}), SCALES["paper"]
+    config = next((run["config"] for run in data["evolutions"].values() if run.get("config")), None) or {}
+    population = (config.get("population_size", sizes.get("population")),
+                  config.get("num_parents", sizes.get("parents")))
+
+    def cell(value, reference):
+        if value is None:
+            return "?"
+        if isinstance(value, tuple):
+            return ", ".join("?" if v is None else f"{v:,}" for v in value)
+        ratio = value / reference
+        return f"{value:,}" + ("" if ratio == 1 else f" ({_fraction(ratio)})")
+
+    rows = [("seeds (runs)", "seeds"), ("generations", "generations"), ("childhood steps", "childhood_steps"),
+            ("steps per adult task (6 tasks)", "task_steps"), ("learning test: best individuals per run", "best"),
+            ("learning test: tests per individual", "tests"), ("learning test: cycles per task", "test_steps"),
+            ("steady state: last cycles", "steady_steps")]
+    body = [[name, cell(sizes.get(key), paper[key]), f"{paper[key]:,}"] for name, key in rows]
+    body.insert(2, ["population, parents", cell(population, None), "50, 10"])
+    return table(["", f"this run ({manifest.get('scale', 'unknown')} scale)", "paper"], body)
+
+
+def _fraction(ratio: float) -> str:
+    inverse = 1 / ratio
+    return f"1/{inverse:g}" if ratio < 1 and abs(inverse - round(inverse)) < 1e-9 else f"x{ratio:.3g}"
+
+
+def pipeline_command(results: str, manifest: dict | None) -> str:
+    """The command that (re)makes a results directory."""
+    if not manifest:
+        return "python experiments/reproduce.py (scale unknown)"
+    scale = manifest.get("scale", "?")
+    command = f"python experiments/reproduce.py --scale {scale}"
+    default = os.path.join(ROOT, "experiments", "results", scale)
+    if os.path.abspath(results) != os.path.abspath(default):
+        command += f" --out {results}"
+    if list(manifest.get("variants", VARIANTS)) != list(VARIANTS):
+        command += f" --variants {','.join(manifest['variants'])}"
+    target = {"cpu": "make reproduce-cpu", "paper": "make reproduce"}.get(scale)
+    plain = command == f"python experiments/reproduce.py --scale {scale}"
+    return f"`{target}` (`{command}`)" if target and plain else f"`{command}`"
+
+
+def table(header: list[str], rows: list[list]) -> str:
+    """A markdown table."""
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def specialisation_rows(lives: dict) -> list[dict]:
+    """One row per expert of each best individual and phase (adult tasks; LE-LS also the end of childhood)."""
+    rows = []
+    for (variant, condition), life in lives.items():
+        phases = [("adult tasks", life["shares"], life["steps"])]
+        if life.get("childhood_shares") is not None:
+            phases.append((f"childhood, last {CHILDHOOD_TAIL:.0%}", life["childhood_shares"], life["childhood_steps"]))
+        for phase, shares, steps in phases:
+            followed = specialisation_score(shares, steps)[1]
+            total = max(int(np.sum(steps)), 1)
+            for e, (row, n) in enumerate(zip(shares, steps)):
+                rows.append(dict(variant="both" if condition == "EE-ES" else variant, condition=condition, phase=phase,
+                                 seed=life["seed"], generation=life["generation"], expert=e + 1, steps=int(n),
+                                 control_share=round(int(n) / total, 4),
+                                 **{name: (None if not np.isfinite(v) else round(float(v), 4))
+                                    for name, v in zip(SEEN, row)},
+                                 follows=followed[e] or ""))
+    return rows
+
+
+def write_document(path: str, figures: str, data: dict, numbers: dict, lives: dict, spec_rows: list[dict],
+                   written: dict) -> None:
+    """The markdown report."""
+    from imrl_jax.checkpoint import git_commit
+
+    manifest, results = data["manifest"], data["results"]
+    label = scale_label(manifest)
+    reduced = not manifest or manifest.get("scale") != "paper"
+    doc_dir = os.path.dirname(os.path.abspath(path))
+    rel = lambda name: os.path.relpath(os.path.join(figures, name), doc_dir)  # noqa: E731
+    out = ["# Reproduction of Schembri, Mirolli & Baldassarre (2007): Fig. 3 and the seven claims", ""]
+    inside = os.path.abspath(results).startswith(ROOT + os.sep)
+    out += [f"Written by `experiments/report.py` from `{os.path.relpath(results, ROOT) if inside else results}`. "
+            f"**All numbers below are at the {label}.**", "", sizes_table(data)]
+    if reduced:
+        out += ["", "This is a **reduced-scale** reproduction: fewer seeds and generations and shorter lives and "
+                    "learning tests than the paper's (10 seeds, 100 generations, 150,000 childhood steps, 100,000 "
+                    "steps per task, tests of 10 best x 10 tests x 1,000,000 cycles). Its numbers are not the "
+                    "paper's numbers; the claims are judged on the shapes and orders the paper reports."]
+    commits = sorted({c for c in [run.get("git_commit") for run in data["evolutions"].values()]
+                      + [t["steady"].get("git_commit") for t in data["tests"].values()] if c})
+    out += ["", f"- Command: {pipeline_command(results, manifest)}",
+            f"- Results made at commit `{(manifest or {}).get('git_commit', 'unknown')}`"
+            + (f" (stages ran at {', '.join(f'`{c[:10]}`' for c in commits)})" if len(commits) > 1 else ""),
+            f"- Report written at commit `{git_commit()}`" + (" (with uncommitted changes)" if _dirty() else ""),
+            f"- Variants: {', '.join(data['variants'])} (`paper`: the learning rules as written; `extension`: "
+            f"MODEL.md's learning extensions at the `extension` preset). EE-ES learns nothing, so its one evolution "
+            f"serves both."]
+    if manifest and manifest.get("stages"):
+        out += ["", "<details><summary>Stages (commands and seconds)</summary>", "",
+                table(["stage", "command", "seconds"],
+                      [[name, f"`{s['command']}`", s.get("seconds", "")] for name, s in manifest["stages"].items()]),
+                "", "</details>"]
+
+    out += ["", "## The arena and the tasks (Fig. 1)", "", f"![arena and tasks]({rel(written['arena'])})"]
+
+    out += ["", "## Fig. 3a: evolution of the best fitness", "",
+            f"Best fitness per generation, mean over seeds with a band of +-1 sd ({label})."]
+    for variant in data["variants"]:
+        if variant in written["fig3a"]:
+            out += ["", f"**{variant}**", "", f"![Fig. 3a, {variant}]({rel(written['fig3a'][variant])})"]
+    rows = []
+    expected = ((manifest or {}).get("sizes") or {}).get("generations")
+    for variant in data["variants"]:
+        for condition, e in numbers[variant]["evolution"].items():
+            life = lives.get(("paper" if condition == "EE-ES" else variant, condition))
+            rows.append([variant, condition, f"{e['final_best_mean']:.3f} +- {e['final_best_sd']:.3f}",
+                         ", ".join(f"{v:.3f}" for v in e["final_best_per_seed"]), _fmt(e["plateau_generation"]),
+                         e["generations"] if e["generations"] == expected else f"{e['generations']} of {expected}",
+                         "-" if life is None else f"seed {life['seed']}, gen {life['generation']}: "
+                                                  f"{life['fitness']:.3f} (relived {life['relived_fitness']:.3f})"])
+    out += ["", f"Final best fitness = mean of each seed's last {LAST_GENERATIONS} generations; mean +- sd over "
+                f"seeds. Plateau = first generation at {PLATEAU_FRACTION:.0%} of the final value of the mean curve. "
+                f"({label})", "",
+            table(["variant", "condition", "final best fitness", "per seed", "plateau generation", "generations",
+                   "best individual (fitness)"], rows)]
+
+    out += ["", "## Fig. 3b: learning tests", "",
+            f"Performance per bin (reaches / the bin's theoretical maximum), mean over all tests and tasks, band "
+            f"+-1 sd over runs ({label}). LE-LS tests start with a fresh childhood; EE-ES does not learn; SLE "
+            f"learns from scratch."]
+    for variant in data["variants"]:
+        if variant in written["fig3b"]:
+            out += ["", f"**{variant}**", "", f"![Fig. 3b, {variant}]({rel(written['fig3b'][variant])})"]
+
+    out += ["", "## Fig. 3c: steady state", ""]
+    if written.get("fig3c"):
+        out += [f"![Fig. 3c]({rel(written['fig3c'])})", ""]
+    rows = []
+    for variant in data["variants"]:
+        for condition, t in numbers[variant]["learning_tests"].items():
+            rows.append([variant, condition, f"{t['steady_mean']:.3f} +- {t['steady_sd']:.3f}",
+                         f"{t['steady_best_run']:.3f} (run {t['best_run']})",
+                         ", ".join(f"{v:.2f}" for v in t["steady_per_task"]), f"{t['whole_test_mean']:.3f}",
+                         f"{t['num_runs']} x {t['num_best']} x {t['num_tests']}"])
+    out += [f"Steady state = mean performance over the last cycles of each test (see the scale); mean +- sd over "
+            f"runs, best run, per task (mean over runs). ({label})", "",
+            table(["variant", "condition", "steady state (mean +- sd over runs)", "best run", "per task 1-6",
+                   "whole test", "runs x best x tests"], rows)]
+
+    out += ["", "## Behaviour of the best evolved individuals", "",
+            f"The fittest individual of the last generation over all seeds of each evolution relives the life that "
+            f"earned its fitness (\"relived\" above: the same keys), then drives each task for {PATH_STEPS:,} steps "
+            f"from the weights it ended that task with (its selector still learning, as in adulthood). Drawn: the "
+            f"last {DRAWN_STEPS} of them per task, coloured by the expert in control; for LE-LS also the last "
+            f"{CHILDHOOD_DRAWN_STEPS:,} childhood steps. The bars show, per expert, the share of its control steps "
+            f"on which the retina's central receptors see red, green, blue or nothing ({label}). The genomes are "
+            f"kept in `best_genomes.npz` beside the results, so that these paths can be drawn again."]
+    if not written["paths"]:
+        out += ["", "(not drawn: no population or best_genomes.npz, or `--no-behaviour`)"]
+    for (variant, condition), name in written["paths"].items():
+        life = lives[variant, condition]
+        header = "EE-ES (both variants)" if condition == "EE-ES" else f"{condition}, {variant}"
+        out += ["", f"**{header}**: stereotypy (share of turns the same way) {_fmt(life['stereotypy'], 2)}, "
+                    f"speed {_fmt(life['speed'], 2)} cm/step (at most {life['config'].max_speed:g}), most-used "
+                    f"expert in control {life['dominant_expert']:.0%} of the steps", "",
+                f"![paths {header}]({rel(name)})"]
+
+    out += ["", "### Expert specialisation", "",
+            f"Share of each expert's control steps' central readings by colour (`imrl_jax.behaviour.colour_shares`); "
+            f"*follows* names the colour of a specialised expert (in control on at least {MIN_CONTROL_SHARE:.0%} of "
+            f"the steps, one colour on more than {SPECIALISED_SHARE:.0%} of its readings). Also in "
+            f"`{os.path.basename(written['specialisation'])}`. ({label})", ""]
+    if spec_rows:
+        out.append(table(["variant", "condition", "phase", "expert", "control", *SEEN, "follows"],
+                         [[r["variant"], r["condition"], r["phase"], r["expert"], f"{r['control_share']:.0%}",
+                           *(_fmt(r[name], 2) for name in SEEN), r["follows"] or "-"] for r in spec_rows]))
+    else:
+        out.append("(no individual was simulated)")
+
+    out += ["", "## The seven claims", "", f"Measured at the {label}. The verdicts follow the rules below, "
+                                           "computed by `experiments/report.py` (also in `claims.json`).", ""]
+    rows = []
+    for n, text in CLAIMS.items():
+        for variant in data["variants"]:
+            c = numbers[variant]["claims"][n]
+            rows.append([n, text if variant == data["variants"][0] else "", variant, c["measured"], PAPER[n],
+                         f"**{c['verdict']}**"])
+    out.append(table(["#", "claim", "variant", "measured", "paper", "verdict"], rows))
+    out += ["", "### Rules", ""] + [f"{n}. {rule}" for n, rule in RULES.items()]
+
+    discussion = os.path.join(results, "discussion.md")
+    out += ["", "## Discussion", ""]
+    if os.path.isfile(discussion):
+        with open(discussion) as f:
+            out.append(f.read().strip())
+    else:
+        out.append("(no discussion written yet)")
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    with open(path, "w") as f:
+        f.write("\n".join(out) + "\n")
+
+
+def _dirty() -> bool:
+    """Whether the code that makes the report differs from its commit (the commit alone would not remake it).
+
+    Only the package and the experiment scripts count: the report's own outputs and the
+    results it reads are tracked files too, and rewriting them must not flag the report.
+    """
+    import subprocess
+
+    try:
+        out = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", "imrl_jax",
+                              "experiments/*.py"], cwd=ROOT, capture_output=True, text=True, timeout=10)
+        return bool(out.stdout.strip())
+    except (OSError, subprocess.SubprocessError):
+        return False

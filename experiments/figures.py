@@ -1,0 +1,127 @@
+"""The report's figures: Fig. 3a, 3b and 3c, and the paths of the best individuals coloured by expert."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from experiments.claims import SEEN
+from experiments.relive import DRAWN_STEPS
+from experiments.reproduce import TESTED
+from imrl_jax.plotting import _style_axis
+
+
+def _curves_figure(series: dict, title: str, xlabel: str, ylabel: str, integer_x: bool = False):
+    """Mean curves with a +-1 sd band, one per condition in the paper's line styles: {condition: (x, mean, sd, label)}."""
+    from matplotlib.ticker import MaxNLocator
+
+    from imrl_jax.plotting import CONDITION_STYLES, new_figure
+
+    fig = new_figure(5.6, 3.5)
+    ax = fig.add_subplot()
+    banded = set()
+    for condition, (x, mean, sd, label) in series.items():
+        style = CONDITION_STYLES[condition]
+        ax.plot(x, mean, label=label, **style)
+        _band(ax, x, mean, sd, style, banded)
+    ax.set_ylim(bottom=0)
+    if integer_x:
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    else:
+        ax.set_xlim(left=0)
+    _style_axis(ax, title, xlabel, ylabel)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+def fig_fitness(evolutions: dict, title: str):
+    """Fig. 3a: best fitness per generation, mean over seeds with a +-1 sd band, one line per condition."""
+    series = {c: (np.arange(len(best)), best.mean(1), best.std(1), f"{c} ({best.shape[1]} seeds)")
+              for c, best in evolutions.items()}
+    return _curves_figure(series, title, "generation", "best fitness", integer_x=True)
+
+
+def fig_learning(tests: dict, title: str):
+    """Fig. 3b: performance per bin of the learning tests (mean over all tests, +-1 sd over runs), x in cycles."""
+    series = {c: (t["steps"], t["mean"], t["sd"], c) for c, t in tests.items()}
+    return _curves_figure(series, title, "cycles of the task", "performance per bin")
+
+
+def fig_steady(steady: dict, variants: list[str], title: str):
+    """Fig. 3c: steady state per condition, mean over runs (dark, +-1 sd) and best run (light); a panel per variant."""
+    from imrl_jax.plotting import new_figure
+
+    fig = new_figure(3.0 * len(variants) + 0.6, 3.3)
+    axes = fig.subplots(1, len(variants), sharey=True, squeeze=False)[0]
+    x = np.arange(len(TESTED))
+    for ax, variant in zip(axes, variants):
+        rows = [steady.get((variant, c)) for c in TESTED]
+        mean = [r["steady_mean"] if r else np.nan for r in rows]
+        sd = [r["steady_sd"] if r else 0.0 for r in rows]
+        best = [r["steady_best_run"] if r else np.nan for r in rows]
+        ax.bar(x - 0.19, mean, 0.38, yerr=sd, color="0.35", capsize=3, label="mean over runs")
+        ax.bar(x + 0.19, best, 0.38, color="0.75", label="best run")
+        ax.set_xticks(x, TESTED, fontsize=7)
+        _style_axis(ax, variant, "", "steady-state performance" if ax is axes[0] else "")
+        ax.grid(False, axis="x")
+    axes[0].set_ylim(bottom=0)
+    axes[-1].legend(fontsize=7)
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def fig_paths(life: dict, title: str):
+    """Each task's path after learning coloured by the expert in control, the last childhood steps, what experts see."""
+    from matplotlib.patches import Circle
+
+    from imrl_jax.plotting import EXPERT_COLOURS, SEEN_COLOURS, draw_arena, draw_path, expert_legend, new_figure
+
+    config = life["config"]
+    fig = new_figure(12.8, 7.4)
+    axes = fig.subplots(2, 4).ravel()
+    panels = [axes[1], axes[2], axes[3], axes[5], axes[6], axes[7]]
+    for i, (ax, trajectory) in enumerate(zip(panels, life["tasks"])):
+        draw_arena(ax, config)
+        shown = trajectory.window(len(trajectory.k) - DRAWN_STEPS, len(trajectory.k))
+        draw_path(ax, shown.pos, shown.k, shown.breaks)
+        task = config.tasks[i]
+        ax.plot(*task.start, "o", color="black", ms=4, zorder=5)
+        ax.add_patch(Circle(task.target, config.target_radius, fc="none", ec="black", lw=1.2, zorder=5))
+        ax.set_title(f"task {i + 1}: performance {life['performance'][i]:.2f} in the life\n"
+                     f"after it: {int(trajectory.reached.sum())} reaches / {len(trajectory.k):,} steps", fontsize=7.5)
+    ax = axes[0]
+    draw_arena(ax, config, tasks=life["childhood"] is None)
+    if life["childhood"] is not None:
+        draw_path(ax, life["childhood"].pos, life["childhood"].k, life["childhood"].breaks, lw=0.8)
+        ax.set_title(f"last {len(life['childhood'].k):,} childhood steps", fontsize=8)
+    else:
+        ax.set_title("arena and tasks (no childhood)", fontsize=8)
+    expert_legend(ax, config.num_experts)
+    ax = axes[4]
+    shares = np.nan_to_num(np.asarray(life["shares"], float))
+    width = 0.2
+    for j, (name, colour) in enumerate(zip(SEEN, SEEN_COLOURS)):
+        ax.bar(np.arange(len(shares)) + (j - 1.5) * width, shares[:, j], width, color=colour, edgecolor="black",
+               lw=0.4, label=name)
+    ax.set_xticks(range(len(shares)), [f"expert {e + 1}\n{int(n):,} steps" for e, n in enumerate(life["steps"])],
+                  fontsize=7)
+    for e, label in enumerate(ax.get_xticklabels()):
+        label.set_color(EXPERT_COLOURS[e % len(EXPERT_COLOURS)])
+    ax.set_ylim(0, 1)
+    _style_axis(ax, "what each expert sees (central receptors)", "", "share of readings")
+    ax.legend(fontsize=6, ncol=2)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def _band(ax, x, mean, sd, style: dict, banded: set) -> None:
+    """A +-1 sd band; for a second condition drawn in the same colour, thin edge lines in its own line style."""
+    colour = style.get("color", "0.5")
+    if colour in banded:
+        for edge in (mean - sd, mean + sd):
+            ax.plot(x, edge, color=colour, lw=0.6, ls=style.get("ls", "-"), alpha=0.6)
+    else:
+        ax.fill_between(x, mean - sd, mean + sd, color=colour, alpha=0.13, lw=0)
+        banded.add(colour)

@@ -1,0 +1,138 @@
+"""Reading a results directory of experiments/reproduce.py, and keeping its best genomes."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+
+import numpy as np
+
+from experiments.reproduce import EVOLVED, TESTED, VARIANTS, evolution_dir, test_dir
+from imrl_jax.config import Config
+from imrl_jax.learning_test import pairs_both_ways, performance_curve, steady_bins
+
+NUM_BEST = 10  # genomes kept per seed in best_genomes.npz
+
+
+def read_json(path: str) -> dict | None:
+    """A JSON file, or None when it does not exist."""
+    if not os.path.isfile(path):
+        return None
+    with open(path) as f:
+        return json.load(f)
+
+
+def read_history(path: str) -> tuple[list[int], np.ndarray] | None:
+    """A history.csv as (seeds, best fitness (generations, seeds)), or None when absent or empty."""
+    if not os.path.isfile(path):
+        return None
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    if not rows:
+        return None
+    seeds = sorted({int(r["seed"]) for r in rows})
+    generations = max(int(r["generation"]) for r in rows) + 1
+    best = np.full((generations, len(seeds)), np.nan)
+    for r in rows:
+        best[int(r["generation"]), seeds.index(int(r["seed"]))] = float(r["best"])
+    return seeds, best
+
+
+def read_curve(path: str) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """A learning test's curve.csv as (end cycle of each bin, mean over all tests, sd over runs)."""
+    if not os.path.isfile(path):
+        return None
+    data = np.genfromtxt(path, delimiter=",", names=True)
+    data = np.atleast_1d(data)
+    return data["end_step"].astype(int), data["mean"].astype(float), data["sd_over_runs"].astype(float)
+
+
+def variants_of(results: str, manifest: dict | None) -> list[str]:
+    """The variants a results directory holds (the manifest's, else those with a directory)."""
+    if manifest and manifest.get("variants"):
+        return list(manifest["variants"])
+    return [v for v in VARIANTS if os.path.isdir(os.path.join(results, v))]
+
+
+def load(results: str) -> dict:
+    """Everything the report reads from a results directory (missing parts are left out)."""
+    manifest = read_json(os.path.join(results, "manifest.json"))
+    data = dict(results=results, manifest=manifest, variants=variants_of(results, manifest), evolutions={},
+                tests={})
+    for variant in data["variants"]:
+        for condition in EVOLVED:
+            run_dir = evolution_dir(results, variant, condition)
+            history = read_history(os.path.join(run_dir, "history.csv"))
+            if history is not None:
+                saved = read_json(os.path.join(run_dir, "config.json")) or {}
+                data["evolutions"][variant, condition] = dict(dir=run_dir, seeds=history[0], best=history[1],
+                                                              config=saved.get("config"),
+                                                              git_commit=saved.get("git_commit"))
+        for condition in TESTED:
+            out_dir = test_dir(results, variant, condition)
+            steady = read_json(os.path.join(out_dir, "steady.json"))
+            curve = read_curve(os.path.join(out_dir, "curve.csv"))
+            if steady is not None and curve is not None:
+                data["tests"][variant, condition] = dict(dir=out_dir, steady=steady, steps=curve[0], mean=curve[1],
+                                                         sd=curve[2], pairs_both_ways=steady.get("pairs_both_ways"))
+                curves_path = os.path.join(out_dir, "curves.npz")
+                if data["tests"][variant, condition]["pairs_both_ways"] is None and os.path.exists(curves_path):
+                    # Tests written before steady.json kept this number: recompute it from every
+                    # test's curves with the learning test's own statistics.
+                    config = Config.from_dict(steady["config"])
+                    with np.load(curves_path) as saved:
+                        performance = performance_curve(config, saved["reaches"])
+                    last = steady_bins(config, steady["steady_steps"])
+                    data["tests"][variant, condition]["pairs_both_ways"] = pairs_both_ways(
+                        performance[..., -last:].mean(-1))
+    return data
+
+
+def _key(variant: str, condition: str, field: str) -> str:
+    return f"{variant}__{condition}__{field}"
+
+
+def update_best_genomes(data: dict, num_best: int = NUM_BEST) -> dict:
+    """The best genomes of every evolution, from final_population.npz where present (else from best_genomes.npz).
+
+    Returns ``{(variant, condition): dict(genomes (S, B, G), fitness (S, B), index (S, B),
+    seeds (S,), generations, config)}`` for the evolutions' own directories (EE-ES under ``paper``)
+    and rewrites RESULTS_DIR/best_genomes.npz when anything came from a population.
+    """
+    path = os.path.join(data["results"], "best_genomes.npz")
+    stored = {}
+    if os.path.isfile(path):
+        with np.load(path) as saved:
+            stored = {name: saved[name] for name in saved.files}
+    found, fresh = {}, False
+    for (variant, condition), run in data["evolutions"].items():
+        owner = "paper" if condition == "EE-ES" else variant
+        if (owner, condition) in found:
+            continue
+        population = os.path.join(run["dir"], "final_population.npz")
+        if os.path.isfile(population):
+            with np.load(population) as pop:
+                evaluated, fitness, generations = pop["evaluated"], pop["fitness"], int(pop["generation"])
+                seeds = pop["seeds"]
+            if generations < 1:
+                continue
+            order = np.argsort(-fitness, axis=1, kind="stable")[:, :num_best]
+            entry = dict(genomes=np.take_along_axis(evaluated, order[:, :, None], 1),
+                         fitness=np.take_along_axis(fitness, order, 1), index=order, seeds=np.asarray(seeds),
+                         generations=np.asarray(generations))
+            stored.update({_key(owner, condition, f): v for f, v in entry.items()})
+            fresh = True
+        elif _key(owner, condition, "genomes") not in stored:
+            continue
+        found[owner, condition] = {f: stored[_key(owner, condition, f)]
+                                   for f in ("genomes", "fitness", "index", "seeds", "generations")}
+        found[owner, condition]["config"] = run["config"]
+    if fresh:
+        buffer = io.BytesIO()
+        np.savez_compressed(buffer, **stored)
+        with open(path + ".tmp", "wb") as f:
+            f.write(buffer.getvalue())
+        os.replace(path + ".tmp", path)
+    return found

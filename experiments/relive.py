@@ -1,0 +1,49 @@
+"""The best evolved individual lives its evaluated life again, then drives each task: paths, shares, stereotypy."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from experiments.claims import mean_speed, turn_consistency
+
+PATH_STEPS = 1000  # steps each task is driven after its learning period (shares, stereotypy)
+DRAWN_STEPS = 300  # of which the last ones are drawn
+CHILDHOOD_DRAWN_STEPS = 1000
+CHILDHOOD_TAIL = 0.25  # childhood shares: its last quarter, when the noise is nearly gone
+
+
+def relive_best(config_dict: dict, best: dict) -> dict:
+    """The fittest genome of ``best`` relives its evaluated life; then each task is driven from its final weights."""
+    import jax
+    import jax.numpy as jnp
+
+    from imrl_jax.behaviour import childhood_trajectory, colour_shares, task_trajectories
+    from imrl_jax.config import Config
+    from imrl_jax.lifetime import live
+    from imrl_jax.render import life_key
+
+    config = Config.from_dict(config_dict)
+    s = int(np.argmax(best["fitness"][:, 0]))
+    genome = jnp.asarray(best["genomes"][s, 0], jnp.float32)
+    seed, index, generation = int(best["seeds"][s]), int(best["index"][s, 0]), int(best["generations"]) - 1
+    params = config.learning_params()
+    key = life_key(config, seed, generation, index)
+    result = jax.jit(live, static_argnums=1)(key, config, params, genome)
+    tasks = task_trajectories(jax.random.fold_in(key, config.num_tasks + 1), config, params, result.adult_agents,
+                              PATH_STEPS)
+    num_experts = config.num_experts
+    pooled = type(tasks[0])(*(np.stack(x) for x in zip(*tasks)))
+    shares, steps = colour_shares(config, pooled, num_experts)
+    out = dict(config=config, seed=seed, index=index, generation=generation, fitness=float(best["fitness"][s, 0]),
+               relived_fitness=float(result.fitness), performance=[float(p) for p in result.performance],
+               tasks=tasks, shares=shares, steps=steps, childhood=None,
+               stereotypy=turn_consistency(pooled.seen_heading, pooled.heading, pooled.breaks),
+               speed=mean_speed(pooled.seen_pos, pooled.pos, pooled.breaks),
+               dominant_expert=float(np.bincount(pooled.k.reshape(-1), minlength=num_experts).max() / pooled.k.size))
+    if config.condition == "LE-LS":
+        childhood = childhood_trajectory(key, config, params, genome, config.childhood_steps)
+        tail = childhood.window(int(config.childhood_steps * (1 - CHILDHOOD_TAIL)), config.childhood_steps)
+        out["childhood"] = childhood.window(max(0, config.childhood_steps - CHILDHOOD_DRAWN_STEPS),
+                                            config.childhood_steps)
+        out["childhood_shares"], out["childhood_steps"] = colour_shares(config, tail, num_experts)
+    return out

@@ -1,0 +1,40 @@
+"""Every relative link in README.md and docs/*.md points at something that exists in a clone."""
+
+import glob
+import os
+import re
+
+import pytest
+
+from helpers import ROOT
+
+LINK = re.compile(r"!?\[[^\]]*\]\(\s*<?([^)\s>]+)>?(?:\s+\"[^\"]*\")?\s*\)")
+FENCE = re.compile(r"^(```|~~~).*?^\1", re.S | re.M)
+DOCUMENTS = ["README.md", *sorted(os.path.relpath(p, ROOT) for p in glob.glob(os.path.join(ROOT, "docs", "*.md")))]
+
+
+def broken_links(path: str) -> list[str]:
+    """The relative link targets of a markdown file (code blocks left out) that do not exist."""
+    with open(path) as f:
+        text = FENCE.sub("", f.read())
+    broken = []
+    for target in LINK.findall(text):
+        if re.match(r"[a-z][a-z0-9+.-]*:", target, re.I) or target.startswith("#"):
+            continue  # a URL, a mail address or an anchor in the same page
+        local = target.split("#")[0].split("?")[0]
+        if not os.path.exists(os.path.join(os.path.dirname(path), local)):
+            broken.append(target)
+    return broken
+
+
+@pytest.mark.parametrize("document", DOCUMENTS)
+def test_relative_links_resolve(document):
+    assert broken_links(os.path.join(ROOT, document)) == []
+
+
+def test_a_broken_link_is_found(tmp_path):
+    (tmp_path / "there.md").write_text("")
+    page = tmp_path / "page.md"
+    page.write_text("[ok](there.md#top) [web](https://example.org) [gone](docs/GONE.md) ![pic](img/x.png)\n"
+                    "```\n[in code](nowhere.md)\n```\n")
+    assert broken_links(str(page)) == ["docs/GONE.md", "img/x.png"]
