@@ -39,9 +39,10 @@ from jax.sharding import NamedSharding, PartitionSpec
 from imrl_jax.checkpoint import git_commit
 from imrl_jax.devices import make_mesh, use_host_cores
 from imrl_jax.config import CONDITIONS, PRESETS, Config, ConfigError, LearningParams, make_config
-from imrl_jax.evolve import UsageError, parse_sets, write_atomic
+from imrl_jax.cli import HelpFormatter, UsageError, parse_sets
 from imrl_jax.lifetime import State, adult_phase, grow_up, lifetime_keys, run_phase, task_spec, task_start
 from imrl_jax.progress import Progress
+from imrl_jax.rundir import best_genomes, check_writable, load_run as read_run, write_atomic
 
 
 class TestState(NamedTuple):
@@ -177,27 +178,10 @@ def curve_csv(config: Config, reaches: np.ndarray) -> str:
 # ----------------------------------------------------------------------------- command line
 
 
-def load_run(run_dir: str, num_best: int) -> tuple[Config, np.ndarray, np.ndarray]:
+def load_run(run_dir: str, num_best: int) -> tuple[Config, list[int], np.ndarray]:
     """A run's config, its seeds and the ``num_best`` best genomes (seeds, best, genes) of its last generation."""
-    config_path = os.path.join(run_dir, "config.json")
-    population_path = os.path.join(run_dir, "final_population.npz")
-    for path in (config_path, population_path):
-        if not os.path.isfile(path):
-            raise UsageError(f"{path}: not found (is {run_dir} an evolution's run directory?)")
-    try:
-        with open(config_path) as f:
-            config = Config.from_dict(json.load(f)["config"])
-        with np.load(population_path) as data:
-            seeds, generation = data["seeds"], int(data["generation"])
-            evaluated, fitness = data["evaluated"], data["fitness"]
-    except (ValueError, KeyError, OSError, ConfigError) as error:
-        raise UsageError(f"{run_dir}: unreadable run directory ({error})") from None
-    if generation < 1:
-        raise UsageError(f"{population_path}: no generation has been evaluated yet")
-    if not 1 <= num_best <= evaluated.shape[1]:
-        raise UsageError(f"--best: must be between 1 and the population size {evaluated.shape[1]}")
-    order = np.argsort(-fitness, axis=1, kind="stable")[:, :num_best]
-    return config, seeds, np.take_along_axis(evaluated, order[:, :, None], axis=1)
+    found = read_run(run_dir)
+    return found.config, found.seeds, best_genomes(found, num_best)
 
 
 def test_keys(seed: int, num_runs: int, num_best: int, num_tests: int) -> jax.Array:
@@ -255,15 +239,18 @@ def _write_plot(config: Config, reaches: np.ndarray, path: str) -> None:
     ax.legend(fontsize=8)
     ax.set_title(f"{config.condition} learning test ({reaches.shape[0]} x {reaches.shape[1]} x {reaches.shape[2]} "
                  f"tests x {config.num_tasks} tasks)", fontsize=9)
-    save(fig, path + ".tmp.png")
-    os.replace(path + ".tmp.png", path)
+    save(fig, path)
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m imrl_jax.learning_test", description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = argparse.ArgumentParser(prog="python -m imrl_jax.learning_test",
+                                description="The paper's learning tests (section 3, Fig. 3b and 3c): the best "
+                                            "individuals of an evolution, or SLE from scratch, learn each task anew.",
+                                formatter_class=HelpFormatter)
     p.add_argument("run_dir", nargs="?", help="an evolution's run directory (omit with --cond SLE)")
-    p.add_argument("--cond", help="SLE: test single-expert learning from scratch (no run directory)")
+    p.add_argument("--cond", metavar="{" + ",".join(CONDITIONS) + "}",
+                   help="SLE: test single-expert learning from scratch (no run directory); "
+                        "another condition: check that run_dir is a run of it")
     p.add_argument("--runs", type=int, default=10, help="SLE: groups of tests, like an evolution's seeds")
     p.add_argument("--preset", default="paper", choices=sorted(PRESETS), help="SLE: the learning rules' preset")
     p.add_argument("--set", action="append", metavar="FIELD=VALUE", help="SLE: set a Config field (repeatable)")
@@ -275,7 +262,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--chunks", type=int, default=10, help="pieces the test runs in (progress lines)")
     p.add_argument("--seed", type=int, default=0, help="seed of the tests' keys")
     p.add_argument("--out", required=True, help="output directory")
-    p.add_argument("--quiet", action="store_true")
+    p.add_argument("--quiet", action="store_true", help="no progress lines (for logs)")
     p.add_argument("--cpu-devices", type=int, default=0, help="CPU devices (0: one per core)")
     return p
 
@@ -296,7 +283,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             genomes = np.zeros((args.runs, args.best, 0), np.float32)
             source = f"SLE from scratch, preset {args.preset}" + "".join(f", {s}" for s in args.set or [])
         elif args.cond is not None and args.cond not in CONDITIONS:
-            raise UsageError(f"--cond: unknown condition {args.cond!r} (only SLE is tested without a run directory)")
+            raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(CONDITIONS)}; "
+                             f"only SLE is tested without a run directory)")
         else:
             if not args.run_dir:
                 raise UsageError("run_dir: give an evolution's run directory, or --cond SLE")
@@ -308,6 +296,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if config.num_bins % args.chunks:
             raise UsageError(f"--chunks: {args.bins} bins cannot be split into {args.chunks} chunks")
         steady_bins(config, args.steady_steps)
+        check_writable(args.out)
         use_host_cores(args.cpu_devices or None)
         summary = run(config, genomes, args.out, num_tests=args.tests, steady_steps=args.steady_steps,
                       num_chunks=args.chunks, seed=args.seed, quiet=args.quiet, source=source, command=command)
