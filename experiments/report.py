@@ -598,11 +598,9 @@ def _band(ax, x, mean, sd, style: dict, banded: set) -> None:
 
 
 def _style(ax, title: str, xlabel: str, ylabel: str) -> None:
-    ax.set_title(title, fontsize=9)
-    ax.set_xlabel(xlabel, fontsize=8)
-    ax.set_ylabel(ylabel, fontsize=8)
-    ax.tick_params(labelsize=7)
-    ax.grid(alpha=0.3)
+    from imrl_jax.plotting import style_axis
+
+    style_axis(ax, title, xlabel, ylabel)
 
 
 # ----------------------------------------------------------------------------- the document
