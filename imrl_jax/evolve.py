@@ -114,7 +114,7 @@ def write_outputs(out_dir: str, config: Config, seeds: Sequence[int], state: Run
         scale = "" if _is_paper_scale(config) else ", reduced scale"
         save(plot_fitness({config.condition: state.history.best[:done].T},
                           title=f"{config.condition}: best fitness per generation, mean and std over "
-                                f"{len(seeds)} seed(s){scale}"),
+                                f"{len(seeds)} seed(s){scale}", ylabel="best fitness of the population"),
              os.path.join(out_dir, "fitness.png"))
 
 

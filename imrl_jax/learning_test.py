@@ -104,15 +104,15 @@ def run_tests(keys: jax.Array, config: Config, params: LearningParams, genomes, 
     sharding = NamedSharding(make_mesh(), PartitionSpec("lanes"))
     tests = begin_all(jax.device_put(keys, sharding), params, jax.device_put(np.asarray(genomes), sharding))
     reaches, selections = [], []
-    start = time.perf_counter()
     best = np.asarray(config.theoretical_max())
+    lane_steps = num_tests * config.num_tasks * config.task_steps / num_chunks  # per chunk
     for chunk in range(num_chunks):
+        start = time.perf_counter()
         tests, curves = advance_all(params, tests)
         reaches.append(np.asarray(curves.reaches)[:num_tests])
         selections.append(np.asarray(curves.selections)[:num_tests])
         if progress is not None:
             recent = reaches[-1].sum(-1) / (best / num_chunks)  # (tests, tasks)
-            lane_steps = num_tests * config.num_tasks * (chunk + 1) * config.task_steps / num_chunks
             progress.update(chunk + 1, 0.0, 0.0, lane_steps / (time.perf_counter() - start),
                             scores=f"performance in this chunk {recent.mean():.4f}")
     return np.concatenate(reaches, -1), np.concatenate(selections, -2)
@@ -223,22 +223,24 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
 
 
 def _write_plot(config: Config, reaches: np.ndarray, path: str) -> None:
-    from imrl_jax.plotting import new_figure, save
+    from imrl_jax.plotting import new_figure, save, style_axis
 
     curve = performance_curve(config, reaches)
     bin_steps = config.task_steps // config.num_bins
-    x = (np.arange(config.num_bins) + 1) * bin_steps
+    x = (np.arange(config.num_bins) + 0.5) * bin_steps
     fig = new_figure(6.0, 3.6)
+    fig.set_layout_engine("constrained")
     ax = fig.subplots()
     per_run = curve.mean((1, 2, 3))
-    ax.fill_between(x, per_run.min(0), per_run.max(0), color="0.85", label="range over runs")
+    ax.fill_between(x, per_run.min(0), per_run.max(0), color="0.85", label="range of the runs' means")
     ax.plot(x, curve.mean((0, 1, 2, 3)), color="k", lw=2, label="mean of all tests")
-    ax.set_xlabel("cycles of the task")
-    ax.set_ylabel("performance per bin")
     ax.set_ylim(0, 1)
-    ax.legend(fontsize=8)
-    ax.set_title(f"{config.condition} learning test ({reaches.shape[0]} x {reaches.shape[1]} x {reaches.shape[2]} "
-                 f"tests x {config.num_tasks} tasks)", fontsize=9)
+    ax.set_xlim(0, config.task_steps)
+    runs, best, tests = reaches.shape[:3]
+    style_axis(ax, f"{config.condition} learning test: {runs} run(s) x {best} best x {tests} test(s), "
+                   f"{config.num_tasks} tasks each", "cycles of the task (bin centres)",
+               "performance per bin (1: straight line)")
+    ax.legend(fontsize=7)
     save(fig, path)
 
 

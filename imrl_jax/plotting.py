@@ -101,6 +101,8 @@ def draw_arena(ax, config: Config, tasks: bool = False) -> None:
     ax.set_aspect("equal")
     ax.set_xticks([])
     ax.set_yticks([])
+    for spine in ax.spines.values():  # the wall is the frame (zoom_on_task shows them again)
+        spine.set_visible(False)
     if tasks:
         for i, task in enumerate(config.tasks):
             (sx, sy), (tx, ty) = task.start, task.target
@@ -161,6 +163,9 @@ def zoom_on_task(ax, config: Config, index: int, margin: float = 70.0) -> None:
     cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
     ax.set_xlim(cx - half, cx + half)
     ax.set_ylim(cy - half, cy + half)
+    for spine in ax.spines.values():
+        spine.set_visible(True)
+        spine.set_color("0.6")
 
 
 def plot_paths(config: Config, rows: list[dict], title: str = ""):
@@ -232,7 +237,7 @@ def plot_fitness(curves: dict, title: str = "", ylabel: str = "best fitness"):
     ax.set_xlim(-0.3, max(1, max(np.shape(v)[-1] for v in curves.values()) - 1) + 0.3)
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     style_axis(ax, title, "generation", ylabel)
-    if len(curves) > 1 or next(iter(curves), ""):
+    if len(curves) > 1:
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     fig.tight_layout()
     return fig
@@ -428,8 +433,11 @@ def plot_selections(selections, title: str = "share of control per expert", bin_
     x = (np.arange(bins) + 0.5) * bin_steps
     fig = new_figure(5.0, 2.8)
     ax = fig.add_subplot()
-    ax.stackplot(x, share.T, colors=[EXPERT_COLOURS[e % len(EXPERT_COLOURS)] for e in range(num_experts)],
-                 labels=[f"expert {e + 1}" for e in range(num_experts)], alpha=0.85)
+    bottom = np.zeros(bins)
+    for e in range(num_experts):  # stacked bars, one per bin: the shares are per bin
+        ax.bar(x, share[:, e], bin_steps, bottom=bottom, color=EXPERT_COLOURS[e % len(EXPERT_COLOURS)],
+               label=f"expert {e + 1}", alpha=0.85, lw=0)
+        bottom = bottom + share[:, e]
     ax.set_ylim(0, 1)
     ax.set_xlim(x[0] - bin_steps / 2, x[-1] + bin_steps / 2)
     style_axis(ax, title, xlabel, "share of steps", grid=False)
