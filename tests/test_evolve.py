@@ -60,6 +60,10 @@ def test_run_directory_contents(finished_run):
         assert b"\r" not in f.read()  # LF line endings, as every other text file the run writes
     rows = history.strip().splitlines()
     assert rows[0].startswith("generation,seed,best,mean,std,best_task1") and len(rows) == 1 + 6 * 2
+    import json
+
+    with open(os.path.join(finished_run, "checkpoints", "6", "meta", "metadata")) as f:
+        assert json.load(f)["elapsed_seconds"] > 0  # a resumed run's progress line counts on from it
     assert arrays["evaluated"].shape == (2, 6, 222) and arrays["fitness"].shape == (2, 6)
     last = [row.split(",") for row in rows[-2:]]
     np.testing.assert_allclose([float(r[2]) for r in last], arrays["fitness"].max(1), atol=1e-6)
