@@ -7,7 +7,7 @@ import numpy as np
 from experiments.claims import SEEN
 from experiments.relive import DRAWN_STEPS
 from experiments.reproduce import TESTED
-from imrl_jax.plotting import _style_axis
+from imrl_jax.plotting import style_axis
 
 
 def _curves_figure(series: dict, title: str, xlabel: str, ylabel: str, integer_x: bool = False):
@@ -28,7 +28,7 @@ def _curves_figure(series: dict, title: str, xlabel: str, ylabel: str, integer_x
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     else:
         ax.set_xlim(left=0)
-    _style_axis(ax, title, xlabel, ylabel)
+    style_axis(ax, title, xlabel, ylabel)
     ax.legend(fontsize=7)
     fig.tight_layout()
     return fig
@@ -62,7 +62,7 @@ def fig_steady(steady: dict, variants: list[str], title: str):
         ax.bar(x - 0.19, mean, 0.38, yerr=sd, color="0.35", capsize=3, label="mean over runs")
         ax.bar(x + 0.19, best, 0.38, color="0.75", label="best run")
         ax.set_xticks(x, TESTED, fontsize=7)
-        _style_axis(ax, variant, "", "steady-state performance" if ax is axes[0] else "")
+        style_axis(ax, variant, "", "steady-state performance" if ax is axes[0] else "")
         ax.grid(False, axis="x")
     axes[0].set_ylim(bottom=0)
     axes[-1].legend(fontsize=7)
@@ -109,7 +109,7 @@ def fig_paths(life: dict, title: str):
     for e, label in enumerate(ax.get_xticklabels()):
         label.set_color(EXPERT_COLOURS[e % len(EXPERT_COLOURS)])
     ax.set_ylim(0, 1)
-    _style_axis(ax, "what each expert sees (central receptors)", "", "share of readings")
+    style_axis(ax, "what each expert sees (central receptors)", "", "share of readings")
     ax.legend(fontsize=6, ncol=2)
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()

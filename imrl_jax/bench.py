@@ -247,7 +247,10 @@ def run(lane_counts, steps: int, repeats: int, reference_steps: int, lifetime_la
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m imrl_jax.bench", description=__doc__.split("\n")[0])
+    from imrl_jax.cli import HelpFormatter
+
+    parser = argparse.ArgumentParser(prog="python -m imrl_jax.bench", description=__doc__.split("\n")[0],
+                                     formatter_class=HelpFormatter)
     parser.add_argument("--lanes", default="1,50,300,3000", help="comma-separated lane counts")
     parser.add_argument("--steps", type=int, default=1000, help="steps per timed phase run")
     parser.add_argument("--repeats", type=int, default=5, help="timed runs after compilation (median)")
@@ -300,7 +303,7 @@ def main(argv=None) -> int:
     result = run(counts["lanes"], args.steps, args.repeats, args.reference_steps, counts["lifetime_lanes"],
                  args.lifetime_task_steps, kernels=kernels)
     if args.json:
-        from imrl_jax.evolve import write_atomic
+        from imrl_jax.rundir import write_atomic
 
         write_atomic(args.json, json.dumps(result, indent=2).encode())
     return 0

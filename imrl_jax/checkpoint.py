@@ -10,7 +10,10 @@ the newest cannot be read, and says so.
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import os
+import re
 import subprocess
 from typing import NamedTuple
 
@@ -56,6 +59,31 @@ def git_commit() -> str:
         return "unknown"
 
 
+def unreadable_reason(error: BaseException, directory: str = "", limit: int = 160) -> str:
+    """One short line saying why a checkpoint could not be read (no object reprs, paths relative, cut at a word)."""
+    text = " ".join(str(error).split()) or type(error).__name__
+    text = re.sub(r"\s*\[source locations=.*", "", text)
+    text = re.sub(r"<[^<>]*? at 0x[0-9a-fA-F]+>", "(an object)", text)
+    text = re.sub(r"<[^<>]*>", "(an object)", text)
+    if directory:
+        text = text.replace(os.path.join(directory, ""), "").replace(directory, ".")
+    if len(text) > limit:
+        text = text[:limit].rsplit(" ", 1)[0].rstrip(",;:") + " ..."
+    return text
+
+
+@contextlib.contextmanager
+def _quiet_absl():
+    """orbax logs each unreadable file on the absl logger; the caller reports it in one line instead."""
+    logger = logging.getLogger("absl")
+    level = logger.level
+    logger.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
+
+
 def _ocp():
     import orbax.checkpoint as ocp
 
@@ -96,8 +124,9 @@ class Checkpointer:
         abstract = jax.tree.map(ocp.utils.to_shape_dtype_struct, template._asdict())
         for step in reversed(self.steps()):
             try:
-                restored = self.manager.restore(step, args=ocp.args.Composite(
-                    state=ocp.args.StandardRestore(abstract), meta=ocp.args.JsonRestore()))
+                with _quiet_absl():
+                    restored = self.manager.restore(step, args=ocp.args.Composite(
+                        state=ocp.args.StandardRestore(abstract), meta=ocp.args.JsonRestore()))
                 state = restored.state
                 history = state["history"]
                 history = History(**history) if isinstance(history, dict) else History(*history)
@@ -109,7 +138,7 @@ class Checkpointer:
                     raise ValueError(f"generation recorded as {int(state.generation)}")
                 return state, dict(restored.meta)
             except Exception as error:  # noqa: BLE001 - any failure means "unreadable"
-                reason = str(error).strip().splitlines()[0][:200] if str(error).strip() else type(error).__name__
+                reason = unreadable_reason(error, os.path.join(self.directory, str(step)))
                 warn(f"checkpoint {os.path.join(self.directory, str(step))} is unreadable ({reason}); "
                      f"trying an older one")
         return None
@@ -118,4 +147,4 @@ class Checkpointer:
         self.manager.close()
 
 
-__all__ = ["Checkpointer", "History", "RunState", "empty_history", "git_commit"]
+__all__ = ["Checkpointer", "History", "RunState", "empty_history", "git_commit", "unreadable_reason"]

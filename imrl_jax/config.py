@@ -277,10 +277,31 @@ def make_config(preset: str = "paper", **overrides) -> Config:
     return Config().replace(**{**PRESETS[preset], **overrides})
 
 
+def _non_finite_field(c: Config) -> str | None:
+    """The first field holding a float that is NaN or infinite (in a tuple or a task too), or None."""
+
+    def numbers(value):
+        if isinstance(value, float):
+            yield value
+        elif isinstance(value, (tuple, list)):
+            for item in value:
+                yield from numbers(item)
+        elif isinstance(value, Task):
+            yield from numbers((value.start, value.heading_deg, value.target))
+
+    for field in dataclasses.fields(c):
+        if not all(math.isfinite(v) for v in numbers(getattr(c, field.name))):
+            return field.name
+    return None
+
+
 def _validate(c: Config) -> None:
     def fail(field: str, why: str):
         raise ConfigError(f"{field}: {why} (got {getattr(c, field)!r})")
 
+    non_finite = _non_finite_field(c)
+    if non_finite is not None:
+        fail(non_finite, "must be a finite number")
     if c.condition not in CONDITIONS:
         fail("condition", f"must be one of {', '.join(CONDITIONS)}")
     if c.step_kernel not in STEP_KERNELS:
@@ -328,6 +349,10 @@ def _validate(c: Config) -> None:
                  "childhood_eta_selector_actor", "childhood_eta_selector_critic"):
         if getattr(c, name) < 0:
             fail(name, "must be non-negative")
+    if not 0.0 < c.max_turn_deg <= 180.0:
+        fail("max_turn_deg", "must be in (0, 180]")
+    if c.colour_tie_tolerance < 0:
+        fail("colour_tie_tolerance", "must be non-negative")
     for name in ("arena_size", "edge_length", "line_half_width", "robot_radius", "max_speed",
                  "target_radius"):
         if getattr(c, name) <= 0:

@@ -121,8 +121,8 @@ class ControllerState(NamedTuple):
     reaches: jnp.ndarray
 
 
-def _run(config: Config, num_steps: int, task_index, route_index) -> jnp.ndarray:
-    """Reaches of the route of task ``route_index`` driven on task ``task_index``."""
+def _run(config: Config, num_steps: int, task_index, route_index, record: bool = False):
+    """Reaches of the route of task ``route_index`` driven on task ``task_index`` (and, if ``record``, each step)."""
     task = task_spec(config, task_index)
     colours, lengths = route_table(config)
     route, length = colours[route_index], lengths[route_index]
@@ -153,12 +153,15 @@ def _run(config: Config, num_steps: int, task_index, route_index) -> jnp.ndarray
             trial_step=jnp.where(reset, 0, trial_step),
             reaches=state.reaches + reached,
         )
-        return new, None
+        if not record:
+            return new, None
+        colour = route[stage]  # the follower in control: 0 red, 1 green, 2 blue
+        return new, (state.pose.pos, state.pose.heading, pose.pos, pose.heading, colour, reached, timeout)
 
     start = ControllerState(task.start, jnp.int32(0), jnp.int32(0), jnp.zeros((), dtype),
                             jnp.int32(0), jnp.int32(0))
-    final, _ = jax.lax.scan(one_step, start, None, length=num_steps)
-    return final.reaches
+    final, steps = jax.lax.scan(one_step, start, None, length=num_steps)
+    return (final.reaches, steps) if record else final.reaches
 
 
 def run_controller(config: Config, task_index, num_steps: int, route_index=None) -> jnp.ndarray:
@@ -176,6 +179,23 @@ def run_controller(config: Config, task_index, num_steps: int, route_index=None)
 def run_many(config: Config, num_steps: int, task_indices, route_indices) -> jnp.ndarray:
     """Reaches of many (task, route) runs at once: one compilation, vmapped."""
     return jax.vmap(lambda t, r: _run(config, num_steps, t, r))(task_indices, route_indices)
+
+
+@functools.partial(jax.jit, static_argnums=(0, 1))
+def _recorded(config: Config, num_steps: int):
+    tasks = jnp.arange(config.num_tasks)
+    return jax.vmap(lambda t: _run(config, num_steps, t, t, record=True)[1])(tasks)
+
+
+def trajectories(config: Config, num_steps: int) -> list:
+    """The composition's first ``num_steps`` steps on each task as :class:`imrl_jax.behaviour.Trajectory`
+    (``k``: the colour followed, 0 red, 1 green, 2 blue)."""
+    import numpy as np
+
+    from imrl_jax.behaviour import Trajectory
+
+    steps = [np.asarray(x) for x in _recorded(config, num_steps)]
+    return [Trajectory(*(x[i] for x in steps)) for i in range(config.num_tasks)]
 
 
 def performance(config: Config, num_steps: int) -> jnp.ndarray:

@@ -1,11 +1,13 @@
-"""A short CPU example of the model: one individual's childhood and adulthood (section 2).
+"""A short CPU example of the model: the six tasks solved, and one random individual's life (section 2).
 
     python -m imrl_jax.demo --out out/demo [--condition LE-LS] [--seed 0]
 
-Lives one random individual of the condition at reduced length (the ``small`` preset:
-15,000 childhood steps, 5,000 steps per task), prints its fitness and per-task
-performance, and writes ``trajectories.png`` (the arena, the first childhood steps and a
-path on each task, coloured by the expert in control) and ``summary.json``.
+Draws what solving the tasks looks like (a hand-written composition of three colour
+followers, :mod:`imrl_jax.controllers`: not evolved, a reference) beside one random
+individual of the condition, as evolution starts from it, living at reduced length (the
+``small`` preset: 15,000 childhood steps, 5,000 steps per task). Prints the individual's
+fitness and per-task performance and writes ``trajectories.png`` (paths coloured by the
+expert in control) and ``summary.json``.
 """
 
 from __future__ import annotations
@@ -17,28 +19,24 @@ import sys
 import time
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
-from imrl_jax.config import CONDITIONS, Config, ConfigError, make_config
-from imrl_jax.lifetime import (CHILDHOOD, adult_phase, childhood_task, init_state, lifetime_keys, live,
-                               random_pose, simulate, task_spec)
-from imrl_jax.networks import decode
+from imrl_jax.cli import HelpFormatter, UsageError
+from imrl_jax.config import CONDITIONS, PRESETS, Config, ConfigError, make_config
+from imrl_jax.rundir import check_writable, write_atomic
 
 PATH_STEPS = 400  # steps of each task path drawn after the lifetime
 CHILDHOOD_PATH_STEPS = 2000
-
-
-def _record(record) -> dict:
-    pos = np.asarray(record.pose.pos)
-    breaks = np.asarray(record.reached | record.timeout)
-    return {"pos": pos, "k": np.asarray(record.k), "breaks": breaks}
+FOLLOWS = ("follows red", "follows green", "follows blue")
 
 
 def run(config: Config, out_dir: str, seed: int = 0) -> dict:
-    """Live one random individual, write the figure and summary into ``out_dir``; return the summary."""
-    from imrl_jax.plotting import plot_life
+    """Drive the composition, live one random individual, write the figure and summary into ``out_dir``; return the summary."""
+    from imrl_jax import behaviour, controllers
+    from imrl_jax.lifetime import live
+    from imrl_jax.plotting import plot_paths, save
 
+    check_writable(out_dir)
     os.makedirs(out_dir, exist_ok=True)
     key = jax.random.key(seed)
     key_genome, key_life, key_paths = jax.random.split(key, 3)
@@ -51,38 +49,31 @@ def run(config: Config, out_dir: str, seed: int = 0) -> dict:
     fitness = float(result.fitness)
     seconds = time.perf_counter() - start
 
-    # Paths for the figure: the first childhood steps (same key and start pose as the life),
-    # then each task from the weights the selector had at the end of that task.
+    # Paths: the first childhood steps (the same draws as the life), then each task from the
+    # weights the selector had at the end of that task.
     childhood = None
     if config.condition == "LE-LS":
-        keys = lifetime_keys(key_life, config.num_tasks)
-        state = init_state(config, decode(config, genome), random_pose(keys.pose, config))
-        _, record = jax.jit(simulate, static_argnums=(1, 2, 6, 7))(
-            keys.childhood, config, CHILDHOOD, params, childhood_task(config), state,
-            CHILDHOOD_PATH_STEPS, config.childhood_steps)
-        childhood = _record(record)
+        childhood = behaviour.childhood_trajectory(key_life, config, params, genome, CHILDHOOD_PATH_STEPS)
+    paths = behaviour.task_trajectories(key_paths, config, params, result.adult_agents, PATH_STEPS)
+    solved = controllers.trajectories(config, PATH_STEPS)
+    trips = np.asarray(config.steps_per_trip())
+    solved_performance = [float(t.reached.sum() * n / PATH_STEPS) for t, n in zip(solved, trips)]
 
-    phase = adult_phase(config.condition)
-
-    def task_path(task_key, index, agent):
-        task = task_spec(config, index)
-        _, record = simulate(task_key, config, phase, params, task, init_state(config, agent, task.start),
-                             PATH_STEPS, config.task_steps)
-        return record
-
-    records = jax.jit(jax.vmap(task_path))(jax.random.split(key_paths, config.num_tasks),
-                                          jnp.arange(config.num_tasks), result.adult_agents)
-    tasks = []
-    for i in range(config.num_tasks):
-        entry = _record(jax.tree.map(lambda x: x[i], records))
-        entry["label"] = f"perf {float(result.performance[i]):.2f}"
-        tasks.append(entry)
-
-    figure = os.path.join(out_dir, "trajectories.png")
-    plot_life(config, childhood, tasks, figure,
-              title=f"{config.condition}, one random individual, reduced scale "
-                    f"(childhood {config.childhood_steps:,}, {config.task_steps:,} steps/task): "
-                    f"fitness {fitness:.3f}")
+    scale = f"childhood {config.childhood_steps:,} steps, " if config.condition == "LE-LS" else ""
+    rows = [
+        dict(name="The tasks solved: a hand-written composition of three colour followers (not evolved), "
+                  "one colour per edge of the route",
+             tasks=[dict(t.as_path(), label=f"perf {p:.2f}") for t, p in zip(solved, solved_performance)],
+             experts=list(FOLLOWS[:config.num_experts])),
+        dict(name=f"A random {config.condition} individual (what evolution starts from), fitness {fitness:.3f}: "
+                  f"its selector switches expert almost every step",
+             childhood=childhood.as_path() if childhood is not None else None,
+             tasks=[dict(t.as_path(), label=f"perf {float(p):.2f}") for t, p in zip(paths, result.performance)]),
+    ]
+    title = (f"Paths coloured by the expert in control, {PATH_STEPS} steps per task (the robot restarts at the "
+             f"start after each reach or timeout);\nthe random individual after its life at reduced scale "
+             f"({scale}{config.task_steps:,} steps per task)")
+    figure = save(plot_paths(config, rows, title), os.path.join(out_dir, "trajectories.png"))
     summary = {
         "condition": config.condition,
         "seed": seed,
@@ -92,32 +83,36 @@ def run(config: Config, out_dir: str, seed: int = 0) -> dict:
         "performance": [float(p) for p in result.performance],
         "reaches": [int(r) for r in result.reaches],
         "timeouts": [int(t) for t in result.timeouts],
+        "composition_performance": solved_performance,
         "seconds_with_compile": seconds,
         "figure": figure,
     }
-    with open(os.path.join(out_dir, "summary.json"), "w") as f:
-        json.dump(summary, f, indent=2)
+    write_atomic(os.path.join(out_dir, "summary.json"), json.dumps(summary, indent=2).encode())
     return summary
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m imrl_jax.demo", description=__doc__.split("\n")[0])
-    parser.add_argument("--out", default="out/demo", help="output directory (default: out/demo)")
-    parser.add_argument("--condition", default="LE-LS", choices=CONDITIONS, help="condition to live")
+    parser = argparse.ArgumentParser(prog="python -m imrl_jax.demo", description=__doc__.split("\n")[0],
+                                     formatter_class=HelpFormatter)
+    parser.add_argument("--out", default="out/demo", help="output directory")
+    parser.add_argument("--condition", default="LE-LS", choices=CONDITIONS, help="condition of the random individual")
     parser.add_argument("--seed", type=int, default=0, help="random seed of the individual and its life")
-    parser.add_argument("--preset", default="small", help="config preset (default: small, reduced scale)")
+    parser.add_argument("--preset", default="small", choices=sorted(PRESETS),
+                        help="config preset (small: reduced scale, about a minute on a CPU)")
     args = parser.parse_args(argv)
     try:
         config = make_config(args.preset, condition=args.condition)
-    except ConfigError as error:
+        summary = run(config, args.out, args.seed)
+    except (ConfigError, UsageError) as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
-    summary = run(config, args.out, args.seed)
     print(f"{config.condition} individual (seed {args.seed}), reduced scale: childhood "
           f"{summary['childhood_steps']:,} steps, {config.task_steps:,} steps per task")
     for i, (p, r) in enumerate(zip(summary["performance"], summary["reaches"])):
         print(f"  task {i + 1}: {r:4d} reaches, performance {p:.3f}")
     print(f"fitness {summary['fitness']:.3f}  ({summary['seconds_with_compile']:.1f} s with compilation)")
+    print("the hand-written colour followers, for comparison: performance "
+          + " ".join(f"{p:.2f}" for p in summary["composition_performance"]))
     print(f"wrote {summary['figure']}")
     return 0
 

@@ -30,16 +30,15 @@ import numpy as np
 
 import imrl_jax
 from imrl_jax.checkpoint import Checkpointer, History, RunState, empty_history, git_commit
+from imrl_jax.cli import HelpFormatter, UsageError, parse_sets
 from imrl_jax.devices import (make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
                               use_host_cores)
 from imrl_jax.config import CONDITIONS, EVOLVED_CONDITIONS, PRESETS, Config, ConfigError, make_config
 from imrl_jax.ga import init_population, make_generation
 from imrl_jax.progress import Progress
+from imrl_jax.rundir import check_writable, read_config, write_atomic
 
-
-class UsageError(Exception):
-    """Bad input: reported as one line, exit code 2, nothing written."""
-
+__all__ = ["UsageError", "parse_sets", "write_atomic", "run", "main"]  # the first three re-exported
 
 # ----------------------------------------------------------------------------- state
 
@@ -87,18 +86,10 @@ def record(history: History, generation: int, fitness: np.ndarray, performance: 
 # ----------------------------------------------------------------------------- outputs
 
 
-def write_atomic(path: str, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file, so a reader never sees half of it."""
-    tmp = f"{path}.tmp-{os.getpid()}"
-    with open(tmp, "wb") as f:
-        f.write(data)
-    os.replace(tmp, path)
-
-
 def history_csv(history: History, generations: int, seeds: Sequence[int]) -> str:
     """The history of the finished generations as CSV text."""
     out = io.StringIO()
-    writer = csv.writer(out)
+    writer = csv.writer(out, lineterminator="\n")
     num_tasks = history.best_performance.shape[-1]
     writer.writerow(["generation", "seed", "best", "mean", "std"] + [f"best_task{i + 1}" for i in range(num_tasks)])
     for g in range(generations):
@@ -111,7 +102,7 @@ def history_csv(history: History, generations: int, seeds: Sequence[int]) -> str
 
 def write_outputs(out_dir: str, config: Config, seeds: Sequence[int], state: RunState) -> None:
     """Rewrite history.csv, fitness.png and final_population.npz from a state."""
-    from imrl_jax.plotting import plot_fitness
+    from imrl_jax.plotting import plot_fitness, save
 
     done = int(state.generation)
     write_atomic(os.path.join(out_dir, "history.csv"), history_csv(state.history, done, seeds).encode())
@@ -120,11 +111,11 @@ def write_outputs(out_dir: str, config: Config, seeds: Sequence[int], state: Run
              fitness=to_host(state.fitness), next_population=to_host(state.populations))
     write_atomic(os.path.join(out_dir, "final_population.npz"), buffer.getvalue())
     if done:
-        path = os.path.join(out_dir, "fitness.png")
-        plot_fitness({config.condition: state.history.best[:done]}, path + ".tmp.png",
-                     title=f"{config.condition}: best fitness, mean and std over {len(seeds)} seed(s)"
-                           + ("" if _is_paper_scale(config) else " (reduced scale)"))
-        os.replace(path + ".tmp.png", path)
+        scale = "" if _is_paper_scale(config) else ", reduced scale"
+        save(plot_fitness({config.condition: state.history.best[:done].T},
+                          title=f"{config.condition}: best fitness per generation, mean and std over "
+                                f"{len(seeds)} seed(s){scale}", ylabel="best fitness of the population"),
+             os.path.join(out_dir, "fitness.png"))
 
 
 def _is_paper_scale(config: Config) -> bool:
@@ -148,13 +139,7 @@ def check_run_dir(out_dir: str, config: Config, seeds: Sequence[int], resume: bo
     if os.path.exists(out_dir) and not os.path.isdir(out_dir):
         raise UsageError(f"--out: {out_dir} is not a directory")
     if exists:
-        try:
-            with open(config_path) as f:
-                saved = json.load(f)
-            saved_config = Config.from_dict(saved["config"])
-            saved_seeds = list(saved["seeds"])
-        except (OSError, ValueError, KeyError, TypeError) as error:
-            raise UsageError(f"{config_path} is unreadable ({error})") from None
+        saved_config, saved_seeds = read_config(out_dir)
         if saved_seeds != list(seeds):
             raise UsageError(f"--resume: seeds {list(seeds)} differ from the run's {saved_seeds}")
         for field in dataclasses.fields(Config):
@@ -175,19 +160,35 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bo
         raise UsageError("--seeds: need at least one seed, all distinct and non-negative")
     if checkpoint_every < 1:
         raise UsageError("--checkpoint-every: must be at least 1")
+    if keep < 1:
+        raise UsageError("--keep: must be at least 1 (a run keeps its latest checkpoint to resume from)")
+    check_writable(out_dir)
     check_run_dir(out_dir, config, seeds, resume)
     if jax.process_count() > 1:  # every process checks before the leader writes
         from jax.experimental import multihost_utils
 
         multihost_utils.sync_global_devices("imrl_jax.evolve: run directory checked")
     leader = jax.process_index() == 0
-    progress = Progress(config.num_generations, quiet=quiet or not leader)
 
     mesh = make_mesh()
     sharding = population_sharding(mesh, len(seeds), config.population_size)
     state = initial_state(config, seeds, sharding)
-    os.makedirs(out_dir, exist_ok=True)
+    try:
+        os.makedirs(out_dir, exist_ok=True)
+    except OSError as error:
+        raise UsageError(f"--out: cannot create {out_dir} ({error.strerror or error})") from None
     checkpointer = Checkpointer(os.path.join(out_dir, "checkpoints"), keep=keep)
+    try:
+        return _evolve(config, out_dir, seeds, state, sharding, mesh, checkpointer, resume=resume,
+                       checkpoint_every=checkpoint_every, quiet=quiet or not leader, leader=leader)
+    finally:
+        checkpointer.close()
+
+
+def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sharding, mesh,
+            checkpointer: Checkpointer, *, resume: bool, checkpoint_every: int, quiet: bool, leader: bool) -> RunState:
+    """The generations of :func:`run` after its checks (resuming from the latest good checkpoint)."""
+    progress = Progress(config.num_generations, quiet=quiet, first_index=0)
     meta = {"config": config.to_dict(), "seeds": seeds}
     if resume:
         restored = checkpointer.restore_latest(state, warn=progress.message)
@@ -199,9 +200,11 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bo
             state, saved_meta = restored
             if not np.array_equal(state.key_data, np.asarray(jax.random.key_data(seed_keys(seeds)))):
                 raise UsageError("--resume: the checkpoint's keys do not match the seeds")
-            progress = Progress(config.num_generations, done=int(state.generation), quiet=quiet or not leader)
-            progress.message(f"resuming {out_dir} after generation {int(state.generation)} "
-                             f"(checkpoint of commit {saved_meta.get('git_commit', 'unknown')[:12]})")
+            progress = Progress(config.num_generations, done=int(state.generation), quiet=quiet, first_index=0,
+                                elapsed=float(saved_meta.get("elapsed_seconds", 0.0)))
+            progress.message(f"resuming {out_dir} after generation {int(state.generation) - 1} "
+                             f"({int(state.generation)} of {config.num_generations} done; checkpoint of commit "
+                             f"{saved_meta.get('git_commit', 'unknown')[:12]})")
     elif leader:
         info = {**meta, "version": imrl_jax.__version__, "git_commit": git_commit(),
                 "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "devices": len(jax.devices()),
@@ -221,13 +224,15 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bo
         seconds = time.perf_counter() - start
         state = RunState(np.asarray(g + 1, np.int32), populations, evaluated, stats.fitness, state.key_data,
                          record(state.history, g, fitness, performance))
-        progress.update(g + 1, float(fitness.max()), float(fitness.mean()), lane_steps / seconds)
+        best = fitness.max(1)
+        progress.update(g + 1, float(best.max()), float(fitness.mean()), lane_steps / seconds,
+                        scores=f"best fitness: max over seeds {best.max():.4f}, mean over seeds {best.mean():.4f}")
         if (g + 1) % checkpoint_every == 0 or g + 1 == config.num_generations:
-            checkpointer.save(state, meta)  # every process: orbax saves collectively
+            # every process: orbax saves collectively
+            checkpointer.save(state, {**meta, "elapsed_seconds": round(progress.elapsed(), 3)})
             _write_outputs_from_leader(out_dir, config, seeds, state, leader)
     if first == config.num_generations:  # a finished run resumed: its outputs are rewritten once
         _write_outputs_from_leader(out_dir, config, seeds, state, leader)
-    checkpointer.close()
     return state
 
 
@@ -241,38 +246,6 @@ def _write_outputs_from_leader(out_dir: str, config: Config, seeds: Sequence[int
 
 
 # ----------------------------------------------------------------------------- CLI
-
-
-def _parse_value(field: dataclasses.Field, text: str):
-    default = field.default if field.default is not dataclasses.MISSING else None
-    if isinstance(default, bool):
-        if text.lower() in ("1", "true", "yes"):
-            return True
-        if text.lower() in ("0", "false", "no"):
-            return False
-        raise ValueError(text)
-    if isinstance(default, int):
-        return int(text)
-    if isinstance(default, float):
-        return float(text)
-    if isinstance(default, str):
-        return text
-    raise ValueError("not settable from the command line")
-
-
-def parse_sets(items: Sequence[str] | None) -> dict:
-    """``--set FIELD=VALUE`` options as Config overrides, each value of its field's type (raises UsageError)."""
-    fields = {f.name: f for f in dataclasses.fields(Config)}
-    overrides = {}
-    for item in items or []:
-        name, sep, text = item.partition("=")
-        if not sep or name not in fields:
-            raise UsageError(f"--set {item}: expected FIELD=VALUE with a Config field name")
-        try:
-            overrides[name] = _parse_value(fields[name], text)
-        except ValueError:
-            raise UsageError(f"--set {item}: {name} cannot take the value {text!r}") from None
-    return overrides
 
 
 def build_config(args) -> Config:
@@ -296,30 +269,30 @@ def parser() -> argparse.ArgumentParser:
         prog="python -m imrl_jax.evolve",
         description="Evolve one of the paper's conditions for several seeds at once "
                     "(Schembri, Mirolli & Baldassarre 2007).",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+        formatter_class=HelpFormatter)
     p.add_argument("--cond", required=True, metavar="{" + ",".join(EVOLVED_CONDITIONS) + "}",
                    help="condition to evolve (SLE is not evolved)")
     p.add_argument("--seeds", type=int, default=1, help="number of independent evolutions (seeds)")
     p.add_argument("--first-seed", type=int, default=0, help="seed of the first evolution; the others follow")
     p.add_argument("--preset", default="paper", choices=sorted(PRESETS),
                    help="paper: full scale; extension: paper scale with the learning extensions; small: reduced lengths for quick CPU checks")
-    p.add_argument("--generations", type=int, help="generations (paper: 100)")
-    p.add_argument("--population", type=int, help="population size (paper: 50)")
-    p.add_argument("--parents", type=int, help="best individuals that reproduce (paper: 10)")
-    p.add_argument("--elites", type=int, help="parents copied unmutated (paper: 0)")
-    p.add_argument("--childhood-steps", type=int, help="LE-LS childhood length (paper: 150000)")
-    p.add_argument("--task-steps", type=int, help="steps per adulthood task (paper: 100000)")
-    p.add_argument("--bins", type=int, help="bins of the per-task reward curves")
+    p.add_argument("--generations", type=int, help="generations (default: the preset's; paper 100, small 10)")
+    p.add_argument("--population", type=int, help="population size (default: the preset's; paper 50, small 20)")
+    p.add_argument("--parents", type=int, help="best individuals that reproduce (default: the preset's; paper 10, small 4)")
+    p.add_argument("--elites", type=int, help="parents copied unmutated (default: the preset's; paper 0)")
+    p.add_argument("--childhood-steps", type=int, help="LE-LS childhood length (default: the preset's; paper 150000, small 15000)")
+    p.add_argument("--task-steps", type=int, help="steps per adulthood task (default: the preset's; paper 100000, small 5000)")
+    p.add_argument("--bins", type=int, help="bins of the per-task reward curves (default: the preset's; paper 100, small 10)")
     p.add_argument("--set", action="append", metavar="FIELD=VALUE",
                    help="set any scalar Config field, e.g. --set trace_lambda=0.9 (repeatable)")
     p.add_argument("--out", help="run directory (default: runs/COND)")
     p.add_argument("--resume", action="store_true", help="continue the run in --out from its latest checkpoint")
     p.add_argument("--checkpoint-every", type=int, default=1, help="generations between checkpoints")
-    p.add_argument("--keep", type=int, default=3, help="checkpoints kept")
+    p.add_argument("--keep", type=int, default=3, help="checkpoints kept (at least 1)")
     p.add_argument("--quiet", action="store_true", help="no progress line (for logs)")
     p.add_argument("--cpu-devices", type=int, default=0,
                    help="CPU devices to split the lanes over (0: one per core; ignored if XLA_FLAGS sets it)")
-    p.add_argument("--coordinator", help="multi-host: coordinator address host:port (or JAX_COORDINATOR_ADDRESS)")
+    p.add_argument("--coordinator", help="multi-host: coordinator address host:port (default: JAX_COORDINATOR_ADDRESS; none: one process)")
     p.add_argument("--num-processes", type=int, help="multi-host: number of processes (or JAX_NUM_PROCESSES)")
     p.add_argument("--process-id", type=int, help="multi-host: this process's id (or JAX_PROCESS_ID)")
     return p
@@ -381,9 +354,9 @@ def main(argv=None) -> int:
     if jax.process_index() == 0:
         done = int(state.generation)
         best = state.history.best[done - 1]
-        print(f"{config.condition}: {done} generations x {args.seeds} seed(s) done; final best fitness "
-              f"{float(best.mean()):.4f} (mean over seeds; per seed "
-              f"{', '.join(f'{b:.3f}' for b in best)}); outputs in {out_dir}")
+        print(f"{config.condition}: generations 0-{done - 1} x {args.seeds} seed(s) done; best fitness of "
+              f"generation {done - 1}: max over seeds {float(best.max()):.4f}, mean over seeds "
+              f"{float(best.mean()):.4f} (per seed {', '.join(f'{b:.3f}' for b in best)}); outputs in {out_dir}")
     return 0
 
 

@@ -39,9 +39,10 @@ from jax.sharding import NamedSharding, PartitionSpec
 from imrl_jax.checkpoint import git_commit
 from imrl_jax.devices import make_mesh, use_host_cores
 from imrl_jax.config import CONDITIONS, PRESETS, Config, ConfigError, LearningParams, make_config
-from imrl_jax.evolve import UsageError, parse_sets, write_atomic
+from imrl_jax.cli import HelpFormatter, UsageError, parse_sets
 from imrl_jax.lifetime import State, adult_phase, grow_up, lifetime_keys, run_phase, task_spec, task_start
 from imrl_jax.progress import Progress
+from imrl_jax.rundir import best_genomes, check_writable, load_run as read_run, write_atomic
 
 
 class TestState(NamedTuple):
@@ -103,15 +104,15 @@ def run_tests(keys: jax.Array, config: Config, params: LearningParams, genomes, 
     sharding = NamedSharding(make_mesh(), PartitionSpec("lanes"))
     tests = begin_all(jax.device_put(keys, sharding), params, jax.device_put(np.asarray(genomes), sharding))
     reaches, selections = [], []
-    start = time.perf_counter()
     best = np.asarray(config.theoretical_max())
+    lane_steps = num_tests * config.num_tasks * config.task_steps / num_chunks  # per chunk
     for chunk in range(num_chunks):
+        start = time.perf_counter()
         tests, curves = advance_all(params, tests)
         reaches.append(np.asarray(curves.reaches)[:num_tests])
         selections.append(np.asarray(curves.selections)[:num_tests])
         if progress is not None:
             recent = reaches[-1].sum(-1) / (best / num_chunks)  # (tests, tasks)
-            lane_steps = num_tests * config.num_tasks * (chunk + 1) * config.task_steps / num_chunks
             progress.update(chunk + 1, 0.0, 0.0, lane_steps / (time.perf_counter() - start),
                             scores=f"performance in this chunk {recent.mean():.4f}")
     return np.concatenate(reaches, -1), np.concatenate(selections, -2)
@@ -177,27 +178,10 @@ def curve_csv(config: Config, reaches: np.ndarray) -> str:
 # ----------------------------------------------------------------------------- command line
 
 
-def load_run(run_dir: str, num_best: int) -> tuple[Config, np.ndarray, np.ndarray]:
+def load_run(run_dir: str, num_best: int) -> tuple[Config, list[int], np.ndarray]:
     """A run's config, its seeds and the ``num_best`` best genomes (seeds, best, genes) of its last generation."""
-    config_path = os.path.join(run_dir, "config.json")
-    population_path = os.path.join(run_dir, "final_population.npz")
-    for path in (config_path, population_path):
-        if not os.path.isfile(path):
-            raise UsageError(f"{path}: not found (is {run_dir} an evolution's run directory?)")
-    try:
-        with open(config_path) as f:
-            config = Config.from_dict(json.load(f)["config"])
-        with np.load(population_path) as data:
-            seeds, generation = data["seeds"], int(data["generation"])
-            evaluated, fitness = data["evaluated"], data["fitness"]
-    except (ValueError, KeyError, OSError, ConfigError) as error:
-        raise UsageError(f"{run_dir}: unreadable run directory ({error})") from None
-    if generation < 1:
-        raise UsageError(f"{population_path}: no generation has been evaluated yet")
-    if not 1 <= num_best <= evaluated.shape[1]:
-        raise UsageError(f"--best: must be between 1 and the population size {evaluated.shape[1]}")
-    order = np.argsort(-fitness, axis=1, kind="stable")[:, :num_best]
-    return config, seeds, np.take_along_axis(evaluated, order[:, :, None], axis=1)
+    found = read_run(run_dir)
+    return found.config, found.seeds, best_genomes(found, num_best)
 
 
 def test_keys(seed: int, num_runs: int, num_best: int, num_tests: int) -> jax.Array:
@@ -239,31 +223,36 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
 
 
 def _write_plot(config: Config, reaches: np.ndarray, path: str) -> None:
-    from imrl_jax.plotting import new_figure, save
+    from imrl_jax.plotting import new_figure, save, style_axis
 
     curve = performance_curve(config, reaches)
     bin_steps = config.task_steps // config.num_bins
-    x = (np.arange(config.num_bins) + 1) * bin_steps
+    x = (np.arange(config.num_bins) + 0.5) * bin_steps
     fig = new_figure(6.0, 3.6)
+    fig.set_layout_engine("constrained")
     ax = fig.subplots()
     per_run = curve.mean((1, 2, 3))
-    ax.fill_between(x, per_run.min(0), per_run.max(0), color="0.85", label="range over runs")
+    ax.fill_between(x, per_run.min(0), per_run.max(0), color="0.85", label="range of the runs' means")
     ax.plot(x, curve.mean((0, 1, 2, 3)), color="k", lw=2, label="mean of all tests")
-    ax.set_xlabel("cycles of the task")
-    ax.set_ylabel("performance per bin")
     ax.set_ylim(0, 1)
-    ax.legend(fontsize=8)
-    ax.set_title(f"{config.condition} learning test ({reaches.shape[0]} x {reaches.shape[1]} x {reaches.shape[2]} "
-                 f"tests x {config.num_tasks} tasks)", fontsize=9)
-    save(fig, path + ".tmp.png")
-    os.replace(path + ".tmp.png", path)
+    ax.set_xlim(0, config.task_steps)
+    runs, best, tests = reaches.shape[:3]
+    style_axis(ax, f"{config.condition} learning test: {runs} run(s) x {best} best x {tests} test(s), "
+                   f"{config.num_tasks} tasks each", "cycles of the task (bin centres)",
+               "performance per bin (1: straight line)")
+    ax.legend(fontsize=7)
+    save(fig, path)
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m imrl_jax.learning_test", description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = argparse.ArgumentParser(prog="python -m imrl_jax.learning_test",
+                                description="The paper's learning tests (section 3, Fig. 3b and 3c): the best "
+                                            "individuals of an evolution, or SLE from scratch, learn each task anew.",
+                                formatter_class=HelpFormatter)
     p.add_argument("run_dir", nargs="?", help="an evolution's run directory (omit with --cond SLE)")
-    p.add_argument("--cond", help="SLE: test single-expert learning from scratch (no run directory)")
+    p.add_argument("--cond", metavar="{" + ",".join(CONDITIONS) + "}",
+                   help="SLE: test single-expert learning from scratch (no run directory); "
+                        "another condition: check that run_dir is a run of it")
     p.add_argument("--runs", type=int, default=10, help="SLE: groups of tests, like an evolution's seeds")
     p.add_argument("--preset", default="paper", choices=sorted(PRESETS), help="SLE: the learning rules' preset")
     p.add_argument("--set", action="append", metavar="FIELD=VALUE", help="SLE: set a Config field (repeatable)")
@@ -275,7 +264,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--chunks", type=int, default=10, help="pieces the test runs in (progress lines)")
     p.add_argument("--seed", type=int, default=0, help="seed of the tests' keys")
     p.add_argument("--out", required=True, help="output directory")
-    p.add_argument("--quiet", action="store_true")
+    p.add_argument("--quiet", action="store_true", help="no progress lines (for logs)")
     p.add_argument("--cpu-devices", type=int, default=0, help="CPU devices (0: one per core)")
     return p
 
@@ -296,7 +285,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             genomes = np.zeros((args.runs, args.best, 0), np.float32)
             source = f"SLE from scratch, preset {args.preset}" + "".join(f", {s}" for s in args.set or [])
         elif args.cond is not None and args.cond not in CONDITIONS:
-            raise UsageError(f"--cond: unknown condition {args.cond!r} (only SLE is tested without a run directory)")
+            raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(CONDITIONS)}; "
+                             f"only SLE is tested without a run directory)")
         else:
             if not args.run_dir:
                 raise UsageError("run_dir: give an evolution's run directory, or --cond SLE")
@@ -308,6 +298,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if config.num_bins % args.chunks:
             raise UsageError(f"--chunks: {args.bins} bins cannot be split into {args.chunks} chunks")
         steady_bins(config, args.steady_steps)
+        check_writable(args.out)
         use_host_cores(args.cpu_devices or None)
         summary = run(config, genomes, args.out, num_tests=args.tests, steady_steps=args.steady_steps,
                       num_chunks=args.chunks, seed=args.seed, quiet=args.quiet, source=source, command=command)

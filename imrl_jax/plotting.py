@@ -1,27 +1,64 @@
-"""Figures in one style: the arena and tasks (the paper's Fig. 1) and trajectories by expert.
+"""Figures in one style: the arena and tasks (the paper's Fig. 1), paths by expert, fitness, learning curves.
 
-matplotlib is imported lazily, inside the functions, so importing the package stays light.
+Every ``plot_*`` function returns a matplotlib ``Figure`` made without pyplot (nothing
+global is touched, a notebook shows it once); :func:`save` writes it. matplotlib is
+imported lazily, inside the functions, so importing the package stays light.
 """
 
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 
-from imrl_jax.config import Config
+from imrl_jax.config import CONDITIONS, Config
 
 FLOOR_COLOURS = ("#d62728", "#2ca02c", "#1f77b4")  # red, green, blue lines
 EXPERT_COLOURS = ("#ff7f0e", "#9467bd", "#111111", "#8c564b", "#e377c2", "#7f7f7f")
+DPI = 110  # resolution of saved figures
+NOTHING_COLOUR = "#d9d9d9"  # a receptor that sees no colour
+SEEN_COLOURS = FLOOR_COLOURS + (NOTHING_COLOUR,)  # red, green, blue, nothing
+CONDITION_STYLES = {"LE-LS": dict(color="black", lw=2.2), "EE-LS": dict(color="0.55", lw=1.8),
+                    "EE-ES": dict(color="black", lw=1.4, ls="--"), "SLE": dict(color="tab:blue", lw=1.4, ls=":")}
 
 
-def _pyplot():
-    import matplotlib
+def new_figure(width: float, height: float):
+    """An empty Figure of the given size in inches (no pyplot: safe in scripts and notebooks)."""
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    return Figure(figsize=(width, height))
 
-    return plt
+
+def save(fig, path: str) -> str:
+    """Write a figure (format from the extension) through a temporary file renamed when complete; return the path."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    if not isinstance(fig.canvas, FigureCanvasAgg):
+        FigureCanvasAgg(fig)
+    folder, name = os.path.split(os.path.abspath(path))
+    base, ext = os.path.splitext(name)
+    tmp = os.path.join(folder, f".{base}.tmp-{os.getpid()}{ext}")
+    try:
+        fig.savefig(tmp, dpi=DPI)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+    return path
+
+
+def style_axis(ax, title: str = "", xlabel: str = "", ylabel: str = "", grid: bool = True) -> None:
+    """Title, labels, tick sizes and grid of an axis in the figures' style."""
+    if title:
+        ax.set_title(title, fontsize=9)
+    if xlabel:
+        ax.set_xlabel(xlabel, fontsize=8)
+    if ylabel:
+        ax.set_ylabel(ylabel, fontsize=8)
+    ax.tick_params(labelsize=7)
+    if grid:
+        ax.grid(alpha=0.3)
 
 
 def floor_segments(config: Config) -> list[tuple[np.ndarray, np.ndarray, int]]:
@@ -59,11 +96,13 @@ def draw_arena(ax, config: Config, tasks: bool = False) -> None:
     ax.add_collection(lines)
     size = config.arena_size
     ax.plot([0, size, size, 0, 0], [0, 0, size, size, 0], color="black", lw=1.5, zorder=2)
-    ax.set_xlim(-5, size + 5)
-    ax.set_ylim(-5, size + 5)
+    ax.set_xlim(-2, size + 2)
+    ax.set_ylim(-2, size + 2)
     ax.set_aspect("equal")
     ax.set_xticks([])
     ax.set_yticks([])
+    for spine in ax.spines.values():  # the wall is the frame (zoom_on_task shows them again)
+        spine.set_visible(False)
     if tasks:
         for i, task in enumerate(config.tasks):
             (sx, sy), (tx, ty) = task.start, task.target
@@ -73,7 +112,7 @@ def draw_arena(ax, config: Config, tasks: bool = False) -> None:
                     bbox=dict(boxstyle="circle,pad=0.15", fc="white", ec="black", lw=0.5))
 
 
-def draw_path(ax, pos: np.ndarray, k: np.ndarray, breaks: np.ndarray | None = None, lw: float = 1.2):
+def draw_path(ax, pos: np.ndarray, k: np.ndarray, breaks: np.ndarray | None = None, lw: float = 1.6):
     """A path (T, 2) of poses after each step, the move into pos[t] coloured by the expert k[t].
 
     ``breaks[t]`` marks a step after which the robot was put back at the start (so
@@ -85,123 +124,123 @@ def draw_path(ax, pos: np.ndarray, k: np.ndarray, breaks: np.ndarray | None = No
     keep = np.ones(len(pos) - 1, bool) if breaks is None else ~np.asarray(breaks)[1:]
     segs = np.stack([pos[:-1], pos[1:]], 1)[keep]
     colours = [EXPERT_COLOURS[int(e) % len(EXPERT_COLOURS)] for e in k[1:][keep]]
-    ax.add_collection(LineCollection(segs, colors=colours, linewidths=lw, zorder=3))
+    ax.add_collection(LineCollection(segs, colors=colours, linewidths=lw, zorder=3, capstyle="round"))
 
 
-def expert_legend(ax, num_experts: int) -> None:
-    """A legend naming the path colour of each expert."""
+def draw_task_ends(ax, config: Config, index: int) -> None:
+    """Task ``index``'s start (a dot) and target (a circle of the target radius)."""
+    from matplotlib.patches import Circle
+
+    task = config.tasks[index]
+    ax.plot(*task.start, "o", color="black", ms=4, zorder=5)
+    ax.add_patch(Circle(task.target, config.target_radius, fc="none", ec="black", lw=1.2, zorder=5))
+
+
+def expert_handles(names: list[str], ends: bool = False) -> list:
+    """Legend handles naming the path colour of each expert, with the start and target if ``ends``."""
     from matplotlib.lines import Line2D
 
-    handles = [Line2D([], [], color=EXPERT_COLOURS[e], lw=2, label=f"expert {e + 1}") for e in range(num_experts)]
-    ax.legend(handles=handles, loc="lower left", fontsize=7, framealpha=0.9)
+    handles = [Line2D([], [], color=EXPERT_COLOURS[e % len(EXPERT_COLOURS)], lw=2, label=name)
+               for e, name in enumerate(names)]
+    if ends:
+        handles += [Line2D([], [], ls="", marker="o", color="black", ms=4, label="start"),
+                    Line2D([], [], ls="", marker="o", mfc="none", mec="black", ms=8, label="target")]
+    return handles
 
 
-def plot_life(config: Config, childhood: dict | None, tasks: list[dict], path: str, title: str = "") -> None:
-    """One PNG: the arena with the tasks, a childhood path and one path per task.
+def expert_legend(ax, num_experts: int, names: list[str] | None = None, ends: bool = False,
+                  loc: str = "lower left") -> None:
+    """A legend naming the path colour of each expert (``names``: one label each), with the start and target if ``ends``."""
+    names = names or [f"expert {e + 1}" for e in range(num_experts)]
+    ax.legend(handles=expert_handles(names, ends), loc=loc, fontsize=6.5, framealpha=0.9, handlelength=1.5)
 
-    ``childhood`` and each entry of ``tasks`` hold ``pos`` (T, 2), ``k`` (T,) and
-    ``breaks`` (T,) (True where the robot was put back at the start after that step).
+
+def zoom_on_task(ax, config: Config, index: int, margin: float = 70.0) -> None:
+    """Limit an arena axis to a square around task ``index``'s start and target (at least ``margin`` cm around)."""
+    task = config.tasks[index]
+    (x0, y0), (x1, y1) = task.start, task.target
+    half = max(abs(x1 - x0), abs(y1 - y0)) / 2 + margin
+    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+    ax.set_xlim(cx - half, cx + half)
+    ax.set_ylim(cy - half, cy + half)
+    for spine in ax.spines.values():
+        spine.set_visible(True)
+        spine.set_color("0.6")
+
+
+def plot_paths(config: Config, rows: list[dict], title: str = ""):
+    """Paths coloured by the expert in control: one row per individual, a first panel, then one panel per task.
+
+    Each row holds ``tasks``: one dict per task with ``pos`` (T, 2), ``k`` (T,), ``breaks``
+    (T,) (True where the robot was put back at the start after that step) and an optional
+    ``label``; optionally ``name`` (the row's heading), ``childhood`` (a dict like a task's,
+    drawn in the first panel; without it the first panel shows the arena and the tasks) and
+    ``experts`` (legend names of the experts). Task panels are zoomed on the task.
     """
-    plt = _pyplot()
-    num_panels = 2 + len(tasks)
-    cols = 4
-    rows = math.ceil(num_panels / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 3.3 * rows))
-    axes = axes.ravel()
-    draw_arena(axes[0], config, tasks=True)
-    axes[0].set_title("arena and tasks", fontsize=9)
-    ax = axes[1]
-    draw_arena(ax, config)
-    if childhood is not None:
-        draw_path(ax, childhood["pos"], childhood["k"], childhood.get("breaks"), lw=0.8)
-        ax.set_title(f"childhood, first {len(childhood['pos'])} steps", fontsize=9)
-    else:
-        ax.set_title("no childhood", fontsize=9)
-    num_experts = 1
-    for i, record in enumerate(tasks):
-        ax = axes[2 + i]
-        draw_arena(ax, config)
-        draw_path(ax, record["pos"], record["k"], record.get("breaks"))
-        task = config.tasks[i]
-        ax.plot(*task.start, "o", color="black", ms=4, zorder=5)
-        ax.add_patch(plt.Circle(task.target, config.target_radius, fc="none", ec="black", lw=1.2, zorder=5))
-        label = record.get("label", "")
-        ax.set_title(f"task {i + 1} {label}".strip(), fontsize=9)
-        num_experts = max(num_experts, int(np.max(record["k"])) + 1)
-    for ax in axes[num_panels:]:
-        ax.axis("off")
-    expert_legend(axes[1], max(num_experts, config.num_lane_experts))
+    cols = 1 + config.num_tasks
+    fig = new_figure(2.0 * cols + 1.3, 2.45 * len(rows) + (0.5 if title else 0.1))
+    fig.set_layout_engine("constrained")
+    subfigures = fig.subfigures(len(rows), 1, squeeze=False)[:, 0]
+    for row, sub in zip(rows, subfigures):
+        panels = sub.subplots(1, cols)
+        first = panels[0]
+        childhood = row.get("childhood")
+        draw_arena(first, config, tasks=childhood is None)
+        if childhood is not None:
+            draw_path(first, childhood["pos"], childhood["k"], childhood.get("breaks"), lw=0.8)
+            first.set_title(f"childhood, first {len(childhood['pos']):,} steps", fontsize=8)
+        else:
+            first.set_title("the arena and the six tasks", fontsize=8)
+        num_experts = max([int(np.max(t["k"])) + 1 for t in row["tasks"]] + [config.num_lane_experts])
+        experts = row.get("experts") or [f"expert {e + 1}" for e in range(num_experts)]
+        for i, (ax, record) in enumerate(zip(panels[1:], row["tasks"])):
+            draw_arena(ax, config)
+            draw_path(ax, record["pos"], record["k"], record.get("breaks"))
+            draw_task_ends(ax, config, i)
+            zoom_on_task(ax, config, i)
+            label = record.get("label", "")
+            ax.set_title(f"task {i + 1}" + (f": {label}" if label else ""), fontsize=8)
+        sub.legend(handles=expert_handles(experts, ends=True), loc="outside right center", fontsize=7,
+                   frameon=False, handlelength=1.5)
+        if row.get("name"):
+            sub.suptitle(row["name"], fontsize=9, x=0.0, ha="left")
     if title:
         fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    return fig
 
 
-CONDITION_STYLES = {"LE-LS": dict(color="black", lw=2.2), "EE-LS": dict(color="0.55", lw=1.8),
-                    "EE-ES": dict(color="black", lw=1.4, ls="--"), "SLE": dict(color="tab:blue", lw=1.4, ls=":")}
+def plot_life(config: Config, childhood: dict | None, tasks: list[dict], title: str = ""):
+    """One individual: its first childhood steps (if any) and a path on each task (see :func:`plot_paths`)."""
+    return plot_paths(config, [dict(childhood=childhood, tasks=tasks)], title)
 
 
-def plot_fitness(best_by_condition: dict, path: str, title: str = "") -> None:
-    """Fig. 3a: best fitness per generation, mean over seeds with a +-1 std band.
+def plot_fitness(curves: dict, title: str = "", ylabel: str = "best fitness"):
+    """Fitness per generation (0 first), one line per label: the mean over seeds with a +-1 std band (Fig. 3a).
 
-    ``best_by_condition`` maps a condition name to an array (generations, seeds).
+    ``curves`` maps a label to an array (seeds, generations) (or (generations,)); a label
+    that is a condition gets the paper's line style, others a colour ramp in order.
     """
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(5.5, 3.6))
-    for condition, best in best_by_condition.items():
-        best = np.asarray(best, float)
-        generations = np.arange(len(best))
-        mean, std = best.mean(1), best.std(1)
-        style = CONDITION_STYLES.get(condition, {})
-        ax.plot(generations, mean, label=condition, **style)
-        ax.fill_between(generations, mean - std, mean + std, color=style.get("color", "0.5"), alpha=0.15, lw=0)
-    ax.set_xlabel("generation")
-    ax.set_ylabel("best fitness")
+    from matplotlib.ticker import MaxNLocator
+
+    fig = new_figure(5.5, 3.4)
+    ax = fig.add_subplot()
+    ramp = iter(_series_colours(sum(label not in CONDITIONS for label in curves)))
+    for label, values in curves.items():
+        values = np.atleast_2d(np.asarray(values, float))
+        generations = np.arange(values.shape[-1])
+        mean, std = values.mean(0), values.std(0)
+        style = CONDITION_STYLES[label] if label in CONDITIONS else dict(color=next(ramp), lw=1.6)
+        ax.plot(generations, mean, label=label, marker="o", ms=2.5, **style)
+        if values.shape[0] > 1:
+            ax.fill_between(generations, mean - std, mean + std, color=style["color"], alpha=0.15, lw=0)
     ax.set_ylim(bottom=0)
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    if title:
-        ax.set_title(title, fontsize=9)
+    ax.set_xlim(-0.3, max(1, max(np.shape(v)[-1] for v in curves.values()) - 1) + 0.3)
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    style_axis(ax, title, "generation", ylabel)
+    if len(curves) > 1:
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-
-
-# ----------------------------------------------------------------------------- figures for notebooks, CLI, reports
-#
-# The functions below return a matplotlib ``Figure`` made without pyplot (nothing global is
-# touched, a notebook shows it once, and ``save`` writes it), in the style of the ones above:
-# the same colours, font sizes and resolution.
-
-DPI = 110  # resolution of saved figures (as above)
-NOTHING_COLOUR = "#d9d9d9"  # a receptor that sees no colour
-SEEN_COLOURS = FLOOR_COLOURS + (NOTHING_COLOUR,)  # red, green, blue, nothing
-
-
-def new_figure(width: float, height: float):
-    """An empty Figure of the given size in inches (no pyplot: safe in scripts and notebooks)."""
-    from matplotlib.figure import Figure
-
-    return Figure(figsize=(width, height))
-
-
-def save(fig, path: str) -> str:
-    """Write a figure at the report's resolution; return the path."""
-    fig.savefig(path, dpi=DPI)
-    return path
-
-
-def _style_axis(ax, title: str = "", xlabel: str = "", ylabel: str = "", grid: bool = True) -> None:
-    if title:
-        ax.set_title(title, fontsize=9)
-    if xlabel:
-        ax.set_xlabel(xlabel, fontsize=8)
-    if ylabel:
-        ax.set_ylabel(ylabel, fontsize=8)
-    ax.tick_params(labelsize=7)
-    if grid:
-        ax.grid(alpha=0.3)
+    return fig
 
 
 def plot_arena(config: Config, title: str = "arena and tasks"):
@@ -357,7 +396,7 @@ def plot_learning_curves(config: Config, curves: dict, title: str = "", bin_step
         axes[num_tasks].plot(x, curve.mean(0), color=colour, lw=1.6, label=label)
     axes[0].set_ylim(bottom=0)  # after every line is drawn: the axes share y
     for t, ax in enumerate(axes[:num_tasks + 1]):
-        _style_axis(ax, f"task {t + 1}" if t < num_tasks else "mean over tasks")
+        style_axis(ax, f"task {t + 1}" if t < num_tasks else "mean over tasks")
         if t % cols == 0:
             ax.set_ylabel("performance", fontsize=8)
         if t >= num_tasks + 1 - cols:
@@ -394,11 +433,14 @@ def plot_selections(selections, title: str = "share of control per expert", bin_
     x = (np.arange(bins) + 0.5) * bin_steps
     fig = new_figure(5.0, 2.8)
     ax = fig.add_subplot()
-    ax.stackplot(x, share.T, colors=[EXPERT_COLOURS[e % len(EXPERT_COLOURS)] for e in range(num_experts)],
-                 labels=[f"expert {e + 1}" for e in range(num_experts)], alpha=0.85)
+    bottom = np.zeros(bins)
+    for e in range(num_experts):  # stacked bars, one per bin: the shares are per bin
+        ax.bar(x, share[:, e], bin_steps, bottom=bottom, color=EXPERT_COLOURS[e % len(EXPERT_COLOURS)],
+               label=f"expert {e + 1}", alpha=0.85, lw=0)
+        bottom = bottom + share[:, e]
     ax.set_ylim(0, 1)
     ax.set_xlim(x[0] - bin_steps / 2, x[-1] + bin_steps / 2)
-    _style_axis(ax, title, xlabel, "share of steps", grid=False)
+    style_axis(ax, title, xlabel, "share of steps", grid=False)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     fig.tight_layout()
     return fig
@@ -423,36 +465,10 @@ def plot_expert_shares(shares, steps, title: str = "what each expert follows"):
     for e in range(num_experts):
         ax.get_xticklabels()[e].set_color(EXPERT_COLOURS[e % len(EXPERT_COLOURS)])
     ax.set_ylim(0, 1)
-    _style_axis(ax, title, "", "share of central readings")
+    style_axis(ax, title, "", "share of central readings")
     ax.grid(alpha=0.3, axis="y")
     ax.grid(False, axis="x")
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
-    fig.tight_layout()
-    return fig
-
-
-def plot_fitness_curves(curves: dict, title: str = "", ylabel: str = "best fitness"):
-    """Fitness per generation, one line per label (mean over seeds, +-1 std band).
-
-    ``curves`` maps a label to an array (seeds, generations) (or (generations,)).
-    """
-    fig = new_figure(5.5, 3.4)
-    ax = fig.add_subplot()
-    colours = _series_colours(len(curves))
-    for (label, values), colour in zip(curves.items(), colours):
-        values = np.atleast_2d(np.asarray(values, float))
-        generations = np.arange(values.shape[-1])
-        mean, std = values.mean(0), values.std(0)
-        ax.plot(generations, mean, color=colour, lw=1.6, label=label, marker="o", ms=2.5)
-        if values.shape[0] > 1:
-            ax.fill_between(generations, mean - std, mean + std, color=colour, alpha=0.15, lw=0)
-    from matplotlib.ticker import MaxNLocator
-
-    ax.set_ylim(bottom=0)
-    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-    _style_axis(ax, title, "generation", ylabel)
-    if len(curves) > 1 or next(iter(curves), ""):
-        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     fig.tight_layout()
     return fig
 
@@ -483,7 +499,7 @@ def plot_sweep_summary(values_by_field: dict, title: str = "", ylabel: str = "fi
             ax.set_xscale("log")
         if baselines and field in baselines:
             ax.axvline(baselines[field], color="0.4", ls="--", lw=0.8)
-        _style_axis(ax, field, field)
+        style_axis(ax, field, field)
     axes[0].set_ylim(bottom=0)  # after every panel is drawn: the axes share y
     for i, ax in enumerate(axes):
         if i % cols == 0 and i < len(fields):

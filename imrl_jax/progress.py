@@ -12,27 +12,43 @@ def _clock(seconds: float) -> str:
 
 
 class Progress:
-    """Redraws one line on a terminal, prints one line per update otherwise; silent if quiet."""
+    """Redraws one line on a terminal, prints one line per update otherwise; silent if quiet.
 
-    def __init__(self, total: int, done: int = 0, quiet: bool = False, stream=None, unit: str = "gen"):
-        self.total, self.start_done, self.unit = total, done, unit
+    ``done`` units were finished before (a resumed run) in ``elapsed`` seconds. Units are
+    named from ``first_index`` (evolve: generation 0 is the first). The first update of a
+    process includes compilation: it shows no ETA or throughput; later ones measure from it.
+    """
+
+    def __init__(self, total: int, done: int = 0, quiet: bool = False, stream=None, unit: str = "gen",
+                 elapsed: float = 0.0, first_index: int = 1):
+        self.total, self.unit, self.first_index = total, unit, first_index
         self.quiet = quiet
         self.stream = stream or sys.stderr
         self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+        self.before = elapsed
         self.start = time.perf_counter()
+        self.warm = None  # (done, time) at the first update: the rate is measured from there
+
+    def elapsed(self) -> float:
+        """Seconds spent on the run, in earlier processes too."""
+        return self.before + time.perf_counter() - self.start
 
     def update(self, done: int, best: float, mean: float, lane_steps_per_s: float, scores: str | None = None) -> str:
         """Report that ``done`` of ``total`` units (generations) are finished; return the line."""
-        elapsed = time.perf_counter() - self.start
-        rate = (done - self.start_done) / elapsed if elapsed > 0 else 0.0
-        eta = (self.total - done) / rate if rate > 0 else float("nan")
+        now = time.perf_counter()
+        if self.warm is None:
+            self.warm = (done, now)
+            timing = f"{_clock(self.elapsed())} elapsed, first {self.unit} with compilation"
+        else:
+            rate = (done - self.warm[0]) / (now - self.warm[1]) if now > self.warm[1] else 0.0
+            eta = _clock((self.total - done) / rate) if rate > 0 else "?"
+            timing = f"{_clock(self.elapsed())} elapsed, ETA {eta} | {lane_steps_per_s / 1e6:.2f} M lane-steps/s"
         scores = f"best {best:.4f} mean {mean:.4f}" if scores is None else scores
-        line = (f"{self.unit} {done:>4d}/{self.total} | {scores} | "
-                f"{_clock(elapsed)} elapsed, ETA {_clock(eta) if eta == eta else '?'} | "
-                f"{lane_steps_per_s / 1e6:.2f} M lane-steps/s")
+        name = self.first_index + done - 1
+        line = f"{self.unit} {name} ({done}/{self.total}) | {scores} | {timing}"
         if not self.quiet:
             if self.tty:
-                self.stream.write("\r" + line + ("\n" if done >= self.total else ""))
+                self.stream.write("\r\033[K" + line + ("\n" if done >= self.total else ""))
             else:
                 self.stream.write(line + "\n")
             self.stream.flush()

@@ -21,7 +21,6 @@ its directory, renamed when complete).
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import shutil
 import sys
@@ -30,11 +29,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from imrl_jax.cli import HelpFormatter, UsageError
+from imrl_jax.rundir import check_writable, load_run
+
 FORMATS = (".gif", ".mp4")
-
-
-class UsageError(Exception):
-    """Bad input: reported as one line, exit code 2, nothing written."""
 
 
 class Best(NamedTuple):
@@ -48,44 +46,11 @@ class Best(NamedTuple):
     fitness: float
 
 
-def load_run(run_dir: str):
-    """(config, seeds, arrays of final_population.npz) of a run directory; raises UsageError."""
-    from imrl_jax.config import Config, ConfigError
-
-    if not os.path.isdir(run_dir):
-        raise UsageError(f"RUN_DIR: {run_dir} is not a directory")
-    config_path = os.path.join(run_dir, "config.json")
-    population_path = os.path.join(run_dir, "final_population.npz")
-    for path in (config_path, population_path):
-        if not os.path.isfile(path):
-            raise UsageError(f"RUN_DIR: {run_dir} holds no {os.path.basename(path)} "
-                             f"(not a run of python -m imrl_jax.evolve?)")
-    try:
-        with open(config_path) as f:
-            saved = json.load(f)
-        config = Config.from_dict(saved["config"])
-        seeds = [int(s) for s in saved["seeds"]]
-    except (OSError, ValueError, KeyError, TypeError, ConfigError) as error:
-        raise UsageError(f"{config_path} is unreadable ({error})") from None
-    try:
-        with np.load(population_path) as data:
-            arrays = {name: data[name] for name in ("evaluated", "fitness", "generation")}
-    except (OSError, ValueError, KeyError) as error:
-        raise UsageError(f"{population_path} is unreadable ({error})") from None
-    if int(arrays["generation"]) < 1:
-        raise UsageError(f"{run_dir}: no generation has been evaluated yet")
-    if arrays["evaluated"].shape[:2] != arrays["fitness"].shape or arrays["fitness"].shape[0] != len(seeds):
-        raise UsageError(f"{population_path}: arrays do not match the {len(seeds)} seed(s) of config.json")
-    return config, seeds, arrays
-
-
 def best_individual(run_dir: str) -> Best:
     """The fittest individual over all seeds of the last evaluated generation of a run."""
-    config, seeds, arrays = load_run(run_dir)
-    fitness = arrays["fitness"]
-    s, i = np.unravel_index(int(np.argmax(fitness)), fitness.shape)
-    return Best(config, arrays["evaluated"][s, i], seeds[s], int(i), int(arrays["generation"]) - 1,
-                float(fitness[s, i]))
+    run = load_run(run_dir)
+    s, i = np.unravel_index(int(np.argmax(run.fitness)), run.fitness.shape)
+    return Best(run.config, run.evaluated[s, i], run.seeds[s], int(i), run.generation - 1, float(run.fitness[s, i]))
 
 
 def life_key(config, seed: int, generation: int, index: int):
@@ -111,6 +76,7 @@ def check_output(out_path: str, overwrite: bool = False) -> str:
         raise UsageError(f"--out: {out_path} is a directory")
     if os.path.exists(out_path) and not overwrite:
         raise UsageError(f"--out: {out_path} exists (pass --overwrite to replace it)")
+    check_writable(os.path.dirname(os.path.abspath(out_path)))
     return ext
 
 
@@ -161,7 +127,7 @@ def run(run_dir: str, task: int, out_path: str, steps: int = 300, every: int = 2
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="python -m imrl_jax.render",
                                 description="Animate the best individual of an evolve run on one task.",
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+                                formatter_class=HelpFormatter)
     p.add_argument("run_dir", metavar="RUN_DIR", help="run directory of python -m imrl_jax.evolve")
     p.add_argument("--task", type=int, required=True, help="task to show, 1-6")
     p.add_argument("--out", required=True, help="animation file, .gif (or .mp4 with ffmpeg on PATH)")
@@ -174,9 +140,6 @@ def parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     args = parser().parse_args(argv)
-    import matplotlib
-
-    matplotlib.use("Agg")
     try:
         summary = run(args.run_dir, args.task, args.out, args.steps, args.every, args.fps, args.overwrite)
     except UsageError as error:

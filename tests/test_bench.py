@@ -31,3 +31,10 @@ def test_json_path_under_a_file_is_refused_before_measuring(tmp_path, capsys):
     assert bench.main(["--json", str(blocker / "out.json")]) == 2
     assert "--json" in capsys.readouterr().err
     assert blocker.read_text() == "kept"
+
+
+def test_help_shows_defaults(capsys):
+    with pytest.raises(SystemExit):
+        bench.main(["--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "(default: 1,50,300,3000)" in text and "(default: 1000)" in text and "(default: None)" not in text

@@ -52,8 +52,14 @@ def test_run_directory_contents(finished_run):
     names = set(os.listdir(finished_run))
     assert {"config.json", "history.csv", "fitness.png", "final_population.npz", "checkpoints"} <= names
     history, arrays = _outputs(finished_run)
+    with open(os.path.join(finished_run, "history.csv"), "rb") as f:
+        assert b"\r" not in f.read()  # LF line endings, as every other text file the run writes
     rows = history.strip().splitlines()
     assert rows[0].startswith("generation,seed,best,mean,std,best_task1") and len(rows) == 1 + 6 * 2
+    import json
+
+    with open(os.path.join(finished_run, "checkpoints", "6", "meta", "metadata")) as f:
+        assert json.load(f)["elapsed_seconds"] > 0  # a resumed run's progress line counts on from it
     assert arrays["evaluated"].shape == (2, 6, 222) and arrays["fitness"].shape == (2, 6)
     last = [row.split(",") for row in rows[-2:]]
     np.testing.assert_allclose([float(r[2]) for r in last], arrays["fitness"].max(1), atol=1e-6)
@@ -96,7 +102,7 @@ def test_corrupt_checkpoint_falls_back_to_the_previous_one(finished_run, tmp_pat
                 f.truncate(max(0, os.path.getsize(os.path.join(root, name)) // 3))
     assert evolve.main([*TINY, "--generations", "6", "--out", out, "--resume"]) == 0
     err = capsys.readouterr().err
-    assert "checkpoints/6 is unreadable" in err and "resuming" in err and "after generation 5" in err
+    assert "checkpoints/6 is unreadable" in err and "resuming" in err and "(5 of 6 done" in err
     _assert_same_outputs(out, finished_run)
 
 
@@ -138,3 +144,83 @@ def test_bad_arguments(tmp_path, capsys, args, message):
     err = capsys.readouterr().err.strip()
     assert message in err and len(err.splitlines()) == 1
     assert not os.path.exists(out)
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--set", "eta_actor=nan"], "eta_actor: must be a finite number"),
+    (["--set", "eta_actor=inf"], "eta_actor: must be a finite number"),
+    (["--set", "noise_std=-inf"], "noise_std: must be a finite number"),
+    (["--set", "max_speed=inf"], "max_speed: must be a finite number"),
+    (["--set", "max_turn_deg=0"], "max_turn_deg: must be in (0, 180]"),
+    (["--set", "eta=0.1"], "did you mean eta_actor or eta_evaluator"),
+    (["--set", "trace_lamda=0.9"], "did you mean trace_lambda?"),
+    (["--set", "bogus=1"], "fields: condition, num_experts"),
+    (["--keep", "0"], "--keep: must be at least 1"),
+])
+def test_bad_values_exit_2_naming_the_field(tmp_path, capsys, args, message):
+    out = str(tmp_path / "new")
+    assert evolve.main(["--cond", "EE-LS", "--preset", "small", *args, "--out", out]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and err.startswith("error: ") and len(err.splitlines()) == 1
+    assert not os.path.exists(out)
+
+
+def test_unwritable_out_exits_2_naming_it(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("kept")
+    for out in (blocker / "run", blocker):
+        assert evolve.main(["--cond", "EE-LS", "--preset", "small", "--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("error: --out: ") and str(out) in err and len(err.splitlines()) == 1
+    assert os.listdir(tmp_path) == ["file"] and blocker.read_text() == "kept"
+
+
+def test_read_only_out_exits_2(tmp_path, capsys, monkeypatch):
+    """A folder the process may not write in (a read-only file system, an immutable folder) is refused up front."""
+    import tempfile
+
+    def refuse(*args, **kwargs):
+        raise OSError(30, "Read-only file system")
+
+    monkeypatch.setattr(tempfile, "TemporaryFile", refuse)
+    out = tmp_path / "new"
+    assert evolve.main(["--cond", "EE-LS", "--preset", "small", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"error: --out: cannot write to {out} ({tmp_path}: Read-only file system)"
+    assert not out.exists()
+
+
+def test_help_shows_each_default_once_and_no_none(capsys):
+    with pytest.raises(SystemExit):
+        evolve.main(["--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "(default: None)" not in text and "(default: False)" not in text
+    assert text.count("default: runs/COND") == 1 and "(default: 3)" in text
+    assert "(default: the preset's; paper 100, small 10)" in text
+
+
+def test_progress_line_names_generations_from_0_and_leaves_compilation_out():
+    import io
+
+    from imrl_jax.progress import Progress
+
+    stream = io.StringIO()
+    progress = Progress(4, done=2, stream=stream, first_index=0, elapsed=100.0)
+    first = progress.update(3, 0.5, 0.1, 1e6, scores="best fitness: max over seeds 0.5000")
+    second = progress.update(4, 0.5, 0.1, 2e6, scores="best fitness: max over seeds 0.5000")
+    assert first.startswith("gen 2 (3/4) | best fitness: max over seeds 0.5000 | 0:01:40 elapsed")
+    assert "with compilation" in first and "ETA" not in first and "lane-steps" not in first
+    assert second.startswith("gen 3 (4/4)") and "ETA 0:00:00" in second and "2.00 M lane-steps/s" in second
+    assert stream.getvalue().splitlines() == [first, second]
+
+
+def test_unreadable_checkpoint_reason_is_one_short_line():
+    from imrl_jax.checkpoint import unreadable_reason
+
+    error = ValueError('DATA_LOSS: Error reading "/runs/x/checkpoints/6/state/manifest.ocdbt": '
+                       '<tensorstore.KvStore object at 0x7f3a2c1d9e70> failed\n  with more words ' + "x " * 200
+                       + "[source locations='tensorstore/kvstore/ocdbt/io.cc:123']")
+    reason = unreadable_reason(error, "/runs/x/checkpoints/6")
+    assert "0x7f" not in reason and "source locations" not in reason and "\n" not in reason
+    assert reason.startswith('DATA_LOSS: Error reading "state/manifest.ocdbt": (an object) failed with more words')
+    assert len(reason) <= 164 and reason.endswith(" ...")

@@ -78,7 +78,9 @@ def test_command_line(tiny_run, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["/nonexistent/run"], "config.json: not found"),
+    (["/nonexistent/run"], "/nonexistent/run: not a directory"),
+    (["--cond", "SLE", "--set", "eta_actor=nan"], "eta_actor: must be a finite number"),
+    (["--cond", "SLE", "--set", "eta=0.1"], "did you mean eta_actor"),
     (["--cond", "SLE", "--bins", "10", "--chunks", "3"], "--chunks"),
     (["--cond", "SLE", "--task-steps", "1000", "--bins", "10", "--steady-steps", "150"], "steady_steps"),
     (["--cond", "XX"], "--cond"),
@@ -100,3 +102,23 @@ def test_pairs_both_ways_by_hand():
                             [0.2, 0.2, 0.2, 0.2, 0.19, 0.8]])  # pairs 1 and 2 (at the level), not 3
     assert learning_test.pairs_both_ways(performance) == pytest.approx(3 / 6)
     assert learning_test.pairs_both_ways(performance, level=0.25) == pytest.approx(1 / 6)
+
+
+def test_unwritable_out_is_refused_before_testing(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("kept")
+    out = blocker / "out"
+    argv = ["--cond", "SLE", "--runs", "1", "--best", "1", "--tests", "1", "--task-steps", "200", "--bins", "2",
+            "--steady-steps", "100", "--chunks", "1", "--out", str(out)]
+    assert learning_test.main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"error: --out: cannot write to {out}") and len(err.splitlines()) == 1
+    assert os.listdir(tmp_path) == ["file"]
+
+
+def test_help(capsys):
+    with pytest.raises(SystemExit):
+        learning_test.main(["--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "``" not in text and "(default: None)" not in text
+    assert "--cond {LE-LS,EE-LS,EE-ES,SLE}" in text and "--quiet no progress lines" in text

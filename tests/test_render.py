@@ -38,7 +38,7 @@ def test_cli_writes_and_refuses_to_overwrite(tiny_run, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("case", ["missing run", "not a run", "task 0", "task 7", "extension", "mp4 without ffmpeg",
-                                  "directory"])
+                                  "directory", "under a file"])
 def test_bad_input(case, tiny_run, tmp_path, capsys, monkeypatch):
     run_dir, task, out = tiny_run, "1", str(tmp_path / "x.gif")
     if case == "missing run":
@@ -56,6 +56,9 @@ def test_bad_input(case, tiny_run, tmp_path, capsys, monkeypatch):
     elif case == "directory":
         out = str(tmp_path / "dir.gif")
         os.makedirs(out)
+    elif case == "under a file":
+        (tmp_path / "file").write_text("kept")
+        out = str(tmp_path / "file" / "x.gif")
     before = sorted(os.listdir(tmp_path))
     assert render.main([run_dir, "--task", task, "--out", out, "--steps", "2"]) == 2
     err = capsys.readouterr().err.strip()

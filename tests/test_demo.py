@@ -1,0 +1,59 @@
+"""The demo (the tasks solved beside a random individual) and the figures' conventions."""
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+from imrl_jax import controllers, demo, plotting
+
+
+def test_demo_shows_the_tasks_solved_beside_a_random_individual(tiny, tmp_path):
+    config = tiny("EE-LS")
+    summary = demo.run(config, str(tmp_path / "demo"), seed=0)
+    assert sorted(os.listdir(tmp_path / "demo")) == ["summary.json", "trajectories.png"]
+    with open(tmp_path / "demo" / "summary.json") as f:
+        assert json.load(f) == summary
+    assert len(summary["performance"]) == 6
+    assert min(summary["composition_performance"]) > 0.7  # a competent driver on every task
+
+
+def test_demo_refuses_an_unwritable_out(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("kept")
+    assert demo.main(["--out", str(blocker / "demo")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: --out: cannot write to") and len(err.splitlines()) == 1
+    assert os.listdir(tmp_path) == ["file"]
+
+
+def test_composition_trajectories_agree_with_its_reaches(tiny):
+    config = tiny("EE-LS")
+    paths = controllers.trajectories(config, 300)
+    reaches = np.asarray(controllers.run_many(config, 300, np.arange(6), np.arange(6)))
+    assert [int(p.reached.sum()) for p in paths] == list(reaches)
+    for path, task in zip(paths, config.tasks):
+        route, _ = controllers.zigzag_route(config, task)
+        first_trial = path.k[:int(np.argmax(path.breaks)) + 1]
+        changes = first_trial[np.r_[True, first_trial[1:] != first_trial[:-1]]]
+        assert tuple(changes) == route  # one colour per edge of the route, in order
+        np.testing.assert_allclose(path.seen_pos[0], task.start)
+
+
+def test_figures_are_returned_not_drawn_with_pyplot(tiny, tmp_path):
+    from matplotlib.figure import Figure
+
+    config = tiny("EE-LS")
+    steps = 5
+    record = dict(pos=np.tile(np.asarray(config.tasks[0].start), (steps, 1)), k=np.zeros(steps, int),
+                  breaks=np.zeros(steps, bool))
+    fig = plotting.plot_paths(config, [dict(name="row", tasks=[record] * 6, experts=["a", "b", "c"])], "title")
+    assert isinstance(fig, Figure)
+    labels = [t.get_text() for legend in fig.subfigs[0].legends for t in legend.get_texts()]
+    assert labels == ["a", "b", "c", "start", "target"]
+    fitness = plotting.plot_fitness({"EE-LS": np.ones((2, 3)), "other": np.ones(3)})
+    lines = fitness.axes[0].get_lines()
+    assert [line.get_label() for line in lines] == ["EE-LS", "other"] and lines[0].get_color() == "0.55"
+    path = plotting.save(fitness, str(tmp_path / "fitness.png"))
+    assert os.listdir(tmp_path) == ["fitness.png"] and path.endswith("fitness.png")
