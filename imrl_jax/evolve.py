@@ -275,7 +275,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--seeds", type=int, default=1, help="number of independent evolutions (seeds)")
     p.add_argument("--first-seed", type=int, default=0, help="seed of the first evolution; the others follow")
     p.add_argument("--preset", default="paper", choices=sorted(PRESETS),
-                   help="paper: full scale; extension: paper scale with the learning extensions; small: reduced lengths for quick CPU checks")
+                   help="paper: the paper's rules at full scale; skills: full scale with the childhood study's choice "
+                        "(docs/CHILDHOOD.md); extension: full scale with the learning extensions; small: reduced "
+                        "lengths for quick CPU checks")
     p.add_argument("--generations", type=int, help="generations (default: the preset's; paper 100, small 10)")
     p.add_argument("--population", type=int, help="population size (default: the preset's; paper 50, small 20)")
     p.add_argument("--parents", type=int, help="best individuals that reproduce (default: the preset's; paper 10, small 4)")
