@@ -70,21 +70,21 @@ def test_childhood_learns_with_its_own_values_and_adulthood_with_the_adult_ones(
 
 
 def test_fitness_as_the_mean_of_several_lives(tiny):
-    config = tiny("EE-LS", lives_per_fitness=2, population_size=2, num_parents=1)
+    from helpers import SHORT_TASK, hand_experts
+
+    config = tiny("EE-LS", lives_per_fitness=2, population_size=2, num_parents=1, task_steps=300, num_bins=1,
+                  tasks=(SHORT_TASK,))
     params = config.learning_params()
-    genomes = jax.random.uniform(jax.random.key(1), (2, config.num_genes), minval=-1, maxval=1)
+    experts = jnp.asarray(hand_experts(config.num_inputs + 1).reshape(-1), jnp.float32)  # they reach the target
+    genomes = jnp.stack([experts, experts * 0.5])
     key = jax.random.key(2)
     fitness, performance = jax.jit(ga.evaluate, static_argnums=1)(key, config, params, genomes)
-    keys = jax.random.split(key, (2, 2))
-    single = jax.jit(L.live, static_argnums=1)
-    for i in range(2):
-        lives = [single(keys[i, j], config, params, genomes[i]) for j in range(2)]
-        np.testing.assert_allclose(fitness[i], np.mean([float(life.fitness) for life in lives]), rtol=1e-6)
-        np.testing.assert_allclose(performance[i], np.mean([life.performance for life in lives], 0), rtol=1e-6)
-    one = config.replace(lives_per_fitness=1)
-    fitness_one, _ = jax.jit(ga.evaluate, static_argnums=1)(key, one, params, genomes)
-    expected = jax.vmap(lambda k, g: L.live(k, one, params, g).fitness)(jax.random.split(key, 2), genomes)
-    np.testing.assert_array_equal(fitness_one, expected)  # one life: the paper's evaluation, as before
+    # The same lives one by one: individual i's lives use keys split(key, (P, N))[i].
+    keys = jax.random.split(key, (2, 2)).reshape(-1)
+    lives = jax.jit(jax.vmap(lambda k, g: L.live(k, config, params, g)))(keys, jnp.repeat(genomes, 2, axis=0))
+    np.testing.assert_allclose(fitness, np.asarray(lives.fitness).reshape(2, 2).mean(1), rtol=1e-6)
+    np.testing.assert_allclose(performance, np.asarray(lives.performance).reshape(2, 2, -1).mean(1), rtol=1e-6)
+    assert not np.allclose(*np.asarray(lives.fitness).reshape(2, 2)[0])  # two different lives were averaged
 
 
 def test_extension_runs_written_before_childhood_values_relive_with_their_own_rules():
