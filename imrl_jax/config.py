@@ -310,10 +310,6 @@ def _validate(c: Config) -> None:
         fail("childhood_walls", f"must be one of {', '.join(CHILDHOOD_WALLS)}")
     if c.childhood_selector_reward not in CHILDHOOD_SELECTOR_REWARDS:
         fail("childhood_selector_reward", f"must be one of {', '.join(CHILDHOOD_SELECTOR_REWARDS)}")
-    if c.step_kernel == "pallas" and c.childhood_walls != "clamp":
-        fail("childhood_walls", "the pallas step kernel supports only clamp")
-    if c.step_kernel == "pallas" and c.childhood_selector_reward != "surprise":
-        fail("childhood_selector_reward", "the pallas step kernel supports only surprise")
     positive_ints = ("num_experts", "task_steps", "draw_block", "scan_unroll", "trial_timeout", "num_bins",
                      "population_size", "num_generations", "num_parents", "wall_respawn_steps",
                      "lives_per_fitness")

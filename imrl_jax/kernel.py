@@ -32,7 +32,7 @@ from imrl_jax.networks import Agent
 
 # Slots of the per-lane scalar vectors.
 _X, _Y, _HEADING, _COS, _SIN, _A0, _A1, _O0, _O1 = range(9)  # floats
-_K, _VALID, _TERMINAL, _TRIAL_STEP, _T, _EXPERTS_ENDED, _SELECTOR_ENDED = range(7)  # int32
+_K, _VALID, _TERMINAL, _TRIAL_STEP, _T, _EXPERTS_ENDED, _SELECTOR_ENDED, _PINNED = range(8)  # int32
 _NUM_FLOATS, _NUM_INTS = 16, 8
 # Rows of the packed weights and traces.
 _REINFORCER, _ACTOR0, _ACTOR1, _EVALUATOR, _SELECTOR = range(5)
@@ -49,7 +49,8 @@ class Packed(NamedTuple):
     xbs: jnp.ndarray  # (2, N): x~_{t-1}, x~_{t-2}
     selection: jnp.ndarray  # (Kp,): s_{t-1} (0 in padded rows)
     floats: jnp.ndarray  # (16,): pose, (cos, sin), a_{t-1}, o_{t-1}
-    ints: jnp.ndarray  # (8,): k, valid, terminal, trial step, t, ended flags
+    ints: jnp.ndarray  # (8,): k, valid, terminal, trial step, t, ended flags, steps on a wall
+    baseline: jnp.ndarray  # (Kp,): each expert's running mean surprise (0 in padded rows)
 
 
 def _pow2(n: int) -> int:
@@ -73,7 +74,7 @@ def pack(state: State) -> Packed:
     floats = jnp.stack([state.pose.pos[0], state.pose.pos[1], state.pose.heading, *state.direction,
                         *prev.action, *prev.output]).astype(dtype)
     ints = jnp.stack([prev.k, prev.valid, prev.terminal, state.trial_step, state.t, traces.experts_ended,
-                      traces.selector_ended]).astype(jnp.int32)
+                      traces.selector_ended, state.pinned]).astype(jnp.int32)
     return Packed(
         weights=jnp.stack([rows(agent.reinforcer), rows(agent.actor[:, 0]), rows(agent.actor[:, 1]),
                            rows(agent.evaluator), rows(agent.selector_actor)]),
@@ -85,6 +86,7 @@ def pack(state: State) -> Packed:
         selection=_pad(prev.selection, (kp,)),
         floats=_pad(floats, (_NUM_FLOATS,)),
         ints=_pad(ints, (_NUM_INTS,)),
+        baseline=_pad(state.baseline, (kp,)),
     )
 
 
@@ -115,7 +117,7 @@ def unpack(packed: Packed, like: State, block: Draws) -> State:
                     selection=packed.selection[:k], valid=i[_VALID] != 0, terminal=i[_TERMINAL] != 0)
     pose = like.pose._replace(pos=f[jnp.array([_X, _Y])], heading=f[_HEADING])
     return State(agent, traces, pose, f[jnp.array([_COS, _SIN])], xbs, prev, i[_TRIAL_STEP], t, block,
-                 like.pinned, like.baseline)
+                 i[_PINNED], packed.baseline[:k])
 
 
 def retina_layout(config: Config, dtype=jnp.float32) -> jnp.ndarray:
@@ -162,9 +164,11 @@ class _Carry(NamedTuple):
     before_xb: jnp.ndarray
     selection: jnp.ndarray
     floats: tuple  # x, y, heading, cos, sin, a0, a1, o0, o1
-    ints: tuple  # k, valid, terminal, trial_step, t, experts_ended, selector_ended (int32)
+    ints: tuple  # k, valid, terminal, trial_step, t, experts_ended, selector_ended, pinned (int32)
+    baseline: jnp.ndarray  # (Kp,)
     reaches: jnp.ndarray
     timeouts: jnp.ndarray
+    respawns: jnp.ndarray
     selections: jnp.ndarray  # (Kp,) int32
 
 
@@ -175,15 +179,16 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
     r = config.robot_radius
     size = config.arena_size
 
-    def kernel(layout_ref, params_ref, task_ref, u_ref, z_ref, weights_ref, critic_ref, traces_ref,
-               selector_trace_ref, xbs_ref, selection_ref, floats_ref, ints_ref,
+    def kernel(layout_ref, params_ref, task_ref, u_ref, z_ref, spawn_ref, weights_ref, critic_ref, traces_ref,
+               selector_trace_ref, xbs_ref, selection_ref, floats_ref, ints_ref, baseline_ref,
                weights_out, critic_out, traces_out, selector_trace_out, xbs_out, selection_out,
-               floats_out, ints_out, counts_out, selections_out):
+               floats_out, ints_out, baseline_out, counts_out, selections_out):
         dtype = weights_ref.dtype
         p = LearningParams(*(params_ref[j] for j in range(len(LearningParams._fields))))
         gamma, lam, noise_std = p.gamma, p.trace_lambda, p.noise_std
         eta_actor, eta_evaluator = p.eta_actor, p.eta_evaluator
         eta_selector_actor, eta_selector_critic = p.eta_selector_actor, p.eta_selector_critic
+        progress_rate = p.progress_rate
         start_x, start_y, start_heading, target_x, target_y = (task_ref[j] for j in range(5))
         start_cos, start_sin = jnp.cos(start_heading), jnp.sin(start_heading)
         forward, lateral, colours, bias = (layout_ref[j] for j in range(4))
@@ -204,9 +209,10 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
             reinforcer, actor0, actor1, evaluator, selector = carry.weights
             trace_actor0, trace_actor1, trace_evaluator, trace_critic = carry.traces
             x, y, heading, c, s, a0, a1, o0, o1 = carry.floats
-            prev_k, valid, terminal, trial_step, t, experts_ended, selector_ended = carry.ints
+            prev_k, valid, terminal, trial_step, t, experts_ended, selector_ended, pinned = carry.ints
             valid, terminal = valid != 0, terminal != 0
             critic, selector_trace, prev_xb = carry.critic, carry.selector_trace, carry.prev_xb
+            baseline = carry.baseline
 
             # 1-2: observe, choose the expert (lifetime.select: the first k with u * sum(s) < cumsum(s)[k]).
             xb = observe(x, y, c, s)
@@ -253,6 +259,10 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
             if phase.selector_learns:
                 if phase.intrinsic:
                     learn, reward = valid & same, surprise
+                    if phase.progress:  # lifetime.step: surprise minus the expert's running mean
+                        mine = held.astype(dtype) * learn.astype(dtype)
+                        reward = surprise - jnp.sum(mine * baseline)
+                        baseline = baseline + progress_rate * mine * (surprise - baseline)
                 else:
                     learn, reward = valid, extrinsic
                 value_before = jnp.sum(critic * prev_xb)
@@ -285,6 +295,17 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
             x = jnp.clip(x + advance * c, r, size - r)
             y = jnp.clip(y + advance * s, r, size - r)
             trial_step = trial_step + 1
+            if phase.respawn:  # lifetime.step: a random pose after wall_respawn_steps steps on a wall
+                on_wall = (x <= r) | (x >= size - r) | (y <= r) | (y >= size - r)
+                pinned = jnp.where(on_wall, pinned + 1, 0)
+                respawned = pinned >= config.wall_respawn_steps
+                x = jnp.where(respawned, r + (size - 2.0 * r) * spawn_ref[0, i], x)
+                y = jnp.where(respawned, r + (size - 2.0 * r) * spawn_ref[1, i], y)
+                heading = jnp.where(respawned, full * spawn_ref[2, i], heading)
+                c, s = jnp.where(respawned, jnp.cos(heading), c), jnp.where(respawned, jnp.sin(heading), s)
+                pinned = jnp.where(respawned, 0, pinned)
+            else:
+                respawned = trial_step < 0  # False, computed (see below)
             if phase.has_target:
                 reached = (x - target_x) ** 2 + (y - target_y) ** 2 <= config.target_radius ** 2
                 timeout = ~reached & (trial_step >= config.trial_timeout)
@@ -306,10 +327,12 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                 before_xb=prev_xb,
                 selection=selection,
                 floats=(x, y, heading, c, s, act0, act1, out0, out1),
-                ints=(k, (~timeout).astype(jnp.int32), reached.astype(jnp.int32), trial_step, t + 1,
-                      experts_ended, selector_ended),
+                ints=(k, (~(timeout | respawned)).astype(jnp.int32), reached.astype(jnp.int32), trial_step, t + 1,
+                      experts_ended, selector_ended, pinned),
+                baseline=baseline,
                 reaches=carry.reaches + reached.astype(jnp.int32),
                 timeouts=carry.timeouts + timeout.astype(jnp.int32),
+                respawns=carry.respawns + respawned.astype(jnp.int32),
                 selections=carry.selections + (rows == k).astype(jnp.int32),
             )
 
@@ -322,9 +345,11 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
             before_xb=xbs_ref[1],
             selection=selection_ref[...],
             floats=tuple(floats_ref[j] for j in range(9)),
-            ints=tuple(ints_ref[j] for j in range(7)),
+            ints=tuple(ints_ref[j] for j in range(8)),
+            baseline=baseline_ref[...],
             reaches=jnp.int32(0),
             timeouts=jnp.int32(0),
+            respawns=jnp.int32(0),
             selections=jnp.zeros((kp,), jnp.int32),
         )
         carry = jax.lax.fori_loop(0, num_steps, one_step, carry)
@@ -343,10 +368,10 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
             floats_out[j] = zero
         for j, value in enumerate(carry.ints):
             ints_out[j] = value
-        for j in range(7, _NUM_INTS):
-            ints_out[j] = jnp.int32(0)
+        baseline_out[...] = carry.baseline
         counts_out[0] = carry.reaches
         counts_out[1] = carry.timeouts
+        counts_out[2] = carry.respawns
         selections_out[...] = carry.selections
 
     return kernel
@@ -370,7 +395,7 @@ def run_bin(config: Config, phase: Phase, params: LearningParams, task: TaskSpec
                              task.target[0], task.target[1]]).astype(dtype)
     kp = packed.selection.shape[0]
     out_shape = (*(jax.ShapeDtypeStruct(x.shape, x.dtype) for x in packed),
-                 jax.ShapeDtypeStruct((2,), jnp.int32), jax.ShapeDtypeStruct((kp,), jnp.int32))
+                 jax.ShapeDtypeStruct((3,), jnp.int32), jax.ShapeDtypeStruct((kp,), jnp.int32))
     call = pl.pallas_call(
         _make_kernel(config, phase, phase_steps, num_steps, num_experts),
         out_shape=out_shape,
@@ -381,16 +406,17 @@ def run_bin(config: Config, phase: Phase, params: LearningParams, task: TaskSpec
     )
     # Without noise the kernel reads no z: a stand-in spares the lanes x steps zeros.
     z = draws.z.T.astype(dtype) if phase.noisy else jnp.zeros((2, 1), dtype)
+    spawn = draws.spawn.T.astype(dtype) if phase.respawn else jnp.zeros((3, 1), dtype)
     *state, counts, selections = call(retina_layout(config, dtype), params_vector, task_vector,
-                                      draws.u.astype(dtype), z, *packed)
+                                      draws.u.astype(dtype), z, spawn, *packed)
     return Packed(*state), counts, selections
 
 
-def draw_range(key: jax.Array, start, num_steps: int, block_steps: int, noisy: bool) -> Draws:
+def draw_range(key: jax.Array, start, num_steps: int, block_steps: int, noisy: bool, spawn: bool = False) -> Draws:
     """The draws of steps start .. start + num_steps - 1 of a phase (the XLA program's stream)."""
     num_blocks = -(-num_steps // block_steps) + 1
     first = start // block_steps
-    blocks = jax.vmap(lambda b: draw_block(key, first + b, block_steps, noisy))(jnp.arange(num_blocks))
+    blocks = jax.vmap(lambda b: draw_block(key, first + b, block_steps, noisy, spawn))(jnp.arange(num_blocks))
     flat = jax.tree.map(lambda x: x.reshape((-1,) + x.shape[2:]), blocks)
     offset = start - first * block_steps
     return jax.tree.map(lambda x: jax.lax.dynamic_slice_in_dim(x, offset, num_steps), flat)
@@ -407,12 +433,13 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
     params = phase_params(phase, params)
 
     def one_bin(packed, _):
-        draws = draw_range(key, packed.ints[_T], bin_steps, config.draw_block, phase.noisy)
+        draws = draw_range(key, packed.ints[_T], bin_steps, config.draw_block, phase.noisy, phase.respawn)
         packed, counts, selections = run_bin(config, phase, params, task, phase_steps, draws, packed, num_experts,
                                              interpret)
-        return packed, Curves(counts[0], counts[1], selections[:num_experts])
+        return packed, Curves(counts[0], counts[1], selections[:num_experts], counts[2] if phase.respawn else None)
 
     packed, curves = jax.lax.scan(one_bin, pack(state), None, length=num_bins)
     # The block of the last step, as the XLA program leaves it.
-    block = draw_block(key, (packed.ints[_T] - 1) // config.draw_block, config.draw_block, phase.noisy)
+    block = draw_block(key, (packed.ints[_T] - 1) // config.draw_block, config.draw_block, phase.noisy,
+                       phase.respawn)
     return unpack(packed, state, block), curves

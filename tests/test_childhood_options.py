@@ -115,11 +115,6 @@ def test_bad_childhood_settings_exit_2_naming_the_field(tmp_path, capsys, settin
     assert not os.path.exists(out)
 
 
-def test_pallas_kernel_refuses_options_it_does_not_have():
-    with pytest.raises(ConfigError, match="childhood_walls"):
-        make_config("skills", step_kernel="pallas")
-
-
 @pytest.mark.parametrize("condition", ["LE-LS", "EE-LS", "EE-ES", "SLE"])
 def test_learned_actors_start_with_the_speed_bias_and_evolved_ones_do_not(tiny, condition):
     from imrl_jax import reference

@@ -26,20 +26,28 @@ def test_round_even_rounds_half_to_even():
     np.testing.assert_array_equal(np.asarray(K.round_even(x)), np.asarray(jnp.round(x)))
 
 
+#: The childhood options of docs/CHILDHOOD.md, with a short wall wait so that respawns happen.
+OPTIONS = dict(childhood_walls="respawn", wall_respawn_steps=5, childhood_selector_reward="progress",
+               progress_rate=0.05, initial_speed_bias=2.0)
+
+
 @pytest.mark.usefixtures("x64")
-@pytest.mark.parametrize("condition", ["LE-LS", "EE-LS", "SLE"], ids=["childhood", "adult-LS", "SLE"])
-def test_phase_in_pieces_matches_xla(tiny, condition):
+@pytest.mark.parametrize("condition, options", [("LE-LS", {}), ("LE-LS", OPTIONS), ("EE-LS", {}), ("SLE", {})],
+                         ids=["childhood", "childhood-options", "adult-LS", "SLE"])
+def test_phase_in_pieces_matches_xla(tiny, condition, options):
     """A phase run by the kernel in two pieces, against XLA in one: every branch of the step.
 
-    Childhood (intrinsic rewards, noise, walls), a learning selector, and a single learning
-    expert (one expert, noise), the adult phases with reaches and timeouts.
+    Childhood (intrinsic rewards, noise, walls; also respawns and the progress reward), a
+    learning selector, and a single learning expert (one expert, noise), the adult phases
+    with reaches and timeouts.
     """
-    config = tiny(condition, tasks=(SHORT_TASK,), childhood_steps=STEPS, task_steps=STEPS, num_bins=8, **EXTENDED)
+    config = tiny(condition, tasks=(SHORT_TASK,), childhood_steps=STEPS, task_steps=STEPS, num_bins=8,
+                  **EXTENDED, **options)
     params = config.learning_params()
     n = config.num_inputs + 1
     if condition == "LE-LS":
         agent = decode(config, jax.random.uniform(jax.random.key(7), (3 * n,), jnp.float64, -1.0, 1.0))
-        phase, task = L.CHILDHOOD, L.childhood_task(config, jnp.float64)
+        phase, task = L.childhood_phase(config), L.childhood_task(config, jnp.float64)
         pose = Pose(jnp.array([40.0, 60.0]), jnp.array(math.pi))  # heading into the west wall
     else:
         agent = L.adult_agent(config, decode(config, jnp.zeros((config.num_genes,), jnp.float64)))
@@ -47,7 +55,7 @@ def test_phase_in_pieces_matches_xla(tiny, condition):
             agent = agent._replace(actor=jnp.asarray(hand_experts(n)))
         phase, task = L.adult_phase(condition), L.task_spec(config, 0, jnp.float64)
         pose = task.start
-    state = L.init_state(config, agent, pose)
+    state = L.for_phase(config, phase, L.init_state(config, agent, pose))
     pallas = config.replace(step_kernel="pallas")
 
     @jax.jit
@@ -67,6 +75,7 @@ def test_phase_in_pieces_matches_xla(tiny, condition):
         assert int(xla_curves.reaches.sum()) > 0 and int(xla_curves.timeouts.sum()) > 0
     else:  # every expert takes control
         assert np.all(np.asarray(xla_curves.selections).sum(0) > 0)
+        assert (int(np.asarray(xla_curves.respawns).sum()) > 0 if options else xla_curves.respawns is None)
 
 
 @pytest.mark.slow
@@ -88,14 +97,14 @@ def test_life_matches_xla(tiny):
 
 
 def test_kernel_lowers_to_triton_for_gpu(tiny):
-    """Childhood and adulthood kernels, vmapped over lanes, lower to Triton kernels for CUDA."""
-    config = tiny("LE-LS", childhood_steps=400, task_steps=200, num_bins=2)
+    """Childhood (with the childhood options) and adulthood kernels, vmapped over lanes, lower to Triton for CUDA."""
+    config = tiny("LE-LS", childhood_steps=400, task_steps=200, num_bins=2, **OPTIONS)
     params = config.learning_params()
 
     def lanes(key, genome):
         agent = decode(config, genome)
         child = L.init_state(config, agent, Pose(jnp.array([40.0, 60.0]), jnp.array(math.pi)))
-        child, _ = K.run_phase(key, config, L.CHILDHOOD, params, L.childhood_task(config), child,
+        child, _ = K.run_phase(key, config, L.childhood_phase(config), params, L.childhood_task(config), child,
                                config.childhood_steps, interpret=False)
         adult = L.task_start(config, child.agent, 0)
         return K.run_phase(key, config, L.ADULT_LEARNING_SELECTOR, params, L.task_spec(config, 0), adult,
