@@ -214,14 +214,51 @@ def plot_hand(rows, path: str) -> None:
     save(fig, path)
 
 
+def read_best(run_dir: str) -> np.ndarray:
+    """Best fitness (seeds, generations) from a run's history.csv."""
+    with open(os.path.join(run_dir, "history.csv")) as f:
+        rows = list(csv.DictReader(f))
+    seeds = sorted({int(r["seed"]) for r in rows})
+    generations = max(int(r["generation"]) for r in rows) + 1
+    best = np.full((len(seeds), generations), np.nan)
+    for r in rows:
+        best[seeds.index(int(r["seed"])), int(r["generation"])] = float(r["best"])
+    return best
+
+
+def plot_evolutions(out: str, path: str) -> None:
+    """Best fitness per generation of the study's evolutions, with the ceilings they climb towards."""
+    from imrl_jax.plotting import plot_fitness, save
+
+    runs = [name for name in EVOLUTIONS if os.path.isfile(os.path.join(out, "evolve", name, "history.csv"))]
+    curves = {name: read_best(os.path.join(out, "evolve", name)) for name in runs}
+    fig = plot_fitness(curves, title="paper life lengths: best fitness, mean and sd over seeds")
+    ax = fig.axes[0]
+    references = []
+    with open(os.path.join(out, "ceiling.csv")) as f:
+        references += [(float(r["fitness"]), "ideal colour followers, extension's selector", "0.3")
+                       for r in csv.DictReader(f) if r["rules"] == "extension" and r["task_steps"] == "100000"]
+    with open(os.path.join(out, "speed.csv")) as f:
+        fast = [float(r["fitness"]) for r in csv.DictReader(f) if float(r["speed_bias"]) == 4.0]
+    references.append((float(np.mean(fast)), "hand-made colour reinforcers under skills", "0.6"))
+    for (value, label, colour), style in zip(references, ("--", ":")):
+        ax.axhline(value, color=colour, lw=1.0, ls=style, label=f"{label}: {value:.2f}")
+    ax.set_ylim(0, 1)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    fig.set_size_inches(8.5, 3.6)
+    fig.tight_layout()
+    save(fig, path)
+
+
 def stage_plot(args) -> int:
-    """Redraw hand.png from hand.csv."""
+    """Redraw hand.png from hand.csv and evolve.png from the runs' histories."""
     with open(os.path.join(args.out, "hand.csv")) as f:
         rows = [{k: (float(v) if k not in ("walls", "reward", "rules") else v) for k, v in r.items()}
                 for r in csv.DictReader(f)]
     for r in rows:
         r["length"] = int(r["length"])
     plot_hand(rows, os.path.join(args.out, "hand.png"))
+    plot_evolutions(args.out, os.path.join(args.out, "evolve.png"))
     return 0
 
 
@@ -332,6 +369,34 @@ def stage_evolved(args) -> int:
               f"{np.bincount(summary, minlength=4).tolist()} (individuals with 0, 1, 2, 3)", flush=True)
     os.makedirs(args.out, exist_ok=True)
     write_csv(os.path.join(args.out, args.name + ".csv"), rows)
+    return 0
+
+
+def stage_random(args) -> int:
+    """Random genomes (generation 0) under a preset: one life's fitness each and the probes of their experts."""
+    import jax
+
+    from imrl_jax.config import make_config
+    from imrl_jax.lifetime import make_evaluate
+
+    config = make_config(args.preset, condition="LE-LS")
+    genomes = jax.random.uniform(jax.random.key(args.key), (args.individuals, config.num_genes), minval=-1.0,
+                                 maxval=1.0)
+    tick = time.perf_counter()
+    fitness = np.asarray(make_evaluate(config)(jax.random.key(args.key + 1), config.learning_params(),
+                                               genomes).fitness)
+    agents, records = grown_agents(config, genomes, args.key + 2)
+    rows = []
+    for i in range(args.individuals):
+        row = dict(preset=args.preset, individual=i, fitness=float(fitness[i]))
+        row.update(measure(config, jax.tree.map(lambda x: x[i], agents), *(x[i] for x in records)))
+        rows.append(row)
+    colours = np.bincount([r["num_colours"] for r in rows], minlength=4).tolist()
+    print(f"{args.individuals} random LE-LS genomes under {args.preset} in {time.perf_counter() - tick:.0f} s: "
+          f"fitness {fitness.mean():.3f} (max {fitness.max():.3f}); individuals with 0-3 colours followed {colours}",
+          flush=True)
+    os.makedirs(args.out, exist_ok=True)
+    write_csv(os.path.join(args.out, f"random_{args.preset}.csv"), rows)
     return 0
 
 
@@ -506,6 +571,11 @@ def main(argv=None) -> int:
     speed.add_argument("--biases", default="0,2,4", help="initial bias of the actors' speed unit (0: the paper's)")
     speed.add_argument("--lives", type=int, default=4)
     speed.add_argument("--key", type=int, default=3)
+    random = sub.add_parser("random", help="random LE-LS genomes (generation 0): fitness and probes")
+    random.add_argument("--out", default="experiments/results/childhood")
+    random.add_argument("--preset", default="skills")
+    random.add_argument("--individuals", type=int, default=30)
+    random.add_argument("--key", type=int, default=4)
     plot = sub.add_parser("plot", help="redraw the figures from the CSVs")
     plot.add_argument("--out", default="experiments/results/childhood")
     args = p.parse_args(argv)
@@ -513,7 +583,8 @@ def main(argv=None) -> int:
 
     use_host_cores(1)
     return {"hand": stage_hand, "evolve": stage_evolve, "ceiling": stage_ceiling, "evolved": stage_evolved,
-            "heritability": stage_heritability, "plot": stage_plot, "speed": stage_speed}[args.stage](args)
+            "heritability": stage_heritability, "plot": stage_plot, "speed": stage_speed,
+            "random": stage_random}[args.stage](args)
 
 
 if __name__ == "__main__":
