@@ -27,7 +27,7 @@ from imrl_jax.arena import floor_colour_xy
 from imrl_jax import learning
 from imrl_jax.config import Config, LearningParams
 from imrl_jax.learning import selector_features, td_error
-from imrl_jax.lifetime import Curves, Draws, Phase, Previous, State, TaskSpec, Traces, draw_block, phase_params
+from imrl_jax.state import Curves, Draws, Phase, Previous, State, TaskSpec, Traces, draw_block, phase_params
 from imrl_jax.networks import Agent
 
 # Slots of the per-lane scalar vectors.

@@ -1,9 +1,10 @@
 """The learning rules of section 2 and MODEL.md "Learning": TD surprise, actor-critic updates, traces.
 
-Each rule is w += eta * delta * e, where e is the network's eligibility trace
-(e <- gamma * lambda * e + phi on the steps at which it learns; lambda = 0 gives the
-paper's one-step rules exactly). It is written as one SGD step of optax on the
-pseudo-gradient -delta * e.
+:func:`learn_experts` and :func:`learn_selector` are the paper's rules, stated once; the
+functions above them are their building blocks. Each rule is w += eta * delta * e, where e
+is the network's eligibility trace (e <- gamma * lambda * e + phi on the steps at which it
+learns; lambda = 0 gives the paper's one-step rules exactly). It is written as one SGD step
+of optax on the pseudo-gradient -delta * e.
 """
 
 from __future__ import annotations
@@ -11,6 +12,8 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 import optax
+
+from imrl_jax.networks import evaluate_both, reinforce
 
 
 def td_error(reward, value, next_value, gamma, terminal):
@@ -71,3 +74,85 @@ def pick_row(matrix, k):
     for j in range(1, matrix.shape[0]):
         picked = picked + onehot[j] * matrix[j]
     return picked
+
+
+# --------------------------------------------------------------------------- the rules
+
+def take_row(matrix, k):
+    """Row k of matrix (k may be traced)."""
+    return jax.lax.dynamic_index_in_dim(matrix, k, 0, keepdims=False)
+
+
+def learn_experts(phase, params, agent, traces, prev, xb, prev_xb, same):
+    """The expert that held control learns from the transition t-1 -> t (section 2; MODEL.md "Learning").
+
+        delta_k = r + gamma V_k(x_t) - V_k(x_{t-1})       (surprise; a terminal transition: r - V_k(x_{t-1}))
+        e_v <- gamma lambda e_v + x~_{t-1};                      v_k += eta_evaluator delta_k e_v
+        e_W <- gamma lambda e_W + ((a - o) o (1 - o)) x~_{t-1}^T;  W_k += eta_actor delta_k e_W
+
+    r is the expert's own reinforcer r_k(x_t) in childhood, the extrinsic reward (1 on
+    reaching the target) for SLE. It learns only when it kept control (k_t == k_{t-1}: the
+    paper's two contiguous steps) over a transition that was not cut; its traces end when it
+    loses control or the trial ends. Returns the agent, the traces and the surprise delta_k.
+    """
+    gamma, lam = params.gamma, params.trace_lambda
+    learn = prev.valid & same
+    ends = prev.terminal | ~prev.valid
+    kp = prev.k
+    held = jax.nn.one_hot(kp, agent.evaluator.shape[0], dtype=xb.dtype)  # the expert that held control
+    # Every reinforcer, and every evaluator, at once: a matrix-vector product is one fast
+    # kernel (see networks.evaluate_both), where taking row kp first is a slow gather.
+    reward = reinforce(agent.reinforcer, xb)[kp] if phase.intrinsic else prev.terminal.astype(xb.dtype)
+    value_before, value_now = (agent.evaluator @ prev_xb)[kp], (agent.evaluator @ xb)[kp]
+    surprise = td_error(reward, value_before, value_now, gamma, prev.terminal)
+    delta = jnp.where(learn, surprise, 0.0)
+    trace_v = accumulate(traces.evaluator, prev_xb, gamma, lam, learn, traces.experts_ended)
+    trace_w = accumulate(traces.actor, actor_features(prev.action, prev.output, prev_xb),
+                         gamma, lam, learn, traces.experts_ended)
+    agent = agent._replace(evaluator=ascend_row(agent.evaluator, held, trace_v, delta, params.eta_evaluator),
+                           actor=ascend_row(agent.actor, held, trace_w, delta, params.eta_actor))
+    traces = traces._replace(evaluator=trace_v, actor=trace_w, experts_ended=~same | ends)
+    return agent, traces, surprise
+
+
+def learn_selector(phase, params, agent, traces, prev, xbs, now, k, same, surprise, baseline):
+    """The selector learns from the transition t-1 -> t (section 2; MODEL.md "Learning"), with e = one-hot(k_{t-1}):
+
+        delta_s = R + gamma U(x_t) - U(x_{t-1})         (a terminal transition: R - U(x_{t-1}))
+        e_u <- gamma lambda e_u + x~_{t-1};                      u += eta_selector_critic delta_s e_u
+        e_S <- gamma lambda e_S + ((e - s) s (1 - s)) x~_{t-1}^T;  S += eta_selector_actor delta_s e_S
+
+    In childhood R is the surprise of the expert that kept control (the paper: "the surprise
+    of the selected expert"), and nothing learns when the expert changed; with the
+    ``progress`` option, that surprise minus the expert's running mean surprise b_k. In
+    adulthood R is the extrinsic reward, every step. x~_{t-1} and x~_t are the rows of
+    ``xbs`` in turn (x~_t in row ``now``). Returns the agent, the traces and the baselines b.
+    """
+    gamma, lam = params.gamma, params.trace_lambda
+    ends = prev.terminal | ~prev.valid
+    prev_xb = take_row(xbs, 1 - now)
+    if phase.intrinsic:
+        learn, reward = prev.valid & same, surprise
+        if phase.progress:
+            # Learning progress, roughly: the surprise beyond what this expert usually gets,
+            # b_k <- b_k + rho (delta_k - b_k) on the steps it learns, so that an expert whose
+            # reinforcer merely pays more everywhere is not favoured.
+            held = jax.nn.one_hot(prev.k, baseline.shape[0], dtype=prev_xb.dtype) * learn
+            before = jnp.sum(held * baseline)
+            reward = surprise - before
+            baseline = baseline + params.progress_rate * held * (surprise - baseline)
+    else:
+        # k >= 0 always holds; it orders this update after the choice of k, which reads the
+        # same selector weights, so that XLA can update them in place, not in a copy.
+        learn, reward = prev.valid & (k >= 0), prev.terminal.astype(prev_xb.dtype)
+    u_weights, s_weights = agent.selector_critic, agent.selector_actor
+    values = evaluate_both(u_weights, xbs)
+    delta = td_error(reward, take_row(values, 1 - now), take_row(values, now), gamma, prev.terminal)
+    delta = jnp.where(learn, delta, 0.0)
+    trace_u = accumulate(traces.selector_critic, prev_xb, gamma, lam, learn, traces.selector_ended)
+    trace_s = accumulate(traces.selector_actor, selector_features(prev.k, prev.selection, prev_xb),
+                         gamma, lam, learn, traces.selector_ended)
+    agent = agent._replace(selector_critic=ascend(u_weights, trace_u, delta, params.eta_selector_critic),
+                           selector_actor=ascend(s_weights, trace_s, delta, params.eta_selector_actor))
+    traces = traces._replace(selector_critic=trace_u, selector_actor=trace_s, selector_ended=ends)
+    return agent, traces, baseline
