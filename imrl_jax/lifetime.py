@@ -328,7 +328,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
     # 4: act.
     output = act(pick_row(agent.actor, k), xb)
     if phase.noisy:
-        sigma = params.noise_std * (1.0 - state.t.astype(xb.dtype) / phase_steps)
+        sigma = params.noise_std * jnp.maximum(1.0 - state.t.astype(xb.dtype) / phase_steps, 0.0)
         action = jnp.clip(output + sigma * draws.z, 0.0, 1.0)
     else:
         action = output
@@ -465,7 +465,8 @@ def live(key: jax.Array, config: Config, params: LearningParams, genome: jnp.nda
 
     def live_task(task_key, index):
         state, curves = run_phase(task_key, config, phase, params, task_spec(config, index, dtype),
-                                  task_start(config, agent, index), config.task_steps)
+                                  task_start(config, agent, index), config.task_steps,
+                                  phase_steps=config.adult_noise_steps)
         return state.agent, curves
 
     adult_agents, curves = jax.vmap(live_task)(keys.tasks, jnp.arange(config.num_tasks))
