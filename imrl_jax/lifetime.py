@@ -369,7 +369,7 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
     """Run ``num_steps`` steps of a phase as a scan over bins of steps (``config.num_bins`` by default).
 
     A phase may run in pieces: give each piece the whole phase's length as ``phase_steps``
-    (it sets the noise schedule) and the carried state; the pieces together are the same
+    (the noise anneals to 0 over it, then stays 0) and the carried state; the pieces together are the same
     computation as one call. With ``config.step_kernel == "pallas"`` each bin is one
     kernel (:func:`imrl_jax.kernel.run_phase`).
     """

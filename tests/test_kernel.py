@@ -27,13 +27,17 @@ def test_round_even_rounds_half_to_even():
 
 
 @pytest.mark.usefixtures("x64")
-@pytest.mark.parametrize("condition", ["LE-LS", "EE-LS", "SLE"], ids=["childhood", "adult-LS", "SLE"])
+@pytest.mark.parametrize("condition", ["LE-LS", "EE-LS", "SLE", "SLE-horizon"],
+                         ids=["childhood", "adult-LS", "SLE", "SLE-noise-horizon"])
 def test_phase_in_pieces_matches_xla(tiny, condition):
     """A phase run by the kernel in two pieces, against XLA in one: every branch of the step.
 
     Childhood (intrinsic rewards, noise, walls), a learning selector, and a single learning
-    expert (one expert, noise), the adult phases with reaches and timeouts.
+    expert (one expert, noise; also with its noise over the first half only, sle_noise_steps),
+    the adult phases with reaches and timeouts.
     """
+    horizon = STEPS // 2 if condition.endswith("-horizon") else STEPS
+    condition = condition.removesuffix("-horizon")
     config = tiny(condition, tasks=(SHORT_TASK,), childhood_steps=STEPS, task_steps=STEPS, num_bins=8, **EXTENDED)
     params = config.learning_params()
     n = config.num_inputs + 1
@@ -52,10 +56,10 @@ def test_phase_in_pieces_matches_xla(tiny, condition):
 
     @jax.jit
     def both(key, state):
-        whole = L.run_phase(key, config, phase, params, task, state, STEPS)
+        whole = L.run_phase(key, config, phase, params, task, state, STEPS, horizon)
         # 750 + 1250 steps: the second piece starts mid-way through a block of draws.
-        first = L.run_phase(key, pallas, phase, params, task, state, 750, STEPS, 3)
-        second = L.run_phase(key, pallas, phase, params, task, first[0], 1250, STEPS, 5)
+        first = L.run_phase(key, pallas, phase, params, task, state, 750, horizon, 3)
+        second = L.run_phase(key, pallas, phase, params, task, first[0], 1250, horizon, 5)
         return whole, (second[0], jax.tree.map(lambda a, b: jnp.concatenate([a, b]), first[1], second[1]))
 
     (xla_state, xla_curves), (kernel_state, kernel_curves) = both(jax.random.key(1), state)
