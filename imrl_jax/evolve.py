@@ -310,7 +310,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--set", action="append", metavar="FIELD=VALUE",
                    help="set any scalar Config field, e.g. --set trace_lambda=0.9 (repeatable)")
     p.add_argument("--out", help="run directory (default: runs/COND)")
-    p.add_argument("--resume", action="store_true", help="continue the run in --out from its latest checkpoint")
+    p.add_argument("--resume", action="store_true", help="continue the run in --out from its latest checkpoint (--generations may grow: a finished run "
+                        "is extended)")
     p.add_argument("--checkpoint-every", type=int, default=1, help="generations between checkpoints")
     p.add_argument("--keep", type=int, default=3, help="checkpoints kept (at least 1)")
     p.add_argument("--quiet", action="store_true", help="no progress line (for logs)")
