@@ -1,4 +1,4 @@
-"""The best evolved individual lives its evaluated life again, then drives each task: paths, shares, stereotypy."""
+"""The best evolved individual lives its evaluated life again, then drives each task; the best ones' experts probed."""
 
 from __future__ import annotations
 
