@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from experiments.loading import NUM_BEST
 from experiments.reproduce import EVOLVED, TESTED
 from imrl_jax.learning_test import PAIR_LEVEL
 
@@ -36,6 +37,9 @@ SPECIALISED_SHARE = 0.5  # an expert follows a colour: it sees it on more than h
 MIN_CONTROL_SHARE = 0.05  # experts in control on fewer steps are not judged
 PAIRS_COMPOSED = 1 / 3  # "composes": at least this share of task pairs solved both ways
 STEADY_ORDER = ("EE-LS", "SLE", "LE-LS", "EE-ES")
+MUCH_SMALLER = 0.5  # claim 2: "much smaller" spread, at most this fraction of the other's
+ORDER_SE = 2.0  # claim 6: a pair is ordered when the difference exceeds this many standard errors
+SPECIALISED_MAJORITY = 0.5  # claim 7: share of probed individuals that must follow 3 colours
 
 RULES = {
     1: f"Plateau generation = the first generation at which the best fitness (mean over seeds) reaches "
@@ -45,33 +49,42 @@ RULES = {
        f"evolutions are shorter than the paper's 100 generations, so \"about 100\" shows as a plateau in the "
        f"last generations or none.)",
     2: f"Final best fitness of a seed = the mean of its last {LAST_GENERATIONS} generations' best fitness; "
-       f"spread = its standard deviation over seeds. **holds** if LE-LS's spread is smaller than both EE-LS's and "
-       f"EE-ES's; **partly** if smaller than one; **does not hold** otherwise.",
+       f"spread = its standard deviation over seeds. \"Much smaller\" = at most {MUCH_SMALLER:g} of the other's. "
+       f"**holds** if LE-LS's spread is at most {MUCH_SMALLER:g} of both EE-LS's and EE-ES's; **partly** if at most "
+       f"{MUCH_SMALLER:g} of one, or smaller than both; **does not hold** otherwise.",
     3: "Difference d = mean final best fitness of EE-LS minus that of LE-LS, standard error "
        "se = sqrt(sd_EE-LS^2/n + sd_LE-LS^2/n) (sd over seeds, ddof 1). **holds** if d > 2 se; **partly** if "
        "0 < d <= 2 se; **does not hold** if d <= 0.",
     4: f"Ratio = mean final best fitness of EE-ES / that of LE-LS; \"about\" = ratio in [{ABOUT[0]}, {ABOUT[1]}]. "
-       f"Stereotypy = of the steps of the best EE-ES individual's task paths that turn by more than "
-       f"{TURN_THRESHOLD_DEG:g} deg, the share that turn the same way (1: always one way, as on a circle; "
-       f"about 0.5: zigzags). \"circular\" = stereotypy >= {STEREOTYPED_TURNS}. **holds** if both; **partly** if "
+       f"Stereotypy of a task = of the steps of the best EE-ES individual's path in that task that turn by more "
+       f"than {TURN_THRESHOLD_DEG:g} deg, the share that turn the same way (1: always one way, as on a circle; "
+       f"about 0.5: zigzags), per task, so that a circle in one task is not averaged away with the others. "
+       f"\"circular\" = stereotypy >= {STEREOTYPED_TURNS} in at least one task. **holds** if both; **partly** if "
        f"one; **does not hold** if neither.",
-    5: f"For LE-LS and EE-LS in turn: level = {PLATEAU_FRACTION:.0%} of the condition's steady state; cycles to "
-       f"it = the end of the first bin of the mean learning curve at or above the level, for the condition and "
-       f"for SLE; ratio = SLE's cycles / the condition's (infinite when SLE never gets there). **holds** if "
-       f"the ratio is >= {MUCH_FASTER:g} for both; **partly** if >= {MUCH_FASTER:g} for one or > 1 for both; "
-       f"**does not hold** otherwise. (The paper's ratio is about 4.)",
-    6: "Steady states (mean over runs) are compared in the six pairs the order EE-LS > SLE > LE-LS > EE-ES "
-       "implies. **holds** if all 6 pairs are in that order; **partly** if 4 or 5; **does not hold** if 3 or "
-       "fewer (3 of 6 is what an arbitrary order gets on average).",
-    7: f"For the best LE-LS and EE-LS individuals (the paper: \"particularly true\" of them), on their adult task "
-       f"paths: an expert in control on at least {MIN_CONTROL_SHARE:.0%} of the steps is *specialised* when one "
-       f"colour covers more than {SPECIALISED_SHARE:.0%} of its central receptors' readings (colour_shares); "
-       f"score = number of distinct colours among specialised experts (0-3). Composition: the share of (learning "
-       f"test, task pair) in which both tasks of a pair reach a steady state of at least {PAIR_LEVEL:g} (the two "
-       f"tasks of a pair look the same up to the first junction and turn the other way there, so any fixed "
-       f"controller solves at most one: EE-ES is the control). **holds** if the score is 3 for both and the "
-       f"LE-LS or EE-LS share is at least {PAIRS_COMPOSED:.2f}; **partly** if a score is at least 1 or that share "
-       f"is reached; **does not hold** otherwise.",
+    5: f"SLE's action noise must anneal over a fixed number of cycles of a task (`sle_noise_steps`; the pipeline "
+       f"uses the adult task length), not over the whole test: otherwise SLE gets good only at the test's end "
+       f"whatever its length, and the comparison is **n/a**. For LE-LS and EE-LS in turn: level = "
+       f"{PLATEAU_FRACTION:.0%} of the condition's steady state; cycles to it = the end of the first bin of the "
+       f"mean learning curve at or above the level, for the condition and for SLE; ratio = SLE's cycles / the "
+       f"condition's. When SLE never reaches the level it is reported as \"never reached\" (the ratio is only "
+       f"bounded below by the test's length). **holds** if SLE reaches both levels and the ratio is >= "
+       f"{MUCH_FASTER:g} for both; **partly** if a measured ratio is >= {MUCH_FASTER:g}, or both measured ratios "
+       f"are > 1, or SLE never reaches a level; **does not hold** otherwise. (The paper's ratio is about 4.)",
+    6: f"Steady states (mean over runs) are compared in the six pairs the order EE-LS > SLE > LE-LS > EE-ES "
+       f"implies. A pair is *in order* when the difference exceeds {ORDER_SE:g} standard errors (se = "
+       f"sqrt(sd_a^2/n_a + sd_b^2/n_b), sd over runs, ddof 1), *reversed* when it is below -{ORDER_SE:g} se, "
+       f"*tied* otherwise. **holds** if all 6 pairs are in order; **partly** if 4 or 5; **does not hold** if 3 or "
+       f"fewer (3 of 6 is what an arbitrary order gets on average).",
+    7: f"For the {NUM_BEST} best LE-LS and EE-LS individuals of every seed (LE-LS after a fresh childhood with its "
+       f"run's config): each expert is driven alone from fixed starts before junctions "
+       f"(`imrl_jax.behaviour.specialisation`) and follows colour c when it takes c at >= 75 % of the junctions "
+       f"offering it; colours = distinct colours its experts follow (0-3); *specialised* individual = 3 colours. "
+       f"Composition: the share of (learning test, task pair) in which both tasks of a pair reach a steady state "
+       f"of at least {PAIR_LEVEL:g} (the two tasks of a pair look the same up to the first junction and turn the "
+       f"other way there, so any fixed controller solves at most one: EE-ES is the control). **holds** if at least "
+       f"{SPECIALISED_MAJORITY:.0%} of the individuals are specialised in both LE-LS and EE-LS and the LE-LS or "
+       f"EE-LS share is at least {PAIRS_COMPOSED:.2f}; **partly** if that many are specialised in one of them, or "
+       f"the mean number of colours is >= 2 in one, or that share is reached; **does not hold** otherwise.",
 }
 
 #: What the paper reports for each claim (sections 3 and 4, Fig. 3).
@@ -184,8 +197,10 @@ def claim_reliability(spread: dict) -> dict:
     le, others = spread.get("LE-LS"), [spread.get(c) for c in ("EE-LS", "EE-ES")]
     if le is None or any(o is None for o in others):
         return _claim(NOT_AVAILABLE, measured, spread=spread)
-    smaller = sum(le < o for o in others)
-    return _claim(HOLDS if smaller == 2 else PARTLY if smaller == 1 else DOES_NOT, measured, spread=spread)
+    much = sum(le <= MUCH_SMALLER * o for o in others)
+    measured += f"; LE-LS's at most {MUCH_SMALLER:g} of {much} of 2"
+    verdict = HOLDS if much == 2 else PARTLY if much == 1 or all(le < o for o in others) else DOES_NOT
+    return _claim(verdict, measured, spread=spread, much_smaller=much)
 
 
 def claim_ee_ls_higher(ee_ls, le_ls) -> dict:
@@ -201,25 +216,35 @@ def claim_ee_ls_higher(ee_ls, le_ls) -> dict:
                   difference=d, standard_error=se, ee_ls=float(ee_ls.mean()), le_ls=float(le_ls.mean()))
 
 
-def claim_ee_es_about(ee_es: float | None, le_ls: float | None, stereotypy: float | None,
-                      speed: float | None = None) -> dict:
-    """Claim 4 from the mean final best fitness of EE-ES and LE-LS and EE-ES's stereotypy (its speed is only shown)."""
+def claim_ee_es_about(ee_es: float | None, le_ls: float | None, stereotypy, speed: float | None = None) -> dict:
+    """Claim 4 from the mean final best fitness of EE-ES and LE-LS and EE-ES's stereotypy per task (speed only shown).
+
+    ``stereotypy``: one value per task (None for a task without turns), or None when no path was measured.
+    """
     ratio = ee_es / le_ls if ee_es is not None and le_ls is not None and le_ls > 0 else None
+    known = [s for s in (stereotypy or []) if s is not None]
+    circular = sum(s >= STEREOTYPED_TURNS for s in known)
+    per_task = "-" if stereotypy is None else ", ".join(_fmt(s, 2) for s in stereotypy)
     measured = (f"EE-ES / LE-LS final best fitness {_fmt(ee_es)} / {_fmt(le_ls)} = {_fmt(ratio, 2)}; "
-                f"stereotypy {_fmt(stereotypy, 2)}" + ("" if speed is None else f", speed {speed:.2f} cm/step"))
+                f"stereotypy per task {per_task}" + (f" ({circular} of {len(stereotypy)} circular)" if known else "")
+                + ("" if speed is None else f", speed {speed:.2f} cm/step"))
     parts = [p for p in (None if ratio is None else ABOUT[0] <= ratio <= ABOUT[1],
-                         None if stereotypy is None else stereotypy >= STEREOTYPED_TURNS) if p is not None]
+                         circular >= 1 if known else None) if p is not None]
     if not parts:
-        return _claim(NOT_AVAILABLE, measured, ratio=ratio, stereotypy=stereotypy)
+        return _claim(NOT_AVAILABLE, measured, ratio=ratio, stereotypy=stereotypy, circular_tasks=circular)
     verdict = HOLDS if len(parts) == 2 and all(parts) else PARTLY if any(parts) else DOES_NOT
-    return _claim(verdict, measured, ratio=ratio, stereotypy=stereotypy)
+    return _claim(verdict, measured, ratio=ratio, stereotypy=stereotypy, circular_tasks=circular)
 
 
-def claim_learning_speed(curves: dict, steady: dict) -> dict:
-    """Claim 5 from the learning curves ``curves[c] = (end cycles, mean)`` and the steady states ``steady[c]``."""
+def claim_learning_speed(curves: dict, steady: dict, sle_noise_steps: int | None = 0) -> dict:
+    """Claim 5 from the learning curves ``curves[c] = (end cycles, mean)``, the steady states ``steady[c]`` and
+    SLE's noise horizon (its test config's ``sle_noise_steps``; 0 or None: over the whole test, not comparable)."""
     ratios, cycles, texts = {}, {}, []
     if "SLE" not in curves:
         return _claim(NOT_AVAILABLE, "-")
+    if not sle_noise_steps:
+        return _claim(NOT_AVAILABLE, "not comparable: SLE's noise anneals over the whole test (sle_noise_steps 0), "
+                                     "so when SLE gets good depends on the test's length", sle_noise_steps=0)
     for c in ("LE-LS", "EE-LS"):
         if c not in curves or steady.get(c) is None or not steady[c] > 0:
             continue
@@ -227,54 +252,88 @@ def claim_learning_speed(curves: dict, steady: dict) -> dict:
         own, sle = first_reach(*curves[c], level), first_reach(*curves["SLE"], level)
         if own is None:  # only when curve.csv's rounding puts every bin under the level
             continue
-        ratio = math.inf if sle is None else sle / own
+        ratio = None if sle is None else sle / own
         ratios[c], cycles[c] = ratio, dict(level=level, cycles=own, sle_cycles=sle)
-        texts.append(f"{c} {own:,} vs SLE {'never' if sle is None else f'{sle:,}'} cycles to {level:.3f} "
-                     f"(x{_fmt(ratio, 1)})")
-    measured = "; ".join(texts) or "-"
-    numbers = dict(ratio={c: (None if math.isinf(r) else r) for c, r in ratios.items()},
-                   sle_never={c: math.isinf(r) for c, r in ratios.items()}, cycles=cycles)
+        end = int(np.asarray(curves["SLE"][0])[-1])
+        texts.append(f"{c} {own:,} vs SLE {sle:,} cycles to {level:.3f} (x{ratio:.1f})" if sle is not None else
+                     f"{c} {own:,} cycles to {level:.3f}, SLE never reached it in {end:,} (x > {end / own:.1f})")
+    measured = "; ".join(texts) + f" (SLE's noise over {sle_noise_steps:,} cycles)" if texts else "-"
+    never = {c: r is None for c, r in ratios.items()}
+    numbers = dict(ratio=ratios, sle_never=never, cycles=cycles, sle_noise_steps=sle_noise_steps)
     if len(ratios) < 2:
         return _claim(NOT_AVAILABLE, measured, **numbers)
-    much = sum(r >= MUCH_FASTER for r in ratios.values())
-    verdict = HOLDS if much == 2 else PARTLY if much == 1 or all(r > 1 for r in ratios.values()) else DOES_NOT
+    measured_ratios = [r for r in ratios.values() if r is not None]
+    much = sum(r >= MUCH_FASTER for r in measured_ratios)
+    if much == 2:
+        verdict = HOLDS
+    elif much == 1 or any(never.values()) or all(r > 1 for r in measured_ratios):
+        verdict = PARTLY
+    else:
+        verdict = DOES_NOT
     return _claim(verdict, measured, **numbers)
 
 
-def claim_ordering(steady: dict, order=STEADY_ORDER) -> dict:
-    """Claim 6 from the steady states (mean over runs) of the four conditions."""
-    if any(steady.get(c) is None for c in order):
+def pair_order(a, b, num_se: float = ORDER_SE) -> str:
+    """"in order" if mean(a) - mean(b) > num_se standard errors, "reversed" if < -num_se se, else "tied"."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    var = lambda x: float(x.var(ddof=1)) / len(x) if len(x) > 1 else 0.0  # noqa: E731
+    d, se = float(a.mean() - b.mean()), math.sqrt(var(a) + var(b))
+    return "in order" if d > num_se * se else "reversed" if d < -num_se * se else "tied"
+
+
+def claim_ordering(per_run: dict, order=STEADY_ORDER) -> dict:
+    """Claim 6 from the steady states of the four conditions, one value per run (``per_run[c]``)."""
+    if any(per_run.get(c) is None or not len(per_run[c]) for c in order):
         return _claim(NOT_AVAILABLE, "-")
-    pairs = {f"{a} > {b}": bool(steady[a] > steady[b]) for i, a in enumerate(order) for b in order[i + 1:]}
+    mean = {c: float(np.mean(per_run[c])) for c in order}
+    outcome = {f"{a} > {b}": pair_order(per_run[a], per_run[b]) for i, a in enumerate(order) for b in order[i + 1:]}
+    pairs = {p: o == "in order" for p, o in outcome.items()}
     held = sum(pairs.values())
-    ranked = sorted(order, key=lambda c: -steady[c])
-    ranked = ranked[0] + "".join(f" {'=' if steady[a] == steady[b] else '>'} {b}" for a, b in zip(ranked, ranked[1:]))
-    failed = [p for p, ok in pairs.items() if not ok]
-    measured = (f"{ranked} (" + ", ".join(f"{c} {steady[c]:.3f}" for c in order) + f"); {held}/6 pairs hold"
-                + (f"; not: {', '.join(failed)}" if failed else ""))
+    ranked = sorted(order, key=lambda c: -mean[c])
+    ranked = ranked[0] + "".join(f" {'=' if mean[a] == mean[b] else '>'} {b}" for a, b in zip(ranked, ranked[1:]))
+    tied = [p for p, o in outcome.items() if o == "tied"]
+    reversed_ = [p for p, o in outcome.items() if o == "reversed"]
+    measured = (f"{ranked} (" + ", ".join(f"{c} {mean[c]:.3f}" for c in order) + f"); {held}/6 pairs in order "
+                f"(> {ORDER_SE:g} se)" + (f"; tied: {', '.join(tied)}" if tied else "")
+                + (f"; reversed: {', '.join(reversed_)}" if reversed_ else ""))
     verdict = HOLDS if held == 6 else PARTLY if held >= 4 else DOES_NOT
-    return _claim(verdict, measured, pairs=pairs, pairs_held=held)
+    return _claim(verdict, measured, pairs=pairs, outcome=outcome, pairs_held=held)
 
 
-def claim_specialisation(scores: dict, pairs: dict | None = None) -> dict:
-    """Claim 7: specialisation score (0-3 colours) of the best LS individuals; pairs solved both ways in their tests."""
+def claim_specialisation(colours: dict, pairs: dict | None = None) -> dict:
+    """Claim 7 from the colours followed (``Specialisation.num_colours``) by each probed LS individual, and the
+    share of task pairs solved both ways in their learning tests."""
     pairs = pairs or {}
-    le, ee = scores.get("LE-LS"), scores.get("EE-LS")
-    measured = f"distinct colours followed: LE-LS {_fmt(le)}/3, EE-LS {_fmt(ee)}/3"
+    probed = {c: np.asarray(colours[c]) for c in ("LE-LS", "EE-LS") if colours.get(c) is not None and len(colours[c])}
+    counts = {c: np.bincount(v.astype(int), minlength=4)[:4].tolist() for c, v in probed.items()}
+    specialised = {c: float((v == 3).mean()) for c, v in probed.items()}
+    mean = {c: float(v.mean()) for c, v in probed.items()}
+    measured = "individuals following 0/1/2/3 colours: " + (", ".join(
+        f"{c} {'/'.join(map(str, n))} (3: {specialised[c]:.0%})" for c, n in counts.items()) or "-")
     if pairs:
         measured += "; task pairs solved both ways: " + ", ".join(f"{c} {_fmt(v, 2)}" for c, v in pairs.items())
-    if le is None and ee is None:
-        return _claim(NOT_AVAILABLE, measured, scores=scores, pairs=pairs)
-    known = [s for s in (le, ee) if s is not None]
+    numbers = dict(counts=counts, specialised=specialised, mean_colours=mean, pairs=pairs)
+    if not probed:
+        return _claim(NOT_AVAILABLE, measured, **numbers)
     composed = [pairs[c] for c in ("LE-LS", "EE-LS") if pairs.get(c) is not None]
     composes = bool(composed) and max(composed) >= PAIRS_COMPOSED
-    verdict = HOLDS if len(known) == 2 and all(s == 3 for s in known) and (composes or not pairs) \
-        else PARTLY if any(s >= 1 for s in known) or composes else DOES_NOT
-    return _claim(verdict, measured, scores=scores, pairs=pairs)
+    majority = [specialised[c] >= SPECIALISED_MAJORITY for c in probed]
+    if len(probed) == 2 and all(majority) and composes:
+        verdict = HOLDS
+    elif any(majority) or any(m >= 2 for m in mean.values()) or composes:
+        verdict = PARTLY
+    else:
+        verdict = DOES_NOT
+    return _claim(verdict, measured, **numbers)
 
 
-def measure(data: dict, lives: dict) -> dict:
-    """Every number of the report: per variant, the evolutions' and tests' statistics and the claims."""
+def measure(data: dict, lives: dict, probes: dict | None = None) -> dict:
+    """Every number of the report: per variant, the evolutions' and tests' statistics and the claims.
+
+    ``lives[(variant, condition)]``: the relived best individuals (claim 4's paths);
+    ``probes[(variant, condition)]``: the colours followed by each probed individual (claim 7).
+    """
+    probes = probes or {}
     out = {}
     for variant in data["variants"]:
         evolution = {}
@@ -304,24 +363,22 @@ def measure(data: dict, lives: dict) -> dict:
         get = lambda d, c, k: d[c][k] if c in d else None  # noqa: E731
         steady = {c: get(tests, c, "steady_mean") for c in TESTED}
         ee_es_life = lives.get(("paper", "EE-ES"))
-        scores = {}
-        for condition in ("LE-LS", "EE-LS"):
-            life = lives.get((variant, condition))
-            if life is not None:
-                scores[condition] = specialisation_score(life["shares"], life["steps"])[0]
+        sle = data["tests"].get((variant, "SLE"))
+        sle_noise = (sle["steady"].get("config") or {}).get("sle_noise_steps", 0) if sle else None
         claims = {
             1: claim_evolvability({c: get(evolution, c, "plateau_generation") for c in EVOLVED}),
             2: claim_reliability({c: get(evolution, c, "final_best_sd") for c in EVOLVED}),
             3: claim_ee_ls_higher(get(evolution, "EE-LS", "final_best_per_seed"),
                                   get(evolution, "LE-LS", "final_best_per_seed")),
             4: claim_ee_es_about(get(evolution, "EE-ES", "final_best_mean"), get(evolution, "LE-LS", "final_best_mean"),
-                                 ee_es_life["stereotypy"] if ee_es_life else None,
+                                 ee_es_life["stereotypy_per_task"] if ee_es_life else None,
                                  ee_es_life["speed"] if ee_es_life else None),
             5: claim_learning_speed({c: (data["tests"][variant, c]["steps"], data["tests"][variant, c]["mean"])
-                                     for c in TESTED if (variant, c) in data["tests"]}, steady),
-            6: claim_ordering(steady),
-            7: claim_specialisation(scores, {c: data["tests"][variant, c]["pairs_both_ways"] for c in EVOLVED
-                                             if data["tests"].get((variant, c), {}).get("pairs_both_ways") is not None}),
+                                     for c in TESTED if (variant, c) in data["tests"]}, steady, sle_noise),
+            6: claim_ordering({c: get(tests, c, "steady_per_run") for c in TESTED}),
+            7: claim_specialisation({c: probes.get((variant, c)) for c in ("LE-LS", "EE-LS")},
+                                    {c: data["tests"][variant, c]["pairs_both_ways"] for c in EVOLVED
+                                     if data["tests"].get((variant, c), {}).get("pairs_both_ways") is not None}),
         }
         out[variant] = dict(evolution=evolution, learning_tests=tests, claims=claims)
     return out

@@ -1,4 +1,4 @@
-"""The best evolved individual lives its evaluated life again, then drives each task: paths, shares, stereotypy."""
+"""The best evolved individual lives its evaluated life again, then drives each task; the best ones' experts probed."""
 
 from __future__ import annotations
 
@@ -38,6 +38,7 @@ def relive_best(config_dict: dict, best: dict) -> dict:
                relived_fitness=float(result.fitness), performance=[float(p) for p in result.performance],
                tasks=tasks, shares=shares, steps=steps, childhood=None,
                stereotypy=turn_consistency(pooled.seen_heading, pooled.heading, pooled.breaks),
+               stereotypy_per_task=[turn_consistency(t.seen_heading, t.heading, t.breaks) for t in tasks],
                speed=mean_speed(pooled.seen_pos, pooled.pos, pooled.breaks),
                dominant_expert=float(np.bincount(pooled.k.reshape(-1), minlength=num_experts).max() / pooled.k.size))
     if config.condition == "LE-LS":
@@ -47,3 +48,22 @@ def relive_best(config_dict: dict, best: dict) -> dict:
                                             config.childhood_steps)
         out["childhood_shares"], out["childhood_steps"] = colour_shares(config, tail, num_experts)
     return out
+
+
+def probe_best(config_dict: dict, best: dict, key: int = 0) -> list[int]:
+    """Distinct colours followed (``Specialisation.num_colours``) by each genome of ``best`` (seeds x best, in order).
+
+    LE-LS genomes first live a fresh childhood with their run's config (keys from ``key``);
+    evolved experts are probed as they are.
+    """
+    import jax
+
+    from experiments.childhood_study import grown_agents
+    from imrl_jax.behaviour import specialisation
+    from imrl_jax.config import Config
+
+    config = Config.from_dict(config_dict)
+    genomes = np.asarray(best["genomes"])
+    agents, _ = grown_agents(config, genomes.reshape(-1, genomes.shape[-1]), key)
+    return [specialisation(config, jax.tree.map(lambda x: x[i], agents)).num_colours
+            for i in range(genomes.shape[0] * genomes.shape[1])]

@@ -22,9 +22,10 @@ populations, the learning tests' curves and steady states, ``manifest.json``) an
 The best individual of an evolution (the fittest of the last generation over all seeds)
 lives again the very life that earned its fitness (:func:`imrl_jax.render.life_key`), then
 drives each task for a while from the weights it ended that task with: those paths give
-the trajectory figures, the expert-specialisation table (claim 7) and the stereotypy of
-EE-ES (claim 4). That is one lifetime per evolved condition (about ten seconds each at the
-cpu scale); ``--no-behaviour`` skips it.
+the trajectory figures, the expert-specialisation table and the stereotypy of EE-ES per
+task (claim 4). Claim 7 probes the experts of the 10 best LE-LS and EE-LS individuals of
+every seed (:func:`imrl_jax.behaviour.specialisation`; LE-LS after a fresh childhood).
+``--no-behaviour`` skips both.
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ from experiments.claims import CLAIMS, PAPER, RULES, SEEN, measure
 from experiments.document import ROOT, pipeline_command, scale_label, specialisation_rows, write_document
 from experiments.figures import fig_fitness, fig_learning, fig_paths, fig_steady
 from experiments.loading import load, update_best_genomes
-from experiments.relive import DRAWN_STEPS, PATH_STEPS, relive_best
+from experiments.relive import DRAWN_STEPS, PATH_STEPS, probe_best, relive_best
 from experiments.reproduce import EVOLVED, TESTED
 
 
@@ -90,7 +91,7 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True) -> dict:
                                 os.path.join(figures, "fig3c.png"))
 
     best = update_best_genomes(data)
-    lives = {}
+    lives, probes = {}, {}
     if behaviour:
         for (variant, condition), entry in best.items():
             if entry["config"] is None:
@@ -103,8 +104,13 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True) -> dict:
                      f"{life['relived_fitness']:.3f}); {short}\npaths: the last {DRAWN_STEPS} of {PATH_STEPS:,} "
                      f"steps driven after each task's learning period, coloured by the expert in control")
             written["paths"][variant, condition] = save(fig_paths(life, title), os.path.join(figures, name))
+        for (variant, condition), entry in best.items():
+            if entry["config"] is not None and condition in ("LE-LS", "EE-LS"):
+                print(f"probing the experts of the {entry['genomes'].shape[1]} best {condition} individuals of "
+                      f"every seed ({variant})", flush=True)
+                probes[variant, condition] = probe_best(entry["config"], entry)
 
-    numbers = measure(data, lives)
+    numbers = measure(data, lives, probes)
     spec_rows = specialisation_rows(lives)
     written["specialisation"] = os.path.join(figures, "specialisation.csv")
     with open(written["specialisation"], "w", newline="") as f:
@@ -127,9 +133,12 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True) -> dict:
                                                       generation=life["generation"], fitness=life["fitness"],
                                                       relived_fitness=life["relived_fitness"],
                                                       performance=life["performance"],
-                                                      stereotypy=life["stereotypy"], speed=life["speed"],
+                                                      stereotypy=life["stereotypy"],
+                                                      stereotypy_per_task=life["stereotypy_per_task"],
+                                                      speed=life["speed"],
                                                       dominant_expert_share=life["dominant_expert"])
-                                     for (v, c), life in lives.items()})
+                                     for (v, c), life in lives.items()},
+                   colours_followed={f"{v}/{c}": colours for (v, c), colours in probes.items()})
     claims = dict(scale=summary["scale"], scale_label=label, rules={str(n): r for n, r in RULES.items()},
                   claims={str(n): dict(text=text, paper=PAPER[n],
                                        variants={v: numbers[v]["claims"][n] for v in numbers})

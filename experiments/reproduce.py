@@ -11,9 +11,14 @@ conditions (EE-ES learns nothing, so its evolution is the same under both varian
 run once, under ``paper``), then the learning tests of LE-LS, EE-LS, EE-ES and SLE. Then
 ``python -m experiments.report`` writes docs/REPRODUCTION.md and its figures.
 
-Every stage is a command of the package, printed before it runs. A finished stage is
-skipped; an interrupted evolution resumes from its last checkpoint; an interrupted
-learning test starts again. Run the same command again to go on after an interruption.
+Every stage is a command of the package, printed before it runs, its progress line shown
+beside the whole pipeline's (stage i of N, elapsed time, and an ETA from the stages' costs in
+lane-steps at the rate measured so far, or an assumed one before any stage is timed). A
+finished stage is skipped; an interrupted evolution resumes from its last checkpoint; an
+interrupted learning test starts again. Run the same command again to go on after an
+interruption. The newest checkpoint of an unfinished evolution is copied into its run
+directory's ``resume_checkpoint/`` (``checkpoints/`` is not committed), so that a fresh
+clone with the results committed goes on from there.
 
 Scales (what ``cpu`` shrinks, and by how much, is the whole difference):
 
@@ -35,9 +40,11 @@ import argparse
 import json
 import os
 import shutil
+import re
 import subprocess
 import sys
 import time
+from typing import NamedTuple
 
 SCALES = {
     "paper": dict(seeds=10, generations=100, childhood_steps=150_000, task_steps=100_000, bins=100,
@@ -77,21 +84,13 @@ def evolve_command(scale: dict, variant: str, condition: str, out_dir: str, kern
     return command + (["--resume"] if started else [])
 
 
-def evolution_done(out_dir: str, scale: dict) -> bool:
-    path = os.path.join(out_dir, "final_population.npz")
-    if not os.path.exists(path):
-        return False
-    import numpy as np
-
-    with np.load(path) as data:
-        return int(data["generation"]) >= scale["generations"]
-
-
 def test_command(scale: dict, variant: str, condition: str, run_dir: str, out_dir: str,
                  kernel: str = "xla") -> list[str]:
     command = [sys.executable, "-m", "imrl_jax.learning_test"]
     if condition == "SLE":
-        command += ["--cond", "SLE", "--preset", variant, "--runs", str(scale["seeds"]), *_kernel_options(kernel)]
+        # SLE's noise anneals over an adult task's length, not the whole test (claim 5 compares speeds)
+        command += ["--cond", "SLE", "--preset", variant, "--runs", str(scale["seeds"]), *_kernel_options(kernel),
+                    "--set", f"sle_noise_steps={scale['task_steps']}"]
     else:  # the test runs with its evolution's config, step kernel included
         command += [run_dir]
     return command + ["--best", str(scale["best"]), "--tests", str(scale["tests"]),
@@ -100,13 +99,204 @@ def test_command(scale: dict, variant: str, condition: str, run_dir: str, out_di
                       "--out", out_dir]
 
 
-def run_stage(name: str, command: list[str], manifest: dict, manifest_path: str, env: dict | None = None) -> None:
-    print(f"\n== {name}\n$ {' '.join(command[1:] if command[0] == sys.executable else command)}", flush=True)
+#: Lane-steps per second assumed before any stage of this results directory has been timed
+#: (the cpu-scale evolutions ran at 1.1-1.3 million on 2 CPU cores).
+DEFAULT_RATE = 1.2e6
+#: Where an unfinished evolution's newest checkpoint is copied (committed: checkpoints/ is not).
+PUBLISHED = "resume_checkpoint"
+_PROGRESS = re.compile(r"\((\d+)/(\d+)\)")
+
+
+class Stage(NamedTuple):
+    """One stage of the pipeline: what it is, where it writes, what it costs (lane-steps, estimated)."""
+
+    name: str
+    kind: str  # evolve, test, report
+    variant: str
+    condition: str
+    out_dir: str
+    cost: float
+
+
+def _life(scale: dict, condition: str, task_steps: int) -> int:
+    return (scale["childhood_steps"] if condition == "LE-LS" else 0) + 6 * task_steps
+
+
+def plan(scale: dict, out: str, variants, report: bool = True) -> list[Stage]:
+    """Every stage in order: the evolutions (EE-ES once, under paper), the learning tests, the report."""
+    stages, population = [], scale.get("population", 50)
+    for variant in variants:
+        for condition in EVOLVED:
+            owner = "paper" if condition == "EE-ES" else variant
+            if any(s.kind == "evolve" and s.name == f"evolve {owner} {condition}" for s in stages):
+                continue
+            cost = scale["seeds"] * population * scale["generations"] * _life(scale, condition, scale["task_steps"])
+            stages.append(Stage(f"evolve {owner} {condition}", "evolve", owner, condition,
+                                evolution_dir(out, variant, condition), float(cost)))
+    for variant in variants:
+        for condition in TESTED:
+            cost = scale["seeds"] * scale["best"] * scale["tests"] * _life(scale, condition, scale["test_steps"])
+            stages.append(Stage(f"learning test {variant} {condition}", "test", variant, condition,
+                                test_dir(out, variant, condition), float(cost)))
+    if report:  # the probes of claim 7: a childhood for each best LE-LS individual
+        cost = len(variants) * scale["seeds"] * scale["best"] * scale["childhood_steps"]
+        stages.append(Stage("report", "report", "", "", out, float(cost)))
+    return stages
+
+
+def generations_done(run_dir: str) -> int:
+    """Generations an evolution has finished, from its history.csv (0 if none)."""
+    path = os.path.join(run_dir, "history.csv")
+    if not os.path.isfile(path):
+        return 0
+    with open(path) as f:
+        rows = [line.split(",", 1)[0] for line in f.read().splitlines()[1:] if line]
+    return max((int(g) for g in rows), default=-1) + 1
+
+
+def stage_done(stage: Stage, scale: dict) -> bool:
+    """A finished evolution (all generations in its history) or learning test (its steady.json); the report never."""
+    if stage.kind == "evolve":
+        return generations_done(stage.out_dir) >= scale["generations"]
+    if stage.kind == "test":
+        return os.path.exists(os.path.join(stage.out_dir, "steady.json"))
+    return False
+
+
+def measured_rate(manifest: dict) -> float | None:
+    """Lane-steps per second over the timed stages of the manifest (None when none is)."""
+    timed = [s for s in manifest.get("stages", {}).values() if s.get("cost") and s.get("seconds")]
+    return sum(s["cost"] for s in timed) / sum(s["seconds"] for s in timed) if timed else None
+
+
+def eta_seconds(remaining: list[Stage], rate: float, fraction: float = 0.0, stage_rate: float | None = None) -> float:
+    """Seconds left: the running stage (``remaining[0]``, ``fraction`` done) and those after it."""
+    if not remaining:
+        return 0.0
+    first = (1.0 - fraction) * remaining[0].cost / (stage_rate or rate)
+    return first + sum(s.cost for s in remaining[1:]) / rate
+
+
+def clock(seconds: float) -> str:
+    seconds = int(max(seconds, 0))
+    return f"{seconds // 3600:d}:{seconds // 60 % 60:02d}:{seconds % 60:02d}"
+
+
+def _checkpoint_steps(folder: str) -> list[int]:
+    return sorted(int(d) for d in os.listdir(folder) if d.isdigit()) if os.path.isdir(folder) else []
+
+
+def publish_checkpoint(run_dir: str) -> int | None:
+    """Copy the newest checkpoint of ``run_dir`` into ``run_dir/resume_checkpoint`` (which is committed)."""
+    steps = _checkpoint_steps(os.path.join(run_dir, "checkpoints"))
+    published = os.path.join(run_dir, PUBLISHED)
+    if not steps or _checkpoint_steps(published) == steps[-1:]:
+        return steps[-1] if steps else None
+    tmp = published + ".tmp"
+    shutil.rmtree(tmp, ignore_errors=True)
+    shutil.copytree(os.path.join(run_dir, "checkpoints", str(steps[-1])), os.path.join(tmp, str(steps[-1])))
+    shutil.rmtree(published, ignore_errors=True)
+    os.replace(tmp, published)
+    return steps[-1]
+
+
+def restore_published(run_dir: str) -> int | None:
+    """In a fresh clone (no checkpoints/), put the published checkpoint back where ``evolve --resume`` reads it."""
+    checkpoints = os.path.join(run_dir, "checkpoints")
+    steps = _checkpoint_steps(os.path.join(run_dir, PUBLISHED))
+    if _checkpoint_steps(checkpoints) or not steps:
+        return None
+    shutil.copytree(os.path.join(run_dir, PUBLISHED, str(steps[-1])), os.path.join(checkpoints, str(steps[-1])))
+    return steps[-1]
+
+
+class Overall:
+    """The whole pipeline's progress: stages done of the total, elapsed time, ETA."""
+
+    def __init__(self, stages: list[Stage], manifest: dict, stream=None):
+        self.stages, self.manifest = stages, manifest
+        self.stream = stream or sys.stderr
+        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+        self.start = time.perf_counter()
+
+    def rate(self) -> tuple[float, str]:
+        measured = measured_rate(self.manifest)
+        return (measured, "measured") if measured else (DEFAULT_RATE, "estimated")
+
+    def status(self, index: int, fraction: float = 0.0, stage_rate: float | None = None) -> str:
+        """'stage i/N, all: elapsed, ETA' for the stage at ``index`` (``fraction`` of it done)."""
+        rate, how = self.rate()
+        remaining = [s for s in self.stages[index:] if not stage_done(s, self.manifest["sizes"])]
+        if remaining and remaining[0] is not self.stages[index]:
+            fraction = 0.0
+        eta = eta_seconds(remaining, rate, fraction, stage_rate)
+        return (f"stage {index + 1}/{len(self.stages)} | all stages: {clock(time.perf_counter() - self.start)} "
+                f"elapsed, ETA {clock(eta)} ({how})")
+
+    def line(self, text: str) -> None:
+        self.stream.write(("\r\033[K" if self.tty else "") + text + ("" if self.tty else "\n"))
+        self.stream.flush()
+
+    def end_line(self) -> None:
+        if self.tty:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def run_stage(stage: Stage, index: int, command: list[str], overall: Overall, manifest_path: str,
+              done_before: float = 0.0, env: dict | None = None) -> None:
+    """Run one stage, its progress lines shown after the whole pipeline's; record its command, time and cost."""
+    manifest = overall.manifest
+    print(f"\n== [{index + 1}/{len(overall.stages)}] {stage.name}\n"
+          f"$ {' '.join(command[1:] if command[0] == sys.executable else command)}\n"
+          f"{overall.status(index, done_before)}", flush=True)
     start = time.perf_counter()
-    subprocess.run(command, check=True, env=env)
-    manifest["stages"][name] = dict(command=" ".join(["python"] + command[1:]), seconds=round(time.perf_counter() - start, 1))
+    process = subprocess.Popen(command, env=env, stderr=subprocess.PIPE, text=True, bufsize=1)
+    first = None  # (fraction, time) at the first progress line: the stage's own rate is measured from there
+    try:
+        for text in process.stderr:
+            text = text.rstrip("\n")
+            match = _PROGRESS.search(text)
+            if match is None:
+                overall.end_line()
+                print(text, file=sys.stderr, flush=True)
+                continue
+            fraction = int(match.group(1)) / max(int(match.group(2)), 1)
+            now = time.perf_counter()
+            first = first or (fraction, now)
+            stage_rate = ((fraction - first[0]) * stage.cost / (now - first[1])
+                          if fraction > first[0] and now > first[1] else None)
+            overall.line(f"{text} || {overall.status(index, fraction, stage_rate)}")
+            if stage.kind == "evolve":
+                publish_checkpoint(stage.out_dir)
+        code = process.wait()
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+        overall.end_line()
+        if stage.kind == "evolve":
+            publish_checkpoint(stage.out_dir)
+    if code:
+        raise subprocess.CalledProcessError(code, command)
+    manifest["stages"][stage.name] = dict(command=" ".join(["python"] + command[1:]),
+                                          seconds=round(time.perf_counter() - start, 1),
+                                          cost=round(stage.cost * (1.0 - done_before)))
     with open(manifest_path, "w") as f:
         json.dump(manifest, f, indent=2)
+
+
+def stage_command(stage: Stage, scale: dict, out: str, kernel: str) -> tuple[list[str], dict | None]:
+    """The command line of a stage and its environment (None: this one's)."""
+    if stage.kind == "evolve":
+        return evolve_command(scale, stage.variant, stage.condition, stage.out_dir, kernel), None
+    if stage.kind == "test":
+        return test_command(scale, stage.variant, stage.condition, evolution_dir(out, stage.variant, stage.condition),
+                            stage.out_dir, kernel), None
+    # The report is a module of the experiments package: the repository root goes on its path.
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    path = os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)
+    return [sys.executable, "-m", "experiments.report", out], {**os.environ, "PYTHONPATH": path}
 
 
 def main(argv=None) -> int:
@@ -134,42 +324,35 @@ def main(argv=None) -> int:
     from imrl_jax.checkpoint import git_commit
 
     manifest["git_commit"] = git_commit()
-    start = time.perf_counter()
+    stages = plan(scale, out, variants, report=not args.no_report)
+    overall = Overall(stages, manifest)
     try:
-        for variant in variants:
-            for condition in EVOLVED:
-                run_dir = evolution_dir(out, variant, condition)
-                if evolution_done(run_dir, scale):
-                    print(f"== evolve {variant} {condition}: done ({run_dir})")
-                    continue
-                run_stage(f"evolve {'paper' if condition == 'EE-ES' else variant} {condition}",
-                          evolve_command(scale, "paper" if condition == "EE-ES" else variant, condition, run_dir,
-                                         args.kernel),
-                          manifest, manifest_path)
-        for variant in variants:
-            for condition in TESTED:
-                out_dir = test_dir(out, variant, condition)
-                if os.path.exists(os.path.join(out_dir, "steady.json")):
-                    print(f"== learning test {variant} {condition}: done ({out_dir})")
-                    continue
-                shutil.rmtree(out_dir, ignore_errors=True)  # an interrupted test starts again
-                run_stage(f"learning test {variant} {condition}",
-                          test_command(scale, variant, condition, evolution_dir(out, variant, condition), out_dir,
-                                       args.kernel),
-                          manifest, manifest_path)
-        if not args.no_report:
-            # The report is a module of the experiments package: the repository root goes on its path.
-            root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-            path = os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)
-            run_stage("report", [sys.executable, "-m", "experiments.report", out], manifest, manifest_path,
-                      env={**os.environ, "PYTHONPATH": path})
+        for index, stage in enumerate(stages):
+            if stage_done(stage, scale):
+                print(f"== [{index + 1}/{len(stages)}] {stage.name}: done ({stage.out_dir})")
+                if stage.kind == "evolve":  # finished: its checkpoint need not be kept in the results
+                    shutil.rmtree(os.path.join(stage.out_dir, PUBLISHED), ignore_errors=True)
+                continue
+            done_before = 0.0
+            if stage.kind == "evolve":
+                restored = restore_published(stage.out_dir)
+                if restored is not None:
+                    print(f"== {stage.name}: continuing from the published checkpoint of generation {restored - 1} "
+                          f"({os.path.join(stage.out_dir, PUBLISHED)})")
+                done_before = generations_done(stage.out_dir) / scale["generations"]
+            elif stage.kind == "test":
+                shutil.rmtree(stage.out_dir, ignore_errors=True)  # an interrupted test starts again
+            command, env = stage_command(stage, scale, out, args.kernel)
+            run_stage(stage, index, command, overall, manifest_path, done_before, env)
+            if stage.kind == "evolve" and stage_done(stage, scale):
+                shutil.rmtree(os.path.join(stage.out_dir, PUBLISHED), ignore_errors=True)
     except subprocess.CalledProcessError as error:
         print(f"error: stage failed with exit code {error.returncode}: {' '.join(error.cmd[1:])}", file=sys.stderr)
         return error.returncode or 1
     except KeyboardInterrupt:
         print("\ninterrupted: run the same command again to go on from here", file=sys.stderr)
         return 130
-    print(f"\nall stages done in {time.perf_counter() - start:.0f} s; results in {out}")
+    print(f"\nall stages done in {time.perf_counter() - overall.start:.0f} s; results in {out}")
     return 0
 
 

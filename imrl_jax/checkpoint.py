@@ -49,6 +49,16 @@ def empty_history(num_generations: int, num_seeds: int, num_tasks: int) -> Histo
                    nan(num_generations, num_seeds), nan(num_generations, num_seeds, num_tasks))
 
 
+def resize_history(history: History, num_generations: int) -> History:
+    """``history`` with ``num_generations`` rows: cut, or padded with NaN rows (generations not yet run)."""
+    def resize(x):
+        x = np.asarray(x)
+        pad = np.full((max(num_generations - len(x), 0),) + x.shape[1:], np.nan, x.dtype)
+        return np.concatenate([x[:num_generations], pad])
+
+    return History(*(resize(x) for x in history))
+
+
 def git_commit() -> str:
     """The git commit of the package source, or 'unknown' outside a git checkout."""
     try:
@@ -118,19 +128,25 @@ class Checkpointer:
     def restore_latest(self, template: RunState, warn=print) -> tuple[RunState, dict] | None:
         """The newest readable checkpoint (state shaped like ``template``), or None if none is.
 
-        An unreadable newer step is reported through ``warn`` and skipped.
+        The saved history may be shorter than the template's (a finished run extended to more
+        generations): it is read at its own length, from the checkpoint's config, and padded
+        with NaN rows. An unreadable newer step is reported through ``warn`` and skipped.
         """
         ocp = _ocp()
-        abstract = jax.tree.map(ocp.utils.to_shape_dtype_struct, template._asdict())
         for step in reversed(self.steps()):
             try:
                 with _quiet_absl():
+                    saved_meta = self.manager.restore(step, args=ocp.args.Composite(meta=ocp.args.JsonRestore())).meta
+                    rows = int(saved_meta.get("config", {}).get("num_generations", len(template.history.best)))
+                    shaped = template._replace(history=resize_history(template.history, rows))
+                    abstract = jax.tree.map(ocp.utils.to_shape_dtype_struct, shaped._asdict())
                     restored = self.manager.restore(step, args=ocp.args.Composite(
                         state=ocp.args.StandardRestore(abstract), meta=ocp.args.JsonRestore()))
                 state = restored.state
                 history = state["history"]
                 history = History(**history) if isinstance(history, dict) else History(*history)
-                state["history"] = jax.tree.map(np.asarray, history)
+                history = jax.tree.map(np.asarray, history)
+                state["history"] = resize_history(history, max(len(template.history.best), step))
                 state["generation"] = np.asarray(state["generation"])
                 state["key_data"] = np.asarray(state["key_data"])
                 state = RunState(**state)
@@ -147,4 +163,4 @@ class Checkpointer:
         self.manager.close()
 
 
-__all__ = ["Checkpointer", "History", "RunState", "empty_history", "git_commit", "unreadable_reason"]
+__all__ = ["Checkpointer", "History", "RunState", "empty_history", "git_commit", "resize_history", "unreadable_reason"]

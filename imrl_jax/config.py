@@ -141,6 +141,10 @@ class Config:
     # Bias of the speed unit of every actor that is learned rather than evolved (LE-LS's
     # experts, SLE's expert). MODEL.md starts every learned weight at 0: half speed.
     initial_speed_bias: float = 0.0
+    # SLE's action noise anneals linearly to 0 over this many steps of each task, then stays
+    # 0 (0: over the whole task, MODEL.md). A learning test's tasks are longer than an adult
+    # task: with a fixed horizon SLE's noise schedule does not stretch with the test.
+    sle_noise_steps: int = 0
 
     # --- genetic algorithm (paper: 50 individuals, best 10 x 5 offspring, p = 0.1, U[-1, 1])
     population_size: int = 50
@@ -185,6 +189,11 @@ class Config:
     def hex_apothem(self) -> float:
         """Distance between a hexagon's centre and its edges (20*sqrt(3) cm)."""
         return self.edge_length * math.sqrt(3.0) / 2.0
+
+    @property
+    def adult_noise_steps(self) -> int:
+        """Steps over which an adult task's action noise (SLE) anneals to 0."""
+        return self.sle_noise_steps or self.task_steps
 
     def steps_per_trip(self) -> tuple[int, ...]:
         """ceil((distance - target radius) / max speed) for each task (48, 65, 30, ...)."""
@@ -317,6 +326,8 @@ def _validate(c: Config) -> None:
         value = getattr(c, name)
         if not isinstance(value, int) or isinstance(value, bool) or value < 1:
             fail(name, "must be a positive integer")
+    if not isinstance(c.sle_noise_steps, int) or isinstance(c.sle_noise_steps, bool) or c.sle_noise_steps < 0:
+        fail("sle_noise_steps", "must be a non-negative integer (0: the whole task)")
     if not isinstance(c.childhood_steps, int) or c.childhood_steps < 0:
         fail("childhood_steps", "must be a non-negative integer")
     if c.task_steps % c.num_bins:

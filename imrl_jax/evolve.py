@@ -144,9 +144,26 @@ def check_run_dir(out_dir: str, config: Config, seeds: Sequence[int], resume: bo
             raise UsageError(f"--resume: seeds {list(seeds)} differ from the run's {saved_seeds}")
         for field in dataclasses.fields(Config):
             old, new = getattr(saved_config, field.name), getattr(config, field.name)
+            if field.name == "num_generations" and new > old:
+                continue  # a run may be extended: its generations go on from the last one done
             if old != new:
+                grow = " (a resumed run may only grow it)" if field.name == "num_generations" else ""
                 raise UsageError(f"--resume: config field {field.name} is {new!r} but the run in {out_dir} "
-                                 f"used {old!r}")
+                                 f"used {old!r}{grow}")
+
+
+def extend_config_json(out_dir: str, config: Config) -> None:
+    """Record a grown ``num_generations`` in the run's config.json (with when it grew from what)."""
+    path = os.path.join(out_dir, "config.json")
+    with open(path) as f:
+        info = json.load(f)
+    old = int(info["config"]["num_generations"])
+    if old == config.num_generations:
+        return
+    info["config"]["num_generations"] = config.num_generations
+    info.setdefault("extended", []).append(dict(num_generations=[old, config.num_generations],
+                                                 at=time.strftime("%Y-%m-%dT%H:%M:%S%z"), git_commit=git_commit()))
+    write_atomic(path, json.dumps(info, indent=2).encode())
 
 
 def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bool = False,
@@ -200,6 +217,11 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
             state, saved_meta = restored
             if not np.array_equal(state.key_data, np.asarray(jax.random.key_data(seed_keys(seeds)))):
                 raise UsageError("--resume: the checkpoint's keys do not match the seeds")
+            if int(state.generation) > config.num_generations:  # only if config.json was edited by hand
+                raise UsageError(f"--resume: config field num_generations is {config.num_generations} but "
+                                 f"{int(state.generation)} generations are done")
+            if leader:
+                extend_config_json(out_dir, config)
             progress = Progress(config.num_generations, done=int(state.generation), quiet=quiet, first_index=0,
                                 elapsed=float(saved_meta.get("elapsed_seconds", 0.0)))
             progress.message(f"resuming {out_dir} after generation {int(state.generation) - 1} "
@@ -288,7 +310,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--set", action="append", metavar="FIELD=VALUE",
                    help="set any scalar Config field, e.g. --set trace_lambda=0.9 (repeatable)")
     p.add_argument("--out", help="run directory (default: runs/COND)")
-    p.add_argument("--resume", action="store_true", help="continue the run in --out from its latest checkpoint")
+    p.add_argument("--resume", action="store_true", help="continue the run in --out from its latest checkpoint (--generations may grow: a finished run "
+                        "is extended)")
     p.add_argument("--checkpoint-every", type=int, default=1, help="generations between checkpoints")
     p.add_argument("--keep", type=int, default=3, help="checkpoints kept (at least 1)")
     p.add_argument("--quiet", action="store_true", help="no progress line (for logs)")

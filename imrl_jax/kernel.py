@@ -281,7 +281,7 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
             out0 = jax.nn.sigmoid(_pick(_dot_rows(actor0, xb), k))
             out1 = jax.nn.sigmoid(_pick(_dot_rows(actor1, xb), k))
             if phase.noisy:
-                sigma = noise_std * (1.0 - t.astype(dtype) / phase_steps)
+                sigma = noise_std * jnp.maximum(1.0 - t.astype(dtype) / phase_steps, 0.0)
                 act0 = jnp.clip(out0 + sigma * z_ref[0, i], 0.0, 1.0)
                 act1 = jnp.clip(out1 + sigma * z_ref[1, i], 0.0, 1.0)
             else:

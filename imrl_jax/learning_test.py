@@ -75,7 +75,7 @@ def advance(config: Config, params: LearningParams, test: TestState, num_chunks:
 
     def one_task(key, index, state):
         state, curves = run_phase(key, config, phase, params, task_spec(config, index, dtype), state,
-                                  config.task_steps // num_chunks, phase_steps=config.task_steps,
+                                  config.task_steps // num_chunks, phase_steps=config.adult_noise_steps,
                                   num_bins=config.num_bins // num_chunks)
         return state, TestCurves(curves.reaches, curves.selections)
 

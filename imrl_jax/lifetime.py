@@ -90,10 +90,13 @@ def _draws(config: Config, phase: Phase, key: jax.Array, state: State) -> tuple[
 
 
 def _action(phase: Phase, params: LearningParams, output, z, t, phase_steps: int):
-    """a_t = clip(o_t + sigma_t z, 0, 1), sigma_t = noise_std (1 - t / T) in noisy phases (paper); else o_t."""
+    """a_t = clip(o_t + sigma_t z, 0, 1), sigma_t = noise_std max(1 - t / T, 0) in noisy phases (paper); else o_t.
+
+    T is the phase's length, or a shorter noise horizon (``Config.sle_noise_steps``).
+    """
     if not phase.noisy:
         return output
-    sigma = params.noise_std * (1.0 - t.astype(output.dtype) / phase_steps)
+    sigma = params.noise_std * jnp.maximum(1.0 - t.astype(output.dtype) / phase_steps, 0.0)
     return jnp.clip(output + sigma * z, 0.0, 1.0)
 
 
@@ -174,7 +177,7 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
     """Run ``num_steps`` steps of a phase as a scan over bins of steps (``config.num_bins`` by default).
 
     A phase may run in pieces: give each piece the whole phase's length as ``phase_steps``
-    (it sets the noise schedule) and the carried state; the pieces together are the same
+    (the noise anneals to 0 over it, then stays 0) and the carried state; the pieces together are the same
     computation as one call. With ``config.step_kernel == "pallas"`` each bin is one
     kernel (:func:`imrl_jax.kernel.run_phase`).
     """
@@ -270,7 +273,8 @@ def live(key: jax.Array, config: Config, params: LearningParams, genome: jnp.nda
 
     def live_task(task_key, index):
         state, curves = run_phase(task_key, config, phase, params, task_spec(config, index, dtype),
-                                  task_start(config, agent, index), config.task_steps)
+                                  task_start(config, agent, index), config.task_steps,
+                                  phase_steps=config.adult_noise_steps)
         return state.agent, curves
 
     adult_agents, curves = jax.vmap(live_task)(keys.tasks, jnp.arange(config.num_tasks))

@@ -363,8 +363,8 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
 
         # 4. Act with the expert in control (weights after this step's learning).
         o = _sigmoid(w["actor"][k] @ xb)
-        # sigma_t = noise_std * (1 - t / phase_steps), in float64 like everything here.
-        sigma = config.noise_std * (1.0 - t / phase_steps) if noisy else 0.0
+        # sigma_t = noise_std * max(1 - t / phase_steps, 0), in float64 like everything here.
+        sigma = config.noise_std * max(1.0 - t / phase_steps, 0.0) if noisy else 0.0
         a = np.clip(o + sigma * z[t], 0.0, 1.0)
 
         # 5. Turn, move, clamp; in adulthood check the target and the timeout.
@@ -470,7 +470,7 @@ def live(config, genome, start_pose, childhood_u, childhood_z, task_u, task_z, c
         else:
             start_weights = _copy_weights(grown)
         result = run_phase(config, adult_phase, start_weights, _task_pose(config, i), task_u[i], task_z[i],
-                           task=i, phase_steps=config.task_steps)
+                           task=i, phase_steps=config.adult_noise_steps)
         reaches[i] = result["reaches"]
         task_weights.append(result["weights"])
 

@@ -106,6 +106,27 @@ def test_corrupt_checkpoint_falls_back_to_the_previous_one(finished_run, tmp_pat
     _assert_same_outputs(out, finished_run)
 
 
+def test_finished_run_extended_is_bitwise_an_uninterrupted_longer_run(tmp_path, capsys):
+    import json
+
+    args = evolve_args(seeds=1, population=4, parents=2, task_steps=200, bins=1)
+    longer, extended = str(tmp_path / "three"), str(tmp_path / "two_then_three")
+    assert evolve.main([*args, "--generations", "3", "--out", longer]) == 0
+    assert evolve.main([*args, "--generations", "2", "--out", extended]) == 0
+    assert evolve.main([*args, "--generations", "3", "--out", extended, "--resume"]) == 0
+    assert "(2 of 3 done" in capsys.readouterr().err
+    _assert_same_outputs(extended, longer)
+    with open(os.path.join(extended, "config.json")) as f:
+        info = json.load(f)
+    assert info["config"]["num_generations"] == 3 and info["extended"][0]["num_generations"] == [2, 3]
+    before = _snapshot(extended)
+    for generations, message in (("2", "num_generations is 2 but the run in"), ("1", "may only grow it")):
+        assert evolve.main([*args, "--generations", generations, "--out", extended, "--resume"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert message in err and err.startswith("error: ") and len(err.splitlines()) == 1
+    assert _snapshot(extended) == before
+
+
 def _snapshot(out_dir):
     files = {}
     for root, _, names in os.walk(out_dir):

@@ -32,15 +32,18 @@ OPTIONS = dict(childhood_walls="respawn", wall_respawn_steps=5, childhood_select
 
 
 @pytest.mark.usefixtures("x64")
-@pytest.mark.parametrize("condition, options", [("LE-LS", {}), ("LE-LS", OPTIONS), ("EE-LS", {}), ("SLE", {})],
-                         ids=["childhood", "childhood-options", "adult-LS", "SLE"])
+@pytest.mark.parametrize("condition, options", [("LE-LS", {}), ("LE-LS", OPTIONS), ("EE-LS", {}), ("SLE", {}),
+                                               ("SLE-horizon", {})],
+                         ids=["childhood", "childhood-options", "adult-LS", "SLE", "SLE-noise-horizon"])
 def test_phase_in_pieces_matches_xla(tiny, condition, options):
     """A phase run by the kernel in two pieces, against XLA in one: every branch of the step.
 
     Childhood (intrinsic rewards, noise, walls; also respawns and the progress reward), a
-    learning selector, and a single learning expert (one expert, noise), the adult phases
-    with reaches and timeouts.
+    learning selector, and a single learning expert (one expert, noise; also with its noise
+    over the first half only, sle_noise_steps), the adult phases with reaches and timeouts.
     """
+    horizon = STEPS // 2 if condition.endswith("-horizon") else STEPS
+    condition = condition.removesuffix("-horizon")
     config = tiny(condition, tasks=(SHORT_TASK,), childhood_steps=STEPS, task_steps=STEPS, num_bins=8,
                   **EXTENDED, **options)
     params = config.learning_params()
@@ -60,10 +63,10 @@ def test_phase_in_pieces_matches_xla(tiny, condition, options):
 
     @jax.jit
     def both(key, state):
-        whole = L.run_phase(key, config, phase, params, task, state, STEPS)
+        whole = L.run_phase(key, config, phase, params, task, state, STEPS, horizon)
         # 750 + 1250 steps: the second piece starts mid-way through a block of draws.
-        first = L.run_phase(key, pallas, phase, params, task, state, 750, STEPS, 3)
-        second = L.run_phase(key, pallas, phase, params, task, first[0], 1250, STEPS, 5)
+        first = L.run_phase(key, pallas, phase, params, task, state, 750, horizon, 3)
+        second = L.run_phase(key, pallas, phase, params, task, first[0], 1250, horizon, 5)
         return whole, (second[0], jax.tree.map(lambda a, b: jnp.concatenate([a, b]), first[1], second[1]))
 
     (xla_state, xla_curves), (kernel_state, kernel_curves) = both(jax.random.key(1), state)

@@ -151,3 +151,24 @@ def test_float32_lifetime_tracks_float64_reference(tiny):
     for name, value in final.agent._asdict().items():
         np.testing.assert_allclose(np.asarray(value), ref["weights"][name], rtol=1e-4, atol=1e-5, err_msg=name)
     assert ref["reached"].sum() > 0
+
+
+@pytest.mark.usefixtures("x64")
+def test_sle_noise_horizon_matches_reference(tiny):
+    """sle_noise_steps: SLE's noise anneals over a fixed number of steps, then stays 0."""
+    config = tiny("SLE", task_steps=300, num_bins=1, sle_noise_steps=100)
+    params = config.learning_params()
+    key = jax.random.key(11)
+    genome = jnp.zeros((0,), jnp.float64)
+    result = _live(key, config, params, genome)
+    keys = L.lifetime_keys(key, config.num_tasks)
+    pose = L.random_pose(keys.pose, config, jnp.float64)
+    tasks = jax.vmap(L.draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
+    none = np.zeros((0,))
+    ref = reference.live(config, np.asarray(genome), (float(pose.pos[0]), float(pose.pos[1]), float(pose.heading)),
+                         none, np.zeros((0, 2)), np.asarray(tasks.u), np.asarray(tasks.z))
+    np.testing.assert_array_equal(np.asarray(result.reaches), ref["reaches"])
+    for t in range(config.num_tasks):
+        _assert_weights_close(jax.tree.map(lambda x: x[t], result.adult_agents), ref["task_weights"][t])
+    whole = _live(key, config.replace(sle_noise_steps=0), params, genome)  # noise over all 300 steps
+    assert not np.allclose(np.asarray(whole.adult_agents.actor), np.asarray(result.adult_agents.actor))

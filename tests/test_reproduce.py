@@ -1,12 +1,17 @@
-"""The reproduction pipeline end to end at the tiny scale: every stage, then a rerun that skips them all (slow)."""
+"""The reproduction pipeline: its plan, progress and ETA, published checkpoints; end to end at the tiny scale (slow)."""
 
+import io
 import json
 import os
+import shutil
 import subprocess
 import sys
 
 import pytest
-from helpers import ROOT
+from helpers import ROOT, evolve_args, outputs
+
+from experiments import reproduce
+from imrl_jax import evolve
 
 
 @pytest.mark.slow
@@ -26,6 +31,68 @@ def test_pipeline_runs_and_resumes(tmp_path):
     os.remove(os.path.join(out, "extension", "test", "SLE", "steady.json"))
     second = subprocess.run(command, cwd=ROOT, capture_output=True, text=True)
     assert second.returncode == 0, second.stderr[-2000:]
-    assert second.stdout.count(": done (") == 6 + 7  # extension EE-ES is paper's run: "done" both times
-    assert "== learning test extension SLE\n" in second.stdout
+    assert second.stdout.count(": done (") == 5 + 7
+    assert "] learning test extension SLE\n" in second.stdout
     assert "imrl_jax.evolve" not in second.stdout
+
+
+def test_plan_costs_and_eta():
+    scale = reproduce.SCALES["tiny"]
+    stages = reproduce.plan(scale, "out", reproduce.VARIANTS)
+    assert [s.kind for s in stages] == ["evolve"] * 5 + ["test"] * 8 + ["report"]
+    assert [s.name for s in stages[:5]] == ["evolve paper LE-LS", "evolve paper EE-LS", "evolve paper EE-ES",
+                                            "evolve extension LE-LS", "evolve extension EE-LS"]
+    # 2 seeds x 6 individuals x 2 generations x (400 childhood + 6 x 400 task steps)
+    assert stages[0].cost == 2 * 6 * 2 * (400 + 6 * 400) and stages[1].cost == 2 * 6 * 2 * 6 * 400
+    # 2 runs x 2 best x 1 test x 6 x 800 cycles; the report: a childhood per probed LE-LS individual
+    assert stages[-2].cost == 2 * 2 * 1 * 6 * 800 and stages[-1].cost == 2 * 2 * 2 * 400
+    # 100 lane-steps/s; the first stage half done at its own rate of 50: 1/2 x 1000/50 + 3000/100
+    few = [s._replace(cost=c) for s, c in zip(stages, (1000.0, 1000.0, 2000.0))]
+    assert reproduce.eta_seconds(few, 100.0, 0.5, 50.0) == pytest.approx(10 + 30)
+    assert reproduce.eta_seconds(few, 100.0) == pytest.approx(40)
+    assert reproduce.measured_rate({"stages": {"a": dict(cost=300, seconds=2), "b": dict(cost=100, seconds=2),
+                                               "old": dict(seconds=9)}}) == 100
+
+
+def test_stage_progress_is_shown_with_the_whole_pipelines(tmp_path, capsys):
+    scale = reproduce.SCALES["tiny"]
+    stages = [reproduce.Stage("learning test paper SLE", "test", "paper", "SLE", str(tmp_path / "a"), 4000.0),
+              reproduce.Stage("learning test paper EE-ES", "test", "paper", "EE-ES", str(tmp_path / "b"), 8000.0)]
+    manifest = dict(sizes=scale, stages={"earlier": dict(cost=1000, seconds=10)})  # 100 lane-steps/s
+    stream = io.StringIO()
+    overall = reproduce.Overall(stages, manifest, stream=stream)
+    child = ("import sys\nfor i in range(1, 5): print(f'chunk {i} ({i}/4) | performance', file=sys.stderr)\n"
+             "print('a note', file=sys.stderr)")
+    manifest_path = str(tmp_path / "manifest.json")
+    reproduce.run_stage(stages[0], 0, [sys.executable, "-c", child], overall, manifest_path)
+    lines = stream.getvalue().splitlines()
+    assert len(lines) == 4 and lines[0].startswith("chunk 1 (1/4) | performance || stage 1/2 | all stages: ")
+    assert "(measured)" in lines[0]
+    out, err = capsys.readouterr()
+    assert "== [1/2] learning test paper SLE" in out and "a note" in err  # other lines pass through
+    with open(manifest_path) as f:
+        recorded = json.load(f)["stages"]["learning test paper SLE"]
+    assert recorded["cost"] == 4000 and recorded["seconds"] >= 0
+    # before the first line: the whole of both stages at 100 lane-steps/s
+    assert overall.status(0).endswith("ETA 0:02:00 (measured)")
+    assert reproduce.Overall(stages, dict(sizes=scale, stages={})).status(1).endswith("(estimated)")
+
+
+def test_a_fresh_clone_continues_from_the_published_checkpoint(tmp_path):
+    """An unfinished evolution's newest checkpoint, published and put back, resumes bitwise."""
+    args = evolve_args(seeds=1, population=4, parents=2, task_steps=200, bins=1)
+    whole, cut = str(tmp_path / "whole"), str(tmp_path / "cut")
+    assert evolve.main([*args, "--generations", "3", "--out", whole]) == 0
+    assert evolve.main([*args, "--generations", "2", "--out", cut]) == 0
+    assert reproduce.publish_checkpoint(cut) == 2
+    assert os.listdir(os.path.join(cut, reproduce.PUBLISHED)) == ["2"]
+    for name in ("checkpoints", "final_population.npz"):  # what git does not keep
+        shutil.rmtree(os.path.join(cut, name)) if name == "checkpoints" else os.remove(os.path.join(cut, name))
+    assert reproduce.restore_published(cut) == 2
+    assert reproduce.restore_published(cut) is None  # checkpoints/ is there now
+    assert reproduce.generations_done(cut) == 2
+    assert evolve.main([*args, "--generations", "3", "--out", cut, "--resume"]) == 0
+    got, want = outputs(cut), outputs(whole)
+    assert got["history.csv"] == want["history.csv"]
+    for name in ("evaluated", "fitness", "next_population"):
+        assert got[name].tobytes() == want[name].tobytes(), name
