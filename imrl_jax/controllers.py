@@ -41,7 +41,7 @@ import jax.numpy as jnp
 
 from imrl_jax.arena import BLUE, GREEN, RED, Pose, move
 from imrl_jax.config import Config, Task
-from imrl_jax.lifetime import make_evaluate, task_spec
+from imrl_jax.lifetime import end_trial, make_evaluate, task_spec
 from imrl_jax.retina import observe
 
 #: Steps after a switch during which the next colour does not trigger another switch
@@ -139,18 +139,15 @@ def _run(config: Config, num_steps: int, task_index, route_index, record: bool =
         dwell = jnp.where(switch, 0, state.dwell + 1)
         action, turn = follow(config, x, route[stage], state.last_turn)
         pose = move(config, state.pose, action)
-        # Trials end as in the adult phase (lifetime.step): a reach or the timeout.
-        trial_step = state.trial_step + 1
-        reached = jnp.sum((pose.pos - task.target) ** 2) <= config.target_radius ** 2
-        timeout = ~reached & (trial_step >= config.trial_timeout)
+        # Trials end as in the adult phase: a reach or the timeout.
+        pose, trial_step, reached, timeout = end_trial(config, task, pose, state.trial_step + 1)
         reset = reached | timeout
-        pose = jax.tree.map(lambda start, now: jnp.where(reset, start, now), task.start, pose)
         new = ControllerState(
             pose=pose,
             stage=jnp.where(reset, 0, stage),
             dwell=jnp.where(reset, 0, dwell),
             last_turn=jnp.where(reset, 0.0, turn),
-            trial_step=jnp.where(reset, 0, trial_step),
+            trial_step=trial_step,
             reaches=state.reaches + reached,
         )
         if not record:

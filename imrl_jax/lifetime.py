@@ -115,7 +115,7 @@ def _respawn(config: Config, pose: Pose, pinned, spawn):
     return pose, jnp.where(respawned, 0, pinned), respawned
 
 
-def _end_trial(config: Config, task: TaskSpec, pose: Pose, trial_step):
+def end_trial(config: Config, task: TaskSpec, pose: Pose, trial_step):
     """Reaching the target (reward 1) or the timeout puts the robot back at the task's start."""
     reached = jnp.sum((pose.pos - task.target) ** 2) <= config.target_radius ** 2
     timeout = ~reached & (trial_step >= config.trial_timeout)
@@ -163,7 +163,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
     trial_step = state.trial_step + 1
     reached = timeout = jnp.bool_(False)
     if phase.has_target:
-        pose, trial_step, reached, timeout = _end_trial(config, task, pose, trial_step)
+        pose, trial_step, reached, timeout = end_trial(config, task, pose, trial_step)
 
     prev = Previous(k, action, output, selection, ~(timeout | respawned), reached)
     state = State(agent, traces, pose, heading_vector(pose.heading), xbs, prev, trial_step, state.t + 1, block,

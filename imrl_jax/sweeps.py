@@ -197,6 +197,9 @@ def make_evolution_sweep(config: Config, num_generations: int | None = None):
     ``seeds`` are integers (the evolve command's ``--seeds``); generations default to
     ``config.num_generations``. One compilation serves any points and seeds of the same counts.
     """
+    if config.lives_per_fitness != 1:
+        raise ValueError(f"lives_per_fitness: evolution sweeps score one life per individual "
+                         f"(got {config.lives_per_fitness}); use python -m imrl_jax.evolve for more")
     num_generations = config.num_generations if num_generations is None else num_generations
 
     def sweep(seeds, points):

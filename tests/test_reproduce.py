@@ -73,8 +73,9 @@ def test_stage_progress_is_shown_with_the_whole_pipelines(tmp_path, capsys):
     with open(manifest_path) as f:
         recorded = json.load(f)["stages"]["learning test paper SLE"]
     assert recorded["cost"] == 4000 and recorded["seconds"] >= 0
-    # before the first line: the whole of both stages at 100 lane-steps/s
-    assert overall.status(0).endswith("ETA 0:02:00 (measured)")
+    # before any stage has run: the whole of both stages at the earlier 100 lane-steps/s
+    before = reproduce.Overall(stages, dict(sizes=scale, stages={"earlier": dict(cost=1000, seconds=10)}))
+    assert before.status(0).endswith("ETA 0:02:00 (measured)")
     assert reproduce.Overall(stages, dict(sizes=scale, stages={})).status(1).endswith("(estimated)")
 
 
