@@ -504,6 +504,7 @@ EVOLUTIONS = {
     "EE-LS-extension": ["--cond", "EE-LS", "--preset", "extension"],
     "LE-LS-skills-2lives": ["--cond", "LE-LS", "--preset", "skills", "--set", "lives_per_fitness=2",
                             "--generations", "15"],
+    "LE-LS-extension-speed-bias": ["--cond", "LE-LS", "--preset", "extension", "--set", "initial_speed_bias=4"],
     "LE-LS-skills-clamp": ["--cond", "LE-LS", "--preset", "skills", "--set", "childhood_walls=clamp"],
     "LE-LS-paper": ["--cond", "LE-LS", "--preset", "paper"],
 }
