@@ -227,25 +227,38 @@ def read_best(run_dir: str) -> np.ndarray:
 
 
 def plot_evolutions(out: str, path: str) -> None:
-    """Best fitness per generation of the study's evolutions, with the ceilings they climb towards."""
-    from imrl_jax.plotting import plot_fitness, save
+    """Best fitness per generation of the study's evolutions, with the ceilings they climb towards.
 
-    runs = [name for name in EVOLUTIONS if os.path.isfile(os.path.join(out, "evolve", name, "history.csv"))]
-    curves = {name: read_best(os.path.join(out, "evolve", name)) for name in runs}
-    fig = plot_fitness(curves, title="paper life lengths: best fitness, mean and sd over seeds")
-    ax = fig.axes[0]
+    The x axis is compute: a run scoring the mean of N lives is drawn at N x its generation.
+    """
+    from imrl_jax.config import Config
+    from imrl_jax.plotting import new_figure, save, style_axis
+
+    fig = new_figure(8.8, 3.8)
+    ax = fig.add_subplot()
+    for i, name in enumerate(name for name in EVOLUTIONS
+                             if os.path.isfile(os.path.join(out, "evolve", name, "history.csv"))):
+        with open(os.path.join(out, "evolve", name, "config.json")) as f:
+            lives = Config.from_dict(json.load(f)["config"]).lives_per_fitness
+        best = read_best(os.path.join(out, "evolve", name))
+        x = lives * np.arange(best.shape[1])
+        mean, sd = np.nanmean(best, 0), np.nanstd(best, 0)
+        style = dict(color=f"C{i}", ls="--" if name.startswith("EE") else "-", marker="o", ms=2.5, lw=1.4)
+        ax.plot(x, mean, label=f"{name} ({best.shape[0]} seeds)", **style)
+        ax.fill_between(x, mean - sd, mean + sd, color=f"C{i}", alpha=0.12, lw=0)
     references = []
     with open(os.path.join(out, "ceiling.csv")) as f:
-        references += [(float(r["fitness"]), "ideal colour followers, extension's selector", "0.3")
+        references += [(float(r["fitness"]), "ideal colour followers, extension's selector")
                        for r in csv.DictReader(f) if r["rules"] == "extension" and r["task_steps"] == "100000"]
     with open(os.path.join(out, "speed.csv")) as f:
         fast = [float(r["fitness"]) for r in csv.DictReader(f) if float(r["speed_bias"]) == 4.0]
-    references.append((float(np.mean(fast)), "hand-made colour reinforcers under skills", "0.6"))
-    for (value, label, colour), style in zip(references, ("--", ":")):
-        ax.axhline(value, color=colour, lw=1.0, ls=style, label=f"{label}: {value:.2f}")
+    references.append((float(np.mean(fast)), "hand-made colour reinforcers under skills"))
+    for (value, label), style in zip(references, ("--", ":")):
+        ax.axhline(value, color="0.35", lw=1.0, ls=style, label=f"{label}: {value:.2f}")
     ax.set_ylim(0, 1)
+    style_axis(ax, "paper life lengths: best fitness (mean over seeds, +-1 sd)",
+               "generation (x lives per fitness: equal compute)", "best fitness")
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
-    fig.set_size_inches(8.5, 3.6)
     fig.tight_layout()
     save(fig, path)
 
