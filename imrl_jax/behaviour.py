@@ -20,7 +20,7 @@ import numpy as np
 
 from imrl_jax.arena import Pose, floor_colour
 from imrl_jax.config import Config, LearningParams
-from imrl_jax.lifetime import (CHILDHOOD, Phase, adult_phase, childhood_task, init_state, lifetime_keys,
+from imrl_jax.lifetime import (Phase, adult_phase, childhood_phase, childhood_task, init_state, lifetime_keys,
                                random_pose, simulate, task_spec)
 from imrl_jax.networks import Agent, decode
 from imrl_jax.retina import sample_points
@@ -43,11 +43,12 @@ class Trajectory(NamedTuple):
     k: np.ndarray  # (T,) expert in control
     reached: np.ndarray  # (T,) the step reached the target
     timeout: np.ndarray  # (T,) the step ended a trial by the timeout
+    respawned: np.ndarray  # (T,) the step put the robot at a random pose after a wall (childhood option)
 
     @property
     def breaks(self) -> np.ndarray:
-        """(T,) True where the robot was put back at the start after the step."""
-        return self.reached | self.timeout
+        """(T,) True where the robot was put elsewhere after the step (the start, or a random pose)."""
+        return self.reached | self.timeout | self.respawned
 
     def as_path(self) -> dict:
         """The dict :func:`imrl_jax.plotting.plot_life` draws (pos, k, breaks)."""
@@ -64,7 +65,7 @@ def _trajectory(start: Pose, record) -> Trajectory:
     seen_pos = jnp.concatenate([start.pos[..., None, :], pos[..., :-1, :]], -2)
     seen_heading = jnp.concatenate([start.heading[..., None], heading[..., :-1]], -1)
     return Trajectory(*(np.asarray(x) for x in (seen_pos, seen_heading, pos, heading, record.k, record.reached,
-                                                 record.timeout)))
+                                                 record.timeout, record.respawned)))
 
 
 @functools.partial(jax.jit, static_argnums=(1, 4, 5))
@@ -72,8 +73,8 @@ def _childhood(key, config, params, genome, num_steps, phase_steps):
     keys = lifetime_keys(key, config.num_tasks)
     start = random_pose(keys.pose, config)
     state = init_state(config, decode(config, genome), start)
-    _, record = simulate(keys.childhood, config, CHILDHOOD, params, childhood_task(config), state, num_steps,
-                         phase_steps)
+    _, record = simulate(keys.childhood, config, childhood_phase(config), params, childhood_task(config), state,
+                         num_steps, phase_steps)
     return start, record
 
 
@@ -125,23 +126,6 @@ def force_expert(agent: Agent, expert) -> Agent:
     return agent._replace(selector_actor=jnp.zeros((k, n), agent.selector_actor.dtype).at[:, -1].set(bias))
 
 
-@functools.partial(jax.jit, static_argnums=(1, 3, 4))
-def _probe(key, config, agent, num_starts, num_steps):
-    num_experts = agent.selector_actor.shape[0]
-    poses = jax.vmap(lambda k: random_pose(k, config))(jax.random.split(key, num_starts))
-    params = config.learning_params()
-
-    def run(expert, pose):
-        state = init_state(config, force_expert(agent, expert), pose)
-        _, record = simulate(key, config, PROBE, params, childhood_task(config), state, num_steps)
-        return record
-
-    per_start = jax.vmap(run, (None, 0))
-    records = jax.vmap(per_start, (0, None))(jnp.arange(num_experts), poses)
-    starts = jax.tree.map(lambda x: jnp.broadcast_to(x, (num_experts,) + x.shape), poses)
-    return starts, records
-
-
 def probe_experts(key: jax.Array, config: Config, agent: Agent, num_starts: int = 8,
                   num_steps: int = 300) -> Trajectory:
     """Each expert alone in control (no learning, no noise) from ``num_starts`` random poses.
@@ -149,7 +133,8 @@ def probe_experts(key: jax.Array, config: Config, agent: Agent, num_starts: int 
     Returns a Trajectory with leading axes (experts, starts, steps); the same start poses
     for every expert.
     """
-    starts, records = _probe(key, config, agent, num_starts, num_steps)
+    poses = jax.vmap(lambda k: random_pose(k, config))(jax.random.split(key, num_starts))
+    starts, records = _probe_from(config, agent, poses, num_steps)
     return _trajectory(starts, records)
 
 

@@ -153,7 +153,9 @@ def _run(config: Config, num_steps: int, task_index, route_index, record: bool =
         if not record:
             return new, None
         colour = route[stage]  # the follower in control: 0 red, 1 green, 2 blue
-        return new, (state.pose.pos, state.pose.heading, pose.pos, pose.heading, colour, reached, timeout)
+        # The Trajectory's fields: no respawns here (the composition drives adult tasks only).
+        return new, (state.pose.pos, state.pose.heading, pose.pos, pose.heading, colour, reached, timeout,
+                     jnp.zeros_like(reached))
 
     start = ControllerState(task.start, jnp.int32(0), jnp.int32(0), jnp.zeros((), dtype),
                             jnp.int32(0), jnp.int32(0))

@@ -84,14 +84,10 @@ def evaluate(key: jax.Array, config: Config, params: LearningParams,
              population: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:
     """Fitness (P,) and task performance (P, tasks) of a population: one life each (the paper),
     or the mean of ``config.lives_per_fitness`` independent lives (a GA extension, less noisy)."""
-    lives = config.lives_per_fitness
-    if lives == 1:
-        keys = jax.random.split(key, config.population_size)
-        result: LifetimeResult = jax.vmap(lambda k, g: live(k, config, params, g))(keys, population)
-        return result.fitness, result.performance
-    keys = jax.random.split(key, (config.population_size, lives))
-    live_all = jax.vmap(lambda k, g: live(k, config, params, g), (0, None))
-    result = jax.vmap(live_all)(keys, population)
+    # split(key, (P, 1))[:, 0] is split(key, P): one life each gets the keys it always had.
+    keys = jax.random.split(key, (config.population_size, config.lives_per_fitness))
+    lives = jax.vmap(lambda k, g: live(k, config, params, g), (0, None))
+    result: LifetimeResult = jax.vmap(lives)(keys, population)
     return result.fitness.mean(1), result.performance.mean(1)
 
 

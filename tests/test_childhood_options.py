@@ -130,3 +130,16 @@ def test_learned_actors_start_with_the_speed_bias_and_evolved_ones_do_not(tiny, 
         assert np.all(np.asarray(L.adult_agent(config, decode(config, genome)).actor)[:, 1, -1] == 2.5)
     else:  # evolved: the genome's
         np.testing.assert_array_equal(actor.reshape(-1)[: actor.size], np.asarray(genome)[: actor.size])
+
+
+def test_childhood_trajectory_lives_the_configs_childhood(tiny):
+    """The pictures' childhood (behaviour.childhood_trajectory) has the config's respawns, drawn as breaks."""
+    from imrl_jax import behaviour
+
+    config = tiny("LE-LS", childhood_walls="respawn", wall_respawn_steps=5)
+    genome = np.asarray(behaviour.colour_reinforcers(config))
+    path = behaviour.childhood_trajectory(jax.random.key(0), config, config.learning_params(), genome, 400)
+    assert path.respawned.sum() > 0
+    np.testing.assert_array_equal(path.breaks, path.respawned)  # no target in childhood: respawns only
+    moved = np.hypot(*(path.pos - path.seen_pos).T)
+    assert moved[~path.breaks].max() <= 2.0 + 1e-4 < moved[path.breaks].min()  # only a respawn jumps
