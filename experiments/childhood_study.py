@@ -74,24 +74,26 @@ def make_childhoods(config, num_pieces: int = NUM_PIECES, jit: bool = True):
     return jax.jit(jax.vmap(one, (0, 0, None))) if jit else one
 
 
-def measure(config, agent, selections, on_wall, respawns) -> dict:
-    """Probes and control shares of one childhood's result."""
+def measure(config, agent, records=None) -> dict:
+    """The probes of an agent's experts and, given its childhood's ``records`` (selections,
+    on-wall samples, respawns per piece; see :func:`make_childhoods`), control shares and walls."""
     from imrl_jax.behaviour import specialisation
 
     spec = specialisation(config, agent)
-    quarter = selections[-len(selections) // 4:].sum(0)
-    control = quarter / max(quarter.sum(), 1)
     own = np.diag(spec.takes)
-    return dict(
-        own_takes=float(own.mean()), own_min=float(own.min()),
-        own_followers=int(sum(int(spec.followed[k]) == k for k in range(3))),
-        num_colours=spec.num_colours, max_control=float(control.max()),
-        wall_share=float(on_wall.mean()), wall_last_quarter=float(on_wall[-len(on_wall) // 4:].mean()),
-        respawns=int(respawns.sum()), speed=float(spec.speed.mean()),
-        **{f"takes_{k + 1}_{c}": float(spec.takes[k, i]) for k in range(3) for i, c in enumerate("rgb")},
-        **{f"control_{k + 1}": float(control[k]) for k in range(3)},
-        **{f"followed_{k + 1}": int(spec.followed[k]) for k in range(3)},
-    )
+    row = dict(own_takes=float(own.mean()), own_min=float(own.min()),
+               own_followers=int(sum(int(spec.followed[k]) == k for k in range(3))),
+               num_colours=spec.num_colours, speed=float(spec.speed.mean()),
+               **{f"takes_{k + 1}_{c}": float(spec.takes[k, i]) for k in range(3) for i, c in enumerate("rgb")},
+               **{f"followed_{k + 1}": int(spec.followed[k]) for k in range(3)})
+    if records is not None:
+        selections, on_wall, respawns = records
+        quarter = selections[-len(selections) // 4:].sum(0)
+        control = quarter / max(quarter.sum(), 1)
+        row.update(max_control=float(control.max()), wall_share=float(on_wall.mean()),
+                   wall_last_quarter=float(on_wall[-len(on_wall) // 4:].mean()), respawns=int(respawns.sum()),
+                   **{f"control_{k + 1}": float(control[k]) for k in range(3)})
+    return row
 
 
 def stage_hand(args) -> int:
@@ -125,7 +127,7 @@ def stage_hand(args) -> int:
         for j, (rule, seed) in enumerate(lanes):
             agent = jax.tree.map(lambda x: x[j], agents)
             row = dict(length=length, walls=wall, reward=reward, rules=rule, seed=seed)
-            row.update(measure(config, agent, selections[j], on_wall[j], respawns[j]))
+            row.update(measure(config, agent, (selections[j], on_wall[j], respawns[j])))
             rows.append(row)
         done = time.perf_counter() - start
         print(f"[{i + 1}/{len(combos)}] childhood {length:,} walls={wall} reward={reward}: {len(lanes)} lanes in "
@@ -164,7 +166,8 @@ def summarise(rows, keys) -> list[dict]:
 def write_csv(path: str, rows: list[dict]) -> None:
     """Rows as CSV (floats with 4 decimals)."""
     with open(path, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]), lineterminator="\n")
+        fields = list(dict.fromkeys(name for row in rows for name in row))  # rows may lack some (EE: no childhood)
+        writer = csv.DictWriter(f, fieldnames=fields, restval="", lineterminator="\n")
         writer.writeheader()
         writer.writerows({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
 
@@ -355,8 +358,6 @@ def stage_evolved(args) -> int:
     """Probes of the best evolved individuals of run directories."""
     import jax
 
-    from imrl_jax.behaviour import specialisation
-
     rows = []
     for run_dir in args.runs:
         config, seeds, genomes, fitness = best_of_run(run_dir, args.best)
@@ -368,14 +369,7 @@ def stage_evolved(args) -> int:
             agent = jax.tree.map(lambda x: x[i], agents)
             row = dict(run=os.path.basename(run_dir.rstrip("/")), seed=int(seeds[s]), rank=rank + 1,
                        fitness=float(fitness[s, rank]))
-            if records is None:
-                spec = specialisation(config, agent)
-                row.update(num_colours=spec.num_colours, speed=float(spec.speed.mean()),
-                           **{f"followed_{k + 1}": int(spec.followed[k]) for k in range(3)},
-                           **{f"takes_{k + 1}_{c}": float(spec.takes[k, j]) for k in range(3)
-                              for j, c in enumerate("rgb")})
-            else:
-                row.update(measure(config, agent, *(x[i] for x in records)))
+            row.update(measure(config, agent, None if records is None else tuple(x[i] for x in records)))
             rows.append(row)
         summary = [r["num_colours"] for r in rows[-len(flat):]]
         print(f"{run_dir}: {len(flat)} individuals in {time.perf_counter() - tick:.0f} s; distinct colours followed "
@@ -402,7 +396,7 @@ def stage_random(args) -> int:
     rows = []
     for i in range(args.individuals):
         row = dict(preset=args.preset, individual=i, fitness=float(fitness[i]))
-        row.update(measure(config, jax.tree.map(lambda x: x[i], agents), *(x[i] for x in records)))
+        row.update(measure(config, jax.tree.map(lambda x: x[i], agents), tuple(x[i] for x in records)))
         rows.append(row)
     colours = np.bincount([r["num_colours"] for r in rows], minlength=4).tolist()
     print(f"{args.individuals} random LE-LS genomes under {args.preset} in {time.perf_counter() - tick:.0f} s: "
