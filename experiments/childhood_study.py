@@ -589,10 +589,25 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     from imrl_jax.devices import use_host_cores
 
+    from imrl_jax.config import ConfigError
+
+    unknown = [r for r in getattr(args, "rules", "").split(",") if r and r not in RULES]
+    runs = getattr(args, "runs", None)
+    if unknown:
+        p.error(f"--rules: unknown rules {unknown[0]!r} (choose from {', '.join(RULES)})")
+    if isinstance(runs, str) and runs and any(r not in EVOLUTIONS for r in runs.split(",")):
+        p.error(f"--runs: choose from {', '.join(EVOLUTIONS)}")
+    for run in runs if isinstance(runs, list) else []:
+        if not os.path.isfile(os.path.join(run, "config.json")):
+            p.error(f"runs: not a run directory (no config.json): {run}")
     use_host_cores(1)
-    return {"hand": stage_hand, "evolve": stage_evolve, "ceiling": stage_ceiling, "evolved": stage_evolved,
-            "heritability": stage_heritability, "plot": stage_plot, "speed": stage_speed,
-            "random": stage_random}[args.stage](args)
+    stages = {"hand": stage_hand, "evolve": stage_evolve, "ceiling": stage_ceiling, "evolved": stage_evolved,
+              "heritability": stage_heritability, "plot": stage_plot, "speed": stage_speed, "random": stage_random}
+    try:
+        return stages[args.stage](args)
+    except ConfigError as error:  # e.g. --walls bounce
+        print(f"error: {error}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":
