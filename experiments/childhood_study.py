@@ -317,24 +317,19 @@ def stage_ceiling(args) -> int:
 
 def best_of_run(run_dir: str, num_best: int):
     """A run's config, seeds, and per seed the ``num_best`` best genomes of its last evaluated generation and their fitness."""
-    from imrl_jax.config import Config
+    from imrl_jax.rundir import best_genomes, load_run, read_config
 
-    with open(os.path.join(run_dir, "config.json")) as f:
-        config = Config.from_dict(json.load(f)["config"])
-    population = os.path.join(run_dir, "final_population.npz")
-    if not os.path.isfile(population):
+    if not os.path.isfile(os.path.join(run_dir, "final_population.npz")):
         # A reproduction's run directory keeps its best genomes in best_genomes.npz, three levels up
         # (RESULTS/VARIANT/evolve/COND), under VARIANT__COND__*.
+        config, _ = read_config(run_dir)
         parts = os.path.normpath(run_dir).split(os.sep)
         prefix = f"{parts[-3]}__{parts[-1]}__"
         with np.load(os.path.join(*parts[:-3], "best_genomes.npz")) as data:
             return (config, data[prefix + "seeds"], data[prefix + "genomes"][:, :num_best],
                     data[prefix + "fitness"][:, :num_best])
-    with np.load(population) as data:
-        seeds, evaluated, fitness = data["seeds"], data["evaluated"], data["fitness"]
-    order = np.argsort(-fitness, axis=1, kind="stable")[:, :num_best]
-    return (config, seeds, np.take_along_axis(evaluated, order[:, :, None], axis=1),
-            np.take_along_axis(fitness, order, axis=1))
+    run = load_run(run_dir)
+    return run.config, np.asarray(run.seeds), best_genomes(run, num_best), -np.sort(-run.fitness, axis=1)[:, :num_best]
 
 
 def grown_agents(config, genomes, key: int):
@@ -589,6 +584,7 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     from imrl_jax.devices import use_host_cores
 
+    from imrl_jax.cli import UsageError
     from imrl_jax.config import ConfigError
 
     unknown = [r for r in getattr(args, "rules", "").split(",") if r and r not in RULES]
@@ -605,7 +601,7 @@ def main(argv=None) -> int:
               "heritability": stage_heritability, "plot": stage_plot, "speed": stage_speed, "random": stage_random}
     try:
         return stages[args.stage](args)
-    except ConfigError as error:  # e.g. --walls bounce
+    except (ConfigError, UsageError) as error:  # e.g. --walls bounce, an unreadable run directory
         print(f"error: {error}", file=sys.stderr)
         return 2
 
