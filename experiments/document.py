@@ -9,7 +9,7 @@ import numpy as np
 from experiments.claims import (CLAIMS, LAST_GENERATIONS, MIN_CONTROL_SHARE, PAPER, PLATEAU_FRACTION, RULES, SEEN,
                                 SPECIALISED_SHARE, _fmt, specialisation_score)
 from experiments.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEPS, PATH_STEPS
-from experiments.reproduce import SCALES, VARIANTS
+from experiments.reproduce import DEFAULT_VARIANTS, SCALES
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -55,6 +55,15 @@ def _fraction(ratio: float) -> str:
     return f"1/{inverse:g}" if ratio < 1 and abs(inverse - round(inverse)) < 1e-9 else f"x{ratio:.3g}"
 
 
+#: What each variant of the learning rules is, for the report's header.
+VARIANT_TEXT = {
+    "paper": "`paper`: the learning rules as written",
+    "extension": "`extension`: MODEL.md's learning extensions at the `extension` preset",
+    "skills": "`skills`: the paper's rules in childhood with a respawning wall and fast-starting experts, the "
+              "extension's selector in adulthood (docs/CHILDHOOD.md)",
+}
+
+
 def pipeline_command(results: str, manifest: dict | None) -> str:
     """The command that (re)makes a results directory."""
     if not manifest:
@@ -64,7 +73,7 @@ def pipeline_command(results: str, manifest: dict | None) -> str:
     default = os.path.join(ROOT, "experiments", "results", scale)
     if os.path.abspath(results) != os.path.abspath(default):
         command += f" --out {results}"
-    if list(manifest.get("variants", VARIANTS)) != list(VARIANTS):
+    if "variants" in manifest and list(manifest["variants"]) != list(DEFAULT_VARIANTS.get(scale, ())):
         command += f" --variants {','.join(manifest['variants'])}"
     target = {"cpu": "make reproduce-cpu", "paper": "make reproduce"}.get(scale)
     plain = command == f"python experiments/reproduce.py --scale {scale}"
@@ -123,9 +132,8 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
             f"- Results made at commit `{(manifest or {}).get('git_commit', 'unknown')}`"
             + (f" (stages ran at {', '.join(f'`{c[:10]}`' for c in commits)})" if len(commits) > 1 else ""),
             f"- Report written at commit `{git_commit()}`" + (" (with uncommitted changes)" if _dirty() else ""),
-            f"- Variants: {', '.join(data['variants'])} (`paper`: the learning rules as written; `extension`: "
-            f"MODEL.md's learning extensions at the `extension` preset). EE-ES learns nothing, so its one evolution "
-            f"serves both."]
+            f"- Variants: {', '.join(data['variants'])} ({'; '.join(VARIANT_TEXT[v] for v in data['variants'])}). "
+            f"EE-ES learns nothing, so its one evolution serves every variant."]
     if manifest and manifest.get("stages"):
         out += ["", "<details><summary>Stages (commands and seconds)</summary>", "",
                 table(["stage", "command", "seconds"],

@@ -4,11 +4,14 @@
     python experiments/reproduce.py --scale cpu     # make reproduce-cpu: 1 h 44 min on 2 CPU cores (measured)
     python experiments/reproduce.py --scale paper --kernel pallas   # on a GPU: the step as one kernel
 
-Two variants of the learning rules are run side by side: ``paper`` (the rules as written)
-and ``extension`` (MODEL.md's learning extensions at the values of the ``extension``
-preset, found by ``experiments/selector_sweep.py``). For each variant: the three evolved
-conditions (EE-ES learns nothing, so its evolution is the same under both variants and is
-run once, under ``paper``), then the learning tests of LE-LS, EE-LS, EE-ES and SLE. Then
+Variants of the learning rules (presets of ``imrl_jax.config``), run one after the other:
+``skills`` (the rules docs/CHILDHOOD.md chose: experts learn one colour each in childhood and
+a selector composes them; the paper scale's first variant), ``paper`` (the rules as written)
+and ``extension`` (MODEL.md's learning extensions at the values found by
+``experiments/selector_sweep.py``; the cpu scale's second variant). For each variant: the
+three evolved conditions (EE-ES learns nothing, so its evolution is the same under every
+variant and is run once, under ``paper``), then the learning tests of LE-LS, EE-LS, EE-ES and
+SLE; so the first variant's Fig. 3 is whole before the second's evolutions start. Then
 ``python -m experiments.report`` writes docs/REPRODUCTION.md and its figures.
 
 Every stage is a command of the package, printed before it runs, its progress line shown
@@ -55,13 +58,15 @@ SCALES = {
     "tiny": dict(seeds=2, generations=2, childhood_steps=400, task_steps=400, bins=2,
                  best=2, tests=1, test_steps=800, test_bins=4, steady_steps=200, population=6, parents=2),
 }
-VARIANTS = ("paper", "extension")
+VARIANTS = ("skills", "paper", "extension")
+#: The variants a scale runs unless ``--variants`` says otherwise.
+DEFAULT_VARIANTS = {"paper": ("skills", "paper"), "cpu": ("paper", "extension"), "tiny": ("paper", "extension")}
 EVOLVED = ("LE-LS", "EE-LS", "EE-ES")
 TESTED = ("LE-LS", "EE-LS", "EE-ES", "SLE")
 
 
 def evolution_dir(out: str, variant: str, condition: str) -> str:
-    """Where a variant's evolution of a condition lives (EE-ES: one run shared by both variants)."""
+    """Where a variant's evolution of a condition lives (EE-ES: one run shared by every variant)."""
     return os.path.join(out, "paper" if condition == "EE-ES" else variant, "evolve", condition)
 
 
@@ -123,7 +128,7 @@ def _life(scale: dict, condition: str, task_steps: int) -> int:
 
 
 def plan(scale: dict, out: str, variants, report: bool = True) -> list[Stage]:
-    """Every stage in order: the evolutions (EE-ES once, under paper), the learning tests, the report."""
+    """Every stage in order: per variant its evolutions (EE-ES once, under paper) then its learning tests; the report."""
     stages, population = [], scale.get("population", 50)
     for variant in variants:
         for condition in EVOLVED:
@@ -133,7 +138,6 @@ def plan(scale: dict, out: str, variants, report: bool = True) -> list[Stage]:
             cost = scale["seeds"] * population * scale["generations"] * _life(scale, condition, scale["task_steps"])
             stages.append(Stage(f"evolve {owner} {condition}", "evolve", owner, condition,
                                 evolution_dir(out, variant, condition), float(cost)))
-    for variant in variants:
         for condition in TESTED:
             cost = scale["seeds"] * scale["best"] * scale["tests"] * _life(scale, condition, scale["test_steps"])
             stages.append(Stage(f"learning test {variant} {condition}", "test", variant, condition,
@@ -303,14 +307,15 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--scale", choices=sorted(SCALES), default="cpu")
     p.add_argument("--out", help="results directory (default: experiments/results/SCALE)")
-    p.add_argument("--variants", default=",".join(VARIANTS), help="comma-separated: paper, extension")
+    p.add_argument("--variants", help="comma-separated, in the order to run: skills, paper, extension "
+                   "(default: skills,paper at the paper scale, paper,extension at the cpu scale)")
     p.add_argument("--no-report", action="store_true", help="skip the report (python -m experiments.report)")
     p.add_argument("--kernel", choices=("xla", "pallas"), default="xla",
                    help="the step kernel (Config.step_kernel): pallas runs each bin of steps as one GPU kernel")
     args = p.parse_args(argv)
     scale = SCALES[args.scale]
     out = args.out or os.path.join("experiments", "results", args.scale)
-    variants = args.variants.split(",")
+    variants = args.variants.split(",") if args.variants else list(DEFAULT_VARIANTS[args.scale])
     unknown = [v for v in variants if v not in VARIANTS]
     if unknown:
         print(f"error: --variants: unknown variant {unknown[0]!r} (choose from {', '.join(VARIANTS)})", file=sys.stderr)

@@ -38,10 +38,19 @@ def test_pipeline_runs_and_resumes(tmp_path):
 
 def test_plan_costs_and_eta():
     scale = reproduce.SCALES["tiny"]
-    stages = reproduce.plan(scale, "out", reproduce.VARIANTS)
-    assert [s.kind for s in stages] == ["evolve"] * 5 + ["test"] * 8 + ["report"]
-    assert [s.name for s in stages[:5]] == ["evolve paper LE-LS", "evolve paper EE-LS", "evolve paper EE-ES",
-                                            "evolve extension LE-LS", "evolve extension EE-LS"]
+    stages = reproduce.plan(scale, "out", ("paper", "extension"))
+    # a variant's Fig. 3 is whole (its evolutions, then its tests) before the next variant starts
+    assert [s.kind for s in stages] == ["evolve"] * 3 + ["test"] * 4 + ["evolve"] * 2 + ["test"] * 4 + ["report"]
+    assert [s.name for s in stages if s.kind == "evolve"] == [
+        "evolve paper LE-LS", "evolve paper EE-LS", "evolve paper EE-ES", "evolve extension LE-LS",
+        "evolve extension EE-LS"]
+    assert [s.name for s in stages[3:7]] == [f"learning test paper {c}" for c in ("LE-LS", "EE-LS", "EE-ES", "SLE")]
+    # EE-ES is evolved once, under paper, whichever variant comes first
+    first = reproduce.plan(scale, "out", ("skills", "paper"))
+    assert [s.name for s in first[:3]] == ["evolve skills LE-LS", "evolve skills EE-LS", "evolve paper EE-ES"]
+    assert first[2].out_dir == os.path.join("out", "paper", "evolve", "EE-ES")
+    assert sum(s.condition == "EE-ES" and s.kind == "evolve" for s in first) == 1
+    assert reproduce.DEFAULT_VARIANTS["paper"] == ("skills", "paper")
     # 2 seeds x 6 individuals x 2 generations x (400 childhood + 6 x 400 task steps)
     assert stages[0].cost == 2 * 6 * 2 * (400 + 6 * 400) and stages[1].cost == 2 * 6 * 2 * 6 * 400
     # 2 runs x 2 best x 1 test x 6 x 800 cycles; the report: a childhood per probed LE-LS individual
