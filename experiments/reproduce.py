@@ -230,6 +230,8 @@ class Overall:
     def status(self, index: int, fraction: float = 0.0, stage_rate: float | None = None) -> str:
         """'stage i/N, all: elapsed, ETA' for the stage at ``index`` (``fraction`` of it done)."""
         rate, how = self.rate()
+        if how == "estimated" and stage_rate:  # nothing timed yet: the running stage's rate beats a guess
+            rate, how = stage_rate, "at this stage's rate"
         remaining = [s for s in self.stages[index:] if not stage_done(s, self.manifest["sizes"])]
         if remaining and remaining[0] is not self.stages[index]:
             fraction = 0.0

@@ -86,6 +86,9 @@ def test_stage_progress_is_shown_with_the_whole_pipelines(tmp_path, capsys):
     before = reproduce.Overall(stages, dict(sizes=scale, stages={"earlier": dict(cost=1000, seconds=10)}))
     assert before.status(0).endswith("ETA 0:02:00 (measured)")
     assert reproduce.Overall(stages, dict(sizes=scale, stages={})).status(1).endswith("(estimated)")
+    # nothing timed yet, but the running stage has a rate: the rest at that rate (8000 / 100 s)
+    assert reproduce.Overall(stages, dict(sizes=scale, stages={})).status(1, 0.0, 100.0).endswith(
+        "ETA 0:01:20 (at this stage's rate)")
 
 
 def test_a_fresh_clone_continues_from_the_published_checkpoint(tmp_path):
