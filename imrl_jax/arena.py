@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+import jax
 import jax.numpy as jnp
 
 from imrl_jax.config import Config
@@ -93,19 +94,61 @@ def heading_vector(heading: jnp.ndarray) -> jnp.ndarray:
     return jnp.stack([jnp.cos(heading), jnp.sin(heading)])
 
 
-def move(config: Config, pose: Pose, action: jnp.ndarray) -> Pose:
-    """Turn by (a0 - 0.5) * 2 * max_turn, then advance max_speed * a1, then clamp to the walls."""
-    turn = (action[0] - 0.5) * 2.0 * math.radians(config.max_turn_deg)
+def turn(config: Config, heading, turn_output):
+    """The new heading: turn by (a0 - 0.5) * 2 * max_turn, kept in [0, 2pi)."""
+    heading = heading + (turn_output - 0.5) * 2.0 * math.radians(config.max_turn_deg)
     # Keeping the heading in [0, 2pi) keeps float32 precise over 150,000 steps of turning.
     # The same values as jnp.mod (a turn is less than a full circle), without its fmod call.
-    heading = pose.heading + turn
-    full = jnp.asarray(2.0 * math.pi, heading.dtype)
-    heading = jnp.where(heading < 0.0, heading + full, jnp.where(heading >= full, heading - full, heading))
-    step = config.max_speed * action[1]
-    pos = pose.pos + step * heading_vector(heading)
+    full = 2.0 * math.pi
+    return jnp.where(heading < 0.0, heading + full, jnp.where(heading >= full, heading - full, heading))
+
+
+def advance(config: Config, pos, direction, speed_output):
+    """The new position: advance max_speed * a1 along the heading's (cos, sin), then clamp to the walls.
+
+    ``pos`` and ``direction`` are (2,) arrays, or (x, y) and (cos, sin) pairs of scalars
+    (the GPU kernel's registers); the same arithmetic on each coordinate.
+    """
+    step = config.max_speed * speed_output
     r = config.robot_radius
-    pos = jnp.clip(pos, r, config.arena_size - r)
-    return Pose(pos, heading)
+    return jax.tree.map(lambda p, d: jnp.clip(p + step * d, r, config.arena_size - r), pos, direction)
+
+
+def move(config: Config, pose: Pose, action: jnp.ndarray) -> Pose:
+    """Turn by (a0 - 0.5) * 2 * max_turn, then advance max_speed * a1, then clamp (MODEL.md "Robot")."""
+    heading = turn(config, pose.heading, action[0])
+    return Pose(advance(config, pose.pos, heading_vector(heading), action[1]), heading)
+
+
+def _combine(values, pair, array):
+    """Both coordinates' values combined: ``pair(x, y)`` for a pair of scalars, ``array(v)`` for a (2,) array."""
+    return pair(*values) if isinstance(values, tuple) else array(values)
+
+
+def on_wall(config: Config, pos):
+    """Whether the robot touches a wall (the clamp holds its centre at the border); ``pos`` as in :func:`advance`."""
+    r, size = config.robot_radius, config.arena_size
+    touching = jax.tree.map(lambda p: (p <= r) | (p >= size - r), pos)
+    return _combine(touching, jnp.logical_or, jnp.any)
+
+
+def spawn_pose(config: Config, position_draws, heading_draw):
+    """A uniform pose from uniform draws in [0, 1): position in [r, size - r]^2, heading in [0, 2pi).
+
+    ``position_draws``: a (2,) array, or a pair of scalars (the position comes back alike).
+    """
+    r, size = config.robot_radius, config.arena_size
+    return jax.tree.map(lambda u: r + (size - 2.0 * r) * u, position_draws), 2.0 * math.pi * heading_draw
+
+
+def trial_ends(config: Config, pos, target, trial_step):
+    """(reached, timeout): the centre within the target's radius (reward 1), or the trial's steps used up.
+
+    ``pos`` and ``target`` as in :func:`advance`.
+    """
+    squares = jax.tree.map(lambda p, t: (p - t) ** 2, pos, target)
+    reached = _combine(squares, jnp.add, jnp.sum) <= config.target_radius ** 2
+    return reached, ~reached & (trial_step >= config.trial_timeout)
 
 
 def task_arrays(config: Config, dtype=jnp.float32):

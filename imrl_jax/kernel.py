@@ -16,19 +16,18 @@ grid. Vectors are padded to powers of two (Triton's rule): experts K to Kp, x~ (
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from imrl_jax.arena import floor_colour_xy
 from imrl_jax import learning
+from imrl_jax.arena import advance, floor_colour_xy, on_wall, spawn_pose, trial_ends, turn
 from imrl_jax.config import Config, LearningParams
-from imrl_jax.learning import selector_features, td_error
+from imrl_jax.learning import ascend, ascend_row, selector_features, td_error, unit_features
+from imrl_jax.networks import Agent, explore, internal_reward, pick, select
 from imrl_jax.state import Curves, Draws, Phase, Previous, State, TaskSpec, Traces, draw_block, phase_params
-from imrl_jax.networks import Agent
 
 # Slots of the per-lane scalar vectors.
 _X, _Y, _HEADING, _COS, _SIN, _A0, _A1, _O0, _O1 = range(9)  # floats
@@ -148,11 +147,6 @@ def _dot_rows(matrix, vector):
     return jnp.sum(matrix * vector[None, :], axis=1)
 
 
-def _pick(values, k):
-    """values[k], as a masked sum (Triton has no gather)."""
-    return jnp.sum(jnp.where(jax.lax.broadcasted_iota(jnp.int32, values.shape, 0) == k, values, 0.0))
-
-
 class _Carry(NamedTuple):
     """The kernel loop's carry: one lane's state, in registers, and the bin's counts."""
 
@@ -173,11 +167,12 @@ class _Carry(NamedTuple):
 
 
 def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int, num_experts: int):
-    """The kernel body: ``num_steps`` steps of one lane (refs: inputs, then outputs)."""
-    max_turn = math.radians(config.max_turn_deg)
-    full = 2.0 * math.pi
-    r = config.robot_radius
-    size = config.arena_size
+    """The kernel body: ``num_steps`` steps of one lane (refs: inputs, then outputs).
+
+    The step is lifetime.step's control cycle on the lane's registers; the rules it applies
+    are the XLA program's functions (networks, learning, arena), written so that Triton
+    lowers them (no gather, no scatter: rows are read and written through one-hot masks).
+    """
 
     def kernel(layout_ref, params_ref, task_ref, u_ref, z_ref, spawn_ref, weights_ref, critic_ref, traces_ref,
                selector_trace_ref, xbs_ref, selection_ref, floats_ref, ints_ref, baseline_ref,
@@ -214,22 +209,10 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
             critic, selector_trace, prev_xb = carry.critic, carry.selector_trace, carry.prev_xb
             baseline = carry.baseline
 
-            # 1-2: observe, choose the expert (lifetime.select: the first k with u * sum(s) < cumsum(s)[k]).
+            # 1-2: observe, choose the expert.
             xb = observe(x, y, c, s)
             selection = jnp.where(expert_rows, jax.nn.sigmoid(_dot_rows(selector, xb)), 0.0)
-            if num_experts > 1:
-                u = u_ref[i]
-                cumulative, k = zero, jnp.int32(0)
-                partial = [_pick(selection, j) for j in range(num_experts)]
-                total = partial[0]
-                for j in range(1, num_experts):
-                    total = total + partial[j]
-                threshold = u * total
-                for j in range(num_experts - 1):
-                    cumulative = cumulative + partial[j]
-                    k = k + (cumulative <= threshold).astype(jnp.int32)
-            else:
-                k = jnp.int32(0)
+            k = select(u_ref[i], selection, num_experts) if num_experts > 1 else jnp.int32(0)
             same = k == prev_k
             ends = terminal | ~valid
             extrinsic = terminal.astype(dtype)
@@ -240,21 +223,21 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
             if phase.experts_learn:
                 learn = valid & same
                 if phase.intrinsic:
-                    reward = 2.0 * jax.nn.sigmoid(_pick(_dot_rows(reinforcer, xb), prev_k)) - 1.0
+                    reward = internal_reward(pick(_dot_rows(reinforcer, xb), prev_k))
                 else:
                     reward = extrinsic
-                value_before = _pick(_dot_rows(evaluator, prev_xb), prev_k)
-                value_now = _pick(_dot_rows(evaluator, xb), prev_k)
+                value_before = pick(_dot_rows(evaluator, prev_xb), prev_k)
+                value_now = pick(_dot_rows(evaluator, xb), prev_k)
                 surprise = td_error(reward, value_before, value_now, gamma, terminal)
                 delta = jnp.where(learn, surprise, 0.0)
                 ended = experts_ended != 0
                 trace_evaluator = accumulate(trace_evaluator, prev_xb, learn, ended)
-                trace_actor0 = accumulate(trace_actor0, ((a0 - o0) * o0 * (1.0 - o0)) * prev_xb, learn, ended)
-                trace_actor1 = accumulate(trace_actor1, ((a1 - o1) * o1 * (1.0 - o1)) * prev_xb, learn, ended)
-                row = held.astype(dtype)[:, None]
-                evaluator = evaluator + row * (eta_evaluator * (delta * trace_evaluator))[None, :]
-                actor0 = actor0 + row * (eta_actor * (delta * trace_actor0))[None, :]
-                actor1 = actor1 + row * (eta_actor * (delta * trace_actor1))[None, :]
+                trace_actor0 = accumulate(trace_actor0, unit_features(a0, o0, prev_xb), learn, ended)
+                trace_actor1 = accumulate(trace_actor1, unit_features(a1, o1, prev_xb), learn, ended)
+                row = held.astype(dtype)
+                evaluator = ascend_row(evaluator, row, trace_evaluator, delta, eta_evaluator)
+                actor0 = ascend_row(actor0, row, trace_actor0, delta, eta_actor)
+                actor1 = ascend_row(actor1, row, trace_actor1, delta, eta_actor)
                 experts_ended = (~same | ends).astype(jnp.int32)
             if phase.selector_learns:
                 if phase.intrinsic:
@@ -273,42 +256,37 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                 trace_critic = accumulate(trace_critic, prev_xb, learn, ended)
                 phi = selector_features(prev_k, carry.selection, prev_xb)
                 selector_trace = accumulate(selector_trace, phi, learn, ended)
-                critic = critic + eta_selector_critic * (delta * trace_critic)
-                selector = selector + eta_selector_actor * (delta * selector_trace)
+                critic = ascend(critic, trace_critic, delta, eta_selector_critic)
+                selector = ascend(selector, selector_trace, delta, eta_selector_actor)
                 selector_ended = ends.astype(jnp.int32)
 
             # 4: act.
-            out0 = jax.nn.sigmoid(_pick(_dot_rows(actor0, xb), k))
-            out1 = jax.nn.sigmoid(_pick(_dot_rows(actor1, xb), k))
+            out0 = jax.nn.sigmoid(pick(_dot_rows(actor0, xb), k))
+            out1 = jax.nn.sigmoid(pick(_dot_rows(actor1, xb), k))
             if phase.noisy:
-                sigma = noise_std * jnp.maximum(1.0 - t.astype(dtype) / phase_steps, 0.0)
-                act0 = jnp.clip(out0 + sigma * z_ref[0, i], 0.0, 1.0)
-                act1 = jnp.clip(out1 + sigma * z_ref[1, i], 0.0, 1.0)
+                act0 = explore(out0, z_ref[0, i], noise_std, t, phase_steps)
+                act1 = explore(out1, z_ref[1, i], noise_std, t, phase_steps)
             else:
                 act0, act1 = out0, out1
 
-            # 5: move (arena.move); reaching the target or the timeout starts a new trial.
-            heading = heading + (act0 - 0.5) * 2.0 * max_turn
-            heading = jnp.where(heading < 0.0, heading + full, jnp.where(heading >= full, heading - full, heading))
+            # 5: move; walls (respawn), then reaching the target or the timeout starts a new trial.
+            heading = turn(config, heading, act0)
             c, s = jnp.cos(heading), jnp.sin(heading)
-            advance = config.max_speed * act1
-            x = jnp.clip(x + advance * c, r, size - r)
-            y = jnp.clip(y + advance * s, r, size - r)
+            x, y = advance(config, (x, y), (c, s), act1)
             trial_step = trial_step + 1
-            if phase.respawn:  # lifetime.step: a random pose after wall_respawn_steps steps on a wall
-                on_wall = (x <= r) | (x >= size - r) | (y <= r) | (y >= size - r)
-                pinned = jnp.where(on_wall, pinned + 1, 0)
+            if phase.respawn:
+                pinned = jnp.where(on_wall(config, (x, y)), pinned + 1, 0)
                 respawned = pinned >= config.wall_respawn_steps
-                x = jnp.where(respawned, r + (size - 2.0 * r) * spawn_ref[0, i], x)
-                y = jnp.where(respawned, r + (size - 2.0 * r) * spawn_ref[1, i], y)
-                heading = jnp.where(respawned, full * spawn_ref[2, i], heading)
+                (spawn_x, spawn_y), spawn_heading = spawn_pose(config, (spawn_ref[0, i], spawn_ref[1, i]),
+                                                               spawn_ref[2, i])
+                x, y = jnp.where(respawned, spawn_x, x), jnp.where(respawned, spawn_y, y)
+                heading = jnp.where(respawned, spawn_heading, heading)
                 c, s = jnp.where(respawned, jnp.cos(heading), c), jnp.where(respawned, jnp.sin(heading), s)
                 pinned = jnp.where(respawned, 0, pinned)
             else:
                 respawned = trial_step < 0  # False, computed (see below)
             if phase.has_target:
-                reached = (x - target_x) ** 2 + (y - target_y) ** 2 <= config.target_radius ** 2
-                timeout = ~reached & (trial_step >= config.trial_timeout)
+                reached, timeout = trial_ends(config, (x, y), (target_x, target_y), trial_step)
                 reset = reached | timeout
                 x, y = jnp.where(reset, start_x, x), jnp.where(reset, start_y, y)
                 heading = jnp.where(reset, start_heading, heading)

@@ -21,9 +21,14 @@ def td_error(reward, value, next_value, gamma, terminal):
     return reward + gamma * jnp.where(terminal, 0.0, next_value) - value
 
 
+def unit_features(action, output, xb):
+    """phi of one actor unit: ((a - o) * o * (1 - o)) x~ (moves o towards the action)."""
+    return ((action - output) * output * (1.0 - output)) * xb
+
+
 def actor_features(action, output, xb):
-    """phi of an expert actor: ((a - o) * o * (1 - o)) outer x~ (moves o towards the action)."""
-    return ((action - output) * output * (1.0 - output))[:, None] * xb[None, :]
+    """phi of an expert actor: :func:`unit_features` of each unit, ((a - o) * o * (1 - o)) outer x~."""
+    return unit_features(action[:, None], output[:, None], xb[None, :])
 
 
 def selector_features(k, selection, xb):

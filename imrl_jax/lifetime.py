@@ -18,10 +18,10 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from imrl_jax.arena import Pose, heading_vector, move, task_arrays
+from imrl_jax.arena import Pose, heading_vector, move, on_wall, spawn_pose, task_arrays, trial_ends
 from imrl_jax.config import Config, LearningParams
 from imrl_jax.learning import learn_experts, learn_selector, pick_row, take_row
-from imrl_jax.networks import Agent, act, decode, with_bias, zero_agent
+from imrl_jax.networks import Agent, act, decode, explore, select, with_bias, zero_agent
 from imrl_jax.retina import observe
 from imrl_jax.state import (ADULT_EVOLVED_SELECTOR, ADULT_LEARNING_SELECTOR, ADULT_SINGLE_EXPERT,  # noqa: F401
                             CHILDHOOD, Curves, Draws, Phase, Previous, State, StepRecord, TaskSpec, Traces,
@@ -49,12 +49,6 @@ class LifetimeKeys(NamedTuple):
     pose: jax.Array  # childhood start pose
     childhood: jax.Array
     tasks: jax.Array  # (tasks,)
-
-
-def select(u, selection):
-    """Expert k with probability s_k / sum(s): the first k with u * sum(s) < cumsum(s)[k]."""
-    cumulative = jnp.cumsum(selection)
-    return jnp.sum(cumulative[:-1] <= u * cumulative[-1]).astype(jnp.int32)
 
 
 def lifetime_keys(key: jax.Array, num_tasks: int) -> LifetimeKeys:
@@ -90,35 +84,29 @@ def _draws(config: Config, phase: Phase, key: jax.Array, state: State) -> tuple[
 
 
 def _action(phase: Phase, params: LearningParams, output, z, t, phase_steps: int):
-    """a_t = clip(o_t + sigma_t z, 0, 1), sigma_t = noise_std max(1 - t / T, 0) in noisy phases (paper); else o_t.
+    """The action: :func:`~imrl_jax.networks.explore` in noisy phases, else o_t.
 
     T is the phase's length, or a shorter noise horizon (``Config.sle_noise_steps``).
     """
-    if not phase.noisy:
-        return output
-    sigma = params.noise_std * jnp.maximum(1.0 - t.astype(output.dtype) / phase_steps, 0.0)
-    return jnp.clip(output + sigma * z, 0.0, 1.0)
+    return explore(output, z, params.noise_std, t, phase_steps) if phase.noisy else output
 
 
 def _respawn(config: Config, pose: Pose, pinned, spawn):
     """A robot on a wall for config.wall_respawn_steps steps in a row is put at the random pose ``spawn``.
 
-    On a wall: the clamp holds the centre at the border. Returns the pose, the steps on a
-    wall and whether it was put back (like a timeout, nothing learns from that transition).
+    Returns the pose, the steps on a wall and whether it was put back (like a timeout,
+    nothing learns from that transition).
     """
-    r, size = config.robot_radius, config.arena_size
-    on_wall = jnp.any((pose.pos <= r) | (pose.pos >= size - r))
-    pinned = jnp.where(on_wall, pinned + 1, 0)
+    pinned = jnp.where(on_wall(config, pose.pos), pinned + 1, 0)
     respawned = pinned >= config.wall_respawn_steps
-    fresh = Pose(r + (size - 2.0 * r) * spawn[:2], 2.0 * math.pi * spawn[2])
+    fresh = Pose(*spawn_pose(config, spawn[:2], spawn[2]))
     pose = jax.tree.map(lambda new, now: jnp.where(respawned, new, now), fresh, pose)
     return pose, jnp.where(respawned, 0, pinned), respawned
 
 
 def end_trial(config: Config, task: TaskSpec, pose: Pose, trial_step):
     """Reaching the target (reward 1) or the timeout puts the robot back at the task's start."""
-    reached = jnp.sum((pose.pos - task.target) ** 2) <= config.target_radius ** 2
-    timeout = ~reached & (trial_step >= config.trial_timeout)
+    reached, timeout = trial_ends(config, pose.pos, task.target, trial_step)
     reset = reached | timeout
     pose = jax.tree.map(lambda start, now: jnp.where(reset, start, now), task.start, pose)
     return pose, jnp.where(reset, 0, trial_step), reached, timeout

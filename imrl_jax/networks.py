@@ -29,9 +29,44 @@ def with_bias(x: jnp.ndarray) -> jnp.ndarray:
     return jnp.concatenate([x, jnp.ones((1,), x.dtype)])
 
 
+def internal_reward(activation: jnp.ndarray) -> jnp.ndarray:
+    """A reinforcer's reward in [-1, 1] from its activation w.x~: 2 sigmoid(w.x~) - 1."""
+    return 2.0 * jax.nn.sigmoid(activation) - 1.0
+
+
 def reinforce(w: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:
     """Internal reward in [-1, 1]: 2 sigmoid(w.x~) - 1."""
-    return 2.0 * jax.nn.sigmoid(w @ xb) - 1.0
+    return internal_reward(w @ xb)
+
+
+def pick(values: jnp.ndarray, k) -> jnp.ndarray:
+    """values[k] (k may be traced), as a masked sum: the GPU kernel's Triton has no gather."""
+    return jnp.sum(jnp.where(jax.lax.broadcasted_iota(jnp.int32, values.shape, 0) == k, values, 0.0))
+
+
+def select(u, selection: jnp.ndarray, num_experts: int | None = None) -> jnp.ndarray:
+    """Expert k with probability s_k / sum(s): the first k with u * sum(s) < cumsum(s)[k].
+
+    ``u`` is a uniform draw in [0, 1); only the first ``num_experts`` entries of
+    ``selection`` count (the GPU kernel pads it with zeros).
+    """
+    num_experts = selection.shape[0] if num_experts is None else num_experts
+    partial = [pick(selection, j) for j in range(num_experts)]
+    total = partial[0]
+    for j in range(1, num_experts):
+        total = total + partial[j]
+    threshold = u * total
+    cumulative, k = jnp.zeros((), selection.dtype), jnp.int32(0)
+    for j in range(num_experts - 1):
+        cumulative = cumulative + partial[j]
+        k = k + (cumulative <= threshold).astype(jnp.int32)
+    return k
+
+
+def explore(output, z, noise_std, t, phase_steps: int):
+    """a_t = clip(o_t + sigma_t z, 0, 1), sigma_t = noise_std max(1 - t / T, 0) (the paper's annealed noise)."""
+    sigma = noise_std * jnp.maximum(1.0 - t.astype(output.dtype) / phase_steps, 0.0)
+    return jnp.clip(output + sigma * z, 0.0, 1.0)
 
 
 def act(weights: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:

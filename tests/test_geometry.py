@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from imrl_jax.arena import BLUE, GREEN, NONE, RED, Pose, floor_colour, move
+from imrl_jax.arena import BLUE, GREEN, NONE, RED, Pose, advance, floor_colour, move, on_wall, spawn_pose, trial_ends
 from imrl_jax.config import Config, ConfigError
 from imrl_jax.retina import observe, sample_points
 
@@ -286,6 +286,34 @@ def test_move_heading_stays_wrapped_over_many_turns(config):
     assert (headings >= 0).all() and (headings < 360).all()
     # 12 turns of 30 deg are a full circle: 25 turns end at 30 deg
     np.testing.assert_allclose(headings[-1], 30.0, atol=1e-3)
+
+
+def test_walls_targets_and_spawns_by_hand_as_arrays_and_as_pairs(config):
+    """The step's arena rules, on a (2,) array (the XLA step) and on a pair of scalars (the GPU kernel)."""
+    def both(fn, *xy):  # fn on arrays, then on pairs of scalars
+        arrays = fn(*(jnp.asarray(v, jnp.float32) for v in xy))
+        pairs = fn(*((jnp.float32(v[0]), jnp.float32(v[1])) for v in xy))
+        return arrays, pairs
+
+    # radius 15 cm in a 400 cm arena: the centre touches a wall at 15 or 385
+    for pos, touching in (((15.0, 200.0), True), ((200.0, 385.0), True), ((16.0, 384.0), False)):
+        arrays, pairs = both(lambda p: on_wall(config, p), pos)
+        assert bool(arrays) == bool(pairs) == touching, pos
+    # target radius 10 cm: (6, 8) from the target is 10 cm away (reached), (6, 8.01) is not
+    for offset, reached in (((6.0, 8.0), True), ((6.0, 8.01), False)):
+        pos = (100.0 + offset[0], 300.0 + offset[1])
+        for got, late in ((both(lambda p, t: trial_ends(config, p, t, 199), pos, (100.0, 300.0)), False),
+                          (both(lambda p, t: trial_ends(config, p, t, 200), pos, (100.0, 300.0)), not reached)):
+            for hit, timeout in got:
+                assert bool(hit) == reached and bool(timeout) == late, (offset, late)
+    # 2 cm a step at full speed along (0.6, 0.8); clamped to [15, 385]
+    arrays, pairs = both(lambda p, d: advance(config, p, d, 1.0), (100.0, 384.0), (0.6, 0.8))
+    np.testing.assert_allclose(np.asarray(arrays), [101.2, 385.0], rtol=1e-6)
+    np.testing.assert_array_equal(np.asarray(arrays), np.asarray(pairs))
+    # draws (0, 0.5, 0.25): the west border, the middle, heading 90 deg
+    (position, heading), ((x, y), heading_pair) = both(lambda u: spawn_pose(config, u, 0.25), (0.0, 0.5))
+    np.testing.assert_allclose(np.asarray(position), [15.0, 200.0])
+    assert (float(x), float(y)) == (15.0, 200.0) and float(heading) == float(heading_pair) == pytest.approx(math.pi / 2)
 
 
 # ---------------------------------------------------------------------------- tasks
