@@ -162,6 +162,14 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
                 f"({label})", "",
             table(["variant", "condition", "final best fitness", "per seed", "plateau generation", "generations",
                    "best individual (fitness)"], rows)]
+    if any(life is not None for life in lives.values()):
+        out += ["", "\"Relived\": the best individual's genome lives its evaluated life again, with the same keys, in "
+                    "the report's program (one individual, not the evolution's batch of seeds x population). XLA "
+                    "compiles the two programs differently, so float32 sums round differently; a life amplifies a "
+                    "rounding difference into another path, so the relived life is in effect a fresh one. And the "
+                    "fittest of a generation's lives is partly the luckiest: one genome's lives spread with an sd "
+                    "of about 0.04 (docs/CHILDHOOD.md, heritability), so a fresh life of the best regresses towards "
+                    "its genome's mean. Expect the relived fitness below the recorded one by a few hundredths."]
 
     out += ["", "## Fig. 3b: learning tests", "",
             f"Performance per bin (reaches / the bin's theoretical maximum), mean over all tests and tasks, band "

@@ -71,6 +71,10 @@ def fig_steady(steady: dict, variants: list[str], title: str):
     return fig
 
 
+#: A childhood path whose extent stays below this (cm) is drawn as a mark and said to stay put.
+STILL_CM = 2.0
+
+
 def fig_paths(life: dict, title: str):
     """Each task's path after learning coloured by the expert in control, the last childhood steps, what experts see."""
     from matplotlib.patches import Circle
@@ -93,8 +97,14 @@ def fig_paths(life: dict, title: str):
     ax = axes[0]
     draw_arena(ax, config, tasks=life["childhood"] is None)
     if life["childhood"] is not None:
-        draw_path(ax, life["childhood"].pos, life["childhood"].k, life["childhood"].breaks, lw=0.8)
-        ax.set_title(f"last {len(life['childhood'].k):,} childhood steps", fontsize=8)
+        pos = np.asarray(life["childhood"].pos)
+        draw_path(ax, pos, life["childhood"].k, life["childhood"].breaks, lw=0.8)
+        title = f"last {len(life['childhood'].k):,} childhood steps"
+        if np.ptp(pos, axis=0).max() < STILL_CM:  # a path too short to see: mark where the robot sits
+            x, y = pos.mean(axis=0)
+            ax.plot(x, y, "x", color="black", ms=7, mew=1.5, zorder=6)
+            title += f":\nthe robot stays at ({x:.0f}, {y:.0f}) cm (moves < {STILL_CM:g} cm)"
+        ax.set_title(title, fontsize=8)
     else:
         ax.set_title("arena and tasks (no childhood)", fontsize=8)
     expert_legend(ax, config.num_experts)

@@ -218,3 +218,27 @@ def test_probe_best_counts_the_colours_each_best_individual_follows(tiny):
     colours = probe_best(le_ls.to_dict(), dict(genomes=genomes))
     assert len(colours) == 2 and all(0 <= c <= 3 for c in colours)
     assert colours[1] == 0  # no reinforcement, no learning: zero actors drive straight on
+
+
+def test_a_childhood_that_stays_put_is_marked_and_said(tiny):
+    """fig_paths: a childhood path under 2 cm across is drawn as a mark, and its title says where the robot stays."""
+    from experiments.figures import fig_paths
+    from imrl_jax.behaviour import Trajectory
+
+    config = tiny("LE-LS")
+
+    def path(pos):
+        steps = len(pos)
+        no = np.zeros(steps, bool)
+        return Trajectory(pos, np.zeros(steps), pos, np.zeros(steps), np.zeros(steps, int), no, no, no)
+
+    still = path(np.tile([[120.0, 80.0]], (50, 1)) + np.linspace(0, 1.0, 50)[:, None])  # 1 cm in x and y
+    moving = path(np.stack([np.linspace(100, 300, 400), np.full(400, 200.0)], 1))
+    life = dict(config=config, tasks=[moving] * config.num_tasks, performance=[0.5] * config.num_tasks,
+                shares=np.full((config.num_experts, 4), 0.25), steps=[100] * config.num_experts)
+    titles = {}
+    for name, childhood in (("still", still), ("moving", moving)):
+        fig = fig_paths(dict(life, childhood=childhood), name)
+        titles[name] = fig.axes[0].get_title()
+    assert "the robot stays at (120, 80) cm" in titles["still"]
+    assert "stays" not in titles["moving"] and titles["moving"].startswith("last 400 childhood steps")
