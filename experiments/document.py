@@ -242,10 +242,11 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
         f.write("\n".join(out) + "\n")
 
 
-def _at(steps, values, target: int):
-    """The value at the evaluation nearest ``target`` cycles, and that evaluation's cycles."""
-    i = int(np.argmin(np.abs(np.asarray(steps) - target)))
-    return float(values[i]), int(steps[i])
+def _at(steps, values, target: int) -> float | None:
+    """The curve's value at ``target`` cycles, interpolated between evaluations (None past its last)."""
+    if target > steps[-1]:
+        return None
+    return float(np.interp(target, steps, values))
 
 
 def baselines_section(baselines: dict, data: dict, written: dict, rel, label: str) -> list[str]:
@@ -265,7 +266,7 @@ def baselines_section(baselines: dict, data: dict, written: dict, rel, label: st
         out += ["", f"![baselines]({rel(written['baselines'])})"]
     header = ["learner", "performance (mean +- sd over seeds or runs)", "per task 1-6"]
     if test_steps:
-        header.append(f"at {test_steps:,} cycles (this report's test length)")
+        header.append(f"at {test_steps:,} cycles (this report's test length; interpolated)")
     header.append("deterministic (mode)")
     rows = []
     for b in baselines.values():
@@ -273,8 +274,8 @@ def baselines_section(baselines: dict, data: dict, written: dict, rel, label: st
         row = [baseline_label(b), f"{summary['performance_mean']:.3f} +- {summary['performance_sd_over_seeds']:.3f}",
                ", ".join(f"{v:.2f}" for v in b["per_task"])]
         if test_steps:
-            value, at = _at(b["steps"], b["mean"], test_steps)
-            row.append(f"{value:.3f} (at {at:,})" if at <= summary["steps"] else "-")
+            value = _at(b["steps"], b["mean"], test_steps)
+            row.append("-" if value is None else f"{value:.3f}")
         row.append(f"{summary['performance_deterministic_mean']:.3f}")
         rows.append(row)
     for (variant, condition), t in data["tests"].items():
@@ -297,17 +298,18 @@ def baselines_section(baselines: dict, data: dict, written: dict, rel, label: st
         (variant, condition), t = max(data["tests"].items(), key=lambda item: item[1]["steady"]["steady_mean"])
         lines.append(f"The paper's architecture here ({label}): best steady state {condition} under the {variant} "
                      f"rules, {t['steady']['steady_mean']:.3f}.")
-        if test_steps:
-            same = [(_at(b["steps"], b["mean"], test_steps), b) for b in baselines.values()]
-            (value, at), b = max(same, key=lambda item: item[0][0])
+        same = [(_at(b["steps"], b["mean"], test_steps), b) for b in baselines.values()] if test_steps else []
+        same = [(value, b) for value, b in same if value is not None]
+        if same:
+            value, b = max(same, key=lambda item: item[0])
             lines.append(f"With the same experience as those tests ({test_steps:,} cycles per task), the best "
-                         f"baseline is at {value:.3f} ({baseline_label(b)}, evaluated at {at:,}).")
-    sps = [f"{b['summary']['agent'].upper()} {b['summary']['steps_per_s_median']:,.0f}" for b in baselines.values()
-           if b["summary"].get("steps_per_s_median")]
+                         f"baseline is at {value:.3f} ({baseline_label(b)}, interpolated between its evaluations).")
+    sps = [f"{baseline_label(b).split(' (')[0]}: {b['summary']['steps_per_s_median']:,.0f}"
+           for b in baselines.values() if b["summary"].get("steps_per_s_median")]
     out += ["", " ".join(lines)]
     if sps:
         out += ["", f"Training speed (median control cycles per second over runs, compilation and evaluation "
-                    f"excluded): {', '.join(sps)}."]
+                    f"excluded): {'; '.join(sps)}."]
     return out
 
 
