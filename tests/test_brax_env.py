@@ -183,3 +183,16 @@ def test_the_core_package_does_not_import_brax():
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "[]"
+
+
+def test_without_brax_the_import_and_the_command_say_how_to_install_it(tmp_path):
+    """With brax unimportable: a clear ImportError, and the command exits 2 with one line."""
+    code = ("import sys; sys.modules['brax'] = None\n"
+            "try:\n    import imrl_jax.brax_env\nexcept ImportError as error:\n    print(error)\n"
+            "from imrl_jax import baselines\n"
+            f"sys.exit(baselines.main(['--steps', '10', '--out', {str(tmp_path / 'out')!r}]))")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2, out.stderr
+    assert out.stdout.strip() == "imrl_jax.brax_env needs brax: pip install -e '.[brax]' (docs/BASELINES.md)"
+    assert out.stderr.strip() == "error: " + out.stdout.strip()
+    assert not (tmp_path / "out").exists()
