@@ -108,8 +108,8 @@ def specialisation_rows(lives: dict) -> list[dict]:
 
 
 def write_document(path: str, figures: str, data: dict, numbers: dict, lives: dict, spec_rows: list[dict],
-                   written: dict) -> None:
-    """The markdown report."""
+                   written: dict, baselines: dict | None = None) -> None:
+    """The markdown report (with a section on the brax baselines when ``baselines`` has any)."""
     from imrl_jax.checkpoint import git_commit
 
     manifest, results = data["manifest"], data["results"]
@@ -235,6 +235,9 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
     out.append(table(["#", "claim", "variant", "measured", "paper", "verdict"], rows))
     out += ["", "### Rules", ""] + [f"{n}. {rule}" for n, rule in RULES.items()]
 
+    if baselines:
+        out += baselines_section(baselines, data, written, rel, label)
+
     discussion = os.path.join(results, "discussion.md")
     out += ["", "## Discussion", ""]
     if os.path.isfile(discussion):
@@ -245,6 +248,77 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     with open(path, "w") as f:
         f.write("\n".join(out) + "\n")
+
+
+def _at(steps, values, target: int) -> float | None:
+    """The curve's value at ``target`` cycles, interpolated between evaluations (None past its last)."""
+    if target > steps[-1]:
+        return None
+    return float(np.interp(target, steps, values))
+
+
+def baselines_section(baselines: dict, data: dict, written: dict, rel, label: str) -> list[str]:
+    """Modern deep RL from brax.training on the same tasks, beside this report's learning tests."""
+    from experiments.figures import baseline_label
+
+    test_steps = max((int(t["steps"][-1]) for t in data["tests"].values()), default=None)
+    out = ["", "## Modern deep RL baselines (brax.training)", "",
+           "Each task learned from scratch by brax's PPO or ES on the arena's brax environments "
+           "(`imrl_jax.brax_env`), measured as the learning tests are: reaches / theoretical maximum, here of the "
+           "trained policy acting (sampling its actions, as the paper's learners are measured while they act) "
+           "from the task's start, replayed by the project's own step; the policy's mode in the last column. The "
+           "baselines' own scale is their budget of cycles per task, not this report's: the paper's learning "
+           "test gives 1,000,000. Made by `python experiments/baselines.py`; what, how and why in "
+           "[BASELINES.md](BASELINES.md)."]
+    if written.get("baselines"):
+        out += ["", f"![baselines]({rel(written['baselines'])})"]
+    header = ["learner", "performance (mean +- sd over seeds or runs)", "per task 1-6"]
+    if test_steps:
+        header.append(f"at {test_steps:,} cycles (this report's test length; interpolated)")
+    header.append("deterministic (mode)")
+    rows = []
+    for b in baselines.values():
+        summary = b["summary"]
+        row = [baseline_label(b), f"{summary['performance_mean']:.3f} +- {summary['performance_sd_over_seeds']:.3f}",
+               ", ".join(f"{v:.2f}" for v in b["per_task"])]
+        if test_steps:
+            value = _at(b["steps"], b["mean"], test_steps)
+            row.append("-" if value is None else f"{value:.3f}")
+        row.append(f"{summary['performance_deterministic_mean']:.3f}")
+        rows.append(row)
+    for (variant, condition), t in data["tests"].items():
+        steady = t["steady"]
+        row = [f"{condition}, {variant} rules: steady state ({label.split(':')[0]})",
+               f"{steady['steady_mean']:.3f} +- {steady['steady_sd']:.3f}",
+               ", ".join(f"{v:.2f}" for v in steady["steady_per_task"])]
+        if test_steps:
+            row.append(f"{steady['steady_mean']:.3f}")
+        rows.append(row + ["-"])
+    out += ["", table(header, rows)]
+    best = max(baselines.values(), key=lambda b: b["summary"]["performance_mean"])
+    at_paper = [b for b in baselines.values() if b["summary"]["steps"] <= 1_100_000]
+    lines = [f"Best baseline: {baseline_label(best)} at {best['summary']['performance_mean']:.3f}."]
+    if at_paper:
+        top = max(at_paper, key=lambda b: b["summary"]["performance_mean"])
+        lines.append(f"With the paper's learning-test budget, {baseline_label(top)} reaches "
+                     f"{top['summary']['performance_mean']:.3f}.")
+    if data["tests"]:
+        (variant, condition), t = max(data["tests"].items(), key=lambda item: item[1]["steady"]["steady_mean"])
+        lines.append(f"The paper's architecture here ({label}): best steady state {condition} under the {variant} "
+                     f"rules, {t['steady']['steady_mean']:.3f}.")
+        same = [(_at(b["steps"], b["mean"], test_steps), b) for b in baselines.values()] if test_steps else []
+        same = [(value, b) for value, b in same if value is not None]
+        if same:
+            value, b = max(same, key=lambda item: item[0])
+            lines.append(f"With the same experience as those tests ({test_steps:,} cycles per task), the best "
+                         f"baseline is at {value:.3f} ({baseline_label(b)}, interpolated between its evaluations).")
+    sps = [f"{baseline_label(b).split(' (')[0]}: {b['summary']['steps_per_s_median']:,.0f}"
+           for b in baselines.values() if b["summary"].get("steps_per_s_median")]
+    out += ["", " ".join(lines)]
+    if sps:
+        out += ["", f"Training speed (median control cycles per second over runs, compilation and evaluation "
+                    f"excluded): {'; '.join(sps)}."]
+    return out
 
 
 def _dirty() -> bool:

@@ -135,3 +135,62 @@ def _band(ax, x, mean, sd, style: dict, banded: set) -> None:
     else:
         ax.fill_between(x, mean - sd, mean + sd, color=colour, alpha=0.13, lw=0)
         banded.add(colour)
+
+
+#: Colours of the brax baselines (by agent); the larger budget is drawn dashed.
+BASELINE_COLOURS = {"ppo": "tab:red", "es": "tab:green"}
+
+
+def baseline_label(entry: dict) -> str:
+    """'PPO, 1M cycles (5 seeds)'."""
+    summary = entry["summary"]
+    steps = summary["steps"]
+    budget = f"{steps / 1e6:g}M" if steps >= 1e6 else f"{steps / 1e3:g}k"
+    return f"{summary['agent'].upper()}, {budget} cycles ({len(summary['seeds'])} seeds)"
+
+
+def fig_baselines(baselines: dict, tests: dict, title: str):
+    """The brax baselines beside the paper's architecture: learning curves (log cycles) and performance per task.
+
+    ``baselines``: :func:`experiments.loading.read_baselines`; ``tests``: ``{(variant, condition): test}``
+    of the report's learning tests (their curves, and steady states per task), drawn thin.
+    """
+    from imrl_jax.plotting import CONDITION_STYLES, new_figure
+
+    fig = new_figure(11.0, 5.0)
+    curves, bars = fig.subplots(1, 2, gridspec_kw=dict(width_ratios=[1.0, 1.25]))
+    budgets = sorted({b["summary"]["steps"] for b in baselines.values()})
+    for name, b in baselines.items():
+        agent = b["summary"]["agent"]
+        dashed = len(budgets) > 1 and b["summary"]["steps"] == budgets[-1]
+        x = np.maximum(b["steps"], 1)
+        curves.plot(x[1:], b["mean"][1:], color=BASELINE_COLOURS.get(agent, "0.3"), lw=2.0,
+                    ls="--" if dashed else "-", marker="o", ms=2.5, label=baseline_label(b))
+    for (variant, condition), t in tests.items():
+        style = dict(CONDITION_STYLES[condition], lw=1.0, alpha=0.9 if variant == "paper" else 0.45)
+        curves.plot(t["steps"], t["mean"], label=f"{condition} ({variant})", **style)
+    curves.set_xscale("log")
+    curves.set_ylim(0, 1)
+    style_axis(curves, "learning curves: mean over the six tasks", "control cycles of experience per task (log)",
+               "performance (1: straight line)")
+    curves.legend(fontsize=6, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.14))
+
+    learners = [(baseline_label(b), b["per_task"], dict(color=BASELINE_COLOURS.get(b["summary"]["agent"], "0.3"),
+                                                        alpha=1.0 if b["summary"]["steps"] == budgets[0] else 0.55))
+                for b in baselines.values()]
+    learners += [(f"{condition} ({variant}), steady state", t["steady"]["steady_per_task"],
+                  dict(color=CONDITION_STYLES[condition]["color"], alpha=0.35 if variant != "paper" else 0.75,
+                       hatch="//" if variant != "paper" else None))
+                 for (variant, condition), t in tests.items()]
+    width = 0.85 / max(len(learners), 1)
+    tasks = np.arange(1, 7)
+    for i, (label, values, style) in enumerate(learners):
+        bars.bar(tasks - 0.425 + (i + 0.5) * width, values, width, label=label, edgecolor="white", lw=0.3, **style)
+    bars.set_xticks(tasks, [f"task {t}" for t in tasks], fontsize=7)
+    bars.set_ylim(0, 1)
+    style_axis(bars, "final performance per task (mean over seeds or runs)", "", "performance")
+    bars.grid(False, axis="x")
+    bars.legend(fontsize=6, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.08))
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    return fig

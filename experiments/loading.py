@@ -136,3 +136,33 @@ def update_best_genomes(data: dict, num_best: int = NUM_BEST) -> dict:
             f.write(buffer.getvalue())
         os.replace(path + ".tmp", path)
     return found
+
+
+def read_baselines(path: str) -> dict:
+    """The brax baselines under ``path`` (one directory per agent and budget, written by ``imrl_jax.baselines``).
+
+    Returns ``{name: dict(summary, steps, mean, sd, per_task)}`` ordered by agent (PPO, ES) then budget:
+    ``mean`` and ``sd`` are the deterministic performance at each evaluation, over tasks
+    then seeds (sd over seeds of the mean over tasks); ``per_task`` the final performance
+    per task, mean over seeds. Directories without a finished run are left out.
+    """
+    found = []
+    for name in sorted(os.listdir(path)) if os.path.isdir(path) else []:
+        summary = read_json(os.path.join(path, name, "summary.json"))
+        curves = os.path.join(path, name, "curves.csv")
+        if summary is None or not os.path.isfile(curves):
+            continue
+        with open(curves) as f:
+            rows = list(csv.DictReader(f))
+        steps = sorted({int(r["step"]) for r in rows})
+        seeds = sorted({int(r["seed"]) for r in rows})
+        # (seeds, steps): each seed's mean over tasks at each evaluation
+        by_seed = np.asarray([[np.mean([float(r["performance"]) for r in rows
+                                        if int(r["seed"]) == s and int(r["step"]) == t]) for t in steps]
+                              for s in seeds])
+        per_task = [summary["per_task"][str(t)]["mean"] for t in summary["tasks"]]
+        found.append((summary["agent"], summary["steps"], name,
+                      dict(summary=summary, steps=np.asarray(steps), mean=by_seed.mean(0), sd=by_seed.std(0),
+                           per_task=per_task)))
+    order = lambda item: (["ppo", "es"].index(item[0]) if item[0] in ("ppo", "es") else 2, item[1])  # noqa: E731
+    return {name: entry for _, _, name, entry in sorted(found, key=order)}

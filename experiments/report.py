@@ -41,8 +41,8 @@ import numpy as np
 
 from experiments.claims import CLAIMS, PAPER, RULES, SEEN, measure
 from experiments.document import ROOT, pipeline_command, scale_label, specialisation_rows, write_document
-from experiments.figures import fig_fitness, fig_learning, fig_paths, fig_steady
-from experiments.loading import load, update_best_genomes
+from experiments.figures import fig_baselines, fig_fitness, fig_learning, fig_paths, fig_steady
+from experiments.loading import load, read_baselines, update_best_genomes
 from experiments.relive import DRAWN_STEPS, PATH_STEPS, probe_best, relive_best
 from experiments.reproduce import EVOLVED, TESTED
 
@@ -59,7 +59,11 @@ def _jsonable(value):
     return value
 
 
-def run(results: str, doc: str, figures: str, behaviour: bool = True) -> dict:
+#: Where experiments/baselines.py writes the brax baselines (the report shows them when present).
+BASELINES = os.path.join(ROOT, "experiments", "results", "baselines")
+
+
+def run(results: str, doc: str, figures: str, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
     """Write the figures, the summaries and the document; return the paths written."""
     from imrl_jax.config import make_config
     from imrl_jax.plotting import plot_arena, save
@@ -89,6 +93,13 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True) -> dict:
         variants = [v for v in data["variants"] if any((v, c) in steady for c in TESTED)]
         written["fig3c"] = save(fig_steady(steady, variants, f"Fig. 3c: steady state ({short})"),
                                 os.path.join(figures, "fig3c.png"))
+
+    baselines = read_baselines(baselines_dir)
+    if baselines:
+        tests = {k: t for k, t in data["tests"].items()}
+        written["baselines"] = save(fig_baselines(baselines, tests, f"brax.training baselines beside the learning "
+                                                                    f"tests ({short})"),
+                                    os.path.join(figures, "baselines.png"))
 
     best = update_best_genomes(data)
     lives, probes = {}, {}
@@ -148,7 +159,7 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True) -> dict:
         with open(written[name], "w") as f:
             json.dump(_jsonable(content), f, indent=2)
             f.write("\n")
-    write_document(doc, figures, data, numbers, lives, spec_rows, written)
+    write_document(doc, figures, data, numbers, lives, spec_rows, written, baselines)
     written["doc"] = doc
     return written
 
@@ -160,12 +171,14 @@ def main(argv=None) -> int:
     p.add_argument("--figures", default=os.path.join(ROOT, "docs", "reproduction"),
                    help="directory of the figures and summaries")
     p.add_argument("--no-behaviour", action="store_true", help="skip reliving the best individuals (paths, claim 7)")
+    p.add_argument("--baselines", default=BASELINES, help="directory of the brax baselines (experiments/baselines.py)")
     args = p.parse_args(argv)
     if not os.path.isdir(args.results):
         print(f"error: RESULTS_DIR: {args.results} is not a directory", file=sys.stderr)
         return 2
     try:
-        written = run(args.results, args.doc, args.figures, behaviour=not args.no_behaviour)
+        written = run(args.results, args.doc, args.figures, behaviour=not args.no_behaviour,
+                      baselines_dir=args.baselines)
     except FileNotFoundError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

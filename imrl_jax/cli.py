@@ -40,19 +40,22 @@ def _parse_value(field: dataclasses.Field, text: str):
     raise ValueError("not settable from the command line")
 
 
-def settable_fields() -> list[str]:
-    """Config fields that ``--set`` accepts (the scalar ones)."""
-    from imrl_jax.config import Config
+def settable_fields(settings=None) -> list[str]:
+    """Fields of a settings dataclass (default: Config) that ``--set`` accepts (the scalar ones)."""
+    if settings is None:
+        from imrl_jax.config import Config as settings
 
-    return [f.name for f in dataclasses.fields(Config) if isinstance(f.default, (bool, int, float, str))]
+    return [f.name for f in dataclasses.fields(settings) if isinstance(f.default, (bool, int, float, str))]
 
 
-def parse_sets(items: Sequence[str] | None) -> dict:
-    """``--set FIELD=VALUE`` options as Config overrides, each value of its field's type (raises UsageError)."""
-    from imrl_jax.config import Config
+def parse_sets(items: Sequence[str] | None, settings=None) -> dict:
+    """``--set FIELD=VALUE`` options as overrides of a settings dataclass (default: Config), each value of its
+    field's type (raises UsageError)."""
+    if settings is None:
+        from imrl_jax.config import Config as settings
 
-    fields = {f.name: f for f in dataclasses.fields(Config)}
-    settable = settable_fields()
+    fields = {f.name: f for f in dataclasses.fields(settings)}
+    settable = settable_fields(settings)
     overrides = {}
     for item in items or []:
         name, sep, text = item.partition("=")
@@ -64,7 +67,8 @@ def parse_sets(items: Sequence[str] | None) -> dict:
             close = [f for f in settable if name and f.startswith(name)] or \
                 difflib.get_close_matches(name, settable, n=1, cutoff=0.5)
             hint = f"did you mean {' or '.join(close)}? " if close else ""
-            raise UsageError(f"--set {item}: {name} is not a Config field; {hint}fields: {', '.join(settable)}")
+            raise UsageError(f"--set {item}: {name} is not a {settings.__name__} field; {hint}fields: "
+                             f"{', '.join(settable)}")
         try:
             overrides[name] = _parse_value(fields[name], text)
         except ValueError:

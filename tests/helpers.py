@@ -228,3 +228,13 @@ class Runs:
 def reference(args: tuple[str, ...]) -> dict:
     """The outputs of the one-device, one-process run of ``args`` (after Runs.wait)."""
     return _references[tuple(args)]
+
+
+def tiny_baseline(agent: str = "ppo", **overrides):
+    """A brax baseline of a few thousand steps with tiny networks and evaluations (imrl_jax.baselines)."""
+    from imrl_jax.baselines import Baseline
+
+    sizes = dict(steps=3000, seeds=1, tasks=(1,), num_evals=3, eval_lanes=4, eval_steps=300, hidden=(16,),
+                 num_envs=8, unroll_length=10, batch_size=8, num_minibatches=4, updates_per_batch=2,
+                 population=4, episode_length=100)
+    return Baseline(agent=agent, **{**sizes, **overrides})

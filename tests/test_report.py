@@ -184,7 +184,8 @@ def test_report_of_a_fabricated_results_directory(tmp_path):
     results, doc, figures = tmp_path / "results", tmp_path / "docs" / "REPRODUCTION.md", tmp_path / "docs" / "fig"
     _write_results(results)
     (results / "discussion.md").write_text("Hand-written words.\n")
-    assert main([str(results), "--doc", str(doc), "--figures", str(figures), "--no-behaviour"]) == 0
+    assert main([str(results), "--doc", str(doc), "--figures", str(figures), "--no-behaviour",
+                 "--baselines", str(tmp_path / "no_baselines")]) == 0
     for name in ("fig1_arena.png", "fig3a_paper.png", "fig3a_extension.png", "fig3b_paper.png", "fig3c.png",
                  "summary.json", "claims.json", "specialisation.csv"):
         assert (figures / name).is_file(), name
@@ -201,6 +202,44 @@ def test_report_of_a_fabricated_results_directory(tmp_path):
     assert "cpu scale" in text and "](fig/fig3a_paper.png)" in text
     assert "## Discussion\n\nHand-written words." in text
     assert "`make reproduce-cpu`" not in text  # the results are not in the default directory
+    assert "brax" not in text and not (figures / "baselines.png").exists()  # no baselines: no section
+
+
+def _write_baselines(root):
+    """A baselines directory as imrl_jax.baselines writes it: PPO, 1M cycles, 2 seeds at 0.5 and 0.7 on every task."""
+    from imrl_jax.baselines import Baseline, _csv, summarise
+    from imrl_jax.config import Config
+
+    b = Baseline(agent="ppo", steps=1_000_000, seeds=2)
+    rows = [dict(agent="ppo", task=t, seed=s, steps=1_024_000, performance=0.5 + 0.2 * s,
+                 performance_deterministic=0.4, seconds=1.0, steps_per_s=100_000) for t in b.tasks for s in (0, 1)]
+    curves = [dict(agent="ppo", task=t, seed=s, step=step, performance=value * (0.5 + 0.2 * s),
+                   performance_deterministic=0.4)
+              for t in b.tasks for s in (0, 1) for step, value in ((0, 0.0), (1024, 0.25), (1_024_000, 1.0))]
+    out = root / "ppo_1M"
+    out.mkdir(parents=True)
+    (out / "runs.csv").write_bytes(_csv(rows))
+    (out / "curves.csv").write_bytes(_csv(curves))
+    (out / "summary.json").write_text(json.dumps(summarise(b, Config(), rows, curves)))
+
+
+def test_report_shows_the_baselines_beside_the_learning_tests(tmp_path):
+    results, doc, figures = tmp_path / "results", tmp_path / "docs" / "REPRODUCTION.md", tmp_path / "docs" / "fig"
+    _write_results(results)
+    _write_baselines(tmp_path / "baselines")
+    (tmp_path / "baselines" / "unfinished").mkdir()  # no summary.json: left out
+    assert main([str(results), "--doc", str(doc), "--figures", str(figures), "--no-behaviour",
+                 "--baselines", str(tmp_path / "baselines")]) == 0
+    assert (figures / "baselines.png").is_file()
+    text = doc.read_text()
+    assert "## Modern deep RL baselines (brax.training)" in text and "](fig/baselines.png)" in text
+    # mean over seeds of each seed's mean over tasks: (0.5 + 0.7) / 2, sd 0.1; at the tests' 1,000 cycles,
+    # interpolated between 0 (at 0 cycles) and 0.15 (at 1,024): 0.146; the mode's performance 0.4
+    assert "| PPO, 1M cycles (2 seeds) | 0.600 +- 0.100 | 0.60, 0.60, 0.60, 0.60, 0.60, 0.60 | 0.146 | 0.400 |" in text
+    assert "Training speed (median control cycles per second over runs, compilation and evaluation excluded): " \
+           "PPO, 1M cycles: 100,000." in text
+    assert "| EE-LS, paper rules: steady state (cpu scale) | 0.800 +- 0.020 |" in text
+    assert "best steady state EE-LS under the paper rules, 0.800" in text
 
 
 def test_probe_best_counts_the_colours_each_best_individual_follows(tiny):

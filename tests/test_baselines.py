@@ -1,0 +1,97 @@
+"""Baselines from brax.training (imrl_jax.baselines): the pipeline end to end at a tiny scale, the measure, the command."""
+
+import csv
+import json
+import os
+
+import jax
+import numpy as np
+import pytest
+
+pytest.importorskip("brax", reason="the brax extra: pip install -e '.[brax]'")
+
+from helpers import SHORT_TASK, tiny_baseline  # noqa: E402
+from imrl_jax import baselines  # noqa: E402
+from imrl_jax.brax_env import TaskEnv, wrap_for_training  # noqa: E402
+from imrl_jax.config import Config  # noqa: E402
+
+
+def wrapped_reaches(env, policy, key, num_lanes: int, num_steps: int):
+    """Reaches of ``policy`` on ``env`` under brax's training wrappers (auto-reset), per lane."""
+    wrapped = wrap_for_training(env)
+
+    def one(state, step_key):
+        action, _ = policy(state.obs, step_key)
+        state = wrapped.step(state, action)
+        return state, state.reward
+
+    state = wrapped.reset(jax.random.split(jax.random.PRNGKey(0), num_lanes))
+    return jax.lax.scan(one, state, jax.random.split(key, num_steps))[1].sum(0)
+
+
+def test_ppo_trains_end_to_end_and_its_reaches_replay_on_the_project_step():
+    """A few thousand steps of brax's PPO: finite losses, evaluations on schedule, and the trained policy's
+    reaches through the brax environment equal its replay by the project's own step."""
+    config = Config(tasks=(SHORT_TASK,))  # a target 40 cm ahead: reaches come early
+    b = tiny_baseline()
+    run = baselines.train_ppo(b, config, 1, seed=0)
+    assert len(run.steps) == b.num_evals and run.steps[0] == 0 and run.steps[-1] >= b.steps
+    assert run.losses and all(np.isfinite(v) for v in run.losses.values()), run.losses
+    assert {"policy_loss", "v_loss"} <= set(run.losses)
+    env = TaskEnv(1, config)
+    key = jax.random.key(5)
+    total = 0
+    for deterministic in (True, False):
+        policy = run.make_policy(run.params, deterministic=deterministic)
+        replayed = jax.jit(lambda k: baselines.rollout(k, env, policy, 4, 400))(key)
+        through_brax = jax.jit(lambda k: wrapped_reaches(env, policy, k, 4, 400))(key)
+        assert replayed.shape == (4,)
+        np.testing.assert_array_equal(np.asarray(through_brax), np.asarray(replayed))
+        total += int(replayed.sum())
+    assert total > 0  # reaches happened, so the counts compared are not all zero
+    # The evaluation is that replay, as a performance: reaches / theoretical maximum.
+    acting, _ = baselines.make_evaluate(b, env, run.make_policy)(key, run.params)
+    policy = run.make_policy(run.params, deterministic=False)
+    reaches = baselines.rollout(key, env, policy, b.eval_lanes, b.eval_steps).sum()
+    assert float(acting) == pytest.approx(float(reaches) * config.steps_per_trip()[0] / (b.eval_lanes * b.eval_steps))
+
+
+def test_performance_is_reaches_over_the_theoretical_maximum():
+    config = Config()  # task 3: 30 steps per trip; 3,000 steps allow 100 trips
+    assert baselines.performance(config, 3, 50, 3000) == pytest.approx(0.5)
+    assert baselines.performance(config, 2, [65, 0], 6500).tolist() == [0.65, 0.0]
+
+
+@pytest.mark.slow
+def test_es_run_writes_its_outputs(tmp_path):
+    """The command with ES at a tiny scale: files, the summary, and a refusal to overwrite."""
+    out = str(tmp_path / "es")
+    args = ["--agent", "es", "--steps", "800", "--seeds", "2", "--tasks", "3", "--evals", "2", "--eval-steps", "200",
+            "--hidden", "8", "--set", "population=2", "--set", "episode_length=100", "--out", out, "--quiet"]
+    assert baselines.main(args) == 0
+    with open(os.path.join(out, "runs.csv")) as f:
+        rows = list(csv.DictReader(f))
+    assert [(r["task"], r["seed"]) for r in rows] == [("3", "0"), ("3", "1")]
+    with open(os.path.join(out, "summary.json")) as f:
+        summary = json.load(f)
+    assert summary["agent"] == "es" and summary["steps"] == 800 and summary["seeds"] == [0, 1]
+    np.testing.assert_allclose(summary["performance_mean"], np.mean([float(r["performance"]) for r in rows]))
+    assert os.path.getsize(os.path.join(out, "learning_curve.png")) > 10_000
+    assert baselines.main(args) == 2
+
+
+@pytest.mark.parametrize("args, field", [
+    (["--agent", "sac"], "agent"),
+    (["--tasks", "3,7"], "tasks"),
+    (["--tasks", "three"], "--tasks"),
+    (["--steps", "0"], "steps"),
+    (["--evals", "1"], "num_evals"),
+    (["--set", "entropy=0.1"], "entropy_cost"),
+    (["--set", "num_envs=5"], "num_envs"),
+])
+def test_bad_input_exits_2_with_one_line(tmp_path, capsys, args, field):
+    out = tmp_path / "out"
+    assert baselines.main([*args, "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: ") and "\n" not in err and field in err, err
+    assert not out.exists()
