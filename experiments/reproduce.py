@@ -18,8 +18,9 @@ Every stage is a command of the package, printed before it runs, its progress li
 beside the whole pipeline's (stage i of N, elapsed time, and an ETA from the stages' costs in
 lane-steps at the rate measured so far, or an assumed one before any stage is timed). A
 finished stage is skipped; an interrupted evolution resumes from its last checkpoint; an
-interrupted learning test starts again. Run the same command again to go on after an
-interruption. The newest checkpoint of an unfinished evolution is copied into its run
+interrupted learning test goes on from its first unfinished run (the runs it finished are
+kept in its ``partial/`` folder, committed with the results). Run the same command again to
+go on after an interruption. The newest checkpoint of an unfinished evolution is copied into its run
 directory's ``resume_checkpoint/`` (``checkpoints/`` is not committed), so that a fresh
 clone with the results committed goes on from there.
 
@@ -156,6 +157,12 @@ def generations_done(run_dir: str) -> int:
     with open(path) as f:
         rows = [line.split(",", 1)[0] for line in f.read().splitlines()[1:] if line]
     return max((int(g) for g in rows), default=-1) + 1
+
+
+def partial_runs(test_dir: str) -> int:
+    """Runs an interrupted learning test has finished (kept in its ``partial/`` folder)."""
+    folder = os.path.join(test_dir, "partial")
+    return sum(name.startswith("run_") for name in os.listdir(folder)) if os.path.isdir(folder) else 0
 
 
 def stage_done(stage: Stage, scale: dict) -> bool:
@@ -348,7 +355,7 @@ def main(argv=None) -> int:
                           f"({os.path.join(stage.out_dir, PUBLISHED)})")
                 done_before = generations_done(stage.out_dir) / scale["generations"]
             elif stage.kind == "test":
-                shutil.rmtree(stage.out_dir, ignore_errors=True)  # an interrupted test starts again
+                done_before = partial_runs(stage.out_dir) / scale["seeds"]
             command, env = stage_command(stage, scale, out, args.kernel)
             run_stage(stage, index, command, overall, manifest_path, done_before, env)
             if stage.kind == "evolve" and stage_done(stage, scale):

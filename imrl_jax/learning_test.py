@@ -11,9 +11,13 @@ length, EE-ES does not learn, EE-LS's selector learns each task from zero. SLE i
 evolved: its ``--runs`` x ``--best`` x ``--tests`` tests all start from scratch (the
 "runs" only group them like the evolved conditions' seeds).
 
-All tests are lanes of one jitted program. The task phase runs in ``--chunks`` pieces
-with the state carried between them (the same computation as one scan; memory does not
-grow with the test length) so that progress can be shown. Writes to ``--out``:
+The tests of one run are lanes of one jitted program, and the runs go through it one after
+the other (one compilation). The task phase runs in ``--chunks`` pieces with the state
+carried between them (the same computation as one scan; memory does not grow with the test
+length) so that progress can be shown. Each finished run is kept in ``--out/partial/``, so
+that the same command after an interruption goes on from the first unfinished run (with
+the same results as an uninterrupted test); ``partial/`` is removed once the test is done.
+Writes to ``--out``:
 ``curve.csv`` (performance per bin: mean over all tests and per run), ``steady.json``
 (performance over the last ``--steady-steps`` cycles: mean over runs, best run, per run,
 per task; the command and git commit), ``curves.npz`` (every test's reaches per bin)
@@ -23,9 +27,11 @@ and ``learning_curve.png``.
 from __future__ import annotations
 
 import argparse
+import hashlib
 import io
 import json
 import os
+import shutil
 import sys
 import time
 from typing import NamedTuple, Sequence
@@ -93,9 +99,13 @@ def make_learning_test(config: Config, num_chunks: int):
 
 
 def run_tests(keys: jax.Array, config: Config, params: LearningParams, genomes, num_chunks: int = 1,
-              progress: Progress | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Every test (one key and genome each) to the end: reaches (tests, tasks, bins), selections (tests, tasks, bins, K)."""
-    begin_all, advance_all = make_learning_test(config, num_chunks)
+              progress: Progress | None = None, programs=None, done_before: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Every test (one key and genome each) to the end: reaches (tests, tasks, bins), selections (tests, tasks, bins, K).
+
+    ``programs``: :func:`make_learning_test`'s pair, made once for batches of the same shape;
+    ``done_before``: progress units finished before this batch.
+    """
+    begin_all, advance_all = programs or make_learning_test(config, num_chunks)
     # Split the tests over every device (one per CPU core in the CLI); pad to a multiple.
     num_tests, num_devices = len(genomes), len(jax.devices())
     pad = -num_tests % num_devices
@@ -113,7 +123,7 @@ def run_tests(keys: jax.Array, config: Config, params: LearningParams, genomes, 
         selections.append(np.asarray(curves.selections)[:num_tests])
         if progress is not None:
             recent = reaches[-1].sum(-1) / (best / num_chunks)  # (tests, tasks)
-            progress.update(chunk + 1, 0.0, 0.0, lane_steps / (time.perf_counter() - start),
+            progress.update(done_before + chunk + 1, 0.0, 0.0, lane_steps / (time.perf_counter() - start),
                             scores=f"performance in this chunk {recent.mean():.4f}")
     return np.concatenate(reaches, -1), np.concatenate(selections, -2)
 
@@ -189,36 +199,87 @@ def test_keys(seed: int, num_runs: int, num_best: int, num_tests: int) -> jax.Ar
     return jax.random.split(jax.random.key(seed), num_runs * num_best * num_tests)
 
 
+#: The folder of ``--out`` that keeps each finished run of an unfinished test.
+PARTIAL = "partial"
+
+
+def fingerprint(config: Config, genomes: np.ndarray, num_tests: int, seed: int) -> str:
+    """What a test's results depend on, hashed: a resumed test continues only a test of the same.
+
+    Only the config fields away from their defaults count, so that a field added to ``Config``
+    later (its default keeping the old behaviour) does not stop an older test from resuming.
+    """
+    default = Config().to_dict()
+    changed = {name: value for name, value in config.to_dict().items() if value != default.get(name)}
+    digest = hashlib.sha256(json.dumps(dict(config=changed, num_tests=num_tests, seed=seed),
+                                       sort_keys=True, default=str).encode())
+    digest.update(np.ascontiguousarray(genomes, np.float32).tobytes())
+    return digest.hexdigest()[:16]
+
+
+def finished_runs(partial: str, stamp: str, num_runs: int) -> dict:
+    """The runs kept in ``partial`` by an interrupted test of the same fingerprint: {run: (reaches, selections)}."""
+    if not os.path.isdir(partial):
+        return {}
+    spec_path = os.path.join(partial, "spec.json")
+    found = json.load(open(spec_path))["fingerprint"] if os.path.exists(spec_path) else None
+    if found != stamp:
+        raise UsageError(f"--out: {partial} holds an unfinished learning test of other settings or individuals; "
+                         f"remove it or choose another directory")
+    done = {}
+    for r in range(num_runs):
+        path = os.path.join(partial, f"run_{r:03d}.npz")
+        if os.path.exists(path):
+            with np.load(path) as data:
+                done[r] = (data["reaches"], data["selections"])
+    return done
+
+
 def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, steady_steps: int, num_chunks: int,
         seed: int = 0, quiet: bool = False, source: str = "", command: str = "") -> dict:
-    """Run the tests of ``genomes`` (runs, best, genes) and write the outputs; return the summary."""
+    """Run the tests of ``genomes`` (runs, best, genes) run by run, resuming from ``partial/``; write the outputs."""
     num_runs, num_best = genomes.shape[:2]
     steady_bins(config, steady_steps)
-    lanes = np.repeat(genomes.reshape(num_runs * num_best, -1), num_tests, axis=0)
-    progress = Progress(num_chunks, quiet=quiet, unit="chunk")
+    keys = test_keys(seed, num_runs, num_best, num_tests).reshape(num_runs, num_best * num_tests)
+    partial, stamp = os.path.join(out_dir, PARTIAL), fingerprint(config, genomes, num_tests, seed)
+    done = finished_runs(partial, stamp, num_runs)
+    resumed = sorted(done)
+    progress = Progress(num_runs * num_chunks, done=len(done) * num_chunks, quiet=quiet, unit="chunk")
     progress.message(f"{config.condition} learning test: {num_runs} run(s) x {num_best} best x {num_tests} test(s) x "
-                     f"{config.num_tasks} tasks = {lanes.shape[0] * config.num_tasks} lanes of {config.task_steps} cycles"
-                     + (f" after a {config.childhood_steps}-step childhood" if config.condition == "LE-LS" else ""))
+                     f"{config.num_tasks} tasks = {num_runs * num_best * num_tests * config.num_tasks} lanes of "
+                     f"{config.task_steps} cycles"
+                     + (f" after a {config.childhood_steps}-step childhood" if config.condition == "LE-LS" else "")
+                     + ", run by run" + (f"; {len(done)} run(s) done before, kept in {partial}" if done else ""))
     start = time.perf_counter()
-    reaches, selections = run_tests(test_keys(seed, num_runs, num_best, num_tests), config, config.learning_params(),
-                                    lanes.astype(np.float32), num_chunks, progress)
+    programs = make_learning_test(config, num_chunks)
+    params = config.learning_params()
+    os.makedirs(partial, exist_ok=True)
+    write_atomic(os.path.join(partial, "spec.json"), json.dumps(dict(fingerprint=stamp, command=command)).encode())
+    for r in range(num_runs):
+        if r in done:
+            continue
+        lanes = np.repeat(genomes[r], num_tests, axis=0).astype(np.float32)
+        done[r] = run_tests(keys[r], config, params, lanes, num_chunks, progress, programs, done_before=r * num_chunks)
+        buffer = io.BytesIO()
+        np.savez_compressed(buffer, reaches=done[r][0].astype(np.int32), selections=done[r][1].astype(np.int32))
+        write_atomic(os.path.join(partial, f"run_{r:03d}.npz"), buffer.getvalue())
     seconds = time.perf_counter() - start
     shape = (num_runs, num_best, num_tests)
-    reaches = reaches.reshape(shape + reaches.shape[1:])
-    selections = selections.reshape(shape + selections.shape[1:])
+    reaches = np.stack([done[r][0] for r in range(num_runs)]).reshape(shape + done[0][0].shape[1:])
+    selections = np.stack([done[r][1] for r in range(num_runs)]).reshape(shape + done[0][1].shape[1:])
     summary = dict(condition=config.condition, source=source, num_runs=num_runs, num_best=num_best,
                    num_tests=num_tests, task_steps=config.task_steps, childhood_steps=config.childhood_steps,
                    num_bins=config.num_bins, steady_steps=steady_steps, seed=seed,
                    **summarise(config, reaches, steady_steps),
-                   seconds=round(seconds, 1), backend=jax.default_backend(), command=command, git_commit=git_commit(),
-                   config=config.to_dict())
-    os.makedirs(out_dir, exist_ok=True)
+                   seconds=round(seconds, 1), resumed_runs=resumed, backend=jax.default_backend(), command=command,
+                   git_commit=git_commit(), config=config.to_dict())
     buffer = io.BytesIO()
     np.savez_compressed(buffer, reaches=reaches.astype(np.int32), selections=selections.astype(np.int32))
     write_atomic(os.path.join(out_dir, "curves.npz"), buffer.getvalue())
     write_atomic(os.path.join(out_dir, "curve.csv"), curve_csv(config, reaches).encode())
     _write_plot(config, reaches, os.path.join(out_dir, "learning_curve.png"))
-    write_atomic(os.path.join(out_dir, "steady.json"), json.dumps(summary, indent=2).encode())  # last: marks completion
+    write_atomic(os.path.join(out_dir, "steady.json"), json.dumps(summary, indent=2).encode())  # marks completion
+    shutil.rmtree(partial)  # curves.npz now holds every run
     return summary
 
 

@@ -77,6 +77,49 @@ def test_command_line(tiny_run, tmp_path, capsys):
     assert before == {name: os.path.getmtime(os.path.join(out, name)) for name in os.listdir(out)}
 
 
+def test_an_interrupted_test_goes_on_from_its_first_unfinished_run(tiny_run, tmp_path, monkeypatch, capsys):
+    """Stopped after its first run, the same command tests only the others; the results equal an uninterrupted test's."""
+    argv = [tiny_run, "--best", "2", "--tests", "1", "--task-steps", "400", "--bins", "4", "--steady-steps", "200",
+            "--chunks", "2", "--quiet"]
+    whole, cut = tmp_path / "whole", tmp_path / "cut"
+    assert learning_test.main([*argv, "--out", str(whole)]) == 0
+    num_runs = len(learning_test.load_run(tiny_run, 2)[1])
+    assert num_runs >= 2
+    real, calls = learning_test.run_tests, []
+
+    def stopped_after_one(*args, **kwargs):
+        if calls:
+            raise KeyboardInterrupt
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(learning_test, "run_tests", stopped_after_one)
+    with pytest.raises(KeyboardInterrupt):
+        learning_test.main([*argv, "--out", str(cut)])
+    assert sorted(os.listdir(cut / learning_test.PARTIAL)) == ["run_000.npz", "spec.json"]
+    assert not (cut / "steady.json").exists()
+
+    # Other settings in the same folder are refused: one line, exit 2, the kept run untouched.
+    kept = (cut / learning_test.PARTIAL / "run_000.npz").read_bytes()
+    capsys.readouterr()
+    assert learning_test.main([*argv[:-1], "--tests", "2", "--quiet", "--out", str(cut)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "--out" in err and "other settings" in err and len(err.splitlines()) == 1
+    assert (cut / learning_test.PARTIAL / "run_000.npz").read_bytes() == kept
+
+    calls.clear()
+    monkeypatch.setattr(learning_test, "run_tests", lambda *a, **k: calls.append(1) or real(*a, **k))
+    assert learning_test.main([*argv, "--out", str(cut)]) == 0
+    assert len(calls) == num_runs - 1  # run 0 was not tested again
+    with np.load(whole / "curves.npz") as a, np.load(cut / "curves.npz") as b:
+        np.testing.assert_array_equal(a["reaches"], b["reaches"])
+        np.testing.assert_array_equal(a["selections"], b["selections"])
+    summary = json.loads((cut / "steady.json").read_text())
+    assert summary["resumed_runs"] == [0]
+    assert summary["steady_mean"] == json.loads((whole / "steady.json").read_text())["steady_mean"]
+    assert not (cut / learning_test.PARTIAL).exists()
+
+
 @pytest.mark.parametrize("argv, message", [
     (["/nonexistent/run"], "/nonexistent/run: not a directory"),
     (["--cond", "SLE", "--set", "eta_actor=nan"], "eta_actor: must be a finite number"),

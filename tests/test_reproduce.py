@@ -36,6 +36,14 @@ def test_pipeline_runs_and_resumes(tmp_path):
     assert "imrl_jax.evolve" not in second.stdout
 
 
+def test_partial_runs_counts_the_runs_an_interrupted_test_kept(tmp_path):
+    assert reproduce.partial_runs(str(tmp_path / "none")) == 0
+    (tmp_path / "partial").mkdir()
+    for name in ("spec.json", "run_000.npz", "run_001.npz"):
+        (tmp_path / "partial" / name).write_bytes(b"")
+    assert reproduce.partial_runs(str(tmp_path)) == 2
+
+
 def test_plan_costs_and_eta():
     scale = reproduce.SCALES["tiny"]
     stages = reproduce.plan(scale, "out", ("paper", "extension"))
