@@ -27,6 +27,7 @@ and ``learning_curve.png``.
 from __future__ import annotations
 
 import argparse
+import functools
 import hashlib
 import io
 import json
@@ -89,6 +90,7 @@ def advance(config: Config, params: LearningParams, test: TestState, num_chunks:
     return test._replace(states=states), curves
 
 
+@functools.lru_cache(maxsize=8)  # tests of the same config in one process (a notebook, a sweep) compile once
 def make_learning_test(config: Config, num_chunks: int):
     """Jitted ``begin(keys, params, genomes)`` and ``advance(params, tests)`` over a batch of tests."""
     if config.num_bins % num_chunks:
