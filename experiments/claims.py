@@ -198,7 +198,7 @@ def claim_reliability(spread: dict) -> dict:
     if le is None or any(o is None for o in others):
         return _claim(NOT_AVAILABLE, measured, spread=spread)
     much = sum(le <= MUCH_SMALLER * o for o in others)
-    measured += f"; LE-LS's at most {MUCH_SMALLER:g} of {much} of 2"
+    measured += f"; LE-LS's sd is at most {MUCH_SMALLER:g}x that of {much} of the 2 EE conditions"
     verdict = HOLDS if much == 2 else PARTLY if much == 1 or all(le < o for o in others) else DOES_NOT
     return _claim(verdict, measured, spread=spread, much_smaller=much)
 

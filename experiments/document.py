@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 
 import numpy as np
@@ -12,6 +13,44 @@ from experiments.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEP
 from experiments.reproduce import DEFAULT_VARIANTS, SCALES
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def report_paths(scale: str) -> tuple[str, str]:
+    """The report and figures folder of a scale: the paper scale's is docs/REPRODUCTION.md, others are labelled."""
+    if scale == "paper":
+        return os.path.join(ROOT, "docs", "REPRODUCTION.md"), os.path.join(ROOT, "docs", "reproduction")
+    return (os.path.join(ROOT, "docs", f"REPRODUCTION_{scale.upper()}.md"),
+            os.path.join(ROOT, "docs", f"reproduction_{scale}"))
+
+
+def other_scale_section(doc_dir: str, scale: str) -> list[str]:
+    """A labelled section on each other scale's report found beside this one (``scale``'s): its verdicts, a link."""
+    out = []
+    for other in [s for s in SCALES if s != scale]:
+        doc, figures = (os.path.basename(p) for p in report_paths(other))
+        claims_path = os.path.join(doc_dir, figures, "claims.json")
+        if not (os.path.isfile(os.path.join(doc_dir, doc)) and os.path.isfile(claims_path)):
+            continue
+        with open(claims_path) as f:
+            claims = json.load(f)
+        variants = list(next(iter(claims["claims"].values()))["variants"])
+        out += ["", f"## The same claims at the {other} scale", "",
+                f"**Another run, at the {claims.get('scale_label', other + ' scale')}.** Its figures, numbers and "
+                f"discussion are in [{doc}]({doc}); only its verdicts are repeated here.", "",
+                table(["#", "claim", *variants],
+                      [[n, c["text"], *(f"{c['variants'][v]['verdict']} ({c['variants'][v]['measured']})"
+                                        for v in variants)] for n, c in claims["claims"].items()])]
+    return out
+
+
+def missing_stages(results: str, manifest: dict | None) -> list[str]:
+    """The evolutions and learning tests of the manifest's plan that are not finished (the report aside)."""
+    from experiments.reproduce import plan, stage_done
+
+    if not manifest or not manifest.get("sizes") or not manifest.get("variants"):
+        return []
+    return [stage.name for stage in plan(manifest["sizes"], results, manifest["variants"], report=False)
+            if not stage_done(stage, manifest["sizes"])]
 
 
 def scale_label(manifest: dict | None) -> str:
@@ -117,7 +156,8 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
     reduced = not manifest or manifest.get("scale") != "paper"
     doc_dir = os.path.dirname(os.path.abspath(path))
     rel = lambda name: os.path.relpath(os.path.join(figures, name), doc_dir)  # noqa: E731
-    out = ["# Reproduction of Schembri, Mirolli & Baldassarre (2007): Fig. 3 and the seven claims", ""]
+    title = "# Reproduction of Schembri, Mirolli & Baldassarre (2007): Fig. 3 and the seven claims"
+    out = [title + ("" if not reduced else f", at the {(manifest or {}).get('scale', 'unknown')} scale (reduced)"), ""]
     inside = os.path.abspath(results).startswith(ROOT + os.sep)
     out += [f"Written by `experiments/report.py` from `{os.path.relpath(results, ROOT) if inside else results}`. "
             f"**All numbers below are at the {label}.**", "", sizes_table(data)]
@@ -125,7 +165,10 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
         out += ["", "This is a **reduced-scale** reproduction: fewer seeds and generations and shorter lives and "
                     "learning tests than the paper's (10 seeds, 100 generations, 150,000 childhood steps, 100,000 "
                     "steps per task, tests of 10 best x 10 tests x 1,000,000 cycles). Its numbers are not the "
-                    "paper's numbers; the claims are judged on the shapes and orders the paper reports."]
+                    "paper's numbers; the claims are judged on the shapes and orders the paper reports."
+                + (" The paper-scale run is reported in [REPRODUCTION.md](REPRODUCTION.md)."
+                   if os.path.isfile(os.path.join(doc_dir, "REPRODUCTION.md")) and
+                   os.path.basename(path) != "REPRODUCTION.md" else "")]
     commits = sorted({c for c in [run.get("git_commit") for run in data["evolutions"].values()]
                       + [t["steady"].get("git_commit") for t in data["tests"].values()] if c})
     out += ["", f"- Command: {pipeline_command(results, manifest)}",
@@ -134,6 +177,10 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
             f"- Report written at commit `{git_commit()}`" + (" (with uncommitted changes)" if _dirty() else ""),
             f"- Variants: {', '.join(data['variants'])} ({'; '.join(VARIANT_TEXT[v] for v in data['variants'])}). "
             f"EE-ES learns nothing, so its one evolution serves every variant."]
+    missing = missing_stages(results, manifest)
+    if missing:
+        out += ["", f"**Unfinished run: {len(missing)} stage(s) not done yet** ({', '.join(missing)}). What they "
+                    f"would measure is shown as not available; run the command again to go on."]
     if manifest and manifest.get("stages"):
         out += ["", "<details><summary>Stages (commands and seconds)</summary>", "",
                 table(["stage", "command", "seconds"],
@@ -237,6 +284,8 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
 
     if baselines:
         out += baselines_section(baselines, data, written, rel, label)
+    if not reduced:  # the reduced scales' verdicts, labelled; a reduced report only links the paper's (above)
+        out += other_scale_section(doc_dir, "paper")
 
     discussion = os.path.join(results, "discussion.md")
     out += ["", "## Discussion", ""]

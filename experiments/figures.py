@@ -99,12 +99,12 @@ def fig_paths(life: dict, title: str):
     if life["childhood"] is not None:
         pos = np.asarray(life["childhood"].pos)
         draw_path(ax, pos, life["childhood"].k, life["childhood"].breaks, lw=0.8)
-        title = f"last {len(life['childhood'].k):,} childhood steps"
+        panel = f"last {len(life['childhood'].k):,} childhood steps"
         if np.ptp(pos, axis=0).max() < STILL_CM:  # a path too short to see: mark where the robot sits
             x, y = pos.mean(axis=0)
             ax.plot(x, y, "x", color="black", ms=7, mew=1.5, zorder=6)
-            title += f":\nthe robot stays at ({x:.0f}, {y:.0f}) cm (moves < {STILL_CM:g} cm)"
-        ax.set_title(title, fontsize=8)
+            panel += f":\nthe robot stays at ({x:.0f}, {y:.0f}) cm (moves < {STILL_CM:g} cm)"
+        ax.set_title(panel, fontsize=8)
     else:
         ax.set_title("arena and tasks (no childhood)", fontsize=8)
     expert_legend(ax, config.num_experts)

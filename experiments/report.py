@@ -1,6 +1,7 @@
 """The paper's Fig. 3 and its seven claims (section 3), from a results directory of reproduce.py.
 
-    python -m experiments.report experiments/results/cpu [--doc docs/REPRODUCTION.md] [--figures docs/reproduction]
+    python -m experiments.report experiments/results/paper   # docs/REPRODUCTION.md, docs/reproduction/
+    python -m experiments.report experiments/results/cpu     # docs/REPRODUCTION_CPU.md, docs/reproduction_cpu/
 
 (from the repository root). The pieces: ``loading`` reads the results, ``claims`` holds the
 verdict rules (pure functions), ``relive`` lives the best individuals again, ``figures``
@@ -40,9 +41,10 @@ import sys
 import numpy as np
 
 from experiments.claims import CLAIMS, PAPER, RULES, SEEN, measure
-from experiments.document import ROOT, pipeline_command, scale_label, specialisation_rows, write_document
+from experiments.document import (ROOT, pipeline_command, report_paths, scale_label, specialisation_rows,
+                                  write_document)
 from experiments.figures import fig_baselines, fig_fitness, fig_learning, fig_paths, fig_steady
-from experiments.loading import load, read_baselines, update_best_genomes
+from experiments.loading import load, read_baselines, read_json, update_best_genomes
 from experiments.relive import DRAWN_STEPS, PATH_STEPS, probe_best, relive_best
 from experiments.reproduce import EVOLVED, TESTED
 
@@ -167,15 +169,19 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True, baselines_
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("results", metavar="RESULTS_DIR", help="a results directory of experiments/reproduce.py")
-    p.add_argument("--doc", default=os.path.join(ROOT, "docs", "REPRODUCTION.md"), help="the markdown report")
-    p.add_argument("--figures", default=os.path.join(ROOT, "docs", "reproduction"),
-                   help="directory of the figures and summaries")
+    p.add_argument("--doc", help="the markdown report (default: docs/REPRODUCTION.md for the paper scale, "
+                                 "docs/REPRODUCTION_CPU.md for the cpu scale, and so on)")
+    p.add_argument("--figures", help="directory of the figures and summaries (default: docs/reproduction for the "
+                                     "paper scale, docs/reproduction_cpu for the cpu scale, and so on)")
     p.add_argument("--no-behaviour", action="store_true", help="skip reliving the best individuals (paths, claim 7)")
     p.add_argument("--baselines", default=BASELINES, help="directory of the brax baselines (experiments/baselines.py)")
     args = p.parse_args(argv)
     if not os.path.isdir(args.results):
         print(f"error: RESULTS_DIR: {args.results} is not a directory", file=sys.stderr)
         return 2
+    scale = (read_json(os.path.join(args.results, "manifest.json")) or {}).get("scale", "unknown")
+    doc, figures = report_paths(scale)
+    args.doc, args.figures = args.doc or doc, args.figures or figures
     try:
         written = run(args.results, args.doc, args.figures, behaviour=not args.no_behaviour,
                       baselines_dir=args.baselines)

@@ -12,7 +12,8 @@ and ``extension`` (MODEL.md's learning extensions at the values found by
 three evolved conditions (EE-ES learns nothing, so its evolution is the same under every
 variant and is run once, under ``paper``), then the learning tests of LE-LS, EE-LS, EE-ES and
 SLE; so the first variant's Fig. 3 is whole before the second's evolutions start. Then
-``python -m experiments.report`` writes docs/REPRODUCTION.md and its figures.
+``python -m experiments.report`` writes the report and its figures (docs/REPRODUCTION.md at the
+paper scale, docs/REPRODUCTION_CPU.md at the cpu scale).
 
 Every stage is a command of the package, printed before it runs, its progress line shown
 beside the whole pipeline's (stage i of N, elapsed time, and an ETA from the stages' costs in

@@ -205,6 +205,44 @@ def test_report_of_a_fabricated_results_directory(tmp_path):
     assert "brax" not in text and not (figures / "baselines.png").exists()  # no baselines: no section
 
 
+def test_paper_and_cpu_reports_each_name_the_other_and_an_unfinished_run_says_so(tmp_path):
+    """Each scale's report has its own file; the other scale's verdicts are a labelled section; missing stages are named."""
+    from experiments.document import report_paths
+
+    assert report_paths("paper")[0].endswith(os.path.join("docs", "REPRODUCTION.md"))
+    assert report_paths("cpu") == (report_paths("paper")[0].replace(".md", "_CPU.md"),
+                                   report_paths("paper")[1] + "_cpu")
+    docs = tmp_path / "docs"
+    cpu, paper = tmp_path / "cpu", tmp_path / "paper"
+    _write_results(cpu)
+    _write_results(paper)
+    manifest = json.loads((paper / "manifest.json").read_text())
+    (paper / "manifest.json").write_text(json.dumps({**manifest, "scale": "paper"}))
+    os.remove(reproduce.test_dir(str(paper), "extension", "SLE") + "/steady.json")
+    common = ["--no-behaviour", "--baselines", str(tmp_path / "no_baselines")]
+    assert main([str(cpu), "--doc", str(docs / "REPRODUCTION_CPU.md"), "--figures", str(docs / "reproduction_cpu"),
+                 *common]) == 0
+    assert "Unfinished run" not in (docs / "REPRODUCTION_CPU.md").read_text()
+    assert "(REPRODUCTION.md)" not in (docs / "REPRODUCTION_CPU.md").read_text()  # no paper-scale report yet
+    assert main([str(paper), "--doc", str(docs / "REPRODUCTION.md"), "--figures", str(docs / "reproduction"),
+                 *common]) == 0
+    text = (docs / "REPRODUCTION.md").read_text()
+    assert "**Unfinished run: 1 stage(s) not done yet** (learning test extension SLE)" in text
+    section = text.split("## The same claims at the cpu scale")[1]
+    assert "[REPRODUCTION_CPU.md](REPRODUCTION_CPU.md)" in section
+    cpu_claims = json.loads((docs / "reproduction_cpu" / "claims.json").read_text())["claims"]
+    first = cpu_claims["1"]["variants"]
+    assert f"| 1 | {cpu_claims['1']['text']} | {first['paper']['verdict']} ({first['paper']['measured']}) |" in section
+    assert text.startswith("# Reproduction of Schembri, Mirolli & Baldassarre (2007): Fig. 3 and the seven claims\n")
+    # The reduced report, written again, links the paper-scale one and says it is reduced; it repeats no verdicts.
+    assert main([str(cpu), "--doc", str(docs / "REPRODUCTION_CPU.md"), "--figures", str(docs / "reproduction_cpu"),
+                 *common]) == 0
+    text = (docs / "REPRODUCTION_CPU.md").read_text()
+    assert text.startswith("# Reproduction of Schembri, Mirolli & Baldassarre (2007): Fig. 3 and the seven claims, "
+                           "at the cpu scale (reduced)\n")
+    assert "reported in [REPRODUCTION.md](REPRODUCTION.md)" in text and "## The same claims at the" not in text
+
+
 def _write_baselines(root):
     """A baselines directory as imrl_jax.baselines writes it: PPO, 1M cycles, 2 seeds at 0.5 and 0.7 on every task."""
     from imrl_jax.baselines import Baseline, _csv, summarise
@@ -279,5 +317,6 @@ def test_a_childhood_that_stays_put_is_marked_and_said(tiny):
     for name, childhood in (("still", still), ("moving", moving)):
         fig = fig_paths(dict(life, childhood=childhood), name)
         titles[name] = fig.axes[0].get_title()
+        assert fig._suptitle.get_text() == name  # the figure keeps its own title
     assert "the robot stays at (120, 80) cm" in titles["still"]
     assert "stays" not in titles["moving"] and titles["moving"].startswith("last 400 childhood steps")
