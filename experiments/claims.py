@@ -230,7 +230,7 @@ def claim_ee_es_about(ee_es: float | None, le_ls: float | None, stereotypy, spee
                 + ("" if speed is None else f", speed {speed:.2f} cm/step"))
     parts = [p for p in (None if ratio is None else ABOUT[0] <= ratio <= ABOUT[1],
                          circular >= 1 if known else None) if p is not None]
-    if not parts:
+    if ratio is None:  # the path alone cannot say whether EE-ES is at LE-LS's level
         return _claim(NOT_AVAILABLE, measured, ratio=ratio, stereotypy=stereotypy, circular_tasks=circular)
     verdict = HOLDS if len(parts) == 2 and all(parts) else PARTLY if any(parts) else DOES_NOT
     return _claim(verdict, measured, ratio=ratio, stereotypy=stereotypy, circular_tasks=circular)
@@ -334,6 +334,7 @@ def measure(data: dict, lives: dict, probes: dict | None = None) -> dict:
     ``probes[(variant, condition)]``: the colours followed by each probed individual (claim 7).
     """
     probes = probes or {}
+    planned = ((data.get("manifest") or {}).get("sizes") or {}).get("generations")
     out = {}
     for variant in data["variants"]:
         evolution = {}
@@ -342,7 +343,7 @@ def measure(data: dict, lives: dict, probes: dict | None = None) -> dict:
             if run is None:
                 continue
             final = final_best(run["best"])
-            evolution[condition] = dict(
+            evolution[condition] = dict(finished=planned is None or len(run["best"]) >= planned,
                 final_best_mean=float(final.mean()), final_best_sd=float(final.std()),
                 final_best_per_seed=[float(v) for v in final], seeds=run["seeds"], generations=len(run["best"]),
                 last_generations_averaged=min(LAST_GENERATIONS, len(run["best"])),
@@ -361,16 +362,17 @@ def measure(data: dict, lives: dict, probes: dict | None = None) -> dict:
                                                       "steady_steps", "num_bins")}
             tests[condition]["pairs_both_ways"] = test.get("pairs_both_ways")
         get = lambda d, c, k: d[c][k] if c in d else None  # noqa: E731
+        done = {c: e for c, e in evolution.items() if e["finished"]}  # claims judge finished evolutions only
         steady = {c: get(tests, c, "steady_mean") for c in TESTED}
         ee_es_life = lives.get(("paper", "EE-ES"))
         sle = data["tests"].get((variant, "SLE"))
         sle_noise = (sle["steady"].get("config") or {}).get("sle_noise_steps", 0) if sle else None
         claims = {
-            1: claim_evolvability({c: get(evolution, c, "plateau_generation") for c in EVOLVED}),
-            2: claim_reliability({c: get(evolution, c, "final_best_sd") for c in EVOLVED}),
-            3: claim_ee_ls_higher(get(evolution, "EE-LS", "final_best_per_seed"),
-                                  get(evolution, "LE-LS", "final_best_per_seed")),
-            4: claim_ee_es_about(get(evolution, "EE-ES", "final_best_mean"), get(evolution, "LE-LS", "final_best_mean"),
+            1: claim_evolvability({c: get(done, c, "plateau_generation") for c in EVOLVED}),
+            2: claim_reliability({c: get(done, c, "final_best_sd") for c in EVOLVED}),
+            3: claim_ee_ls_higher(get(done, "EE-LS", "final_best_per_seed"),
+                                  get(done, "LE-LS", "final_best_per_seed")),
+            4: claim_ee_es_about(get(done, "EE-ES", "final_best_mean"), get(done, "LE-LS", "final_best_mean"),
                                  ee_es_life["stereotypy_per_task"] if ee_es_life else None,
                                  ee_es_life["speed"] if ee_es_life else None),
             5: claim_learning_speed({c: (data["tests"][variant, c]["steps"], data["tests"][variant, c]["mean"])

@@ -272,7 +272,8 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
         out.append("(no individual was simulated)")
 
     out += ["", "## The seven claims", "", f"Measured at the {label}. The verdicts follow the rules below, "
-                                           "computed by `experiments/report.py` (also in `claims.json`).", ""]
+                                           "computed by `experiments/report.py` (also in `claims.json`); claims "
+                                           "1 to 4 judge finished evolutions only.", ""]
     rows = []
     for n, text in CLAIMS.items():
         for variant in data["variants"]:

@@ -82,7 +82,7 @@ def fig_paths(life: dict, title: str):
     from imrl_jax.plotting import EXPERT_COLOURS, SEEN_COLOURS, draw_arena, draw_path, expert_legend, new_figure
 
     config = life["config"]
-    fig = new_figure(12.8, 7.4)
+    fig = new_figure(12.8, 8.0)  # tall enough that the lower row's two-line titles clear the upper row
     axes = fig.subplots(2, 4).ravel()
     panels = [axes[1], axes[2], axes[3], axes[5], axes[6], axes[7]]
     for i, (ax, trajectory) in enumerate(zip(panels, life["tasks"])):

@@ -219,6 +219,8 @@ def test_paper_and_cpu_reports_each_name_the_other_and_an_unfinished_run_says_so
     manifest = json.loads((paper / "manifest.json").read_text())
     (paper / "manifest.json").write_text(json.dumps({**manifest, "scale": "paper"}))
     os.remove(reproduce.test_dir(str(paper), "extension", "SLE") + "/steady.json")
+    history = paper / "paper" / "evolve" / "EE-ES" / "history.csv"  # EE-ES stopped after 5 of 8 generations
+    history.write_text("".join(history.read_text().splitlines(keepends=True)[:1 + 5 * 3]))
     common = ["--no-behaviour", "--baselines", str(tmp_path / "no_baselines")]
     assert main([str(cpu), "--doc", str(docs / "REPRODUCTION_CPU.md"), "--figures", str(docs / "reproduction_cpu"),
                  *common]) == 0
@@ -227,7 +229,12 @@ def test_paper_and_cpu_reports_each_name_the_other_and_an_unfinished_run_says_so
     assert main([str(paper), "--doc", str(docs / "REPRODUCTION.md"), "--figures", str(docs / "reproduction"),
                  *common]) == 0
     text = (docs / "REPRODUCTION.md").read_text()
-    assert "**Unfinished run: 1 stage(s) not done yet** (learning test extension SLE)" in text
+    assert "**Unfinished run: 2 stage(s) not done yet** (evolve paper EE-ES, learning test extension SLE)" in text
+    assert "| paper | EE-ES | " in text and "| 5 of 8 |" in text  # drawn and tabled, labelled unfinished
+    verdicts = json.loads((docs / "reproduction" / "claims.json").read_text())["claims"]
+    for n in ("1", "2", "4"):  # judged on finished evolutions only: EE-ES's is not
+        assert verdicts[n]["variants"]["paper"]["verdict"] == NOT_AVAILABLE, n
+    assert verdicts["3"]["variants"]["paper"]["verdict"] == HOLDS  # LE-LS and EE-LS are finished
     section = text.split("## The same claims at the cpu scale")[1]
     assert "[REPRODUCTION_CPU.md](REPRODUCTION_CPU.md)" in section
     cpu_claims = json.loads((docs / "reproduction_cpu" / "claims.json").read_text())["claims"]
