@@ -189,6 +189,17 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
 
     out += ["", "## The arena and the tasks (Fig. 1)", "", f"![arena and tasks]({rel(written['arena'])})"]
 
+    if written.get("fig3"):
+        out += ["", "## Fig. 3 in the paper's layout", "",
+                "The paper's three panels side by side for each variant: (a) the best fitness per generation of "
+                "the evolved conditions, (b) the learning tests of the conditions that learn (LE-LS, EE-LS, SLE; "
+                "EE-ES learns nothing and appears in (c) only, as in the paper), (c) the steady state of all four "
+                f"(dark: mean over runs, +-1 sd; light: the best run). The sections below show each panel with "
+                f"its numbers ({label})."]
+        for variant in data["variants"]:
+            if variant in written["fig3"]:
+                out += ["", f"**{variant}**", "", f"![Fig. 3, {variant}]({rel(written['fig3'][variant])})"]
+
     out += ["", "## Fig. 3a: evolution of the best fitness", "",
             f"Best fitness per generation, mean over seeds with a band of +-1 sd ({label})."]
     for variant in data["variants"]:

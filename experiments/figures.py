@@ -10,14 +10,12 @@ from experiments.reproduce import TESTED
 from imrl_jax.plotting import style_axis
 
 
-def _curves_figure(series: dict, title: str, xlabel: str, ylabel: str, integer_x: bool = False):
+def _draw_curves(ax, series: dict, title: str, xlabel: str, ylabel: str, integer_x: bool = False) -> None:
     """Mean curves with a +-1 sd band, one per condition in the paper's line styles: {condition: (x, mean, sd, label)}."""
     from matplotlib.ticker import MaxNLocator
 
-    from imrl_jax.plotting import CONDITION_STYLES, new_figure
+    from imrl_jax.plotting import CONDITION_STYLES
 
-    fig = new_figure(5.6, 3.5)
-    ax = fig.add_subplot()
     banded = set()
     for condition, (x, mean, sd, label) in series.items():
         style = CONDITION_STYLES[condition]
@@ -30,15 +28,26 @@ def _curves_figure(series: dict, title: str, xlabel: str, ylabel: str, integer_x
         ax.set_xlim(left=0)
     style_axis(ax, title, xlabel, ylabel)
     ax.legend(fontsize=7)
+
+
+def _curves_figure(series: dict, title: str, xlabel: str, ylabel: str, integer_x: bool = False):
+    """One axis of :func:`_draw_curves`."""
+    from imrl_jax.plotting import new_figure
+
+    fig = new_figure(5.6, 3.5)
+    _draw_curves(fig.add_subplot(), series, title, xlabel, ylabel, integer_x)
     fig.tight_layout()
     return fig
 
 
+def _fitness_series(evolutions: dict) -> dict:
+    return {c: (np.arange(len(best)), best.mean(1), best.std(1), f"{c} ({best.shape[1]} seeds)")
+            for c, best in evolutions.items()}
+
+
 def fig_fitness(evolutions: dict, title: str):
     """Fig. 3a: best fitness per generation, mean over seeds with a +-1 sd band, one line per condition."""
-    series = {c: (np.arange(len(best)), best.mean(1), best.std(1), f"{c} ({best.shape[1]} seeds)")
-              for c, best in evolutions.items()}
-    return _curves_figure(series, title, "generation", "best fitness", integer_x=True)
+    return _curves_figure(_fitness_series(evolutions), title, "generation", "best fitness", integer_x=True)
 
 
 def fig_learning(tests: dict, title: str):
@@ -47,26 +56,59 @@ def fig_learning(tests: dict, title: str):
     return _curves_figure(series, title, "cycles of the task", "performance per bin")
 
 
+def _draw_steady(ax, steady: dict, variant: str, title: str, ylabel: str = "steady-state performance") -> None:
+    """Fig. 3c's bars for one variant: mean over runs (dark, +-1 sd) and best run (light) per condition."""
+    x = np.arange(len(TESTED))
+    rows = [steady.get((variant, c)) for c in TESTED]
+    mean = [r["steady_mean"] if r else np.nan for r in rows]
+    sd = [r["steady_sd"] if r else 0.0 for r in rows]
+    best = [r["steady_best_run"] if r else np.nan for r in rows]
+    ax.bar(x - 0.19, mean, 0.38, yerr=sd, color="0.35", capsize=3, label="mean over runs")
+    ax.bar(x + 0.19, best, 0.38, color="0.75", label="best run")
+    ax.set_xticks(x, TESTED, fontsize=7)
+    style_axis(ax, title, "", ylabel)
+    ax.grid(False, axis="x")
+    ax.set_ylim(bottom=0)
+
+
 def fig_steady(steady: dict, variants: list[str], title: str):
     """Fig. 3c: steady state per condition, mean over runs (dark, +-1 sd) and best run (light); a panel per variant."""
     from imrl_jax.plotting import new_figure
 
     fig = new_figure(3.0 * len(variants) + 0.6, 3.3)
     axes = fig.subplots(1, len(variants), sharey=True, squeeze=False)[0]
-    x = np.arange(len(TESTED))
     for ax, variant in zip(axes, variants):
-        rows = [steady.get((variant, c)) for c in TESTED]
-        mean = [r["steady_mean"] if r else np.nan for r in rows]
-        sd = [r["steady_sd"] if r else 0.0 for r in rows]
-        best = [r["steady_best_run"] if r else np.nan for r in rows]
-        ax.bar(x - 0.19, mean, 0.38, yerr=sd, color="0.35", capsize=3, label="mean over runs")
-        ax.bar(x + 0.19, best, 0.38, color="0.75", label="best run")
-        ax.set_xticks(x, TESTED, fontsize=7)
-        style_axis(ax, variant, "", "steady-state performance" if ax is axes[0] else "")
-        ax.grid(False, axis="x")
-    axes[0].set_ylim(bottom=0)
+        _draw_steady(ax, steady, variant, variant, "steady-state performance" if ax is axes[0] else "")
     axes[-1].legend(fontsize=7)
     fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+#: The conditions of the paper's Fig. 3b (EE-ES does not learn: it appears in 3c only).
+FIG3B = ("LE-LS", "EE-LS", "SLE")
+
+
+def fig3(evolutions: dict, tests: dict, steady: dict, variant: str, title: str):
+    """The paper's Fig. 3 for one variant, its three panels side by side: (a) fitness, (b) learning, (c) steady state.
+
+    As in the paper, (b) shows LE-LS, EE-LS and SLE (EE-ES learns nothing) and (c) all four conditions.
+    """
+    from imrl_jax.plotting import new_figure
+
+    fig = new_figure(14.0, 3.8)
+    a, b, c = fig.subplots(1, 3, gridspec_kw=dict(width_ratios=[1.0, 1.0, 0.8]))
+    _draw_curves(a, _fitness_series(evolutions), "(a) best fitness, mean +-1 sd over seeds", "generation",
+                 "best fitness", integer_x=True)
+    _draw_curves(b, {k: (t["steps"], t["mean"], t["sd"], k) for k, t in tests.items() if k in FIG3B},
+                 "(b) learning tests, mean +-1 sd over runs", "cycles of the task", "performance per bin")
+    _draw_steady(c, steady, variant, "(c) steady state: last cycles of (b)")
+    c.legend(fontsize=7)
+    for ax, missing in ((a, not evolutions), (b, not any(k in FIG3B for k in tests)),
+                        (c, not any((variant, k) in steady for k in TESTED))):
+        if missing:  # an unfinished run: say so rather than leave a blank panel
+            ax.text(0.5, 0.5, "not run yet", transform=ax.transAxes, ha="center", va="center", color="0.4")
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     return fig
 

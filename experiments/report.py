@@ -43,7 +43,7 @@ import numpy as np
 from experiments.claims import CLAIMS, PAPER, RULES, SEEN, measure
 from experiments.document import (ROOT, pipeline_command, report_paths, scale_label, specialisation_rows,
                                   write_document)
-from experiments.figures import fig_baselines, fig_fitness, fig_learning, fig_paths, fig_steady
+from experiments.figures import fig3, fig_baselines, fig_fitness, fig_learning, fig_paths, fig_steady
 from experiments.loading import load, read_baselines, read_json, update_best_genomes
 from experiments.relive import DRAWN_STEPS, PATH_STEPS, probe_best, relive_best
 from experiments.reproduce import EVOLVED, TESTED
@@ -77,7 +77,7 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True, baselines_
     os.makedirs(figures, exist_ok=True)
     label = scale_label(data["manifest"])
     short = (data["manifest"] or {}).get("scale", "unknown") + " scale"
-    written = dict(fig3a={}, fig3b={}, paths={})
+    written = dict(fig3={}, fig3a={}, fig3b={}, paths={})
 
     written["arena"] = save(plot_arena(make_config("paper"), "the arena and the six tasks"),
                             os.path.join(figures, "fig1_arena.png"))
@@ -95,6 +95,13 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True, baselines_
         variants = [v for v in data["variants"] if any((v, c) in steady for c in TESTED)]
         written["fig3c"] = save(fig_steady(steady, variants, f"Fig. 3c: steady state ({short})"),
                                 os.path.join(figures, "fig3c.png"))
+    for variant in data["variants"]:  # the three panels side by side, as the paper draws them
+        evolutions = {c: data["evolutions"][variant, c]["best"] for c in EVOLVED if (variant, c) in data["evolutions"]}
+        tests = {c: data["tests"][variant, c] for c in TESTED if (variant, c) in data["tests"]}
+        if evolutions or tests:
+            written["fig3"][variant] = save(fig3(evolutions, tests, steady, variant,
+                                                 f"Fig. 3, {variant} rules ({short})"),
+                                            os.path.join(figures, f"fig3_{variant}.png"))
 
     baselines = read_baselines(baselines_dir)
     if baselines:

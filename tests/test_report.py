@@ -187,6 +187,7 @@ def test_report_of_a_fabricated_results_directory(tmp_path):
     assert main([str(results), "--doc", str(doc), "--figures", str(figures), "--no-behaviour",
                  "--baselines", str(tmp_path / "no_baselines")]) == 0
     for name in ("fig1_arena.png", "fig3a_paper.png", "fig3a_extension.png", "fig3b_paper.png", "fig3c.png",
+                 "fig3_paper.png", "fig3_extension.png",
                  "summary.json", "claims.json", "specialisation.csv"):
         assert (figures / name).is_file(), name
     claims = json.loads((figures / "claims.json").read_text())
@@ -199,7 +200,7 @@ def test_report_of_a_fabricated_results_directory(tmp_path):
     summary = json.loads((figures / "summary.json").read_text())
     assert summary["evolution"]["paper"]["LE-LS"]["final_best_mean"] == pytest.approx(0.5)
     text = doc.read_text()
-    assert "cpu scale" in text and "](fig/fig3a_paper.png)" in text
+    assert "cpu scale" in text and "](fig/fig3a_paper.png)" in text and "](fig/fig3_paper.png)" in text
     assert "## Discussion\n\nHand-written words." in text
     assert "`make reproduce-cpu`" not in text  # the results are not in the default directory
     assert "brax" not in text and not (figures / "baselines.png").exists()  # no baselines: no section
@@ -327,3 +328,22 @@ def test_a_childhood_that_stays_put_is_marked_and_said(tiny):
         assert fig._suptitle.get_text() == name  # the figure keeps its own title
     assert "the robot stays at (120, 80) cm" in titles["still"]
     assert "stays" not in titles["moving"] and titles["moving"].startswith("last 400 childhood steps")
+
+
+def test_fig3_has_the_papers_three_panels():
+    """(a) the three evolved conditions, (b) the three that learn (no EE-ES, as in the paper), (c) four bar pairs."""
+    from experiments.figures import fig3
+
+    best = np.linspace(0.1, 0.5, 12).reshape(4, 3)  # (generations, seeds)
+    evolutions = {c: best for c in reproduce.EVOLVED}
+    curve = dict(steps=np.array([100, 200]), mean=np.array([0.1, 0.2]), sd=np.array([0.01, 0.01]))
+    tests = {c: curve for c in reproduce.TESTED}
+    steady = {("skills", c): dict(steady_mean=0.2 + 0.1 * i, steady_sd=0.01, steady_best_run=0.25 + 0.1 * i)
+              for i, c in enumerate(reproduce.TESTED)}
+    fig = fig3(evolutions, tests, steady, "skills", "title")
+    a, b, c = fig.axes
+    assert [line.get_label() for line in a.get_legend().get_lines()] == [f"{k} (3 seeds)" for k in reproduce.EVOLVED]
+    assert [line.get_label() for line in b.get_legend().get_lines()] == ["LE-LS", "EE-LS", "SLE"]
+    heights = [round(p.get_height(), 3) for p in c.patches]
+    assert heights == [0.2, 0.3, 0.4, 0.5, 0.25, 0.35, 0.45, 0.55]  # means, then best runs, in TESTED order
+    assert [t.get_text() for t in c.get_xticklabels()] == list(reproduce.TESTED)
