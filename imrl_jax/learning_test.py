@@ -55,7 +55,7 @@ from imrl_jax.rundir import best_genomes, check_writable, load_run as read_run, 
 class TestState(NamedTuple):
     """Where one test stands between chunks: the six task phases' carries and keys."""
 
-    states: State  # (tasks, ...)
+    states: State  # (tasks, ...); their step counter ``t`` is passed to :func:`advance` instead
     keys: jax.Array  # (tasks,): each task phase's key
     childhood_selections: jnp.ndarray  # (bins, K): zeros without childhood
 
@@ -75,12 +75,20 @@ def begin(key: jax.Array, config: Config, params: LearningParams, genome: jnp.nd
     return TestState(states, keys.tasks, childhood_selections)
 
 
-def advance(config: Config, params: LearningParams, test: TestState, num_chunks: int) -> tuple[TestState, TestCurves]:
-    """One of ``num_chunks`` equal pieces of every task of a test."""
+def advance(config: Config, params: LearningParams, test: TestState, num_chunks: int,
+            t: jnp.ndarray) -> tuple[TestState, TestCurves]:
+    """One of ``num_chunks`` equal pieces of every task of a test, starting at the task's step ``t``.
+
+    ``t`` is passed, not read from the carried states, so that it is one value for every lane
+    (not batched under vmap): the step draws its random numbers a block at a time only then.
+    """
     phase = adult_phase(config.condition)
     dtype = test.states.agent.actor.dtype
 
     def one_task(key, index, state):
+        # The carried t is batched (begin's output is per task and test); an unbatched one keeps the
+        # step's block draws a real branch instead of a select that draws on every step (3x slower).
+        state = state._replace(t=t)
         state, curves = run_phase(key, config, phase, params, task_spec(config, index, dtype), state,
                                   config.task_steps // num_chunks, phase_steps=config.adult_noise_steps,
                                   num_bins=config.num_bins // num_chunks)
@@ -92,11 +100,12 @@ def advance(config: Config, params: LearningParams, test: TestState, num_chunks:
 
 @functools.lru_cache(maxsize=8)  # tests of the same config in one process (a notebook, a sweep) compile once
 def make_learning_test(config: Config, num_chunks: int):
-    """Jitted ``begin(keys, params, genomes)`` and ``advance(params, tests)`` over a batch of tests."""
+    """Jitted ``begin(keys, params, genomes)`` and ``advance(params, t, tests)`` over a batch of tests."""
     if config.num_bins % num_chunks:
         raise ConfigError(f"num_bins: {config.num_bins} bins cannot be split into {num_chunks} chunks")
     begin_all = jax.jit(jax.vmap(lambda k, p, g: begin(k, config, p, g), (0, None, 0)))
-    advance_all = jax.jit(jax.vmap(lambda p, t: advance(config, p, t, num_chunks), (None, 0)), donate_argnums=1)
+    advance_all = jax.jit(jax.vmap(lambda p, t, tests: advance(config, p, tests, num_chunks, t), (None, None, 0)),
+                          donate_argnums=2)
     return begin_all, advance_all
 
 
@@ -120,7 +129,7 @@ def run_tests(keys: jax.Array, config: Config, params: LearningParams, genomes, 
     lane_steps = num_tests * config.num_tasks * config.task_steps / num_chunks  # per chunk
     for chunk in range(num_chunks):
         start = time.perf_counter()
-        tests, curves = advance_all(params, tests)
+        tests, curves = advance_all(params, jnp.int32(chunk * (config.task_steps // num_chunks)), tests)
         reaches.append(np.asarray(curves.reaches)[:num_tests])
         selections.append(np.asarray(curves.selections)[:num_tests])
         if progress is not None:

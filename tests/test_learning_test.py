@@ -165,3 +165,16 @@ def test_help(capsys):
     text = " ".join(capsys.readouterr().out.split())
     assert "``" not in text and "(default: None)" not in text
     assert "--cond {LE-LS,EE-LS,EE-ES,SLE}" in text and "--quiet no progress lines" in text
+
+
+def test_the_step_counter_is_shared_so_block_draws_stay_a_branch(tiny):
+    """advance gets the step counter as one value for every lane: under vmap the block draw stays a cond.
+
+    Carried per lane it would be batched, and the cond a select that draws a block on every step (3x slower).
+    """
+    config = tiny("EE-LS", task_steps=400, num_bins=4)
+    begin_all, advance_all = learning_test.make_learning_test(config, 2)
+    genomes = np.asarray(init_population(jax.random.key(1), config))[:2]
+    tests = begin_all(jax.random.split(jax.random.key(0), 2), config.learning_params(), genomes)
+    jaxpr = str(jax.make_jaxpr(advance_all)(config.learning_params(), jax.numpy.int32(0), tests))
+    assert " cond[" in jaxpr
