@@ -110,13 +110,13 @@ def make_learning_test(config: Config, num_chunks: int):
 
 
 def run_tests(keys: jax.Array, config: Config, params: LearningParams, genomes, num_chunks: int = 1,
-              progress: Progress | None = None, programs=None, done_before: int = 0) -> tuple[np.ndarray, np.ndarray]:
+              progress: Progress | None = None, done_before: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Every test (one key and genome each) to the end: reaches (tests, tasks, bins), selections (tests, tasks, bins, K).
 
-    ``programs``: :func:`make_learning_test`'s pair, made once for batches of the same shape;
-    ``done_before``: progress units finished before this batch.
+    ``done_before``: progress units finished before this batch. The programs are cached: batches
+    of the same config compile once.
     """
-    begin_all, advance_all = programs or make_learning_test(config, num_chunks)
+    begin_all, advance_all = make_learning_test(config, num_chunks)
     # Split the tests over every device (one per CPU core in the CLI); pad to a multiple.
     num_tests, num_devices = len(genomes), len(jax.devices())
     pad = -num_tests % num_devices
@@ -262,7 +262,6 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
                      + (f" after a {config.childhood_steps}-step childhood" if config.condition == "LE-LS" else "")
                      + ", run by run" + (f"; {len(done)} run(s) done before, kept in {partial}" if done else ""))
     start = time.perf_counter()
-    programs = make_learning_test(config, num_chunks)
     params = config.learning_params()
     os.makedirs(partial, exist_ok=True)
     write_atomic(os.path.join(partial, "spec.json"), json.dumps(dict(fingerprint=stamp, command=command)).encode())
@@ -270,7 +269,7 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
         if r in done:
             continue
         lanes = np.repeat(genomes[r], num_tests, axis=0).astype(np.float32)
-        done[r] = run_tests(keys[r], config, params, lanes, num_chunks, progress, programs, done_before=r * num_chunks)
+        done[r] = run_tests(keys[r], config, params, lanes, num_chunks, progress, done_before=r * num_chunks)
         buffer = io.BytesIO()
         np.savez_compressed(buffer, reaches=done[r][0].astype(np.int32), selections=done[r][1].astype(np.int32))
         write_atomic(os.path.join(partial, f"run_{r:03d}.npz"), buffer.getvalue())
