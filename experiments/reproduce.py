@@ -9,9 +9,10 @@ Variants of the learning rules (presets of ``imrl_jax.config``), run one after t
 a selector composes them; the paper scale's first variant), ``paper`` (the rules as written)
 and ``extension`` (MODEL.md's learning extensions at the values found by
 ``experiments/selector_sweep.py``; the cpu scale's second variant). For each variant: the
-three evolved conditions (EE-ES learns nothing, so its evolution is the same under every
-variant and is run once, under ``paper``), then the learning tests of LE-LS, EE-LS, EE-ES and
-SLE; so the first variant's Fig. 3 is whole before the second's evolutions start. Then
+three evolved conditions, then the learning tests of LE-LS, EE-LS, EE-ES and SLE (EE-ES
+learns nothing, so its evolution and its test are the same under every variant: each is run
+once, under ``paper``, where the first variant needs it). So the first variant's Fig. 3 is
+whole before the second's evolutions start. Then
 ``python -m experiments.report`` writes the report and its figures (docs/REPRODUCTION.md at the
 paper scale, docs/REPRODUCTION_CPU.md at the cpu scale).
 
@@ -67,13 +68,19 @@ EVOLVED = ("LE-LS", "EE-LS", "EE-ES")
 TESTED = ("LE-LS", "EE-LS", "EE-ES", "SLE")
 
 
+def owner(variant: str, condition: str) -> str:
+    """The variant whose folder holds a condition's runs: EE-ES learns nothing, so every variant shares paper's."""
+    return "paper" if condition == "EE-ES" else variant
+
+
 def evolution_dir(out: str, variant: str, condition: str) -> str:
     """Where a variant's evolution of a condition lives (EE-ES: one run shared by every variant)."""
-    return os.path.join(out, "paper" if condition == "EE-ES" else variant, "evolve", condition)
+    return os.path.join(out, owner(variant, condition), "evolve", condition)
 
 
 def test_dir(out: str, variant: str, condition: str) -> str:
-    return os.path.join(out, variant, "test", condition)
+    """Where a variant's learning test of a condition lives (EE-ES: one test shared by every variant)."""
+    return os.path.join(out, owner(variant, condition), "test", condition)
 
 
 def _kernel_options(kernel: str) -> list[str]:
@@ -130,20 +137,24 @@ def _life(scale: dict, condition: str, task_steps: int) -> int:
 
 
 def plan(scale: dict, out: str, variants, report: bool = True) -> list[Stage]:
-    """Every stage in order: per variant its evolutions (EE-ES once, under paper) then its learning tests; the report."""
+    """Every stage in order: per variant its evolutions then its learning tests (EE-ES's once, under paper); the report."""
     stages, population = [], scale.get("population", 50)
+    names = set()
     for variant in variants:
         for condition in EVOLVED:
-            owner = "paper" if condition == "EE-ES" else variant
-            if any(s.kind == "evolve" and s.name == f"evolve {owner} {condition}" for s in stages):
-                continue
+            name = f"evolve {owner(variant, condition)} {condition}"
             cost = scale["seeds"] * population * scale["generations"] * _life(scale, condition, scale["task_steps"])
-            stages.append(Stage(f"evolve {owner} {condition}", "evolve", owner, condition,
-                                evolution_dir(out, variant, condition), float(cost)))
+            if name not in names:
+                names.add(name)
+                stages.append(Stage(name, "evolve", owner(variant, condition), condition,
+                                    evolution_dir(out, variant, condition), float(cost)))
         for condition in TESTED:
+            name = f"learning test {owner(variant, condition)} {condition}"
             cost = scale["seeds"] * scale["best"] * scale["tests"] * _life(scale, condition, scale["test_steps"])
-            stages.append(Stage(f"learning test {variant} {condition}", "test", variant, condition,
-                                test_dir(out, variant, condition), float(cost)))
+            if name not in names:
+                names.add(name)
+                stages.append(Stage(name, "test", owner(variant, condition), condition,
+                                    test_dir(out, variant, condition), float(cost)))
     if report:  # the probes of claim 7: a childhood for each best LE-LS individual
         cost = len(variants) * scale["seeds"] * scale["best"] * scale["childhood_steps"]
         stages.append(Stage("report", "report", "", "", out, float(cost)))

@@ -23,15 +23,16 @@ def test_pipeline_runs_and_resumes(tmp_path):
     assert first.returncode == 0, first.stderr[-2000:]
     with open(os.path.join(out, "manifest.json")) as f:
         stages = json.load(f)["stages"]
-    assert len(stages) == 5 + 8  # 5 evolutions (EE-ES once), 4 learning tests per variant
+    assert len(stages) == 5 + 7  # 5 evolutions and 7 learning tests (EE-ES's once each)
     for variant in ("paper", "extension"):
         for condition in ("LE-LS", "EE-LS", "EE-ES", "SLE"):
-            assert os.path.exists(os.path.join(out, variant, "test", condition, "steady.json"))
+            assert os.path.exists(os.path.join(reproduce.test_dir(out, variant, condition), "steady.json"))
+    assert not os.path.exists(os.path.join(out, "extension", "test", "EE-ES"))
     # An interrupted learning test (no steady.json) is run again; everything else is skipped.
     os.remove(os.path.join(out, "extension", "test", "SLE", "steady.json"))
     second = subprocess.run(command, cwd=ROOT, capture_output=True, text=True)
     assert second.returncode == 0, second.stderr[-2000:]
-    assert second.stdout.count(": done (") == 5 + 7
+    assert second.stdout.count(": done (") == 5 + 6
     assert "] learning test extension SLE\n" in second.stdout
     assert "imrl_jax.evolve" not in second.stdout
 
@@ -48,16 +49,21 @@ def test_plan_costs_and_eta():
     scale = reproduce.SCALES["tiny"]
     stages = reproduce.plan(scale, "out", ("paper", "extension"))
     # a variant's Fig. 3 is whole (its evolutions, then its tests) before the next variant starts
-    assert [s.kind for s in stages] == ["evolve"] * 3 + ["test"] * 4 + ["evolve"] * 2 + ["test"] * 4 + ["report"]
+    assert [s.kind for s in stages] == ["evolve"] * 3 + ["test"] * 4 + ["evolve"] * 2 + ["test"] * 3 + ["report"]
     assert [s.name for s in stages if s.kind == "evolve"] == [
         "evolve paper LE-LS", "evolve paper EE-LS", "evolve paper EE-ES", "evolve extension LE-LS",
         "evolve extension EE-LS"]
     assert [s.name for s in stages[3:7]] == [f"learning test paper {c}" for c in ("LE-LS", "EE-LS", "EE-ES", "SLE")]
-    # EE-ES is evolved once, under paper, whichever variant comes first
+    assert [s.name for s in stages[9:12]] == [f"learning test extension {c}" for c in ("LE-LS", "EE-LS", "SLE")]
+    # EE-ES is evolved and tested once, under paper, where the first variant needs it
     first = reproduce.plan(scale, "out", ("skills", "paper"))
     assert [s.name for s in first[:3]] == ["evolve skills LE-LS", "evolve skills EE-LS", "evolve paper EE-ES"]
     assert first[2].out_dir == os.path.join("out", "paper", "evolve", "EE-ES")
-    assert sum(s.condition == "EE-ES" and s.kind == "evolve" for s in first) == 1
+    assert [s.name for s in first[3:7]] == ["learning test skills LE-LS", "learning test skills EE-LS",
+                                           "learning test paper EE-ES", "learning test skills SLE"]
+    assert first[5].out_dir == os.path.join("out", "paper", "test", "EE-ES")
+    assert reproduce.test_dir("out", "skills", "EE-ES") == first[5].out_dir
+    assert [sum(s.condition == "EE-ES" and s.kind == kind for s in first) for kind in ("evolve", "test")] == [1, 1]
     assert reproduce.DEFAULT_VARIANTS["paper"] == ("skills", "paper")
     # 2 seeds x 6 individuals x 2 generations x (400 childhood + 6 x 400 task steps)
     assert stages[0].cost == 2 * 6 * 2 * (400 + 6 * 400) and stages[1].cost == 2 * 6 * 2 * 6 * 400
