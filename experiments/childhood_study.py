@@ -36,47 +36,11 @@ RULES = {
     # The selector does not learn: every expert gets a third of the steps, at random.
     "uniform": dict(childhood_trace_lambda=0.0, childhood_eta_selector_actor=0.0, childhood_eta_selector_critic=0.0),
 }
-#: Samples of the pose (for the time on walls) and of control shares over a childhood.
-NUM_PIECES = 200
-
-
-def make_childhoods(config, num_pieces: int = NUM_PIECES, jit: bool = True):
-    """A jitted ``childhoods(keys, params, genome)`` over lanes: the agents after childhood and per-piece records.
-
-    Records per lane: steps each expert led in each piece (pieces, K), whether the robot is
-    on a wall at the end of each piece (pieces,), random poses after a wall per piece.
-    """
-    import jax
-    import jax.numpy as jnp
-
-    from imrl_jax.lifetime import (childhood_phase, childhood_task, for_phase, init_state, lifetime_keys,
-                                   random_pose, run_phase)
-    from imrl_jax.networks import decode
-
-    phase = childhood_phase(config)
-    piece_steps = config.childhood_steps // num_pieces
-    r, size = config.robot_radius, config.arena_size
-
-    def one(key, params, genome):
-        keys = lifetime_keys(key, config.num_tasks)
-        state = for_phase(config, phase, init_state(config, decode(config, genome), random_pose(keys.pose, config)))
-
-        def piece(state, _):
-            state, curves = run_phase(keys.childhood, config, phase, params, childhood_task(config), state,
-                                      piece_steps, phase_steps=config.childhood_steps, num_bins=1)
-            on_wall = jnp.any((state.pose.pos <= r + 1e-3) | (state.pose.pos >= size - r - 1e-3))
-            respawns = jnp.int32(0) if curves.respawns is None else curves.respawns[0]
-            return state, (curves.selections[0], on_wall, respawns)
-
-        state, records = jax.lax.scan(piece, state, None, length=num_pieces)
-        return state.agent, records
-
-    return jax.jit(jax.vmap(one, (0, 0, None))) if jit else one
 
 
 def measure(config, agent, records=None) -> dict:
     """The probes of an agent's experts and, given its childhood's ``records`` (selections,
-    on-wall samples, respawns per piece; see :func:`make_childhoods`), control shares and walls."""
+    on-wall samples, respawns per piece; see :func:`imrl_jax.behaviour.make_childhoods`), control shares and walls."""
     from imrl_jax.behaviour import specialisation
 
     spec = specialisation(config, agent)
@@ -98,6 +62,7 @@ def measure(config, agent, records=None) -> dict:
 
 def stage_hand(args) -> int:
     """Childhood alone with hand-made colour reinforcers, over the factors."""
+    from imrl_jax import behaviour
     import jax
 
     from imrl_jax import sweeps
@@ -122,7 +87,7 @@ def stage_hand(args) -> int:
         keys = jax.vmap(lambda s: jax.random.fold_in(jax.random.key(args.key), s))(
             jax.numpy.asarray([seed for _, seed in lanes]))
         tick = time.perf_counter()
-        agents, (selections, on_wall, respawns) = make_childhoods(config)(keys, points, genome)
+        agents, (selections, on_wall, respawns) = behaviour.make_childhoods(config)(keys, points, genome)
         agents, selections, on_wall, respawns = jax.device_get((agents, selections, on_wall, respawns))
         for j, (rule, seed) in enumerate(lanes):
             agent = jax.tree.map(lambda x: x[j], agents)
@@ -332,25 +297,9 @@ def best_of_run(run_dir: str, num_best: int):
     return run.config, np.asarray(run.seeds), best_genomes(run, num_best), -np.sort(-run.fitness, axis=1)[:, :num_best]
 
 
-def grown_agents(config, genomes, key: int):
-    """The experts each genome ends childhood with (LE-LS: a fresh childhood each), and childhood records."""
-    import jax
-    import jax.numpy as jnp
-
-    from imrl_jax.networks import decode
-
-    genomes = jnp.asarray(genomes)
-    if config.condition != "LE-LS":
-        return jax.vmap(lambda g: decode(config, g))(genomes), None
-    keys = jax.random.split(jax.random.key(key), len(genomes))
-    one = make_childhoods(config, jit=False)
-    params = config.learning_params()
-    agents, records = jax.jit(jax.vmap(lambda k, g: one(k, params, g)))(keys, genomes)
-    return agents, jax.device_get(records)
-
-
 def stage_evolved(args) -> int:
     """Probes of the best evolved individuals of run directories."""
+    from imrl_jax import behaviour
     import jax
 
     rows = []
@@ -358,7 +307,7 @@ def stage_evolved(args) -> int:
         config, seeds, genomes, fitness = best_of_run(run_dir, args.best)
         flat = genomes.reshape(-1, genomes.shape[-1])
         tick = time.perf_counter()
-        agents, records = grown_agents(config, flat, args.key)
+        agents, records = behaviour.grown_agents(config, flat, args.key)
         for i in range(len(flat)):
             s, rank = divmod(i, args.best)
             agent = jax.tree.map(lambda x: x[i], agents)
@@ -376,6 +325,7 @@ def stage_evolved(args) -> int:
 
 def stage_random(args) -> int:
     """Random genomes (generation 0) under a preset: one life's fitness each and the probes of their experts."""
+    from imrl_jax import behaviour
     import jax
 
     from imrl_jax.config import make_config
@@ -387,7 +337,7 @@ def stage_random(args) -> int:
     tick = time.perf_counter()
     fitness = np.asarray(make_evaluate(config)(jax.random.key(args.key + 1), config.learning_params(),
                                                genomes).fitness)
-    agents, records = grown_agents(config, genomes, args.key + 2)
+    agents, records = behaviour.grown_agents(config, genomes, args.key + 2)
     rows = []
     for i in range(args.individuals):
         row = dict(preset=args.preset, individual=i, fitness=float(fitness[i]))
@@ -443,8 +393,8 @@ def stage_speed(args) -> int:
     from imrl_jax.behaviour import colour_reinforcers, specialisation
     from imrl_jax.checkpoint import git_commit
     from imrl_jax.config import make_config
-    from imrl_jax.lifetime import (adult_phase, childhood_phase, childhood_task, for_phase, init_state,
-                                   lifetime_keys, random_pose, run_phase, task_spec, task_start)
+    from imrl_jax.lifetime import childhood_task, lifetime_keys, random_pose, run_phase, task_spec, task_start
+    from imrl_jax.state import childhood_phase, for_phase, init_state
     from imrl_jax.arena import task_arrays
     from imrl_jax.networks import decode
 
@@ -464,7 +414,7 @@ def stage_speed(args) -> int:
         grown = state.agent
 
         def task(task_key, index):
-            _, curves = run_phase(task_key, config, adult_phase("LE-LS"), params, task_spec(config, index),
+            _, curves = run_phase(task_key, config, config.spec.adult, params, task_spec(config, index),
                                   task_start(config, grown, index), config.task_steps)
             return curves.reaches.sum()
 
@@ -584,8 +534,7 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     from imrl_jax.devices import use_host_cores
 
-    from imrl_jax.cli import UsageError
-    from imrl_jax.config import ConfigError
+    from imrl_jax.cli import user_errors
 
     unknown = [r for r in getattr(args, "rules", "").split(",") if r and r not in RULES]
     runs = getattr(args, "runs", None)
@@ -601,7 +550,7 @@ def main(argv=None) -> int:
               "heritability": stage_heritability, "plot": stage_plot, "speed": stage_speed, "random": stage_random}
     try:
         return stages[args.stage](args)
-    except (ConfigError, UsageError) as error:  # e.g. --walls bounce, an unreadable run directory
+    except user_errors() as error:  # e.g. --walls bounce, an unreadable run directory
         print(f"error: {error}", file=sys.stderr)
         return 2
 

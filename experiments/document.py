@@ -10,7 +10,7 @@ import numpy as np
 from experiments.claims import (CLAIMS, LAST_GENERATIONS, MIN_CONTROL_SHARE, PAPER, PLATEAU_FRACTION, RULES, SEEN,
                                 SPECIALISED_SHARE, _fmt, specialisation_score)
 from experiments.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEPS, PATH_STEPS
-from experiments.reproduce import DEFAULT_VARIANTS, SCALES
+from experiments.reproduce import DEFAULT_VARIANTS, SCALES, owner
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -137,7 +137,7 @@ def specialisation_rows(lives: dict) -> list[dict]:
             followed = specialisation_score(shares, steps)[1]
             total = max(int(np.sum(steps)), 1)
             for e, (row, n) in enumerate(zip(shares, steps)):
-                rows.append(dict(variant="both" if condition == "EE-ES" else variant, condition=condition, phase=phase,
+                rows.append(dict(variant="both" if owner(variant, condition) != variant else variant, condition=condition, phase=phase,
                                  seed=life["seed"], generation=life["generation"], expert=e + 1, steps=int(n),
                                  control_share=round(int(n) / total, 4),
                                  **{name: (None if not np.isfinite(v) else round(float(v), 4))
@@ -209,7 +209,7 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
     expected = ((manifest or {}).get("sizes") or {}).get("generations")
     for variant in data["variants"]:
         for condition, e in numbers[variant]["evolution"].items():
-            life = lives.get(("paper" if condition == "EE-ES" else variant, condition))
+            life = lives.get((owner(variant, condition), condition))
             rows.append([variant, condition, f"{e['final_best_mean']:.3f} +- {e['final_best_sd']:.3f}",
                          ", ".join(f"{v:.3f}" for v in e["final_best_per_seed"]), _fmt(e["plateau_generation"]),
                          e["generations"] if e["generations"] == expected else f"{e['generations']} of {expected}",
@@ -264,7 +264,7 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
         out += ["", "(not drawn: no population or best_genomes.npz, or `--no-behaviour`)"]
     for (variant, condition), name in written["paths"].items():
         life = lives[variant, condition]
-        header = "EE-ES (both variants)" if condition == "EE-ES" else f"{condition}, {variant}"
+        header = f"{condition} (both variants)" if owner(variant, condition) != variant else f"{condition}, {variant}"
         out += ["", f"**{header}**: stereotypy (share of turns the same way) {_fmt(life['stereotypy'], 2)}, "
                     f"speed {_fmt(life['speed'], 2)} cm/step (at most {life['config'].max_speed:g}), most-used "
                     f"expert in control {life['dominant_expert']:.0%} of the steps", "",

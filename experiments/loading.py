@@ -9,11 +9,10 @@ import os
 
 import numpy as np
 
-from experiments.reproduce import EVOLVED, TESTED, VARIANTS, evolution_dir, test_dir
+from experiments.claims import NUM_BEST  # genomes kept per seed in best_genomes.npz: those claim 7 probes
+from experiments.reproduce import EVOLVED, TESTED, VARIANTS, evolution_dir, owner, test_dir
 from imrl_jax.config import Config
 from imrl_jax.learning_test import pairs_both_ways, performance_curve, steady_bins
-
-NUM_BEST = 10  # genomes kept per seed in best_genomes.npz
 
 
 def read_json(path: str) -> dict | None:
@@ -56,6 +55,36 @@ def variants_of(results: str, manifest: dict | None) -> list[str]:
     return [v for v in VARIANTS if os.path.isdir(os.path.join(results, v))]
 
 
+def read_evolution(run_dir: str) -> dict | None:
+    """An evolution's history and config, as the report reads them (None before its first generation)."""
+    history = read_history(os.path.join(run_dir, "history.csv"))
+    if history is None:
+        return None
+    saved = read_json(os.path.join(run_dir, "config.json")) or {}
+    return dict(dir=run_dir, seeds=history[0], best=history[1], config=saved.get("config"),
+                git_commit=saved.get("git_commit"))
+
+
+def read_test(out_dir: str) -> dict | None:
+    """A finished learning test's steady state and mean curve, as the report reads them (None if unfinished)."""
+    steady = read_json(os.path.join(out_dir, "steady.json"))
+    curve = read_curve(os.path.join(out_dir, "curve.csv"))
+    if steady is None or curve is None:
+        return None
+    test = dict(dir=out_dir, steady=steady, steps=curve[0], mean=curve[1], sd=curve[2],
+                pairs_both_ways=steady.get("pairs_both_ways"))
+    curves_path = os.path.join(out_dir, "curves.npz")
+    if test["pairs_both_ways"] is None and os.path.exists(curves_path):
+        # Tests written before steady.json kept this number: recompute it from every
+        # test's curves with the learning test's own statistics.
+        config = Config.from_dict(steady["config"])
+        with np.load(curves_path) as saved:
+            performance = performance_curve(config, saved["reaches"])
+        last = steady_bins(config, steady["steady_steps"])
+        test["pairs_both_ways"] = pairs_both_ways(performance[..., -last:].mean(-1))
+    return test
+
+
 def load(results: str) -> dict:
     """Everything the report reads from a results directory (missing parts are left out)."""
     manifest = read_json(os.path.join(results, "manifest.json"))
@@ -63,35 +92,30 @@ def load(results: str) -> dict:
                 tests={})
     for variant in data["variants"]:
         for condition in EVOLVED:
-            run_dir = evolution_dir(results, variant, condition)
-            history = read_history(os.path.join(run_dir, "history.csv"))
-            if history is not None:
-                saved = read_json(os.path.join(run_dir, "config.json")) or {}
-                data["evolutions"][variant, condition] = dict(dir=run_dir, seeds=history[0], best=history[1],
-                                                              config=saved.get("config"),
-                                                              git_commit=saved.get("git_commit"))
+            run = read_evolution(evolution_dir(results, variant, condition))
+            if run is not None:
+                data["evolutions"][variant, condition] = run
         for condition in TESTED:
-            out_dir = test_dir(results, variant, condition)
-            steady = read_json(os.path.join(out_dir, "steady.json"))
-            curve = read_curve(os.path.join(out_dir, "curve.csv"))
-            if steady is not None and curve is not None:
-                data["tests"][variant, condition] = dict(dir=out_dir, steady=steady, steps=curve[0], mean=curve[1],
-                                                         sd=curve[2], pairs_both_ways=steady.get("pairs_both_ways"))
-                curves_path = os.path.join(out_dir, "curves.npz")
-                if data["tests"][variant, condition]["pairs_both_ways"] is None and os.path.exists(curves_path):
-                    # Tests written before steady.json kept this number: recompute it from every
-                    # test's curves with the learning test's own statistics.
-                    config = Config.from_dict(steady["config"])
-                    with np.load(curves_path) as saved:
-                        performance = performance_curve(config, saved["reaches"])
-                    last = steady_bins(config, steady["steady_steps"])
-                    data["tests"][variant, condition]["pairs_both_ways"] = pairs_both_ways(
-                        performance[..., -last:].mean(-1))
+            test = read_test(test_dir(results, variant, condition))
+            if test is not None:
+                data["tests"][variant, condition] = test
     return data
 
 
 def _key(variant: str, condition: str, field: str) -> str:
     return f"{variant}__{condition}__{field}"
+
+
+def best_of_population(path: str, num_best: int = NUM_BEST) -> dict | None:
+    """The ``num_best`` fittest of each seed's last evaluated generation in a final_population.npz (None before
+    the first): dict(genomes (S, B, G), fitness (S, B), index (S, B), seeds (S,), generations)."""
+    with np.load(path) as pop:
+        evaluated, fitness, generations, seeds = pop["evaluated"], pop["fitness"], int(pop["generation"]), pop["seeds"]
+    if generations < 1:
+        return None
+    order = np.argsort(-fitness, axis=1, kind="stable")[:, :num_best]
+    return dict(genomes=np.take_along_axis(evaluated, order[:, :, None], 1), fitness=np.take_along_axis(fitness, order, 1),
+                index=order, seeds=np.asarray(seeds), generations=np.asarray(generations))
 
 
 def update_best_genomes(data: dict, num_best: int = NUM_BEST) -> dict:
@@ -108,27 +132,21 @@ def update_best_genomes(data: dict, num_best: int = NUM_BEST) -> dict:
             stored = {name: saved[name] for name in saved.files}
     found, fresh = {}, False
     for (variant, condition), run in data["evolutions"].items():
-        owner = "paper" if condition == "EE-ES" else variant
-        if (owner, condition) in found:
+        shared = owner(variant, condition)
+        if (shared, condition) in found:
             continue
         population = os.path.join(run["dir"], "final_population.npz")
         if os.path.isfile(population):
-            with np.load(population) as pop:
-                evaluated, fitness, generations = pop["evaluated"], pop["fitness"], int(pop["generation"])
-                seeds = pop["seeds"]
-            if generations < 1:
+            entry = best_of_population(population, num_best)
+            if entry is None:
                 continue
-            order = np.argsort(-fitness, axis=1, kind="stable")[:, :num_best]
-            entry = dict(genomes=np.take_along_axis(evaluated, order[:, :, None], 1),
-                         fitness=np.take_along_axis(fitness, order, 1), index=order, seeds=np.asarray(seeds),
-                         generations=np.asarray(generations))
-            stored.update({_key(owner, condition, f): v for f, v in entry.items()})
+            stored.update({_key(shared, condition, f): v for f, v in entry.items()})
             fresh = True
-        elif _key(owner, condition, "genomes") not in stored:
+        elif _key(shared, condition, "genomes") not in stored:
             continue
-        found[owner, condition] = {f: stored[_key(owner, condition, f)]
+        found[shared, condition] = {f: stored[_key(shared, condition, f)]
                                    for f in ("genomes", "fitness", "index", "seeds", "generations")}
-        found[owner, condition]["config"] = run["config"]
+        found[shared, condition]["config"] = run["config"]
     if fresh:
         buffer = io.BytesIO()
         np.savez_compressed(buffer, **stored)

@@ -41,7 +41,7 @@ def relive_best(config_dict: dict, best: dict) -> dict:
                stereotypy_per_task=[turn_consistency(t.seen_heading, t.heading, t.breaks) for t in tasks],
                speed=mean_speed(pooled.seen_pos, pooled.pos, pooled.breaks),
                dominant_expert=float(np.bincount(pooled.k.reshape(-1), minlength=num_experts).max() / pooled.k.size))
-    if config.condition == "LE-LS":
+    if config.spec.has_childhood:
         childhood = childhood_trajectory(key, config, params, genome, config.childhood_steps)
         tail = childhood.window(int(config.childhood_steps * (1 - CHILDHOOD_TAIL)), config.childhood_steps)
         out["childhood"] = childhood.window(max(0, config.childhood_steps - CHILDHOOD_DRAWN_STEPS),
@@ -58,8 +58,7 @@ def probe_best(config_dict: dict, best: dict, key: int = 0) -> list[int]:
     """
     import jax
 
-    from experiments.childhood_study import grown_agents
-    from imrl_jax.behaviour import specialisation
+    from imrl_jax.behaviour import grown_agents, specialisation
     from imrl_jax.config import Config
 
     config = Config.from_dict(config_dict)

@@ -46,7 +46,7 @@ from experiments.document import (ROOT, pipeline_command, report_paths, scale_la
 from experiments.figures import fig3, fig_baselines, fig_fitness, fig_learning, fig_paths, fig_steady
 from experiments.loading import load, read_baselines, read_json, update_best_genomes
 from experiments.relive import DRAWN_STEPS, PATH_STEPS, probe_best, relive_best
-from experiments.reproduce import EVOLVED, TESTED
+from experiments.reproduce import EVOLVED, TESTED, owner
 
 
 def _jsonable(value):
@@ -118,8 +118,9 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True, baselines_
                 continue
             print(f"reliving the best {condition} individual ({variant})", flush=True)
             life = lives[variant, condition] = relive_best(entry["config"], entry)
-            name = f"paths_{condition}.png" if condition == "EE-ES" else f"paths_{variant}_{condition}.png"
-            title = (f"{condition}{'' if condition == 'EE-ES' else f', {variant} rules'}: best individual (seed "
+            shared = owner(variant, condition) != variant
+            name = f"paths_{condition}.png" if shared else f"paths_{variant}_{condition}.png"
+            title = (f"{condition}{'' if shared else f', {variant} rules'}: best individual (seed "
                      f"{life['seed']}, generation {life['generation']}, fitness {life['fitness']:.3f}, relived "
                      f"{life['relived_fitness']:.3f}); {short}\npaths: the last {DRAWN_STEPS} of {PATH_STEPS:,} "
                      f"steps driven after each task's learning period, coloured by the expert in control")

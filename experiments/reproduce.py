@@ -52,6 +52,8 @@ import sys
 import time
 from typing import NamedTuple
 
+from imrl_jax import conditions  # the condition table (no JAX)
+
 SCALES = {
     "paper": dict(seeds=10, generations=100, childhood_steps=150_000, task_steps=100_000, bins=100,
                   best=10, tests=10, test_steps=1_000_000, test_bins=100, steady_steps=100_000),
@@ -64,13 +66,15 @@ SCALES = {
 VARIANTS = ("skills", "paper", "extension")
 #: The variants a scale runs unless ``--variants`` says otherwise.
 DEFAULT_VARIANTS = {"paper": ("skills", "paper"), "cpu": ("paper", "extension"), "tiny": ("paper", "extension")}
-EVOLVED = ("LE-LS", "EE-LS", "EE-ES")
-TESTED = ("LE-LS", "EE-LS", "EE-ES", "SLE")
+#: The paper's conditions (rows of imrl_jax.conditions): those evolved, and those learning-tested.
+EVOLVED = conditions.PAPER_EVOLVED
+TESTED = conditions.PAPER
 
 
 def owner(variant: str, condition: str) -> str:
-    """The variant whose folder holds a condition's runs: EE-ES learns nothing, so every variant shares paper's."""
-    return "paper" if condition == "EE-ES" else variant
+    """The variant whose folder holds a condition's runs: one that learns nothing (EE-ES) is the same under
+    every variant, so every variant shares paper's."""
+    return variant if conditions.get(condition).learns else "paper"
 
 
 def evolution_dir(out: str, variant: str, condition: str) -> str:
@@ -87,8 +91,14 @@ def _kernel_options(kernel: str) -> list[str]:
     return [] if kernel == "xla" else ["--set", f"step_kernel={kernel}"]
 
 
-def evolve_command(scale: dict, variant: str, condition: str, out_dir: str, kernel: str = "xla") -> list[str]:
-    command = [sys.executable, "-m", "imrl_jax.evolve", "--cond", condition, "--preset", variant,
+def _set_options(sets) -> list[str]:
+    return [option for assignment in sets for option in ("--set", assignment)]
+
+
+def evolve_command(scale: dict, variant: str, condition: str, out_dir: str, kernel: str = "xla",
+                   sets: tuple[str, ...] = ()) -> list[str]:
+    """The evolve command of a stage: ``variant`` is the preset, ``sets`` more FIELD=VALUE overrides."""
+    command = [sys.executable, "-m", "imrl_jax.evolve", "--cond", condition, "--preset", variant, *_set_options(sets),
                "--seeds", str(scale["seeds"]), "--generations", str(scale["generations"]),
                "--childhood-steps", str(scale["childhood_steps"]), "--task-steps", str(scale["task_steps"]),
                "--bins", str(scale["bins"]), "--out", out_dir, *_kernel_options(kernel)]
@@ -99,12 +109,15 @@ def evolve_command(scale: dict, variant: str, condition: str, out_dir: str, kern
 
 
 def test_command(scale: dict, variant: str, condition: str, run_dir: str, out_dir: str,
-                 kernel: str = "xla") -> list[str]:
+                 kernel: str = "xla", sets: tuple[str, ...] = (), sle_noise_steps: int | None = None) -> list[str]:
+    """The learning-test command of a stage (SLE: ``variant`` is the preset, ``sets`` more overrides)."""
     command = [sys.executable, "-m", "imrl_jax.learning_test"]
-    if condition == "SLE":
-        # SLE's noise anneals over an adult task's length, not the whole test (claim 5 compares speeds)
-        command += ["--cond", "SLE", "--preset", variant, "--runs", str(scale["seeds"]), *_kernel_options(kernel),
-                    "--set", f"sle_noise_steps={scale['task_steps']}"]
+    if not conditions.get(condition).evolved:
+        # SLE's noise anneals over an adult task's length, not the whole test (claim 5 compares speeds);
+        # sle_noise_steps=0 anneals it over the whole test instead.
+        noise_steps = scale["task_steps"] if sle_noise_steps is None else sle_noise_steps
+        command += ["--cond", condition, "--preset", variant, "--runs", str(scale["seeds"]), *_kernel_options(kernel),
+                    *_set_options(sets), "--set", f"sle_noise_steps={noise_steps}"]
     else:  # the test runs with its evolution's config, step kernel included
         command += [run_dir]
     return command + ["--best", str(scale["best"]), "--tests", str(scale["tests"]),
@@ -133,7 +146,7 @@ class Stage(NamedTuple):
 
 
 def _life(scale: dict, condition: str, task_steps: int) -> int:
-    return (scale["childhood_steps"] if condition == "LE-LS" else 0) + 6 * task_steps
+    return (scale["childhood_steps"] if conditions.get(condition).has_childhood else 0) + 6 * task_steps
 
 
 def plan(scale: dict, out: str, variants, report: bool = True) -> list[Stage]:
@@ -324,33 +337,12 @@ def stage_command(stage: Stage, scale: dict, out: str, kernel: str) -> tuple[lis
     return [sys.executable, "-m", "experiments.report", out], {**os.environ, "PYTHONPATH": path}
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--scale", choices=sorted(SCALES), default="cpu")
-    p.add_argument("--out", help="results directory (default: experiments/results/SCALE)")
-    p.add_argument("--variants", help="comma-separated, in the order to run: skills, paper, extension "
-                   "(default: skills,paper at the paper scale, paper,extension at the cpu scale)")
-    p.add_argument("--no-report", action="store_true", help="skip the report (python -m experiments.report)")
-    p.add_argument("--kernel", choices=("xla", "pallas"), default="xla",
-                   help="the step kernel (Config.step_kernel): pallas runs each bin of steps as one GPU kernel")
-    args = p.parse_args(argv)
-    scale = SCALES[args.scale]
-    out = args.out or os.path.join("experiments", "results", args.scale)
-    variants = args.variants.split(",") if args.variants else list(DEFAULT_VARIANTS[args.scale])
-    unknown = [v for v in variants if v not in VARIANTS]
-    if unknown:
-        print(f"error: --variants: unknown variant {unknown[0]!r} (choose from {', '.join(VARIANTS)})", file=sys.stderr)
-        return 2
-    os.makedirs(out, exist_ok=True)
-    manifest_path = os.path.join(out, "manifest.json")
-    manifest = dict(scale=args.scale, sizes=scale, variants=variants, kernel=args.kernel, stages={})
-    if os.path.exists(manifest_path):
-        with open(manifest_path) as f:
-            manifest["stages"] = json.load(f).get("stages", {})
-    from imrl_jax.checkpoint import git_commit
+def run_stages(stages: list[Stage], scale: dict, manifest: dict, manifest_path: str, command_for) -> int:
+    """The resumable stage runner every study shares: skip finished stages, resume the others, one after another.
 
-    manifest["git_commit"] = git_commit()
-    stages = plan(scale, out, variants, report=not args.no_report)
+    ``command_for(stage)`` gives a stage's command line and environment (None: this one's).
+    Returns the exit code: 0 when every stage is done, a failed stage's code, or 130 on Ctrl-C.
+    """
     overall = Overall(stages, manifest)
     try:
         for index, stage in enumerate(stages):
@@ -368,7 +360,7 @@ def main(argv=None) -> int:
                 done_before = generations_done(stage.out_dir) / scale["generations"]
             elif stage.kind == "test":
                 done_before = partial_runs(stage.out_dir) / scale["seeds"]
-            command, env = stage_command(stage, scale, out, args.kernel)
+            command, env = command_for(stage)
             run_stage(stage, index, command, overall, manifest_path, done_before, env)
             if stage.kind == "evolve" and stage_done(stage, scale):
                 shutil.rmtree(os.path.join(stage.out_dir, PUBLISHED), ignore_errors=True)
@@ -378,8 +370,44 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("\ninterrupted: run the same command again to go on from here", file=sys.stderr)
         return 130
-    print(f"\nall stages done in {time.perf_counter() - overall.start:.0f} s; results in {out}")
+    print(f"\nall stages done in {time.perf_counter() - overall.start:.0f} s; results in {os.path.dirname(manifest_path)}")
     return 0
+
+
+def load_manifest(out: str, **fields) -> tuple[dict, str]:
+    """A results directory's manifest (its stages kept from earlier sittings) and its path."""
+    os.makedirs(out, exist_ok=True)
+    manifest_path = os.path.join(out, "manifest.json")
+    manifest = dict(fields, stages={})
+    if os.path.exists(manifest_path):
+        with open(manifest_path) as f:
+            manifest["stages"] = json.load(f).get("stages", {})
+    from imrl_jax.checkpoint import git_commit
+
+    manifest["git_commit"] = git_commit()
+    return manifest, manifest_path
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--scale", choices=sorted(SCALES), default="cpu")
+    p.add_argument("--out", help="results directory (default: experiments/results/SCALE)")
+    p.add_argument("--variants", help="comma-separated, in the order to run: skills, paper, extension "
+                   "(default: skills,paper at the paper scale, paper,extension at the cpu scale)")
+    p.add_argument("--no-report", action="store_true", help="skip the report (python -m experiments.report)")
+    p.add_argument("--kernel", choices=("xla", "pallas"), default="xla",
+                   help="the step kernel (Config.step_kernel): pallas runs each bin of steps as one GPU kernel")
+    args = p.parse_args(argv)
+    scale = SCALES[args.scale]
+    out = args.out or os.path.join("experiments", "results", args.scale)
+    variants = args.variants.split(",") if args.variants else list(DEFAULT_VARIANTS[args.scale])
+    unknown = [v for v in variants if v not in VARIANTS]
+    if unknown:
+        print(f"error: --variants: unknown variant {unknown[0]!r} (choose from {', '.join(VARIANTS)})", file=sys.stderr)
+        return 2
+    manifest, manifest_path = load_manifest(out, scale=args.scale, sizes=scale, variants=variants, kernel=args.kernel)
+    stages = plan(scale, out, variants, report=not args.no_report)
+    return run_stages(stages, scale, manifest, manifest_path, lambda stage: stage_command(stage, scale, out, args.kernel))
 
 
 if __name__ == "__main__":

@@ -33,10 +33,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from imrl_jax.arena import Pose, move
-from imrl_jax.cli import HelpFormatter, UsageError, parse_sets
+from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
 from imrl_jax.config import Config, ConfigError
-from imrl_jax.lifetime import end_trial
+from imrl_jax.env import make_env
 from imrl_jax.progress import Progress
 
 AGENTS = ("ppo", "es")
@@ -120,25 +119,24 @@ def rollout(key: jax.Array, env, policy, num_lanes: int, num_steps: int) -> jnp.
     """Reaches of ``policy`` (brax's ``policy(obs, key)``) in ``num_lanes`` replays of ``num_steps`` cycles.
 
     Each replay starts at the task's start pose and is driven by the project's own
-    kinematics and trial rule (:func:`imrl_jax.arena.move`, :func:`imrl_jax.lifetime.end_trial`),
-    not by the environment's step: reaching the target or the timeout puts the robot
-    back at the start, and the replay goes on. ``env`` gives the task and the observation.
+    environment (:meth:`imrl_jax.env.Environment.transition`), not by the brax environment's
+    step: reaching the target or the timeout puts the robot back at the start, and the replay
+    goes on. ``env`` gives the task and the observation.
     """
     from imrl_jax.brax_env import robot_action
 
-    config, spec = env.config, env.spec
-    advance = jax.vmap(lambda pose, outputs: move(config, pose, outputs))
-    finish = jax.vmap(lambda pose, trial_step: end_trial(config, spec, pose, trial_step))
+    arena, spec = make_env(env.config), env.spec
+    advance = jax.vmap(lambda robot, outputs: arena.transition(robot, outputs, spec))
 
     def one_step(carry, step_key):
-        pose, trial_step, reaches = carry
-        action, _ = policy(jax.vmap(env.observation)(pose), step_key)
-        pose, trial_step, reached, _ = finish(advance(pose, robot_action(action)), trial_step + 1)
-        return (pose, trial_step, reaches + reached), None
+        robots, reaches = carry
+        action, _ = policy(jax.vmap(env.observation)(robots.pose), step_key)
+        robots, events = advance(robots, robot_action(action))
+        return (robots, reaches + events.reached), None
 
-    start = jax.tree.map(lambda x: jnp.broadcast_to(x, (num_lanes,) + x.shape), spec.start)
-    carry = (Pose(*start), jnp.zeros((num_lanes,), jnp.int32), jnp.zeros((num_lanes,), jnp.int32))
-    (_, _, reaches), _ = jax.lax.scan(one_step, carry, jax.random.split(key, num_steps))
+    robots = jax.vmap(lambda _: arena.at(spec.start))(jnp.arange(num_lanes))
+    (_, reaches), _ = jax.lax.scan(one_step, (robots, jnp.zeros((num_lanes,), jnp.int32)),
+                                   jax.random.split(key, num_steps))
     return reaches
 
 
@@ -421,7 +419,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         except ImportError as error:
             raise UsageError(str(error)) from None
         summary = run(settings, args.out, quiet=args.quiet, command=command)
-    except (UsageError, ConfigError) as error:
+    except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
     print(f"{summary['agent'].upper()}, {summary['steps']:,} cycles per task: performance "

@@ -20,8 +20,9 @@ import numpy as np
 
 from imrl_jax.arena import Pose, floor_colour
 from imrl_jax.config import Config, LearningParams
-from imrl_jax.lifetime import (Phase, adult_phase, childhood_phase, childhood_task, init_state, lifetime_keys,
-                               random_pose, simulate, task_spec)
+from imrl_jax.conditions import Phase
+from imrl_jax.lifetime import childhood_task, lifetime_keys, random_pose, run_phase, simulate, task_spec
+from imrl_jax.state import childhood_phase, for_phase, init_state
 from imrl_jax.networks import Agent, decode
 from imrl_jax.retina import sample_points
 
@@ -88,7 +89,7 @@ def childhood_trajectory(key: jax.Array, config: Config, params: LearningParams,
 def _task(key, config, params, agent, index, num_steps):
     task = task_spec(config, index)
     state = init_state(config, agent, task.start)
-    _, record = simulate(key, config, adult_phase(config.condition), params, task, state, num_steps,
+    _, record = simulate(key, config, config.spec.adult, params, task, state, num_steps,
                          config.task_steps)
     return task.start, record
 
@@ -349,3 +350,49 @@ def specialisation_table(spec: Specialisation) -> str:
         lines.append(f"{e + 1:>7} {name:>8} " + " ".join(f"{v:11.2f}" for v in spec.takes[e])
                      + f" {spec.passed[e]:7.2f} {spec.speed[e]:8.2f} {spec.turn[e]:9.1f}")
     return "\n".join(lines)
+
+
+# ----------------------------------------------------------------------------- childhoods of many genomes
+
+#: Samples of the pose (for the time on walls) and of control shares over a childhood.
+NUM_PIECES = 200
+
+
+def make_childhoods(config, num_pieces: int = NUM_PIECES, jit: bool = True):
+    """A jitted ``childhoods(keys, params, genome)`` over lanes: the agents after childhood and per-piece records.
+
+    Records per lane: steps each expert led in each piece (pieces, K), whether the robot is
+    on a wall at the end of each piece (pieces,), random poses after a wall per piece.
+    """
+    phase = childhood_phase(config)
+    piece_steps = config.childhood_steps // num_pieces
+    r, size = config.robot_radius, config.arena_size
+
+    def one(key, params, genome):
+        keys = lifetime_keys(key, config.num_tasks)
+        state = for_phase(config, phase, init_state(config, decode(config, genome), random_pose(keys.pose, config)))
+
+        def piece(state, _):
+            state, curves = run_phase(keys.childhood, config, phase, params, childhood_task(config), state,
+                                      piece_steps, phase_steps=config.childhood_steps, num_bins=1)
+            on_wall = jnp.any((state.pose.pos <= r + 1e-3) | (state.pose.pos >= size - r - 1e-3))
+            respawns = jnp.int32(0) if curves.respawns is None else curves.respawns[0]
+            return state, (curves.selections[0], on_wall, respawns)
+
+        state, records = jax.lax.scan(piece, state, None, length=num_pieces)
+        return state.agent, records
+
+    return jax.jit(jax.vmap(one, (0, 0, None))) if jit else one
+
+
+def grown_agents(config, genomes, key: int):
+    """The experts each genome ends childhood with (LE-LS: a fresh childhood each, keys from ``key``), and the
+    childhood records of :func:`make_childhoods` (None without a childhood)."""
+    genomes = jnp.asarray(genomes)
+    if not config.spec.has_childhood:
+        return jax.vmap(lambda g: decode(config, g))(genomes), None
+    keys = jax.random.split(jax.random.key(key), len(genomes))
+    one = make_childhoods(config, jit=False)
+    params = config.learning_params()
+    agents, records = jax.jit(jax.vmap(lambda k, g: one(k, params, g)))(keys, genomes)
+    return agents, jax.device_get(records)

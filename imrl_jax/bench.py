@@ -89,6 +89,15 @@ def _modules(package: str):
     return (importlib.import_module(f"{package}.{name}") for name in ("config", "lifetime", "networks"))
 
 
+def _phase(package: str, name: str):
+    """The phase ``name`` (e.g. ``CHILDHOOD``) of a package: in its condition table, or (revisions before the
+    table) in its lifetime module."""
+    try:
+        return getattr(importlib.import_module(f"{package}.conditions"), name)
+    except ModuleNotFoundError:
+        return getattr(importlib.import_module(f"{package}.lifetime"), name)
+
+
 def _kernel_field(step_kernel: str) -> dict:
     # Only when not the default, so that revisions from before the field build too.
     return {} if step_kernel == "xla" else {"step_kernel": step_kernel}
@@ -96,7 +105,7 @@ def _kernel_field(step_kernel: str) -> dict:
 
 def phase_program(condition: str, phase_name: str, lanes: int, steps: int, package: str = "imrl_jax",
                   step_kernel: str = "xla") -> Program:
-    """One phase (an attribute of lifetime, e.g. ``CHILDHOOD``) run for ``steps`` steps on ``lanes`` lanes.
+    """One phase (a name of the condition table, e.g. ``CHILDHOOD``) run for ``steps`` steps on ``lanes`` lanes.
 
     ``package`` names the imrl_jax whose modules build it (``python -m imrl_jax.compare``
     passes an earlier revision's, imported under another name).
@@ -104,12 +113,12 @@ def phase_program(condition: str, phase_name: str, lanes: int, steps: int, packa
     config_module, L, networks = _modules(package)
     config = config_module.make_config("paper", condition=condition, childhood_steps=steps, task_steps=steps,
                                        num_bins=1, **_kernel_field(step_kernel))
-    phase = getattr(L, phase_name)
+    phase = _phase(package, phase_name)
     params = config.learning_params()
 
     def lane(key, genome):
         agent = networks.decode(config, genome)
-        if phase is L.CHILDHOOD:
+        if phase.intrinsic:
             task = L.childhood_task(config)
             pose = L.random_pose(key, config)
         else:
@@ -152,7 +161,7 @@ def bench_phase(condition: str, phase_name: str, lanes: int, steps: int, repeats
 def bench_reference_phase(condition: str, reference_phase: str, steps: int) -> dict:
     """Steps per second of the NumPy reference on one lane of the same phase."""
     from imrl_jax import reference
-    from imrl_jax.lifetime import draw_many
+    from imrl_jax.state import draw_many
 
     config = make_config("paper", condition=condition, childhood_steps=steps, task_steps=steps, num_bins=1)
     rng = np.random.default_rng(0)
@@ -185,7 +194,8 @@ def bench_lifetime(lanes: int, task_steps: int, repeats: int, step_kernel: str =
 def bench_reference_life(task_steps: int) -> float:
     """Lane-steps per second of the NumPy reference living one life of the whole-life benchmark."""
     from imrl_jax import reference
-    from imrl_jax.lifetime import draw_many, lifetime_keys, random_pose
+    from imrl_jax.lifetime import lifetime_keys, random_pose
+    from imrl_jax.state import draw_many
 
     program = lifetime_program(1, task_steps)
     config, (key, _, genomes) = program.config, program.args

@@ -3,9 +3,8 @@
     import imrl_jax.brax_env                      # registers imrl-task1 .. imrl-task6, imrl-childhood
     env = brax.envs.get_environment("imrl-task3")
 
-Every environment is built on the project's own functions: the pose moves by
-:func:`imrl_jax.arena.move`, a trial ends by :func:`imrl_jax.lifetime.end_trial` and the
-observation is :func:`imrl_jax.retina.observe`, so the geometry has one copy. The action
+Every environment steps the project's own environment (:mod:`imrl_jax.env`: the pose
+moves, a trial ends and the retina observes exactly as in a life), so the geometry has one copy. The action
 is 2 values in [-1, 1] (what brax's agents emit), mapped to the robot's actor outputs
 a = clip((u + 1) / 2, 0, 1), which then turn and move the robot exactly as an actor's
 outputs do (:func:`robot_action`; :meth:`TaskEnv.drive` takes the outputs themselves).
@@ -41,11 +40,10 @@ try:
 except ImportError as error:  # the core package runs without the extra
     raise ImportError("imrl_jax.brax_env needs brax: pip install -e '.[brax]' (docs/BASELINES.md)") from error
 
-from imrl_jax.arena import Pose, move
+from imrl_jax.arena import Pose
 from imrl_jax.config import Config
-from imrl_jax.lifetime import end_trial, random_pose, task_spec
+from imrl_jax.env import childhood_task, make_env, random_pose, task_spec
 from imrl_jax.networks import reinforce, with_bias
-from imrl_jax.retina import observe
 
 #: Names under which :func:`register` puts the environments (task k is ``imrl-task{k}``).
 TASK_NAME = "imrl-task{}"
@@ -74,11 +72,20 @@ def typed_key(rng: jax.Array) -> jax.Array:
 class _ArenaEnv(Env):
     """What both kinds of environment share: the config, the observation, the action."""
 
+    has_target = True
+
     def __init__(self, config: Config | None = None):
         self.config = Config() if config is None else config
+        self.arena = make_env(self.config, has_target=self.has_target)
 
     def _retina(self, pose: Pose) -> jnp.ndarray:
-        return observe(self.config, pose)
+        return self.arena.observe(self.arena.at(pose))
+
+    def _move(self, robot: Robot, outputs: jnp.ndarray, task):
+        """The robot after one step of :meth:`imrl_jax.env.Environment.transition`, and its events."""
+        moved, events = self.arena.transition(self.arena.at(robot.pose)._replace(trial_step=robot.trial_step),
+                                              outputs, task)
+        return Robot(moved.pose, moved.trial_step), events
 
     @property
     def action_size(self) -> int:
@@ -127,16 +134,15 @@ class TaskEnv(_ArenaEnv):
 
     def drive(self, state: State, outputs: jax.Array) -> State:
         """One control cycle with the robot's actor outputs in [0, 1]^2, as :func:`imrl_jax.lifetime.step` moves."""
-        robot = state.pipeline_state
-        pose = move(self.config, robot.pose, outputs)
-        pose, trial_step, reached, timeout = end_trial(self.config, self.spec, pose, robot.trial_step + 1)
+        robot, events = self._move(state.pipeline_state, outputs, self.spec)
+        pose, reached, timeout = robot.pose, events.reached, events.timeout
         reward = reached.astype(jnp.float32)
         ended = (reached | timeout) if self.trial_episodes else jnp.bool_(False)
         truncated = (timeout if self.trial_episodes else jnp.bool_(False)).astype(jnp.float32)
         # brax's EpisodeWrapper rewrites 'truncation' from its own step count; the copy
         # lets wrap_for_training keep the trial's timeout as a truncation.
         info = {**state.info, "truncation": truncated, "trial_truncation": truncated}
-        return state.replace(pipeline_state=Robot(pose, trial_step), obs=self.observation(pose), reward=reward,
+        return state.replace(pipeline_state=robot, obs=self.observation(pose), reward=reward,
                              done=ended.astype(jnp.float32),
                              metrics={**state.metrics, "reaches": reward, "timeouts": timeout.astype(jnp.float32)},
                              info=info)
@@ -148,6 +154,8 @@ class ChildhoodEnv(_ArenaEnv):
     The reward is 0, or with ``reinforcer`` (37 weights) the paper's internal reward
     2 sigmoid(w.x~) - 1 of the view after the step. Walls clamp, as in the ``paper`` preset.
     """
+
+    has_target = False
 
     def __init__(self, config: Config | None = None, reinforcer=None):
         super().__init__(config)
@@ -169,17 +177,16 @@ class ChildhoodEnv(_ArenaEnv):
         return reinforce(self.reinforcer, with_bias(x))
 
     def reset(self, rng: jax.Array) -> State:
-        """A uniform random pose, as a childhood starts (:func:`imrl_jax.lifetime.random_pose`)."""
+        """A uniform random pose, as a childhood starts (:func:`imrl_jax.env.random_pose`)."""
         robot = Robot(random_pose(typed_key(rng), self.config), jnp.int32(0))
         zero = jnp.zeros((), jnp.float32)
         return State(robot, self._retina(robot.pose), zero, zero, info=dict(truncation=zero))
 
     def step(self, state: State, action: jax.Array) -> State:
         """One control cycle with brax's action in [-1, 1]^2 (:func:`robot_action`)."""
-        robot = state.pipeline_state
-        pose = move(self.config, robot.pose, robot_action(action))
-        x = self._retina(pose)
-        return state.replace(pipeline_state=Robot(pose, robot.trial_step + 1), obs=x, reward=self._reward(x))
+        robot, _ = self._move(state.pipeline_state, robot_action(action), childhood_task(self.config))
+        x = self._retina(robot.pose)
+        return state.replace(pipeline_state=robot, obs=x, reward=self._reward(x))
 
 
 class TrialTruncation(Wrapper):

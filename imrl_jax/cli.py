@@ -12,6 +12,14 @@ class UsageError(Exception):
     """Bad input: reported as one line, exit code 2, nothing written."""
 
 
+def user_errors() -> tuple[type[Exception], ...]:
+    """The errors a command reports as one line with exit code 2: bad usage, config or run directory."""
+    from imrl_jax.config import ConfigError
+    from imrl_jax.rundir import RunDirError
+
+    return UsageError, ConfigError, RunDirError
+
+
 class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
     """``--help`` with each option's default, except where there is none to show (None, a flag's False)."""
 

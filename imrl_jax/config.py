@@ -16,14 +16,18 @@ import dataclasses
 import math
 from typing import NamedTuple
 
-CONDITIONS = ("LE-LS", "EE-LS", "EE-ES", "SLE")
+from imrl_jax import conditions
+from imrl_jax.conditions import Condition
+
+#: Condition names (the rows of :data:`imrl_jax.conditions.CONDITIONS`).
+CONDITIONS = conditions.NAMES
 #: How walls act in childhood: "clamp" (MODEL.md: the robot slides along them) or
 #: "respawn" (also put back at a random pose after ``wall_respawn_steps`` steps on a wall).
 CHILDHOOD_WALLS = ("clamp", "respawn")
 #: The childhood selector's reward: "surprise" (the paper: the surprise of the expert that
 #: kept control) or "progress" (that surprise minus a running mean of the expert's surprise).
 CHILDHOOD_SELECTOR_REWARDS = ("surprise", "progress")
-EVOLVED_CONDITIONS = ("LE-LS", "EE-LS", "EE-ES")
+EVOLVED_CONDITIONS = conditions.EVOLVED
 STEP_KERNELS = ("xla", "pallas")
 
 #: Half the distance between parallel lines of the floor: 20*sqrt(3) cm for a = 40 cm.
@@ -94,11 +98,12 @@ class Config:
     task_steps: int = 100_000
     trial_timeout: int = 200  # steps after a trial's start without reaching the target
     num_bins: int = 100  # bins of the reward/selection curves of each phase
-    draw_block: int = 100  # steps whose random numbers are drawn in one call (sets the stream)
-    scan_unroll: int = 1  # steps per iteration of the step loop (speed only, same results)
+    draw_block: int = 100  # steps whose random numbers are drawn in one call (sets the stream: a model value)
+    # --- how it is computed, not what (COMPUTE_FIELDS): a run resumes under other values of these.
+    scan_unroll: int = dataclasses.field(default=1, metadata={"compute": True})  # steps per loop iteration
     # "xla": each step is XLA operations; "pallas": each bin of steps is one GPU kernel
     # (kernel.py; same results up to rounding, interpreted off a GPU).
-    step_kernel: str = "xla"
+    step_kernel: str = dataclasses.field(default="xla", metadata={"compute": True})
 
     # --- arena and floor (fixed here)
     arena_size: float = 400.0
@@ -170,16 +175,19 @@ class Config:
         return len(self.tasks)
 
     @property
+    def spec(self) -> Condition:
+        """The condition's row of the table (:mod:`imrl_jax.conditions`)."""
+        return conditions.CONDITIONS[self.condition]
+
+    @property
     def num_lane_experts(self) -> int:
         """Experts an individual of this condition has (SLE: one)."""
-        return 1 if self.condition == "SLE" else self.num_experts
+        return self.spec.num_experts(self.num_experts)
 
     @property
     def num_genes(self) -> int:
         """Genome length of the condition (111, 222, 333; 0 for SLE)."""
-        n = self.num_inputs + 1
-        k = self.num_experts
-        return {"LE-LS": k * n, "EE-LS": 2 * k * n, "EE-ES": 3 * k * n, "SLE": 0}[self.condition]
+        return self.spec.num_genes(self.num_experts, self.num_inputs)
 
     @property
     def offspring_per_parent(self) -> int:
@@ -208,12 +216,19 @@ class Config:
     @property
     def lifetime_steps(self) -> int:
         """Steps one individual lives (childhood only in LE-LS) over all tasks."""
-        child = self.childhood_steps if self.condition == "LE-LS" else 0
+        child = self.childhood_steps if self.spec.has_childhood else 0
         return child + self.num_tasks * self.task_steps
 
     def learning_params(self) -> LearningParams:
         """The dynamic learning values as a pytree (see :class:`LearningParams`)."""
         return LearningParams(*(getattr(self, f) for f in LearningParams._fields))
+
+    def model_differences(self, other: "Config") -> list[str]:
+        """The fields that make ``other`` another model than this one: every differing field but the
+        compute choices (:data:`COMPUTE_FIELDS`) and the fields this condition never reads."""
+        skip = set(COMPUTE_FIELDS) | (self.spec.ignored_fields() if self.condition == other.condition else set())
+        return [f.name for f in dataclasses.fields(self)
+                if f.name not in skip and getattr(self, f.name) != getattr(other, f.name)]
 
     def replace(self, **changes) -> "Config":
         """A copy with some fields changed (validated)."""
@@ -250,6 +265,10 @@ class Config:
                 data[name] = tuple(data[name])
         return cls(**data)
 
+
+#: Fields that choose how a life is computed, not what it is: the results are the same (bitwise, or up to
+#: rounding for the GPU kernel), so a run may resume under other values of them.
+COMPUTE_FIELDS = tuple(f.name for f in dataclasses.fields(Config) if f.metadata.get("compute"))
 
 #: Named presets. ``paper`` is full scale; ``small`` keeps the structure at a length a
 #: laptop CPU evolves in minutes (reduced scale: label results made with it as such).
@@ -311,8 +330,8 @@ def _validate(c: Config) -> None:
     non_finite = _non_finite_field(c)
     if non_finite is not None:
         fail(non_finite, "must be a finite number")
-    if c.condition not in CONDITIONS:
-        fail("condition", f"must be one of {', '.join(CONDITIONS)}")
+    if c.condition not in conditions.CONDITIONS:  # the table as it is now (rows may be registered)
+        fail("condition", f"must be one of {', '.join(conditions.CONDITIONS)}")
     if c.step_kernel not in STEP_KERNELS:
         fail("step_kernel", f"must be one of {', '.join(STEP_KERNELS)}")
     if c.childhood_walls not in CHILDHOOD_WALLS:
@@ -332,8 +351,8 @@ def _validate(c: Config) -> None:
         fail("childhood_steps", "must be a non-negative integer")
     if c.task_steps % c.num_bins:
         fail("task_steps", f"must be a multiple of num_bins={c.num_bins}")
-    if c.condition == "LE-LS" and (c.childhood_steps == 0 or c.childhood_steps % c.num_bins):
-        fail("childhood_steps", f"must be a positive multiple of num_bins={c.num_bins} for LE-LS")
+    if c.spec.has_childhood and (c.childhood_steps == 0 or c.childhood_steps % c.num_bins):
+        fail("childhood_steps", f"must be a positive multiple of num_bins={c.num_bins} for {c.condition}")
     if c.num_parents > c.population_size:
         fail("num_parents", f"cannot exceed population_size={c.population_size}")
     if c.population_size % c.num_parents:

@@ -39,10 +39,10 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from imrl_jax.arena import BLUE, GREEN, RED, Pose, move
+from imrl_jax.arena import BLUE, GREEN, RED
 from imrl_jax.config import Config, Task
-from imrl_jax.lifetime import end_trial, make_evaluate, task_spec
-from imrl_jax.retina import observe
+from imrl_jax.env import EnvState, make_env, task_spec
+from imrl_jax.lifetime import make_evaluate
 
 #: Steps after a switch during which the next colour does not trigger another switch
 #: (20 cm: half an edge; consecutive junctions of a route are about 40 cm apart).
@@ -113,23 +113,22 @@ def follow(config: Config, x: jnp.ndarray, colour, last_turn) -> tuple[jnp.ndarr
 class ControllerState(NamedTuple):
     """Scan carry of a controller run."""
 
-    pose: Pose
+    robot: EnvState  # the robot in the task's environment
     stage: jnp.ndarray  # index into the route of the colour being followed
     dwell: jnp.ndarray  # steps since the last switch of stage
     last_turn: jnp.ndarray  # the follower's last turn, kept while its colour is out of sight
-    trial_step: jnp.ndarray  # steps since the current trial started
     reaches: jnp.ndarray
 
 
 def _run(config: Config, num_steps: int, task_index, route_index, record: bool = False):
     """Reaches of the route of task ``route_index`` driven on task ``task_index`` (and, if ``record``, each step)."""
-    task = task_spec(config, task_index)
+    task, arena = task_spec(config, task_index), make_env(config)
     colours, lengths = route_table(config)
     route, length = colours[route_index], lengths[route_index]
     dtype = task.start.pos.dtype
 
     def one_step(state: ControllerState, _):
-        x = observe(config, state.pose)
+        x = arena.observe(state.robot)
         # Switch to the route's next colour when it comes into view at the next junction.
         has_next = state.stage + 1 < length
         next_colour = route[jnp.minimum(state.stage + 1, MAX_ROUTE - 1)]
@@ -138,27 +137,25 @@ def _run(config: Config, num_steps: int, task_index, route_index, record: bool =
         stage = state.stage + switch
         dwell = jnp.where(switch, 0, state.dwell + 1)
         action, turn = follow(config, x, route[stage], state.last_turn)
-        pose = move(config, state.pose, action)
         # Trials end as in the adult phase: a reach or the timeout.
-        pose, trial_step, reached, timeout = end_trial(config, task, pose, state.trial_step + 1)
+        robot, events = arena.transition(state.robot, action, task)
+        reached, timeout = events.reached, events.timeout
         reset = reached | timeout
         new = ControllerState(
-            pose=pose,
+            robot=robot,
             stage=jnp.where(reset, 0, stage),
             dwell=jnp.where(reset, 0, dwell),
             last_turn=jnp.where(reset, 0.0, turn),
-            trial_step=trial_step,
             reaches=state.reaches + reached,
         )
         if not record:
             return new, None
         colour = route[stage]  # the follower in control: 0 red, 1 green, 2 blue
         # The Trajectory's fields: no respawns here (the composition drives adult tasks only).
-        return new, (state.pose.pos, state.pose.heading, pose.pos, pose.heading, colour, reached, timeout,
-                     jnp.zeros_like(reached))
+        return new, (state.robot.pose.pos, state.robot.pose.heading, robot.pose.pos, robot.pose.heading, colour,
+                     reached, timeout, jnp.zeros_like(reached))
 
-    start = ControllerState(task.start, jnp.int32(0), jnp.int32(0), jnp.zeros((), dtype),
-                            jnp.int32(0), jnp.int32(0))
+    start = ControllerState(arena.at(task.start), jnp.int32(0), jnp.int32(0), jnp.zeros((), dtype), jnp.int32(0))
     final, steps = jax.lax.scan(one_step, start, None, length=num_steps)
     return (final.reaches, steps) if record else final.reaches
 

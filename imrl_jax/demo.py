@@ -21,8 +21,8 @@ import time
 import jax
 import numpy as np
 
-from imrl_jax.cli import HelpFormatter, UsageError
-from imrl_jax.config import CONDITIONS, PRESETS, Config, ConfigError, make_config
+from imrl_jax.cli import HelpFormatter, user_errors
+from imrl_jax.config import CONDITIONS, PRESETS, Config, make_config
 from imrl_jax.rundir import check_writable, write_atomic
 
 PATH_STEPS = 400  # steps of each task path drawn after the lifetime
@@ -52,14 +52,14 @@ def run(config: Config, out_dir: str, seed: int = 0) -> dict:
     # Paths: the first childhood steps (the same draws as the life), then each task from the
     # weights the selector had at the end of that task.
     childhood = None
-    if config.condition == "LE-LS":
+    if config.spec.has_childhood:
         childhood = behaviour.childhood_trajectory(key_life, config, params, genome, CHILDHOOD_PATH_STEPS)
     paths = behaviour.task_trajectories(key_paths, config, params, result.adult_agents, PATH_STEPS)
     solved = controllers.trajectories(config, PATH_STEPS)
     trips = np.asarray(config.steps_per_trip())
     solved_performance = [float(t.reached.sum() * n / PATH_STEPS) for t, n in zip(solved, trips)]
 
-    scale = f"childhood {config.childhood_steps:,} steps, " if config.condition == "LE-LS" else ""
+    scale = f"childhood {config.childhood_steps:,} steps, " if config.spec.has_childhood else ""
     rows = [
         dict(name="The tasks solved: a hand-written composition of three colour followers (not evolved), "
                   "one colour per edge of the route",
@@ -77,7 +77,7 @@ def run(config: Config, out_dir: str, seed: int = 0) -> dict:
     summary = {
         "condition": config.condition,
         "seed": seed,
-        "childhood_steps": config.childhood_steps if config.condition == "LE-LS" else 0,
+        "childhood_steps": config.childhood_steps if config.spec.has_childhood else 0,
         "task_steps": config.task_steps,
         "fitness": fitness,
         "performance": [float(p) for p in result.performance],
@@ -103,7 +103,7 @@ def main(argv=None) -> int:
     try:
         config = make_config(args.preset, condition=args.condition)
         summary = run(config, args.out, args.seed)
-    except (ConfigError, UsageError) as error:
+    except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
     print(f"{config.condition} individual (seed {args.seed}), reduced scale: childhood "

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import dataclasses
 import io
 import json
 import os
@@ -30,7 +29,7 @@ import numpy as np
 
 import imrl_jax
 from imrl_jax.checkpoint import Checkpointer, History, RunState, empty_history, git_commit
-from imrl_jax.cli import HelpFormatter, UsageError, parse_sets
+from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
 from imrl_jax.devices import (make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
                               use_host_cores)
 from imrl_jax.config import CONDITIONS, EVOLVED_CONDITIONS, PRESETS, Config, ConfigError, make_config
@@ -142,14 +141,13 @@ def check_run_dir(out_dir: str, config: Config, seeds: Sequence[int], resume: bo
         saved_config, saved_seeds = read_config(out_dir)
         if saved_seeds != list(seeds):
             raise UsageError(f"--resume: seeds {list(seeds)} differ from the run's {saved_seeds}")
-        for field in dataclasses.fields(Config):
-            old, new = getattr(saved_config, field.name), getattr(config, field.name)
-            if field.name == "num_generations" and new > old:
-                continue  # a run may be extended: its generations go on from the last one done
-            if old != new:
-                grow = " (a resumed run may only grow it)" if field.name == "num_generations" else ""
-                raise UsageError(f"--resume: config field {field.name} is {new!r} but the run in {out_dir} "
-                                 f"used {old!r}{grow}")
+        differing = [name for name in saved_config.model_differences(config)
+                     if not (name == "num_generations" and config.num_generations > saved_config.num_generations)]
+        if differing:  # a run may be extended: its generations go on from the last one done
+            changes = "; ".join(f"{name} is {getattr(config, name)!r} but the run used {getattr(saved_config, name)!r}"
+                                + (" (a resumed run may only grow it)" if name == "num_generations" else "")
+                                for name in differing)
+            raise UsageError(f"--resume: the config differs from the run's in {out_dir}: {changes}")
 
 
 def extend_config_json(out_dir: str, config: Config) -> None:
@@ -169,9 +167,9 @@ def extend_config_json(out_dir: str, config: Config) -> None:
 def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bool = False,
         checkpoint_every: int = 1, keep: int = 3, quiet: bool = False) -> RunState:
     """Evolve ``config.condition`` for every seed into ``out_dir``; return the final state."""
-    if config.condition not in EVOLVED_CONDITIONS:
+    if not config.spec.evolved:
         raise UsageError(f"--cond: {config.condition} is not evolved (it learns each task from scratch); "
-                         f"run it with: python -m imrl_jax.demo --condition SLE")
+                         f"test it with: python -m imrl_jax.learning_test --cond {config.condition} --out DIR")
     seeds = [int(s) for s in seeds]
     if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
         raise UsageError("--seeds: need at least one seed, all distinct and non-negative")
@@ -373,7 +371,7 @@ def main(argv=None) -> int:
         init_distributed(args)
         state = run(config, out_dir, range(args.first_seed, args.first_seed + args.seeds), resume=args.resume,
                     checkpoint_every=args.checkpoint_every, keep=args.keep, quiet=args.quiet)
-    except UsageError as error:
+    except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
     if jax.process_index() == 0:

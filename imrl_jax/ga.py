@@ -4,17 +4,20 @@ Generation 0 is uniform in [-1, 1]; the best 10 of 50 individuals each produce 5
 offspring; each gene of an offspring is mutated with probability 0.1 by adding U[-1, 1].
 No elitism unless ``num_elites`` > 0 (then the first offspring of each of the best
 ``num_elites`` parents is an unmutated copy). All functions are for one population and
-pure; :func:`make_generation` composes them with the lifetimes into one jitted step that
-is vmapped over independent seeds.
+pure; :class:`GA` is them as a search strategy (:mod:`imrl_jax.search`), and
+:func:`make_generation` composes it with the lifetimes into one jitted step that is vmapped
+over independent seeds.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 
+from imrl_jax import search
 from imrl_jax.config import Config, LearningParams
 from imrl_jax.lifetime import LifetimeResult, live
 
@@ -65,32 +68,68 @@ def reproduce(key: jax.Array, config: Config, population: jnp.ndarray, parents: 
     return mutated
 
 
-def generation_keys(key: jax.Array, generation) -> tuple[jax.Array, jax.Array]:
-    """The keys of one generation of a seed: lifetimes, reproduction."""
-    return tuple(jax.random.split(jax.random.fold_in(key, generation)))
+class GAParams(NamedTuple):
+    """The GA's dynamic values: per-gene mutation probability and the U[-scale, scale] size."""
+
+    mutation_prob: float
+    mutation_scale: float
+
+
+class GAState(NamedTuple):
+    """The GA's state: the population that lives next."""
+
+    population: jnp.ndarray  # (P, genes)
+
+
+@dataclasses.dataclass(frozen=True)
+class GA:
+    """The paper's genetic algorithm as a search strategy (:mod:`imrl_jax.search`): the default.
+
+    Its static settings are the config's (population, parents, elites, initial range); its
+    dynamic values are :class:`GAParams`. It draws only in ``tell`` (the mutations).
+    """
+
+    config: Config
+
+    def default_params(self) -> GAParams:
+        """The config's mutation probability and size (Python floats: a program closing over them
+        compiles them in, as the GA always has)."""
+        return GAParams(self.config.mutation_prob, self.config.mutation_scale)
+
+    def init(self, key: jax.Array, params: GAParams | None = None, dtype=jnp.float32) -> GAState:
+        """Generation 0: uniform in [-init_scale, init_scale]."""
+        return GAState(init_population(key, self.config, dtype))
+
+    def ask(self, key: jax.Array, state: GAState, params: GAParams) -> tuple[jnp.ndarray, GAState]:
+        """The population as it is (the GA draws nothing here)."""
+        return state.population, state
+
+    def tell(self, key: jax.Array, genomes: jnp.ndarray, fitness: jnp.ndarray, state: GAState,
+             params: GAParams) -> tuple[GAState, jnp.ndarray]:
+        """Select the best, reproduce them with mutations; report the parents, best first."""
+        parents = select(fitness, self.config.num_parents)
+        children = reproduce(key, self.config, genomes, parents, params.mutation_prob, params.mutation_scale)
+        return GAState(children), parents
 
 
 def evolve_step(key: jax.Array, config: Config, params: LearningParams, population: jnp.ndarray,
                 generation) -> tuple[jnp.ndarray, GenerationStats]:
     """One generation of one seed: live every individual, select the best, reproduce."""
-    key_life, key_reproduce = generation_keys(key, generation)
-    fitness, performance = evaluate(key_life, config, params, population)
-    parents = select(fitness, config.num_parents)
-    children = reproduce(key_reproduce, config, population, parents)
-    return children, GenerationStats(fitness, performance, parents)
+    strategy = GA(config)
+    state, result = search.generation(key, strategy, lambda k, g: live(k, config, params, g),
+                                      GAState(population), strategy.default_params(), generation,
+                                      config.lives_per_fitness)
+    return state.population, GenerationStats(result.fitness, result.lives.performance.mean(1), result.info)
 
 
 def evaluate(key: jax.Array, config: Config, params: LearningParams,
              population: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:
     """Fitness (P,) and task performance (P, tasks) of a population: one life each (the paper),
     or the mean of ``config.lives_per_fitness`` independent lives (a GA extension, less noisy)."""
-    # split(key, (P, 1))[:, 0] is split(key, P): one life each gets the keys it always had.
-    keys = jax.random.split(key, (config.population_size, config.lives_per_fitness))
+    keys = search.life_keys(key, config.population_size, config.lives_per_fitness)
     lives = jax.vmap(lambda k, g: live(k, config, params, g), (0, None))
     result: LifetimeResult = jax.vmap(lives)(keys, population)
     return result.fitness.mean(1), result.performance.mean(1)
-
-
 def make_generation(config: Config, sharding=None):
     """A jitted ``generation(keys, params, populations, generation)`` vmapped over seeds.
 

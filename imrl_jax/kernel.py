@@ -27,7 +27,9 @@ from imrl_jax.arena import advance, floor_colour_xy, on_wall, spawn_pose, trial_
 from imrl_jax.config import Config, LearningParams
 from imrl_jax.learning import ascend, ascend_row, selector_features, td_error, unit_features
 from imrl_jax.networks import Agent, explore, internal_reward, pick, select
-from imrl_jax.state import Curves, Draws, Phase, Previous, State, TaskSpec, Traces, draw_block, phase_params
+from imrl_jax.conditions import Phase
+from imrl_jax.env import TaskSpec
+from imrl_jax.state import Curves, Draws, Previous, State, Traces, bin_steps, draw_block, phase_params
 
 # Slots of the per-lane scalar vectors.
 _X, _Y, _HEADING, _COS, _SIN, _A0, _A1, _O0, _O1 = range(9)  # floats
@@ -406,12 +408,12 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
     """:func:`imrl_jax.lifetime.run_phase`, each bin one kernel call (``interpret``: default off a GPU)."""
     phase_steps = num_steps if phase_steps is None else phase_steps
     num_bins = config.num_bins if num_bins is None else num_bins
-    bin_steps = num_steps // num_bins
+    steps_per_bin = bin_steps(num_steps, num_bins)
     num_experts = state.agent.selector_actor.shape[0]
     params = phase_params(phase, params)
 
     def one_bin(packed, _):
-        draws = draw_range(key, packed.ints[_T], bin_steps, config.draw_block, phase.noisy, phase.respawn)
+        draws = draw_range(key, packed.ints[_T], steps_per_bin, config.draw_block, phase.noisy, phase.respawn)
         packed, counts, selections = run_bin(config, phase, params, task, phase_steps, draws, packed, num_experts,
                                              interpret)
         return packed, Curves(counts[0], counts[1], selections[:num_experts], counts[2] if phase.respawn else None)

@@ -3,15 +3,13 @@
 :func:`learn_experts` and :func:`learn_selector` are the paper's rules, stated once; the
 functions above them are their building blocks. Each rule is w += eta * delta * e, where e
 is the network's eligibility trace (e <- gamma * lambda * e + phi on the steps at which it
-learns; lambda = 0 gives the paper's one-step rules exactly). It is written as one SGD step
-of optax on the pseudo-gradient -delta * e.
+learns; lambda = 0 gives the paper's one-step rules exactly).
 """
 
 from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
-import optax
 
 from imrl_jax.networks import evaluate_both, reinforce
 
@@ -52,20 +50,16 @@ def accumulate(trace, phi, gamma, trace_lambda, learn, ended=False):
 
 
 def ascend(weights, trace, delta, eta):
-    """w += eta * delta * e, as an SGD step on the pseudo-gradient -delta * e."""
-    sgd = optax.sgd(eta)
-    updates, _ = sgd.update(-delta * trace, sgd.init(weights))
-    return optax.apply_updates(weights, updates)
+    """w += eta * delta * e."""
+    return weights + eta * (delta * trace)
 
 
 def ascend_row(weights, row, trace, delta, eta):
     """w[k] += eta * delta * e for the row k that the one-hot vector ``row`` picks; other rows unchanged."""
-    sgd = optax.sgd(eta)
-    updates, _ = sgd.update(-delta * trace, sgd.init(trace))
     # A product with the one-hot instead of a row write: under vmap a row write is a
     # scatter, a slow loop on XLA's CPU backend, and this is one vectorised pass. The
     # same numbers while the weights are finite (the other rows get + 0).
-    return weights + row.reshape(row.shape + (1,) * trace.ndim) * updates
+    return weights + row.reshape(row.shape + (1,) * trace.ndim) * (eta * (delta * trace))
 
 
 def pick_row(matrix, k):
@@ -79,6 +73,16 @@ def pick_row(matrix, k):
     for j in range(1, matrix.shape[0]):
         picked = picked + onehot[j] * matrix[j]
     return picked
+
+
+def after_choice(flag, k):
+    """``flag`` itself, made to depend on this step's expert choice ``k`` (``k >= 0`` always holds).
+
+    A speed device, not a rule: it orders the selector's update after the choice, which reads
+    the same selector weights, so that XLA updates them in place rather than in a copy made
+    every step (docs/PERFORMANCE.md, changelog).
+    """
+    return flag & (k >= 0)
 
 
 # --------------------------------------------------------------------------- the rules
@@ -147,9 +151,7 @@ def learn_selector(phase, params, agent, traces, prev, xbs, now, k, same, surpri
             reward = surprise - before
             baseline = baseline + params.progress_rate * held * (surprise - baseline)
     else:
-        # k >= 0 always holds; it orders this update after the choice of k, which reads the
-        # same selector weights, so that XLA can update them in place, not in a copy.
-        learn, reward = prev.valid & (k >= 0), prev.terminal.astype(prev_xb.dtype)
+        learn, reward = after_choice(prev.valid, k), prev.terminal.astype(prev_xb.dtype)
     u_weights, s_weights = agent.selector_critic, agent.selector_actor
     values = evaluate_both(u_weights, xbs)
     delta = td_error(reward, take_row(values, 1 - now), take_row(values, now), gamma, prev.terminal)

@@ -45,9 +45,11 @@ from jax.sharding import NamedSharding, PartitionSpec
 
 from imrl_jax.checkpoint import git_commit
 from imrl_jax.devices import make_mesh, use_host_cores
-from imrl_jax.config import CONDITIONS, PRESETS, Config, ConfigError, LearningParams, make_config
-from imrl_jax.cli import HelpFormatter, UsageError, parse_sets
-from imrl_jax.lifetime import State, adult_phase, grow_up, lifetime_keys, run_phase, task_spec, task_start
+from imrl_jax.conditions import CONDITIONS as TABLE
+from imrl_jax.config import COMPUTE_FIELDS, CONDITIONS, PRESETS, Config, ConfigError, LearningParams, make_config
+from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
+from imrl_jax.lifetime import grow_up, lifetime_keys, run_phase, task_spec, task_start
+from imrl_jax.state import State
 from imrl_jax.progress import Progress
 from imrl_jax.rundir import best_genomes, check_writable, load_run as read_run, write_atomic
 
@@ -82,7 +84,7 @@ def advance(config: Config, params: LearningParams, test: TestState, num_chunks:
     ``t`` is passed, not read from the carried states, so that it is one value for every lane
     (not batched under vmap): the step draws its random numbers a block at a time only then.
     """
-    phase = adult_phase(config.condition)
+    phase = config.spec.adult
     dtype = test.states.agent.actor.dtype
 
     def one_task(key, index, state):
@@ -142,6 +144,8 @@ def run_tests(keys: jax.Array, config: Config, params: LearningParams, genomes, 
 # ----------------------------------------------------------------------------- statistics
 
 PAIR_LEVEL = 0.2  # a task counts as solved in a test at this steady-state performance
+#: Conditions that are not evolved: tested from scratch (``--cond``), without a run directory.
+FROM_SCRATCH = tuple(name for name, condition in TABLE.items() if not condition.evolved)
 
 
 def performance_curve(config: Config, reaches: np.ndarray) -> np.ndarray:
@@ -218,10 +222,12 @@ def fingerprint(config: Config, genomes: np.ndarray, num_tests: int, seed: int) 
     """What a test's results depend on, hashed: a resumed test continues only a test of the same.
 
     Only the config fields away from their defaults count, so that a field added to ``Config``
-    later (its default keeping the old behaviour) does not stop an older test from resuming.
+    later (its default keeping the old behaviour) does not stop an older test from resuming; the
+    compute choices (step kernel, unroll) do not count.
     """
     default = Config().to_dict()
-    changed = {name: value for name, value in config.to_dict().items() if value != default.get(name)}
+    changed = {name: value for name, value in config.to_dict().items()
+               if value != default.get(name) and name not in COMPUTE_FIELDS}  # how, not what: a test resumes
     digest = hashlib.sha256(json.dumps(dict(config=changed, num_tests=num_tests, seed=seed),
                                        sort_keys=True, default=str).encode())
     digest.update(np.ascontiguousarray(genomes, np.float32).tobytes())
@@ -259,7 +265,7 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
     progress.message(f"{config.condition} learning test: {num_runs} run(s) x {num_best} best x {num_tests} test(s) x "
                      f"{config.num_tasks} tasks = {num_runs * num_best * num_tests * config.num_tasks} lanes of "
                      f"{config.task_steps} cycles"
-                     + (f" after a {config.childhood_steps}-step childhood" if config.condition == "LE-LS" else "")
+                     + (f" after a {config.childhood_steps}-step childhood" if config.spec.has_childhood else "")
                      + ", run by run" + (f"; {len(done)} run(s) done before, kept in {partial}" if done else ""))
     start = time.perf_counter()
     params = config.learning_params()
@@ -322,11 +328,13 @@ def parser() -> argparse.ArgumentParser:
                                 formatter_class=HelpFormatter)
     p.add_argument("run_dir", nargs="?", help="an evolution's run directory (omit with --cond SLE)")
     p.add_argument("--cond", metavar="{" + ",".join(CONDITIONS) + "}",
-                   help="SLE: test single-expert learning from scratch (no run directory); "
+                   help=f"{', '.join(FROM_SCRATCH)}: test learning from scratch (no run directory); "
                         "another condition: check that run_dir is a run of it")
-    p.add_argument("--runs", type=int, default=10, help="SLE: groups of tests, like an evolution's seeds")
-    p.add_argument("--preset", default="paper", choices=sorted(PRESETS), help="SLE: the learning rules' preset")
-    p.add_argument("--set", action="append", metavar="FIELD=VALUE", help="SLE: set a Config field (repeatable)")
+    p.add_argument("--runs", type=int, default=10, help="from scratch: groups of tests, like an evolution's seeds")
+    p.add_argument("--preset", default="paper", choices=sorted(PRESETS),
+                   help="from scratch: the learning rules' preset")
+    p.add_argument("--set", action="append", metavar="FIELD=VALUE",
+                   help="from scratch: set a Config field (repeatable)")
     p.add_argument("--best", type=int, default=10, help="best individuals of each run's last generation")
     p.add_argument("--tests", type=int, default=10, help="tests per individual")
     p.add_argument("--task-steps", type=int, default=1_000_000, help="cycles per task")
@@ -349,15 +357,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         for name in ("best", "tests", "task_steps", "bins", "chunks", "runs"):
             if getattr(args, name) < 1:
                 raise UsageError(f"--{name.replace('_', '-')}: must be at least 1")
-        if args.cond == "SLE":
-            if args.run_dir:
-                raise UsageError("run_dir: SLE is tested from scratch; give either a run directory or --cond SLE")
-            base = make_config(args.preset, **{**parse_sets(args.set), "condition": "SLE"})
-            genomes = np.zeros((args.runs, args.best, 0), np.float32)
-            source = f"SLE from scratch, preset {args.preset}" + "".join(f", {s}" for s in args.set or [])
-        elif args.cond is not None and args.cond not in CONDITIONS:
+        if args.cond is not None and args.cond not in CONDITIONS:
             raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(CONDITIONS)}; "
-                             f"only SLE is tested without a run directory)")
+                             f"only {', '.join(FROM_SCRATCH)} are tested without a run directory)")
+        if args.cond in FROM_SCRATCH:
+            if args.run_dir:
+                raise UsageError(f"run_dir: {args.cond} is tested from scratch; give either a run directory or "
+                                 f"--cond {args.cond}")
+            base = make_config(args.preset, **{**parse_sets(args.set), "condition": args.cond})
+            genomes = np.zeros((args.runs, args.best, base.num_genes), np.float32)
+            source = f"{args.cond} from scratch, preset {args.preset}" + "".join(f", {s}" for s in args.set or [])
         else:
             if not args.run_dir:
                 raise UsageError("run_dir: give an evolution's run directory, or --cond SLE")
@@ -373,7 +382,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         use_host_cores(args.cpu_devices or None)
         summary = run(config, genomes, args.out, num_tests=args.tests, steady_steps=args.steady_steps,
                       num_chunks=args.chunks, seed=args.seed, quiet=args.quiet, source=source, command=command)
-    except (UsageError, ConfigError) as error:
+    except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
     print(f"{summary['condition']}: steady state (last {args.steady_steps} cycles) {summary['steady_mean']:.4f} mean "

@@ -12,21 +12,19 @@ trajectory of one individual, for plots and for the reference tests.
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 
-from imrl_jax.arena import Pose, heading_vector, move, on_wall, spawn_pose, task_arrays, trial_ends
+from imrl_jax.arena import task_arrays
+from imrl_jax.conditions import Phase
 from imrl_jax.config import Config, LearningParams
+from imrl_jax.env import EnvState, TaskSpec, childhood_task, make_env, random_pose, task_spec
 from imrl_jax.learning import learn_experts, learn_selector, pick_row, take_row
 from imrl_jax.networks import Agent, act, decode, explore, select, with_bias, zero_agent
-from imrl_jax.retina import observe
-from imrl_jax.state import (ADULT_EVOLVED_SELECTOR, ADULT_LEARNING_SELECTOR, ADULT_SINGLE_EXPERT,  # noqa: F401
-                            CHILDHOOD, Curves, Draws, Phase, Previous, State, StepRecord, TaskSpec, Traces,
-                            adult_phase, childhood_phase, draw_block, draw_many, for_phase, init_state,
-                            phase_params)
+from imrl_jax.state import (Curves, Draws, Previous, State, StepRecord, bin_steps, childhood_phase, draw_block,
+                            for_phase, init_state, phase_params)
 
 
 class LifetimeResult(NamedTuple):
@@ -57,15 +55,6 @@ def lifetime_keys(key: jax.Array, num_tasks: int) -> LifetimeKeys:
     return LifetimeKeys(key_pose, key_child, jax.random.split(key_adult, num_tasks))
 
 
-def random_pose(key: jax.Array, config: Config, dtype=jnp.float32) -> Pose:
-    """Uniform position in [r, size - r]^2 and uniform heading (childhood start)."""
-    key_pos, key_heading = jax.random.split(key)
-    r = config.robot_radius
-    pos = jax.random.uniform(key_pos, (2,), dtype, r, config.arena_size - r)
-    heading = jax.random.uniform(key_heading, (), dtype, 0.0, 2.0 * math.pi)
-    return Pose(pos, heading)
-
-
 def _set_row(matrix, k, row):
     """matrix with row k replaced."""
     return jax.lax.dynamic_update_index_in_dim(matrix, row, k, 0)
@@ -91,30 +80,15 @@ def _action(phase: Phase, params: LearningParams, output, z, t, phase_steps: int
     return explore(output, z, params.noise_std, t, phase_steps) if phase.noisy else output
 
 
-def _respawn(config: Config, pose: Pose, pinned, spawn):
-    """A robot on a wall for config.wall_respawn_steps steps in a row is put at the random pose ``spawn``.
+def step(key: jax.Array, config: Config, phase: Phase, params: LearningParams, task: TaskSpec, phase_steps: int,
+         state: State) -> tuple[State, StepRecord]:
+    """One control cycle (MODEL.md "Acting, each time step t of a phase"): observe, choose, learn, act, move.
 
-    Returns the pose, the steps on a wall and whether it was put back (like a timeout,
-    nothing learns from that transition).
+    ``key`` is the phase's key: the step takes its random numbers from the block of draws it
+    makes from it every ``config.draw_block`` steps.
     """
-    pinned = jnp.where(on_wall(config, pose.pos), pinned + 1, 0)
-    respawned = pinned >= config.wall_respawn_steps
-    fresh = Pose(*spawn_pose(config, spawn[:2], spawn[2]))
-    pose = jax.tree.map(lambda new, now: jnp.where(respawned, new, now), fresh, pose)
-    return pose, jnp.where(respawned, 0, pinned), respawned
-
-
-def end_trial(config: Config, task: TaskSpec, pose: Pose, trial_step):
-    """Reaching the target (reward 1) or the timeout puts the robot back at the task's start."""
-    reached, timeout = trial_ends(config, pose.pos, task.target, trial_step)
-    reset = reached | timeout
-    pose = jax.tree.map(lambda start, now: jnp.where(reset, start, now), task.start, pose)
-    return pose, jnp.where(reset, 0, trial_step), reached, timeout
-
-
-def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, phase_steps: int,
-         key: jax.Array, state: State) -> tuple[State, StepRecord]:
-    """One control cycle (MODEL.md "Acting, each time step t of a phase"): observe, choose, learn, act, move."""
+    env = make_env(config, phase.has_target, phase.respawn)
+    robot = EnvState(state.pose, state.direction, state.trial_step, state.pinned)
     block, draws = _draws(config, phase, key, state)
     params = phase_params(phase, params)
     agent, traces, prev, baseline = state.agent, state.traces, state.prev, state.baseline
@@ -125,7 +99,7 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
     # computed here from the carried pose, not at the end of the previous step, its kernels
     # read the pose instead of computing the move again for every sample point.
     now = state.t % 2
-    xbs = _set_row(state.xbs, now, with_bias(observe(config, state.pose, state.direction)))
+    xbs = _set_row(state.xbs, now, with_bias(env.observe(robot)))
     xb, prev_xb = take_row(xbs, now), take_row(xbs, 1 - now)
     selection = act(agent.selector_actor, xb)
     k = select(draws.u, selection) if selection.shape[0] > 1 else jnp.int32(0)
@@ -144,19 +118,11 @@ def step(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, p
     action = _action(phase, params, output, draws.z, state.t, phase_steps)
 
     # 5: turn, move, clamp; then walls (respawn), the target and the timeout.
-    pose = move(config, state.pose, action)
-    pinned, respawned = state.pinned, jnp.bool_(False)
-    if phase.respawn:
-        pose, pinned, respawned = _respawn(config, pose, pinned, draws.spawn)
-    trial_step = state.trial_step + 1
-    reached = timeout = jnp.bool_(False)
-    if phase.has_target:
-        pose, trial_step, reached, timeout = end_trial(config, task, pose, trial_step)
-
-    prev = Previous(k, action, output, selection, ~(timeout | respawned), reached)
-    state = State(agent, traces, pose, heading_vector(pose.heading), xbs, prev, trial_step, state.t + 1, block,
-                  pinned, baseline)
-    return state, StepRecord(pose, k, reached, timeout, respawned)
+    robot, events = env.transition(robot, action, task, draws.spawn)
+    prev = Previous(k, action, output, selection, ~(events.timeout | events.respawned), events.reached)
+    state = State(agent, traces, robot.pose, robot.direction, xbs, prev, robot.trial_step, state.t + 1, block,
+                  robot.pinned, baseline)
+    return state, StepRecord(robot.pose, k, events.reached, events.timeout, events.respawned)
 
 
 def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningParams, task: TaskSpec,
@@ -175,13 +141,13 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
         return kernel.run_phase(key, config, phase, params, task, state, num_steps, phase_steps, num_bins)
     phase_steps = num_steps if phase_steps is None else phase_steps
     num_bins = config.num_bins if num_bins is None else num_bins
-    bin_steps = num_steps // num_bins
+    steps_per_bin = bin_steps(num_steps, num_bins)
     state = for_phase(config, phase, state)
     num_experts = state.agent.selector_actor.shape[0]
 
     def one_step(carry, _):
         state, counts = carry
-        state, record = step(config, phase, params, task, phase_steps, key, state)
+        state, record = step(key, config, phase, params, task, phase_steps, state)
         counts = Curves(counts.reaches + record.reached, counts.timeouts + record.timeout,
                         counts.selections + jax.nn.one_hot(record.k, num_experts, dtype=jnp.int32),
                         None if counts.respawns is None else counts.respawns + record.respawned)
@@ -190,7 +156,7 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
     def one_bin(state, _):
         counts = Curves(jnp.int32(0), jnp.int32(0), jnp.zeros((num_experts,), jnp.int32),
                         jnp.int32(0) if phase.respawn else None)
-        (state, counts), _ = jax.lax.scan(one_step, (state, counts), None, length=bin_steps,
+        (state, counts), _ = jax.lax.scan(one_step, (state, counts), None, length=steps_per_bin,
                                           unroll=config.scan_unroll)
         return state, counts
 
@@ -204,41 +170,30 @@ def simulate(key: jax.Array, config: Config, phase: Phase, params: LearningParam
     state = for_phase(config, phase, state)
 
     def one_step(state, _):
-        return step(config, phase, params, task, phase_steps, key, state)
+        return step(key, config, phase, params, task, phase_steps, state)
 
     return jax.lax.scan(one_step, state, None, length=num_steps)
 
 
-def task_spec(config: Config, index, dtype=jnp.float32) -> TaskSpec:
-    """The start pose and target of task ``index`` (an int or a traced index)."""
-    starts, targets, _ = task_arrays(config, dtype)
-    return TaskSpec(Pose(starts.pos[index], starts.heading[index]), targets[index])
-
-
-def childhood_task(config: Config, dtype=jnp.float32) -> TaskSpec:
-    """A placeholder task for childhood, which has no target."""
-    return TaskSpec(Pose(jnp.zeros((2,), dtype), jnp.zeros((), dtype)), jnp.zeros((2,), dtype))
-
-
 def adult_agent(config: Config, agent: Agent) -> Agent:
-    """The agent a task starts with: selector reset to 0 (SLE: its expert too, paper)."""
+    """The agent a task starts with: the networks the condition resets set back to their start
+    (LE-LS, EE-LS: the selector; SLE: everything; EE-ES: nothing)."""
+    reset = config.spec.reset
+    if not reset:
+        return agent
     fresh = zero_agent(config, agent.actor.dtype)
-    if config.condition == "SLE":
-        return fresh
-    if config.condition == "EE-ES":
-        return agent  # nothing learns; the selector is evolved
-    return agent._replace(selector_actor=fresh.selector_actor, selector_critic=fresh.selector_critic)
+    return agent._replace(**{network: getattr(fresh, network) for network in reset})
 
 
 def grow_up(keys: LifetimeKeys, config: Config, params: LearningParams, genome: jnp.ndarray):
-    """The experts adulthood starts from: the decoded genome after its childhood (LE-LS only).
+    """The experts adulthood starts from: the decoded genome after its childhood (conditions that have one).
 
     Returns the agent and the childhood's selections per bin (zeros without childhood).
     """
     agent = decode(config, genome)
     dtype = agent.actor.dtype
     childhood_selections = jnp.zeros((config.num_bins, agent.selector_actor.shape[0]), jnp.int32)
-    if config.condition == "LE-LS":
+    if config.spec.has_childhood:
         state = init_state(config, agent, random_pose(keys.pose, config, dtype))
         state, curves = run_phase(keys.childhood, config, childhood_phase(config), params, childhood_task(config, dtype),
                                   state, config.childhood_steps)
@@ -257,7 +212,7 @@ def live(key: jax.Array, config: Config, params: LearningParams, genome: jnp.nda
     agent, childhood_selections = grow_up(keys, config, params, genome)
     dtype = agent.actor.dtype
 
-    phase = adult_phase(config.condition)
+    phase = config.spec.adult
 
     def live_task(task_key, index):
         state, curves = run_phase(task_key, config, phase, params, task_spec(config, index, dtype),

@@ -6,6 +6,7 @@ an :class:`Agent` pytree; :func:`decode` turns a genome into the weights a condi
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import jax
@@ -98,32 +99,25 @@ def zero_agent(config: Config, dtype=jnp.float32) -> Agent:
 
 
 def decode(config: Config, genome: jnp.ndarray) -> Agent:
-    """The weights a genome encodes (MODEL.md "Conditions"); the rest start at 0.
+    """The weights a genome encodes (MODEL.md "Conditions"); the rest start as :func:`zero_agent`.
 
-    LE-LS: the K reinforcers. EE-LS: the K actors. EE-ES: the K actors, then the selector
-    actor. SLE: nothing (genome of length 0).
+    The genome lists the networks of ``config.spec.genome`` one after the other (LE-LS: the K
+    reinforcers; EE-LS: the K actors; EE-ES: the K actors, then the selector actor; SLE: nothing).
     """
     if genome.shape != (config.num_genes,):
         raise ValueError(f"genome: expected shape ({config.num_genes},) for {config.condition}, "
                          f"got {genome.shape}")
     agent = zero_agent(config, genome.dtype)
-    k, n = config.num_experts, config.num_inputs + 1
-    if config.condition == "LE-LS":
-        return agent._replace(reinforcer=genome.reshape(k, n))
-    if config.condition == "EE-LS":
-        return agent._replace(actor=genome.reshape(k, 2, n))
-    if config.condition == "EE-ES":
-        return agent._replace(actor=genome[: 2 * k * n].reshape(k, 2, n),
-                              selector_actor=genome[2 * k * n:].reshape(k, n))
-    return agent
+    start, networks = 0, {}
+    for network in config.spec.genome:
+        shape = getattr(agent, network).shape
+        size = math.prod(shape)
+        networks[network] = genome[start:start + size].reshape(shape)
+        start += size
+    return agent._replace(**networks)
 
 
 def encode(config: Config, agent: Agent) -> jnp.ndarray:
     """Inverse of :func:`decode`: the genome of the evolved parts of an agent."""
-    if config.condition == "LE-LS":
-        return agent.reinforcer.reshape(-1)
-    if config.condition == "EE-LS":
-        return agent.actor.reshape(-1)
-    if config.condition == "EE-ES":
-        return jnp.concatenate([agent.actor.reshape(-1), agent.selector_actor.reshape(-1)])
-    return jnp.zeros((0,), agent.actor.dtype)
+    parts = [getattr(agent, network).reshape(-1) for network in config.spec.genome]
+    return jnp.concatenate(parts) if parts else jnp.zeros((0,), agent.actor.dtype)

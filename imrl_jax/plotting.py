@@ -12,6 +12,7 @@ import os
 
 import numpy as np
 
+from imrl_jax.conditions import CONDITIONS as TABLE
 from imrl_jax.config import CONDITIONS, Config
 
 FLOOR_COLOURS = ("#d62728", "#2ca02c", "#1f77b4")  # red, green, blue lines
@@ -19,8 +20,7 @@ EXPERT_COLOURS = ("#ff7f0e", "#9467bd", "#111111", "#8c564b", "#e377c2", "#7f7f7
 DPI = 110  # resolution of saved figures
 NOTHING_COLOUR = "#d9d9d9"  # a receptor that sees no colour
 SEEN_COLOURS = FLOOR_COLOURS + (NOTHING_COLOUR,)  # red, green, blue, nothing
-CONDITION_STYLES = {"LE-LS": dict(color="black", lw=2.2), "EE-LS": dict(color="0.55", lw=1.8),
-                    "EE-ES": dict(color="black", lw=1.4, ls="--"), "SLE": dict(color="tab:blue", lw=1.4, ls=":")}
+CONDITION_STYLES = {name: condition.style for name, condition in TABLE.items()}
 
 
 def new_figure(width: float, height: float):

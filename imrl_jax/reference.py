@@ -21,9 +21,14 @@ import math
 
 import numpy as np
 
+from imrl_jax.conditions import (ADULT_EVOLVED_SELECTOR, ADULT_LEARNING_SELECTOR, ADULT_SINGLE_EXPERT, CHILDHOOD,
+                                 Phase)
+
 NO_COLOUR, RED, GREEN, BLUE = -1, 0, 1, 2
 
-PHASES = ("childhood", "adult-ls", "adult-es", "sle")
+#: The phases by name (a phase may also be given as a :class:`~imrl_jax.conditions.Phase`).
+PHASES = {"childhood": CHILDHOOD, "adult-ls": ADULT_LEARNING_SELECTOR, "adult-es": ADULT_EVOLVED_SELECTOR,
+          "sle": ADULT_SINGLE_EXPERT}
 
 WEIGHT_KEYS = ("reinforcer", "actor", "evaluator", "selector_actor", "selector_critic")
 
@@ -200,23 +205,17 @@ def zero_weights(config, num_experts):
 
 
 def decode(config, genome):
-    """The weights a genome encodes for config.condition; the rest are 0."""
+    """The weights a genome encodes for config.condition (its networks one after the other); the rest are 0."""
     genome = np.asarray(genome, dtype=np.float64)
-    k, n = config.num_experts, config.num_inputs + 1
-    if config.condition == "SLE":
-        if genome.size != 0:
-            raise ValueError("SLE has no genome")
-        return zero_weights(config, 1)
-    weights = zero_weights(config, k)
-    if config.condition == "LE-LS":
-        weights["reinforcer"] = genome.reshape(k, n).copy()
-    elif config.condition == "EE-LS":
-        weights["actor"] = genome.reshape(k, 2, n).copy()
-    elif config.condition == "EE-ES":
-        weights["actor"] = genome[: 2 * k * n].reshape(k, 2, n).copy()
-        weights["selector_actor"] = genome[2 * k * n:].reshape(k, n).copy()
-    else:
-        raise ValueError(f"unknown condition {config.condition!r}")
+    weights = zero_weights(config, config.num_lane_experts)
+    if genome.size != config.num_genes:
+        raise ValueError(f"genome: {config.condition} has {config.num_genes} genes, got {genome.size}")
+    start = 0
+    for network in config.spec.genome:
+        shape = weights[network].shape
+        size = int(np.prod(shape))
+        weights[network] = genome[start:start + size].reshape(shape).copy()
+        start += size
     return weights
 
 
@@ -226,7 +225,9 @@ def decode(config, genome):
 def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, spawn=None) -> dict:
     """Run one phase step by step (MODEL.md "Acting" and "Learning"; docs/CHILDHOOD.md options).
 
-    phase: "childhood", "adult-ls", "adult-es" or "sle". pose: (x, y, heading radians).
+    phase: a :class:`~imrl_jax.conditions.Phase` or its name in :data:`PHASES` ("childhood",
+    "adult-ls", "adult-es", "sle"); a phase with intrinsic rewards takes the config's childhood
+    options and values. pose: (x, y, heading radians).
     u (T,) uniform draws for the expert choice, z (T, 2) normal draws for the action noise,
     spawn (T, 3) uniform draws of a random pose (childhood with config.childhood_walls
     "respawn" only). task: task index for the adult phases (None in childhood).
@@ -234,8 +235,10 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
     step, the experts chosen, the reach/timeout/respawn flags, the final weights and the
     number of reaches.
     """
-    if phase not in PHASES:
-        raise ValueError(f"unknown phase {phase!r}")
+    if not isinstance(phase, Phase):
+        if phase not in PHASES:
+            raise ValueError(f"unknown phase {phase!r}")
+        phase = PHASES[phase]
     u = np.asarray(u, dtype=np.float64)
     z = np.asarray(z, dtype=np.float64)
     num_steps = u.shape[0]
@@ -246,13 +249,11 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
     num_experts = w["selector_actor"].shape[0]
     n = w["selector_critic"].shape[0]
 
-    experts_learn = phase in ("childhood", "sle")
-    selector_learns = phase in ("childhood", "adult-ls")
-    noisy = phase in ("childhood", "sle")
-    has_target = phase != "childhood"
+    experts_learn, selector_learns = phase.experts_learn, phase.selector_learns
+    noisy, has_target = phase.noisy, phase.has_target
 
     gamma = config.gamma
-    childhood = phase == "childhood"
+    childhood = phase.intrinsic
     # Childhood learns with its own trace decay and selector rates.
     decay = config.gamma * (config.childhood_trace_lambda if childhood else config.trace_lambda)
     eta_selector_actor = config.childhood_eta_selector_actor if childhood else config.eta_selector_actor
@@ -312,7 +313,7 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
         if prev_valid:
             if experts_learn and same_expert:
                 kp = prev_k
-                if phase == "childhood":
+                if childhood:
                     reward = 2.0 * _sigmoid(w["reinforcer"][kp] @ xb) - 1.0
                 else:
                     reward = 1.0 if prev_reached else 0.0
@@ -330,7 +331,7 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
 
             selector_reward = None
             if selector_learns:
-                if phase == "childhood":
+                if childhood:
                     if same_expert:
                         selector_reward = expert_delta
                         if progress:
@@ -423,13 +424,6 @@ def _task_pose(config, i):
     return (float(spec.start[0]), float(spec.start[1]), math.radians(spec.heading_deg))
 
 
-def _reset_selector(weights):
-    w = _copy_weights(weights)
-    w["selector_actor"] = np.zeros_like(w["selector_actor"])
-    w["selector_critic"] = np.zeros_like(w["selector_critic"])
-    return w
-
-
 def live(config, genome, start_pose, childhood_u, childhood_z, task_u, task_z, childhood_spawn=None) -> dict:
     """One whole life of config.condition (MODEL.md "Life" and "Conditions").
 
@@ -438,24 +432,12 @@ def live(config, genome, start_pose, childhood_u, childhood_z, task_u, task_z, c
     childhood_spawn (childhood_steps, 3) with config.childhood_walls "respawn".
     task_u (tasks, task_steps), task_z (tasks, task_steps, 2): the draws of each task.
     """
-    condition = config.condition
-    weights = decode(config, genome)
-    if condition == "LE-LS":
-        child = run_phase(config, "childhood", weights, start_pose, childhood_u, childhood_z,
+    spec = config.spec
+    grown = decode(config, genome)
+    if spec.has_childhood:
+        child = run_phase(config, spec.childhood, grown, start_pose, childhood_u, childhood_z,
                           task=None, phase_steps=config.childhood_steps, spawn=childhood_spawn)
         grown = child["weights"]
-        adult_phase = "adult-ls"
-    elif condition == "EE-LS":
-        grown = weights
-        adult_phase = "adult-ls"
-    elif condition == "EE-ES":
-        grown = weights
-        adult_phase = "adult-es"
-    elif condition == "SLE":
-        grown = zero_weights(config, 1)
-        adult_phase = "sle"
-    else:
-        raise ValueError(f"unknown condition {condition!r}")
 
     task_u = np.asarray(task_u, dtype=np.float64)
     task_z = np.asarray(task_z, dtype=np.float64)
@@ -463,13 +445,11 @@ def live(config, genome, start_pose, childhood_u, childhood_z, task_u, task_z, c
     reaches = np.zeros(config.num_tasks, dtype=np.int64)
     task_weights = []
     for i in range(config.num_tasks):
-        if adult_phase == "adult-ls":
-            start_weights = _reset_selector(grown)
-        elif adult_phase == "sle":
-            start_weights = zero_weights(config, 1)
-        else:
-            start_weights = _copy_weights(grown)
-        result = run_phase(config, adult_phase, start_weights, _task_pose(config, i), task_u[i], task_z[i],
+        start_weights = _copy_weights(grown)
+        fresh = zero_weights(config, config.num_lane_experts)
+        for network in spec.reset:  # what the condition sets back to its start at each task
+            start_weights[network] = fresh[network]
+        result = run_phase(config, spec.adult, start_weights, _task_pose(config, i), task_u[i], task_z[i],
                            task=i, phase_steps=config.adult_noise_steps)
         reaches[i] = result["reaches"]
         task_weights.append(result["weights"])

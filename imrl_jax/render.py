@@ -29,7 +29,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from imrl_jax.cli import HelpFormatter, UsageError
+from imrl_jax.cli import HelpFormatter, UsageError, user_errors
 from imrl_jax.rundir import check_writable, load_run
 
 FORMATS = (".gif", ".mp4")
@@ -53,16 +53,17 @@ def best_individual(run_dir: str) -> Best:
     return Best(run.config, run.evaluated[s, i], run.seeds[s], int(i), run.generation - 1, float(run.fitness[s, i]))
 
 
-def life_key(config, seed: int, generation: int, index: int):
-    """The key of the life individual ``index`` of ``seed`` lived in ``generation`` of an evolve run."""
+def life_key(config, seed: int, generation: int, index: int, life: int = 0):
+    """The key of life ``life`` (of ``config.lives_per_fitness``) of individual ``index`` of ``seed`` in
+    ``generation`` of an evolve run: the key the GA lived it with."""
     import jax
 
     from imrl_jax.evolve import evolution_keys, seed_keys
-    from imrl_jax.ga import generation_keys
+    from imrl_jax.search import generation_keys, life_keys
 
     key = evolution_keys(np.asarray(jax.random.key_data(seed_keys([seed]))))[0]
     key_life, _ = generation_keys(key, generation)
-    return jax.random.split(key_life, config.population_size)[index]
+    return life_keys(key_life, config.population_size, config.lives_per_fitness)[index, life]
 
 
 def check_output(out_path: str, overwrite: bool = False) -> str:
@@ -142,7 +143,7 @@ def main(argv=None) -> int:
     args = parser().parse_args(argv)
     try:
         summary = run(args.run_dir, args.task, args.out, args.steps, args.every, args.fps, args.overwrite)
-    except UsageError as error:
+    except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
     print(f"wrote {summary['out']}: {summary['frames']} frames of task {summary['task']} "

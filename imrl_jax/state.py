@@ -16,42 +16,29 @@ import jax
 import jax.numpy as jnp
 
 from imrl_jax.arena import Pose, heading_vector
-from imrl_jax.config import Config, LearningParams
+from imrl_jax.conditions import CHILDHOOD, Phase
+from imrl_jax.config import Config, ConfigError, LearningParams
 from imrl_jax.networks import Agent
 
-class Phase(NamedTuple):
-    """Static description of a phase: who learns, from what, and whether there is a target."""
 
-    experts_learn: bool
-    selector_learns: bool
-    intrinsic: bool  # rewards: own reinforcer for experts, expert surprise for the selector
-    has_target: bool
-    noisy: bool  # actions get Gaussian noise annealed linearly to 0 over the phase
-    respawn: bool = False  # a robot on a wall for config.wall_respawn_steps steps gets a random pose
-    progress: bool = False  # childhood selector: surprise minus the expert's running mean surprise
-
-
-CHILDHOOD = Phase(experts_learn=True, selector_learns=True, intrinsic=True, has_target=False, noisy=True)
-ADULT_LEARNING_SELECTOR = Phase(False, True, False, True, False)
-ADULT_EVOLVED_SELECTOR = Phase(False, False, False, True, False)
-ADULT_SINGLE_EXPERT = Phase(True, False, False, True, True)
+def bin_steps(num_steps: int, num_bins: int) -> int:
+    """Steps per bin of a phase of ``num_steps`` steps; a count the bins do not divide is refused, not cut."""
+    if num_bins < 1 or num_steps % num_bins:
+        raise ConfigError(f"num_steps, num_bins: {num_steps} steps cannot be split into {num_bins} equal bins "
+                          f"(steps must be a multiple of the bins)")
+    return num_steps // num_bins
 
 
 def childhood_phase(config: Config) -> Phase:
-    """The childhood phase with the config's options (docs/CHILDHOOD.md; the paper's by default)."""
-    return CHILDHOOD._replace(respawn=config.childhood_walls == "respawn",
-                              progress=config.childhood_selector_reward == "progress")
+    """The condition's childhood phase (LE-LS's by default) with the config's options (docs/CHILDHOOD.md)."""
+    phase = config.spec.childhood if config.spec.has_childhood else CHILDHOOD
+    return phase._replace(respawn=config.childhood_walls == "respawn",
+                          progress=config.childhood_selector_reward == "progress")
 
 
 def phase_params(phase: Phase, params: LearningParams) -> LearningParams:
     """The learning values a phase uses: childhood (intrinsic rewards) has its own."""
     return params.in_childhood() if phase.intrinsic else params
-
-
-def adult_phase(condition: str) -> Phase:
-    """The adulthood phase of a condition (MODEL.md "Conditions")."""
-    return {"LE-LS": ADULT_LEARNING_SELECTOR, "EE-LS": ADULT_LEARNING_SELECTOR,
-            "EE-ES": ADULT_EVOLVED_SELECTOR, "SLE": ADULT_SINGLE_EXPERT}[condition]
 
 
 class Draws(NamedTuple):
@@ -105,13 +92,6 @@ class State(NamedTuple):
     block: Draws  # the random numbers of the current block of steps
     pinned: jnp.ndarray  # steps on a wall in a row (childhood with respawns)
     baseline: jnp.ndarray  # (K,): each expert's running mean surprise (childhood "progress" reward)
-
-
-class TaskSpec(NamedTuple):
-    """Where a phase starts trials and where its target is (unused without a target)."""
-
-    start: Pose
-    target: jnp.ndarray
 
 
 class StepRecord(NamedTuple):

@@ -35,19 +35,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from imrl_jax.config import Config, LearningParams
-from imrl_jax.ga import generation_keys, init_population, reproduce, select
-from imrl_jax.lifetime import LifetimeResult, live
+from imrl_jax import search
+from imrl_jax.ga import GA, GAParams
+from imrl_jax.lifetime import live
 
 #: Learning rates set together by the pseudo-field ``eta`` (the paper has one rate).
 ETA_FIELDS = ("eta_actor", "eta_evaluator", "eta_selector_actor", "eta_selector_critic",
               "childhood_eta_selector_actor", "childhood_eta_selector_critic")
-
-
-class GAParams(NamedTuple):
-    """The GA's dynamic values: per-gene mutation probability and the U[-scale, scale] size."""
-
-    mutation_prob: float
-    mutation_scale: float
 
 
 class SweepPoint(NamedTuple):
@@ -170,23 +164,22 @@ def make_lifetime_sweep(config: Config):
 
 def evolve_one(config: Config, num_generations: int, seed_key: jax.Array, sweep_point: SweepPoint) -> EvolutionCurves:
     """A short evolution of one seed at one point, with the keys of ``python -m imrl_jax.evolve``."""
-    population = init_population(jax.random.fold_in(seed_key, 0), config)
+    strategy = GA(config)
+    state = strategy.init(jax.random.fold_in(seed_key, 0))
     key = jax.random.fold_in(seed_key, 1)
     params = sweep_point.params
 
     def generation(carry, g):
-        population, _, _ = carry
-        key_life, key_reproduce = generation_keys(key, g)
-        lives = jax.random.split(key_life, config.population_size)
-        result: LifetimeResult = jax.vmap(lambda k, genome: live(k, config, params, genome))(lives, population)
-        parents = select(result.fitness, config.num_parents)
-        children = reproduce(key_reproduce, config, population, parents, *sweep_point.ga)
-        best = parents[0]
-        stats = (result.fitness.max(), result.fitness.mean(), result.performance[best],
-                 result.reward_curve[best], result.childhood_selections[best])
-        return (children, population, result.fitness), stats
+        state, _, _ = carry
+        state, result = search.generation(key, strategy, lambda k, genome: live(k, config, params, genome), state,
+                                          sweep_point.ga, g)
+        best, life = result.info[0], jax.tree.map(lambda x: x[:, 0], result.lives)  # parents best first; one life
+        stats = (result.fitness.max(), result.fitness.mean(), life.performance[best],
+                 life.reward_curve[best], life.childhood_selections[best])
+        return (state, result.genomes, result.fitness), stats
 
-    start = (population, population, jnp.zeros((config.population_size,), population.dtype))
+    population = state.population
+    start = (state, population, jnp.zeros((config.population_size,), population.dtype))
     (_, evaluated, fitness), stats = jax.lax.scan(generation, start, jnp.arange(num_generations))
     return EvolutionCurves(*stats, evaluated, fitness)
 

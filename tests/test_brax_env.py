@@ -20,7 +20,7 @@ from imrl_jax.learning import take_row  # noqa: E402
 from imrl_jax.lifetime import random_pose, step, task_spec, task_start  # noqa: E402
 from imrl_jax.networks import reinforce, with_bias, zero_agent  # noqa: E402
 from imrl_jax.retina import observe  # noqa: E402
-from imrl_jax.state import ADULT_EVOLVED_SELECTOR  # noqa: E402
+from imrl_jax.conditions import ADULT_EVOLVED_SELECTOR  # noqa: E402
 
 STEPS = 2000
 
@@ -35,7 +35,7 @@ def project_steps(config, task: int, key):
     spec = task_spec(config, task - 1)
 
     def one(state, _):
-        new, record = step(config, ADULT_EVOLVED_SELECTOR, config.learning_params(), spec, STEPS, key, state)
+        new, record = step(key, config, ADULT_EVOLVED_SELECTOR, config.learning_params(), spec, STEPS, state)
         return new, (take_row(new.xbs, state.t % 2)[:-1], new.prev.action, record.pose, record.reached,
                      record.timeout)
 

@@ -12,9 +12,11 @@ import numpy as np
 import pytest
 
 from imrl_jax import evolve, ga
+from imrl_jax import conditions as C
+from imrl_jax import state as S
 from imrl_jax import lifetime as L
 from imrl_jax.arena import Pose
-from imrl_jax.config import ConfigError, make_config
+from imrl_jax.config import make_config
 from imrl_jax.networks import decode
 
 
@@ -37,7 +39,7 @@ def test_robot_pinned_on_a_wall_is_put_at_a_random_pose_after_n_steps(tiny):
     x = np.asarray(record.pose.pos[:, 0])
     np.testing.assert_allclose(x[:6], [18, 16, 15, 15, 15, 15], atol=1e-4)
     # The new pose is the step's spawn draw, scaled to the arena.
-    draws = L.draw_many(key, 40, config.draw_block, spawn=True)
+    draws = S.draw_many(key, 40, config.draw_block, spawn=True)
     r, size = config.robot_radius, config.arena_size
     np.testing.assert_allclose(np.asarray(record.pose.pos[6]), r + (size - 2 * r) * np.asarray(draws.spawn[6, :2]),
                                rtol=1e-6)
@@ -64,9 +66,9 @@ def test_paper_childhood_draws_are_unchanged_by_the_respawn_draws():
 def test_childhood_learns_with_its_own_values_and_adulthood_with_the_adult_ones(tiny):
     params = make_config("paper", trace_lambda=0.9, eta_selector_actor=0.5, childhood_eta_selector_critic=0.02,
                          childhood_trace_lambda=0.3).learning_params()
-    child = L.phase_params(L.CHILDHOOD, params)
+    child = S.phase_params(C.CHILDHOOD, params)
     assert (child.trace_lambda, child.eta_selector_actor, child.eta_selector_critic) == (0.3, 0.01, 0.02)
-    assert L.phase_params(L.ADULT_LEARNING_SELECTOR, params) == params
+    assert S.phase_params(C.ADULT_LEARNING_SELECTOR, params) == params
 
 
 def test_fitness_as_the_mean_of_several_lives(tiny):

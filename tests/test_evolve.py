@@ -1,6 +1,7 @@
 """The evolve command: run directory, exact resume after SIGKILL, fall-back, bad input."""
 
 import os
+import shutil
 import signal
 import subprocess
 import time
@@ -120,11 +121,26 @@ def test_finished_run_extended_is_bitwise_an_uninterrupted_longer_run(tmp_path, 
         info = json.load(f)
     assert info["config"]["num_generations"] == 3 and info["extended"][0]["num_generations"] == [2, 3]
     before = _snapshot(extended)
-    for generations, message in (("2", "num_generations is 2 but the run in"), ("1", "may only grow it")):
+    for generations, message in (("2", "num_generations is 2 but the run used 3"), ("1", "may only grow it")):
         assert evolve.main([*args, "--generations", generations, "--out", extended, "--resume"]) == 2
         err = capsys.readouterr().err.strip()
         assert message in err and err.startswith("error: ") and len(err.splitlines()) == 1
     assert _snapshot(extended) == before
+
+
+def test_resume_accepts_other_compute_choices_and_ignored_fields_listing_every_real_difference(
+        finished_run, tmp_path, capsys):
+    """scan_unroll is how, not what; EE-LS never reads eta_actor: neither blocks a resume. Model changes are all named."""
+    out = str(tmp_path / "copy")
+    shutil.copytree(finished_run, out)
+    assert evolve.main([*TINY, "--generations", "6", "--out", out, "--resume", "--set", "scan_unroll=2",
+                        "--set", "eta_actor=0.5"]) == 0
+    _assert_same_outputs(out, finished_run)
+    capsys.readouterr()
+    assert evolve.main([*_tiny(task_steps="500"), "--generations", "6", "--out", out, "--resume",
+                        "--set", "gamma=0.5"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "task_steps is 500" in err and "gamma is 0.5" in err
 
 
 def _snapshot(out_dir):
@@ -139,7 +155,7 @@ def _snapshot(out_dir):
 
 @pytest.mark.parametrize("args, message", [
     (TINY, "already holds a run"),
-    ([*_tiny(task_steps="500"), "--resume"], "config field task_steps is 500"),
+    ([*_tiny(task_steps="500"), "--resume"], "task_steps is 500 but the run used 1000"),
     ([*_tiny(seeds="3"), "--resume"], "seeds [0, 1, 2] differ"),
 ])
 def test_bad_input_exits_2_and_changes_nothing(finished_run, capsys, args, message):

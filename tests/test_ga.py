@@ -74,3 +74,38 @@ def test_generation_step_over_seeds(tiny):
     alone, alone_stats = generation(keys[:1], config.learning_params(), populations[:1], 0)
     np.testing.assert_array_equal(alone[0], children[0])
     np.testing.assert_array_equal(alone_stats.fitness[0], stats.fitness[0])
+
+
+def test_the_ga_behind_ask_and_tell():
+    """ask gives the population as it is; tell selects by the fitness passed in (maximised) and mutates."""
+    strategy = ga.GA(_config(population_size=10, num_parents=2))
+    params = strategy.default_params()
+    assert params == ga.GAParams(0.1, 1.0)
+    state = strategy.init(jax.random.key(0), params)
+    genomes, asked = strategy.ask(jax.random.key(1), state, params)
+    np.testing.assert_array_equal(genomes, state.population)
+    assert asked is state and genomes.shape == (10, 333)
+    fitness = jnp.arange(10.0)
+    nxt, parents = strategy.tell(jax.random.key(2), genomes, fitness, state, params._replace(mutation_prob=0.0))
+    np.testing.assert_array_equal(parents, [9, 8])  # the highest fitness first: it maximises
+    np.testing.assert_array_equal(nxt.population[:5], np.repeat(np.asarray(genomes)[9:10], 5, 0))
+    np.testing.assert_array_equal(nxt.population[5:], np.repeat(np.asarray(genomes)[8:9], 5, 0))
+
+
+def test_render_relives_each_of_several_lives_the_ga_lived(tiny, tmp_path):
+    """With lives_per_fitness 2 the recorded fitness is the mean of the two lives render's keys relive."""
+    from imrl_jax import evolve, render
+    from imrl_jax.lifetime import live
+
+    config = tiny("EE-ES", task_steps=300, num_bins=1, lives_per_fitness=2, num_generations=1,
+                  target_radius=40.0)  # reaches are common: the two lives differ
+    out = str(tmp_path / "run")
+    evolve.run(config, out, [3], quiet=True)
+    with np.load(f"{out}/final_population.npz") as data:
+        evaluated, fitness = data["evaluated"][0], data["fitness"][0]
+    best = int(np.argmax(fitness))
+    lives = [float(jax.jit(live, static_argnums=1)(render.life_key(config, 3, 0, best, life), config,
+                                                   config.learning_params(), jnp.asarray(evaluated[best])).fitness)
+             for life in range(2)]
+    assert lives[0] != lives[1]
+    np.testing.assert_allclose(np.mean(lives), fitness[best], rtol=1e-6)

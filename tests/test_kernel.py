@@ -14,6 +14,7 @@ import pytest
 from helpers import EXTENDED, SHORT_TASK, assert_trees_close, hand_experts
 
 from imrl_jax import kernel as K
+from imrl_jax import conditions as C
 from imrl_jax import lifetime as L
 from imrl_jax.arena import Pose
 from imrl_jax.networks import decode
@@ -56,7 +57,7 @@ def test_phase_in_pieces_matches_xla(tiny, condition, options):
         agent = L.adult_agent(config, decode(config, jnp.zeros((config.num_genes,), jnp.float64)))
         if condition == "EE-LS":
             agent = agent._replace(actor=jnp.asarray(hand_experts(n)))
-        phase, task = L.adult_phase(condition), L.task_spec(config, 0, jnp.float64)
+        phase, task = C.get(condition).adult, L.task_spec(config, 0, jnp.float64)
         pose = task.start
     state = L.for_phase(config, phase, L.init_state(config, agent, pose))
     pallas = config.replace(step_kernel="pallas")
@@ -110,7 +111,7 @@ def test_kernel_lowers_to_triton_for_gpu(tiny):
         child, _ = K.run_phase(key, config, L.childhood_phase(config), params, L.childhood_task(config), child,
                                config.childhood_steps, interpret=False)
         adult = L.task_start(config, child.agent, 0)
-        return K.run_phase(key, config, L.ADULT_LEARNING_SELECTOR, params, L.task_spec(config, 0), adult,
+        return K.run_phase(key, config, C.ADULT_LEARNING_SELECTOR, params, L.task_spec(config, 0), adult,
                            config.task_steps, interpret=False)
 
     keys = jax.random.split(jax.random.key(0), 6).reshape(2, 3)

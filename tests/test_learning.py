@@ -45,3 +45,13 @@ def test_pick_row_is_the_row_bit_for_bit():
         np.testing.assert_array_equal(pick_row(matrix, k), matrix[k])
     picked = jax.vmap(pick_row)(jnp.stack([matrix] * 3), jnp.arange(3))
     np.testing.assert_array_equal(picked, matrix)
+
+
+def test_after_choice_is_the_flag_itself():
+    import jax.numpy as jnp
+
+    from imrl_jax.learning import after_choice
+
+    for flag in (True, False):
+        for k in range(3):
+            assert bool(after_choice(jnp.bool_(flag), jnp.int32(k))) is flag

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from helpers import assert_trees_close, random_genomes
 
+from imrl_jax import conditions as C
 from imrl_jax import lifetime as L
 from imrl_jax.config import CONDITIONS
 from imrl_jax.networks import decode, encode
@@ -62,16 +63,16 @@ def test_binned_phase_equals_step_by_step_loop(tiny):
     task = L.task_spec(config, 2)
     state = L.init_state(config, L.adult_agent(config, agent), task.start)
     key = jax.random.key(5)
-    phase = L.ADULT_LEARNING_SELECTOR
+    phase = C.ADULT_LEARNING_SELECTOR
 
     binned_state, curves = jax.jit(L.run_phase, static_argnums=(1, 2, 6))(
         key, config, phase, params, task, state, 60)
     sim_state, records = jax.jit(L.simulate, static_argnums=(1, 2, 6))(key, config, phase, params, task, state, 60)
-    step = jax.jit(L.step, static_argnums=(0, 1, 4))
+    step = jax.jit(L.step, static_argnums=(1, 2, 5))
     loop_state = state
     ks = []
     for _ in range(60):
-        loop_state, record = step(config, phase, params, task, 60, key, loop_state)
+        loop_state, record = step(key, config, phase, params, task, 60, loop_state)
         ks.append(int(record.k))
 
     np.testing.assert_array_equal(np.asarray(records.k), ks)

@@ -14,6 +14,8 @@ import numpy as np
 import pytest
 from helpers import EXTENDED, SHORT_TASK, hand_experts
 
+from imrl_jax import conditions as C
+from imrl_jax import state as S
 from imrl_jax import lifetime as L
 from imrl_jax import reference
 from imrl_jax.arena import Pose
@@ -37,7 +39,7 @@ def _assert_weights_close(jax_agent: Agent, ref: dict):
 
 def _compare_phase(config, phase, phase_name, agent, pose, task_index, params, seed=0):
     key = jax.random.key(seed)
-    draws = L.draw_many(key, STEPS, config.draw_block, spawn=phase.respawn)
+    draws = S.draw_many(key, STEPS, config.draw_block, spawn=phase.respawn)
     task = L.childhood_task(config, jnp.float64) if task_index is None else L.task_spec(config, task_index, jnp.float64)
     state = L.init_state(config, agent, pose)
     final, record = jax.jit(L.simulate, static_argnums=(1, 2, 6))(key, config, phase, params, task, state, STEPS)
@@ -84,16 +86,16 @@ def test_adult_phase_matches_reference(tiny, condition, rules):
     n = config.num_inputs + 1
     if condition == "SLE":
         agent = L.adult_agent(config, decode(config, jnp.zeros((0,), jnp.float64)))
-        phase, name = L.ADULT_SINGLE_EXPERT, "sle"
+        phase, name = C.ADULT_SINGLE_EXPERT, "sle"
     else:
         agent = decode(config, jnp.zeros((config.num_genes,), jnp.float64))
         agent = agent._replace(actor=jnp.asarray(hand_experts(n)))
         if condition == "EE-ES":
             selector = jax.random.uniform(jax.random.key(3), (3, n), jnp.float64, -1.0, 1.0)
             agent = agent._replace(selector_actor=selector)
-            phase, name = L.ADULT_EVOLVED_SELECTOR, "adult-es"
+            phase, name = C.ADULT_EVOLVED_SELECTOR, "adult-es"
         else:
-            phase, name = L.ADULT_LEARNING_SELECTOR, "adult-ls"
+            phase, name = C.ADULT_LEARNING_SELECTOR, "adult-ls"
     task = L.task_spec(config, 0, jnp.float64)
     events = _compare_phase(config, phase, name, agent, task.start, 0, params)
     assert events["reaches"] > 0 and events["timeouts"] > 0 and events["walls"] > 0, events
@@ -120,8 +122,8 @@ def test_whole_life_matches_reference(tiny, condition, rules):
 
     keys = L.lifetime_keys(key, config.num_tasks)
     pose = L.random_pose(keys.pose, config, jnp.float64)
-    child = L.draw_many(keys.childhood, config.childhood_steps, config.draw_block)
-    tasks = jax.vmap(L.draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
+    child = S.draw_many(keys.childhood, config.childhood_steps, config.draw_block)
+    tasks = jax.vmap(S.draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
     ref = reference.live(config, np.asarray(genome), (float(pose.pos[0]), float(pose.pos[1]), float(pose.heading)),
                          np.asarray(child.u), np.asarray(child.z), np.asarray(tasks.u), np.asarray(tasks.z))
     np.testing.assert_array_equal(np.asarray(result.reaches), ref["reaches"])
@@ -140,8 +142,8 @@ def test_float32_lifetime_tracks_float64_reference(tiny):
     task = L.task_spec(config, 0)
     key = jax.random.key(0)
     final, record = jax.jit(L.simulate, static_argnums=(1, 2, 6))(
-        key, config, L.ADULT_LEARNING_SELECTOR, params, task, L.init_state(config, agent, task.start), STEPS)
-    draws = L.draw_many(key, STEPS, config.draw_block)
+        key, config, C.ADULT_LEARNING_SELECTOR, params, task, L.init_state(config, agent, task.start), STEPS)
+    draws = S.draw_many(key, STEPS, config.draw_block)
     ref = reference.run_phase(config, "adult-ls", _to_numpy(agent), (300.0, 200.0, 0.0),
                               np.asarray(draws.u, np.float64), np.asarray(draws.z, np.float64), task=0)
     np.testing.assert_array_equal(np.asarray(record.k), ref["k"])
@@ -163,7 +165,7 @@ def test_sle_noise_horizon_matches_reference(tiny):
     result = _live(key, config, params, genome)
     keys = L.lifetime_keys(key, config.num_tasks)
     pose = L.random_pose(keys.pose, config, jnp.float64)
-    tasks = jax.vmap(L.draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
+    tasks = jax.vmap(S.draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
     none = np.zeros((0,))
     ref = reference.live(config, np.asarray(genome), (float(pose.pos[0]), float(pose.pos[1]), float(pose.heading)),
                          none, np.zeros((0, 2)), np.asarray(tasks.u), np.asarray(tasks.z))

@@ -8,7 +8,8 @@ from helpers import random_genomes
 
 from imrl_jax import behaviour, evolve, render, sweeps
 from imrl_jax.config import Config, ConfigError
-from imrl_jax.ga import generation_keys, reproduce
+from imrl_jax.ga import reproduce
+from imrl_jax.search import generation_keys
 from imrl_jax.networks import decode
 
 

@@ -1,0 +1,311 @@
+"""Which reading of the paper reproduces its Fig. 3: the seven claims under every candidate rule set.
+
+    python -m experiments.claims_study                  # run (or go on with) the screen, then the table
+    python -m experiments.claims_study --only skills-bias0,paper-selector
+    python -m experiments.claims_study --table          # docs/CLAIMS.md's table from what has run
+
+A rule set is a row of :data:`RULE_SETS`: a preset of ``imrl_jax.config`` and ``--set``
+overrides of values the paper does not state. Every run is at the paper's life lengths
+(150,000 + 6 x 100,000 steps; learning tests of 1,000,000 cycles per task). The screen is
+5 seeds x 100 generations, learning tests of 5 best x 4 tests (:data:`SCREEN`); the finished
+paper-scale runs (``paper`` and ``skills``, 10 x 100, 10 x 10 x 10) are read where they are.
+
+What is shared, and why (each rule set lists where its other conditions come from):
+
+- EE-ES learns nothing and has no childhood: one run for all (the paper scale's, under ``paper``).
+- EE-LS has no childhood and evolves its actors: it depends only on the adult selector's values
+  (trace decay, selector rates, discount). Rule sets with ``skills``' adult selector share
+  ``skills``' EE-LS; those with the paper's share ``paper``'s.
+- SLE has no childhood and no selector: it depends on the adult learning values, the learned
+  actors' initial speed bias and its noise schedule; rule sets equal in those share one SLE test.
+
+So most rule sets need only an LE-LS evolution and its learning test. The stages run through
+the reproduction's resumable stage runner (:func:`experiments.reproduce.run_stages`): run the
+same command again after an interruption; the newest checkpoint of an unfinished evolution is
+committed in its ``resume_checkpoint/``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from typing import NamedTuple
+
+from imrl_jax import conditions
+from experiments.reproduce import (EVOLVED, SCALES, TESTED, Stage, evolution_dir, evolve_command, load_manifest,
+                                   run_stages, test_command, test_dir)
+
+#: The screen's sizes: the paper's life lengths, fewer seeds and tests.
+SCREEN = dict(SCALES["paper"], seeds=5, best=5, tests=4)
+FULL = SCALES["paper"]
+#: Where the finished paper-scale reproduction lives (the ``paper`` and ``skills`` rows, shared runs).
+REPRODUCTION = os.path.join("experiments", "results", "paper")
+OUT = os.path.join("experiments", "results", "claims")
+
+
+class RuleSet(NamedTuple):
+    """One row of the claims map: learning rules as a preset plus overrides, and what it shares."""
+
+    name: str
+    preset: str
+    sets: tuple[str, ...]
+    about: str
+    ee_ls: str  # the rule set whose EE-LS run (and test) this one's is
+    sle: str  # the rule set whose SLE test this one's is (itself: its own test)
+    le_ls: str = ""  # the rule set whose LE-LS run this one's is ("": its own)
+    sle_noise_steps: int | None = None  # SLE's noise horizon: None one task's length (100,000), 0 the whole test
+
+
+RULE_SETS: tuple[RuleSet, ...] = (
+    RuleSet("paper", "paper", (), "the learning rules as written (the finished paper-scale run)",
+            ee_ls="paper", sle="paper", le_ls="paper"),
+    RuleSet("skills", "skills", (), "docs/CHILDHOOD.md's choice (the finished paper-scale run)",
+            ee_ls="skills", sle="skills", le_ls="skills"),
+    RuleSet("skills-bias0", "skills", ("initial_speed_bias=0.0",),
+            "skills whose learned experts start at half speed, as MODEL.md's zero weights (the paper's "
+            "\"sub-optimal basic skills\")", ee_ls="skills", sle="skills-bias0"),
+    RuleSet("skills-bias1", "skills", ("initial_speed_bias=1.0",), "skills, learned experts start at 73 % speed",
+            ee_ls="skills", sle="skills-bias1"),
+    RuleSet("skills-bias2", "skills", ("initial_speed_bias=2.0",), "skills, learned experts start at 88 % speed",
+            ee_ls="skills", sle="skills-bias2"),
+    RuleSet("skills-clamp", "skills", ("childhood_walls=clamp",),
+            "skills with MODEL.md's walls in childhood (the robot slides along them, never put back)",
+            ee_ls="skills", sle="skills"),
+    RuleSet("paper-selector", "paper", ("trace_lambda=0.98", "eta_selector_actor=0.3", "eta_selector_critic=0.001"),
+            "the paper's rules with only the adult selector's unstated values of skills (traces, selector rates)",
+            ee_ls="skills", sle="skills-bias0"),
+    RuleSet("extension", "extension", (), "MODEL.md's learning extensions, in childhood too", ee_ls="skills",
+            sle="skills-bias0"),
+    RuleSet("skills-sle-test", "skills", (), "skills, SLE's noise annealed over the whole 1,000,000-cycle test",
+            ee_ls="skills", sle="skills-sle-test", le_ls="skills", sle_noise_steps=0),
+    RuleSet("paper-sle-test", "paper", (), "paper, SLE's noise annealed over the whole 1,000,000-cycle test",
+            ee_ls="paper", sle="paper-sle-test", le_ls="paper", sle_noise_steps=0),
+)
+BY_NAME = {rule.name: rule for rule in RULE_SETS}
+#: The order the screen runs its stages in: the cheap SLE tests first, then the evolutions that matter most.
+SCREEN_ORDER = ("skills-sle-test", "paper-sle-test", "skills-bias0", "paper-selector", "skills-bias2",
+                "skills-clamp", "extension", "skills-bias1")
+
+
+def is_reproduction(name: str) -> bool:
+    """The rule sets whose runs are the finished paper-scale reproduction's."""
+    return name in ("paper", "skills")
+
+
+def run_dir(rule: RuleSet, condition: str, out: str = OUT, reproduction: str = REPRODUCTION) -> str:
+    """Where a rule set's evolution of ``condition`` lives (its own or the one it shares)."""
+    owner = {"LE-LS": rule.le_ls or rule.name, "EE-LS": rule.ee_ls, "EE-ES": "paper"}[condition]
+    if is_reproduction(owner):
+        return evolution_dir(reproduction, owner, condition)
+    return os.path.join(out, owner, "evolve", condition)
+
+
+def learning_dir(rule: RuleSet, condition: str, out: str = OUT, reproduction: str = REPRODUCTION) -> str:
+    """Where a rule set's learning test of ``condition`` lives (its own or the one it shares)."""
+    owner = {"LE-LS": rule.le_ls or rule.name, "EE-LS": rule.ee_ls, "EE-ES": "paper", "SLE": rule.sle}[condition]
+    if is_reproduction(owner):
+        return test_dir(reproduction, owner, condition)
+    return os.path.join(out, owner, "test", condition)
+
+
+def _life(scale: dict, condition: str) -> int:
+    return (scale["childhood_steps"] if conditions.get(condition).has_childhood else 0) + 6 * scale["test_steps"]
+
+
+def plan(names, scale: dict = SCREEN, out: str = OUT) -> list[Stage]:
+    """The stages the rule sets ``names`` need that no other run provides, in order."""
+    stages, population = [], scale.get("population", 50)
+    for name in names:
+        rule = BY_NAME[name]
+        if not rule.le_ls:
+            life = scale["childhood_steps"] + 6 * scale["task_steps"]
+            stages.append(Stage(f"evolve {name} LE-LS", "evolve", name, "LE-LS", run_dir(rule, "LE-LS", out),
+                                float(scale["seeds"] * population * scale["generations"] * life)))
+            stages.append(Stage(f"learning test {name} LE-LS", "test", name, "LE-LS", learning_dir(rule, "LE-LS", out),
+                                float(scale["seeds"] * scale["best"] * scale["tests"] * _life(scale, "LE-LS"))))
+        if rule.sle == name and not is_reproduction(name):
+            stages.append(Stage(f"learning test {name} SLE", "test", name, "SLE", learning_dir(rule, "SLE", out),
+                                float(scale["seeds"] * scale["best"] * scale["tests"] * _life(scale, "SLE"))))
+    return stages
+
+
+def stage_command(stage: Stage, scale: dict, out: str = OUT) -> tuple[list[str], None]:
+    """A stage's command line: the package's evolve or learning_test with the rule set's preset and overrides."""
+    rule = BY_NAME[stage.variant]
+    if stage.kind == "evolve":
+        return evolve_command(scale, rule.preset, stage.condition, stage.out_dir, sets=rule.sets), None
+    return test_command(scale, rule.preset, stage.condition, run_dir(rule, "LE-LS", out), stage.out_dir,
+                        sets=rule.sets, sle_noise_steps=rule.sle_noise_steps), None
+
+
+def finished(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION) -> bool:
+    """Whether every run of a rule set's row has finished (its own and the ones it shares)."""
+    from experiments.loading import read_evolution, read_test
+
+    runs = [read_evolution(run_dir(rule, c, out, reproduction)) for c in EVOLVED]
+    tests = [read_test(learning_dir(rule, c, out, reproduction)) for c in TESTED]
+    return all(r is not None and len(r["best"]) >= SCREEN["generations"] for r in runs) and all(
+        t is not None for t in tests)
+
+
+def load_rule(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
+    """A rule set's runs in the form the report's claims read (one variant: the rule set)."""
+    from experiments.loading import read_evolution, read_test
+
+    data = dict(results=out, manifest=dict(sizes=dict(generations=SCREEN["generations"])), variants=[rule.name],
+                evolutions={}, tests={})
+    for condition in EVOLVED:
+        run = read_evolution(run_dir(rule, condition, out, reproduction))
+        if run is not None:
+            data["evolutions"][rule.name, condition] = run
+    for condition in TESTED:
+        test = read_test(learning_dir(rule, condition, out, reproduction))
+        if test is not None:
+            data["tests"][rule.name, condition] = test
+    return data
+
+
+def shared_numbers(reproduction_summary: dict, rule: RuleSet, condition: str):
+    """The reproduction report's probe of a shared run: (colours followed per best individual, best life) or None."""
+    owner = {"LE-LS": rule.le_ls, "EE-LS": rule.ee_ls, "EE-ES": "paper"}[condition]
+    if not is_reproduction(owner):
+        return None
+    key = f"{owner}/{condition}"
+    return (reproduction_summary.get("colours_followed", {}).get(key),
+            reproduction_summary.get("best_individuals", {}).get(key))
+
+
+def measure_rule(rule: RuleSet, reproduction_summary: dict, out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
+    """The seven claims of one rule set by the report's own rules, with the numbers behind them.
+
+    Shared runs reuse the reproduction report's probes (docs/reproduction/summary.json: colours
+    followed by the 10 best of each seed, the relived best EE-ES individual); a rule set's own
+    LE-LS is probed here as the report probes it (a fresh childhood, then the junction probe).
+    """
+    from experiments.claims import measure
+    from experiments.loading import best_of_population
+    from experiments.relive import probe_best
+
+    data = load_rule(rule, out, reproduction)
+    probes, lives = {}, {}
+    for condition in ("LE-LS", "EE-LS"):
+        shared = shared_numbers(reproduction_summary, rule, condition)
+        if shared is not None:
+            probes[rule.name, condition] = shared[0]
+            continue
+        run = data["evolutions"].get((rule.name, condition))
+        population = os.path.join(run_dir(rule, condition, out, reproduction), "final_population.npz")
+        if run is not None and os.path.isfile(population):
+            probes[rule.name, condition] = probe_best(run["config"], best_of_population(population))
+    ee_es = shared_numbers(reproduction_summary, rule, "EE-ES")
+    if ee_es is not None and ee_es[1] is not None:
+        lives["paper", "EE-ES"] = ee_es[1]
+    return measure(data, lives, probes, sle_whole_test=rule.sle_noise_steps == 0)[rule.name]
+
+
+def config_of(rule: RuleSet, condition: str):
+    """The config a rule set's run of ``condition`` has (its learning test's, for SLE)."""
+    from imrl_jax.cli import parse_sets
+    from imrl_jax.config import make_config
+
+    overrides = parse_sets(list(rule.sets))
+    if condition == "SLE":
+        noise = SCREEN["task_steps"] if rule.sle_noise_steps is None else rule.sle_noise_steps
+        overrides["sle_noise_steps"] = noise
+    return make_config(rule.preset, condition=condition, **overrides)
+
+
+def sizes(rule: RuleSet, condition: str) -> str:
+    """Seeds x generations of an evolution, or runs x best x tests of a learning test, of a rule set's row."""
+    owner = {"LE-LS": rule.le_ls or rule.name, "EE-LS": rule.ee_ls, "EE-ES": "paper", "SLE": rule.sle}[condition]
+    scale = FULL if is_reproduction(owner) else SCREEN
+    if condition == "SLE":
+        return f"{scale['seeds']}x{scale['best']}x{scale['tests']}"
+    return f"{scale['seeds']}x{scale['generations']}"
+
+
+#: Where the table goes in docs/CLAIMS.md (the text around it is written by hand).
+TABLE_START, TABLE_END = "<!-- claims table: python -m experiments.claims_study --table -->", "<!-- end of table -->"
+
+
+def table(measured: dict, names) -> str:
+    """The claims map as markdown: rule sets as rows, the seven claims as columns (verdict, then the numbers)."""
+    short = {"holds": "**holds**", "partly": "partly", "does not hold": "no", "n/a": "n/a"}
+    lines = ["| rule set | runs (LE-LS, SLE) | " + " | ".join(f"claim {k}" for k in range(1, 8)) + " |",
+             "|---|---|" + "---|" * 7]
+    for name in names:
+        rule = BY_NAME[name]
+        if name not in measured:
+            lines.append(f"| `{name}` | not finished | " + " | ".join("-" for _ in range(7)) + " |")
+            continue
+        cells = []
+        for k in range(1, 8):
+            claim = measured[name]["claims"][k]
+            cells.append(f"{short[claim['verdict']]}: {claim['measured'].split(';')[0]}")
+        lines.append(f"| `{name}` | {sizes(rule, 'LE-LS')}, {sizes(rule, 'SLE')} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def write_table(path: str, text: str) -> None:
+    """Put the table between its markers in ``path`` (the rest of the document is kept)."""
+    with open(path) as f:
+        document = f.read()
+    start, end = document.index(TABLE_START), document.index(TABLE_END)
+    with open(path, "w") as f:
+        f.write(document[:start + len(TABLE_START)] + "\n" + text + "\n" + document[end:])
+
+
+def parse_names(text: str | None) -> list[str]:
+    """The rule sets named on the command line (default: the screen's order); unknown names are an error."""
+    names = text.split(",") if text else list(SCREEN_ORDER)
+    unknown = [n for n in names if n not in BY_NAME]
+    if unknown:
+        raise ValueError(f"--only: unknown rule set {unknown[0]!r} (choose from {', '.join(BY_NAME)})")
+    return names
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m experiments.claims_study", description=__doc__.split("\n\n")[0])
+    p.add_argument("--only", help="comma-separated rule sets to run, in order (default: the screen's order)")
+    p.add_argument("--out", default=OUT, help=f"results directory (default: {OUT})")
+    p.add_argument("--table", action="store_true", help="write the claims of every finished rule set into "
+                   "docs/CLAIMS.md and experiments/results/claims/claims.json (runs nothing)")
+    args = p.parse_args(argv)
+    try:
+        names = parse_names(args.only)
+    except ValueError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    if args.table:
+        return write_claims(args.out, [rule.name for rule in RULE_SETS] if not args.only else names)
+    manifest, manifest_path = load_manifest(args.out, study="claims", sizes=SCREEN, rule_sets=names)
+    stages = plan(names, SCREEN, args.out)
+    return run_stages(stages, SCREEN, manifest, manifest_path, lambda stage: stage_command(stage, SCREEN, args.out))
+
+
+def write_claims(out: str, names) -> int:
+    """Measure every finished rule set of ``names``; write claims.json and docs/CLAIMS.md's table."""
+    import json
+
+    with open(os.path.join("docs", "reproduction", "summary.json")) as f:
+        summary = json.load(f)
+    measured = {}
+    for name in names:
+        rule = BY_NAME[name]
+        if finished(rule, out):
+            print(f"measuring {name}", flush=True)
+            measured[name] = measure_rule(rule, summary, out)
+    os.makedirs(out, exist_ok=True)
+    numbers = {name: {str(k): v for k, v in m["claims"].items()} for name, m in measured.items()}
+    with open(os.path.join(out, "claims.json"), "w") as f:
+        json.dump(dict(sizes=dict(screen=SCREEN, full=FULL), rule_sets={r.name: r._asdict() for r in RULE_SETS},
+                       claims=numbers), f, indent=2, default=str)
+    write_table(os.path.join("docs", "CLAIMS.md"), table(measured, names))
+    print(f"wrote docs/CLAIMS.md's table and {os.path.join(out, 'claims.json')}: {len(measured)} of {len(names)} "
+          f"rule sets finished")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,169 @@
+"""The paper's four conditions (section 2, "The four conditions"; MODEL.md "Conditions") as one table.
+
+A condition is one :class:`Condition` in :data:`CONDITIONS`: which networks its genome
+encodes (and so its number of genes and the decoding), whether it lives a childhood, its
+adult :class:`Phase` (who learns, from which reward), what a task starts from, whether it is
+evolved, and how plots draw it. Everything else in the engine (config validation, decoding,
+the lifetime, the NumPy reference, evolution, learning tests, plots, the report) reads this
+table; a new condition is a new row (plus its learning rule, if it brings one).
+
+This module imports nothing of the package and no JAX, so the experiment scripts can read it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import NamedTuple
+
+
+class Phase(NamedTuple):
+    """Static description of a phase: who learns, from what, and whether there is a target."""
+
+    experts_learn: bool
+    selector_learns: bool
+    intrinsic: bool  # rewards: own reinforcer for experts, expert surprise for the selector
+    has_target: bool
+    noisy: bool  # actions get Gaussian noise annealed linearly to 0 over the phase
+    respawn: bool = False  # a robot on a wall for config.wall_respawn_steps steps gets a random pose
+    progress: bool = False  # childhood selector: surprise minus the expert's running mean surprise
+
+
+#: Childhood (LE-LS): experts learn from their own reinforcers, the selector from the surprise.
+CHILDHOOD = Phase(experts_learn=True, selector_learns=True, intrinsic=True, has_target=False, noisy=True)
+#: Adulthood with a learning selector (LE-LS, EE-LS): experts frozen, selector learns from the task's reward.
+ADULT_LEARNING_SELECTOR = Phase(False, True, False, True, False)
+#: Adulthood of EE-ES: nothing learns.
+ADULT_EVOLVED_SELECTOR = Phase(False, False, False, True, False)
+#: Adulthood of SLE: its one expert learns from the task's reward, with annealed noise.
+ADULT_SINGLE_EXPERT = Phase(True, False, False, True, True)
+
+#: The networks of an agent (fields of ``networks.Agent``), in the order a genome lists them.
+NETWORKS = ("reinforcer", "actor", "evaluator", "selector_actor", "selector_critic")
+SELECTOR = ("selector_actor", "selector_critic")
+
+#: Config fields that only childhood reads.
+CHILDHOOD_FIELDS = ("childhood_steps", "childhood_walls", "wall_respawn_steps", "childhood_selector_reward",
+                    "progress_rate", "childhood_trace_lambda", "childhood_eta_selector_actor",
+                    "childhood_eta_selector_critic")
+#: Config fields that only the genetic algorithm reads.
+GA_FIELDS = ("population_size", "num_generations", "num_parents", "mutation_prob", "mutation_scale", "init_scale",
+             "num_elites", "lives_per_fitness")
+
+
+def network_shape(network: str, num_experts: int, num_weights: int) -> tuple[int, ...]:
+    """The weight array of one network for ``num_experts`` experts reading ``num_weights`` inputs (bias included)."""
+    return {"reinforcer": (num_experts, num_weights), "actor": (num_experts, 2, num_weights),
+            "evaluator": (num_experts, num_weights), "selector_actor": (num_experts, num_weights),
+            "selector_critic": (num_weights,)}[network]
+
+
+@dataclasses.dataclass(frozen=True)
+class Condition:
+    """One row of the condition table."""
+
+    name: str
+    description: str
+    genome: tuple[str, ...]  # the networks the genome encodes, in this order (the rest start at 0)
+    adult: Phase  # the phase of every adult task
+    childhood: Phase | None = None  # the phase of its childhood before the tasks (None: no childhood); the config's
+    # childhood options (walls, the selector's reward) are applied to it
+    reset: tuple[str, ...] = SELECTOR  # networks set back to their start values at each task
+    single_expert: bool = False  # one expert, whatever config.num_experts says
+    evolved: bool = True  # evolved by the GA (else it only learns: learning tests from scratch)
+    style: dict = dataclasses.field(default_factory=dict, compare=False)  # matplotlib line style
+
+    def num_experts(self, num_experts: int) -> int:
+        """Experts an individual has, given the config's ``num_experts``."""
+        return 1 if self.single_expert else num_experts
+
+    def num_genes(self, num_experts: int, num_inputs: int) -> int:
+        """Genome length: the sizes of the encoded networks (LE-LS 111, EE-LS 222, EE-ES 333, SLE 0)."""
+        total = 0
+        for network in self.genome:
+            size = 1
+            for n in network_shape(network, self.num_experts(num_experts), num_inputs + 1):
+                size *= n
+            total += size
+        return total
+
+    @property
+    def has_childhood(self) -> bool:
+        """Whether it lives a childhood before the tasks."""
+        return self.childhood is not None
+
+    @property
+    def learns(self) -> bool:
+        """Whether anything learns in its life."""
+        return self.has_childhood or self.adult.experts_learn or self.adult.selector_learns
+
+    @property
+    def learned_actors(self) -> bool:
+        """Whether its actors are learned (they start at config.initial_speed_bias) rather than evolved."""
+        return "actor" not in self.genome
+
+    def ignored_fields(self) -> frozenset[str]:
+        """Config fields its lives never read: changing one changes no life (tested against the reference)."""
+        ignored = set()
+        if not self.has_childhood:
+            ignored.update(CHILDHOOD_FIELDS)
+        if not (self.has_childhood or self.adult.experts_learn):
+            ignored.update(("eta_actor", "eta_evaluator"))
+        if not self.learned_actors:
+            ignored.add("initial_speed_bias")
+        if not self.adult.selector_learns:
+            ignored.update(("eta_selector_actor", "eta_selector_critic"))
+        if not (self.adult.experts_learn or self.adult.selector_learns):
+            ignored.add("trace_lambda")
+        if not self.learns:
+            ignored.add("gamma")
+        if not ((self.has_childhood and self.childhood.noisy) or self.adult.noisy):
+            ignored.add("noise_std")
+        if not self.adult.noisy:
+            ignored.add("sle_noise_steps")
+        if not self.evolved:
+            ignored.update(GA_FIELDS)
+        if self.single_expert:
+            ignored.add("num_experts")
+        return frozenset(ignored)
+
+
+CONDITIONS: dict[str, Condition] = {c.name: c for c in (
+    Condition("LE-LS", "learned experts, learning selector: the genome encodes the experts' reinforcers; experts and "
+              "selector learn from them in childhood, the selector from the task's reward in adulthood",
+              genome=("reinforcer",), adult=ADULT_LEARNING_SELECTOR, childhood=CHILDHOOD,
+              style=dict(color="black", lw=2.2)),
+    Condition("EE-LS", "evolved experts, learning selector: the genome encodes the experts' actors; the selector "
+              "learns from the task's reward", genome=("actor",), adult=ADULT_LEARNING_SELECTOR,
+              style=dict(color="0.55", lw=1.8)),
+    Condition("EE-ES", "evolved experts, evolved selector: the genome encodes the actors and the selector; nothing "
+              "learns", genome=("actor", "selector_actor"), adult=ADULT_EVOLVED_SELECTOR, reset=(),
+              style=dict(color="black", lw=1.4, ls="--")),
+    Condition("SLE", "single learning expert: no evolution; one expert learns each task from scratch from its "
+              "reward", genome=(), adult=ADULT_SINGLE_EXPERT, reset=NETWORKS, single_expert=True, evolved=False,
+              style=dict(color="tab:blue", lw=1.4, ls=":")),
+)}
+#: Condition names, in the table's order.
+NAMES = tuple(CONDITIONS)
+EVOLVED = tuple(name for name, c in CONDITIONS.items() if c.evolved)
+#: The paper's four conditions (its Fig. 3 and claims), and those of them that are evolved.
+PAPER = ("LE-LS", "EE-LS", "EE-ES", "SLE")
+PAPER_EVOLVED = tuple(name for name in PAPER if CONDITIONS[name].evolved)
+
+
+def register(condition: Condition) -> Condition:
+    """Add a row to the table (a condition of your own, e.g. in a notebook); a name in use is a ValueError."""
+    if condition.name in CONDITIONS:
+        raise ValueError(f"condition: {condition.name!r} is already a row of the table")
+    unknown = [n for n in condition.genome + condition.reset if n not in NETWORKS]
+    if unknown:
+        raise ValueError(f"condition {condition.name}: {unknown[0]!r} is not a network (choose from {', '.join(NETWORKS)})")
+    CONDITIONS[condition.name] = condition
+    return condition
+
+
+def get(name: str) -> Condition:
+    """The row of condition ``name``; an unknown name is a ValueError naming the choices."""
+    try:
+        return CONDITIONS[name]
+    except KeyError:
+        raise ValueError(f"condition: unknown condition {name!r} (choose from {', '.join(NAMES)})") from None

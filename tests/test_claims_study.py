@@ -1,0 +1,70 @@
+"""The claims study's plan: what each rule set runs, what it shares (and that sharing is sound), its table."""
+
+import numpy as np
+import pytest
+
+from experiments import claims, claims_study as study
+
+
+@pytest.mark.parametrize("rule", study.RULE_SETS, ids=lambda r: r.name)
+def test_a_shared_run_differs_only_in_fields_its_condition_ignores(rule):
+    """A row may use another row's run only where that condition's lives would be bitwise the same."""
+    owners = {"EE-LS": rule.ee_ls, "EE-ES": "paper", "SLE": rule.sle, "LE-LS": rule.le_ls or rule.name}
+    for condition, owner in owners.items():
+        own, shared = study.config_of(rule, condition), study.config_of(study.BY_NAME[owner], condition)
+        assert own.model_differences(shared) == [], (condition, owner)
+
+
+def test_the_sharing_would_catch_a_wrong_share():
+    """skills' EE-LS cannot stand for paper's (the adult selector differs), nor skills' SLE for bias 0's."""
+    skills, paper = study.BY_NAME["skills"], study.BY_NAME["paper"]
+    assert study.config_of(paper, "EE-LS").model_differences(study.config_of(skills, "EE-LS")) == [
+        "trace_lambda", "eta_selector_actor", "eta_selector_critic"]
+    bias0 = study.BY_NAME["skills-bias0"]
+    assert study.config_of(bias0, "SLE").model_differences(study.config_of(skills, "SLE")) == ["initial_speed_bias"]
+
+
+def test_plan_runs_only_what_no_other_run_provides():
+    stages = study.plan(["skills", "skills-sle-test", "skills-clamp", "skills-bias0"])
+    assert [s.name for s in stages] == ["learning test skills-sle-test SLE", "evolve skills-clamp LE-LS",
+                                        "learning test skills-clamp LE-LS", "evolve skills-bias0 LE-LS",
+                                        "learning test skills-bias0 LE-LS", "learning test skills-bias0 SLE"]
+    evolve = study.stage_command(stages[1], study.SCREEN)[0]
+    assert evolve[evolve.index("--preset") + 1] == "skills" and "childhood_walls=clamp" in evolve
+    assert evolve[evolve.index("--seeds") + 1] == "5" and evolve[evolve.index("--task-steps") + 1] == "100000"
+    sle = study.stage_command(stages[0], study.SCREEN)[0]
+    assert "sle_noise_steps=0" in sle and sle[sle.index("--runs") + 1] == "5"
+    assert "sle_noise_steps=100000" in study.stage_command(stages[-1], study.SCREEN)[0]
+    test = study.stage_command(stages[2], study.SCREEN)[0]
+    assert test[test.index("--best") + 1] == "5" and test[test.index("--tests") + 1] == "4"
+    assert study.run_dir(study.BY_NAME["skills-clamp"], "EE-LS").endswith("paper/skills/evolve/EE-LS")
+
+
+def test_unknown_rule_set_is_refused(capsys):
+    assert study.main(["--only", "skills,skils"]) == 2
+    assert "unknown rule set 'skils'" in capsys.readouterr().err
+
+
+def test_claim_5_under_the_whole_test_reading_is_measured_not_na():
+    steps = np.arange(1, 11) * 100_000
+    fast, slow = np.full(10, 0.8), np.linspace(0.1, 0.9, 10)
+    curves = {"LE-LS": (steps, fast), "EE-LS": (steps, fast), "SLE": (steps, slow)}
+    steady = {"LE-LS": 0.8, "EE-LS": 0.8}
+    assert claims.claim_learning_speed(curves, steady, 0)["verdict"] == claims.NOT_AVAILABLE
+    whole = claims.claim_learning_speed(curves, steady, 0, whole_test=True)
+    # 90 % of 0.8 is 0.72: LE-LS's first bin, SLE's 9th (0.1 + 8 x 0.1 = 0.9 >= 0.72 first at bin 8: 800,000).
+    assert whole["numbers"]["cycles"]["LE-LS"] == dict(level=pytest.approx(0.72), cycles=100_000, sle_cycles=800_000)
+    assert whole["verdict"] == claims.HOLDS and "the whole test of 1,000,000 cycles" in whole["measured"]
+
+
+def test_the_table_goes_between_its_markers(tmp_path):
+    path = tmp_path / "CLAIMS.md"
+    path.write_text(f"# Title\n\n{study.TABLE_START}\nstale row\n{study.TABLE_END}\n\nafter\n")
+    row = {k: dict(verdict="holds" if k < 4 else "n/a", measured=f"m{k}; more") for k in range(1, 8)}
+    study.write_table(str(path), study.table({"paper": dict(claims=row)}, ["paper", "skills-bias0"]))
+    text = path.read_text()
+    assert "stale row" not in text and text.endswith("after\n") and text.startswith("# Title")
+    lines = text.split("\n")
+    paper = next(line for line in lines if line.startswith("| `paper`"))
+    assert paper.split(" | ")[1] == "10x100, 10x10x10" and "**holds**: m1 |" in paper and "n/a: m7 |" in paper
+    assert any(line.startswith("| `skills-bias0` | not finished") for line in lines)

@@ -1,0 +1,140 @@
+"""The condition table: genome sizes and layout, the fields each condition ignores, a new condition as one row."""
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from imrl_jax import conditions
+from imrl_jax import lifetime as L
+from imrl_jax import reference
+from imrl_jax import state as S
+from imrl_jax.config import ConfigError, Task, make_config
+from imrl_jax.networks import decode, encode
+
+#: A target 40 cm ahead, off the floor's lattice: a robot driving straight from the lattice's exact points
+#: meets retina points exactly 3 cm from a line, where the reference and JAX may see different colours.
+TASK = Task(start=(300.25, 200.5), heading_deg=1.0, target=(340.25, 201.2))
+#: A value other than the paper's for every field some condition ignores (all valid together with the rest).
+OTHER_VALUES = dict(childhood_steps=90, childhood_walls="respawn", wall_respawn_steps=3,
+                    childhood_selector_reward="progress", progress_rate=0.5, childhood_trace_lambda=0.5,
+                    childhood_eta_selector_actor=0.3, childhood_eta_selector_critic=0.2, eta_actor=0.3,
+                    eta_evaluator=0.2, initial_speed_bias=2.0, eta_selector_actor=0.4, eta_selector_critic=0.25,
+                    trace_lambda=0.6, gamma=0.5, noise_std=0.9, sle_noise_steps=10, population_size=60,
+                    num_generations=5, num_parents=5, mutation_prob=0.5, mutation_scale=2.0, init_scale=2.0,
+                    num_elites=1, lives_per_fitness=2, num_experts=4)
+
+
+def test_genome_sizes_and_layout_follow_the_table():
+    """111, 222, 333 and 0 genes (37 weights per network and expert); decode puts each network in its place."""
+    sizes = {name: make_config("paper", condition=name).num_genes for name in conditions.PAPER}
+    assert sizes == {"LE-LS": 111, "EE-LS": 222, "EE-ES": 333, "SLE": 0}
+    config = make_config("paper", condition="EE-ES")
+    genome = jnp.arange(333, dtype=jnp.float32)
+    agent = decode(config, genome)
+    np.testing.assert_array_equal(agent.actor[1, 0, :3], [74.0, 75.0, 76.0])  # expert 1, turn unit: genes 74..
+    np.testing.assert_array_equal(agent.selector_actor[0, :2], [222.0, 223.0])  # the selector follows the actors
+    np.testing.assert_array_equal(agent.reinforcer, 0.0)
+    np.testing.assert_array_equal(encode(config, agent), genome)
+    assert make_config("paper", condition="SLE", num_experts=5).num_lane_experts == 1
+
+
+def test_unknown_condition_names_the_field():
+    with pytest.raises(ConfigError, match="condition: must be one of LE-LS, EE-LS, EE-ES, SLE"):
+        make_config("paper", condition="XX")
+    with pytest.raises(ValueError, match="unknown condition 'XX'"):
+        conditions.get("XX")
+
+
+def _reference_life(config, genome, seed=0):
+    """One whole life in the NumPy reference with draws from NumPy (the same for every config of these sizes)."""
+    rng = np.random.default_rng(seed)
+    child = max(config.childhood_steps, OTHER_VALUES["childhood_steps"])
+    u, z, spawn = rng.random(child), rng.standard_normal((child, 2)), rng.random((child, 3))
+    task_u, task_z = rng.random((config.num_tasks, config.task_steps)), rng.standard_normal(
+        (config.num_tasks, config.task_steps, 2))
+    return reference.live(config, genome, (120.0, 180.0, 0.7), u[:config.childhood_steps], z[:config.childhood_steps],
+                          task_u, task_z, childhood_spawn=spawn[:config.childhood_steps])
+
+
+def _genome(config):
+    genome = np.random.default_rng(1).uniform(-1.0, 1.0, config.num_genes)
+    if "actor" in config.spec.genome:  # experts that drive straight at 2 and 1 cm a step: targets are reached
+        n = config.num_inputs + 1
+        actors = np.zeros((3, 2, n))
+        actors[:, 1, -1] = (6.0, 0.0, 6.0)
+        genome[:6 * n] = actors.reshape(-1)
+    return genome
+
+
+def _same_life(a, b) -> bool:
+    same = np.array_equal(a["reaches"], b["reaches"]) and np.array_equal(a["performance"], b["performance"])
+    for wa, wb in zip([a["childhood_weights"], *a["task_weights"]], [b["childhood_weights"], *b["task_weights"]]):
+        same &= all(np.array_equal(wa[name], wb[name]) for name in reference.WEIGHT_KEYS)
+    return bool(same)
+
+
+@pytest.mark.parametrize("name", conditions.PAPER)
+def test_a_field_the_condition_ignores_changes_no_life(name):
+    """Every field in ``ignored_fields`` leaves the reference's life bitwise as it is; a field it reads does not."""
+    config = make_config("paper", condition=name, childhood_steps=60, task_steps=60, num_bins=1,
+                         tasks=(TASK, TASK), num_experts=3)
+    genome = _genome(config)
+    base = _reference_life(config, genome)
+    assert base["reaches"].sum() > 0  # something happens for the ignored fields to disturb
+    ignored = config.spec.ignored_fields()
+    assert ignored <= set(OTHER_VALUES), sorted(ignored - set(OTHER_VALUES))
+    for field in sorted(ignored):
+        changed = config.replace(**{field: OTHER_VALUES[field]})
+        assert _same_life(base, _reference_life(changed, genome)), field
+        assert config.model_differences(changed) == []
+    # A field every condition reads: the test can fail.
+    slower = config.replace(max_speed=1.5)
+    assert not _same_life(base, _reference_life(slower, genome))
+    assert config.model_differences(slower) == ["max_speed"]
+
+
+def test_compute_fields_are_not_model_differences():
+    config = make_config("paper", condition="LE-LS")
+    assert config.model_differences(config.replace(step_kernel="pallas", scan_unroll=4)) == []
+    assert config.model_differences(config.replace(draw_block=50)) == ["draw_block"]  # it sets the random stream
+
+
+@pytest.fixture
+def evolved_selector_that_learns():
+    """A condition of one's own: EE-ES's genome (actors and selector), but the selector learns on from it."""
+    row = conditions.register(dataclasses.replace(conditions.get("EE-ES"), name="EE-ES-learning",
+                                                  adult=conditions.ADULT_LEARNING_SELECTOR,
+                                                  description="evolved actors and initial selector; it learns"))
+    yield row
+    del conditions.CONDITIONS[row.name]
+
+
+@pytest.mark.usefixtures("x64")
+def test_a_new_condition_is_one_row(tiny, evolved_selector_that_learns):
+    """A registered row lives in JAX as the reference says, with no other change to the engine."""
+    config = tiny("EE-ES-learning", tasks=(TASK, TASK), task_steps=200, num_bins=1)
+    assert config.num_genes == 333 and config.lifetime_steps == 2 * 200
+    genome = jnp.asarray(_genome(config))
+    key = jax.random.key(11)
+    result = jax.jit(L.live, static_argnums=1)(key, config, config.learning_params(), genome)
+    keys = L.lifetime_keys(key, config.num_tasks)
+    tasks = jax.vmap(S.draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
+    ref = reference.live(config, np.asarray(genome), (0.0, 0.0, 0.0), np.zeros(0), np.zeros((0, 2)),
+                         np.asarray(tasks.u), np.asarray(tasks.z))
+    np.testing.assert_array_equal(np.asarray(result.reaches), ref["reaches"])
+    assert ref["reaches"].sum() > 0
+    evolved = decode(config, genome).selector_actor
+    learned = result.adult_agents.selector_actor[0]
+    assert not np.allclose(learned, evolved)  # the evolved selector learned on (EE-ES's would not)
+    np.testing.assert_allclose(learned, ref["task_weights"][0]["selector_actor"], rtol=1e-10, atol=1e-12)
+    with pytest.raises(ValueError, match="already a row"):
+        conditions.register(evolved_selector_that_learns)
+
+
+def test_register_refuses_an_unknown_network():
+    row = dataclasses.replace(conditions.get("LE-LS"), name="LE-XX", genome=("reinforcers",))
+    with pytest.raises(ValueError, match="'reinforcers' is not a network"):
+        conditions.register(row)
+    assert "LE-XX" not in conditions.CONDITIONS
