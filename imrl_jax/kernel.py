@@ -24,7 +24,7 @@ import numpy as np
 
 from imrl_jax import learning
 from imrl_jax.arena import advance, floor_colour_xy, on_wall, spawn_pose, trial_ends, turn
-from imrl_jax.config import Config, LearningParams
+from imrl_jax.config import Config, ConfigError, LearningParams
 from imrl_jax.learning import ascend, ascend_row, selector_features, td_error, unit_features
 from imrl_jax.networks import Agent, explore, internal_reward, pick, select
 from imrl_jax.conditions import Phase
@@ -402,10 +402,24 @@ def draw_range(key: jax.Array, start, num_steps: int, block_steps: int, noisy: b
     return jax.tree.map(lambda x: jax.lax.dynamic_slice_in_dim(x, offset, num_steps), flat)
 
 
+#: The fields of a Phase the kernel implements; a phase that sets any other (a later condition's rule) is refused.
+SUPPORTED = ("experts_learn", "selector_learns", "intrinsic", "has_target", "noisy", "respawn", "progress")
+
+
+def check_supported(phase: Phase) -> None:
+    """Refuse a phase whose rules the kernel does not implement (ConfigError naming the field)."""
+    default = Phase(*(False,) * 5)
+    for name in Phase._fields:
+        if name not in SUPPORTED and getattr(phase, name) != getattr(default, name):
+            raise ConfigError(f"step_kernel: the pallas kernel does not implement the phase option {name}="
+                              f"{getattr(phase, name)!r}; use step_kernel=xla")
+
+
 def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningParams, task: TaskSpec,
               state: State, num_steps: int, phase_steps: int | None = None,
               num_bins: int | None = None, interpret: bool | None = None) -> tuple[State, Curves]:
     """:func:`imrl_jax.lifetime.run_phase`, each bin one kernel call (``interpret``: default off a GPU)."""
+    check_supported(phase)
     phase_steps = num_steps if phase_steps is None else phase_steps
     num_bins = config.num_bins if num_bins is None else num_bins
     steps_per_bin = bin_steps(num_steps, num_bins)
