@@ -26,6 +26,9 @@ class Phase(NamedTuple):
     noisy: bool  # actions get Gaussian noise annealed linearly to 0 over the phase
     respawn: bool = False  # a robot on a wall for config.wall_respawn_steps steps gets a random pose
     progress: bool = False  # childhood selector: surprise minus the expert's running mean surprise
+    # Evolved evaluators (the paper's future work (a)): an expert's reinforcement is the change of its evolved,
+    # fixed evaluation, "discounted" gamma V(x_t) - V(x_{t-1}) or "difference" V(x_t) - V(x_{t-1}); "" no.
+    evaluation: str = ""
 
 
 #: Childhood (LE-LS): experts learn from their own reinforcers, the selector from the surprise.
@@ -108,6 +111,8 @@ class Condition:
             ignored.update(CHILDHOOD_FIELDS)
         if not (self.has_childhood or self.adult.experts_learn):
             ignored.update(("eta_actor", "eta_evaluator"))
+        if not ((self.has_childhood and not self.childhood.evaluation) or self.adult.experts_learn):
+            ignored.add("eta_evaluator")  # evolved evaluators are fixed
         if not self.learned_actors:
             ignored.add("initial_speed_bias")
         if not self.adult.selector_learns:
@@ -141,6 +146,16 @@ CONDITIONS: dict[str, Condition] = {c.name: c for c in (
     Condition("SLE", "single learning expert: no evolution; one expert learns each task from scratch from its "
               "reward", genome=(), adult=ADULT_SINGLE_EXPERT, reset=NETWORKS, single_expert=True, evolved=False,
               style=dict(color="tab:blue", lw=1.4, ls=":")),
+    # The paper's future work (a), after Ackley and Littman's evolutionary reinforcement learning: the
+    # genome encodes each expert's evaluator, and in childhood each actor learns from the change of its
+    # innate evaluation (MODEL.md "Future-work conditions"); adulthood as LE-LS.
+    Condition("EV-LS", "evolved evaluators, learning selector: the genome encodes the experts' evaluators; in "
+              "childhood each actor learns from the change of its fixed evaluation, gamma V(x_t) - V(x_{t-1}), and the "
+              "selector from that surprise; adulthood as LE-LS", genome=("evaluator",), adult=ADULT_LEARNING_SELECTOR,
+              childhood=CHILDHOOD._replace(evaluation="discounted"), style=dict(color="tab:green", lw=2.0)),
+    Condition("EV-LS-diff", "EV-LS with the undiscounted change of evaluation, V(x_t) - V(x_{t-1}) (Ackley and "
+              "Littman's form)", genome=("evaluator",), adult=ADULT_LEARNING_SELECTOR,
+              childhood=CHILDHOOD._replace(evaluation="difference"), style=dict(color="tab:olive", lw=2.0)),
 )}
 #: Condition names, in the table's order.
 NAMES = tuple(CONDITIONS)

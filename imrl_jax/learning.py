@@ -103,6 +103,11 @@ def learn_experts(phase, params, agent, traces, prev, xb, prev_xb, same):
     reaching the target) for SLE. It learns only when it kept control (k_t == k_{t-1}: the
     paper's two contiguous steps) over a transition that was not cut; its traces end when it
     loses control or the trial ends. Returns the agent, the traces and the surprise delta_k.
+
+    With evolved evaluators (``phase.evaluation``; the paper's future work (a)) the evaluation
+    V_k is innate and fixed, and the actor learns from its change alone:
+
+        delta_k = gamma V_k(x_t) - V_k(x_{t-1})   ("discounted"),  or  V_k(x_t) - V_k(x_{t-1})   ("difference")
     """
     gamma, lam = params.gamma, params.trace_lambda
     learn = prev.valid & same
@@ -111,16 +116,24 @@ def learn_experts(phase, params, agent, traces, prev, xb, prev_xb, same):
     held = jax.nn.one_hot(kp, agent.evaluator.shape[0], dtype=xb.dtype)  # the expert that held control
     # Every reinforcer, and every evaluator, at once: a matrix-vector product is one fast
     # kernel (see networks.evaluate_both), where taking row kp first is a slow gather.
-    reward = reinforce(agent.reinforcer, xb)[kp] if phase.intrinsic else prev.terminal.astype(xb.dtype)
+    if phase.evaluation:  # the change of the innate evaluation alone
+        reward, discount = 0.0, gamma if phase.evaluation == "discounted" else 1.0
+    else:
+        reward = reinforce(agent.reinforcer, xb)[kp] if phase.intrinsic else prev.terminal.astype(xb.dtype)
+        discount = gamma
     value_before, value_now = (agent.evaluator @ prev_xb)[kp], (agent.evaluator @ xb)[kp]
-    surprise = td_error(reward, value_before, value_now, gamma, prev.terminal)
+    surprise = td_error(reward, value_before, value_now, discount, prev.terminal)
     delta = jnp.where(learn, surprise, 0.0)
-    trace_v = accumulate(traces.evaluator, prev_xb, gamma, lam, learn, traces.experts_ended)
+    learns_value = not phase.evaluation  # an evolved evaluation is innate: it does not learn
+    updated, kept = {}, {}
+    if learns_value:
+        kept["evaluator"] = accumulate(traces.evaluator, prev_xb, gamma, lam, learn, traces.experts_ended)
     trace_w = accumulate(traces.actor, actor_features(prev.action, prev.output, prev_xb),
                          gamma, lam, learn, traces.experts_ended)
-    agent = agent._replace(evaluator=ascend_row(agent.evaluator, held, trace_v, delta, params.eta_evaluator),
-                           actor=ascend_row(agent.actor, held, trace_w, delta, params.eta_actor))
-    traces = traces._replace(evaluator=trace_v, actor=trace_w, experts_ended=~same | ends)
+    if learns_value:
+        updated["evaluator"] = ascend_row(agent.evaluator, held, kept["evaluator"], delta, params.eta_evaluator)
+    agent = agent._replace(**updated, actor=ascend_row(agent.actor, held, trace_w, delta, params.eta_actor))
+    traces = traces._replace(**kept, actor=trace_w, experts_ended=~same | ends)
     return agent, traces, surprise
 
 

@@ -313,7 +313,11 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
         if prev_valid:
             if experts_learn and same_expert:
                 kp = prev_k
-                if childhood:
+                discount = gamma
+                if phase.evaluation:  # evolved evaluators: the change of the fixed evaluation
+                    reward = 0.0
+                    discount = gamma if phase.evaluation == "discounted" else 1.0
+                elif childhood:
                     reward = 2.0 * _sigmoid(w["reinforcer"][kp] @ xb) - 1.0
                 else:
                     reward = 1.0 if prev_reached else 0.0
@@ -322,11 +326,12 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
                 if terminal:
                     expert_delta = reward - value_prev
                 else:
-                    expert_delta = reward + gamma * value_now - value_prev
+                    expert_delta = reward + discount * value_now - value_prev
                 trace_v = decay * trace_v + prev_xb
                 slope = (prev_a - prev_o) * prev_o * (1.0 - prev_o)
                 trace_w = decay * trace_w + np.outer(slope, prev_xb)
-                w["evaluator"][kp] = w["evaluator"][kp] + config.eta_evaluator * expert_delta * trace_v
+                if not phase.evaluation:  # an evolved evaluator does not learn
+                    w["evaluator"][kp] = w["evaluator"][kp] + config.eta_evaluator * expert_delta * trace_v
                 w["actor"][kp] = w["actor"][kp] + config.eta_actor * expert_delta * trace_w
 
             selector_reward = None

@@ -28,8 +28,11 @@ OTHER_VALUES = dict(childhood_steps=90, childhood_walls="respawn", wall_respawn_
 
 def test_genome_sizes_and_layout_follow_the_table():
     """111, 222, 333 and 0 genes (37 weights per network and expert); decode puts each network in its place."""
-    sizes = {name: make_config("paper", condition=name).num_genes for name in conditions.PAPER}
-    assert sizes == {"LE-LS": 111, "EE-LS": 222, "EE-ES": 333, "SLE": 0}
+    sizes = {name: make_config("paper", condition=name).num_genes for name in conditions.NAMES}
+    assert sizes == {"LE-LS": 111, "EE-LS": 222, "EE-ES": 333, "SLE": 0, "EV-LS": 111, "EV-LS-diff": 111}
+    evaluators = decode(make_config("paper", condition="EV-LS"), jnp.arange(111, dtype=jnp.float32))
+    np.testing.assert_array_equal(evaluators.evaluator[2, :2], [74.0, 75.0])  # expert 2's evaluator: genes 74..
+    np.testing.assert_array_equal(evaluators.reinforcer, 0.0)
     config = make_config("paper", condition="EE-ES")
     genome = jnp.arange(333, dtype=jnp.float32)
     agent = decode(config, genome)
@@ -75,7 +78,7 @@ def _same_life(a, b) -> bool:
     return bool(same)
 
 
-@pytest.mark.parametrize("name", conditions.PAPER)
+@pytest.mark.parametrize("name", conditions.NAMES)
 def test_a_field_the_condition_ignores_changes_no_life(name):
     """Every field in ``ignored_fields`` leaves the reference's life bitwise as it is; a field it reads does not."""
     config = make_config("paper", condition=name, childhood_steps=60, task_steps=60, num_bins=1,

@@ -118,3 +118,12 @@ def test_kernel_lowers_to_triton_for_gpu(tiny):
     genomes = jnp.zeros((2, 3, config.num_genes))
     text = jax.jit(jax.vmap(jax.vmap(lanes))).trace(keys, genomes).lower(lowering_platforms=("cuda",)).as_text()
     assert text.count("__gpu$xla.gpu.triton") == 2
+
+
+def test_a_phase_option_the_kernel_does_not_implement_is_refused():
+    """A later condition's phase option (here a made-up field value) gets a one-line error, not wrong results."""
+    from imrl_jax.config import ConfigError
+
+    K.check_supported(C.CHILDHOOD._replace(respawn=True, progress=True))  # implemented: no error
+    with pytest.raises(ConfigError, match="does not implement the phase option evaluation='discounted'"):
+        K.check_supported(C.get("EV-LS").childhood)

@@ -59,7 +59,8 @@ def _compare_phase(config, phase, phase_name, agent, pose, task_index, params, s
     r = config.robot_radius
     walls = np.sum((pos <= r + 1e-9) | (pos >= config.arena_size - r - 1e-9))
     return dict(reaches=int(ref["reached"].sum()), timeouts=int(ref["timeout"].sum()), walls=int(walls),
-                switches=int(np.sum(ref["k"][1:] != ref["k"][:-1])), respawns=int(ref["respawned"].sum()))
+                switches=int(np.sum(ref["k"][1:] != ref["k"][:-1])), respawns=int(ref["respawned"].sum()),
+                agent=final.agent)
 
 
 @pytest.mark.usefixtures("x64")
@@ -75,6 +76,24 @@ def test_childhood_matches_reference(tiny, rules, options):
     events = _compare_phase(config, L.childhood_phase(config), "childhood", agent, pose, None, params)
     assert events["walls"] > 0 and events["switches"] > 100
     assert (events["respawns"] > 0) == bool(options), events
+
+
+@pytest.mark.usefixtures("x64")
+@pytest.mark.parametrize("condition, form", [("EV-LS", "discounted"), ("EV-LS-diff", "difference")])
+def test_evolved_evaluators_childhood_matches_reference(tiny, condition, form):
+    """The actors learn from the change of their fixed, evolved evaluations; the evaluators stay as evolved."""
+    config = tiny(condition, childhood_steps=STEPS, **CHILDHOOD_OPTIONS)
+    params = config.replace(**EXTENDED).learning_params()
+    genome = jax.random.uniform(jax.random.key(7), (config.num_genes,), jnp.float64, -1.0, 1.0)
+    agent = decode(config, genome)
+    phase = L.childhood_phase(config)
+    assert phase.evaluation == form and config.num_genes == 111
+    pose = Pose(jnp.array([40.0, 60.0]), jnp.array(math.pi))  # heading into the west wall
+    events = _compare_phase(config, phase, phase, agent, pose, None, params)
+    assert events["walls"] > 0 and events["switches"] > 100 and events["respawns"] > 0
+    np.testing.assert_array_equal(events["agent"].evaluator, agent.evaluator)  # innate: never learns
+    assert np.abs(np.asarray(events["agent"].actor - agent.actor)).max() > 1e-3  # the actors learned
+    assert np.abs(np.asarray(events["agent"].selector_actor)).max() > 1e-3  # and the selector, from that surprise
 
 
 @pytest.mark.usefixtures("x64")
@@ -106,7 +125,7 @@ _live = jax.jit(L.live, static_argnums=1)
 
 @pytest.mark.usefixtures("x64")
 @pytest.mark.parametrize("rules", [PAPER, EXTENDED], ids=["paper-rules", "traces-and-rates"])
-@pytest.mark.parametrize("condition", ["LE-LS", "EE-LS", "EE-ES", "SLE"])
+@pytest.mark.parametrize("condition", ["LE-LS", "EE-LS", "EE-ES", "SLE", "EV-LS"])
 def test_whole_life_matches_reference(tiny, condition, rules):
     """live(): childhood, key splitting, selector resets, six tasks, fitness."""
     # The rules are dynamic values (params): both variants share one compiled life.
