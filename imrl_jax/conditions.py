@@ -39,6 +39,8 @@ ADULT_LEARNING_SELECTOR = Phase(False, True, False, True, False)
 ADULT_EVOLVED_SELECTOR = Phase(False, False, False, True, False)
 #: Adulthood of SLE: its one expert learns from the task's reward, with annealed noise.
 ADULT_SINGLE_EXPERT = Phase(True, False, False, True, True)
+#: Adulthood of the whole hierarchy on the task's reward (future work (b)): experts and selector learn, with noise.
+ADULT_HIERARCHY = Phase(True, True, False, True, True)
 
 #: The networks of an agent (fields of ``networks.Agent``), in the order a genome lists them.
 NETWORKS = ("reinforcer", "actor", "evaluator", "selector_actor", "selector_critic")
@@ -156,6 +158,12 @@ CONDITIONS: dict[str, Condition] = {c.name: c for c in (
     Condition("EV-LS-diff", "EV-LS with the undiscounted change of evaluation, V(x_t) - V(x_{t-1}) (Ackley and "
               "Littman's form)", genome=("evaluator",), adult=ADULT_LEARNING_SELECTOR,
               childhood=CHILDHOOD._replace(evaluation="difference"), style=dict(color="tab:olive", lw=2.0)),
+    # The paper's future work (b): the whole hierarchy trained on the task's reward only; no evolution, no
+    # childhood, everything reset at each task as SLE is (MODEL.md "Future-work conditions").
+    Condition("EXT-LS", "the hierarchy on extrinsic reward only: no evolution, no childhood; in each task, reset, "
+              "the three experts (evaluators and actors, while in control) and the selector learn from the task's "
+              "reward, with SLE's annealed noise", genome=(), adult=ADULT_HIERARCHY, reset=NETWORKS, evolved=False,
+              style=dict(color="tab:purple", lw=1.4, ls="-.")),
 )}
 #: Condition names, in the table's order.
 NAMES = tuple(CONDITIONS)

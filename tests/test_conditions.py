@@ -29,7 +29,9 @@ OTHER_VALUES = dict(childhood_steps=90, childhood_walls="respawn", wall_respawn_
 def test_genome_sizes_and_layout_follow_the_table():
     """111, 222, 333 and 0 genes (37 weights per network and expert); decode puts each network in its place."""
     sizes = {name: make_config("paper", condition=name).num_genes for name in conditions.NAMES}
-    assert sizes == {"LE-LS": 111, "EE-LS": 222, "EE-ES": 333, "SLE": 0, "EV-LS": 111, "EV-LS-diff": 111}
+    assert sizes == {"LE-LS": 111, "EE-LS": 222, "EE-ES": 333, "SLE": 0, "EV-LS": 111, "EV-LS-diff": 111,
+                     "EXT-LS": 0}
+    assert make_config("paper", condition="EXT-LS").num_lane_experts == 3
     evaluators = decode(make_config("paper", condition="EV-LS"), jnp.arange(111, dtype=jnp.float32))
     np.testing.assert_array_equal(evaluators.evaluator[2, :2], [74.0, 75.0])  # expert 2's evaluator: genes 74..
     np.testing.assert_array_equal(evaluators.reinforcer, 0.0)

@@ -97,6 +97,19 @@ def test_evolved_evaluators_childhood_matches_reference(tiny, condition, form):
 
 
 @pytest.mark.usefixtures("x64")
+def test_hierarchy_on_extrinsic_reward_matches_reference(tiny):
+    """EXT-LS: from scratch, the experts (while in control) and the selector all learn from the task's reward."""
+    config = tiny("EXT-LS", tasks=(SHORT_TASK,), task_steps=STEPS, num_bins=1, initial_speed_bias=3.0)
+    params = config.replace(**EXTENDED).learning_params()
+    task = L.task_spec(config, 0, jnp.float64)
+    agent = L.adult_agent(config, decode(config, jnp.zeros((0,), jnp.float64)))
+    events = _compare_phase(config, config.spec.adult, config.spec.adult, agent, task.start, 0, params)
+    assert events["reaches"] > 0 and events["timeouts"] > 0 and events["switches"] > 100, events
+    for network in ("actor", "evaluator", "selector_actor", "selector_critic"):
+        assert np.abs(np.asarray(getattr(events["agent"], network) - getattr(agent, network))).max() > 1e-4, network
+
+
+@pytest.mark.usefixtures("x64")
 @pytest.mark.parametrize("rules", [PAPER, EXTENDED], ids=["paper-rules", "traces-and-rates"])
 @pytest.mark.parametrize("condition", ["EE-LS", "EE-ES", "SLE"])
 def test_adult_phase_matches_reference(tiny, condition, rules):
@@ -125,7 +138,7 @@ _live = jax.jit(L.live, static_argnums=1)
 
 @pytest.mark.usefixtures("x64")
 @pytest.mark.parametrize("rules", [PAPER, EXTENDED], ids=["paper-rules", "traces-and-rates"])
-@pytest.mark.parametrize("condition", ["LE-LS", "EE-LS", "EE-ES", "SLE", "EV-LS"])
+@pytest.mark.parametrize("condition", ["LE-LS", "EE-LS", "EE-ES", "SLE", "EV-LS", "EXT-LS"])
 def test_whole_life_matches_reference(tiny, condition, rules):
     """live(): childhood, key splitting, selector resets, six tasks, fitness."""
     # The rules are dynamic values (params): both variants share one compiled life.
