@@ -44,6 +44,8 @@ ADULT_HIERARCHY = Phase(True, True, False, True, True)
 
 #: The networks of an agent (fields of ``networks.Agent``), in the order a genome lists them.
 NETWORKS = ("reinforcer", "actor", "evaluator", "selector_actor", "selector_critic")
+#: What else a genome may encode: one expression gene per expert (an evolved number of experts).
+GENOME_PARTS = NETWORKS + ("expressed",)
 SELECTOR = ("selector_actor", "selector_critic")
 
 #: Config fields that only childhood reads.
@@ -59,7 +61,7 @@ def network_shape(network: str, num_experts: int, num_weights: int) -> tuple[int
     """The weight array of one network for ``num_experts`` experts reading ``num_weights`` inputs (bias included)."""
     return {"reinforcer": (num_experts, num_weights), "actor": (num_experts, 2, num_weights),
             "evaluator": (num_experts, num_weights), "selector_actor": (num_experts, num_weights),
-            "selector_critic": (num_weights,)}[network]
+            "selector_critic": (num_weights,), "expressed": (num_experts,)}[network]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -158,6 +160,11 @@ CONDITIONS: dict[str, Condition] = {c.name: c for c in (
     Condition("EV-LS-diff", "EV-LS with the undiscounted change of evaluation, V(x_t) - V(x_{t-1}) (Ackley and "
               "Littman's form)", genome=("evaluator",), adult=ADULT_LEARNING_SELECTOR,
               childhood=CHILDHOOD._replace(evaluation="difference"), style=dict(color="tab:olive", lw=2.0)),
+    # The paper's future work (d): LE-LS with up to num_experts experts, each expressed or not by a gene of its own.
+    Condition("LE-LS-N", "LE-LS with an evolved number of experts: the genome also carries one expression gene per "
+              "expert (up to num_experts); an unexpressed expert is never selected and never learns",
+              genome=("reinforcer", "expressed"), adult=ADULT_LEARNING_SELECTOR, childhood=CHILDHOOD,
+              style=dict(color="tab:red", lw=2.0)),
     # The paper's future work (b): the whole hierarchy trained on the task's reward only; no evolution, no
     # childhood, everything reset at each task as SLE is (MODEL.md "Future-work conditions").
     Condition("EXT-LS", "the hierarchy on extrinsic reward only: no evolution, no childhood; in each task, reset, "
@@ -177,9 +184,10 @@ def register(condition: Condition) -> Condition:
     """Add a row to the table (a condition of your own, e.g. in a notebook); a name in use is a ValueError."""
     if condition.name in CONDITIONS:
         raise ValueError(f"condition: {condition.name!r} is already a row of the table")
-    unknown = [n for n in condition.genome + condition.reset if n not in NETWORKS]
+    unknown = [n for n in condition.genome if n not in GENOME_PARTS] + [n for n in condition.reset if n not in NETWORKS]
     if unknown:
-        raise ValueError(f"condition {condition.name}: {unknown[0]!r} is not a network (choose from {', '.join(NETWORKS)})")
+        raise ValueError(f"condition {condition.name}: {unknown[0]!r} is not a network (choose from "
+                         f"{', '.join(GENOME_PARTS)})")
     CONDITIONS[condition.name] = condition
     return condition
 

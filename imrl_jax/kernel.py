@@ -420,6 +420,9 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
               num_bins: int | None = None, interpret: bool | None = None) -> tuple[State, Curves]:
     """:func:`imrl_jax.lifetime.run_phase`, each bin one kernel call (``interpret``: default off a GPU)."""
     check_supported(phase)
+    if state.agent.expressed is not None:
+        raise ConfigError("step_kernel: the pallas kernel does not implement an evolved number of experts "
+                          "(expression genes); use step_kernel=xla")
     phase_steps = num_steps if phase_steps is None else phase_steps
     num_bins = config.num_bins if num_bins is None else num_bins
     steps_per_bin = bin_steps(num_steps, num_bins)

@@ -22,7 +22,7 @@ from imrl_jax.conditions import Phase
 from imrl_jax.config import Config, LearningParams
 from imrl_jax.env import EnvState, TaskSpec, childhood_task, make_env, random_pose, task_spec
 from imrl_jax.learning import learn_experts, learn_selector, pick_row, take_row
-from imrl_jax.networks import Agent, act, decode, explore, select, with_bias, zero_agent
+from imrl_jax.networks import Agent, act, decode, explore, expressed_only, select, with_bias, zero_agent
 from imrl_jax.state import (Curves, Draws, Previous, State, StepRecord, bin_steps, childhood_phase, draw_block,
                             for_phase, init_state, phase_params)
 
@@ -101,7 +101,7 @@ def step(key: jax.Array, config: Config, phase: Phase, params: LearningParams, t
     now = state.t % 2
     xbs = _set_row(state.xbs, now, with_bias(env.observe(robot)))
     xb, prev_xb = take_row(xbs, now), take_row(xbs, 1 - now)
-    selection = act(agent.selector_actor, xb)
+    selection = expressed_only(agent, act(agent.selector_actor, xb))
     k = select(draws.u, selection) if selection.shape[0] > 1 else jnp.int32(0)
     same = k == prev.k
 

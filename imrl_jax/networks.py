@@ -23,6 +23,8 @@ class Agent(NamedTuple):
     evaluator: jnp.ndarray  # (K, n+1): V_k = v.x~
     selector_actor: jnp.ndarray  # (K, n+1): s = sigmoid(S x~)
     selector_critic: jnp.ndarray  # (n+1,): U = u.x~
+    # (K,) 1 for an expressed expert, 0 for one that is not (an evolved number of experts); None: all are.
+    expressed: jnp.ndarray | None = None
 
 
 def with_bias(x: jnp.ndarray) -> jnp.ndarray:
@@ -43,6 +45,16 @@ def reinforce(w: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:
 def pick(values: jnp.ndarray, k) -> jnp.ndarray:
     """values[k] (k may be traced), as a masked sum: the GPU kernel's Triton has no gather."""
     return jnp.sum(jnp.where(jax.lax.broadcasted_iota(jnp.int32, values.shape, 0) == k, values, 0.0))
+
+
+def express(genes: jnp.ndarray) -> jnp.ndarray:
+    """Which experts the expression genes express: those with a positive gene, and always the largest one's."""
+    return ((genes > 0) | (genes == genes.max())).astype(genes.dtype)
+
+
+def expressed_only(agent: Agent, selection: jnp.ndarray) -> jnp.ndarray:
+    """The selector's outputs with those of unexpressed experts set to 0: they are never chosen, so never learn."""
+    return selection if agent.expressed is None else selection * agent.expressed
 
 
 def select(u, selection: jnp.ndarray, num_experts: int | None = None) -> jnp.ndarray:
@@ -95,6 +107,7 @@ def zero_agent(config: Config, dtype=jnp.float32) -> Agent:
         evaluator=jnp.zeros((k, n), dtype),
         selector_actor=jnp.zeros((k, n), dtype),
         selector_critic=jnp.zeros((n,), dtype),
+        expressed=jnp.ones((k,), dtype) if "expressed" in config.spec.genome else None,
     )
 
 
@@ -114,6 +127,8 @@ def decode(config: Config, genome: jnp.ndarray) -> Agent:
         size = math.prod(shape)
         networks[network] = genome[start:start + size].reshape(shape)
         start += size
+    if "expressed" in networks:  # expression genes: which experts exist (an evolved number of experts)
+        networks["expressed"] = express(networks["expressed"])
     return agent._replace(**networks)
 
 

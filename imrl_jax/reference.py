@@ -186,7 +186,8 @@ def _choose_expert(s, u):
 
 
 def _copy_weights(weights):
-    return {key: np.array(weights[key], dtype=np.float64, copy=True) for key in WEIGHT_KEYS}
+    return {key: np.array(weights[key], dtype=np.float64, copy=True) for key in (*WEIGHT_KEYS, "expressed")
+            if key in weights}
 
 
 def zero_weights(config, num_experts):
@@ -212,10 +213,13 @@ def decode(config, genome):
         raise ValueError(f"genome: {config.condition} has {config.num_genes} genes, got {genome.size}")
     start = 0
     for network in config.spec.genome:
-        shape = weights[network].shape
+        shape = weights[network].shape if network in weights else (config.num_lane_experts,)
         size = int(np.prod(shape))
         weights[network] = genome[start:start + size].reshape(shape).copy()
         start += size
+    if "expressed" in weights:  # an expert is expressed when its gene is positive; the largest one always is
+        genes = weights["expressed"]
+        weights["expressed"] = ((genes > 0) | (genes == genes.max())).astype(np.float64)
     return weights
 
 
@@ -304,6 +308,8 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
 
         # 2. The selector picks an expert (weights before this step's learning).
         s = _sigmoid(w["selector_actor"] @ xb)
+        if "expressed" in w:  # an unexpressed expert's output is 0: it is never chosen
+            s = s * w["expressed"]
         k = _choose_expert(s, u[t])
 
         # 3. Learning from the transition t-1 -> t.

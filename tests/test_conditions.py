@@ -30,7 +30,7 @@ def test_genome_sizes_and_layout_follow_the_table():
     """111, 222, 333 and 0 genes (37 weights per network and expert); decode puts each network in its place."""
     sizes = {name: make_config("paper", condition=name).num_genes for name in conditions.NAMES}
     assert sizes == {"LE-LS": 111, "EE-LS": 222, "EE-ES": 333, "SLE": 0, "EV-LS": 111, "EV-LS-diff": 111,
-                     "EXT-LS": 0}
+                     "LE-LS-N": 114, "EXT-LS": 0}
     assert make_config("paper", condition="EXT-LS").num_lane_experts == 3
     evaluators = decode(make_config("paper", condition="EV-LS"), jnp.arange(111, dtype=jnp.float32))
     np.testing.assert_array_equal(evaluators.evaluator[2, :2], [74.0, 75.0])  # expert 2's evaluator: genes 74..
@@ -143,3 +143,47 @@ def test_register_refuses_an_unknown_network():
     with pytest.raises(ValueError, match="'reinforcers' is not a network"):
         conditions.register(row)
     assert "LE-XX" not in conditions.CONDITIONS
+
+
+@pytest.mark.usefixtures("x64")
+def test_an_unexpressed_expert_is_never_chosen_and_never_learns(tiny):
+    """LE-LS-N: expression genes (+, -, +, -) leave experts 1 and 3 out of childhood and tasks; JAX agrees with
+    the reference step by step over a whole life."""
+    config = tiny("LE-LS-N", num_experts=4, childhood_steps=600, task_steps=300, num_bins=1)
+    n = config.num_inputs + 1
+    assert config.num_genes == 4 * n + 4
+    genome = jax.random.uniform(jax.random.key(12), (config.num_genes,), jnp.float64, -1.0, 1.0)
+    genome = genome.at[-4:].set(jnp.asarray([0.5, -0.3, 0.8, -0.9]))
+    agent = decode(config, genome)
+    np.testing.assert_array_equal(agent.expressed, [1.0, 0.0, 1.0, 0.0])
+    np.testing.assert_array_equal(decode(config, genome.at[-4:].set(-0.5).at[-2].set(-0.1)).expressed,
+                                  [0.0, 0.0, 1.0, 0.0])  # none positive: the largest gene's expert is expressed
+    key = jax.random.key(11)
+    result = jax.jit(L.live, static_argnums=1)(key, config, config.learning_params(), genome)
+    assert int(result.childhood_selections[:, [1, 3]].sum()) == 0 and int(result.adult_selections[..., [1, 3]].sum()) == 0
+    assert int(result.childhood_selections[:, 0].sum()) > 0 and int(result.childhood_selections[:, 2].sum()) > 0
+    np.testing.assert_array_equal(result.agent.actor[1], agent.actor[1])  # never in control: never learned
+    assert not np.array_equal(result.agent.actor[0], agent.actor[0])
+    keys = L.lifetime_keys(key, config.num_tasks)
+    pose = L.random_pose(keys.pose, config, jnp.float64)
+    child = S.draw_many(keys.childhood, config.childhood_steps, config.draw_block)
+    tasks = jax.vmap(S.draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
+    ref = reference.live(config, np.asarray(genome), (float(pose.pos[0]), float(pose.pos[1]), float(pose.heading)),
+                         np.asarray(child.u), np.asarray(child.z), np.asarray(tasks.u), np.asarray(tasks.z))
+    np.testing.assert_array_equal(np.asarray(result.reaches), ref["reaches"])
+    for name in ("actor", "evaluator", "selector_actor"):
+        np.testing.assert_allclose(np.asarray(getattr(result.agent, name)), ref["childhood_weights"][name],
+                                   rtol=1e-8, atol=1e-10, err_msg=name)
+        np.testing.assert_allclose(np.asarray(getattr(result.adult_agents, name)[2]), ref["task_weights"][2][name],
+                                   rtol=1e-8, atol=1e-10, err_msg=name)
+
+
+def test_the_gpu_kernel_refuses_expression_genes(tiny):
+    from imrl_jax import kernel
+
+    config = tiny("LE-LS-N", num_experts=4)
+    task = L.task_spec(config, 0)
+    state = L.init_state(config, L.adult_agent(config, decode(config, jnp.zeros(config.num_genes))), task.start)
+    with pytest.raises(ConfigError, match="does not implement an evolved number of experts"):
+        kernel.run_phase(jax.random.key(0), config, config.spec.adult, config.learning_params(), task, state,
+                         config.task_steps)
