@@ -247,6 +247,44 @@ def table(measured: dict, names) -> str:
     return "\n".join(lines)
 
 
+#: Where the claims map's figure goes.
+FIGURE = os.path.join("docs", "claims", "claims_map.png")
+
+
+def figure(measured: dict, names, path: str = FIGURE) -> str:
+    """The claims map as a grid: rule sets as rows, claims as columns, coloured by verdict; written to ``path``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    shades = {"holds": "#2e7d32", "partly": "#f9a825", "does not hold": "#c62828", "n/a": "#bdbdbd"}
+    fig, ax = plt.subplots(figsize=(8.5, 0.45 * len(names) + 1.6))
+    for row, name in enumerate(names):
+        for k in range(1, 8):
+            verdict = measured[name]["claims"][k]["verdict"] if name in measured else None
+            ax.add_patch(plt.Rectangle((k - 1, row), 0.95, 0.9, color=shades.get(verdict, "white"),
+                                       ec="0.6", lw=0.5))
+            ax.text(k - 0.53, row + 0.45, {"holds": "holds", "partly": "partly", "does not hold": "no",
+                                           "n/a": "n/a"}.get(verdict, "not run"),
+                    ha="center", va="center", fontsize=8, color="white" if verdict in ("holds", "does not hold")
+                    else "black")
+    ax.set_xlim(0, 7)
+    ax.set_ylim(len(names), 0)
+    ax.set_xticks([k - 0.53 for k in range(1, 8)], [f"claim {k}" for k in range(1, 8)], fontsize=9)
+    ax.set_yticks([r + 0.45 for r in range(len(names))], names, fontsize=9)
+    ax.tick_params(length=0)
+    for side in ax.spines.values():
+        side.set_visible(False)
+    ax.set_title("The paper's seven claims under each rule set (the report's verdict rules; paper lengths)",
+                 fontsize=10)
+    fig.tight_layout()
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
 def write_table(path: str, text: str) -> None:
     """Put the table between its markers in ``path`` (the rest of the document is kept)."""
     with open(path) as f:
@@ -302,6 +340,7 @@ def write_claims(out: str, names) -> int:
         json.dump(dict(sizes=dict(screen=SCREEN, full=FULL), rule_sets={r.name: r._asdict() for r in RULE_SETS},
                        claims=numbers), f, indent=2, default=str)
     write_table(os.path.join("docs", "CLAIMS.md"), table(measured, names))
+    figure(measured, names)
     print(f"wrote docs/CLAIMS.md's table and {os.path.join(out, 'claims.json')}: {len(measured)} of {len(names)} "
           f"rule sets finished")
     return 0
