@@ -22,9 +22,10 @@ lane-steps at the rate measured so far, or an assumed one before any stage is ti
 finished stage is skipped; an interrupted evolution resumes from its last checkpoint; an
 interrupted learning test goes on from its first unfinished run (the runs it finished are
 kept in its ``partial/`` folder, committed with the results). Run the same command again to
-go on after an interruption. The newest checkpoint of an unfinished evolution is copied into its run
-directory's ``resume_checkpoint/`` (``checkpoints/`` is not committed), so that a fresh
-clone with the results committed goes on from there.
+go on after an interruption. The newest checkpoint of every evolution, unfinished or
+finished, is copied into its run directory's ``resume_checkpoint/`` (``checkpoints/`` is
+not committed), so that a fresh clone with the results committed goes on from there, or
+extends a finished run (``evolve --resume --generations 150``).
 
 Scales (what ``cpu`` shrinks, and by how much, is the whole difference):
 
@@ -348,8 +349,8 @@ def run_stages(stages: list[Stage], scale: dict, manifest: dict, manifest_path: 
         for index, stage in enumerate(stages):
             if stage_done(stage, scale):
                 print(f"== [{index + 1}/{len(stages)}] {stage.name}: done ({stage.out_dir})")
-                if stage.kind == "evolve":  # finished: its checkpoint need not be kept in the results
-                    shutil.rmtree(os.path.join(stage.out_dir, PUBLISHED), ignore_errors=True)
+                if stage.kind == "evolve":  # its last checkpoint stays published: a clone can extend the run
+                    publish_checkpoint(stage.out_dir)
                 continue
             done_before = 0.0
             if stage.kind == "evolve":
@@ -362,8 +363,6 @@ def run_stages(stages: list[Stage], scale: dict, manifest: dict, manifest_path: 
                 done_before = partial_runs(stage.out_dir) / scale["seeds"]
             command, env = command_for(stage)
             run_stage(stage, index, command, overall, manifest_path, done_before, env)
-            if stage.kind == "evolve" and stage_done(stage, scale):
-                shutil.rmtree(os.path.join(stage.out_dir, PUBLISHED), ignore_errors=True)
     except subprocess.CalledProcessError as error:
         print(f"error: stage failed with exit code {error.returncode}: {' '.join(error.cmd[1:])}", file=sys.stderr)
         return error.returncode or 1
