@@ -44,8 +44,28 @@ ADULT_HIERARCHY = Phase(True, True, False, True, True)
 
 #: The networks of an agent (fields of ``networks.Agent``), in the order a genome lists them.
 NETWORKS = ("reinforcer", "actor", "evaluator", "selector_actor", "selector_critic")
-#: What else a genome may encode: one expression gene per expert (an evolved number of experts).
-GENOME_PARTS = NETWORKS + ("expressed",)
+#: What else a genome may encode: one expression gene per expert (an evolved number of experts), and the
+#: learning values (evolved learning parameters).
+GENOME_PARTS = NETWORKS + ("expressed", "parameters")
+
+#: The learning values LE-LS-P evolves (the paper's future work (c)), one gene each, in this order. A gene g
+#: is first mapped onto u = clip((g + 1) / 2, 0, 1) (generation 0's U[-1, 1] onto [0, 1]), then by its map:
+#: "log" 10^(lo + u (hi - lo)) (rates), "1-log" 1 - 10^(lo + u (hi - lo)) (discount, trace decays: fine steps
+#: near 1), "linear" lo + u (hi - lo). The gene 0 gives u = 0.5: a rate of 0.01, the paper's.
+EVOLVED_PARAMETERS = (
+    ("gamma", "1-log", -3.0, -0.5),  # 0.684 .. 0.999 (the paper's 0.99 at u = 0.4)
+    ("trace_lambda", "1-log", -3.0, 0.0),  # 0 .. 0.999 (the paper's 0 at u = 1; skills' 0.98 at u = 0.43)
+    ("eta_actor", "log", -4.0, 0.0),  # 1e-4 .. 1
+    ("eta_evaluator", "log", -4.0, 0.0),
+    ("eta_selector_actor", "log", -4.0, 0.0),  # skills' adult 0.3 at u = 0.87
+    ("eta_selector_critic", "log", -4.0, 0.0),  # skills' adult 0.001 at u = 0.25
+    ("childhood_trace_lambda", "1-log", -3.0, 0.0),
+    ("childhood_eta_selector_actor", "log", -4.0, 0.0),
+    ("childhood_eta_selector_critic", "log", -4.0, 0.0),
+    ("noise_std", "linear", 0.0, 1.0),  # the paper's 0.3 at u = 0.3
+    ("initial_speed_bias", "linear", -2.0, 6.0),  # MODEL.md's 0 at u = 0.25, skills' 4 at u = 0.75
+)
+EVOLVED_FIELDS = tuple(name for name, *_ in EVOLVED_PARAMETERS)
 SELECTOR = ("selector_actor", "selector_critic")
 
 #: Config fields that only childhood reads.
@@ -61,7 +81,8 @@ def network_shape(network: str, num_experts: int, num_weights: int) -> tuple[int
     """The weight array of one network for ``num_experts`` experts reading ``num_weights`` inputs (bias included)."""
     return {"reinforcer": (num_experts, num_weights), "actor": (num_experts, 2, num_weights),
             "evaluator": (num_experts, num_weights), "selector_actor": (num_experts, num_weights),
-            "selector_critic": (num_weights,), "expressed": (num_experts,)}[network]
+            "selector_critic": (num_weights,), "expressed": (num_experts,),
+            "parameters": (len(EVOLVED_PARAMETERS),)}[network]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -133,6 +154,8 @@ class Condition:
             ignored.update(GA_FIELDS)
         if self.single_expert:
             ignored.add("num_experts")
+        if "parameters" in self.genome:  # the genome's values replace the config's
+            ignored.update(EVOLVED_FIELDS)
         return frozenset(ignored)
 
 
@@ -165,6 +188,11 @@ CONDITIONS: dict[str, Condition] = {c.name: c for c in (
               "expert (up to num_experts); an unexpressed expert is never selected and never learns",
               genome=("reinforcer", "expressed"), adult=ADULT_LEARNING_SELECTOR, childhood=CHILDHOOD,
               style=dict(color="tab:red", lw=2.0)),
+    # The paper's future work (c): LE-LS whose genome also carries its learning values.
+    Condition("LE-LS-P", "LE-LS with evolved learning parameters: the genome also carries the discount, the "
+              "experts' and the selector's rates and trace decays (adult and childhood), the exploration noise and the "
+              "learned actors' initial speed bias (conditions.EVOLVED_PARAMETERS)", genome=("reinforcer", "parameters"),
+              adult=ADULT_LEARNING_SELECTOR, childhood=CHILDHOOD, style=dict(color="tab:brown", lw=2.0)),
     # The paper's future work (b): the whole hierarchy trained on the task's reward only; no evolution, no
     # childhood, everything reset at each task as SLE is (MODEL.md "Future-work conditions").
     Condition("EXT-LS", "the hierarchy on extrinsic reward only: no evolution, no childhood; in each task, reset, "

@@ -420,6 +420,9 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
               num_bins: int | None = None, interpret: bool | None = None) -> tuple[State, Curves]:
     """:func:`imrl_jax.lifetime.run_phase`, each bin one kernel call (``interpret``: default off a GPU)."""
     check_supported(phase)
+    if state.agent.params is not None:
+        raise ConfigError("step_kernel: the pallas kernel does not implement evolved learning parameters; "
+                          "use step_kernel=xla")
     if state.agent.expressed is not None:
         raise ConfigError("step_kernel: the pallas kernel does not implement an evolved number of experts "
                           "(expression genes); use step_kernel=xla")

@@ -90,7 +90,8 @@ def step(key: jax.Array, config: Config, phase: Phase, params: LearningParams, t
     env = make_env(config, phase.has_target, phase.respawn)
     robot = EnvState(state.pose, state.direction, state.trial_step, state.pinned)
     block, draws = _draws(config, phase, key, state)
-    params = phase_params(phase, params)
+    # An individual with learning values of its own (evolved learning parameters) learns with them.
+    params = phase_params(phase, params if state.agent.params is None else state.agent.params)
     agent, traces, prev, baseline = state.agent, state.traces, state.prev, state.baseline
 
     # 1-2: observe x_t, choose the expert k_t with probability s_k / sum(s).

@@ -12,7 +12,8 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from imrl_jax.config import Config
+from imrl_jax.conditions import EVOLVED_PARAMETERS, network_shape
+from imrl_jax.config import Config, LearningParams
 
 
 class Agent(NamedTuple):
@@ -25,6 +26,8 @@ class Agent(NamedTuple):
     selector_critic: jnp.ndarray  # (n+1,): U = u.x~
     # (K,) 1 for an expressed expert, 0 for one that is not (an evolved number of experts); None: all are.
     expressed: jnp.ndarray | None = None
+    # The individual's own learning values (evolved learning parameters); None: the phase's params.
+    params: LearningParams | None = None
 
 
 def with_bias(x: jnp.ndarray) -> jnp.ndarray:
@@ -45,6 +48,16 @@ def reinforce(w: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:
 def pick(values: jnp.ndarray, k) -> jnp.ndarray:
     """values[k] (k may be traced), as a masked sum: the GPU kernel's Triton has no gather."""
     return jnp.sum(jnp.where(jax.lax.broadcasted_iota(jnp.int32, values.shape, 0) == k, values, 0.0))
+
+
+def parameter_values(genes) -> dict:
+    """The learning values that parameter genes encode (:data:`~imrl_jax.conditions.EVOLVED_PARAMETERS`' maps)."""
+    values = {}
+    for gene, (name, kind, lo, hi) in zip(genes, EVOLVED_PARAMETERS):
+        u = jnp.clip((gene + 1.0) / 2.0, 0.0, 1.0)
+        exponent = lo + u * (hi - lo)
+        values[name] = {"log": 10.0 ** exponent, "1-log": 1.0 - 10.0 ** exponent, "linear": exponent}[kind]
+    return values
 
 
 def express(genes: jnp.ndarray) -> jnp.ndarray:
@@ -123,16 +136,25 @@ def decode(config: Config, genome: jnp.ndarray) -> Agent:
     agent = zero_agent(config, genome.dtype)
     start, networks = 0, {}
     for network in config.spec.genome:
-        shape = getattr(agent, network).shape
+        shape = network_shape(network, config.num_lane_experts, config.num_inputs + 1)
         size = math.prod(shape)
         networks[network] = genome[start:start + size].reshape(shape)
         start += size
     if "expressed" in networks:  # expression genes: which experts exist (an evolved number of experts)
         networks["expressed"] = express(networks["expressed"])
+    if "parameters" in networks:  # the individual's own learning values; the config's for the others
+        values = parameter_values(networks.pop("parameters"))
+        bias = values.pop("initial_speed_bias")
+        base = config.learning_params()
+        networks["params"] = LearningParams(*(jnp.asarray(values.get(f, getattr(base, f)), genome.dtype)
+                                              for f in LearningParams._fields))
+        networks["actor"] = agent.actor.at[:, 1, -1].set(bias)
     return agent._replace(**networks)
 
 
 def encode(config: Config, agent: Agent) -> jnp.ndarray:
     """Inverse of :func:`decode`: the genome of the evolved parts of an agent."""
+    if "parameters" in config.spec.genome:
+        raise ValueError("encode: evolved learning parameters are not encoded back into genes")
     parts = [getattr(agent, network).reshape(-1) for network in config.spec.genome]
     return jnp.concatenate(parts) if parts else jnp.zeros((0,), agent.actor.dtype)

@@ -22,7 +22,7 @@ import math
 import numpy as np
 
 from imrl_jax.conditions import (ADULT_EVOLVED_SELECTOR, ADULT_LEARNING_SELECTOR, ADULT_SINGLE_EXPERT, CHILDHOOD,
-                                 Phase)
+                                 EVOLVED_PARAMETERS, Phase, network_shape)
 
 NO_COLOUR, RED, GREEN, BLUE = -1, 0, 1, 2
 
@@ -213,7 +213,7 @@ def decode(config, genome):
         raise ValueError(f"genome: {config.condition} has {config.num_genes} genes, got {genome.size}")
     start = 0
     for network in config.spec.genome:
-        shape = weights[network].shape if network in weights else (config.num_lane_experts,)
+        shape = network_shape(network, config.num_lane_experts, config.num_inputs + 1)
         size = int(np.prod(shape))
         weights[network] = genome[start:start + size].reshape(shape).copy()
         start += size
@@ -445,6 +445,13 @@ def live(config, genome, start_pose, childhood_u, childhood_z, task_u, task_z, c
     """
     spec = config.spec
     grown = decode(config, genome)
+    if "parameters" in grown:  # evolved learning parameters: the genome's values replace the config's
+        values = {}
+        for gene, (name, kind, lo, hi) in zip(grown.pop("parameters"), EVOLVED_PARAMETERS):
+            exponent = lo + min(max((gene + 1.0) / 2.0, 0.0), 1.0) * (hi - lo)
+            values[name] = {"log": 10.0 ** exponent, "1-log": 1.0 - 10.0 ** exponent, "linear": exponent}[kind]
+        config = config.replace(**values)
+        grown["actor"][:, 1, -1] = values["initial_speed_bias"]
     if spec.has_childhood:
         child = run_phase(config, spec.childhood, grown, start_pose, childhood_u, childhood_z,
                           task=None, phase_steps=config.childhood_steps, spawn=childhood_spawn)

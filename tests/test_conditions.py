@@ -187,3 +187,44 @@ def test_the_gpu_kernel_refuses_expression_genes(tiny):
     with pytest.raises(ConfigError, match="does not implement an evolved number of experts"):
         kernel.run_phase(jax.random.key(0), config, config.spec.adult, config.learning_params(), task, state,
                          config.task_steps)
+
+
+def test_evolved_learning_parameters_decode_by_their_maps():
+    """LE-LS-P: gene 0 is a rate of 0.01; -0.2 a discount of 0.99; 1 a trace decay of 0; 0.5 a speed bias of 4."""
+    config = make_config("paper", condition="LE-LS-P")
+    assert config.num_genes == 111 + len(conditions.EVOLVED_PARAMETERS) == 122
+    genes = {name: 0.0 for name in conditions.EVOLVED_FIELDS}
+    genes.update(gamma=-0.2, trace_lambda=1.0, initial_speed_bias=0.5, noise_std=-0.4, eta_selector_actor=3.0)
+    genome = jnp.concatenate([jnp.zeros(111), jnp.asarray([genes[f] for f in conditions.EVOLVED_FIELDS])])
+    agent = decode(config, genome)
+    np.testing.assert_allclose(agent.params.gamma, 0.99, rtol=1e-6)
+    np.testing.assert_allclose(agent.params.trace_lambda, 0.0, atol=1e-7)
+    np.testing.assert_allclose(agent.params.eta_actor, 0.01, rtol=1e-6)
+    np.testing.assert_allclose(agent.params.eta_selector_actor, 1.0, rtol=1e-6)  # clipped at the top of its range
+    np.testing.assert_allclose(agent.params.noise_std, 0.3, rtol=1e-6)
+    np.testing.assert_allclose(agent.actor[:, 1, -1], 4.0, rtol=1e-6)
+    assert float(agent.params.progress_rate) == pytest.approx(config.progress_rate)  # not evolved: the config's
+    assert set(conditions.EVOLVED_FIELDS) <= config.spec.ignored_fields()
+
+
+@pytest.mark.usefixtures("x64")
+def test_an_individual_learns_with_its_evolved_parameters(tiny):
+    """A whole LE-LS-P life in JAX agrees with the reference run with the decoded values as its config's."""
+    config = tiny("LE-LS-P", childhood_steps=600, task_steps=300, num_bins=1)
+    genome = jax.random.uniform(jax.random.key(12), (config.num_genes,), jnp.float64, -1.0, 1.0)
+    key = jax.random.key(11)
+    result = jax.jit(L.live, static_argnums=1)(key, config, config.learning_params(), genome)
+    keys = L.lifetime_keys(key, config.num_tasks)
+    pose = L.random_pose(keys.pose, config, jnp.float64)
+    child = S.draw_many(keys.childhood, config.childhood_steps, config.draw_block)
+    tasks = jax.vmap(S.draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
+    ref = reference.live(config, np.asarray(genome), (float(pose.pos[0]), float(pose.pos[1]), float(pose.heading)),
+                         np.asarray(child.u), np.asarray(child.z), np.asarray(tasks.u), np.asarray(tasks.z))
+    np.testing.assert_array_equal(np.asarray(result.reaches), ref["reaches"])
+    for name in ("actor", "evaluator", "selector_actor", "selector_critic"):
+        np.testing.assert_allclose(np.asarray(getattr(result.agent, name)), ref["childhood_weights"][name],
+                                   rtol=1e-8, atol=1e-10, err_msg=name)
+    # The config's own rates would have given another childhood: the evolved ones were used.
+    plain = jax.jit(L.live, static_argnums=1)(key, config.replace(condition="LE-LS"), config.learning_params(),
+                                              genome[:111])
+    assert not np.allclose(np.asarray(plain.agent.actor), np.asarray(result.agent.actor))
