@@ -7,10 +7,10 @@ import os
 
 import numpy as np
 
-from experiments.claims import (CLAIMS, LAST_GENERATIONS, MIN_CONTROL_SHARE, PAPER, PLATEAU_FRACTION, RULES, SEEN,
-                                SPECIALISED_SHARE, _fmt, specialisation_score)
-from experiments.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEPS, PATH_STEPS
-from experiments.reproduce import DEFAULT_VARIANTS, SCALES, owner
+from experiments.claims import (CLAIMS, LAST_GENERATIONS, PAPER, PLATEAU_FRACTION, RULES, SEEN,
+                                _fmt, specialisation_score)
+from experiments.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEPS, FRESH_LIVES, PATH_STEPS
+from experiments.reproduce import DEFAULT_VARIANTS, SCALES, owner, shared
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -133,11 +133,13 @@ def specialisation_rows(lives: dict) -> list[dict]:
         phases = [("adult tasks", life["shares"], life["steps"])]
         if life.get("childhood_shares") is not None:
             phases.append((f"childhood, last {CHILDHOOD_TAIL:.0%}", life["childhood_shares"], life["childhood_steps"]))
+        probe = life.get("probe")
         for phase, shares, steps in phases:
-            followed = specialisation_score(shares, steps)[1]
+            followed = ([SEEN[int(c)] if c >= 0 else None for c in probe.followed] if probe is not None
+                        else specialisation_score(shares, steps)[1])
             total = max(int(np.sum(steps)), 1)
             for e, (row, n) in enumerate(zip(shares, steps)):
-                rows.append(dict(variant="both" if owner(variant, condition) != variant else variant, condition=condition, phase=phase,
+                rows.append(dict(variant="both" if shared(condition) else variant, condition=condition, phase=phase,
                                  seed=life["seed"], generation=life["generation"], expert=e + 1, steps=int(n),
                                  control_share=round(int(n) / total, 4),
                                  **{name: (None if not np.isfinite(v) else round(float(v), 4))
@@ -214,20 +216,25 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
                          ", ".join(f"{v:.3f}" for v in e["final_best_per_seed"]), _fmt(e["plateau_generation"]),
                          e["generations"] if e["generations"] == expected else f"{e['generations']} of {expected}",
                          "-" if life is None else f"seed {life['seed']}, gen {life['generation']}: "
-                                                  f"{life['fitness']:.3f} (relived {life['relived_fitness']:.3f})"])
+                                                  f"{life['fitness']:.3f} (relived {life['relived_fitness']:.3f})",
+                         "-" if life is None or "fresh" not in life else
+                         f"{np.mean(life['fresh']['mean']):.3f} (seeds {np.min(life['fresh']['mean']):.3f}-"
+                         f"{np.max(life['fresh']['mean']):.3f}; sd of a genome's lives "
+                         f"{np.mean(life['fresh']['sd']):.3f})"])
     out += ["", f"Final best fitness = mean of each seed's last {LAST_GENERATIONS} generations; mean +- sd over "
                 f"seeds. Plateau = first generation at {PLATEAU_FRACTION:.0%} of the final value of the mean curve. "
                 f"({label})", "",
             table(["variant", "condition", "final best fitness", "per seed", "plateau generation", "generations",
-                   "best individual (fitness)"], rows)]
+                   "best individual (fitness)", f"fresh lives of each seed's best ({FRESH_LIVES} each)"], rows)]
     if any(life is not None for life in lives.values()):
-        out += ["", "\"Relived\": the best individual's genome lives its evaluated life again, with the same keys, in "
-                    "the report's program (one individual, not the evolution's batch of seeds x population). XLA "
-                    "compiles the two programs differently, so float32 sums round differently; a life amplifies a "
-                    "rounding difference into another path, so the relived life is in effect a fresh one. And the "
-                    "fittest of a generation's lives is partly the luckiest: one genome's lives spread with an sd "
-                    "of about 0.04 (docs/CHILDHOOD.md, heritability), so a fresh life of the best regresses towards "
-                    "its genome's mean. Expect the relived fitness below the recorded one by a few hundredths."]
+        out += ["", "\"Final best fitness\" is the recorded best of each generation: the best of its 50 noisy lives, "
+                    "as in the paper's Fig. 3a; claims 1 to 4 use it. \"Relived\": the best individual lives its "
+                    "evaluated life again with the same keys; it equals the recorded fitness (the same life: same "
+                    "keys, same program), so it shows that the life is reproducible, not how good the genome is. "
+                    f"\"Fresh lives\": each seed's best genome of the last generation lives {FRESH_LIVES} lives with "
+                    "keys the GA never used; their mean over seeds (the range of the seeds' means; the mean sd of "
+                    "one genome's lives) is what the genomes score, below the recorded best because the best of a "
+                    "generation's lives is partly the luckiest."]
 
     out += ["", "## Fig. 3b: learning tests", "",
             f"Performance per bin (reaches / the bin's theoretical maximum), mean over all tests and tasks, band "
@@ -264,19 +271,22 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
         out += ["", "(not drawn: no population or best_genomes.npz, or `--no-behaviour`)"]
     for (variant, condition), name in written["paths"].items():
         life = lives[variant, condition]
-        header = f"{condition} (both variants)" if owner(variant, condition) != variant else f"{condition}, {variant}"
+        header = f"{condition} (both variants)" if shared(condition) else f"{condition}, {variant}"
         out += ["", f"**{header}**: stereotypy (share of turns the same way) {_fmt(life['stereotypy'], 2)}, "
                     f"speed {_fmt(life['speed'], 2)} cm/step (at most {life['config'].max_speed:g}), most-used "
                     f"expert in control {life['dominant_expert']:.0%} of the steps", "",
                 f"![paths {header}]({rel(name)})"]
 
     out += ["", "### Expert specialisation", "",
-            f"Share of each expert's control steps' central readings by colour (`imrl_jax.behaviour.colour_shares`); "
-            f"*follows* names the colour of a specialised expert (in control on at least {MIN_CONTROL_SHARE:.0%} of "
-            f"the steps, one colour on more than {SPECIALISED_SHARE:.0%} of its readings). Also in "
-            f"`{os.path.basename(written['specialisation'])}`. ({label})", ""]
+            f"*follows* is claim 7's definition: the colour each expert of the best individual takes at >= 75 % of "
+            f"the junctions when it drives alone from fixed starts (`imrl_jax.behaviour.specialisation`, the "
+            f"junction probe; \"-\": none). The other columns are what the retina's central receptors see on each "
+            f"expert's control steps during the drawn paths (`colour_shares`): on this floor no colour runs "
+            f"straight for long, so those shares stay mixed even for an expert that follows a colour, and they are "
+            f"not the claim's measure. Also in `{os.path.basename(written['specialisation'])}`. ({label})", ""]
     if spec_rows:
-        out.append(table(["variant", "condition", "phase", "expert", "control", *SEEN, "follows"],
+        out.append(table(["variant", "condition", "phase", "expert", "control", *(f"sees {n}" for n in SEEN),
+                          "follows (probe)"],
                          [[r["variant"], r["condition"], r["phase"], r["expert"], f"{r['control_share']:.0%}",
                            *(_fmt(r[name], 2) for name in SEEN), r["follows"] or "-"] for r in spec_rows]))
     else:

@@ -17,7 +17,7 @@ def relive_best(config_dict: dict, best: dict) -> dict:
     import jax
     import jax.numpy as jnp
 
-    from imrl_jax.behaviour import childhood_trajectory, colour_shares, task_trajectories
+    from imrl_jax.behaviour import childhood_trajectory, colour_shares, specialisation, task_trajectories
     from imrl_jax.config import Config
     from imrl_jax.lifetime import live
     from imrl_jax.render import life_key
@@ -41,6 +41,7 @@ def relive_best(config_dict: dict, best: dict) -> dict:
                stereotypy_per_task=[turn_consistency(t.seen_heading, t.heading, t.breaks) for t in tasks],
                speed=mean_speed(pooled.seen_pos, pooled.pos, pooled.breaks),
                dominant_expert=float(np.bincount(pooled.k.reshape(-1), minlength=num_experts).max() / pooled.k.size))
+    out["probe"] = specialisation(config, result.agent)  # claim 7's definition of "follows", per expert
     if config.spec.has_childhood:
         childhood = childhood_trajectory(key, config, params, genome, config.childhood_steps)
         tail = childhood.window(int(config.childhood_steps * (1 - CHILDHOOD_TAIL)), config.childhood_steps)
@@ -48,6 +49,29 @@ def relive_best(config_dict: dict, best: dict) -> dict:
                                             config.childhood_steps)
         out["childhood_shares"], out["childhood_steps"] = colour_shares(config, tail, num_experts)
     return out
+
+
+#: Fresh lives of each seed's best genome in the report, and the seed of their keys (not any key the GA used).
+FRESH_LIVES, FRESH_SEED = 10, 20_071_001
+
+
+def fresh_fitness(config_dict: dict, best: dict, num_lives: int = FRESH_LIVES, seed: int = FRESH_SEED) -> dict:
+    """Each seed's best genome (``best["genomes"][:, 0]``) living ``num_lives`` fresh lives: fitness (S, L), mean, sd.
+
+    The recorded best of a generation is the best of its noisy lives; these lives, with keys the
+    GA never used, show what the genome scores on average (it regresses by several hundredths).
+    """
+    import jax
+    import jax.numpy as jnp
+
+    from imrl_jax.config import Config
+    from imrl_jax.lifetime import make_evaluate
+
+    config = Config.from_dict(config_dict)
+    genomes = jnp.asarray(np.repeat(np.asarray(best["genomes"])[:, 0], num_lives, axis=0), jnp.float32)
+    fitness = np.asarray(make_evaluate(config)(jax.random.key(seed), config.learning_params(), genomes).fitness)
+    fitness = fitness.reshape(-1, num_lives)
+    return dict(fitness=fitness, mean=fitness.mean(1), sd=fitness.std(1, ddof=1), num_lives=num_lives, seed=seed)
 
 
 def probe_best(config_dict: dict, best: dict, key: int = 0) -> list[int]:

@@ -45,14 +45,14 @@ from experiments.document import (ROOT, pipeline_command, report_paths, scale_la
                                   write_document)
 from experiments.figures import fig3, fig_baselines, fig_fitness, fig_learning, fig_paths, fig_steady
 from experiments.loading import load, read_baselines, read_json, update_best_genomes
-from experiments.relive import DRAWN_STEPS, PATH_STEPS, probe_best, relive_best
-from experiments.reproduce import EVOLVED, TESTED, owner
+from experiments.relive import DRAWN_STEPS, FRESH_LIVES, PATH_STEPS, fresh_fitness, probe_best, relive_best
+from experiments.reproduce import EVOLVED, TESTED, shared
 
 
 def _jsonable(value):
     if isinstance(value, dict):
         return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
+    if isinstance(value, (list, tuple, np.ndarray)):
         return [_jsonable(v) for v in value]
     if isinstance(value, np.generic):
         return value.item()
@@ -118,9 +118,11 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True, baselines_
                 continue
             print(f"reliving the best {condition} individual ({variant})", flush=True)
             life = lives[variant, condition] = relive_best(entry["config"], entry)
-            shared = owner(variant, condition) != variant
-            name = f"paths_{condition}.png" if shared else f"paths_{variant}_{condition}.png"
-            title = (f"{condition}{'' if shared else f', {variant} rules'}: best individual (seed "
+            print(f"{FRESH_LIVES} fresh lives of each seed's best {condition} genome ({variant})", flush=True)
+            life["fresh"] = fresh_fitness(entry["config"], entry)
+            one_for_all = shared(condition)
+            name = f"paths_{condition}.png" if one_for_all else f"paths_{variant}_{condition}.png"
+            title = (f"{condition}{'' if one_for_all else f', {variant} rules'}: best individual (seed "
                      f"{life['seed']}, generation {life['generation']}, fitness {life['fitness']:.3f}, relived "
                      f"{life['relived_fitness']:.3f}); {short}\npaths: the last {DRAWN_STEPS} of {PATH_STEPS:,} "
                      f"steps driven after each task's learning period, coloured by the expert in control")
@@ -157,7 +159,11 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True, baselines_
                                                       stereotypy=life["stereotypy"],
                                                       stereotypy_per_task=life["stereotypy_per_task"],
                                                       speed=life["speed"],
-                                                      dominant_expert_share=life["dominant_expert"])
+                                                      dominant_expert_share=life["dominant_expert"],
+                                                      follows=[int(c) for c in life["probe"].followed],
+                                                      fresh_mean_per_seed=life["fresh"]["mean"],
+                                                      fresh_sd_per_seed=life["fresh"]["sd"],
+                                                      fresh_lives=life["fresh"]["num_lives"])
                                      for (v, c), life in lives.items()},
                    colours_followed={f"{v}/{c}": colours for (v, c), colours in probes.items()})
     claims = dict(scale=summary["scale"], scale_label=label, rules={str(n): r for n, r in RULES.items()},
@@ -166,8 +172,9 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True, baselines_
                           for n, text in CLAIMS.items()})
     for name, content in (("summary.json", summary), ("claims.json", claims)):
         written[name] = os.path.join(figures, name)
+        text = json.dumps(_jsonable(content), indent=2)  # all of it first: a failure leaves the old file whole
         with open(written[name], "w") as f:
-            json.dump(_jsonable(content), f, indent=2)
+            f.write(text)
             f.write("\n")
     write_document(doc, figures, data, numbers, lives, spec_rows, written, baselines)
     written["doc"] = doc

@@ -78,6 +78,11 @@ def owner(variant: str, condition: str) -> str:
     return variant if conditions.get(condition).learns else "paper"
 
 
+def shared(condition: str) -> bool:
+    """Whether a condition's runs are one for every variant (it learns nothing: EE-ES)."""
+    return not conditions.get(condition).learns
+
+
 def evolution_dir(out: str, variant: str, condition: str) -> str:
     """Where a variant's evolution of a condition lives (EE-ES: one run shared by every variant)."""
     return os.path.join(out, owner(variant, condition), "evolve", condition)

@@ -4,6 +4,8 @@ import json
 import math
 import os
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
@@ -303,6 +305,26 @@ def test_probe_best_counts_the_colours_each_best_individual_follows(tiny):
     colours = probe_best(le_ls.to_dict(), dict(genomes=genomes))
     assert len(colours) == 2 and all(0 <= c <= 3 for c in colours)
     assert colours[1] == 0  # no reinforcement, no learning: zero actors drive straight on
+
+
+def test_fresh_lives_of_each_seeds_best_genome(tiny):
+    """fresh_fitness lives each seed's best genome with keys of its own seed: reproducible, other keys other lives."""
+    from experiments.relive import fresh_fitness
+    from imrl_jax.controllers import perceptron_followers
+    from imrl_jax.lifetime import make_evaluate
+
+    config = tiny("EE-LS", task_steps=300, num_bins=1, target_radius=30.0)  # reaches are common: lives differ
+    followers = np.asarray(perceptron_followers(config)).reshape(-1)
+    best = dict(genomes=np.stack([followers, np.zeros_like(followers)])[:, None])  # (2 seeds, 1 best, genes)
+    fresh = fresh_fitness(config.to_dict(), best, num_lives=4, seed=5)
+    assert fresh["fitness"].shape == (2, 4) and np.ptp(fresh["fitness"][0]) > 0  # lives of one genome differ
+    np.testing.assert_allclose(fresh["mean"], fresh["fitness"].mean(1))
+    np.testing.assert_allclose(fresh["sd"], fresh["fitness"].std(1, ddof=1))
+    assert fresh["mean"][0] > fresh["mean"][1]  # followers beat a zero genome
+    again = make_evaluate(config)(jax.random.key(5), config.learning_params(),
+                                  jnp.asarray(np.repeat(best["genomes"][:, 0], 4, 0)))
+    np.testing.assert_array_equal(np.asarray(again.fitness).reshape(2, 4), fresh["fitness"])
+    assert not np.array_equal(fresh_fitness(config.to_dict(), best, num_lives=4, seed=6)["fitness"], fresh["fitness"])
 
 
 def test_a_childhood_that_stays_put_is_marked_and_said(tiny):
