@@ -11,10 +11,15 @@ the newest cannot be read, and says so.
 from __future__ import annotations
 
 import contextlib
+import glob
 import logging
 import os
 import re
+import shutil
 import subprocess
+import sys
+import threading
+import time
 from typing import NamedTuple
 
 import jax
@@ -94,6 +99,22 @@ def _quiet_absl():
         logger.setLevel(level)
 
 
+@contextlib.contextmanager
+def _quiet_closed_loops():
+    """tensorstore calls back into the event loop of a save that failed, which orbax has closed: not worth a traceback."""
+    hook = sys.unraisablehook
+
+    def drop_closed_loop(unraisable):
+        if not (isinstance(unraisable.exc_value, RuntimeError) and str(unraisable.exc_value) == "Event loop is closed"):
+            hook(unraisable)
+
+    sys.unraisablehook = drop_closed_loop
+    try:
+        yield
+    finally:
+        sys.unraisablehook = hook
+
+
 def _ocp():
     import orbax.checkpoint as ocp
 
@@ -121,9 +142,21 @@ class Checkpointer:
         meta = {**meta, "generation": step, "version": imrl_jax.__version__, "git_commit": git_commit()}
         if step in self.manager.all_steps():  # an unreadable step being redone after a fall-back
             self.manager.delete(step)
-        self.manager.save(step, args=ocp.args.Composite(state=ocp.args.StandardSave(state._asdict()),
-                                                        meta=ocp.args.JsonSave(meta)), force=True)
-        self.manager.wait_until_finished()
+        before = set(threading.enumerate())
+        # A failed save is logged by each of orbax's threads, with tracebacks; the caller reports it once.
+        with _quiet_absl(), _quiet_closed_loops():
+            try:
+                self.manager.save(step, args=ocp.args.Composite(state=ocp.args.StandardSave(state._asdict()),
+                                                                meta=ocp.args.JsonSave(meta)), force=True)
+                self.manager.wait_until_finished()
+            except Exception:
+                deadline = time.monotonic() + 10.0  # the other writes of the step end (and log) while quiet
+                for thread in set(threading.enumerate()) - before:
+                    thread.join(max(deadline - time.monotonic(), 0.0))
+                # What the failed save left (orbax's temporary folder of the step) goes: it may be what fills the disk.
+                for leftover in glob.glob(os.path.join(glob.escape(self.directory), f"{step}.orbax-checkpoint-tmp*")):
+                    shutil.rmtree(leftover, ignore_errors=True)
+                raise
 
     def restore_latest(self, template: RunState, warn=print) -> tuple[RunState, dict] | None:
         """The newest readable checkpoint (state shaped like ``template``), or None if none is.

@@ -1,11 +1,12 @@
-"""What the command lines share: the usage error, the help formatter and ``--set FIELD=VALUE``."""
+"""What the command lines share: the usage error, the parser and help formatter, ``--set FIELD=VALUE``, size limits."""
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
 import difflib
-from typing import Sequence
+import os
+from typing import Mapping, Sequence
 
 
 class UsageError(Exception):
@@ -18,6 +19,13 @@ def user_errors() -> tuple[type[Exception], ...]:
     from imrl_jax.rundir import RunDirError
 
     return UsageError, ConfigError, RunDirError
+
+
+class Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are UsageErrors, so that the command reports them as its other bad input."""
+
+    def error(self, message: str):
+        raise UsageError(message)
 
 
 class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
@@ -82,3 +90,49 @@ def parse_sets(items: Sequence[str] | None, settings=None) -> dict:
         except ValueError:
             raise UsageError(f"--set {item}: {name} cannot take the value {text!r}") from None
     return overrides
+
+
+def refuse_option_fields(items: Sequence[str] | None, options: Mapping[str, str]) -> None:
+    """Raise UsageError for a ``--set`` of a field that an option of the command line sets (``options``: field -> flag)."""
+    for item in items or []:
+        name = item.partition("=")[0]
+        if name in options:
+            raise UsageError(f"--set {item}: {name} is set by {options[name]}; use {options[name]} instead")
+
+
+#: The largest sizes the commands accept, checked before anything is allocated (a typo such as
+#: --generations 2147483648 would otherwise start allocating gigabytes).
+MAX_GENERATIONS = 1_000_000
+MAX_SEEDS = 10_000  # seeds of an evolution, runs, best and tests of a learning test
+MAX_POPULATION = 100_000
+MAX_STEPS = 10**9  # per task and per childhood
+MAX_BINS = 100_000
+MAX_LANES = 1_000_000  # lives evaluated at once: seeds x population, best x tests
+
+
+def check_at_most(flag: str, value: int | None, limit: int) -> None:
+    """Raise UsageError naming ``flag`` and the limit if ``value`` (None: not given) is above ``limit``."""
+    if value is not None and value > limit:
+        raise UsageError(f"{flag}: {value:,} is above the limit of {limit:,}")
+
+
+def ignored_notes(config, sets: Mapping[str, object]) -> list[str]:
+    """A note for each ``--set`` of a field that ``config``'s condition never reads."""
+    ignored = config.spec.ignored_fields()
+    return [f"note: --set {name}={value}: {config.condition} does not read {name} (it changes nothing)"
+            for name, value in sets.items() if name in ignored]
+
+
+def device_warnings(config, cpu_devices: int = 0) -> list[str]:
+    """Warnings about the machine: the GPU step kernel off a GPU, more CPU devices than cores (starts JAX's backend)."""
+    import jax
+
+    warnings = []
+    if config.step_kernel == "pallas" and jax.default_backend() != "gpu":
+        warnings.append(f"warning: step_kernel=pallas without a GPU (backend {jax.default_backend()}): the kernel runs "
+                        f"in Pallas's interpreter, several times slower than step_kernel=xla")
+    cores = os.cpu_count() or 1
+    if cpu_devices > cores:
+        warnings.append(f"warning: --cpu-devices {cpu_devices} is more than this machine's {cores} cores: "
+                        f"the devices share them (no faster, likely slower)")
+    return warnings

@@ -10,16 +10,20 @@ with orbax; ``--resume`` continues from the latest good checkpoint and ends bitw
 where an uninterrupted run would. The run directory holds ``config.json``,
 ``history.csv`` (best, mean, std and the best individual's task performances per seed
 per generation), ``fitness.png`` (best fitness, mean and std over seeds, as Fig. 3a),
-``final_population.npz`` and ``checkpoints/``; all are rewritten as the run goes.
+``final_population.npz`` and ``checkpoints/``; all are rewritten as the run goes. It must be
+new or empty (or, with ``--resume``, the run itself), and one process writes it at a time
+(``.lock``). ``--resume --out RUN`` is enough: the run's own config and seeds are used.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import io
 import json
 import os
+import shlex
 import sys
 import time
 from typing import Sequence
@@ -29,13 +33,15 @@ import numpy as np
 
 import imrl_jax
 from imrl_jax.checkpoint import Checkpointer, History, RunState, empty_history, git_commit
+from imrl_jax import cli
 from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
 from imrl_jax.devices import (make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
                               use_host_cores)
-from imrl_jax.config import CONDITIONS, EVOLVED_CONDITIONS, PRESETS, Config, ConfigError, make_config
+from imrl_jax.config import CONDITIONS, EVOLVED_CONDITIONS, PRESETS, Config, make_config
 from imrl_jax.ga import init_population, make_generation
 from imrl_jax.progress import Progress
-from imrl_jax.rundir import check_writable, read_config, write_atomic
+from imrl_jax.rundir import (RunDirError, RunWriteError, check_unlocked, check_writable, entries, lock_run_dir,
+                             read_config, write_atomic, write_errno)
 
 __all__ = ["UsageError", "parse_sets", "write_atomic", "run", "main"]  # the first three re-exported
 
@@ -127,16 +133,20 @@ def _is_paper_scale(config: Config) -> bool:
 
 
 def check_run_dir(out_dir: str, config: Config, seeds: Sequence[int], resume: bool) -> None:
-    """Refuse to overwrite another run; on resume refuse a changed config. Raises UsageError."""
+    """Refuse to write into anything but a new or empty directory or (resuming) a run of this config. Raises UsageError."""
     config_path = os.path.join(out_dir, "config.json")
+    if os.path.exists(out_dir) and not os.path.isdir(out_dir):
+        raise UsageError(f"--out: {out_dir} is not a directory")
     exists = os.path.exists(config_path)
     if exists and not resume:
         raise UsageError(f"{out_dir} already holds a run (config.json); pass --resume to continue it "
                          f"or choose another --out")
     if resume and not exists:
         raise UsageError(f"--resume: {out_dir} holds no run to resume (no config.json)")
-    if os.path.exists(out_dir) and not os.path.isdir(out_dir):
-        raise UsageError(f"--out: {out_dir} is not a directory")
+    found = [] if exists else entries(out_dir)
+    if found:  # its files could have the names of a run's outputs
+        raise UsageError(f"--out: {out_dir} is not empty and holds no run (no config.json; it holds "
+                         f"{', '.join(found[:3])}{', ...' if len(found) > 3 else ''}); choose a new or empty directory")
     if exists:
         saved_config, saved_seeds = read_config(out_dir)
         if saved_seeds != list(seeds):
@@ -164,9 +174,35 @@ def extend_config_json(out_dir: str, config: Config) -> None:
     write_atomic(path, json.dumps(info, indent=2).encode())
 
 
+class RunInterrupted(KeyboardInterrupt):
+    """Ctrl-C during the generations: how far the run got (the command reports it in one line, exit code 130)."""
+
+    def __init__(self, out_dir: str, done: int, checkpointed: int, total: int):
+        super().__init__(f"interrupted with {done} of {total} generations done, {checkpointed} checkpointed")
+        self.out_dir, self.done, self.checkpointed, self.total = out_dir, done, checkpointed, total
+
+
+def _write_failed(error: BaseException, what: str, out_dir: str, generation: int, checkpointed: int) -> RunWriteError:
+    """The one-line report of a write the user can fix (a full disk, an unwritable file)."""
+    where = getattr(error, "filename", None) or what
+    reason = getattr(error, "strerror", None) or os.strerror(write_errno(error))
+    return RunWriteError(f"cannot write {where} ({reason}) after generation {generation - 1} ({checkpointed} "
+                         f"generation(s) checkpointed); free space or fix permissions, then resume with: "
+                         f"{resume_command(out_dir)}")
+
+
+def resume_command(out_dir: str) -> str:
+    return f"python -m imrl_jax.evolve --resume --out {shlex.quote(out_dir)}"
+
+
 def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bool = False,
-        checkpoint_every: int = 1, keep: int = 3, quiet: bool = False) -> RunState:
-    """Evolve ``config.condition`` for every seed into ``out_dir``; return the final state."""
+        checkpoint_every: int = 1, keep: int = 3, quiet: bool = False, warnings: Sequence[str] = (),
+        notes: Sequence[str] = ()) -> RunState:
+    """Evolve ``config.condition`` for every seed into ``out_dir``; return the final state.
+
+    The directory is locked for the whole run (:func:`imrl_jax.rundir.lock_run_dir`). ``warnings`` are
+    printed once the checks pass, ``notes`` too unless ``quiet``.
+    """
     if not config.spec.evolved:
         raise UsageError(f"--cond: {config.condition} is not evolved (it learns each task from scratch); "
                          f"test it with: python -m imrl_jax.learning_test --cond {config.condition} --out DIR")
@@ -178,8 +214,10 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bo
     if keep < 1:
         raise UsageError("--keep: must be at least 1 (a run keeps its latest checkpoint to resume from)")
     check_writable(out_dir)
+    check_unlocked(out_dir)  # a live writer is named before anything about what it is writing
     check_run_dir(out_dir, config, seeds, resume)
-    if jax.process_count() > 1:  # every process checks before the leader writes
+    multihost = jax.process_count() > 1
+    if multihost:  # every process checks before the leader writes
         from jax.experimental import multihost_utils
 
         multihost_utils.sync_global_devices("imrl_jax.evolve: run directory checked")
@@ -187,90 +225,170 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bo
 
     mesh = make_mesh()
     sharding = population_sharding(mesh, len(seeds), config.population_size)
-    state = initial_state(config, seeds, sharding)
+    with contextlib.ExitStack() as stack:
+        failure = None
+        if leader:
+            try:
+                _make_dir(out_dir)
+                stack.enter_context(lock_run_dir(out_dir))
+                check_run_dir(out_dir, config, seeds, resume)  # again, locked: another writer may have begun
+                if not resume:  # first, so that the directory is this run's from the start
+                    info = {"config": config.to_dict(), "seeds": seeds, "version": imrl_jax.__version__,
+                            "git_commit": git_commit(), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+                            "devices": len(jax.devices()), "processes": jax.process_count(),
+                            "sharded_axis": sharded_axis(sharding)}
+                    write_atomic(os.path.join(out_dir, "config.json"), json.dumps(info, indent=2).encode())
+            except user_errors() as error:
+                failure = error
+            except OSError as error:
+                if write_errno(error) is None:
+                    raise
+                failure = RunDirError(f"--out: cannot write {error.filename or out_dir} ({error.strerror})")
+        if multihost:  # the others stop with the leader (else they would wait for it in a collective)
+            from jax.experimental import multihost_utils
+
+            ok = multihost_utils.broadcast_one_to_all(np.asarray(failure is None, np.int32))
+            if not leader and not int(ok):
+                raise RunDirError(f"--out: process 0 could not take {out_dir} (its error says why)")
+            if not leader:
+                _make_dir(out_dir)
+        if failure is not None:
+            raise failure
+        for line in [*warnings, *([] if quiet else notes)] if leader else []:
+            print(line, file=sys.stderr, flush=True)
+        state = initial_state(config, seeds, sharding)
+        checkpointer = stack.enter_context(contextlib.closing(
+            Checkpointer(os.path.join(out_dir, "checkpoints"), keep=keep)))
+        return _evolve(config, out_dir, seeds, state, sharding, mesh, checkpointer, resume=resume,
+                       checkpoint_every=checkpoint_every, quiet=quiet or not leader, leader=leader)
+
+
+def _make_dir(out_dir: str) -> None:
     try:
         os.makedirs(out_dir, exist_ok=True)
     except OSError as error:
         raise UsageError(f"--out: cannot create {out_dir} ({error.strerror or error})") from None
-    checkpointer = Checkpointer(os.path.join(out_dir, "checkpoints"), keep=keep)
-    try:
-        return _evolve(config, out_dir, seeds, state, sharding, mesh, checkpointer, resume=resume,
-                       checkpoint_every=checkpoint_every, quiet=quiet or not leader, leader=leader)
-    finally:
-        checkpointer.close()
 
 
 def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sharding, mesh,
             checkpointer: Checkpointer, *, resume: bool, checkpoint_every: int, quiet: bool, leader: bool) -> RunState:
-    """The generations of :func:`run` after its checks (resuming from the latest good checkpoint)."""
-    progress = Progress(config.num_generations, quiet=quiet, first_index=0)
-    meta = {"config": config.to_dict(), "seeds": seeds}
-    if resume:
-        restored = checkpointer.restore_latest(state, warn=progress.message)
-        if restored is None:
-            if checkpointer.steps():
-                raise UsageError(f"--resume: no readable checkpoint in {checkpointer.directory}")
-            progress.message(f"no checkpoint in {checkpointer.directory} yet: starting from generation 0")
-        else:
-            state, saved_meta = restored
-            if not np.array_equal(state.key_data, np.asarray(jax.random.key_data(seed_keys(seeds)))):
-                raise UsageError("--resume: the checkpoint's keys do not match the seeds")
-            if int(state.generation) > config.num_generations:  # only if config.json was edited by hand
-                raise UsageError(f"--resume: config field num_generations is {config.num_generations} but "
-                                 f"{int(state.generation)} generations are done")
-            if leader:
-                extend_config_json(out_dir, config)
-            progress = Progress(config.num_generations, done=int(state.generation), quiet=quiet, first_index=0,
-                                elapsed=float(saved_meta.get("elapsed_seconds", 0.0)))
-            progress.message(f"resuming {out_dir} after generation {int(state.generation) - 1} "
-                             f"({int(state.generation)} of {config.num_generations} done; checkpoint of commit "
-                             f"{saved_meta.get('git_commit', 'unknown')[:12]})")
-    elif leader:
-        info = {**meta, "version": imrl_jax.__version__, "git_commit": git_commit(),
-                "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "devices": len(jax.devices()),
-                "processes": jax.process_count(), "sharded_axis": sharded_axis(sharding)}
-        write_atomic(os.path.join(out_dir, "config.json"), json.dumps(info, indent=2).encode())
+    """The generations of :func:`run` after its checks (resuming from the latest good checkpoint).
 
-    generation = make_generation(config, sharding)
-    keys = to_global(evolution_keys(state.key_data), replicated(mesh))
-    params = config.learning_params()
-    lane_steps = len(seeds) * config.population_size * config.lives_per_fitness * config.lifetime_steps
-    first = int(state.generation)
-    for g in range(first, config.num_generations):
-        start = time.perf_counter()
-        evaluated = state.populations
-        populations, stats = generation(keys, params, evaluated, g)
-        fitness, performance = to_host(stats.fitness), to_host(stats.performance)
-        seconds = time.perf_counter() - start
-        state = RunState(np.asarray(g + 1, np.int32), populations, evaluated, stats.fitness, state.key_data,
-                         record(state.history, g, fitness, performance))
-        best = fitness.max(1)
-        progress.update(g + 1, float(best.max()), float(fitness.mean()), lane_steps / seconds,
-                        scores=f"best fitness: max over seeds {best.max():.4f}, mean over seeds {best.mean():.4f}")
-        if (g + 1) % checkpoint_every == 0 or g + 1 == config.num_generations:
-            # every process: orbax saves collectively
-            checkpointer.save(state, {**meta, "elapsed_seconds": round(progress.elapsed(), 3)})
-            _write_outputs_from_leader(out_dir, config, seeds, state, leader)
-    if first == config.num_generations:  # a finished run resumed: its outputs are rewritten once
-        _write_outputs_from_leader(out_dir, config, seeds, state, leader)
+    Ctrl-C raises :class:`RunInterrupted`; a write the user can fix, :class:`RunWriteError`.
+    """
+    progress = Progress(config.num_generations, quiet=quiet, first_index=0)
+    note = (lambda text: None) if quiet else progress.message  # --quiet: errors, warnings and the summary only
+    meta = {"config": config.to_dict(), "seeds": seeds}
+    checkpointed = 0
+    try:
+        if resume:
+            restored = checkpointer.restore_latest(state, warn=lambda text: progress.message(f"warning: {text}"))
+            if restored is None:
+                if checkpointer.steps():
+                    raise UsageError(f"--resume: no readable checkpoint in {checkpointer.directory}")
+                note(f"no checkpoint in {checkpointer.directory} yet: starting from generation 0")
+            else:
+                state, saved_meta = restored
+                if not np.array_equal(state.key_data, np.asarray(jax.random.key_data(seed_keys(seeds)))):
+                    raise UsageError("--resume: the checkpoint's keys do not match the seeds")
+                if int(state.generation) > config.num_generations:  # only if config.json was edited by hand
+                    raise UsageError(f"--resume: config field num_generations is {config.num_generations} but "
+                                     f"{int(state.generation)} generations are done")
+                checkpointed = int(state.generation)
+                if leader:
+                    extend_config_json(out_dir, config)
+                progress = Progress(config.num_generations, done=int(state.generation), quiet=quiet, first_index=0,
+                                    elapsed=float(saved_meta.get("elapsed_seconds", 0.0)))
+                note(f"resuming {out_dir} after generation {int(state.generation) - 1} "
+                     f"({int(state.generation)} of {config.num_generations} done; checkpoint of commit "
+                     f"{saved_meta.get('git_commit', 'unknown')[:12]})")
+
+        generation = make_generation(config, sharding)
+        keys = to_global(evolution_keys(state.key_data), replicated(mesh))
+        params = config.learning_params()
+        lane_steps = len(seeds) * config.population_size * config.lives_per_fitness * config.lifetime_steps
+        first = int(state.generation)
+        for g in range(first, config.num_generations):
+            start = time.perf_counter()
+            evaluated = state.populations
+            populations, stats = generation(keys, params, evaluated, g)
+            fitness, performance = to_host(stats.fitness), to_host(stats.performance)
+            seconds = time.perf_counter() - start
+            state = RunState(np.asarray(g + 1, np.int32), populations, evaluated, stats.fitness, state.key_data,
+                             record(state.history, g, fitness, performance))
+            best = fitness.max(1)
+            progress.update(g + 1, float(best.max()), float(fitness.mean()), lane_steps / seconds,
+                            scores=f"best fitness: max over seeds {best.max():.4f}, mean over seeds {best.mean():.4f}")
+            if (g + 1) % checkpoint_every == 0 or g + 1 == config.num_generations:
+                try:  # every process: orbax saves collectively
+                    checkpointer.save(state, {**meta, "elapsed_seconds": round(progress.elapsed(), 3)})
+                except Exception as error:  # noqa: BLE001 - orbax wraps the OS error in its own
+                    if write_errno(error) is None:
+                        raise
+                    raise _write_failed(error, os.path.join(checkpointer.directory, str(g + 1)), out_dir, g + 1,
+                                        checkpointed) from None
+                checkpointed = g + 1
+                _write_outputs_from_leader(out_dir, config, seeds, state, leader, checkpointed)
+        if first == config.num_generations:  # a finished run resumed: its outputs are rewritten once
+            note(f"{out_dir} is finished ({first} of {first} generations): its outputs are rewritten; "
+                 f"--generations N (more than {first}) extends it")
+            _write_outputs_from_leader(out_dir, config, seeds, state, leader, checkpointed)
+    except KeyboardInterrupt:
+        raise RunInterrupted(out_dir, int(state.generation), checkpointed, config.num_generations) from None
     return state
 
 
 def _write_outputs_from_leader(out_dir: str, config: Config, seeds: Sequence[int], state: RunState,
-                               leader: bool) -> None:
+                               leader: bool, checkpointed: int) -> None:
     """Gather the state on every process (to_host is a collective), then write on the leader."""
     host = state._replace(populations=to_host(state.populations), evaluated=to_host(state.evaluated),
                           fitness=to_host(state.fitness))
     if leader:
-        write_outputs(out_dir, config, seeds, host)
+        try:
+            write_outputs(out_dir, config, seeds, host)
+        except OSError as error:
+            if write_errno(error) is None:
+                raise
+            raise _write_failed(error, out_dir, out_dir, int(state.generation), checkpointed) from None
 
 
 # ----------------------------------------------------------------------------- CLI
 
 
-def build_config(args) -> Config:
-    """The config the command line asks for (raises UsageError naming the field)."""
-    overrides = {"condition": args.cond}
+#: The config fields that options of the command line set (``--set`` may not set them): field -> option.
+OPTION_FIELDS = {"condition": "--cond", "num_generations": "--generations", "population_size": "--population",
+                 "num_parents": "--parents", "num_elites": "--elites", "childhood_steps": "--childhood-steps",
+                 "task_steps": "--task-steps", "num_bins": "--bins"}
+
+
+def check_sizes(args) -> None:
+    """Refuse absurd sizes before anything is allocated (raises UsageError naming the option and its limit)."""
+    for flag, value, limit in (("--generations", args.generations, cli.MAX_GENERATIONS),
+                               ("--seeds", args.seeds, cli.MAX_SEEDS),
+                               ("--population", args.population, cli.MAX_POPULATION),
+                               ("--childhood-steps", args.childhood_steps, cli.MAX_STEPS),
+                               ("--task-steps", args.task_steps, cli.MAX_STEPS),
+                               ("--bins", args.bins, cli.MAX_BINS)):
+        cli.check_at_most(flag, value, limit)
+    if args.seeds is not None and args.seeds < 1:
+        raise UsageError("--seeds: must be at least 1")
+    if args.first_seed is not None and args.first_seed < 0:
+        raise UsageError(f"--first-seed: must be 0 or more (got {args.first_seed})")
+    if args.first_seed is not None and args.first_seed + (args.seeds or 1) > 2**32:  # a seed is a uint32 key
+        raise UsageError(f"--first-seed: the seeds must stay below 2^32 (got {args.first_seed:,} and on)")
+    if args.seeds is not None and args.population is not None:
+        cli.check_at_most("--seeds x --population", args.seeds * args.population, cli.MAX_LANES)
+
+
+def build_config(args, saved: tuple[Config, list[int]] | None = None) -> tuple[Config, list[int]]:
+    """The config and seeds the command line asks for (raises UsageError naming the field).
+
+    ``saved``: the config and seeds of the run being resumed, used for whatever the command line
+    leaves out (a preset given explicitly is used instead, but not its number of generations:
+    only ``--generations`` extends a run).
+    """
+    cli.refuse_option_fields(args.set, OPTION_FIELDS)
+    overrides = {} if args.cond is None else {"condition": args.cond}
     for flag, field in (("generations", "num_generations"), ("population", "population_size"),
                         ("parents", "num_parents"), ("childhood_steps", "childhood_steps"),
                         ("task_steps", "task_steps"), ("bins", "num_bins"), ("elites", "num_elites")):
@@ -278,41 +396,58 @@ def build_config(args) -> Config:
         if value is not None:
             overrides[field] = value
     overrides.update(parse_sets(args.set))
-    try:
-        return make_config(args.preset, **overrides)
-    except ConfigError as error:
-        raise UsageError(str(error)) from None
+    if saved is None:
+        config = make_config(args.preset or "paper", **overrides)
+        first, count = args.first_seed or 0, args.seeds or 1
+    else:
+        saved_config, saved_seeds = saved
+        if args.preset is None:
+            config = saved_config.replace(**overrides)
+        else:
+            config = make_config(args.preset, **{"num_generations": saved_config.num_generations, **overrides})
+        first = saved_seeds[0] if args.first_seed is None else args.first_seed
+        count = len(saved_seeds) if args.seeds is None else args.seeds
+        if args.first_seed is None and args.seeds is None:
+            return config, saved_seeds
+    return config, list(range(first, first + count))
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = cli.Parser(
         prog="python -m imrl_jax.evolve",
         description="Evolve one of the paper's conditions for several seeds at once "
-                    "(Schembri, Mirolli & Baldassarre 2007).",
+                    "(Schembri, Mirolli & Baldassarre 2007). With --resume --out RUN the run's own config "
+                    "and seeds are used; an option that differs from them is refused (but a grown "
+                    "--generations extends the run).",
         formatter_class=HelpFormatter)
-    p.add_argument("--cond", required=True, metavar="{" + ",".join(EVOLVED_CONDITIONS) + "}",
-                   help="condition to evolve (SLE is not evolved)")
-    p.add_argument("--seeds", type=int, default=1, help="number of independent evolutions (seeds)")
-    p.add_argument("--first-seed", type=int, default=0, help="seed of the first evolution; the others follow")
-    p.add_argument("--preset", default="paper", choices=sorted(PRESETS),
-                   help="paper: the paper's rules at full scale; skills: full scale with the childhood study's choice "
-                        "(docs/CHILDHOOD.md); extension: full scale with the learning extensions; small: reduced "
-                        "lengths for quick CPU checks")
-    p.add_argument("--generations", type=int, help="generations (default: the preset's; paper 100, small 10)")
+    p.add_argument("--cond", metavar="{" + ",".join(EVOLVED_CONDITIONS) + "}",
+                   help="condition to evolve (SLE is not evolved); required unless --resume")
+    p.add_argument("--seeds", type=int,
+                   help=f"number of independent evolutions (default: 1, or the run's; at most {cli.MAX_SEEDS:,})")
+    p.add_argument("--first-seed", type=int, help="seed of the first evolution; the others follow (default: 0)")
+    p.add_argument("--preset", choices=sorted(PRESETS),
+                   help="paper (the default): the paper's rules at full scale; skills: full scale with the childhood "
+                        "study's choice (docs/CHILDHOOD.md); extension: full scale with the learning extensions; "
+                        "small: reduced lengths for quick CPU checks")
+    p.add_argument("--generations", type=int, help="generations (default: the preset's; paper 100, small 10; "
+                                                    f"at most {cli.MAX_GENERATIONS:,})")
     p.add_argument("--population", type=int, help="population size (default: the preset's; paper 50, small 20)")
     p.add_argument("--parents", type=int, help="best individuals that reproduce (default: the preset's; paper 10, small 4)")
     p.add_argument("--elites", type=int, help="parents copied unmutated (default: the preset's; paper 0)")
-    p.add_argument("--childhood-steps", type=int, help="LE-LS childhood length (default: the preset's; paper 150000, small 15000)")
-    p.add_argument("--task-steps", type=int, help="steps per adulthood task (default: the preset's; paper 100000, small 5000)")
+    p.add_argument("--childhood-steps", type=int, help="LE-LS childhood length (default: the preset's; paper 150000, "
+                                                        "small 15000)")
+    p.add_argument("--task-steps", type=int, help="steps per adulthood task (default: the preset's; paper 100000, "
+                                                   f"small 5000; at most {cli.MAX_STEPS:,})")
     p.add_argument("--bins", type=int, help="bins of the per-task reward curves (default: the preset's; paper 100, small 10)")
     p.add_argument("--set", action="append", metavar="FIELD=VALUE",
-                   help="set any scalar Config field, e.g. --set trace_lambda=0.9 (repeatable)")
-    p.add_argument("--out", help="run directory (default: runs/COND)")
-    p.add_argument("--resume", action="store_true", help="continue the run in --out from its latest checkpoint (--generations may grow: a finished run "
-                        "is extended)")
+                   help="set any other scalar Config field, e.g. --set trace_lambda=0.9 (repeatable)")
+    p.add_argument("--out", help="run directory: new, empty, or the run to resume (default: runs/COND)")
+    p.add_argument("--resume", action="store_true",
+                   help="continue the run in --out from its latest checkpoint (a finished run is extended by a "
+                        "larger --generations)")
     p.add_argument("--checkpoint-every", type=int, default=1, help="generations between checkpoints")
     p.add_argument("--keep", type=int, default=3, help="checkpoints kept (at least 1)")
-    p.add_argument("--quiet", action="store_true", help="no progress line (for logs)")
+    p.add_argument("--quiet", action="store_true", help="print only errors, warnings and the final summary (for logs)")
     p.add_argument("--cpu-devices", type=int, default=0,
                    help="CPU devices to split the lanes over (0: one per core; ignored if XLA_FLAGS sets it)")
     p.add_argument("--coordinator", help="multi-host: coordinator address host:port (default: JAX_COORDINATOR_ADDRESS; none: one process)")
@@ -357,27 +492,51 @@ def init_distributed(args) -> None:
 
 
 def main(argv=None) -> int:
-    args = parser().parse_args(argv)
+    out_dir = None
     try:
-        if args.cond not in CONDITIONS:
+        args = parser().parse_args(argv)
+        check_sizes(args)
+        if args.cond is not None and args.cond not in CONDITIONS:
             raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(EVOLVED_CONDITIONS)})")
-        if args.seeds < 1:
-            raise UsageError("--seeds: must be at least 1")
-        config = build_config(args)
+        if args.resume and not (args.out or args.cond):
+            raise UsageError("--resume: give the run to continue with --out RUN")
+        if args.cond is None and not args.resume:
+            raise UsageError("--cond: required (or --resume --out RUN to continue a run with its own config)")
         out_dir = args.out or os.path.join("runs", args.cond)
+        saved = None
+        if args.resume:
+            if not os.path.exists(os.path.join(out_dir, "config.json")):
+                raise UsageError(f"--resume: {out_dir} holds no run to resume (no config.json)")
+            saved = read_config(out_dir)
+        config, seeds = build_config(args, saved)
         if args.cpu_devices < 0:
             raise UsageError("--cpu-devices: must be 0 (one per core) or more")
+        notes = cli.ignored_notes(config, parse_sets(args.set))
         use_host_cores(args.cpu_devices or None)
         init_distributed(args)
-        state = run(config, out_dir, range(args.first_seed, args.first_seed + args.seeds), resume=args.resume,
-                    checkpoint_every=args.checkpoint_every, keep=args.keep, quiet=args.quiet)
+        state = run(config, out_dir, seeds, resume=args.resume, checkpoint_every=args.checkpoint_every,
+                    keep=args.keep, quiet=args.quiet, warnings=cli.device_warnings(config, args.cpu_devices),
+                    notes=notes)
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
+    except RunWriteError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt as stop:
+        if isinstance(stop, RunInterrupted):
+            where = (f"in generation {stop.done} ({stop.done} of {stop.total} done, {stop.checkpointed} checkpointed)"
+                     if stop.done < stop.total else "after the last generation")
+        else:
+            where = "before the first generation"
+        started = out_dir is not None and os.path.exists(os.path.join(out_dir, "config.json"))
+        print(f"interrupted {where}; " + (f"resume with: {resume_command(out_dir)}" if started else
+                                          "nothing to resume"), file=sys.stderr)
+        return 130
     if jax.process_index() == 0:
         done = int(state.generation)
         best = state.history.best[done - 1]
-        print(f"{config.condition}: generations 0-{done - 1} x {args.seeds} seed(s) done; best fitness of "
+        print(f"{config.condition}: generations 0-{done - 1} x {len(seeds)} seed(s) done; best fitness of "
               f"generation {done - 1}: max over seeds {float(best.max()):.4f}, mean over seeds "
               f"{float(best.mean()):.4f} (per seed {', '.join(f'{b:.3f}' for b in best)}); outputs in {out_dir}")
     return 0

@@ -17,7 +17,8 @@ carried between them (the same computation as one scan; memory does not grow wit
 length) so that progress can be shown. Each finished run is kept in ``--out/partial/``, so
 that the same command after an interruption goes on from the first unfinished run (with
 the same results as an uninterrupted test); ``partial/`` is removed once the test is done.
-Writes to ``--out``:
+``--out`` must be new, empty or such an unfinished test, and one process writes it at a
+time (``.lock``). Writes to ``--out``:
 ``curve.csv`` (performance per bin: mean over all tests and per run), ``steady.json``
 (performance over the last ``--steady-steps`` cycles: mean over runs, best run, per run,
 per task; the command and git commit), ``curves.npz`` (every test's reaches per bin)
@@ -47,11 +48,13 @@ from imrl_jax.checkpoint import git_commit
 from imrl_jax.devices import make_mesh, use_host_cores
 from imrl_jax.conditions import CONDITIONS as TABLE
 from imrl_jax.config import COMPUTE_FIELDS, CONDITIONS, PRESETS, Config, ConfigError, LearningParams, make_config
+from imrl_jax import cli
 from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
 from imrl_jax.lifetime import grow_up, lifetime_keys, run_phase, task_spec, task_start
 from imrl_jax.state import State
 from imrl_jax.progress import Progress
-from imrl_jax.rundir import best_genomes, check_writable, load_run as read_run, write_atomic
+from imrl_jax.rundir import (RunWriteError, best_genomes, check_unlocked, check_writable, entries,
+                             load_run as read_run, lock_run_dir, write_atomic, write_errno)
 
 
 class TestState(NamedTuple):
@@ -119,11 +122,12 @@ def run_tests(keys: jax.Array, config: Config, params: LearningParams, genomes, 
     of the same config compile once.
     """
     begin_all, advance_all = make_learning_test(config, num_chunks)
-    # Split the tests over every device (one per CPU core in the CLI); pad to a multiple.
+    # Split the tests over every device (one per CPU core in the CLI); pad to a multiple with copies of
+    # the last test (lanes are independent: the copies change no other lane, and are dropped below).
     num_tests, num_devices = len(genomes), len(jax.devices())
     pad = -num_tests % num_devices
     genomes = np.concatenate([genomes, np.repeat(genomes[-1:], pad, 0)]) if pad else genomes
-    keys = jnp.concatenate([keys, keys[-1:].repeat(pad)]) if pad else keys
+    keys = jnp.concatenate([keys, jnp.repeat(keys[-1:], pad, axis=0)]) if pad else keys  # typed keys: no .repeat
     sharding = NamedSharding(make_mesh(), PartitionSpec("lanes"))
     tests = begin_all(jax.device_put(keys, sharding), params, jax.device_put(np.asarray(genomes), sharding))
     reaches, selections = [], []
@@ -252,11 +256,66 @@ def finished_runs(partial: str, stamp: str, num_runs: int) -> dict:
     return done
 
 
+#: The files a learning test writes into ``--out`` (its last, steady.json, marks it finished).
+OUTPUTS = ("curves.npz", "curve.csv", "learning_curve.png", "steady.json")
+
+
+def check_out_dir(out_dir: str) -> None:
+    """Refuse an ``--out`` that is neither new, nor empty, nor an unfinished learning test (raises UsageError)."""
+    if os.path.exists(os.path.join(out_dir, "steady.json")):
+        raise UsageError(f"--out: {out_dir} already holds a learning test; choose another directory")
+    found = entries(out_dir)
+    if not found:
+        return
+    partial = os.path.join(out_dir, PARTIAL)
+    unfinished = os.path.isdir(partial) and (os.path.exists(os.path.join(partial, "spec.json"))
+                                             or not os.listdir(partial))
+    # An interrupted test may also have written some outputs (and a temporary file) before steady.json.
+    others = [name for name in found if name != PARTIAL and not any(
+        name == output or name.startswith(f"{output}.tmp-") or name.startswith(f".{os.path.splitext(output)[0]}.tmp-")
+        for output in OUTPUTS)]
+    if not unfinished or others:
+        shown = (others or found)[:3]
+        raise UsageError(f"--out: {out_dir} is not empty and holds no unfinished learning test (it holds "
+                         f"{', '.join(shown)}{', ...' if len(others or found) > 3 else ''}); choose a new or empty "
+                         f"directory")
+
+
 def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, steady_steps: int, num_chunks: int,
-        seed: int = 0, quiet: bool = False, source: str = "", command: str = "") -> dict:
-    """Run the tests of ``genomes`` (runs, best, genes) run by run, resuming from ``partial/``; write the outputs."""
-    num_runs, num_best = genomes.shape[:2]
+        seed: int = 0, quiet: bool = False, source: str = "", command: str = "", warnings: Sequence[str] = (),
+        notes: Sequence[str] = ()) -> dict:
+    """Run the tests of ``genomes`` (runs, best, genes) run by run, resuming from ``partial/``; write the outputs.
+
+    ``out_dir`` is locked for the whole test (:func:`imrl_jax.rundir.lock_run_dir`). ``warnings`` are
+    printed once the checks pass, ``notes`` too unless ``quiet``.
+    """
     steady_bins(config, steady_steps)
+    check_writable(out_dir)
+    check_unlocked(out_dir)
+    check_out_dir(out_dir)
+    try:
+        os.makedirs(out_dir, exist_ok=True)
+    except OSError as error:
+        raise UsageError(f"--out: cannot create {out_dir} ({error.strerror or error})") from None
+    with lock_run_dir(out_dir):
+        check_out_dir(out_dir)  # again, locked: another test may have written there in between
+        for line in [*warnings, *([] if quiet else notes)]:
+            print(line, file=sys.stderr, flush=True)
+        try:
+            return _run_locked(config, genomes, out_dir, num_tests=num_tests, steady_steps=steady_steps,
+                               num_chunks=num_chunks, seed=seed, quiet=quiet, source=source, command=command)
+        except OSError as error:
+            if write_errno(error) is None:
+                raise
+            raise RunWriteError(f"cannot write {error.filename or out_dir} ({error.strerror}); free space or fix "
+                                f"permissions, then run the same command again (the finished runs are kept in "
+                                f"{os.path.join(out_dir, PARTIAL)})") from None
+
+
+def _run_locked(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, steady_steps: int,
+                num_chunks: int, seed: int, quiet: bool, source: str, command: str) -> dict:
+    """:func:`run` once the directory is checked and locked."""
+    num_runs, num_best = genomes.shape[:2]
     keys = test_keys(seed, num_runs, num_best, num_tests).reshape(num_runs, num_best * num_tests)
     partial, stamp = os.path.join(out_dir, PARTIAL), fingerprint(config, genomes, num_tests, seed)
     done = finished_runs(partial, stamp, num_runs)
@@ -322,10 +381,10 @@ def _write_plot(config: Config, reaches: np.ndarray, path: str) -> None:
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m imrl_jax.learning_test",
-                                description="The paper's learning tests (section 3, Fig. 3b and 3c): the best "
-                                            "individuals of an evolution, or SLE from scratch, learn each task anew.",
-                                formatter_class=HelpFormatter)
+    p = cli.Parser(prog="python -m imrl_jax.learning_test",
+                   description="The paper's learning tests (section 3, Fig. 3b and 3c): the best individuals of an "
+                               "evolution, or SLE from scratch, learn each task anew.",
+                   formatter_class=HelpFormatter)
     p.add_argument("run_dir", nargs="?", help="an evolution's run directory (omit with --cond SLE)")
     p.add_argument("--cond", metavar="{" + ",".join(CONDITIONS) + "}",
                    help=f"{', '.join(FROM_SCRATCH)}: test learning from scratch (no run directory); "
@@ -334,7 +393,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--preset", default="paper", choices=sorted(PRESETS),
                    help="from scratch: the learning rules' preset")
     p.add_argument("--set", action="append", metavar="FIELD=VALUE",
-                   help="from scratch: set a Config field (repeatable)")
+                   help="from scratch: set a Config field other than those the options set (repeatable)")
     p.add_argument("--best", type=int, default=10, help="best individuals of each run's last generation")
     p.add_argument("--tests", type=int, default=10, help="tests per individual")
     p.add_argument("--task-steps", type=int, default=1_000_000, help="cycles per task")
@@ -342,29 +401,46 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--steady-steps", type=int, default=100_000, help="final cycles averaged for the steady state")
     p.add_argument("--chunks", type=int, default=10, help="pieces the test runs in (progress lines)")
     p.add_argument("--seed", type=int, default=0, help="seed of the tests' keys")
-    p.add_argument("--out", required=True, help="output directory")
+    p.add_argument("--out", required=True,
+                   help="output directory: new, empty, or an unfinished test of the same command to go on with")
     p.add_argument("--quiet", action="store_true", help="no progress lines (for logs)")
     p.add_argument("--cpu-devices", type=int, default=0, help="CPU devices (0: one per core)")
     return p
 
 
+#: The config fields that options of the command line set (``--set`` may not set them): field -> option.
+OPTION_FIELDS = {"condition": "--cond", "task_steps": "--task-steps", "num_bins": "--bins"}
+
+
+def check_sizes(args) -> None:
+    """Refuse absurd sizes before anything is allocated (raises UsageError naming the option and its limit)."""
+    for name in ("best", "tests", "task_steps", "bins", "chunks", "runs"):
+        if getattr(args, name) < 1:
+            raise UsageError(f"--{name.replace('_', '-')}: must be at least 1")
+    for flag, value, limit in (("--task-steps", args.task_steps, cli.MAX_STEPS), ("--runs", args.runs, cli.MAX_SEEDS),
+                               ("--best", args.best, cli.MAX_SEEDS), ("--tests", args.tests, cli.MAX_SEEDS),
+                               ("--bins", args.bins, cli.MAX_BINS)):
+        cli.check_at_most(flag, value, limit)
+    cli.check_at_most("--best x --tests", args.best * args.tests, cli.MAX_LANES)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    args = parser().parse_args(argv)
     command = "python -m imrl_jax.learning_test " + " ".join(sys.argv[1:] if argv is None else argv)
     try:
+        args = parser().parse_args(argv)
         if os.path.exists(os.path.join(args.out, "steady.json")):
             raise UsageError(f"--out: {args.out} already holds a learning test; choose another directory")
-        for name in ("best", "tests", "task_steps", "bins", "chunks", "runs"):
-            if getattr(args, name) < 1:
-                raise UsageError(f"--{name.replace('_', '-')}: must be at least 1")
+        check_sizes(args)
         if args.cond is not None and args.cond not in CONDITIONS:
             raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(CONDITIONS)}; "
                              f"only {', '.join(FROM_SCRATCH)} are tested without a run directory)")
+        cli.refuse_option_fields(args.set, OPTION_FIELDS)
+        sets = parse_sets(args.set)
         if args.cond in FROM_SCRATCH:
             if args.run_dir:
                 raise UsageError(f"run_dir: {args.cond} is tested from scratch; give either a run directory or "
                                  f"--cond {args.cond}")
-            base = make_config(args.preset, **{**parse_sets(args.set), "condition": args.cond})
+            base = make_config(args.preset, **{**sets, "condition": args.cond})
             genomes = np.zeros((args.runs, args.best, base.num_genes), np.float32)
             source = f"{args.cond} from scratch, preset {args.preset}" + "".join(f", {s}" for s in args.set or [])
         else:
@@ -379,12 +455,19 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise UsageError(f"--chunks: {args.bins} bins cannot be split into {args.chunks} chunks")
         steady_bins(config, args.steady_steps)
         check_writable(args.out)
+        check_out_dir(args.out)
+        if args.cpu_devices < 0:
+            raise UsageError("--cpu-devices: must be 0 (one per core) or more")
         use_host_cores(args.cpu_devices or None)
         summary = run(config, genomes, args.out, num_tests=args.tests, steady_steps=args.steady_steps,
-                      num_chunks=args.chunks, seed=args.seed, quiet=args.quiet, source=source, command=command)
+                      num_chunks=args.chunks, seed=args.seed, quiet=args.quiet, source=source, command=command,
+                      warnings=cli.device_warnings(config, args.cpu_devices), notes=cli.ignored_notes(config, sets))
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
+    except RunWriteError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 1
     print(f"{summary['condition']}: steady state (last {args.steady_steps} cycles) {summary['steady_mean']:.4f} mean "
           f"over {summary['num_runs']} run(s), best run {summary['steady_best_run']:.4f}; whole test "
           f"{summary['whole_test_mean']:.4f}; outputs in {args.out}")

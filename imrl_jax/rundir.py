@@ -1,11 +1,17 @@
-"""Run directories and output files: reading an evolution's run, checking and writing outputs atomically."""
+"""Run directories and output files: reading an evolution's run, checking and writing outputs atomically, one writer."""
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import json
 import os
+import re
+import socket
+import sys
 import tempfile
-from typing import NamedTuple
+import time
+from typing import Callable, Iterator, NamedTuple
 
 import numpy as np
 
@@ -14,6 +20,27 @@ from imrl_jax.config import Config, ConfigError
 
 class RunDirError(ValueError):
     """A run directory (or output path) that cannot be read or written; the message names it."""
+
+
+class RunWriteError(Exception):
+    """Writing a run's files failed mid-run (a full disk, an unwritable file): one line, exit code 1."""
+
+
+#: Errors of writing that the user fixes (space, permissions, a read-only mount): reported as one line.
+WRITE_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EACCES, errno.EPERM, errno.EROFS})
+
+
+def write_errno(error: BaseException) -> int | None:
+    """The errno of a failed write that the user can fix (:data:`WRITE_ERRNOS`), or None.
+
+    orbax reports the OS error of a failed checkpoint inside the text of a ValueError
+    (tensorstore's ``[os_error_code='28']``), so the text is read too.
+    """
+    code = error.errno if isinstance(error, OSError) else None
+    if code is None:
+        found = re.search(r"os_error_code='?(\d+)", str(error))
+        code = int(found.group(1)) if found else None
+    return code if code in WRITE_ERRNOS else None
 
 
 class Run(NamedTuple):
@@ -27,11 +54,17 @@ class Run(NamedTuple):
 
 
 def write_atomic(path: str, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file, so a reader never sees half of it."""
+    """Write ``data`` to ``path`` through a temporary file, so a reader never sees half of it (none is left on failure)."""
     tmp = f"{path}.tmp-{os.getpid()}"
-    with open(tmp, "wb") as f:
-        f.write(data)
-    os.replace(tmp, path)
+    try:
+        with open(tmp, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except OSError as error:
+        with contextlib.suppress(OSError):
+            os.remove(tmp)
+        # A failed write() names no file and a failed open() the temporary one: name the file being written.
+        raise OSError(error.errno, error.strerror, path) from error
 
 
 def check_writable(path: str, flag: str = "--out") -> None:
@@ -90,3 +123,136 @@ def best_genomes(run: Run, num_best: int) -> np.ndarray:
         raise RunDirError(f"--best: must be between 1 and the population size {run.evaluated.shape[1]}")
     order = np.argsort(-run.fitness, axis=1, kind="stable")[:, :num_best]
     return np.take_along_axis(run.evaluated, order[:, :, None], axis=1)
+
+
+# ----------------------------------------------------------------------------- one writer per directory
+
+#: The file in a run directory that names the process writing it.
+LOCK = ".lock"
+
+
+class LockHolder(NamedTuple):
+    """The process a lock file names."""
+
+    pid: int
+    host: str
+    start: int  # the process's start time (clock ticks after boot, /proc), 0 where unknown: tells a reused pid
+
+
+def _proc_stat(pid: int) -> tuple[str, int] | None:
+    """A process's state letter and start time from /proc (None off Linux or if it is gone)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()  # the name before ")" may hold spaces
+        return fields[0], int(fields[19])
+    except (OSError, IndexError, ValueError):
+        return None
+
+
+def _me() -> LockHolder:
+    stat = _proc_stat(os.getpid())
+    return LockHolder(os.getpid(), socket.gethostname(), stat[1] if stat else 0)
+
+
+def read_lock(path: str, tries: int = 20) -> LockHolder | None:
+    """The holder a lock file names; None if it is gone or unreadable (waits a little for one being written)."""
+    for attempt in range(tries):
+        try:
+            with open(path) as f:
+                info = json.load(f)
+            return LockHolder(int(info["pid"]), str(info["host"]), int(info.get("start", 0)))
+        except FileNotFoundError:
+            return None
+        except (OSError, ValueError, KeyError, TypeError):
+            time.sleep(0.05)  # created but not yet written: its writer is between open() and write()
+    return None
+
+
+def holder_alive(holder: LockHolder) -> bool | None:
+    """Whether the holder still runs: None where that cannot be told (another host)."""
+    if holder.host != socket.gethostname():
+        return None
+    try:
+        os.kill(holder.pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        pass  # another user's process: it exists
+    stat = _proc_stat(holder.pid)
+    if stat is not None and (stat[0] == "Z" or (holder.start and stat[1] != holder.start)):
+        return False  # killed but not yet reaped, or the pid now belongs to a later process
+    return True
+
+
+def _refusal(path: str, holder: LockHolder) -> RunDirError:
+    where = f"pid {holder.pid} on {holder.host}"
+    if holder_alive(holder) is None:
+        return RunDirError(f"--out: {path} is being written by {where} (another host; if nothing writes there any "
+                           f"more, remove {os.path.join(path, LOCK)})")
+    return RunDirError(f"--out: {path} is being written by {where}; wait for it to end or stop it")
+
+
+def check_unlocked(path: str) -> None:
+    """Raise RunDirError naming the live process that holds ``path``'s lock, if one does (nothing is written)."""
+    holder = read_lock(os.path.join(path, LOCK))
+    if holder is not None and holder != _me() and holder_alive(holder) is not False:
+        raise _refusal(path, holder)
+
+
+@contextlib.contextmanager
+def lock_run_dir(path: str, say: Callable[[str], None] | None = None) -> Iterator[None]:
+    """Hold ``path/.lock`` (pid and host, as JSON) while the block runs, so that a directory has one writer.
+
+    The lock is created with O_CREAT | O_EXCL (atomic) and removed at the end, on errors and
+    Ctrl-C too. A live holder is refused (RunDirError naming it); the lock of a process that
+    no longer runs on this host is taken over, said through ``say`` (default: stderr).
+    """
+    say = say or (lambda text: print(text, file=sys.stderr, flush=True))
+    lock, me = os.path.join(path, LOCK), _me()
+    for attempt in range(5):
+        try:
+            fd = os.open(lock, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        except FileExistsError:
+            holder = read_lock(lock)
+            if holder is not None and holder_alive(holder) is not False:
+                raise _refusal(path, holder) from None
+            # Stale: moved aside, not removed, so that of two processes taking it over only one succeeds.
+            aside = f"{lock}.stale-{os.getpid()}"
+            try:
+                os.rename(lock, aside)
+            except FileNotFoundError:
+                continue
+            if read_lock(aside, tries=1) != holder:  # a fresh lock of a third process: put it back
+                with contextlib.suppress(OSError):
+                    os.link(aside, lock)
+            else:
+                name = f"pid {holder.pid} on {holder.host}" if holder else "an unreadable lock"
+                say(f"warning: {lock}: took over the stale lock of {name} (no longer running)")
+            with contextlib.suppress(OSError):
+                os.remove(aside)
+            continue
+        except OSError as error:
+            raise RunDirError(f"--out: cannot create {lock} ({error.strerror or error})") from None
+        try:
+            with os.fdopen(fd, "w") as f:
+                json.dump(dict(me._asdict(), since=time.strftime("%Y-%m-%dT%H:%M:%S%z")), f)
+        except OSError as error:
+            with contextlib.suppress(OSError):
+                os.remove(lock)
+            raise RunDirError(f"--out: cannot write {lock} ({error.strerror or error})") from None
+        break
+    else:
+        raise RunDirError(f"--out: cannot take {lock} (other processes keep taking it)")
+    try:
+        yield
+    finally:
+        if read_lock(lock, tries=1) == me:
+            with contextlib.suppress(OSError):
+                os.remove(lock)
+
+
+def entries(path: str) -> list[str]:
+    """What a directory holds besides its lock (nothing if it does not exist)."""
+    if not os.path.isdir(path):
+        return []
+    return sorted(name for name in os.listdir(path) if name != LOCK)

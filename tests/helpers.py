@@ -108,6 +108,43 @@ def command(out_dir: str, args: tuple[str, ...]) -> list[str]:
     return evolve_command([*evolve_args(out=out_dir), *args])
 
 
+def snapshot(out_dir: str) -> dict:
+    """Every file under ``out_dir``: relative path -> bytes."""
+    files = {}
+    for root, _, names in os.walk(out_dir):
+        for name in names:
+            path = os.path.join(root, name)
+            with open(path, "rb") as f:
+                files[os.path.relpath(path, out_dir)] = f.read()
+    return files
+
+
+def interruptible_command(module: str, args) -> list[str]:
+    """``python -m module args`` whose SIGINT is Ctrl-C even where the parent ignores SIGINT (as background jobs do)."""
+    code = ("import runpy, signal; signal.signal(signal.SIGINT, signal.default_int_handler); "
+            f"runpy.run_module({module!r}, run_name='__main__', alter_sys=True)")
+    return [sys.executable, "-c", code, *args]
+
+
+def write_lock(run_dir: str, pid: int, host: str | None = None, start: int = 0) -> str:
+    """A lock file in ``run_dir`` naming ``pid`` on ``host`` (default: this one) as its writer; its path."""
+    from imrl_jax.rundir import LOCK
+
+    os.makedirs(run_dir, exist_ok=True)
+    path = os.path.join(run_dir, LOCK)
+    with open(path, "w") as f:
+        json.dump({"pid": pid, "host": host or socket.gethostname(), "start": start}, f)
+    return path
+
+
+def run_python(code: str, devices: int = 1, timeout: float = TIMEOUT) -> subprocess.CompletedProcess:
+    """``python -c code`` in the repository root on ``devices`` forced CPU devices (tests/ on its path)."""
+    env = environment(devices)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (os.path.join(ROOT, "tests"), env.get("PYTHONPATH")) if p)
+    return subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True,
+                          timeout=timeout)
+
+
 def environment(devices: int = 1) -> dict:
     """The environment of a run on ``devices`` forced CPU devices (nothing of ours inherited)."""
     env = {k: v for k, v in os.environ.items() if k not in _DISTRIBUTED_ENV}
@@ -238,3 +275,17 @@ def tiny_baseline(agent: str = "ppo", **overrides):
                  num_envs=8, unroll_length=10, batch_size=8, num_minibatches=4, updates_per_batch=2,
                  population=4, episode_length=100)
     return Baseline(agent=agent, **{**sizes, **overrides})
+
+
+def reference_life(config, key, genome) -> dict:
+    """The NumPy reference's whole life of ``genome`` with the draws ``lifetime.live(key, ...)`` makes (float64)."""
+    import jax.numpy as jnp
+
+    from imrl_jax import lifetime, reference, state
+
+    keys = lifetime.lifetime_keys(key, config.num_tasks)
+    pose = lifetime.random_pose(keys.pose, config, jnp.float64)
+    child = state.draw_many(keys.childhood, config.childhood_steps, config.draw_block)
+    tasks = jax.vmap(state.draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
+    return reference.live(config, np.asarray(genome), (float(pose.pos[0]), float(pose.pos[1]), float(pose.heading)),
+                          np.asarray(child.u), np.asarray(child.z), np.asarray(tasks.u), np.asarray(tasks.z))

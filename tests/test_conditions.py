@@ -6,6 +6,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import reference_life
 from imrl_jax import conditions
 from imrl_jax import lifetime as L
 from imrl_jax import reference
@@ -30,7 +31,7 @@ def test_genome_sizes_and_layout_follow_the_table():
     """111, 222, 333 and 0 genes (37 weights per network and expert); decode puts each network in its place."""
     sizes = {name: make_config("paper", condition=name).num_genes for name in conditions.NAMES}
     assert sizes == {"LE-LS": 111, "EE-LS": 222, "EE-ES": 333, "SLE": 0, "EV-LS": 111, "EV-LS-diff": 111,
-                     "LE-LS-N": 114, "EXT-LS": 0}
+                     "LE-LS-P": 122, "LE-LS-N": 114, "EXT-LS": 0}
     assert make_config("paper", condition="EXT-LS").num_lane_experts == 3
     evaluators = decode(make_config("paper", condition="EV-LS"), jnp.arange(111, dtype=jnp.float32))
     np.testing.assert_array_equal(evaluators.evaluator[2, :2], [74.0, 75.0])  # expert 2's evaluator: genes 74..
@@ -164,12 +165,7 @@ def test_an_unexpressed_expert_is_never_chosen_and_never_learns(tiny):
     assert int(result.childhood_selections[:, 0].sum()) > 0 and int(result.childhood_selections[:, 2].sum()) > 0
     np.testing.assert_array_equal(result.agent.actor[1], agent.actor[1])  # never in control: never learned
     assert not np.array_equal(result.agent.actor[0], agent.actor[0])
-    keys = L.lifetime_keys(key, config.num_tasks)
-    pose = L.random_pose(keys.pose, config, jnp.float64)
-    child = S.draw_many(keys.childhood, config.childhood_steps, config.draw_block)
-    tasks = jax.vmap(S.draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
-    ref = reference.live(config, np.asarray(genome), (float(pose.pos[0]), float(pose.pos[1]), float(pose.heading)),
-                         np.asarray(child.u), np.asarray(child.z), np.asarray(tasks.u), np.asarray(tasks.z))
+    ref = reference_life(config, key, genome)
     np.testing.assert_array_equal(np.asarray(result.reaches), ref["reaches"])
     for name in ("actor", "evaluator", "selector_actor"):
         np.testing.assert_allclose(np.asarray(getattr(result.agent, name)), ref["childhood_weights"][name],
@@ -214,12 +210,7 @@ def test_an_individual_learns_with_its_evolved_parameters(tiny):
     genome = jax.random.uniform(jax.random.key(12), (config.num_genes,), jnp.float64, -1.0, 1.0)
     key = jax.random.key(11)
     result = jax.jit(L.live, static_argnums=1)(key, config, config.learning_params(), genome)
-    keys = L.lifetime_keys(key, config.num_tasks)
-    pose = L.random_pose(keys.pose, config, jnp.float64)
-    child = S.draw_many(keys.childhood, config.childhood_steps, config.draw_block)
-    tasks = jax.vmap(S.draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
-    ref = reference.live(config, np.asarray(genome), (float(pose.pos[0]), float(pose.pos[1]), float(pose.heading)),
-                         np.asarray(child.u), np.asarray(child.z), np.asarray(tasks.u), np.asarray(tasks.z))
+    ref = reference_life(config, key, genome)
     np.testing.assert_array_equal(np.asarray(result.reaches), ref["reaches"])
     for name in ("actor", "evaluator", "selector_actor", "selector_critic"):
         np.testing.assert_allclose(np.asarray(getattr(result.agent, name)), ref["childhood_weights"][name],

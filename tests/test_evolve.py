@@ -1,14 +1,16 @@
 """The evolve command: run directory, exact resume after SIGKILL, fall-back, bad input."""
 
+import errno
 import os
 import shutil
 import signal
+import socket
 import subprocess
 import time
 
 import numpy as np
 import pytest
-from helpers import evolve_args, evolve_command, read_population
+from helpers import evolve_args, evolve_command, interruptible_command, read_population, snapshot
 
 from imrl_jax import evolve
 
@@ -18,6 +20,7 @@ def _tiny(seeds="2", task_steps="1000"):
 
 
 TINY = _tiny()
+LOUD = [a for a in TINY if a != "--quiet"]  # the same run, its notes printed
 
 
 def _outputs(out_dir):
@@ -66,7 +69,8 @@ def test_run_directory_contents(finished_run):
     np.testing.assert_allclose([float(r[2]) for r in last], arrays["fitness"].max(1), atol=1e-6)
 
 
-def test_sigkill_mid_run_then_resume_is_bitwise_identical(finished_run, tmp_path):
+def test_sigkill_mid_run_then_resume_is_bitwise_identical(finished_run, tmp_path, capsys):
+    """A second writer is refused while the first runs; killed, the first's lock is stale and --resume takes it over."""
     out = str(tmp_path / "killed")
     args = [*TINY, "--generations", "6", "--out", out]
     process = _cli(args, tmp_path)
@@ -78,16 +82,24 @@ def test_sigkill_mid_run_then_resume_is_bitwise_identical(finished_run, tmp_path
                 break
             time.sleep(0.02)
         assert process.poll() is None, "the run finished before it could be killed"
+        for second in (["--resume", "--out", out], args):  # this process: another writer
+            assert evolve.main(second) == 2
+            err = capsys.readouterr().err.strip()
+            assert err == (f"error: --out: {out} is being written by pid {process.pid} on {socket.gethostname()}; "
+                           f"wait for it to end or stop it")
         process.send_signal(signal.SIGKILL)
     finally:
         process.kill()
-        process.communicate()
+        process.communicate()  # reaped: its pid is gone
     done = sorted(int(d) for d in os.listdir(checkpoints) if d.isdigit())
     assert 2 <= done[-1] < 6
-    resumed = _cli([*args, "--resume"], tmp_path)
+    assert os.path.exists(os.path.join(out, ".lock"))
+    resumed = _cli(["--resume", "--out", out, "--quiet"], tmp_path)
     stdout, stderr = resumed.communicate(timeout=300)
     assert resumed.returncode == 0, stderr
-    assert "resuming" in stderr
+    assert stderr.strip() == (f"warning: {os.path.join(out, '.lock')}: took over the stale lock of pid {process.pid} "
+                              f"on {socket.gethostname()} (no longer running)")
+    assert not os.path.exists(os.path.join(out, ".lock"))
     _assert_same_outputs(out, finished_run)
 
 
@@ -101,7 +113,7 @@ def test_corrupt_checkpoint_falls_back_to_the_previous_one(finished_run, tmp_pat
         for name in files:  # truncate every data file of the newest checkpoint
             with open(os.path.join(root, name), "r+b") as f:
                 f.truncate(max(0, os.path.getsize(os.path.join(root, name)) // 3))
-    assert evolve.main([*TINY, "--generations", "6", "--out", out, "--resume"]) == 0
+    assert evolve.main([*LOUD, "--generations", "6", "--out", out, "--resume"]) == 0
     err = capsys.readouterr().err
     assert "checkpoints/6 is unreadable" in err and "resuming" in err and "(5 of 6 done" in err
     _assert_same_outputs(out, finished_run)
@@ -114,18 +126,18 @@ def test_finished_run_extended_is_bitwise_an_uninterrupted_longer_run(tmp_path, 
     longer, extended = str(tmp_path / "three"), str(tmp_path / "two_then_three")
     assert evolve.main([*args, "--generations", "3", "--out", longer]) == 0
     assert evolve.main([*args, "--generations", "2", "--out", extended]) == 0
-    assert evolve.main([*args, "--generations", "3", "--out", extended, "--resume"]) == 0
+    assert evolve.main([*args[:-1], "--generations", "3", "--out", extended, "--resume"]) == 0  # not --quiet
     assert "(2 of 3 done" in capsys.readouterr().err
     _assert_same_outputs(extended, longer)
     with open(os.path.join(extended, "config.json")) as f:
         info = json.load(f)
     assert info["config"]["num_generations"] == 3 and info["extended"][0]["num_generations"] == [2, 3]
-    before = _snapshot(extended)
+    before = snapshot(extended)
     for generations, message in (("2", "num_generations is 2 but the run used 3"), ("1", "may only grow it")):
         assert evolve.main([*args, "--generations", generations, "--out", extended, "--resume"]) == 2
         err = capsys.readouterr().err.strip()
         assert message in err and err.startswith("error: ") and len(err.splitlines()) == 1
-    assert _snapshot(extended) == before
+    assert snapshot(extended) == before
 
 
 def test_resume_accepts_other_compute_choices_and_ignored_fields_listing_every_real_difference(
@@ -143,27 +155,17 @@ def test_resume_accepts_other_compute_choices_and_ignored_fields_listing_every_r
     assert len(err.splitlines()) == 1 and "task_steps is 500" in err and "gamma is 0.5" in err
 
 
-def _snapshot(out_dir):
-    files = {}
-    for root, _, names in os.walk(out_dir):
-        for name in names:
-            path = os.path.join(root, name)
-            with open(path, "rb") as f:
-                files[os.path.relpath(path, out_dir)] = f.read()
-    return files
-
-
 @pytest.mark.parametrize("args, message", [
     (TINY, "already holds a run"),
     ([*_tiny(task_steps="500"), "--resume"], "task_steps is 500 but the run used 1000"),
     ([*_tiny(seeds="3"), "--resume"], "seeds [0, 1, 2] differ"),
 ])
 def test_bad_input_exits_2_and_changes_nothing(finished_run, capsys, args, message):
-    before = _snapshot(finished_run)
+    before = snapshot(finished_run)
     assert evolve.main([*args, "--generations", "6", "--out", finished_run]) == 2
     err = capsys.readouterr().err.strip()
     assert message in err and err.startswith("error: ") and len(err.splitlines()) == 1
-    assert _snapshot(finished_run) == before
+    assert snapshot(finished_run) == before
 
 
 @pytest.mark.parametrize("args, message", [
@@ -174,12 +176,22 @@ def test_bad_input_exits_2_and_changes_nothing(finished_run, capsys, args, messa
     (["--cond", "EE-LS", "--childhood-steps", "-5"], "childhood_steps"),
     (["--cond", "EE-LS", "--seeds", "0"], "--seeds"),
     (["--cond", "EE-LS", "--resume"], "holds no run to resume"),
+    (["--resume"], "holds no run to resume"),
+    ([], "--cond: required (or --resume --out RUN"),
+    (["--cond", "EE-LS", "--generations", "1e12"], "--generations: invalid int value: '1e12'"),
+    (["--cond", "EE-LS", "--generations", "2147483648"], "--generations: 2,147,483,648 is above the limit of 1,000,000"),
+    (["--cond", "EE-LS", "--seeds", "20000"], "--seeds: 20,000 is above the limit of 10,000"),
+    (["--cond", "EE-LS", "--task-steps", "2000000000"], "--task-steps: 2,000,000,000 is above the limit of 1,000,000,000"),
+    (["--cond", "EE-LS", "--seeds", "1000", "--population", "5000"], "--seeds x --population: 5,000,000 is above"),
+    (["--cond", "EE-LS", "--first-seed", "-5"], "--first-seed: must be 0 or more (got -5)"),
+    (["--cond", "EE-LS", "--set", "condition=LE-LS"], "--set condition=LE-LS: condition is set by --cond; use --cond"),
+    (["--cond", "EE-LS", "--set", "num_generations=5"], "num_generations is set by --generations"),
 ])
 def test_bad_arguments(tmp_path, capsys, args, message):
     out = str(tmp_path / "new")
     assert evolve.main([*args, "--out", out]) == 2
     err = capsys.readouterr().err.strip()
-    assert message in err and len(err.splitlines()) == 1
+    assert err.startswith("error: ") and message in err and len(err.splitlines()) == 1
     assert not os.path.exists(out)
 
 
@@ -261,3 +273,131 @@ def test_unreadable_checkpoint_reason_is_one_short_line():
     assert "0x7f" not in reason and "source locations" not in reason and "\n" not in reason
     assert reason.startswith('DATA_LOSS: Error reading "state/manifest.ocdbt": (an object) failed with more words')
     assert len(reason) <= 164 and reason.endswith(" ...")
+
+
+def test_resume_needs_only_out_and_extends_only_with_generations(finished_run, tmp_path, capsys):
+    """--resume --out uses the run's own config and seeds; the preset's generations do not extend it; --quiet is quiet."""
+    out = str(tmp_path / "copy")
+    shutil.copytree(finished_run, out)
+    def text(name):
+        with open(os.path.join(out, name)) as f:
+            return f.read()
+
+    history, config_json = text("history.csv"), text("config.json")
+    capsys.readouterr()
+    assert evolve.main([*TINY, "--out", out, "--resume"]) == 0  # small's 10 generations are not asked for
+    captured = capsys.readouterr()
+    assert captured.err == "" and captured.out.startswith("EE-LS: generations 0-5 x 2 seed(s) done")
+    assert evolve.main(["--resume", "--out", out]) == 0
+    assert f"{out} is finished (6 of 6 generations): its outputs are rewritten" in capsys.readouterr().err
+    assert (text("history.csv"), text("config.json")) == (history, config_json)  # not extended
+    _assert_same_outputs(out, finished_run)
+    before = snapshot(out)
+    assert evolve.main(["--resume", "--out", out, "--population", "8", "--bins", "1", "--set", "gamma=0.5"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and all(f"{field} is " in err for field in ("population_size", "num_bins", "gamma"))
+    assert snapshot(out) == before
+
+
+def test_a_directory_holding_no_run_is_refused(tmp_path, capsys):
+    """Its files could have the names of a run's outputs (history.csv): nothing is written there."""
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "history.csv").write_text("my own")
+    assert evolve.main([*TINY, "--generations", "1", "--out", str(out)]) == 2
+    assert capsys.readouterr().err.strip() == (f"error: --out: {out} is not empty and holds no run (no config.json; "
+                                               f"it holds history.csv); choose a new or empty directory")
+    assert snapshot(str(out)) == {"history.csv": b"my own"}
+
+
+def test_notes_and_warnings(finished_run, tmp_path, capsys):
+    """A field the condition never reads is noted (not under --quiet); more devices than cores are warned of."""
+    out = str(tmp_path / "copy")
+    shutil.copytree(finished_run, out)
+    cores = os.cpu_count() + 1
+    warning = (f"warning: --cpu-devices {cores} is more than this machine's {cores - 1} cores: the devices share them "
+               f"(no faster, likely slower)")
+    options = ["--resume", "--out", out, "--set", "eta_actor=0.5", "--cpu-devices", str(cores)]
+    assert evolve.main(options) == 0
+    assert capsys.readouterr().err.splitlines()[:2] == [
+        warning, "note: --set eta_actor=0.5: EE-LS does not read eta_actor (it changes nothing)"]
+    assert evolve.main([*options, "--quiet"]) == 0
+    assert capsys.readouterr().err.splitlines() == [warning]
+
+
+def test_the_gpu_kernel_off_a_gpu_is_warned_about():
+    from imrl_jax.cli import device_warnings
+    from imrl_jax.config import make_config
+
+    assert device_warnings(make_config("small", condition="EE-LS")) == []
+    assert device_warnings(make_config("small", condition="EE-LS", step_kernel="pallas")) == [
+        "warning: step_kernel=pallas without a GPU (backend cpu): the kernel runs in Pallas's interpreter, several "
+        "times slower than step_kernel=xla"]
+
+
+def test_ctrl_c_stops_with_one_line_and_exit_code_130(tmp_path):
+    out = str(tmp_path / "stopped")
+    env = {**os.environ, "JAX_PLATFORMS": "cpu"}
+    process = subprocess.Popen(interruptible_command("imrl_jax.evolve", [*TINY, "--generations", "50", "--out", out]),
+                               cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 120
+    try:
+        while time.time() < deadline and process.poll() is None and not os.path.isdir(os.path.join(out, "checkpoints",
+                                                                                                    "1")):
+            time.sleep(0.02)
+        assert process.poll() is None, "the run ended before it could be interrupted"
+        process.send_signal(signal.SIGINT)
+        stdout, stderr = process.communicate(timeout=60)
+    finally:
+        process.kill()
+        process.communicate()
+    assert process.returncode == 130, stderr
+    assert stdout == "" and len(stderr.splitlines()) == 1, stderr
+    assert stderr.startswith("interrupted in generation ") and " checkpointed); resume with: python -m " \
+        f"imrl_jax.evolve --resume --out {out}\n" in stderr
+    assert not os.path.exists(os.path.join(out, ".lock"))
+
+
+def test_a_full_disk_mid_run_is_one_line_exit_1_and_resumable(tmp_path, monkeypatch, capsys):
+    """history.csv cannot be written after generation 1: one line naming it, no temporary file left; --resume writes it."""
+    from imrl_jax import rundir
+
+    out = tmp_path / "full"
+    out.mkdir()  # an empty directory is as good as a new one
+    out = str(out)
+    args = evolve_args(seeds=1, population=4, parents=2, task_steps=200, bins=1, generations=2)
+    writes = []
+
+    class FullDisk:
+        def __init__(self, file):
+            self.file = file
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            self.file.close()
+
+        def write(self, data):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    def open_on_a_full_disk(path, *a, **k):
+        file = open(path, *a, **k)
+        if os.path.basename(path).startswith("history.csv.tmp-"):
+            writes.append(path)
+            if len(writes) == 2:
+                return FullDisk(file)
+        return file
+
+    monkeypatch.setattr(rundir, "open", open_on_a_full_disk, raising=False)
+    assert evolve.main([*args, "--out", out]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err == (f"error: cannot write {os.path.join(out, 'history.csv')} ({os.strerror(errno.ENOSPC)}) after "
+                   f"generation 1 (2 generation(s) checkpointed); free space or fix permissions, then resume with: "
+                   f"python -m imrl_jax.evolve --resume --out {out}")
+    assert [name for _, _, names in os.walk(out) for name in names if ".tmp-" in name] == []
+    assert ".lock" not in os.listdir(out)
+    monkeypatch.undo()
+    assert evolve.main(["--resume", "--out", out, "--quiet"]) == 0  # checkpointed, it is finished: outputs written
+    with open(os.path.join(out, "history.csv")) as f:
+        assert len(f.read().splitlines()) == 1 + 2

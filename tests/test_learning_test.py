@@ -2,6 +2,7 @@
 
 import json
 import os
+import socket
 
 import jax
 import numpy as np
@@ -164,7 +165,9 @@ def test_help(capsys):
         learning_test.main(["--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert "``" not in text and "(default: None)" not in text
-    assert "--cond {LE-LS,EE-LS,EE-ES,SLE}" in text and "--quiet no progress lines" in text
+    from imrl_jax.config import CONDITIONS
+
+    assert f"--cond {{{','.join(CONDITIONS)}}}" in text and "--quiet no progress lines" in text
 
 
 def test_the_step_counter_is_shared_so_block_draws_stay_a_branch(tiny):
@@ -178,3 +181,91 @@ def test_the_step_counter_is_shared_so_block_draws_stay_a_branch(tiny):
     tests = begin_all(jax.random.split(jax.random.key(0), 2), config.learning_params(), genomes)
     jaxpr = str(jax.make_jaxpr(advance_all)(config.learning_params(), jax.numpy.int32(0), tests))
     assert " cond[" in jaxpr
+
+
+#: On 2 devices: tests whose count is odd are padded with copies of the last; the copies change no real lane.
+ODD_COUNTS = """
+import jax, jax.numpy as jnp, numpy as np
+from imrl_jax import learning_test
+from imrl_jax.config import make_config
+assert len(jax.devices()) == 2
+argv = ["--cond", "SLE", "--runs", "1", "--best", "1", "--tests", "1", "--task-steps", "200", "--bins", "2",
+        "--steady-steps", "100", "--chunks", "1", "--set", "target_radius=40", "--quiet", "--out", OUT]
+assert learning_test.main(argv) == 0  # 1 test: 1 padding lane
+config = make_config("paper", condition="SLE", target_radius=40).replace(task_steps=200, num_bins=2)
+keys = jnp.concatenate([learning_test.test_keys(0, 1, 1, 1), jax.random.split(jax.random.key(7), 3)])
+genomes, params = np.zeros((4, 0), np.float32), config.learning_params()
+four = learning_test.run_tests(keys, config, params, genomes)  # no padding
+three = learning_test.run_tests(keys[:3], config, params, genomes[:3])  # 1 padding lane
+for got, want in zip(three, four):
+    np.testing.assert_array_equal(got, want[:3])
+with np.load(OUT + "/curves.npz") as data:
+    np.testing.assert_array_equal(data["reaches"].reshape(four[0][:1].shape), four[0][:1])
+print("reaches", int(four[0].sum()))
+"""
+
+
+def test_odd_test_counts_on_two_devices_equal_unpadded_tests(tmp_path):
+    """1 or 3 tests on 2 devices (padded) give the same reaches and expert use as the same tests among 4."""
+    from helpers import run_python
+
+    done = run_python(f"OUT = {str(tmp_path / 'out')!r}\n" + ODD_COUNTS, devices=2)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert int(done.stdout.split()[-1]) > 0, "the check is weak if no test reaches a target"
+    assert not (tmp_path / "out" / learning_test.PARTIAL).exists()
+
+
+def _sle_argv(out):
+    return ["--cond", "SLE", "--runs", "1", "--best", "1", "--tests", "2", "--task-steps", "200", "--bins", "2",
+            "--steady-steps", "100", "--chunks", "1", "--quiet", "--out", str(out)]
+
+
+def test_a_locked_out_is_refused_and_a_stale_lock_taken_over(tmp_path, capsys):
+    """A live writer (another process) is named and refused; once it is gone, its lock is taken over."""
+    import subprocess
+
+    from helpers import write_lock
+
+    out = tmp_path / "out"
+    holder = subprocess.Popen(["sleep", "60"])
+    try:
+        lock = write_lock(str(out), holder.pid)
+        assert learning_test.main(_sle_argv(out)) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("error: --out: ") and f"pid {holder.pid} on " in err and len(err.splitlines()) == 1
+        assert sorted(os.listdir(out)) == [".lock"]
+    finally:
+        holder.kill()
+        holder.wait()
+    assert learning_test.main(_sle_argv(out)) == 0
+    first = capsys.readouterr().err.splitlines()[0]
+    assert first == f"warning: {lock}: took over the stale lock of pid {holder.pid} on {socket.gethostname()} (no longer running)"
+    assert not os.path.exists(lock) and (out / "steady.json").exists()
+
+
+def test_an_out_holding_anything_else_is_refused(tmp_path, capsys):
+    """Only a new or empty directory, or an unfinished test to go on with: anything else is left alone."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine")
+    assert learning_test.main(_sle_argv(out)) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (f"error: --out: {out} is not empty and holds no unfinished learning test (it holds notes.txt); "
+                   f"choose a new or empty directory")
+    assert os.listdir(out) == ["notes.txt"]
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--cond", "SLE", "--task-steps", "2000000000"], "--task-steps: 2,000,000,000 is above the limit of 1,000,000,000"),
+    (["--cond", "SLE", "--runs", "20000"], "--runs: 20,000 is above the limit of 10,000"),
+    (["--cond", "SLE", "--best", "1000", "--tests", "10000"], "--best x --tests: 10,000,000 is above the limit"),
+    (["--cond", "SLE", "--task-steps", "1e9"], "--task-steps: invalid int value: '1e9'"),
+    (["--cond", "SLE", "--set", "condition=LE-LS"], "--set condition=LE-LS: condition is set by --cond"),
+    (["--cond", "SLE", "--set", "task_steps=500"], "task_steps is set by --task-steps"),
+])
+def test_absurd_sizes_and_sets_of_options_are_refused(tmp_path, capsys, argv, message):
+    out = tmp_path / "out"
+    assert learning_test.main([*argv, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: ") and message in err and len(err.splitlines()) == 1
+    assert not out.exists()
