@@ -16,8 +16,8 @@ $(STAMP): pyproject.toml
 install: $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/python -m imrl_jax.demo --out $(OUT)/demo
 	rm -rf $(OUT)/demo/evolve
+	$(BIN)/python -m imrl_jax.demo --out $(OUT)/demo --overwrite
 	$(BIN)/python -m imrl_jax.evolve --cond LE-LS --seeds 2 --preset small --out $(OUT)/demo/evolve
 
 test: $(STAMP)

@@ -23,6 +23,7 @@ import csv
 import dataclasses
 import functools
 import io
+import math
 import json
 import os
 import sys
@@ -110,6 +111,19 @@ def steps_per_update(b: Baseline) -> int:
     if b.agent == "ppo":
         return b.batch_size * b.num_minibatches * b.unroll_length
     return 2 * b.population * b.episode_length
+
+
+def steps_trained(b: Baseline) -> int:
+    """Control cycles brax trains for ``b.steps`` asked: whole updates, rounded up as its trainers do.
+
+    PPO: ``num_evals - 1`` epochs of ceil(steps / ((num_evals - 1) x update)) updates each;
+    ES: generations until the count reaches ``steps``.
+    """
+    update = steps_per_update(b)
+    if b.agent == "ppo":
+        epochs = max(b.num_evals - 1, 1)
+        return epochs * math.ceil(b.steps / (epochs * update)) * update
+    return math.ceil(b.steps / update) * update
 
 
 # ----------------------------------------------------------------------------- measuring
@@ -250,6 +264,10 @@ def train_es(b: Baseline, config: Config, task: int, seed: int, report=None) -> 
     # The final policy is measured as PPO's is: replays by the project's own step.
     sto, det = make_evaluate(b, env, run.make_policy)(jax.random.fold_in(jax.random.key(seed), task), run.params)
     run.final = (float(sto), float(det))
+    # The curve ends with the same measure as runs.csv (the earlier points are brax's own evaluation).
+    if not run.steps or run.steps[-1] != steps_trained(b):
+        run.steps.append(steps_trained(b)), run.stochastic.append(0.0), run.deterministic.append(0.0)
+    run.stochastic[-1], run.deterministic[-1] = run.final
     return run
 
 
@@ -259,6 +277,8 @@ def final_performance(run: Run) -> tuple[float, float]:
 
 
 # ----------------------------------------------------------------------------- the run
+
+OUTPUTS = ("runs.csv", "curves.csv", "learning_curve.png", "summary.json")
 
 
 def run(b: Baseline, out_dir: str, config: Config | None = None, quiet: bool = False, command: str = "") -> dict:
@@ -271,8 +291,11 @@ def run(b: Baseline, out_dir: str, config: Config | None = None, quiet: bool = F
     train = {"ppo": train_ppo, "es": train_es}[b.agent]
     jobs = [(task, seed) for task in b.tasks for seed in b.seed_list]
     progress = Progress(len(jobs), quiet=quiet, unit="run")
-    progress.message(f"{b.agent.upper()} baseline: {len(b.tasks)} task(s) x {b.seeds} seed(s), {b.steps:,} cycles "
-                     f"each ({len(jobs) * b.steps:,} in all)")
+    total = steps_trained(b)
+    rounded = (f" (brax trains whole {'updates' if b.agent == 'ppo' else 'generations'} of "
+               f"{steps_per_update(b):,} cycles: {b.steps:,} asked)") if total != b.steps else ""
+    progress.note(f"{b.agent.upper()} baseline: {len(b.tasks)} task(s) x {b.seeds} seed(s), {total:,} cycles "
+                     f"each{rounded}, {len(jobs) * total:,} in all")
     rows, curves = [], []
     started = time.perf_counter()
     for task, seed in jobs:
@@ -299,7 +322,9 @@ def run(b: Baseline, out_dir: str, config: Config | None = None, quiet: bool = F
     os.makedirs(out_dir, exist_ok=True)
     write_atomic(os.path.join(out_dir, "runs.csv"), _csv(rows))
     write_atomic(os.path.join(out_dir, "curves.csv"), _csv(curves))
-    _write_plot(b, curves, os.path.join(out_dir, "learning_curve.png"))
+    from imrl_jax.plotting import save
+
+    save(plot_learning_curve(b, curves), os.path.join(out_dir, "learning_curve.png"))
     write_atomic(os.path.join(out_dir, "summary.json"), json.dumps(summary, indent=2).encode())  # last: marks completion
     return summary
 
@@ -314,7 +339,7 @@ def summarise(b: Baseline, config: Config, rows: list[dict], curves: list[dict])
                                    deterministic_mean=float(mode.mean()))
     per_seed = [np.mean([r["performance"] for r in rows if r["seed"] == s]) for s in b.seed_list]
     sps = [r["steps_per_s"] for r in rows if np.isfinite(r["steps_per_s"])]
-    return dict(agent=b.agent, steps=b.steps, seeds=b.seed_list, tasks=list(b.tasks),
+    return dict(agent=b.agent, steps=b.steps, steps_trained=steps_trained(b), seeds=b.seed_list, tasks=list(b.tasks),
                 performance_mean=float(np.mean(per_seed)), performance_sd_over_seeds=float(np.std(per_seed)),
                 performance_deterministic_mean=float(np.mean([r["performance_deterministic"] for r in rows])),
                 per_task=per_task, steps_per_s_median=float(np.median(sps)) if sps else None,
@@ -349,8 +374,9 @@ def _csv(rows: list[dict]) -> bytes:
     return out.getvalue().encode()
 
 
-def _write_plot(b: Baseline, curves: list[dict], path: str) -> None:
-    from imrl_jax.plotting import new_figure, save, style_axis
+def plot_learning_curve(b: Baseline, curves: list[dict]):
+    """Performance against cycles of experience per task, the mean over seeds (learning_curve.png)."""
+    from imrl_jax.plotting import new_figure, style_axis
 
     fig = new_figure(6.0, 3.6)
     fig.set_layout_engine("constrained")
@@ -362,11 +388,11 @@ def _write_plot(b: Baseline, curves: list[dict], path: str) -> None:
         mean = [np.mean([c["performance"] for c in points if c["step"] == s]) for s in steps]
         ax.plot(steps, mean, color=colours[task - 1], lw=1.5, label=f"task {task}")
     ax.set_ylim(0, 1)
-    ax.set_xlim(0, b.steps)
+    ax.set_xlim(0, steps_trained(b))  # brax trains whole updates: the last point lies past b.steps
     style_axis(ax, f"{b.agent.upper()} from brax.training: {b.seeds} seed(s), mean over seeds",
                "control cycles of experience on the task", "performance (1: straight line)")
     ax.legend(fontsize=7)
-    save(fig, path)
+    return fig
 
 
 # ----------------------------------------------------------------------------- command line
@@ -394,6 +420,7 @@ def parser() -> argparse.ArgumentParser:
                    help="set a scalar Baseline field, e.g. --set learning_rate=0.001 (repeatable)")
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--quiet", action="store_true", help="no progress lines (for logs)")
+    p.add_argument("--overwrite", action="store_true", help="replace the outputs of an earlier baseline run in --out")
     return p
 
 
@@ -401,8 +428,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser().parse_args(argv)
     command = "python -m imrl_jax.baselines " + " ".join(sys.argv[1:] if argv is None else argv)
     try:
-        if os.path.exists(os.path.join(args.out, "summary.json")):
-            raise UsageError(f"--out: {args.out} already holds a baseline run; choose another directory")
         try:
             tasks, hidden = _ints(args.tasks), _ints(args.hidden)
         except ValueError:
@@ -411,9 +436,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         settings = Baseline(**{**parse_sets(args.set, Baseline), "agent": args.agent, "steps": args.steps,
                                "seeds": args.seeds, "first_seed": args.first_seed, "tasks": tasks,
                                "num_evals": args.evals, "eval_steps": args.eval_steps, "hidden": hidden})
-        from imrl_jax.rundir import check_writable
+        from imrl_jax.rundir import check_outputs_dir, check_writable
 
         check_writable(args.out)
+        check_outputs_dir(args.out, OUTPUTS, "baseline run", args.overwrite)
         try:
             from imrl_jax import brax_env  # noqa: F401
         except ImportError as error:

@@ -33,7 +33,27 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+
+
+def _import_quietly(name: str):
+    """Import a module, dropping the lines mujoco's optional GPU backend prints when it is absent ("Failed to import warp")."""
+    import contextlib
+    import importlib
+    import io
+    import sys
+
+    printed = io.StringIO()
+    try:
+        with contextlib.redirect_stdout(printed):
+            return importlib.import_module(name)
+    finally:
+        kept = [line for line in printed.getvalue().splitlines(keepends=True)
+                if not line.startswith(("Failed to import warp:", "Failed to import mujoco_warp:"))]
+        sys.stdout.write("".join(kept))
+
+
 try:
+    _import_quietly("brax.envs")  # brax imports mujoco.mjx, whose warp backend is a GPU extra
     import brax.envs
     from brax.envs.base import Env, State, Wrapper
     from brax.envs.wrappers.training import AutoResetWrapper, EpisodeWrapper, VmapWrapper

@@ -1,6 +1,6 @@
 """A short CPU example of the model: the six tasks solved, and one random individual's life (section 2).
 
-    python -m imrl_jax.demo --out out/demo [--condition LE-LS] [--seed 0]
+    python -m imrl_jax.demo --out out/demo [--condition LE-LS] [--seed 0] [--overwrite]
 
 Draws what solving the tasks looks like (a hand-written composition of three colour
 followers, :mod:`imrl_jax.controllers`: not evolved, a reference) beside one random
@@ -23,20 +23,27 @@ import numpy as np
 
 from imrl_jax.cli import HelpFormatter, user_errors
 from imrl_jax.config import CONDITIONS, PRESETS, Config, make_config
-from imrl_jax.rundir import check_writable, write_atomic
+from imrl_jax.rundir import check_outputs_dir, check_writable, write_atomic
 
 PATH_STEPS = 400  # steps of each task path drawn after the lifetime
 CHILDHOOD_PATH_STEPS = 2000
 FOLLOWS = ("follows red", "follows green", "follows blue")
 
 
-def run(config: Config, out_dir: str, seed: int = 0) -> dict:
-    """Drive the composition, live one random individual, write the figure and summary into ``out_dir``; return the summary."""
+OUTPUTS = ("trajectories.png", "summary.json")
+
+
+def run(config: Config, out_dir: str, seed: int = 0, overwrite: bool = False) -> dict:
+    """Drive the composition, live one random individual, write the figure and summary into ``out_dir``; return the summary.
+
+    ``out_dir`` is new, empty, or (with ``overwrite``) a demo's output.
+    """
     from imrl_jax import behaviour, controllers
     from imrl_jax.lifetime import live
     from imrl_jax.plotting import plot_paths, save
 
     check_writable(out_dir)
+    check_outputs_dir(out_dir, OUTPUTS, "demo output", overwrite)
     os.makedirs(out_dir, exist_ok=True)
     key = jax.random.key(seed)
     key_genome, key_life, key_paths = jax.random.split(key, 3)
@@ -99,10 +106,11 @@ def main(argv=None) -> int:
     parser.add_argument("--seed", type=int, default=0, help="random seed of the individual and its life")
     parser.add_argument("--preset", default="small", choices=sorted(PRESETS),
                         help="config preset (small: reduced scale, about a minute on a CPU)")
+    parser.add_argument("--overwrite", action="store_true", help="replace the outputs of an earlier demo in --out")
     args = parser.parse_args(argv)
     try:
         config = make_config(args.preset, condition=args.condition)
-        summary = run(config, args.out, args.seed)
+        summary = run(config, args.out, args.seed, args.overwrite)
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

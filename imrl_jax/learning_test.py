@@ -321,7 +321,7 @@ def _run_locked(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests:
     done = finished_runs(partial, stamp, num_runs)
     resumed = sorted(done)
     progress = Progress(num_runs * num_chunks, done=len(done) * num_chunks, quiet=quiet, unit="chunk")
-    progress.message(f"{config.condition} learning test: {num_runs} run(s) x {num_best} best x {num_tests} test(s) x "
+    progress.note(f"{config.condition} learning test: {num_runs} run(s) x {num_best} best x {num_tests} test(s) x "
                      f"{config.num_tasks} tasks = {num_runs * num_best * num_tests * config.num_tasks} lanes of "
                      f"{config.task_steps} cycles"
                      + (f" after a {config.childhood_steps}-step childhood" if config.spec.has_childhood else "")
@@ -358,6 +358,17 @@ def _run_locked(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests:
     return summary
 
 
+PAPER_TEST = dict(task_steps=1_000_000, shape=(10, 10, 10))  # the paper's tests: 1,000,000 cycles, 10 x 10 x 10
+
+
+def scale_label(config: Config, shape: tuple[int, ...]) -> str:
+    """", reduced scale (...)" when a test is shorter or smaller than the paper's, else ""."""
+    short = bool(config.task_steps < PAPER_TEST["task_steps"])
+    small = bool(np.prod(shape) < np.prod(PAPER_TEST["shape"]))
+    parts = [f"{config.task_steps:,} cycles"] * short + [f"{int(np.prod(shape)):,} tests"] * small
+    return f", reduced scale ({', '.join(parts)})" if parts else ""
+
+
 def _write_plot(config: Config, reaches: np.ndarray, path: str) -> None:
     from imrl_jax.plotting import new_figure, save, style_axis
 
@@ -374,7 +385,8 @@ def _write_plot(config: Config, reaches: np.ndarray, path: str) -> None:
     ax.set_xlim(0, config.task_steps)
     runs, best, tests = reaches.shape[:3]
     style_axis(ax, f"{config.condition} learning test: {runs} run(s) x {best} best x {tests} test(s), "
-                   f"{config.num_tasks} tasks each", "cycles of the task (bin centres)",
+                   f"{config.num_tasks} tasks each{scale_label(config, reaches.shape[:3])}",
+               "cycles of the task (bin centres)",
                "performance per bin (1: straight line)")
     ax.legend(fontsize=7)
     save(fig, path)
@@ -393,7 +405,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--preset", default="paper", choices=sorted(PRESETS),
                    help="from scratch: the learning rules' preset")
     p.add_argument("--set", action="append", metavar="FIELD=VALUE",
-                   help="from scratch: set a Config field other than those the options set (repeatable)")
+                   help="set a Config field other than those the options set (from scratch: of --preset; with a run "
+                        "directory: of its evolution's config, the genome unchanged) (repeatable)")
     p.add_argument("--best", type=int, default=10, help="best individuals of each run's last generation")
     p.add_argument("--tests", type=int, default=10, help="tests per individual")
     p.add_argument("--task-steps", type=int, default=1_000_000, help="cycles per task")
@@ -449,7 +462,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             base, seeds, genomes = load_run(args.run_dir, args.best)
             if args.cond is not None and args.cond != base.condition:
                 raise UsageError(f"--cond: {args.run_dir} is a {base.condition} run, not {args.cond}")
-            source = os.path.abspath(args.run_dir)
+            source = os.path.abspath(args.run_dir) + "".join(f", {s}" for s in args.set or [])
+            if sets:  # the evolved genomes tested under other values (their evolution's config otherwise)
+                tested = base.replace(**sets)
+                if tested.num_genes != base.num_genes:
+                    raise UsageError(f"--set: {', '.join(sets)} changes the genome ({base.num_genes} genes evolved, "
+                                     f"{tested.num_genes} asked)")
+                base = tested
         config = base.replace(task_steps=args.task_steps, num_bins=args.bins)
         if config.num_bins % args.chunks:
             raise UsageError(f"--chunks: {args.bins} bins cannot be split into {args.chunks} chunks")

@@ -51,7 +51,7 @@ def save(fig, path: str) -> str:
 def style_axis(ax, title: str = "", xlabel: str = "", ylabel: str = "", grid: bool = True) -> None:
     """Title, labels, tick sizes and grid of an axis in the figures' style."""
     if title:
-        ax.set_title(title, fontsize=9)
+        ax.set_title(wrap_title(ax, title), fontsize=9)
     if xlabel:
         ax.set_xlabel(xlabel, fontsize=8)
     if ylabel:
@@ -59,6 +59,15 @@ def style_axis(ax, title: str = "", xlabel: str = "", ylabel: str = "", grid: bo
     ax.tick_params(labelsize=7)
     if grid:
         ax.grid(alpha=0.3)
+
+
+def wrap_title(ax, title: str, fontsize: float = 9) -> str:
+    """The title broken into lines that fit the axis' width (a 9-point character is about 5 points wide)."""
+    import textwrap
+
+    width_inches = ax.figure.get_figwidth() * ax.get_position().width
+    chars = max(20, int(width_inches * 72 / (0.56 * fontsize)))
+    return "\n".join(textwrap.fill(line, chars) for line in title.split("\n"))
 
 
 def floor_segments(config: Config) -> list[tuple[np.ndarray, np.ndarray, int]]:

@@ -54,8 +54,13 @@ class Progress:
             self.stream.flush()
         return line
 
+    def note(self, text: str) -> None:
+        """A line of its own (a header, a note), left out in quiet mode."""
+        if not self.quiet:
+            self.message(text)
+
     def message(self, text: str) -> None:
-        """A line of its own (a warning or a note), even in quiet mode."""
+        """A line of its own (a warning), even in quiet mode."""
         if self.tty:
             self.stream.write("\n")
         self.stream.write(text + "\n")

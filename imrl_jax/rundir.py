@@ -84,6 +84,22 @@ def check_writable(path: str, flag: str = "--out") -> None:
         raise RunDirError(f"{flag}: cannot write to {path} ({folder}: {error.strerror or error})") from None
 
 
+def check_outputs_dir(path: str, outputs: tuple[str, ...], kind: str, overwrite: bool = False,
+                      flag: str = "--out") -> None:
+    """Refuse (RunDirError) an output directory holding anything but a ``kind``'s ``outputs``, or those without ``overwrite``."""
+    found = entries(path)
+    # an interrupted command may leave its outputs' temporary files (``x.tmp-PID``, ``.x.tmp-PID.png``)
+    ours = [name for name in found if any(name == out or name.startswith(f"{out}.tmp-")
+                                          or name.startswith(f".{os.path.splitext(out)[0]}.tmp-") for out in outputs)]
+    others = [name for name in found if name not in ours]
+    if others:
+        shown = ", ".join(others[:3]) + (", ..." if len(others) > 3 else "")
+        raise RunDirError(f"{flag}: {path} is not empty and holds no {kind} (it holds {shown}); choose a new or empty "
+                          f"directory")
+    if ours and not overwrite:
+        raise RunDirError(f"{flag}: {path} already holds a {kind} (pass --overwrite to replace it)")
+
+
 def read_config(run_dir: str) -> tuple[Config, list[int]]:
     """The config and seeds recorded in a run's ``config.json`` (raises RunDirError naming the file)."""
     path = os.path.join(run_dir, "config.json")

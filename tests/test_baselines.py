@@ -10,7 +10,7 @@ import pytest
 
 pytest.importorskip("brax", reason="the brax extra: pip install -e '.[brax]'")
 
-from helpers import SHORT_TASK, tiny_baseline  # noqa: E402
+from helpers import ROOT, SHORT_TASK, tiny_baseline  # noqa: E402
 from imrl_jax import baselines  # noqa: E402
 from imrl_jax.brax_env import TaskEnv, wrap_for_training  # noqa: E402
 from imrl_jax.config import Config  # noqa: E402
@@ -72,12 +72,18 @@ def test_es_run_writes_its_outputs(tmp_path):
     with open(os.path.join(out, "runs.csv")) as f:
         rows = list(csv.DictReader(f))
     assert [(r["task"], r["seed"]) for r in rows] == [("3", "0"), ("3", "1")]
+    with open(os.path.join(out, "curves.csv")) as f:
+        curves = list(csv.DictReader(f))
+    for r in rows:  # each curve ends with the measure of runs.csv, at the cycles trained (whole generations)
+        last = [c for c in curves if c["seed"] == r["seed"]][-1]
+        assert (last["step"], last["performance"]) == (r["steps"], r["performance"]) and r["steps"] == "800"
     with open(os.path.join(out, "summary.json")) as f:
         summary = json.load(f)
     assert summary["agent"] == "es" and summary["steps"] == 800 and summary["seeds"] == [0, 1]
     np.testing.assert_allclose(summary["performance_mean"], np.mean([float(r["performance"]) for r in rows]))
     assert os.path.getsize(os.path.join(out, "learning_curve.png")) > 10_000
-    assert baselines.main(args) == 2
+    assert baselines.main(args) == 2  # an earlier run is replaced only with --overwrite
+    assert baselines.main([*args, "--overwrite"]) == 0
 
 
 @pytest.mark.parametrize("args, field", [
@@ -95,3 +101,33 @@ def test_bad_input_exits_2_with_one_line(tmp_path, capsys, args, field):
     err = capsys.readouterr().err.strip()
     assert err.startswith("error: ") and "\n" not in err and field in err, err
     assert not out.exists()
+
+
+def test_an_out_holding_a_run_or_anything_else_is_refused_before_training(tmp_path, capsys):
+    own, user = tmp_path / "es", tmp_path / "mine"
+    own.mkdir(), user.mkdir()
+    (own / "summary.json").write_text("{}")
+    (user / "history.csv").write_text("kept")
+    assert baselines.main(["--agent", "es", "--out", str(own), "--quiet"]) == 2
+    assert capsys.readouterr().err.strip() == f"error: --out: {own} already holds a baseline run (pass --overwrite to replace it)"
+    assert baselines.main(["--agent", "es", "--out", str(user), "--overwrite", "--quiet"]) == 2
+    assert "holds no baseline run (it holds history.csv)" in capsys.readouterr().err
+    assert (own / "summary.json").read_text() == "{}" and os.listdir(user) == ["history.csv"]
+
+
+def test_steps_trained_is_what_the_committed_runs_trained():
+    for name in ("ppo_1M", "ppo_5M", "es_1M", "es_5M"):
+        folder = os.path.join(ROOT, "experiments", "results", "baselines", name)
+        with open(os.path.join(folder, "summary.json")) as f:
+            settings = json.load(f)["settings"]
+        b = baselines.Baseline(**{**settings, "tasks": tuple(settings["tasks"]), "hidden": tuple(settings["hidden"])})
+        with open(os.path.join(folder, "runs.csv")) as f:
+            assert {int(r["steps"]) for r in csv.DictReader(f)} == {baselines.steps_trained(b)}, name
+    assert baselines.steps_trained(baselines.Baseline(agent="es", steps=20_000)) == 32_000  # one generation
+
+
+def test_the_learning_curve_shows_its_last_point_past_the_budget_asked():
+    b = baselines.Baseline(agent="ppo", steps=20_000, tasks=(3,), seeds=1, num_evals=2)  # 2 updates: 20,480
+    curves = [dict(task=3, seed=0, step=s, performance=p) for s, p in ((0, 0.0), (20_480, 0.5))]
+    ax = baselines.plot_learning_curve(b, curves).axes[0]
+    assert ax.get_xlim() == (0, 20_480) and ax.get_lines()[0].get_xdata()[-1] == 20_480

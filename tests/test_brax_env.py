@@ -196,3 +196,10 @@ def test_without_brax_the_import_and_the_command_say_how_to_install_it(tmp_path)
     assert out.stdout.strip() == "imrl_jax.brax_env needs brax: pip install -e '.[brax]' (docs/BASELINES.md)"
     assert out.stderr.strip() == "error: " + out.stdout.strip()
     assert not (tmp_path / "out").exists()
+
+
+def test_importing_the_environments_and_agents_prints_nothing():
+    code = ("import imrl_jax.brax_env, brax.training.agents.ppo.train, brax.training.agents.es.train")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == ""  # mujoco prints "Failed to import warp" without its GPU extra

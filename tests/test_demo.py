@@ -4,6 +4,7 @@ import json
 import os
 
 import numpy as np
+import pytest
 
 from imrl_jax import controllers, demo, plotting
 
@@ -56,3 +57,38 @@ def test_figures_are_returned_not_drawn_with_pyplot(tiny, tmp_path):
     assert [line.get_label() for line in lines] == ["EE-LS", "other"] and lines[0].get_color() == "0.55"
     path = plotting.save(fitness, str(tmp_path / "fitness.png"))
     assert os.listdir(tmp_path) == ["fitness.png"] and path.endswith("fitness.png")
+
+
+def test_a_long_title_is_wrapped_inside_the_figure():
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    title = "EE-LS: best fitness per generation, mean and std over 1 seed(s), reduced scale"
+    fig = plotting.plot_fitness({"EE-LS": np.ones((1, 2))}, title=title, ylabel="best fitness of the population")
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    text = fig.axes[0].title
+    box = text.get_window_extent(canvas.get_renderer())
+    assert text.get_text().replace("\n", " ") == title and "\n" in text.get_text()
+    assert 0 <= box.x0 and box.x1 <= fig.bbox.width and box.y1 <= fig.bbox.height
+
+
+def test_demo_writes_only_into_a_new_empty_or_own_directory(tiny, tmp_path, capsys):
+    from imrl_jax.rundir import RunDirError
+
+    config = tiny("EE-LS")
+    own = tmp_path / "demo"
+    own.mkdir()
+    for name in demo.OUTPUTS:
+        (own / name).write_text("an earlier demo")
+    with pytest.raises(RunDirError, match="already holds a demo output .pass --overwrite"):
+        demo.run(config, str(own))
+    assert (own / "summary.json").read_text() == "an earlier demo"
+    demo.run(config, str(own), overwrite=True)
+    assert json.loads((own / "summary.json").read_text())["condition"] == "EE-LS"
+    user = tmp_path / "mine"
+    user.mkdir()
+    (user / "notes.txt").write_text("kept")
+    assert demo.main(["--out", str(user), "--overwrite"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"error: --out: {user} is not empty and holds no demo output (it holds notes.txt); choose a new or empty directory"
+    assert os.listdir(user) == ["notes.txt"]

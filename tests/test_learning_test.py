@@ -53,7 +53,10 @@ def test_command_line(tiny_run, tmp_path, capsys):
     out = str(tmp_path / "test")
     argv = [tiny_run, "--best", "2", "--tests", "2", "--task-steps", "400", "--bins", "4", "--steady-steps", "200",
             "--chunks", "2", "--out", out, "--quiet"]
+    capsys.readouterr()
     assert learning_test.main(argv) == 0
+    printed = capsys.readouterr()  # --quiet: the summary line alone
+    assert printed.err == "" and printed.out.count("\n") == 1 and printed.out.startswith("EE-LS: steady state")
     config, seeds, best = learning_test.load_run(tiny_run, 2)
     with np.load(os.path.join(tiny_run, "final_population.npz")) as data:
         fitness, evaluated = data["fitness"], data["evaluated"]
@@ -266,3 +269,33 @@ def test_absurd_sizes_and_sets_of_options_are_refused(tmp_path, capsys, argv, me
     err = capsys.readouterr().err.strip()
     assert err.startswith("error: ") and message in err and len(err.splitlines()) == 1
     assert not out.exists()
+
+
+def test_a_test_smaller_or_shorter_than_the_papers_is_labelled_reduced_scale(tiny):
+    config = tiny("EE-LS")
+    assert learning_test.scale_label(config.replace(task_steps=1_000_000), (10, 10, 10)) == ""
+    assert learning_test.scale_label(config.replace(task_steps=1_000_000), (5, 4, 5)) == ", reduced scale (100 tests)"
+    assert (learning_test.scale_label(config.replace(task_steps=20), (10, 10, 10))
+            == ", reduced scale (20 cycles)")
+
+
+def test_set_with_a_run_directory_tests_the_evolved_genomes_under_the_values_set(tiny_run, tmp_path, monkeypatch,
+                                                                                  capsys):
+    import collections
+
+    seen = {}
+
+    def run(config, genomes, out_dir, **options):
+        seen.update(config=config, source=options["source"])
+        return collections.defaultdict(float, condition=config.condition)
+
+    monkeypatch.setattr(learning_test, "run", run)
+    argv = [tiny_run, "--best", "1", "--tests", "1", "--task-steps", "400", "--bins", "4", "--steady-steps", "200",
+            "--chunks", "1", "--quiet"]
+    learning_test.main([*argv, "--set", "eta_selector_actor=0.05", "--out", str(tmp_path / "a")])
+    evolved, _ = learning_test.load_run(tiny_run, 1)[:2]
+    assert seen["config"] == evolved.replace(task_steps=400, num_bins=4, eta_selector_actor=0.05)
+    assert seen["source"].endswith(", eta_selector_actor=0.05")
+    capsys.readouterr()
+    assert learning_test.main([*argv, "--set", "num_experts=2", "--out", str(tmp_path / "b")]) == 2
+    assert capsys.readouterr().err == "error: --set: num_experts changes the genome (222 genes evolved, 148 asked)\n"
