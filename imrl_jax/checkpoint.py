@@ -20,7 +20,7 @@ import subprocess
 import sys
 import threading
 import time
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import jax
 import numpy as np
@@ -46,6 +46,7 @@ class RunState(NamedTuple):
     fitness: jax.Array  # (S, P) their fitness
     key_data: np.ndarray  # (S, 2) jax.random.key_data of each seed's key
     history: History
+    search: Any = ()  # each seed's search strategy state beyond the populations (the paper's GA: none)
 
 
 def empty_history(num_generations: int, num_seeds: int, num_tasks: int) -> History:
@@ -121,6 +122,27 @@ def _ocp():
     return ocp
 
 
+def _saved(state: RunState) -> dict:
+    """The state as orbax saves it: the search state's leaves numbered in order (any pytree comes back as it
+    went in), and no entry for a strategy without one (so the GA's checkpoints are as they always were)."""
+    saved = state._asdict()
+    leaves = jax.tree.leaves(saved.pop("search"))
+    if leaves:
+        saved["search"] = {f"{i:03d}": leaf for i, leaf in enumerate(leaves)}
+    return saved
+
+
+def _search_from_saved(template: Any, saved: dict | None) -> Any:
+    """The search state rebuilt in the template's structure from its numbered leaves."""
+    treedef = jax.tree.structure(template)
+    if treedef.num_leaves == 0:
+        return template
+    if saved is None or len(saved) != treedef.num_leaves:
+        raise ValueError(f"the checkpoint holds {0 if saved is None else len(saved)} search state arrays, "
+                         f"the strategy {treedef.num_leaves}")
+    return jax.tree.unflatten(treedef, [saved[name] for name in sorted(saved)])
+
+
 class Checkpointer:
     """Saves and restores :class:`RunState` under ``directory`` (one sub-directory per step)."""
 
@@ -146,7 +168,7 @@ class Checkpointer:
         # A failed save is logged by each of orbax's threads, with tracebacks; the caller reports it once.
         with _quiet_absl(), _quiet_closed_loops():
             try:
-                self.manager.save(step, args=ocp.args.Composite(state=ocp.args.StandardSave(state._asdict()),
+                self.manager.save(step, args=ocp.args.Composite(state=ocp.args.StandardSave(_saved(state)),
                                                                 meta=ocp.args.JsonSave(meta)), force=True)
                 self.manager.wait_until_finished()
             except Exception:
@@ -172,7 +194,7 @@ class Checkpointer:
                     saved_meta = self.manager.restore(step, args=ocp.args.Composite(meta=ocp.args.JsonRestore())).meta
                     rows = int(saved_meta.get("config", {}).get("num_generations", len(template.history.best)))
                     shaped = template._replace(history=resize_history(template.history, rows))
-                    abstract = jax.tree.map(ocp.utils.to_shape_dtype_struct, shaped._asdict())
+                    abstract = jax.tree.map(ocp.utils.to_shape_dtype_struct, _saved(shaped))
                     restored = self.manager.restore(step, args=ocp.args.Composite(
                         state=ocp.args.StandardRestore(abstract), meta=ocp.args.JsonRestore()))
                 state = restored.state
@@ -182,6 +204,7 @@ class Checkpointer:
                 state["history"] = resize_history(history, max(len(template.history.best), step))
                 state["generation"] = np.asarray(state["generation"])
                 state["key_data"] = np.asarray(state["key_data"])
+                state["search"] = _search_from_saved(template.search, state.get("search"))
                 state = RunState(**state)
                 if int(state.generation) != step or int(restored.meta.get("generation", -1)) != step:
                     raise ValueError(f"generation recorded as {int(state.generation)}")

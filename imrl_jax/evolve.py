@@ -38,7 +38,9 @@ from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
 from imrl_jax.devices import (make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
                               use_host_cores)
 from imrl_jax.config import CONDITIONS, EVOLVED_CONDITIONS, PRESETS, Config, make_config
-from imrl_jax.ga import init_population, make_generation
+from imrl_jax import search
+from imrl_jax.ga import GA, init_population, make_generation
+from imrl_jax.lifetime import live
 from imrl_jax.progress import Progress
 from imrl_jax.rundir import (RunDirError, RunWriteError, check_unlocked, check_writable, entries, lock_run_dir,
                              read_config, write_atomic, write_errno)
@@ -53,11 +55,26 @@ def seed_keys(seeds: Sequence[int]) -> jax.Array:
     return jax.vmap(jax.random.key)(np.asarray(seeds, np.uint32))
 
 
-def initial_state(config: Config, seeds: Sequence[int], sharding) -> RunState:
-    """Generation 0 of every seed (drawn from the seed's own key)."""
+def initial_state(config: Config, seeds: Sequence[int], sharding, strategy=None, mesh=None) -> RunState:
+    """Generation 0 of every seed (drawn from the seed's own key).
+
+    The paper's GA (``strategy`` None or a GA) draws the population uniformly; another strategy is
+    initialised with the same key and asked for generation 0 with the generations' keys (its state,
+    replicated over ``mesh``, is the run's ``search``).
+    """
     keys = seed_keys(seeds)
     init_keys = jax.vmap(lambda k: jax.random.fold_in(k, 0))(keys)
-    populations = np.asarray(jax.vmap(lambda k: init_population(k, config))(init_keys))
+    key_data = np.asarray(jax.random.key_data(keys))
+    search_state = ()
+    if strategy is None or isinstance(strategy, GA):
+        populations = np.asarray(jax.vmap(lambda k: init_population(k, config))(init_keys))
+    else:
+        params = strategy.default_params()
+        states = jax.vmap(lambda k: strategy.init(k, params))(init_keys)
+        populations, states = jax.jit(jax.vmap(lambda k, s: search.ask(k, strategy, s, params, 0)))(
+            evolution_keys(key_data), states)
+        populations = np.asarray(populations, np.float32)
+        search_state = jax.tree.map(lambda x: to_global(np.asarray(x), replicated(mesh or make_mesh())), states)
     shape = populations.shape
     history = empty_history(config.num_generations, len(seeds), config.num_tasks)
     return RunState(
@@ -65,8 +82,9 @@ def initial_state(config: Config, seeds: Sequence[int], sharding) -> RunState:
         populations=to_global(populations, sharding),
         evaluated=to_global(np.zeros(shape, np.float32), sharding),
         fitness=to_global(np.zeros(shape[:2], np.float32), sharding),
-        key_data=np.asarray(jax.random.key_data(keys)),
+        key_data=key_data,
         history=history,
+        search=search_state,
     )
 
 
@@ -132,8 +150,10 @@ def _is_paper_scale(config: Config) -> bool:
 # ----------------------------------------------------------------------------- run
 
 
-def check_run_dir(out_dir: str, config: Config, seeds: Sequence[int], resume: bool) -> None:
-    """Refuse to write into anything but a new or empty directory or (resuming) a run of this config. Raises UsageError."""
+def check_run_dir(out_dir: str, config: Config, seeds: Sequence[int], resume: bool,
+                  search_record: dict | None = None) -> None:
+    """Refuse to write into anything but a new or empty directory or (resuming) a run of this config and search
+    strategy (``search_record``, :func:`imrl_jax.strategies.describe`; the GA if None). Raises UsageError."""
     config_path = os.path.join(out_dir, "config.json")
     if os.path.exists(out_dir) and not os.path.isdir(out_dir):
         raise UsageError(f"--out: {out_dir} is not a directory")
@@ -151,6 +171,10 @@ def check_run_dir(out_dir: str, config: Config, seeds: Sequence[int], resume: bo
         saved_config, saved_seeds = read_config(out_dir)
         if saved_seeds != list(seeds):
             raise UsageError(f"--resume: seeds {list(seeds)} differ from the run's {saved_seeds}")
+        saved_search, asked = read_search(out_dir), search_record or GA_RECORD
+        if saved_search != asked:
+            raise UsageError(f"--strategy: {out_dir} was evolved with {_strategy_text(saved_search)}, not "
+                             f"{_strategy_text(asked)}; resume it with its own (leave out --strategy)")
         differing = [name for name in saved_config.model_differences(config)
                      if not (name == "num_generations" and config.num_generations > saved_config.num_generations)]
         if differing:  # a run may be extended: its generations go on from the last one done
@@ -158,6 +182,20 @@ def check_run_dir(out_dir: str, config: Config, seeds: Sequence[int], resume: bo
                                 + (" (a resumed run may only grow it)" if name == "num_generations" else "")
                                 for name in differing)
             raise UsageError(f"--resume: the config differs from the run's in {out_dir}: {changes}")
+
+
+GA_RECORD = {"strategy": "ga", "settings": {}}  # what a run made before --strategy existed was evolved with
+
+
+def read_search(out_dir: str) -> dict:
+    """The search strategy a run records in its config.json (the paper's GA if it records none)."""
+    with open(os.path.join(out_dir, "config.json")) as f:
+        return json.load(f).get("search", GA_RECORD)
+
+
+def _strategy_text(record: dict) -> str:
+    settings = ", ".join(f"{k}={v:g}" for k, v in sorted(record["settings"].items()))
+    return record["strategy"] + (f" ({settings})" if settings else "")
 
 
 def extend_config_json(out_dir: str, config: Config) -> None:
@@ -195,14 +233,18 @@ def resume_command(out_dir: str) -> str:
     return f"python -m imrl_jax.evolve --resume --out {shlex.quote(out_dir)}"
 
 
-def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bool = False,
+def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=None, resume: bool = False,
         checkpoint_every: int = 1, keep: int = 3, quiet: bool = False, warnings: Sequence[str] = (),
         notes: Sequence[str] = ()) -> RunState:
     """Evolve ``config.condition`` for every seed into ``out_dir``; return the final state.
 
-    The directory is locked for the whole run (:func:`imrl_jax.rundir.lock_run_dir`). ``warnings`` are
-    printed once the checks pass, ``notes`` too unless ``quiet``.
+    ``strategy`` is the search (:mod:`imrl_jax.strategies`; default the paper's GA). The directory is
+    locked for the whole run (:func:`imrl_jax.rundir.lock_run_dir`). ``warnings`` are printed once the
+    checks pass, ``notes`` too unless ``quiet``.
     """
+    from imrl_jax.strategies import describe
+
+    strategy = GA(config) if strategy is None else strategy
     if not config.spec.evolved:
         raise UsageError(f"--cond: {config.condition} is not evolved (it learns each task from scratch); "
                          f"test it with: python -m imrl_jax.learning_test --cond {config.condition} --out DIR")
@@ -215,7 +257,7 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bo
         raise UsageError("--keep: must be at least 1 (a run keeps its latest checkpoint to resume from)")
     check_writable(out_dir)
     check_unlocked(out_dir)  # a live writer is named before anything about what it is writing
-    check_run_dir(out_dir, config, seeds, resume)
+    check_run_dir(out_dir, config, seeds, resume, describe(strategy))
     multihost = jax.process_count() > 1
     if multihost:  # every process checks before the leader writes
         from jax.experimental import multihost_utils
@@ -231,9 +273,10 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bo
             try:
                 _make_dir(out_dir)
                 stack.enter_context(lock_run_dir(out_dir))
-                check_run_dir(out_dir, config, seeds, resume)  # again, locked: another writer may have begun
+                check_run_dir(out_dir, config, seeds, resume, describe(strategy))  # again, locked: another writer may have begun
                 if not resume:  # first, so that the directory is this run's from the start
-                    info = {"config": config.to_dict(), "seeds": seeds, "version": imrl_jax.__version__,
+                    info = {"config": config.to_dict(), "seeds": seeds, "search": describe(strategy),
+                            "version": imrl_jax.__version__,
                             "git_commit": git_commit(), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
                             "devices": len(jax.devices()), "processes": jax.process_count(),
                             "sharded_axis": sharded_axis(sharding)}
@@ -256,10 +299,10 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, resume: bo
             raise failure
         for line in [*warnings, *([] if quiet else notes)] if leader else []:
             print(line, file=sys.stderr, flush=True)
-        state = initial_state(config, seeds, sharding)
+        state = initial_state(config, seeds, sharding, strategy, mesh)
         checkpointer = stack.enter_context(contextlib.closing(
             Checkpointer(os.path.join(out_dir, "checkpoints"), keep=keep)))
-        return _evolve(config, out_dir, seeds, state, sharding, mesh, checkpointer, resume=resume,
+        return _evolve(config, out_dir, seeds, state, sharding, mesh, checkpointer, strategy, resume=resume,
                        checkpoint_every=checkpoint_every, quiet=quiet or not leader, leader=leader)
 
 
@@ -271,14 +314,17 @@ def _make_dir(out_dir: str) -> None:
 
 
 def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sharding, mesh,
-            checkpointer: Checkpointer, *, resume: bool, checkpoint_every: int, quiet: bool, leader: bool) -> RunState:
+            checkpointer: Checkpointer, strategy, *, resume: bool, checkpoint_every: int, quiet: bool,
+            leader: bool) -> RunState:
     """The generations of :func:`run` after its checks (resuming from the latest good checkpoint).
 
     Ctrl-C raises :class:`RunInterrupted`; a write the user can fix, :class:`RunWriteError`.
     """
     progress = Progress(config.num_generations, quiet=quiet, first_index=0)
     note = (lambda text: None) if quiet else progress.message  # --quiet: errors, warnings and the summary only
-    meta = {"config": config.to_dict(), "seeds": seeds}
+    from imrl_jax.strategies import describe
+
+    meta = {"config": config.to_dict(), "seeds": seeds, "search": describe(strategy)}
     checkpointed = 0
     try:
         if resume:
@@ -289,6 +335,9 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
                 note(f"no checkpoint in {checkpointer.directory} yet: starting from generation 0")
             else:
                 state, saved_meta = restored
+                if saved_meta.get("search", GA_RECORD) != describe(strategy):
+                    raise UsageError(f"--strategy: the checkpoint was made by {saved_meta['search']}, not "
+                                     f"{describe(strategy)}")
                 if not np.array_equal(state.key_data, np.asarray(jax.random.key_data(seed_keys(seeds)))):
                     raise UsageError("--resume: the checkpoint's keys do not match the seeds")
                 if int(state.generation) > config.num_generations:  # only if config.json was edited by hand
@@ -303,7 +352,7 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
                      f"({int(state.generation)} of {config.num_generations} done; checkpoint of commit "
                      f"{saved_meta.get('git_commit', 'unknown')[:12]})")
 
-        generation = make_generation(config, sharding)
+        generation = make_step(config, strategy, sharding)
         keys = to_global(evolution_keys(state.key_data), replicated(mesh))
         params = config.learning_params()
         lane_steps = len(seeds) * config.population_size * config.lives_per_fitness * config.lifetime_steps
@@ -311,11 +360,11 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
         for g in range(first, config.num_generations):
             start = time.perf_counter()
             evaluated = state.populations
-            populations, stats = generation(keys, params, evaluated, g)
+            populations, search_state, stats = generation(keys, params, evaluated, state.search, g)
             fitness, performance = to_host(stats.fitness), to_host(stats.performance)
             seconds = time.perf_counter() - start
             state = RunState(np.asarray(g + 1, np.int32), populations, evaluated, stats.fitness, state.key_data,
-                             record(state.history, g, fitness, performance))
+                             record(state.history, g, fitness, performance), search_state)
             best = fitness.max(1)
             progress.update(g + 1, float(best.max()), float(fitness.mean()), lane_steps / seconds,
                             scores=f"best fitness: max over seeds {best.max():.4f}, mean over seeds {best.mean():.4f}")
@@ -336,6 +385,27 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
     except KeyboardInterrupt:
         raise RunInterrupted(out_dir, int(state.generation), checkpointed, config.num_generations) from None
     return state
+
+
+def make_step(config: Config, strategy, sharding):
+    """The jitted generation ``step(keys, params, populations, search_state, index)`` of ``strategy``.
+
+    It returns the next populations, the next search state and each seed's fitness and performance.
+    The paper's GA keeps its own step (:func:`imrl_jax.ga.make_generation`, bitwise as it always was;
+    its state is the populations); another strategy runs :func:`imrl_jax.search.make_generation`.
+    """
+    if isinstance(strategy, GA):
+        ga_step = make_generation(config, sharding)
+
+        def step_ga(keys, params, populations, search_state, index):
+            children, stats = ga_step(keys, params, populations, index)
+            return children, search_state, stats
+
+        return step_ga
+    step = search.make_generation(strategy, lambda k, p, g: live(k, config, p, g), config.lives_per_fitness, sharding)
+    search_params = strategy.default_params()
+    return lambda keys, params, populations, search_state, index: step(keys, params, populations, search_state,
+                                                                        search_params, index)
 
 
 def _write_outputs_from_leader(out_dir: str, config: Config, seeds: Sequence[int], state: RunState,
@@ -412,6 +482,18 @@ def build_config(args, saved: tuple[Config, list[int]] | None = None) -> tuple[C
     return config, list(range(first, first + count))
 
 
+def build_strategy(args, config: Config, saved: dict | None = None):
+    """The search strategy the command line asks for; resuming, the run's own (``saved``) for what it leaves out."""
+    from imrl_jax.strategies import make_strategy, parse_settings
+
+    name = args.strategy or (saved["strategy"] if saved else "ga")
+    if args.strategy_set is not None:
+        settings = parse_settings(args.strategy_set)
+    else:
+        settings = saved["settings"] if saved and args.strategy in (None, saved["strategy"]) else {}
+    return make_strategy(name, config, settings)
+
+
 def parser() -> argparse.ArgumentParser:
     p = cli.Parser(
         prog="python -m imrl_jax.evolve",
@@ -441,6 +523,11 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--bins", type=int, help="bins of the per-task reward curves (default: the preset's; paper 100, small 10)")
     p.add_argument("--set", action="append", metavar="FIELD=VALUE",
                    help="set any other scalar Config field, e.g. --set trace_lambda=0.9 (repeatable)")
+    p.add_argument("--strategy", metavar="NAME",
+                   help="the search: ga (the paper's genetic algorithm, the default) or an evolution strategy of "
+                        "evosax (the evosax extra): sep_cma_es, cma_es, snes, xnes, open_es, pgpe; docs/SEARCH.md")
+    p.add_argument("--strategy-set", action="append", metavar="FIELD=VALUE",
+                   help="set a parameter of an evosax strategy, e.g. --strategy-set std_init=0.3 (repeatable)")
     p.add_argument("--out", help="run directory: new, empty, or the run to resume (default: runs/COND)")
     p.add_argument("--resume", action="store_true",
                    help="continue the run in --out from its latest checkpoint (a finished run is extended by a "
@@ -511,10 +598,12 @@ def main(argv=None) -> int:
         config, seeds = build_config(args, saved)
         if args.cpu_devices < 0:
             raise UsageError("--cpu-devices: must be 0 (one per core) or more")
+        strategy = build_strategy(args, config, read_search(out_dir) if args.resume else None)
         notes = cli.ignored_notes(config, parse_sets(args.set))
         use_host_cores(args.cpu_devices or None)
         init_distributed(args)
-        state = run(config, out_dir, seeds, resume=args.resume, checkpoint_every=args.checkpoint_every,
+        state = run(config, out_dir, seeds, strategy=strategy, resume=args.resume,
+                    checkpoint_every=args.checkpoint_every,
                     keep=args.keep, quiet=args.quiet, warnings=cli.device_warnings(config, args.cpu_devices),
                     notes=notes)
     except user_errors() as error:

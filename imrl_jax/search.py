@@ -61,16 +61,61 @@ def life_keys(key: jax.Array, num_individuals: int, lives_per_fitness: int) -> j
     return jax.random.split(key, (num_individuals, lives_per_fitness))
 
 
+def ask(key: jax.Array, strategy: Strategy, state, params, index) -> tuple[jnp.ndarray, Any]:
+    """The genomes of generation ``index`` of one seed, drawn with that generation's search key."""
+    _, key_search = generation_keys(key, index)
+    return strategy.ask(key_search, state, params)
+
+
+def evaluate_and_tell(key: jax.Array, strategy: Strategy, live: Callable, genomes: jnp.ndarray, state, params, index,
+                      lives_per_fitness: int = 1) -> tuple[Any, Generation]:
+    """Live generation ``index``'s ``genomes`` ``lives_per_fitness`` times each and tell the strategy their mean fitness."""
+    key_life, key_search = generation_keys(key, index)
+    keys = life_keys(key_life, genomes.shape[0], lives_per_fitness)
+    lives = jax.vmap(jax.vmap(live, (0, None)))(keys, genomes)
+    fitness = lives.fitness.mean(1)
+    state, info = strategy.tell(key_search, genomes, fitness, state, params)
+    return state, Generation(genomes, fitness, lives, info)
+
+
 def generation(key: jax.Array, strategy: Strategy, live: Callable, state, params, index,
                lives_per_fitness: int = 1) -> tuple[Any, Generation]:
     """One generation of one seed: ask for genomes, live each ``lives_per_fitness`` times, tell the mean fitness.
 
     ``live(key, genome)`` is one life (a LifetimeResult); ``index`` the generation's number.
     """
-    key_life, key_search = generation_keys(key, index)
-    genomes, state = strategy.ask(key_search, state, params)
-    keys = life_keys(key_life, genomes.shape[0], lives_per_fitness)
-    lives = jax.vmap(jax.vmap(live, (0, None)))(keys, genomes)
-    fitness = lives.fitness.mean(1)
-    state, info = strategy.tell(key_search, genomes, fitness, state, params)
-    return state, Generation(genomes, fitness, lives, info)
+    genomes, state = ask(key, strategy, state, params, index)
+    return evaluate_and_tell(key, strategy, live, genomes, state, params, index, lives_per_fitness)
+
+
+class Evaluated(NamedTuple):
+    """What a generation of one seed reports to ``evolve``."""
+
+    fitness: jnp.ndarray  # (P,) the mean of each individual's lives
+    performance: jnp.ndarray  # (P, tasks) likewise
+
+
+def make_generation(strategy: Strategy, live: Callable, lives_per_fitness: int = 1, sharding=None):
+    """A jitted ``generation(keys, params, populations, states, search_params, index)`` vmapped over seeds.
+
+    ``populations`` (seeds, P, genes) are generation ``index``'s genomes (asked for before), ``states``
+    the strategies' states after that ask; ``live(key, params, genome)`` is one life. It lives and tells
+    generation ``index``, then asks for generation ``index + 1``: it returns the next populations (kept
+    in ``sharding``, so that the next lives are divided over the devices as these were), the states
+    and each seed's :class:`Evaluated`. The same draws as :func:`generation` run generation by generation.
+    """
+
+    def one(key, params, genomes, state, search_params, index):
+        state, result = evaluate_and_tell(key, strategy, lambda k, g: live(k, params, g), genomes, state,
+                                          search_params, index, lives_per_fitness)
+        following, state = ask(key, strategy, state, search_params, index + 1)
+        return following, state, Evaluated(result.fitness, result.lives.performance.mean(1))
+
+    def step(keys, params, populations, states, search_params, index):
+        following, states, evaluated = jax.vmap(one, (0, None, 0, 0, None, None))(keys, params, populations, states,
+                                                                                  search_params, index)
+        if sharding is not None:
+            following = jax.lax.with_sharding_constraint(following, sharding)
+        return following, states, evaluated
+
+    return jax.jit(step)

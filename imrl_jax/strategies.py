@@ -100,3 +100,24 @@ def make_strategy(name: str, config: Config, settings: dict | None = None):
                       tuple(sorted((settings or {}).items())))
     strategy.default_params()  # checks the settings now: one line naming a bad one
     return strategy
+
+
+def describe(strategy) -> dict:
+    """What a run records of its strategy (config.json's ``search``): its name and the settings given."""
+    if isinstance(strategy, Evosax):
+        return {"strategy": strategy.name, "settings": dict(strategy.settings)}
+    return {"strategy": "ga", "settings": {}}
+
+
+def parse_settings(items) -> dict:
+    """``--strategy-set FIELD=VALUE`` items as {field: float} (raises ConfigError naming a bad one)."""
+    settings = {}
+    for item in items or ():
+        name, sep, value = item.partition("=")
+        try:
+            settings[name.strip()] = float(value)
+        except ValueError:
+            sep = ""
+        if not sep or not name.strip():
+            raise ConfigError(f"--strategy-set: expected FIELD=NUMBER, got {item!r}")
+    return settings

@@ -64,3 +64,94 @@ def test_an_evosax_strategy_runs_the_shared_generation_step(tiny):
                                                         s, params, 0))(state)
     assert result.genomes.shape == (4, config.num_genes) and result.fitness.shape == (4,)
     assert int(state.generation_counter) == 1
+
+
+def _evolve_args(generations, strategy=None, *extra):
+    from helpers import evolve_args
+
+    args = evolve_args(seeds=2, population=6, parents=2, task_steps=200, childhood_steps=200, bins=1,
+                       generations=generations)
+    return args + (["--strategy", strategy] if strategy else []) + list(extra)
+
+
+def _outputs(out):
+    from helpers import read_population
+
+    with open(f"{out}/history.csv") as f:
+        return f.read(), read_population(out)
+
+
+def test_evolve_with_an_evosax_strategy_resumes_and_extends_bitwise(tmp_path, capsys):
+    """--strategy snes: 2 generations then --resume to 3 end as 3 uninterrupted (the strategy's state checkpointed)."""
+    import json
+
+    from imrl_jax import evolve
+
+    whole, split = str(tmp_path / "whole"), str(tmp_path / "split")
+    assert evolve.main([*_evolve_args(3, "snes", "--strategy-set", "lr_std_init=0.2"), "--out", whole]) == 0
+    assert evolve.main([*_evolve_args(2, "snes", "--strategy-set", "lr_std_init=0.2"), "--out", split]) == 0
+    assert evolve.main(["--resume", "--out", split, "--generations", "3", "--quiet"]) == 0
+    history, arrays = _outputs(whole)
+    history_split, arrays_split = _outputs(split)
+    assert history == history_split and len(history.splitlines()) == 1 + 3 * 2
+    for name in arrays:
+        np.testing.assert_array_equal(arrays[name], arrays_split[name], err_msg=name)
+    with open(f"{whole}/config.json") as f:
+        assert json.load(f)["search"] == {"strategy": "snes", "settings": {"lr_std_init": 0.2}}
+    assert not np.array_equal(arrays["evaluated"][:, 0], arrays["evaluated"][:, 1])  # drawn, not copies
+    capsys.readouterr()
+    for argv, message in ((["--strategy", "ga"], f"error: --strategy: {split} was evolved with snes (lr_std_init=0.2), "
+                                                 f"not ga; resume it with its own (leave out --strategy)"),
+                          (["--strategy-set", "lr_std_init=0.3"], "not snes (lr_std_init=0.3)")):
+        assert evolve.main(["--resume", "--out", split, "--generations", "4", *argv]) == 2
+        err = capsys.readouterr().err.strip()
+        assert message in err and "\n" not in err
+    assert _outputs(split)[0] == history  # nothing written by the refused resumes
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--strategy", "cmaes"], "error: strategy: unknown strategy 'cmaes' (choose from ga, sep_cma_es, cma_es, snes, "
+                              "xnes, open_es, pgpe)"),
+    (["--strategy", "snes", "--strategy-set", "sigma=1"], "error: strategy snes: sigma is not a parameter"),
+    (["--strategy", "snes", "--strategy-set", "std_init"], "error: --strategy-set: expected FIELD=NUMBER, got 'std_init'"),
+    (["--strategy", "ga", "--strategy-set", "std_init=1"], "error: strategy ga: its settings are config fields"),
+])
+def test_bad_strategies_exit_2_with_one_line_and_write_nothing(tmp_path, capsys, argv, message):
+    from imrl_jax import evolve
+
+    out = tmp_path / "run"
+    assert evolve.main([*_evolve_args(1), *argv, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(message) and "\n" not in err, err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=[] if n == "sep_cma_es" else pytest.mark.slow)
+                                  for n in strategies.STRATEGIES])
+def test_a_tiny_evolution_with_each_offered_strategy(tiny, name):
+    """Two generations of each strategy through evolve's own step equal search.generation run generation by generation."""
+    from imrl_jax import evolve
+    from imrl_jax.lifetime import live
+
+    config = tiny("EE-LS", population_size=4, num_parents=2, task_steps=60, num_bins=1, num_generations=2)
+    from imrl_jax.devices import make_mesh, population_sharding
+
+    strategy = strategies.make_strategy(name, config)
+    mesh = make_mesh()
+    sharding = population_sharding(mesh, 1, config.population_size)
+    state = evolve.initial_state(config, [0], sharding, strategy, mesh)
+    step = evolve.make_step(config, strategy, sharding)
+    keys = evolve.evolution_keys(state.key_data)
+    params = config.learning_params()
+    populations, search_state, fitness = state.populations, state.search, []
+    for g in range(2):
+        populations, search_state, stats = step(keys, params, populations, search_state, g)
+        fitness.append(np.asarray(stats.fitness))
+    # the same by hand: init, then ask, live, tell per generation
+    search_params = strategy.default_params()
+    hand = strategy.init(jax.random.fold_in(jax.random.key(0), 0), search_params)
+    for g in range(2):
+        hand, result = search.generation(keys[0], strategy, lambda k, genome: live(k, config, params, genome), hand,
+                                         search_params, g)
+        np.testing.assert_array_equal(np.asarray(result.fitness), fitness[g][0])
+    assert np.asarray(populations).shape == (1, 4, config.num_genes)
