@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 OUT ?= out
 
-.PHONY: install demo test test-all bench reproduce reproduce-cpu clean
+.PHONY: install demo test test-all test-min bench reproduce reproduce-cpu clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -26,6 +26,14 @@ test: $(STAMP)
 test-all: $(STAMP)
 	$(BIN)/python -m pytest -q -m ""
 
+# The default suite against the declared floors of the core dependencies (tests/floors.txt), in
+# its own environment; the optional extras (brax, evosax) need newer jax and are not installed.
+test-min:
+	$(PYTHON) -m venv .venv-min
+	.venv-min/bin/python -m pip install --quiet --upgrade pip
+	.venv-min/bin/python -m pip install --quiet -c tests/floors.txt -e ".[test]"
+	.venv-min/bin/python -m pytest -q -p no:cacheprovider --durations=5
+
 bench: $(STAMP)
 	$(BIN)/python -m imrl_jax.bench --json $(OUT)/bench.json
 
@@ -38,4 +46,4 @@ reproduce-cpu: $(STAMP)
 	$(BIN)/python experiments/reproduce.py --scale cpu
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache
+	rm -rf $(VENV) .venv-min $(OUT) .pytest_cache

@@ -36,7 +36,8 @@ import os
 import shutil
 import sys
 import time
-from typing import NamedTuple, Sequence
+import zipfile
+from typing import Callable, NamedTuple, Sequence
 
 import jax
 import jax.numpy as jnp
@@ -238,12 +239,19 @@ def fingerprint(config: Config, genomes: np.ndarray, num_tests: int, seed: int) 
     return digest.hexdigest()[:16]
 
 
-def finished_runs(partial: str, stamp: str, num_runs: int) -> dict:
+def finished_runs(partial: str, stamp: str, num_runs: int, warn: Callable[[str], None] = print) -> dict:
     """The runs kept in ``partial`` by an interrupted test of the same fingerprint: {run: (reaches, selections)}."""
     if not os.path.isdir(partial):
         return {}
     spec_path = os.path.join(partial, "spec.json")
-    found = json.load(open(spec_path))["fingerprint"] if os.path.exists(spec_path) else None
+    found = None
+    if os.path.exists(spec_path):
+        try:
+            with open(spec_path) as f:
+                found = json.load(f)["fingerprint"]
+        except (OSError, ValueError, KeyError, TypeError) as error:
+            raise UsageError(f"--out: {spec_path} cannot be read ({type(error).__name__}), so the runs kept beside it "
+                             f"cannot be checked; remove {partial} to start the test over") from None
     if found != stamp:
         raise UsageError(f"--out: {partial} holds an unfinished learning test of other settings or individuals; "
                          f"remove it or choose another directory")
@@ -251,8 +259,11 @@ def finished_runs(partial: str, stamp: str, num_runs: int) -> dict:
     for r in range(num_runs):
         path = os.path.join(partial, f"run_{r:03d}.npz")
         if os.path.exists(path):
-            with np.load(path) as data:
-                done[r] = (data["reaches"], data["selections"])
+            try:
+                with np.load(path) as data:
+                    done[r] = (data["reaches"], data["selections"])
+            except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as error:
+                warn(f"warning: {path} cannot be read ({type(error).__name__}); run {r} is tested again")
     return done
 
 
@@ -318,7 +329,7 @@ def _run_locked(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests:
     num_runs, num_best = genomes.shape[:2]
     keys = test_keys(seed, num_runs, num_best, num_tests).reshape(num_runs, num_best * num_tests)
     partial, stamp = os.path.join(out_dir, PARTIAL), fingerprint(config, genomes, num_tests, seed)
-    done = finished_runs(partial, stamp, num_runs)
+    done = finished_runs(partial, stamp, num_runs, warn=lambda text: print(text, file=sys.stderr))
     resumed = sorted(done)
     progress = Progress(num_runs * num_chunks, done=len(done) * num_chunks, quiet=quiet, unit="chunk")
     progress.note(f"{config.condition} learning test: {num_runs} run(s) x {num_best} best x {num_tests} test(s) x "

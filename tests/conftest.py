@@ -15,7 +15,9 @@ def tiny():
 @pytest.fixture
 def x64():
     """Run the test body with 64-bit floats (exact comparisons with the NumPy reference)."""
-    with jax.enable_x64(True):
+    # jax.enable_x64 is jax 0.8's name; the declared floor (0.6.2) has the experimental one
+    enable = jax.enable_x64 if hasattr(jax, "enable_x64") else __import__("jax.experimental", fromlist=["x"]).enable_x64
+    with enable(True):
         yield
 
 

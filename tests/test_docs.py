@@ -38,3 +38,17 @@ def test_a_broken_link_is_found(tmp_path):
     page.write_text("[ok](there.md#top) [web](https://example.org) [gone](docs/GONE.md) ![pic](img/x.png)\n"
                     "```\n[in code](nowhere.md)\n```\n")
     assert broken_links(str(page)) == ["docs/GONE.md", "img/x.png"]
+
+
+def test_the_floors_make_test_min_installs_are_the_declared_ones():
+    import tomllib
+
+    with open(os.path.join(ROOT, "pyproject.toml"), "rb") as f:
+        declared = dict(re.fullmatch(r"([\w-]+)>=([\d.]+)", d).groups() for d in tomllib.load(f)["project"]["dependencies"])
+    with open(os.path.join(ROOT, "tests", "floors.txt")) as f:
+        pinned = dict(line.strip().split("==") for line in f if line.strip() and not line.startswith("#"))
+    from packaging.version import Version  # 1.26 is 1.26.0
+
+    assert {name: Version(v) for name, v in declared.items()} == {
+        name: Version(v) for name, v in pinned.items() if name != "jaxlib"}
+    assert pinned["jaxlib"] == pinned["jax"]
