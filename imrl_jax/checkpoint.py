@@ -47,6 +47,7 @@ class RunState(NamedTuple):
     key_data: np.ndarray  # (S, 2) jax.random.key_data of each seed's key
     history: History
     search: Any = ()  # each seed's search strategy state beyond the populations (the paper's GA: none)
+    traits: Any = ()  # (G, S, traits, 2) the evolved values' population mean and the best's (networks.traits); or none
 
 
 def empty_history(num_generations: int, num_seeds: int, num_tasks: int) -> History:
@@ -63,6 +64,15 @@ def resize_history(history: History, num_generations: int) -> History:
         return np.concatenate([x[:num_generations], pad])
 
     return History(*(resize(x) for x in history))
+
+
+def resize_rows(x, num_generations: int):
+    """Per-generation rows (generations first) cut or padded with NaN to ``num_generations``; () stays ()."""
+    if not np.size(x):
+        return x
+    x = np.asarray(x)
+    pad = np.full((max(num_generations - len(x), 0),) + x.shape[1:], np.nan, x.dtype)
+    return np.concatenate([x[:num_generations], pad])
 
 
 def git_commit() -> str:
@@ -129,6 +139,8 @@ def _saved(state: RunState) -> dict:
     leaves = jax.tree.leaves(saved.pop("search"))
     if leaves:
         saved["search"] = {f"{i:03d}": leaf for i, leaf in enumerate(leaves)}
+    if not np.size(saved["traits"]):
+        del saved["traits"]
     return saved
 
 
@@ -193,7 +205,8 @@ class Checkpointer:
                 with _quiet_absl():
                     saved_meta = self.manager.restore(step, args=ocp.args.Composite(meta=ocp.args.JsonRestore())).meta
                     rows = int(saved_meta.get("config", {}).get("num_generations", len(template.history.best)))
-                    shaped = template._replace(history=resize_history(template.history, rows))
+                    shaped = template._replace(history=resize_history(template.history, rows),
+                                               traits=resize_rows(template.traits, rows))
                     abstract = jax.tree.map(ocp.utils.to_shape_dtype_struct, _saved(shaped))
                     restored = self.manager.restore(step, args=ocp.args.Composite(
                         state=ocp.args.StandardRestore(abstract), meta=ocp.args.JsonRestore()))
@@ -205,6 +218,8 @@ class Checkpointer:
                 state["generation"] = np.asarray(state["generation"])
                 state["key_data"] = np.asarray(state["key_data"])
                 state["search"] = _search_from_saved(template.search, state.get("search"))
+                state["traits"] = resize_rows(np.asarray(state.get("traits", template.traits)),
+                                              max(len(template.history.best), step))
                 state = RunState(**state)
                 if int(state.generation) != step or int(restored.meta.get("generation", -1)) != step:
                     raise ValueError(f"generation recorded as {int(state.generation)}")

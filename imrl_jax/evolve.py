@@ -10,7 +10,9 @@ with orbax; ``--resume`` continues from the latest good checkpoint and ends bitw
 where an uninterrupted run would. The run directory holds ``config.json``,
 ``history.csv`` (best, mean, std and the best individual's task performances per seed
 per generation), ``fitness.png`` (best fitness, mean and std over seeds, as Fig. 3a),
-``final_population.npz`` and ``checkpoints/``; all are rewritten as the run goes. It must be
+``final_population.npz`` and ``checkpoints/`` (and, for a condition evolving values besides weights,
+their per-generation mean and best's in ``history.csv`` and ``traits.png``); all are rewritten as the
+run goes. It must be
 new or empty (or, with ``--resume``, the run itself), and one process writes it at a time
 (``.lock``). ``--resume --out RUN`` is enough: the run's own config and seeds are used.
 """
@@ -41,6 +43,7 @@ from imrl_jax.config import CONDITIONS, EVOLVED_CONDITIONS, PRESETS, Config, mak
 from imrl_jax import search
 from imrl_jax.ga import GA, init_population, make_generation
 from imrl_jax.lifetime import live
+from imrl_jax.networks import trait_names, traits
 from imrl_jax.progress import Progress
 from imrl_jax.rundir import (RunDirError, RunWriteError, check_unlocked, check_writable, entries, lock_run_dir,
                              read_config, write_atomic, write_errno)
@@ -77,6 +80,8 @@ def initial_state(config: Config, seeds: Sequence[int], sharding, strategy=None,
         search_state = jax.tree.map(lambda x: to_global(np.asarray(x), replicated(mesh or make_mesh())), states)
     shape = populations.shape
     history = empty_history(config.num_generations, len(seeds), config.num_tasks)
+    names = trait_names(config)
+    traits = np.full((config.num_generations, len(seeds), len(names), 2), np.nan, np.float32) if names else ()
     return RunState(
         generation=np.asarray(0, np.int32),
         populations=to_global(populations, sharding),
@@ -85,6 +90,7 @@ def initial_state(config: Config, seeds: Sequence[int], sharding, strategy=None,
         key_data=key_data,
         history=history,
         search=search_state,
+        traits=traits,
     )
 
 
@@ -92,6 +98,16 @@ def evolution_keys(key_data: np.ndarray) -> jax.Array:
     """The keys the generations of each seed draw from (distinct from the initial population's)."""
     keys = jax.random.wrap_key_data(np.asarray(key_data))
     return jax.vmap(lambda k: jax.random.fold_in(k, 1))(keys)
+
+
+def record_traits(traits: np.ndarray, generation: int, fitness: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Traits (G, S, T, 2) with generation's population mean (``[..., 0]``) and best's (``[..., 1]``) of ``values``
+    (S, P, T) written in."""
+    traits = np.array(traits)
+    best = np.argmax(fitness, axis=1)
+    traits[generation, :, :, 0] = values.mean(1)
+    traits[generation, :, :, 1] = values[np.arange(len(best)), best]
+    return traits
 
 
 def record(history: History, generation: int, fitness: np.ndarray, performance: np.ndarray) -> History:
@@ -109,17 +125,20 @@ def record(history: History, generation: int, fitness: np.ndarray, performance: 
 # ----------------------------------------------------------------------------- outputs
 
 
-def history_csv(history: History, generations: int, seeds: Sequence[int]) -> str:
-    """The history of the finished generations as CSV text."""
+def history_csv(history: History, generations: int, seeds: Sequence[int], traits=(), names: Sequence[str] = ()) -> str:
+    """The history of the finished generations as CSV text; with ``traits`` (G, S, T, 2) of ``names``, the
+    population mean (``mean_NAME``) and the best individual's value (``best_NAME``) of each, too."""
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     num_tasks = history.best_performance.shape[-1]
-    writer.writerow(["generation", "seed", "best", "mean", "std"] + [f"best_task{i + 1}" for i in range(num_tasks)])
+    writer.writerow(["generation", "seed", "best", "mean", "std"] + [f"best_task{i + 1}" for i in range(num_tasks)]
+                    + [f"{which}_{name}" for name in names for which in ("mean", "best")])
     for g in range(generations):
         for s, seed in enumerate(seeds):
             writer.writerow([g, seed] + [f"{float(history.best[g, s]):.6f}", f"{float(history.mean[g, s]):.6f}",
                                          f"{float(history.std[g, s]):.6f}"]
-                            + [f"{float(p):.6f}" for p in history.best_performance[g, s]])
+                            + [f"{float(p):.6f}" for p in history.best_performance[g, s]]
+                            + [f"{float(v):.6g}" for t in range(len(names)) for v in traits[g, s, t]])
     return out.getvalue()
 
 
@@ -128,7 +147,9 @@ def write_outputs(out_dir: str, config: Config, seeds: Sequence[int], state: Run
     from imrl_jax.plotting import plot_fitness, save
 
     done = int(state.generation)
-    write_atomic(os.path.join(out_dir, "history.csv"), history_csv(state.history, done, seeds).encode())
+    names = trait_names(config)
+    write_atomic(os.path.join(out_dir, "history.csv"),
+                 history_csv(state.history, done, seeds, state.traits, names).encode())
     buffer = io.BytesIO()
     np.savez(buffer, seeds=np.asarray(seeds), generation=done, evaluated=to_host(state.evaluated),
              fitness=to_host(state.fitness), next_population=to_host(state.populations))
@@ -139,6 +160,13 @@ def write_outputs(out_dir: str, config: Config, seeds: Sequence[int], state: Run
                           title=f"{config.condition}: best fitness per generation, mean and std over "
                                 f"{len(seeds)} seed(s){scale}", ylabel="best fitness of the population"),
              os.path.join(out_dir, "fitness.png"))
+        if names:
+            from imrl_jax.plotting import plot_traits
+
+            save(plot_traits(config, names, np.asarray(state.traits)[:done],
+                             title=f"{config.condition}: evolved values per generation, mean over {len(seeds)} "
+                                   f"seed(s){scale}"),
+                 os.path.join(out_dir, "traits.png"))
 
 
 def _is_paper_scale(config: Config) -> bool:
@@ -357,14 +385,19 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
         params = config.learning_params()
         lane_steps = len(seeds) * config.population_size * config.lives_per_fitness * config.lifetime_steps
         first = int(state.generation)
+        if trait_names(config):
+            trait_values = jax.jit(jax.vmap(jax.vmap(lambda genome: traits(config, genome))))
         for g in range(first, config.num_generations):
             start = time.perf_counter()
             evaluated = state.populations
             populations, search_state, stats = generation(keys, params, evaluated, state.search, g)
             fitness, performance = to_host(stats.fitness), to_host(stats.performance)
             seconds = time.perf_counter() - start
+            recorded = state.traits
+            if trait_names(config):
+                recorded = record_traits(state.traits, g, fitness, to_host(trait_values(evaluated)))
             state = RunState(np.asarray(g + 1, np.int32), populations, evaluated, stats.fitness, state.key_data,
-                             record(state.history, g, fitness, performance), search_state)
+                             record(state.history, g, fitness, performance), search_state, recorded)
             best = fitness.max(1)
             progress.update(g + 1, float(best.max()), float(fitness.mean()), lane_steps / seconds,
                             scores=f"best fitness: max over seeds {best.max():.4f}, mean over seeds {best.mean():.4f}")

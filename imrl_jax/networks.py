@@ -124,6 +124,30 @@ def zero_agent(config: Config, dtype=jnp.float32) -> Agent:
     )
 
 
+def trait_names(config: Config) -> tuple[str, ...]:
+    """The evolved values a condition's genomes carry besides weights (recorded per generation by ``evolve``)."""
+    names = ()
+    if "parameters" in config.spec.genome:
+        names += tuple(name for name, *_ in EVOLVED_PARAMETERS)
+    if "expressed" in config.spec.genome:
+        names += ("expressed_experts",) + tuple(f"share_{k}_experts" for k in range(1, config.num_experts + 1))
+    return names
+
+
+def traits(config: Config, genome: jnp.ndarray) -> jnp.ndarray:
+    """The values of :func:`trait_names` for one genome (the learning values its genes decode to; how many experts it
+    expresses, and 1 in the ``share_k_experts`` entry of that number): a population's mean of those is the share."""
+    agent = decode(config, genome)
+    values = []
+    if "parameters" in config.spec.genome:
+        values += [getattr(agent.params, name) for name, *_ in EVOLVED_PARAMETERS if name != "initial_speed_bias"]
+        values.append(agent.actor[0, 1, -1])  # the learned actors' initial speed bias
+    if "expressed" in config.spec.genome:
+        count = agent.expressed.sum()
+        values += [count] + [(count == k).astype(genome.dtype) for k in range(1, config.num_experts + 1)]
+    return jnp.stack(values) if values else jnp.zeros((0,), genome.dtype)
+
+
 def decode(config: Config, genome: jnp.ndarray) -> Agent:
     """The weights a genome encodes (MODEL.md "Conditions"); the rest start as :func:`zero_agent`.
 

@@ -56,7 +56,7 @@ def style_axis(ax, title: str = "", xlabel: str = "", ylabel: str = "", grid: bo
         ax.set_xlabel(xlabel, fontsize=8)
     if ylabel:
         ax.set_ylabel(ylabel, fontsize=8)
-    ax.tick_params(labelsize=7)
+    ax.tick_params(which="both", labelsize=7)
     if grid:
         ax.grid(alpha=0.3)
 
@@ -67,7 +67,7 @@ def wrap_title(ax, title: str, fontsize: float = 9) -> str:
 
     width_inches = ax.figure.get_figwidth() * ax.get_position().width
     chars = max(20, int(width_inches * 72 / (0.56 * fontsize)))
-    return "\n".join(textwrap.fill(line, chars) for line in title.split("\n"))
+    return "\n".join(textwrap.fill(line, chars, break_long_words=False) for line in title.split("\n"))
 
 
 def floor_segments(config: Config) -> list[tuple[np.ndarray, np.ndarray, int]]:
@@ -613,3 +613,56 @@ def write_animation(config: Config, trajectory, path: str, task: int | None = No
             grid_ax.set_title(f"retina view; reaches so far: {int(reached[:t].sum())}", fontsize=9)
             writer.grab_frame()
     return len(frames)
+
+
+def plot_traits(config: Config, names, traits: np.ndarray, title: str = ""):
+    """The evolved values per generation (``traits`` (G, S, T, 2): population mean and the best's, per seed).
+
+    One panel per learning value (log scale for rates and for 1 - discount), the run's config value
+    (what its preset fixes by hand) and the paper's dashed; the expressed experts as their mean count
+    and the population's shares of each count, stacked.
+    """
+    from matplotlib.ticker import MaxNLocator
+
+    from imrl_jax.conditions import EVOLVED_PARAMETERS
+    from imrl_jax.config import make_config
+
+    kinds = {name: kind for name, kind, *_ in EVOLVED_PARAMETERS}
+    paper = make_config("paper")
+    values = [n for n in names if n in kinds]
+    panels = values + (["expressed_experts", "shares"] if "expressed_experts" in names else [])
+    columns = min(4, len(panels))
+    rows = -(-len(panels) // columns)
+    fig = new_figure(2.6 * columns, 2.1 * rows + 0.5)
+    generations = np.arange(traits.shape[0])
+    for i, panel in enumerate(panels):
+        ax = fig.add_subplot(rows, columns, i + 1)
+        if panel == "shares":
+            shares = [traits[:, :, names.index(f"share_{k}_experts"), 0].mean(1) for k in range(1, config.num_experts + 1)]
+            ax.stackplot(generations, shares, labels=[f"{k}" for k in range(1, config.num_experts + 1)],
+                         colors=_series_colours(config.num_experts))
+            ax.set_ylim(0, 1)
+            ax.legend(title="experts", fontsize=6, title_fontsize=6, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+            style_axis(ax, "share of the population", "generation", "", grid=False)
+            ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+            continue
+        t = names.index(panel)
+        mean, best = traits[:, :, t, 0].mean(1), traits[:, :, t, 1].mean(1)
+        kind = kinds.get(panel, "linear")
+        shown = (lambda v: 1.0 - v) if kind == "1-log" else (lambda v: v)
+        ax.plot(generations, shown(mean), color="k", lw=1.4, label="population mean")
+        ax.plot(generations, shown(best), color="tab:red", lw=1.0, label="the best's")
+        if panel in kinds:
+            ax.axhline(shown(getattr(config, panel)), color="tab:blue", lw=1, ls="--", label="the preset's value")
+            if getattr(paper, panel) != getattr(config, panel):
+                ax.axhline(shown(getattr(paper, panel)), color="0.5", lw=1, ls=":", label="the paper's value")
+        if kind in ("log", "1-log"):
+            ax.set_yscale("log")
+        style_axis(ax, f"1 - {panel}" if kind == "1-log" else panel, "generation" if i >= len(panels) - columns else "")
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        if i == 0:
+            ax.legend(fontsize=6)
+    if title:
+        fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    return fig
