@@ -392,3 +392,39 @@ def measure(data: dict, lives: dict, probes: dict | None = None, sle_whole_test:
         }
         out[variant] = dict(evolution=evolution, learning_tests=tests, claims=claims)
     return out
+
+
+# ----------------------------------------------------------------------------- claim 8
+
+#: The paper's remark on the number of experts (section 2), checked beside the seven claims (docs/CLAIMS.md).
+EXPERTS_CLAIM = "The quality of results did not change in tests with a higher number of experts (4 and 6 against 3)."
+EXPERTS_RULE = (f"For LE-LS and EE-LS, each with 4 and 6 experts against 3 (the same rule set): final best fitness "
+                f"of a seed as in claim 2, and the steady state of each learning-test run as in claim 6. A comparison "
+                f"is *unchanged* when the mean with more experts is within [{ABOUT[0]}, {ABOUT[1]}] of the mean with 3 "
+                f"(claim 4's \"about\"); the difference and its standard error (as in claim 3) are shown. **holds** if "
+                f"every comparison made is unchanged; **partly** if at least one is; **does not hold** if none is; "
+                f"**n/a** without a comparison.")
+
+
+def claim_experts(final: dict, steady: dict | None = None) -> dict:
+    """Claim 8 from per-seed final best fitness ``final[(condition, experts)]`` and per-run steady states
+    ``steady[(condition, experts)]``, each compared with the same condition's 3 experts."""
+    compared, parts = {}, []
+    for measure, values in (("final", final), ("steady", steady or {})):
+        for (condition, k), numbers in sorted(values.items()):
+            base = values.get((condition, 3))
+            if k == 3 or base is None or numbers is None or not len(numbers) or not len(base):
+                continue
+            a, b = np.asarray(base, float), np.asarray(numbers, float)
+            ratio = float(b.mean() / a.mean()) if a.mean() > 0 else None
+            var = lambda x: float(x.var(ddof=1)) / len(x) if len(x) > 1 else 0.0  # noqa: E731
+            unchanged = ratio is not None and ABOUT[0] <= ratio <= ABOUT[1]
+            compared[f"{condition} {measure} {k} vs 3"] = dict(ratio=ratio, difference=float(b.mean() - a.mean()),
+                                                              standard_error=math.sqrt(var(a) + var(b)),
+                                                              unchanged=unchanged)
+            parts.append(f"{condition} {measure} {k}/3 experts {b.mean():.3f}/{a.mean():.3f} = {_fmt(ratio, 2)}")
+    if not compared:
+        return _claim(NOT_AVAILABLE, "-", compared=compared)
+    held = sum(c["unchanged"] for c in compared.values())
+    verdict = HOLDS if held == len(compared) else PARTLY if held else DOES_NOT
+    return _claim(verdict, "; ".join(parts) + f" ({held} of {len(compared)} unchanged)", compared=compared)

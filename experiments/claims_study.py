@@ -130,8 +130,50 @@ def plan(names, scale: dict = SCREEN, out: str = OUT) -> list[Stage]:
     return stages
 
 
+#: Claim 8 (the paper: "the quality of results did not change in tests with a higher number of experts"):
+#: LE-LS and EE-LS with these many experts, under these rule sets, against their own 3-expert runs.
+EXPERT_COUNTS = (4, 6)
+EXPERT_RULE_SETS = ("skills",)
+EXPERT_CONDITIONS = ("LE-LS", "EE-LS")
+
+
+def experts_variant(rule: str, num_experts: int) -> str:
+    """The stage variant of a claim-8 run: the rule set and the number of experts."""
+    return f"{rule}+experts{num_experts}"
+
+
+def experts_dir(rule: str, condition: str, num_experts: int, kind: str = "evolve", out: str = OUT) -> str:
+    """Where a claim-8 evolution (``kind`` "evolve") or its learning test ("test") lives."""
+    return os.path.join(out, rule, f"experts{num_experts}", kind, condition)
+
+
+def plan_experts(rules=EXPERT_RULE_SETS, scale: dict = SCREEN, out: str = OUT) -> list[Stage]:
+    """Claim 8's stages: each rule set's LE-LS and EE-LS with 4 and 6 experts, evolved then tested."""
+    stages, population = [], scale.get("population", 50)
+    for name in rules:
+        for k in EXPERT_COUNTS:
+            for condition in EXPERT_CONDITIONS:
+                life = (scale["childhood_steps"] if conditions.get(condition).has_childhood else 0) + 6 * scale["task_steps"]
+                variant = experts_variant(name, k)
+                stages.append(Stage(f"evolve {name} {condition} {k} experts", "evolve", variant, condition,
+                                    experts_dir(name, condition, k, "evolve", out),
+                                    float(scale["seeds"] * population * scale["generations"] * life)))
+                stages.append(Stage(f"learning test {name} {condition} {k} experts", "test", variant, condition,
+                                    experts_dir(name, condition, k, "test", out),
+                                    float(scale["seeds"] * scale["best"] * scale["tests"] * _life(scale, condition))))
+    return stages
+
+
 def stage_command(stage: Stage, scale: dict, out: str = OUT) -> tuple[list[str], None]:
     """A stage's command line: the package's evolve or learning_test with the rule set's preset and overrides."""
+    if "+experts" in stage.variant:  # claim 8: the rule set with more experts
+        name, k = stage.variant.split("+experts")
+        rule = BY_NAME[name]
+        if stage.kind == "evolve":
+            return evolve_command(scale, rule.preset, stage.condition, stage.out_dir,
+                                  sets=(*rule.sets, f"num_experts={k}")), None
+        evolved = experts_dir(name, stage.condition, int(k), "evolve", out)
+        return test_command(scale, rule.preset, stage.condition, evolved, stage.out_dir), None
     rule = BY_NAME[stage.variant]
     if stage.kind == "evolve":
         return evolve_command(scale, rule.preset, stage.condition, stage.out_dir, sets=rule.sets), None
@@ -285,19 +327,56 @@ def figure(measured: dict, names, path: str = FIGURE) -> str:
     return path
 
 
-def write_table(path: str, text: str) -> None:
+def write_table(path: str, text: str, start_marker: str = TABLE_START, end_marker: str = TABLE_END) -> None:
     """Put the table between its markers in ``path`` (the rest of the document is kept)."""
     with open(path) as f:
         document = f.read()
-    start, end = document.index(TABLE_START), document.index(TABLE_END)
+    start, end = document.index(start_marker), document.index(end_marker)
     with open(path, "w") as f:
-        f.write(document[:start + len(TABLE_START)] + "\n" + text + "\n" + document[end:])
+        f.write(document[:start + len(start_marker)] + "\n" + text + "\n" + document[end:])
+
+
+#: Where claim 8's table goes in docs/CLAIMS.md.
+EXPERTS_START = "<!-- claim 8 table: python -m experiments.claims_study --table -->"
+EXPERTS_END = "<!-- end of claim 8 table -->"
+
+
+def measure_experts(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
+    """Claim 8 for a rule set: its finished 4- and 6-expert runs against its own 3-expert ones."""
+    from experiments.claims import claim_experts, final_best
+    from experiments.loading import read_evolution, read_test
+
+    final, steady, sizes_ = {}, {}, {}
+    for condition in EXPERT_CONDITIONS:
+        for k in (3, *EXPERT_COUNTS):
+            evolved = run_dir(rule, condition, out, reproduction) if k == 3 else experts_dir(rule.name, condition, k,
+                                                                                          "evolve", out)
+            tested = learning_dir(rule, condition, out, reproduction) if k == 3 else experts_dir(rule.name, condition,
+                                                                                              k, "test", out)
+            run, test = read_evolution(evolved), read_test(tested)
+            done = run is not None and run["config"] and len(run["best"]) >= run["config"]["num_generations"]
+            if done:
+                final[condition, k] = final_best(run["best"]).tolist()
+                sizes_[f"{condition} {k}"] = f"{len(run['seeds'])}x{len(run['best'])}"
+            if test is not None:
+                steady[condition, k] = test["steady"]["steady_per_run"]
+    claim = claim_experts(final, steady)
+    return dict(claim, sizes=sizes_)
+
+
+def experts_table(measured: dict) -> str:
+    """Claim 8 as markdown: one row per rule set, the verdict and the comparisons."""
+    lines = ["| rule set | runs (seeds x generations) | claim 8 |", "|---|---|---|"]
+    for name, claim in measured.items():
+        runs = ", ".join(f"{k}: {v}" for k, v in claim["sizes"].items()) or "none finished"
+        lines.append(f"| `{name}` | {runs} | {claim['verdict']}: {claim['measured']} |")
+    return "\n".join(lines)
 
 
 def parse_names(text: str | None) -> list[str]:
     """The rule sets named on the command line (default: the screen's order); unknown names are an error."""
-    names = text.split(",") if text else list(SCREEN_ORDER)
-    unknown = [n for n in names if n not in BY_NAME]
+    names = text.split(",") if text else [*SCREEN_ORDER, "experts"]
+    unknown = [n for n in names if n not in BY_NAME and n != "experts"]
     if unknown:
         raise ValueError(f"--only: unknown rule set {unknown[0]!r} (choose from {', '.join(BY_NAME)})")
     return names
@@ -305,7 +384,8 @@ def parse_names(text: str | None) -> list[str]:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m experiments.claims_study", description=__doc__.split("\n\n")[0])
-    p.add_argument("--only", help="comma-separated rule sets to run, in order (default: the screen's order)")
+    p.add_argument("--only", help="comma-separated rule sets to run, in order, and 'experts' for claim 8's runs "
+                                  "(default: the screen's order, then experts)")
     p.add_argument("--out", default=OUT, help=f"results directory (default: {OUT})")
     p.add_argument("--table", action="store_true", help="write the claims of every finished rule set into "
                    "docs/CLAIMS.md and experiments/results/claims/claims.json (runs nothing)")
@@ -316,9 +396,12 @@ def main(argv=None) -> int:
         print(f"error: {error}", file=sys.stderr)
         return 2
     if args.table:
-        return write_claims(args.out, [rule.name for rule in RULE_SETS] if not args.only else names)
+        return write_claims(args.out, [rule.name for rule in RULE_SETS] if not args.only else
+                            [n for n in names if n != "experts"])
     manifest, manifest_path = load_manifest(args.out, study="claims", sizes=SCREEN, rule_sets=names)
-    stages = plan(names, SCREEN, args.out)
+    # "experts": claim 8's runs, after the rule sets' (the screen's default order ends with them)
+    stages = plan([n for n in names if n != "experts"], SCREEN, args.out)
+    stages += plan_experts(EXPERT_RULE_SETS, SCREEN, args.out) if "experts" in names else []
     return run_stages(stages, SCREEN, manifest, manifest_path, lambda stage: stage_command(stage, SCREEN, args.out))
 
 
@@ -341,6 +424,10 @@ def write_claims(out: str, names) -> int:
                        claims=numbers), f, indent=2, default=str)
     write_table(os.path.join("docs", "CLAIMS.md"), table(measured, names))
     figure(measured, names)
+    experts = {name: measure_experts(BY_NAME[name], out) for name in EXPERT_RULE_SETS}
+    with open(os.path.join(out, "claim8.json"), "w") as f:
+        json.dump(experts, f, indent=2, default=str)
+    write_table(os.path.join("docs", "CLAIMS.md"), experts_table(experts), EXPERTS_START, EXPERTS_END)
     print(f"wrote docs/CLAIMS.md's table and {os.path.join(out, 'claims.json')}: {len(measured)} of {len(names)} "
           f"rule sets finished")
     return 0

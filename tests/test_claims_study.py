@@ -68,3 +68,29 @@ def test_the_table_goes_between_its_markers(tmp_path):
     paper = next(line for line in lines if line.startswith("| `paper`"))
     assert paper.split(" | ")[1] == "10x100, 10x10x10" and "**holds**: m1 |" in paper and "n/a: m7 |" in paper
     assert any(line.startswith("| `skills-bias0` | not finished") for line in lines)
+
+
+def test_claim_experts_on_hand_made_numbers():
+    from experiments.claims import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY, claim_experts
+
+    three, same, lower = [0.40, 0.44], [0.41, 0.45], [0.20, 0.22]
+    claim = claim_experts({("LE-LS", 3): three, ("LE-LS", 4): same, ("LE-LS", 6): same})
+    assert claim["verdict"] == HOLDS and len(claim["numbers"]["compared"]) == 2
+    entry = claim["numbers"]["compared"]["LE-LS final 6 vs 3"]
+    assert entry["ratio"] == pytest.approx(0.43 / 0.42) and entry["difference"] == pytest.approx(0.01)
+    assert entry["standard_error"] == pytest.approx(np.sqrt(2 * 0.04 ** 2 / 2 / 2))
+    assert claim_experts({("EE-LS", 3): three, ("EE-LS", 6): lower}, {("EE-LS", 3): three, ("EE-LS", 6): same}
+                         )["verdict"] == PARTLY  # the steady state unchanged, the final best halved
+    assert claim_experts({("EE-LS", 3): three, ("EE-LS", 4): lower})["verdict"] == DOES_NOT
+    assert claim_experts({("EE-LS", 4): same})["verdict"] == NOT_AVAILABLE  # no 3-expert run to compare with
+
+
+def test_claim_8_stages_evolve_more_experts_and_test_their_own_runs():
+    stages = study.plan_experts(("skills",))
+    assert len(stages) == 8 and stages[0].name == "evolve skills LE-LS 4 experts"
+    evolve = study.stage_command(stages[0], study.SCREEN)[0]
+    assert "num_experts=4" in evolve and evolve[evolve.index("--preset") + 1] == "skills"
+    test = study.stage_command(stages[3], study.SCREEN)[0]  # EE-LS, 4 experts
+    assert test[test.index("-m") + 2] == study.experts_dir("skills", "EE-LS", 4)
+    assert stages[2].cost == 5 * 50 * 100 * 6 * 100_000  # EE-LS: no childhood
+    assert study.parse_names(None)[-1] == "experts" and study.parse_names("experts") == ["experts"]
