@@ -46,6 +46,7 @@ def test_traits_of_a_hand_made_genome():
     assert networks.trait_names(make_config("skills", condition="LE-LS")) == ()
 
 
+@pytest.mark.slow
 def test_history_records_the_evolved_values_and_they_survive_a_resume(tmp_path):
     import csv
 
@@ -76,3 +77,19 @@ def test_history_records_the_evolved_values_and_they_survive_a_resume(tmp_path):
             assert float(row[f"mean_{name}"]) == pytest.approx(values[s, :, t].mean(), rel=1e-5)
             assert float(row[f"best_{name}"]) == pytest.approx(values[s, best[s], t], rel=1e-5)
     assert os.path.getsize(f"{out}/traits.png") > 10_000
+
+
+def test_record_traits_and_their_history_columns_by_hand():
+    import numpy as np
+
+    from imrl_jax import evolve
+    from imrl_jax.checkpoint import empty_history
+
+    traits = np.full((2, 1, 2, 2), np.nan, np.float32)
+    values = np.asarray([[[1.0, 10.0], [3.0, 30.0], [2.0, 20.0]]])  # 1 seed x 3 individuals x 2 traits
+    traits = evolve.record_traits(traits, 0, np.asarray([[0.1, 0.5, 0.2]]), values)
+    np.testing.assert_allclose(traits[0, 0], [[2.0, 3.0], [20.0, 30.0]])  # (mean, the best's) per trait
+    assert np.isnan(traits[1]).all()
+    text = evolve.history_csv(empty_history(2, 1, 6), 1, [7], traits, ("a", "b"))
+    header, row = text.splitlines()
+    assert header.endswith(",mean_a,best_a,mean_b,best_b") and row.endswith(",2,3,20,30")

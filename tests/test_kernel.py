@@ -33,8 +33,10 @@ OPTIONS = dict(childhood_walls="respawn", wall_respawn_steps=5, childhood_select
 
 
 @pytest.mark.usefixtures("x64")
-@pytest.mark.parametrize("condition, options", [("LE-LS", {}), ("LE-LS", OPTIONS), ("EE-LS", {}), ("SLE", {}),
-                                               ("SLE-horizon", {})],
+# The plain childhood and SLE's horizon are slow: childhood-options and SLE run the same branches and more.
+@pytest.mark.parametrize("condition, options", [pytest.param("LE-LS", {}, marks=pytest.mark.slow), ("LE-LS", OPTIONS),
+                                               ("EE-LS", {}), ("SLE", {}),
+                                               pytest.param("SLE-horizon", {}, marks=pytest.mark.slow)],
                          ids=["childhood", "childhood-options", "adult-LS", "SLE", "SLE-noise-horizon"])
 def test_phase_in_pieces_matches_xla(tiny, condition, options):
     """A phase run by the kernel in two pieces, against XLA in one: every branch of the step.

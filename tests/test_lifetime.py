@@ -12,7 +12,9 @@ from imrl_jax.config import CONDITIONS
 from imrl_jax.networks import decode, encode
 
 
-@pytest.mark.parametrize("condition", CONDITIONS)
+# The future-work rows' lives follow the NumPy reference (test_reference.py); their contracts are slow.
+@pytest.mark.parametrize("condition", [c if c in C.PAPER else pytest.param(c, marks=pytest.mark.slow)
+                                       for c in CONDITIONS])
 def test_population_shapes_dtypes_and_single_compile(tiny, condition):
     config = tiny(condition)
     evaluate = L.make_evaluate(config)
@@ -149,6 +151,7 @@ def test_paper_length_life_runs_on_cpu():
     assert np.isfinite(np.asarray(result.agent.actor)).all()
 
 
+@pytest.mark.slow  # a compute field (COMPUTE_FIELDS): the default suite keeps to the model
 def test_unrolling_the_step_loop_changes_nothing(tiny):
     """scan_unroll is a speed knob: 1 and 3 steps per loop iteration give the same life."""
     params = tiny().learning_params()

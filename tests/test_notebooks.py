@@ -38,7 +38,7 @@ def test_stored_without_outputs(name):
             assert cell.execution_count is None, f"{name}: a code cell has an execution count"
 
 
-@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("name", [NAMES[0], pytest.param(NAMES[1], marks=pytest.mark.slow)])
 def test_runs_at_tiny_scale(name, monkeypatch):
     monkeypatch.setenv("IMRL_NOTEBOOK_SCALE", "tiny")
     monkeypatch.setenv("JAX_PLATFORMS", "cpu")

@@ -126,8 +126,8 @@ def test_bad_strategies_exit_2_with_one_line_and_write_nothing(tmp_path, capsys,
     assert not out.exists()
 
 
-@pytest.mark.parametrize("name", [pytest.param(n, marks=[] if n == "sep_cma_es" else pytest.mark.slow)
-                                  for n in strategies.STRATEGIES])
+@pytest.mark.slow  # evolve's evosax step runs in the default suite in the resume test above
+@pytest.mark.parametrize("name", list(strategies.STRATEGIES))
 def test_a_tiny_evolution_with_each_offered_strategy(tiny, name):
     """Two generations of each strategy through evolve's own step equal search.generation run generation by generation."""
     from imrl_jax import evolve
