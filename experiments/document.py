@@ -266,7 +266,10 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
             f"last {DRAWN_STEPS} of them per task, coloured by the expert in control; for LE-LS also the last "
             f"{CHILDHOOD_DRAWN_STEPS:,} childhood steps. The bars show, per expert, the share of its control steps "
             f"on which the retina's central receptors see red, green, blue or nothing ({label}). The genomes are "
-            f"kept in `best_genomes.npz` beside the results, so that these paths can be drawn again."]
+            f"kept in `best_genomes.npz` beside the results, so that these paths can be drawn again. (Evolutions run "
+            f"by the pipeline now also commit their last population and newest checkpoint; those of this report's "
+            f"runs were not kept by the machine that ran them, so only these 10 best per seed can be "
+            f"relived, and extending the runs means running them again.)"]
     if not written["paths"]:
         out += ["", "(not drawn: no population or best_genomes.npz, or `--no-behaviour`)"]
     for (variant, condition), name in written["paths"].items():

@@ -15,7 +15,7 @@ populations, the learning tests' curves and steady states, ``manifest.json``) an
   ``summary.json``, ``specialisation.csv`` and ``claims.json``;
 - into RESULTS_DIR: ``best_genomes.npz``, the 10 best genomes of each seed's last
   generation of every evolution, so that the paths can be drawn again without
-  ``final_population.npz`` (which is not committed);
+  ``final_population.npz`` (not kept for the finished paper- and cpu-scale runs; committed for new ones);
 - ``--doc``: the markdown report, with every number labelled with the run's scale, the
   claims table with the rule that gave each verdict, and a "Discussion" section read from
   ``RESULTS_DIR/discussion.md`` (written by hand) when it exists.
