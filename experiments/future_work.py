@@ -43,6 +43,7 @@ RUNS: tuple[Run, ...] = (
     Run("EXT-LS", "EXT-LS", "skills", (), "(b) the hierarchy on the task's reward only, SLE's noise over 100,000 cycles"),
     Run("EXT-LS-whole", "EXT-LS", "skills", ("sle_noise_steps=0",), "(b), the noise over the whole test"),
     Run("LE-LS-P", "LE-LS-P", "skills", (), "(c) evolved learning parameters"),
+    Run("LE-LS-PC", "LE-LS-PC", "skills", (), "(c) evolved learning parameters and childhood length"),
     Run("LE-LS-N6", "LE-LS-N", "skills", ("num_experts=6",), "(d) up to 6 experts, each expressed by a gene"),
     Run("LE-LS-6", "LE-LS", "skills", ("num_experts=6",), "(d)'s comparison: 6 experts, all expressed"),
 )

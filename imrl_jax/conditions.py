@@ -44,9 +44,10 @@ ADULT_HIERARCHY = Phase(True, True, False, True, True)
 
 #: The networks of an agent (fields of ``networks.Agent``), in the order a genome lists them.
 NETWORKS = ("reinforcer", "actor", "evaluator", "selector_actor", "selector_critic")
-#: What else a genome may encode: one expression gene per expert (an evolved number of experts), and the
-#: learning values (evolved learning parameters).
-GENOME_PARTS = NETWORKS + ("expressed", "parameters")
+#: What else a genome may encode: one expression gene per expert (an evolved number of experts), the
+#: learning values (evolved learning parameters), and the childhood's length (one gene: learning and noise stop
+#: after round(u x childhood_steps) steps of it, u = clip((g + 1) / 2, 0, 1); childhood_steps is the maximum).
+GENOME_PARTS = NETWORKS + ("expressed", "parameters", "childhood_length")
 
 #: The learning values LE-LS-P evolves (the paper's future work (c)), one gene each, in this order. A gene g
 #: is first mapped onto u = clip((g + 1) / 2, 0, 1) (generation 0's U[-1, 1] onto [0, 1]), then by its map:
@@ -82,7 +83,7 @@ def network_shape(network: str, num_experts: int, num_weights: int) -> tuple[int
     return {"reinforcer": (num_experts, num_weights), "actor": (num_experts, 2, num_weights),
             "evaluator": (num_experts, num_weights), "selector_actor": (num_experts, num_weights),
             "selector_critic": (num_weights,), "expressed": (num_experts,),
-            "parameters": (len(EVOLVED_PARAMETERS),)}[network]
+            "parameters": (len(EVOLVED_PARAMETERS),), "childhood_length": (1,)}[network]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -193,6 +194,11 @@ CONDITIONS: dict[str, Condition] = {c.name: c for c in (
               "experts' and the selector's rates and trace decays (adult and childhood), the exploration noise and the "
               "learned actors' initial speed bias (conditions.EVOLVED_PARAMETERS)", genome=("reinforcer", "parameters"),
               adult=ADULT_LEARNING_SELECTOR, childhood=CHILDHOOD, style=dict(color="tab:brown", lw=2.0)),
+    # (c) with the childhood's length evolved too (up to childhood_steps): learning and noise stop at its end.
+    Condition("LE-LS-PC", "LE-LS-P whose genome also carries the childhood's length: the experts and the selector "
+              "learn and explore for the first round(u x childhood_steps) steps of childhood only, u = clip((g + 1) / "
+              "2, 0, 1) of the last gene", genome=("reinforcer", "parameters", "childhood_length"),
+              adult=ADULT_LEARNING_SELECTOR, childhood=CHILDHOOD, style=dict(color="tab:brown", lw=1.4, ls="--")),
     # The paper's future work (b): the whole hierarchy trained on the task's reward only; no evolution, no
     # childhood, everything reset at each task as SLE is (MODEL.md "Future-work conditions").
     Condition("EXT-LS", "the hierarchy on extrinsic reward only: no evolution, no childhood; in each task, reset, "

@@ -423,6 +423,9 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
     if state.agent.params is not None:
         raise ConfigError("step_kernel: the pallas kernel does not implement evolved learning parameters; "
                           "use step_kernel=xla")
+    if state.agent.childhood_length is not None:
+        raise ConfigError("step_kernel: the pallas kernel does not implement an evolved childhood length; "
+                          "use step_kernel=xla")
     if state.agent.expressed is not None:
         raise ConfigError("step_kernel: the pallas kernel does not implement an evolved number of experts "
                           "(expression genes); use step_kernel=xla")

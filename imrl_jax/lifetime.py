@@ -24,7 +24,7 @@ from imrl_jax.env import EnvState, TaskSpec, childhood_task, make_env, random_po
 from imrl_jax.learning import learn_experts, learn_selector, pick_row, take_row
 from imrl_jax.networks import Agent, act, decode, explore, expressed_only, select, with_bias, zero_agent
 from imrl_jax.state import (Curves, Draws, Previous, State, StepRecord, bin_steps, childhood_phase, draw_block,
-                            for_phase, init_state, phase_params)
+                            for_phase, init_state, learning_until, phase_params)
 
 
 class LifetimeResult(NamedTuple):
@@ -92,6 +92,8 @@ def step(key: jax.Array, config: Config, phase: Phase, params: LearningParams, t
     block, draws = _draws(config, phase, key, state)
     # An individual with learning values of its own (evolved learning parameters) learns with them.
     params = phase_params(phase, params if state.agent.params is None else state.agent.params)
+    if phase.intrinsic and state.agent.childhood_length is not None:  # an evolved childhood length
+        params = learning_until(params, state.t < state.agent.childhood_length)
     agent, traces, prev, baseline = state.agent, state.traces, state.prev, state.baseline
 
     # 1-2: observe x_t, choose the expert k_t with probability s_k / sum(s).

@@ -28,6 +28,8 @@ class Agent(NamedTuple):
     expressed: jnp.ndarray | None = None
     # The individual's own learning values (evolved learning parameters); None: the phase's params.
     params: LearningParams | None = None
+    # () steps of childhood it learns and explores for (an evolved childhood length); None: all of them.
+    childhood_length: jnp.ndarray | None = None
 
 
 def with_bias(x: jnp.ndarray) -> jnp.ndarray:
@@ -129,6 +131,8 @@ def trait_names(config: Config) -> tuple[str, ...]:
     names = ()
     if "parameters" in config.spec.genome:
         names += tuple(name for name, *_ in EVOLVED_PARAMETERS)
+    if "childhood_length" in config.spec.genome:
+        names += ("childhood_length",)
     if "expressed" in config.spec.genome:
         names += ("expressed_experts",) + tuple(f"share_{k}_experts" for k in range(1, config.num_experts + 1))
     return names
@@ -142,6 +146,8 @@ def traits(config: Config, genome: jnp.ndarray) -> jnp.ndarray:
     if "parameters" in config.spec.genome:
         values += [getattr(agent.params, name) for name, *_ in EVOLVED_PARAMETERS if name != "initial_speed_bias"]
         values.append(agent.actor[0, 1, -1])  # the learned actors' initial speed bias
+    if "childhood_length" in config.spec.genome:
+        values.append(agent.childhood_length.astype(genome.dtype))
     if "expressed" in config.spec.genome:
         count = agent.expressed.sum()
         values += [count] + [(count == k).astype(genome.dtype) for k in range(1, config.num_experts + 1)]
@@ -166,6 +172,9 @@ def decode(config: Config, genome: jnp.ndarray) -> Agent:
         start += size
     if "expressed" in networks:  # expression genes: which experts exist (an evolved number of experts)
         networks["expressed"] = express(networks["expressed"])
+    if "childhood_length" in networks:  # learning and noise stop after this many steps of childhood
+        u = jnp.clip((networks["childhood_length"][0] + 1.0) / 2.0, 0.0, 1.0)
+        networks["childhood_length"] = jnp.round(u * config.childhood_steps)
     if "parameters" in networks:  # the individual's own learning values; the config's for the others
         values = parameter_values(networks.pop("parameters"))
         bias = values.pop("initial_speed_bias")

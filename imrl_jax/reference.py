@@ -226,7 +226,8 @@ def decode(config, genome):
 # --------------------------------------------------------------------------- one phase
 
 
-def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, spawn=None) -> dict:
+def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, spawn=None,
+              learning_steps=None) -> dict:
     """Run one phase step by step (MODEL.md "Acting" and "Learning"; docs/CHILDHOOD.md options).
 
     phase: a :class:`~imrl_jax.conditions.Phase` or its name in :data:`PHASES` ("childhood",
@@ -235,7 +236,8 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
     u (T,) uniform draws for the expert choice, z (T, 2) normal draws for the action noise,
     spawn (T, 3) uniform draws of a random pose (childhood with config.childhood_walls
     "respawn" only). task: task index for the adult phases (None in childhood).
-    phase_steps: the length of the noise annealing (default T). Returns the pose after each
+    phase_steps: the length of the noise annealing (default T). learning_steps: steps after which
+    nothing learns or explores (an evolved childhood length; default all). Returns the pose after each
     step, the experts chosen, the reach/timeout/respawn flags, the final weights and the
     number of reaches.
     """
@@ -254,6 +256,7 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
     n = w["selector_critic"].shape[0]
 
     experts_learn, selector_learns = phase.experts_learn, phase.selector_learns
+    learning = lambda t: learning_steps is None or t < learning_steps  # noqa: E731
     noisy, has_target = phase.noisy, phase.has_target
 
     gamma = config.gamma
@@ -317,7 +320,7 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
         same_expert = prev_valid and k == prev_k
         expert_delta = None
         if prev_valid:
-            if experts_learn and same_expert:
+            if experts_learn and learning(t) and same_expert:
                 kp = prev_k
                 discount = gamma
                 if phase.evaluation:  # evolved evaluators: the change of the fixed evaluation
@@ -341,7 +344,7 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
                 w["actor"][kp] = w["actor"][kp] + config.eta_actor * expert_delta * trace_w
 
             selector_reward = None
-            if selector_learns:
+            if selector_learns and learning(t):
                 if childhood:
                     if same_expert:
                         selector_reward = expert_delta
@@ -376,7 +379,7 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
         # 4. Act with the expert in control (weights after this step's learning).
         o = _sigmoid(w["actor"][k] @ xb)
         # sigma_t = noise_std * max(1 - t / phase_steps, 0), in float64 like everything here.
-        sigma = config.noise_std * max(1.0 - t / phase_steps, 0.0) if noisy else 0.0
+        sigma = config.noise_std * max(1.0 - t / phase_steps, 0.0) if noisy and learning(t) else 0.0
         a = np.clip(o + sigma * z[t], 0.0, 1.0)
 
         # 5. Turn, move, clamp; in adulthood check the target and the timeout.
@@ -452,9 +455,14 @@ def live(config, genome, start_pose, childhood_u, childhood_z, task_u, task_z, c
             values[name] = {"log": 10.0 ** exponent, "1-log": 1.0 - 10.0 ** exponent, "linear": exponent}[kind]
         config = config.replace(**values)
         grown["actor"][:, 1, -1] = values["initial_speed_bias"]
+    learning_steps = None
+    if "childhood_length" in grown:  # an evolved childhood length: learning and noise stop after it
+        learning_steps = round(min(max((float(grown.pop("childhood_length")[0]) + 1.0) / 2.0, 0.0), 1.0)
+                               * config.childhood_steps)
     if spec.has_childhood:
         child = run_phase(config, spec.childhood, grown, start_pose, childhood_u, childhood_z,
-                          task=None, phase_steps=config.childhood_steps, spawn=childhood_spawn)
+                          task=None, phase_steps=config.childhood_steps, spawn=childhood_spawn,
+                          learning_steps=learning_steps)
         grown = child["weights"]
 
     task_u = np.asarray(task_u, dtype=np.float64)

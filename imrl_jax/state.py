@@ -41,6 +41,15 @@ def phase_params(phase: Phase, params: LearningParams) -> LearningParams:
     return params.in_childhood() if phase.intrinsic else params
 
 
+def learning_until(params: LearningParams, learning) -> LearningParams:
+    """The values with every learning rate and the noise 0 where ``learning`` is false (the end of an evolved
+    childhood: the weights stay as they are, w + 0 = w, and the actions are the actors' outputs)."""
+    off = lambda v: jnp.where(learning, v, jnp.zeros_like(v))  # noqa: E731
+    return params._replace(eta_actor=off(params.eta_actor), eta_evaluator=off(params.eta_evaluator),
+                           eta_selector_actor=off(params.eta_selector_actor),
+                           eta_selector_critic=off(params.eta_selector_critic), noise_std=off(params.noise_std))
+
+
 class Draws(NamedTuple):
     """The random numbers of one step: expert choice u ~ U[0, 1), action noise z ~ N(0, I2),
     and (phases with respawns only) a random pose's (x, y, heading) as U[0, 1)^3."""

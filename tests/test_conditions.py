@@ -31,7 +31,7 @@ def test_genome_sizes_and_layout_follow_the_table():
     """111, 222, 333 and 0 genes (37 weights per network and expert); decode puts each network in its place."""
     sizes = {name: make_config("paper", condition=name).num_genes for name in conditions.NAMES}
     assert sizes == {"LE-LS": 111, "EE-LS": 222, "EE-ES": 333, "SLE": 0, "EV-LS": 111, "EV-LS-diff": 111,
-                     "LE-LS-P": 122, "LE-LS-N": 114, "EXT-LS": 0}
+                     "LE-LS-P": 122, "LE-LS-PC": 123, "LE-LS-N": 114, "EXT-LS": 0}
     assert make_config("paper", condition="EXT-LS").num_lane_experts == 3
     evaluators = decode(make_config("paper", condition="EV-LS"), jnp.arange(111, dtype=jnp.float32))
     np.testing.assert_array_equal(evaluators.evaluator[2, :2], [74.0, 75.0])  # expert 2's evaluator: genes 74..
@@ -219,3 +219,35 @@ def test_an_individual_learns_with_its_evolved_parameters(tiny):
     plain = jax.jit(L.live, static_argnums=1)(key, config.replace(condition="LE-LS"), config.learning_params(),
                                               genome[:111])
     assert not np.allclose(np.asarray(plain.agent.actor), np.asarray(result.agent.actor))
+
+
+@pytest.mark.usefixtures("x64")
+def test_an_evolved_childhood_length_stops_learning_and_noise_at_its_end(tiny):
+    """LE-LS-PC: a whole life in JAX agrees with the reference, whose childhood of 600 steps with learning for
+    300 ends with the weights of its first 300 steps (nothing learns afterwards); a longer one learns more."""
+
+
+    config = tiny("LE-LS-PC", childhood_steps=600, task_steps=300, num_bins=1)
+    genome = np.array(jax.random.uniform(jax.random.key(12), (config.num_genes,), jnp.float64, -1.0, 1.0))
+    genome[-1] = 0.0  # u = 0.5: learning for the first 300 steps of 600
+    assert float(decode(config, jnp.asarray(genome)).childhood_length) == 300
+    key = jax.random.key(11)
+    result = jax.jit(L.live, static_argnums=1)(key, config, config.learning_params(), jnp.asarray(genome))
+    ref = reference_life(config, key, genome)
+    np.testing.assert_array_equal(np.asarray(result.reaches), ref["reaches"])
+    for name in ("actor", "evaluator", "selector_actor", "selector_critic"):
+        np.testing.assert_allclose(np.asarray(getattr(result.agent, name)), ref["childhood_weights"][name],
+                                   rtol=1e-8, atol=1e-10, err_msg=name)
+    # In the reference: 600 steps learning for 300 end with the weights of the first 300 steps alone.
+    weights = reference.decode(config, genome)
+    weights.pop("childhood_length"), weights.pop("parameters")
+    rng = np.random.default_rng(0)
+    u, z = rng.random(600), rng.standard_normal((600, 2))
+    whole = reference.run_phase(config, "childhood", weights, (200.0, 200.0, 0.3), u, z, learning_steps=300)
+    first = reference.run_phase(config, "childhood", weights, (200.0, 200.0, 0.3), u[:300], z[:300], phase_steps=600)
+    for name in ("actor", "evaluator"):
+        np.testing.assert_array_equal(whole["weights"][name], first["weights"][name])
+    assert not np.array_equal(first["weights"]["actor"], weights["actor"])  # it did learn in the first 300
+    genome[-1] = 1.0  # all 600 steps
+    longer = jax.jit(L.live, static_argnums=1)(key, config, config.learning_params(), jnp.asarray(genome))
+    assert not np.allclose(np.asarray(longer.agent.actor), np.asarray(result.agent.actor))
