@@ -32,6 +32,8 @@ import os
 import sys
 from typing import NamedTuple
 
+import numpy as np
+
 from imrl_jax import conditions
 from experiments.reproduce import (EVOLVED, SCALES, TESTED, Stage, evolution_dir, evolve_command, load_manifest,
                                    run_stages, test_command, test_dir)
@@ -225,25 +227,36 @@ def measure_rule(rule: RuleSet, reproduction_summary: dict, out: str = OUT, repr
     followed by the 10 best of each seed, the relived best EE-ES individual); a rule set's own
     LE-LS is probed here as the report probes it (a fresh childhood, then the junction probe).
     """
-    from experiments.claims import measure
+    from experiments.claims import final_best, measure
     from experiments.loading import best_of_population
-    from experiments.relive import probe_best
+    from experiments.relive import fresh_fitness, probe_best
 
     data = load_rule(rule, out, reproduction)
-    probes, lives = {}, {}
-    for condition in ("LE-LS", "EE-LS"):
+    probes, lives, fresh = {}, {}, {}
+    for condition in ("LE-LS", "EE-LS", "EE-ES"):
+        run = data["evolutions"].get((rule.name, condition))
         shared = shared_numbers(reproduction_summary, rule, condition)
         if shared is not None:
-            probes[rule.name, condition] = shared[0]
-            continue
-        run = data["evolutions"].get((rule.name, condition))
-        population = os.path.join(run_dir(rule, condition, out, reproduction), "final_population.npz")
-        if run is not None and os.path.isfile(population):
-            probes[rule.name, condition] = probe_best(run["config"], best_of_population(population))
+            if condition != "EE-ES":
+                probes[rule.name, condition] = shared[0]
+            per_seed = (shared[1] or {}).get("fresh_mean_per_seed")
+        else:
+            population = os.path.join(run_dir(rule, condition, out, reproduction), "final_population.npz")
+            per_seed = None
+            if run is not None and os.path.isfile(population):
+                best = best_of_population(population)
+                probes[rule.name, condition] = probe_best(run["config"], best)
+                print(f"fresh lives of each seed's best {condition} genome ({rule.name})", flush=True)
+                per_seed = fresh_fitness(run["config"], best)["mean"].tolist()
+        if run is not None and per_seed is not None:  # the recorded best beside the same genomes' fresh lives
+            fresh[condition] = dict(recorded=float(final_best(run["best"]).mean()), fresh=float(np.mean(per_seed)),
+                                    fresh_sd_over_seeds=float(np.std(per_seed, ddof=1)), seeds=len(per_seed))
     ee_es = shared_numbers(reproduction_summary, rule, "EE-ES")
     if ee_es is not None and ee_es[1] is not None:
         lives["paper", "EE-ES"] = ee_es[1]
-    return measure(data, lives, probes, sle_whole_test=rule.sle_noise_steps == 0)[rule.name]
+    measured = measure(data, lives, probes, sle_whole_test=rule.sle_noise_steps == 0)[rule.name]
+    measured["fresh"] = fresh
+    return measured
 
 
 def config_of(rule: RuleSet, condition: str):
@@ -325,6 +338,26 @@ def figure(measured: dict, names, path: str = FIGURE) -> str:
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+#: Where the fresh-life table goes in docs/CLAIMS.md.
+FRESH_START = "<!-- fresh-life table: python -m experiments.claims_study --table -->"
+FRESH_END = "<!-- end of fresh-life table -->"
+
+
+def fresh_table(measured: dict, names) -> str:
+    """Recorded final best fitness (claims 1-4's measure) beside the fresh-life fitness of each seed's best genome."""
+    lines = ["| rule set | LE-LS recorded / fresh | EE-LS recorded / fresh | EE-ES recorded / fresh |", "|---|---|---|---|"]
+    for name in names:
+        if name not in measured:
+            continue
+        cells = []
+        for condition in ("LE-LS", "EE-LS", "EE-ES"):
+            f = measured[name].get("fresh", {}).get(condition)
+            cells.append("-" if f is None else f"{f['recorded']:.3f} / {f['fresh']:.3f} (sd {f['fresh_sd_over_seeds']:.3f}, "
+                                               f"{f['seeds']} seeds)")
+        lines.append(f"| `{name}` | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
 
 
 def write_table(path: str, text: str, start_marker: str = TABLE_START, end_marker: str = TABLE_END) -> None:
@@ -418,11 +451,13 @@ def write_claims(out: str, names) -> int:
             print(f"measuring {name}", flush=True)
             measured[name] = measure_rule(rule, summary, out)
     os.makedirs(out, exist_ok=True)
-    numbers = {name: {str(k): v for k, v in m["claims"].items()} for name, m in measured.items()}
+    numbers = {name: {**{str(k): v for k, v in m["claims"].items()}, "fresh": m.get("fresh", {})}
+               for name, m in measured.items()}
     with open(os.path.join(out, "claims.json"), "w") as f:
         json.dump(dict(sizes=dict(screen=SCREEN, full=FULL), rule_sets={r.name: r._asdict() for r in RULE_SETS},
                        claims=numbers), f, indent=2, default=str)
     write_table(os.path.join("docs", "CLAIMS.md"), table(measured, names))
+    write_table(os.path.join("docs", "CLAIMS.md"), fresh_table(measured, names), FRESH_START, FRESH_END)
     figure(measured, names)
     experts = {name: measure_experts(BY_NAME[name], out) for name in EXPERT_RULE_SETS}
     with open(os.path.join(out, "claim8.json"), "w") as f:

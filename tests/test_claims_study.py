@@ -94,3 +94,11 @@ def test_claim_8_stages_evolve_more_experts_and_test_their_own_runs():
     assert test[test.index("-m") + 2] == study.experts_dir("skills", "EE-LS", 4)
     assert stages[2].cost == 5 * 50 * 100 * 6 * 100_000  # EE-LS: no childhood
     assert study.parse_names(None)[-1] == "experts" and study.parse_names("experts") == ["experts"]
+
+
+def test_fresh_table_shows_the_recorded_best_beside_the_fresh_lives():
+    measured = {"skills-bias0": {"fresh": {"LE-LS": dict(recorded=0.412, fresh=0.371, fresh_sd_over_seeds=0.0123,
+                                                         seeds=5)}}}
+    text = study.fresh_table(measured, ["paper", "skills-bias0"])
+    assert text.splitlines()[2] == "| `skills-bias0` | 0.412 / 0.371 (sd 0.012, 5 seeds) | - | - |"
+    assert len(text.splitlines()) == 3  # rule sets not measured are left out
