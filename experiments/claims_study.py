@@ -81,12 +81,16 @@ RULE_SETS: tuple[RuleSet, ...] = (
             sle="skills-bias0"),
     RuleSet("skills-sle-test", "skills", (), "skills, SLE's noise annealed over the whole 1,000,000-cycle test",
             ee_ls="skills", sle="skills-sle-test", le_ls="skills", sle_noise_steps=0),
+    RuleSet("skills-bias0-sle-test", "skills", ("initial_speed_bias=0.0",),
+            "skills-bias0 with SLE's noise annealed over the whole 1,000,000-cycle test", ee_ls="skills",
+            sle="skills-bias0-sle-test", le_ls="skills-bias0", sle_noise_steps=0),
     RuleSet("paper-sle-test", "paper", (), "paper, SLE's noise annealed over the whole 1,000,000-cycle test",
             ee_ls="paper", sle="paper-sle-test", le_ls="paper", sle_noise_steps=0),
 )
 BY_NAME = {rule.name: rule for rule in RULE_SETS}
 #: The order the screen runs its stages in: the cheap SLE tests first, then the evolutions that matter most.
-SCREEN_ORDER = ("skills-sle-test", "paper-sle-test", "skills-bias0", "paper-selector", "skills-bias2",
+SCREEN_ORDER = ("skills-sle-test", "paper-sle-test", "skills-bias0", "skills-bias0-sle-test", "paper-selector",
+                "skills-bias2",
                 "skills-clamp", "extension", "skills-bias1")
 
 
