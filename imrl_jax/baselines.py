@@ -318,7 +318,8 @@ def run(b: Baseline, out_dir: str, config: Config | None = None, quiet: bool = F
                         scores=f"task {task} seed {seed}: performance {sto:.3f} (deterministic {det:.3f})")
     summary = summarise(b, config, rows, curves)
     summary.update(seconds=round(time.perf_counter() - started, 1), command=command, git_commit=git_commit(),
-                   versions=_versions(), backend=jax.default_backend(), settings=_jsonable(dataclasses.asdict(b)))
+                   versions=_versions(), backend=jax.default_backend(), settings=_jsonable(dataclasses.asdict(b)),
+                   task_set=[dataclasses.asdict(t) for t in config.tasks])
     os.makedirs(out_dir, exist_ok=True)
     write_atomic(os.path.join(out_dir, "runs.csv"), _csv(rows))
     write_atomic(os.path.join(out_dir, "curves.csv"), _csv(curves))
@@ -413,6 +414,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--seeds", type=int, default=defaults.seeds, help="seeds per task")
     p.add_argument("--first-seed", type=int, default=defaults.first_seed, help="the first seed")
     p.add_argument("--tasks", default="1,2,3,4,5,6", help="tasks to learn, e.g. 3,6")
+    p.add_argument("--task-set", default="paper", metavar="NAME|FILE",
+                   help="whose tasks --tasks numbers: paper (the six), novel (six never met in evolution) or a .json file")
     p.add_argument("--evals", type=int, default=defaults.num_evals, help="evaluations per run, the untrained one included")
     p.add_argument("--eval-steps", type=int, default=defaults.eval_steps, help="cycles of each evaluation replay")
     p.add_argument("--hidden", default=",".join(map(str, defaults.hidden)), help="hidden layer sizes")
@@ -444,7 +447,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             from imrl_jax import brax_env  # noqa: F401
         except ImportError as error:
             raise UsageError(str(error)) from None
-        summary = run(settings, args.out, quiet=args.quiet, command=command)
+        from imrl_jax.tasks import load
+
+        config = Config(tasks=load(args.task_set))
+        summary = run(settings, args.out, config=config, quiet=args.quiet, command=command)
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

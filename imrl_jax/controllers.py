@@ -122,9 +122,13 @@ class ControllerState(NamedTuple):
 
 def _run(config: Config, num_steps: int, task_index, route_index, record: bool = False):
     """Reaches of the route of task ``route_index`` driven on task ``task_index`` (and, if ``record``, each step)."""
-    task, arena = task_spec(config, task_index), make_env(config)
     colours, lengths = route_table(config)
-    route, length = colours[route_index], lengths[route_index]
+    return _drive(config, num_steps, task_index, colours[route_index], lengths[route_index], record)
+
+
+def _drive(config: Config, num_steps: int, task_index, route, length, record: bool = False):
+    """Reaches of the colour route ``route`` (MAX_ROUTE, padded; ``length`` used) driven on task ``task_index``."""
+    task, arena = task_spec(config, task_index), make_env(config)
     dtype = task.start.pos.dtype
 
     def one_step(state: ControllerState, _):
@@ -199,6 +203,21 @@ def performance(config: Config, num_steps: int) -> jnp.ndarray:
     tasks = jnp.arange(config.num_tasks)
     reaches = run_many(config, num_steps, tasks, tasks)
     return reaches / (num_steps / jnp.asarray(config.steps_per_trip(), jnp.float32))
+
+
+@functools.partial(jax.jit, static_argnums=(0, 1))
+def follower_performance(config: Config, num_steps: int) -> jnp.ndarray:
+    """(colours, tasks) performance of one fixed colour follower (red, green, blue) on every task: a controller that
+    cannot compose, to compare with the composition (:func:`performance`)."""
+    trips = num_steps / jnp.asarray(config.steps_per_trip(), jnp.float32)
+
+    def one(colour, task):
+        route = jnp.full((MAX_ROUTE,), colour, jnp.int32)
+        return _drive(config, num_steps, task, route, jnp.int32(1))
+
+    colours, tasks = jnp.meshgrid(jnp.arange(3), jnp.arange(config.num_tasks), indexing="ij")
+    reaches = jax.vmap(jax.vmap(one))(colours, tasks)
+    return reaches / trips
 
 
 def perceptron_followers(config: Config, turn_gain: float = 0.1, speed_bias: float = 6.0) -> jnp.ndarray:

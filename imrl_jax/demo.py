@@ -106,10 +106,15 @@ def main(argv=None) -> int:
     parser.add_argument("--seed", type=int, default=0, help="random seed of the individual and its life")
     parser.add_argument("--preset", default="small", choices=sorted(PRESETS),
                         help="config preset (small: reduced scale, about a minute on a CPU)")
+    parser.add_argument("--task-set", default="paper", metavar="NAME|FILE",
+                        help="the tasks: paper (the six), novel (six never met in evolution) or a .json file")
     parser.add_argument("--overwrite", action="store_true", help="replace the outputs of an earlier demo in --out")
     args = parser.parse_args(argv)
     try:
+        from imrl_jax.tasks import load
+
         config = make_config(args.preset, condition=args.condition)
+        config = config.replace(tasks=load(args.task_set, config))
         summary = run(config, args.out, args.seed, args.overwrite)
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)

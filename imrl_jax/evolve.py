@@ -206,10 +206,17 @@ def check_run_dir(out_dir: str, config: Config, seeds: Sequence[int], resume: bo
         differing = [name for name in saved_config.model_differences(config)
                      if not (name == "num_generations" and config.num_generations > saved_config.num_generations)]
         if differing:  # a run may be extended: its generations go on from the last one done
-            changes = "; ".join(f"{name} is {getattr(config, name)!r} but the run used {getattr(saved_config, name)!r}"
-                                + (" (a resumed run may only grow it)" if name == "num_generations" else "")
-                                for name in differing)
+            changes = "; ".join(_difference(name, config, saved_config) for name in differing)
             raise UsageError(f"--resume: the config differs from the run's in {out_dir}: {changes}")
+
+
+def _difference(name: str, config: Config, saved: Config) -> str:
+    """One differing field, in words (a task set by how many of its tasks differ, not every coordinate)."""
+    if name == "tasks":
+        differ = sum(a != b for a, b in zip(config.tasks, saved.tasks)) + abs(len(config.tasks) - len(saved.tasks))
+        return f"tasks: {differ} of the run's {len(saved.tasks)} tasks differ (--task-set)"
+    return (f"{name} is {getattr(config, name)!r} but the run used {getattr(saved, name)!r}"
+            + (" (a resumed run may only grow it)" if name == "num_generations" else ""))
 
 
 GA_RECORD = {"strategy": "ga", "settings": {}}  # what a run made before --strategy existed was evolved with
@@ -499,6 +506,10 @@ def build_config(args, saved: tuple[Config, list[int]] | None = None) -> tuple[C
         if value is not None:
             overrides[field] = value
     overrides.update(parse_sets(args.set))
+    if args.task_set is not None:  # checked against the preset's geometry when the config is made
+        from imrl_jax.tasks import load
+
+        overrides["tasks"] = load(args.task_set)
     if saved is None:
         config = make_config(args.preset or "paper", **overrides)
         first, count = args.first_seed or 0, args.seeds or 1
@@ -556,6 +567,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--bins", type=int, help="bins of the per-task reward curves (default: the preset's; paper 100, small 10)")
     p.add_argument("--set", action="append", metavar="FIELD=VALUE",
                    help="set any other scalar Config field, e.g. --set trace_lambda=0.9 (repeatable)")
+    p.add_argument("--task-set", metavar="NAME|FILE",
+                   help="the tasks of adulthood: paper (the six, the default), novel (six never met: docs/NOVEL_TASKS.md) "
+                        "or a .json file (imrl_jax.tasks)")
     p.add_argument("--strategy", metavar="NAME",
                    help="the search: ga (the paper's genetic algorithm, the default) or an evolution strategy of "
                         "evosax (the evosax extra): sep_cma_es, cma_es, snes, xnes, open_es, pgpe; docs/SEARCH.md")

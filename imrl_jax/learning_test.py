@@ -418,6 +418,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--set", action="append", metavar="FIELD=VALUE",
                    help="set a Config field other than those the options set (from scratch: of --preset; with a run "
                         "directory: of its evolution's config, the genome unchanged) (repeatable)")
+    p.add_argument("--task-set", metavar="NAME|FILE",
+                   help="the tasks to learn: paper (the six), novel (six never met in evolution) or a .json file "
+                        "(default: the run's, or the six)")
     p.add_argument("--best", type=int, default=10, help="best individuals of each run's last generation")
     p.add_argument("--tests", type=int, default=10, help="tests per individual")
     p.add_argument("--task-steps", type=int, default=1_000_000, help="cycles per task")
@@ -481,6 +484,11 @@ def main(argv: Sequence[str] | None = None) -> int:
                                      f"{tested.num_genes} asked)")
                 base = tested
         config = base.replace(task_steps=args.task_steps, num_bins=args.bins)
+        if args.task_set is not None:  # evolved genomes tested on other tasks (they encode no task)
+            from imrl_jax.tasks import load
+
+            config = config.replace(tasks=load(args.task_set, config))
+            source += f", task set {args.task_set}"
         if config.num_bins % args.chunks:
             raise UsageError(f"--chunks: {args.bins} bins cannot be split into {args.chunks} chunks")
         steady_bins(config, args.steady_steps)
