@@ -34,9 +34,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from imrl_jax import conditions
-from experiments.reproduce import (EVOLVED, SCALES, TESTED, Stage, evolution_dir, evolve_command, load_manifest,
-                                   run_stages, test_command, test_dir)
+from experiments.reproduce import (EVOLVED, SCALES, TESTED, Stage, evolution_cost, evolution_dir, evolve_command,
+                                   load_manifest, run_stages, test_command, test_cost, test_dir)
 
 #: The screen's sizes: the paper's life lengths, fewer seeds and tests.
 SCREEN = dict(SCALES["paper"], seeds=5, best=5, tests=4)
@@ -115,24 +114,19 @@ def learning_dir(rule: RuleSet, condition: str, out: str = OUT, reproduction: st
     return os.path.join(out, owner, "test", condition)
 
 
-def _life(scale: dict, condition: str) -> int:
-    return (scale["childhood_steps"] if conditions.get(condition).has_childhood else 0) + 6 * scale["test_steps"]
-
-
 def plan(names, scale: dict = SCREEN, out: str = OUT) -> list[Stage]:
     """The stages the rule sets ``names`` need that no other run provides, in order."""
-    stages, population = [], scale.get("population", 50)
+    stages = []
     for name in names:
         rule = BY_NAME[name]
         if not rule.le_ls:
-            life = scale["childhood_steps"] + 6 * scale["task_steps"]
             stages.append(Stage(f"evolve {name} LE-LS", "evolve", name, "LE-LS", run_dir(rule, "LE-LS", out),
-                                float(scale["seeds"] * population * scale["generations"] * life)))
+                                evolution_cost(scale, "LE-LS")))
             stages.append(Stage(f"learning test {name} LE-LS", "test", name, "LE-LS", learning_dir(rule, "LE-LS", out),
-                                float(scale["seeds"] * scale["best"] * scale["tests"] * _life(scale, "LE-LS"))))
+                                test_cost(scale, "LE-LS")))
         if rule.sle == name and not is_reproduction(name):
             stages.append(Stage(f"learning test {name} SLE", "test", name, "SLE", learning_dir(rule, "SLE", out),
-                                float(scale["seeds"] * scale["best"] * scale["tests"] * _life(scale, "SLE"))))
+                                test_cost(scale, "SLE")))
     return stages
 
 
@@ -155,18 +149,15 @@ def experts_dir(rule: str, condition: str, num_experts: int, kind: str = "evolve
 
 def plan_experts(rules=EXPERT_RULE_SETS, scale: dict = SCREEN, out: str = OUT) -> list[Stage]:
     """Claim 8's stages: each rule set's LE-LS and EE-LS with 4 and 6 experts, evolved then tested."""
-    stages, population = [], scale.get("population", 50)
+    stages = []
     for name in rules:
         for k in EXPERT_COUNTS:
             for condition in EXPERT_CONDITIONS:
-                life = (scale["childhood_steps"] if conditions.get(condition).has_childhood else 0) + 6 * scale["task_steps"]
                 variant = experts_variant(name, k)
                 stages.append(Stage(f"evolve {name} {condition} {k} experts", "evolve", variant, condition,
-                                    experts_dir(name, condition, k, "evolve", out),
-                                    float(scale["seeds"] * population * scale["generations"] * life)))
+                                    experts_dir(name, condition, k, "evolve", out), evolution_cost(scale, condition)))
                 stages.append(Stage(f"learning test {name} {condition} {k} experts", "test", variant, condition,
-                                    experts_dir(name, condition, k, "test", out),
-                                    float(scale["seeds"] * scale["best"] * scale["tests"] * _life(scale, condition))))
+                                    experts_dir(name, condition, k, "test", out), test_cost(scale, condition)))
     return stages
 
 

@@ -21,7 +21,8 @@ import sys
 from typing import NamedTuple
 
 from experiments.claims_study import SCREEN
-from experiments.reproduce import Stage, evolve_command, load_manifest, run_stages, test_command
+from experiments.reproduce import (Stage, evolution_cost, evolve_command, load_manifest, run_stages, test_command,
+                                   test_cost)
 from imrl_jax import conditions
 
 OUT = os.path.join("experiments", "results", "future_work")
@@ -50,23 +51,16 @@ RUNS: tuple[Run, ...] = (
 BY_NAME = {run.name: run for run in RUNS}
 
 
-def _life(scale: dict, condition: str, task_steps: int) -> int:
-    return (scale["childhood_steps"] if conditions.get(condition).has_childhood else 0) + 6 * task_steps
-
-
 def plan(names, scale: dict = SCREEN, out: str = OUT) -> list[Stage]:
     """The stages of the rows ``names``, in order: each evolution then its learning test."""
-    stages, population = [], scale.get("population", 50)
+    stages = []
     for name in names:
         run = BY_NAME[name]
-        test_cost = float(scale["seeds"] * scale["best"] * scale["tests"] * _life(scale, run.condition,
-                                                                                   scale["test_steps"]))
         if conditions.get(run.condition).evolved:
-            cost = scale["seeds"] * population * scale["generations"] * _life(scale, run.condition, scale["task_steps"])
             stages.append(Stage(f"evolve {name}", "evolve", name, run.condition,
-                                os.path.join(out, name, "evolve"), float(cost)))
+                                os.path.join(out, name, "evolve"), evolution_cost(scale, run.condition)))
         stages.append(Stage(f"learning test {name}", "test", name, run.condition, os.path.join(out, name, "test"),
-                            test_cost))
+                            test_cost(scale, run.condition)))
     return stages
 
 

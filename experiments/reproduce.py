@@ -151,25 +151,36 @@ class Stage(NamedTuple):
     cost: float
 
 
-def _life(scale: dict, condition: str, task_steps: int) -> int:
+def life_steps(scale: dict, condition: str, task_steps: int) -> int:
+    """Steps of one life of ``condition`` at ``scale`` with tasks of ``task_steps`` (its childhood, if any, included)."""
     return (scale["childhood_steps"] if conditions.get(condition).has_childhood else 0) + 6 * task_steps
+
+
+def evolution_cost(scale: dict, condition: str) -> float:
+    """Lane-steps of an evolution of ``condition`` at ``scale`` (every life of every generation and seed)."""
+    return float(scale["seeds"] * scale.get("population", 50) * scale["generations"]
+                 * life_steps(scale, condition, scale["task_steps"]))
+
+
+def test_cost(scale: dict, condition: str) -> float:
+    """Lane-steps of a learning test of ``condition`` at ``scale``."""
+    return float(scale["seeds"] * scale["best"] * scale["tests"] * life_steps(scale, condition, scale["test_steps"]))
 
 
 def plan(scale: dict, out: str, variants, report: bool = True) -> list[Stage]:
     """Every stage in order: per variant its evolutions then its learning tests (EE-ES's once, under paper); the report."""
-    stages, population = [], scale.get("population", 50)
-    names = set()
+    stages, names = [], set()
     for variant in variants:
         for condition in EVOLVED:
             name = f"evolve {owner(variant, condition)} {condition}"
-            cost = scale["seeds"] * population * scale["generations"] * _life(scale, condition, scale["task_steps"])
+            cost = evolution_cost(scale, condition)
             if name not in names:
                 names.add(name)
                 stages.append(Stage(name, "evolve", owner(variant, condition), condition,
                                     evolution_dir(out, variant, condition), float(cost)))
         for condition in TESTED:
             name = f"learning test {owner(variant, condition)} {condition}"
-            cost = scale["seeds"] * scale["best"] * scale["tests"] * _life(scale, condition, scale["test_steps"])
+            cost = test_cost(scale, condition)
             if name not in names:
                 names.add(name)
                 stages.append(Stage(name, "test", owner(variant, condition), condition,

@@ -22,8 +22,8 @@ import sys
 from typing import NamedTuple
 
 from experiments.claims_study import SCREEN
-from experiments.reproduce import Stage, evolve_command, load_manifest, run_stages, test_command
-from imrl_jax import conditions
+from experiments.reproduce import (Stage, evolution_cost, evolve_command, load_manifest, run_stages, test_command,
+                                   test_cost)
 
 OUT = os.path.join("experiments", "results", "search")
 #: The GA's runs: the reproduction's skills evolutions and learning tests.
@@ -50,21 +50,15 @@ ROWS: tuple[Row, ...] = tuple(Row(s, c) for s in ("sep_cma_es", "snes") for c in
 BY_NAME = {row.name: row for row in ROWS}
 
 
-def _life(scale: dict, condition: str, task_steps: int) -> int:
-    return (scale["childhood_steps"] if conditions.get(condition).has_childhood else 0) + 6 * task_steps
-
-
 def plan(rows, scale: dict = SCREEN, out: str = OUT) -> list[Stage]:
     """The stages of ``rows``, in order: each evolution then its learning test."""
-    stages, population = [], scale.get("population", 50)
+    stages = []
     for row in rows:
         folder = os.path.join(out, row.strategy, row.condition)
-        cost = scale["seeds"] * population * scale["generations"] * _life(scale, row.condition, scale["task_steps"])
-        test_cost = scale["seeds"] * scale["best"] * scale["tests"] * _life(scale, row.condition, scale["test_steps"])
         stages.append(Stage(f"evolve {row.name}", "evolve", row.name, row.condition, os.path.join(folder, "evolve"),
-                            float(cost)))
+                            evolution_cost(scale, row.condition)))
         stages.append(Stage(f"learning test {row.name}", "test", row.name, row.condition, os.path.join(folder, "test"),
-                            float(test_cost)))
+                            test_cost(scale, row.condition)))
     return stages
 
 
