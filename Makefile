@@ -21,7 +21,7 @@ demo: $(STAMP)
 	$(BIN)/python -m imrl_jax.evolve --cond LE-LS --seeds 2 --preset small --out $(OUT)/demo/evolve
 
 test: $(STAMP)
-	$(BIN)/python -m pytest -q --durations=10
+	$(BIN)/python -m pytest -q -n 2 --durations=10
 
 test-all: $(STAMP)
 	$(BIN)/python -m pytest -q -m ""
@@ -32,7 +32,7 @@ test-min:
 	$(PYTHON) -m venv .venv-min
 	.venv-min/bin/python -m pip install --quiet --upgrade pip
 	.venv-min/bin/python -m pip install --quiet -c tests/floors.txt -e ".[test]"
-	.venv-min/bin/python -m pytest -q -p no:cacheprovider --durations=5
+	.venv-min/bin/python -m pytest -q -n 2 -p no:cacheprovider --durations=5
 
 bench: $(STAMP)
 	$(BIN)/python -m imrl_jax.bench --json $(OUT)/bench.json

@@ -92,6 +92,7 @@ def test_the_ga_behind_ask_and_tell():
     np.testing.assert_array_equal(nxt.population[5:], np.repeat(np.asarray(genomes)[8:9], 5, 0))
 
 
+@pytest.mark.slow  # lives_per_fitness 2; the one-life relive is checked by test_render and the report's tests
 def test_render_relives_each_of_several_lives_the_ga_lived(tiny, tmp_path):
     """With lives_per_fitness 2 the recorded fitness is the mean of the two lives render's keys relive."""
     from imrl_jax import evolve, render

@@ -35,7 +35,7 @@ OPTIONS = dict(childhood_walls="respawn", wall_respawn_steps=5, childhood_select
 @pytest.mark.usefixtures("x64")
 # The plain childhood and SLE's horizon are slow: childhood-options and SLE run the same branches and more.
 @pytest.mark.parametrize("condition, options", [pytest.param("LE-LS", {}, marks=pytest.mark.slow), ("LE-LS", OPTIONS),
-                                               ("EE-LS", {}), ("SLE", {}),
+                                               ("EE-LS", {}), pytest.param("SLE", {}, marks=pytest.mark.slow),
                                                pytest.param("SLE-horizon", {}, marks=pytest.mark.slow)],
                          ids=["childhood", "childhood-options", "adult-LS", "SLE", "SLE-noise-horizon"])
 def test_phase_in_pieces_matches_xla(tiny, condition, options):
