@@ -3,6 +3,7 @@
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 from imrl_jax import ga
 from imrl_jax.config import make_config
