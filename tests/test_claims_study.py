@@ -102,3 +102,8 @@ def test_fresh_table_shows_the_recorded_best_beside_the_fresh_lives():
     text = study.fresh_table(measured, ["paper", "skills-bias0"])
     assert text.splitlines()[2] == "| `skills-bias0` | 0.412 / 0.371 (sd 0.012, 5 seeds) | - | - |"
     assert len(text.splitlines()) == 3  # rule sets not measured are left out
+
+
+def test_table_with_only_is_refused_so_no_row_is_dropped(capsys):
+    assert study.main(["--table", "--only", "skills"]) == 2
+    assert capsys.readouterr().err.strip() == "error: --table: measures every finished rule set; leave out --only"
