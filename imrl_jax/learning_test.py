@@ -214,6 +214,31 @@ def load_run(run_dir: str, num_best: int) -> tuple[Config, list[int], np.ndarray
     return found.config, found.seeds, best_genomes(found, num_best)
 
 
+def load_kept_best(run_dir: str, path: str, num_best: int) -> tuple[Config, list[int], np.ndarray]:
+    """A run's config and the ``num_best`` best genomes of each seed kept in a report's ``best_genomes.npz``
+    (for a run whose final population was not kept); its key is the run's ``VARIANT/evolve/CONDITION`` path."""
+    from imrl_jax.rundir import RunDirError, read_config
+
+    config, _ = read_config(run_dir)
+    variant = os.path.basename(os.path.dirname(os.path.dirname(os.path.abspath(run_dir))))
+    key = f"{variant}__{config.condition}"
+    try:
+        with np.load(path) as kept:
+            arrays = {name: kept[name] for name in kept.files}
+    except (OSError, ValueError) as error:
+        raise RunDirError(f"--best-genomes: {path} is unreadable ({error})") from None
+    if f"{key}__genomes" not in arrays:
+        found = sorted({name.rsplit("__", 1)[0].replace("__", "/") for name in arrays})
+        raise RunDirError(f"--best-genomes: {path} holds no {variant}/{config.condition} (it holds "
+                          f"{', '.join(found)})")
+    genomes, seeds = arrays[f"{key}__genomes"], [int(s) for s in arrays[f"{key}__seeds"]]
+    if not 1 <= num_best <= genomes.shape[1]:
+        raise RunDirError(f"--best: must be between 1 and the {genomes.shape[1]} kept in {path}")
+    if genomes.shape[-1] != config.num_genes:
+        raise RunDirError(f"--best-genomes: {key} has {genomes.shape[-1]} genes, the run's config {config.num_genes}")
+    return config, seeds, genomes[:, :num_best]
+
+
 def test_keys(seed: int, num_runs: int, num_best: int, num_tests: int) -> jax.Array:
     """One key per (run, individual, test), all from ``seed``."""
     return jax.random.split(jax.random.key(seed), num_runs * num_best * num_tests)
@@ -418,6 +443,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--set", action="append", metavar="FIELD=VALUE",
                    help="set a Config field other than those the options set (from scratch: of --preset; with a run "
                         "directory: of its evolution's config, the genome unchanged) (repeatable)")
+    p.add_argument("--best-genomes", metavar="FILE",
+                   help="take the best genomes from a report's best_genomes.npz (the 10 best of each seed), for a run "
+                        "whose final_population.npz was not kept; the run directory gives the config")
     p.add_argument("--task-set", metavar="NAME|FILE",
                    help="the tasks to learn: paper (the six), novel (six never met in evolution) or a .json file "
                         "(default: the run's, or the six)")
@@ -473,7 +501,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         else:
             if not args.run_dir:
                 raise UsageError("run_dir: give an evolution's run directory, or --cond SLE")
-            base, seeds, genomes = load_run(args.run_dir, args.best)
+            if args.best_genomes:
+                base, seeds, genomes = load_kept_best(args.run_dir, args.best_genomes, args.best)
+            else:
+                base, seeds, genomes = load_run(args.run_dir, args.best)
             if args.cond is not None and args.cond != base.condition:
                 raise UsageError(f"--cond: {args.run_dir} is a {base.condition} run, not {args.cond}")
             source = os.path.abspath(args.run_dir) + "".join(f", {s}" for s in args.set or [])

@@ -299,3 +299,22 @@ def test_set_with_a_run_directory_tests_the_evolved_genomes_under_the_values_set
     capsys.readouterr()
     assert learning_test.main([*argv, "--set", "num_experts=2", "--out", str(tmp_path / "b")]) == 2
     assert capsys.readouterr().err == "error: --set: num_experts changes the genome (222 genes evolved, 148 asked)\n"
+
+
+def test_the_best_genomes_a_report_kept_stand_in_for_a_lost_final_population(tiny_run, tmp_path, capsys):
+    import shutil
+
+    config, seeds, best = learning_test.load_run(tiny_run, 2)
+    run = tmp_path / "v" / "evolve" / config.condition  # the pipeline's layout: VARIANT/evolve/CONDITION
+    run.mkdir(parents=True)
+    shutil.copy(os.path.join(tiny_run, "config.json"), run / "config.json")  # no final_population.npz
+    kept = tmp_path / "best_genomes.npz"
+    np.savez(kept, **{f"v__{config.condition}__genomes": best, f"v__{config.condition}__seeds": np.asarray(seeds)})
+    found = learning_test.load_kept_best(str(run), str(kept), 1)
+    assert found[0] == config and found[1] == seeds
+    np.testing.assert_array_equal(found[2], best[:, :1])
+    other = tmp_path / "w" / "evolve" / config.condition
+    shutil.copytree(run, other)
+    assert learning_test.main([str(other), "--best-genomes", str(kept), "--best", "1", "--out", str(tmp_path / "t")]) == 2
+    assert capsys.readouterr().err.strip() == (f"error: --best-genomes: {kept} holds no w/{config.condition} (it holds "
+                                               f"v/{config.condition})")
