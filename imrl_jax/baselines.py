@@ -93,8 +93,8 @@ def _validate(b: Baseline) -> None:
         fail("first_seed", "must be 0 or more")
     if b.num_evals < 2:
         fail("num_evals", "must be at least 2 (the untrained policy and the trained one)")
-    if not b.tasks or len(set(b.tasks)) != len(b.tasks) or not all(1 <= t <= 6 for t in b.tasks):
-        fail("tasks", "must be distinct task numbers 1 to 6")
+    if not b.tasks or len(set(b.tasks)) != len(b.tasks) or not all(t >= 1 for t in b.tasks):
+        fail("tasks", "must be distinct task numbers from 1 (of the task set)")
     if not b.hidden or any(h < 1 for h in b.hidden):
         fail("hidden", "must be positive layer sizes")
     if (b.batch_size * b.num_minibatches) % b.num_envs:
@@ -387,7 +387,7 @@ def plot_learning_curve(b: Baseline, curves: list[dict]):
         points = [c for c in curves if c["task"] == task]
         steps = sorted({c["step"] for c in points})
         mean = [np.mean([c["performance"] for c in points if c["step"] == s]) for s in steps]
-        ax.plot(steps, mean, color=colours[task - 1], lw=1.5, label=f"task {task}")
+        ax.plot(steps, mean, color=colours[(task - 1) % len(colours)], lw=1.5, label=f"task {task}")
     ax.set_ylim(0, 1)
     ax.set_xlim(0, steps_trained(b))  # brax trains whole updates: the last point lies past b.steps
     style_axis(ax, f"{b.agent.upper()} from brax.training: {b.seeds} seed(s), mean over seeds",
@@ -450,6 +450,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         from imrl_jax.tasks import load
 
         config = Config(tasks=load(args.task_set))
+        if max(settings.tasks) > config.num_tasks:
+            raise UsageError(f"--tasks: task {max(settings.tasks)} is not in the task set {args.task_set!r} "
+                             f"(tasks 1 to {config.num_tasks})")
         summary = run(settings, args.out, config=config, quiet=args.quiet, command=command)
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
