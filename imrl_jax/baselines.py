@@ -34,7 +34,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
+from imrl_jax.cli import HelpFormatter, UsageError, add_task_set, parse_sets, user_errors
 from imrl_jax.config import Config, ConfigError
 from imrl_jax.env import make_env
 from imrl_jax.progress import Progress
@@ -414,8 +414,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--seeds", type=int, default=defaults.seeds, help="seeds per task")
     p.add_argument("--first-seed", type=int, default=defaults.first_seed, help="the first seed")
     p.add_argument("--tasks", default="1,2,3,4,5,6", help="tasks to learn, e.g. 3,6")
-    p.add_argument("--task-set", default="paper", metavar="NAME|FILE",
-                   help="whose tasks --tasks numbers: paper (the six), novel (six never met in evolution) or a .json file")
+    add_task_set(p, "whose tasks --tasks numbers", default="paper")
     p.add_argument("--evals", type=int, default=defaults.num_evals, help="evaluations per run, the untrained one included")
     p.add_argument("--eval-steps", type=int, default=defaults.eval_steps, help="cycles of each evaluation replay")
     p.add_argument("--hidden", default=",".join(map(str, defaults.hidden)), help="hidden layer sizes")

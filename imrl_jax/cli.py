@@ -110,6 +110,13 @@ MAX_BINS = 100_000
 MAX_LANES = 1_000_000  # lives evaluated at once: seeds x population, best x tests
 
 
+def add_task_set(parser: argparse.ArgumentParser, what: str, default: str | None = None) -> None:
+    """The ``--task-set NAME|FILE`` option every command that runs tasks shares (:mod:`imrl_jax.tasks`)."""
+    parser.add_argument("--task-set", default=default, metavar="NAME|FILE",
+                        help=f"{what}: paper (the six), novel (six never met in evolution: docs/NOVEL_TASKS.md) "
+                             f"or a .json file")
+
+
 def check_at_most(flag: str, value: int | None, limit: int) -> None:
     """Raise UsageError naming ``flag`` and the limit if ``value`` (None: not given) is above ``limit``."""
     if value is not None and value > limit:

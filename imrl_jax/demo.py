@@ -21,7 +21,7 @@ import time
 import jax
 import numpy as np
 
-from imrl_jax.cli import HelpFormatter, user_errors
+from imrl_jax.cli import HelpFormatter, add_task_set, user_errors
 from imrl_jax.config import CONDITIONS, PRESETS, Config, make_config
 from imrl_jax.rundir import check_outputs_dir, check_writable, write_atomic
 
@@ -106,8 +106,7 @@ def main(argv=None) -> int:
     parser.add_argument("--seed", type=int, default=0, help="random seed of the individual and its life")
     parser.add_argument("--preset", default="small", choices=sorted(PRESETS),
                         help="config preset (small: reduced scale, about a minute on a CPU)")
-    parser.add_argument("--task-set", default="paper", metavar="NAME|FILE",
-                        help="the tasks: paper (the six), novel (six never met in evolution) or a .json file")
+    add_task_set(parser, "the tasks", default="paper")
     parser.add_argument("--overwrite", action="store_true", help="replace the outputs of an earlier demo in --out")
     args = parser.parse_args(argv)
     try:

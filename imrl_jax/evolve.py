@@ -567,9 +567,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--bins", type=int, help="bins of the per-task reward curves (default: the preset's; paper 100, small 10)")
     p.add_argument("--set", action="append", metavar="FIELD=VALUE",
                    help="set any other scalar Config field, e.g. --set trace_lambda=0.9 (repeatable)")
-    p.add_argument("--task-set", metavar="NAME|FILE",
-                   help="the tasks of adulthood: paper (the six, the default), novel (six never met: docs/NOVEL_TASKS.md) "
-                        "or a .json file (imrl_jax.tasks)")
+    cli.add_task_set(p, "the tasks of adulthood (default: paper, or the run's)")
     p.add_argument("--strategy", metavar="NAME",
                    help="the search: ga (the paper's genetic algorithm, the default) or an evolution strategy of "
                         "evosax (the evosax extra): sep_cma_es, cma_es, snes, xnes, open_es, pgpe; docs/SEARCH.md")

@@ -446,9 +446,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--best-genomes", metavar="FILE",
                    help="take the best genomes from a report's best_genomes.npz (the 10 best of each seed), for a run "
                         "whose final_population.npz was not kept; the run directory gives the config")
-    p.add_argument("--task-set", metavar="NAME|FILE",
-                   help="the tasks to learn: paper (the six), novel (six never met in evolution) or a .json file "
-                        "(default: the run's, or the six)")
+    cli.add_task_set(p, "the tasks to learn (default: the run's, or paper)")
     p.add_argument("--best", type=int, default=10, help="best individuals of each run's last generation")
     p.add_argument("--tests", type=int, default=10, help="tests per individual")
     p.add_argument("--task-steps", type=int, default=1_000_000, help="cycles per task")
