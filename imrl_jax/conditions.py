@@ -153,8 +153,8 @@ class Condition:
             ignored.add("sle_noise_steps")
         if not self.evolved:
             ignored.update(GA_FIELDS)
-        if self.single_expert:
-            ignored.add("num_experts")
+        if self.single_expert:  # one expert: there is nothing to choose
+            ignored.update(("num_experts", "selector_period", "selector_termination"))
         if "parameters" in self.genome:  # the genome's values replace the config's
             ignored.update(EVOLVED_FIELDS)
         return frozenset(ignored)

@@ -29,6 +29,10 @@ CHILDHOOD_WALLS = ("clamp", "respawn")
 CHILDHOOD_SELECTOR_REWARDS = ("surprise", "progress")
 EVOLVED_CONDITIONS = conditions.EVOLVED
 STEP_KERNELS = ("xla", "pallas")
+#: When the selector's choice ends (docs/TIMESCALE.md): "period" (after ``selector_period`` steps) or "colour"
+#: (when a colour comes into view that the retina did not see the step before, as at a junction, or after
+#: ``selector_period`` steps at most). A trial's end always ends it. With a period of 1 every choice lasts one step.
+SELECTOR_TERMINATIONS = ("period", "colour")
 
 #: Half the distance between parallel lines of the floor: 20*sqrt(3) cm for a = 40 cm.
 _S = 20.0 * math.sqrt(3.0)
@@ -150,6 +154,11 @@ class Config:
     # 0 (0: over the whole task, MODEL.md). A learning test's tasks are longer than an adult
     # task: with a fixed horizon SLE's noise schedule does not stretch with the test.
     sle_noise_steps: int = 0
+    # --- the selector's time-scale (the paper's Discussion; docs/TIMESCALE.md). The paper's selector chooses
+    # every step (1). With N > 1 the chosen expert keeps control for N steps (or until the termination event)
+    # and the selector learns once per choice, by semi-Markov TD, in childhood and in adulthood.
+    selector_period: int = 1
+    selector_termination: str = "period"
 
     # --- genetic algorithm (paper: 50 individuals, best 10 x 5 offspring, p = 0.1, U[-1, 1])
     population_size: int = 50
@@ -197,6 +206,11 @@ class Config:
     def hex_apothem(self) -> float:
         """Distance between a hexagon's centre and its edges (20*sqrt(3) cm)."""
         return self.edge_length * math.sqrt(3.0) / 2.0
+
+    @property
+    def selector_options(self) -> bool:
+        """Whether the selector chooses options lasting several steps rather than every step (docs/TIMESCALE.md)."""
+        return self.selector_period > 1
 
     @property
     def adult_noise_steps(self) -> int:
@@ -338,13 +352,17 @@ def _validate(c: Config) -> None:
         fail("childhood_walls", f"must be one of {', '.join(CHILDHOOD_WALLS)}")
     if c.childhood_selector_reward not in CHILDHOOD_SELECTOR_REWARDS:
         fail("childhood_selector_reward", f"must be one of {', '.join(CHILDHOOD_SELECTOR_REWARDS)}")
+    if c.selector_termination not in SELECTOR_TERMINATIONS:
+        fail("selector_termination", f"must be one of {', '.join(SELECTOR_TERMINATIONS)}")
     positive_ints = ("num_experts", "task_steps", "draw_block", "scan_unroll", "trial_timeout", "num_bins",
                      "population_size", "num_generations", "num_parents", "wall_respawn_steps",
-                     "lives_per_fitness")
+                     "lives_per_fitness", "selector_period")
     for name in positive_ints:
         value = getattr(c, name)
         if not isinstance(value, int) or isinstance(value, bool) or value < 1:
             fail(name, "must be a positive integer")
+    if c.selector_options and c.step_kernel == "pallas":
+        fail("selector_period", "the pallas kernel's selector chooses every step; use step_kernel=xla")
     if not isinstance(c.sle_noise_steps, int) or isinstance(c.sle_noise_steps, bool) or c.sle_noise_steps < 0:
         fail("sle_noise_steps", "must be a non-negative integer (0: the whole task)")
     if not isinstance(c.childhood_steps, int) or c.childhood_steps < 0:

@@ -137,6 +137,21 @@ def learn_experts(phase, params, agent, traces, prev, xb, prev_xb, same):
     return agent, traces, surprise
 
 
+def childhood_selector_reward(phase, params, k, learned, surprise, baseline):
+    """The childhood selector's reward for a transition its expert ``k`` ``learned`` from, and the baselines b.
+
+    The paper's is the expert's surprise delta_k. With the ``progress`` option it is learning progress,
+    roughly: the surprise beyond what this expert usually gets, delta_k - b_k, with
+    b_k <- b_k + rho (delta_k - b_k) on the steps it learns, so that an expert whose reinforcer merely
+    pays more everywhere is not favoured.
+    """
+    if not phase.progress:
+        return surprise, baseline
+    held = jax.nn.one_hot(k, baseline.shape[0], dtype=baseline.dtype) * learned
+    before = jnp.sum(held * baseline)
+    return surprise - before, baseline + params.progress_rate * held * (surprise - baseline)
+
+
 def learn_selector(phase, params, agent, traces, prev, xbs, now, k, same, surprise, baseline):
     """The selector learns from the transition t-1 -> t (section 2; MODEL.md "Learning"), with e = one-hot(k_{t-1}):
 
@@ -154,15 +169,8 @@ def learn_selector(phase, params, agent, traces, prev, xbs, now, k, same, surpri
     ends = prev.terminal | ~prev.valid
     prev_xb = take_row(xbs, 1 - now)
     if phase.intrinsic:
-        learn, reward = prev.valid & same, surprise
-        if phase.progress:
-            # Learning progress, roughly: the surprise beyond what this expert usually gets,
-            # b_k <- b_k + rho (delta_k - b_k) on the steps it learns, so that an expert whose
-            # reinforcer merely pays more everywhere is not favoured.
-            held = jax.nn.one_hot(prev.k, baseline.shape[0], dtype=prev_xb.dtype) * learn
-            before = jnp.sum(held * baseline)
-            reward = surprise - before
-            baseline = baseline + params.progress_rate * held * (surprise - baseline)
+        learn = prev.valid & same
+        reward, baseline = childhood_selector_reward(phase, params, prev.k, learn, surprise, baseline)
     else:
         learn, reward = after_choice(prev.valid, k), prev.terminal.astype(prev_xb.dtype)
     u_weights, s_weights = agent.selector_critic, agent.selector_actor
@@ -176,3 +184,47 @@ def learn_selector(phase, params, agent, traces, prev, xbs, now, k, same, surpri
                            selector_actor=ascend(s_weights, trace_s, delta, params.eta_selector_actor))
     traces = traces._replace(selector_critic=trace_u, selector_actor=trace_s, selector_ended=ends)
     return agent, traces, baseline
+
+
+def learn_selector_over_option(phase, params, agent, traces, prev, option, xb, choose, same, surprise, baseline):
+    """The selector learns from an option when it ends (semi-Markov TD; docs/TIMESCALE.md), with e = one-hot(k):
+
+        R = sum_{i<tau} gamma^i r_{t0+i+1}                   (the option's reward, summed over its tau steps)
+        delta_s = R + gamma^tau U(x_t) - U(x_{t0})           (a terminal transition: R - U(x_{t0}))
+        e_u <- gamma^tau' lambda e_u + x~_{t0};                          u += eta_selector_critic delta_s e_u
+        e_S <- gamma^tau' lambda e_S + ((e - s_{t0}) s_{t0} (1 - s_{t0})) x~_{t0}^T;  S += eta_selector_actor delta_s e_S
+
+    t0 is the step at which the option was chosen, t the step at which it ends (``choose``), and
+    tau' the length of the option learned from before it (the traces decay by the time between the
+    two choices). r is :func:`learn_selector`'s per-step reward: in adulthood the extrinsic reward; in
+    childhood the surprise of the expert in control on the transitions it learned from (an option in
+    which it learned from none teaches nothing). Every step adds this step's reward to the option;
+    the option returned is the one that goes on (see :func:`imrl_jax.timescale.next_option`). With
+    options of one step this is :func:`learn_selector`'s rule. Returns the agent, traces, baselines
+    and the option.
+    """
+    gamma, lam = params.gamma, params.trace_lambda
+    ends = prev.terminal | ~prev.valid
+    if phase.intrinsic:
+        learned = prev.valid & same
+        reward, baseline = childhood_selector_reward(phase, params, prev.k, learned, surprise, baseline)
+        reward, worth = jnp.where(learned, reward, 0.0), option.learned | learned
+    else:
+        reward, worth = prev.terminal.astype(xb.dtype), jnp.bool_(True)
+    total, discount = option.reward + option.discount * reward, option.discount * gamma
+    learn = choose & prev.valid & worth
+    u_weights, s_weights = agent.selector_critic, agent.selector_actor
+    delta = total + jnp.where(prev.terminal, 0.0, discount * (u_weights @ xb)) - u_weights @ option.start_xb
+    delta = jnp.where(learn, delta, 0.0)
+    trace_u = accumulate(traces.selector_critic, option.start_xb, option.trace_discount, lam, learn,
+                         traces.selector_ended)
+    trace_s = accumulate(traces.selector_actor, selector_features(prev.k, option.selection, option.start_xb),
+                         option.trace_discount, lam, learn, traces.selector_ended)
+    agent = agent._replace(selector_critic=ascend(u_weights, trace_u, delta, params.eta_selector_critic),
+                           selector_actor=ascend(s_weights, trace_s, delta, params.eta_selector_actor))
+    # The traces end with the trial; between choices nothing reads them.
+    traces = traces._replace(selector_critic=trace_u, selector_actor=trace_s,
+                             selector_ended=jnp.where(choose, ends, traces.selector_ended))
+    option = option._replace(reward=total, discount=discount, learned=worth,
+                             trace_discount=jnp.where(learn, discount, option.trace_discount))
+    return agent, traces, baseline, option

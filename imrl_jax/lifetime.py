@@ -21,10 +21,11 @@ from imrl_jax.arena import task_arrays
 from imrl_jax.conditions import Phase
 from imrl_jax.config import Config, LearningParams
 from imrl_jax.env import EnvState, TaskSpec, childhood_task, make_env, random_pose, task_spec
-from imrl_jax.learning import learn_experts, learn_selector, pick_row, take_row
+from imrl_jax.learning import learn_experts, learn_selector, learn_selector_over_option, pick_row, take_row
 from imrl_jax.networks import Agent, act, decode, explore, expressed_only, select, with_bias, zero_agent
 from imrl_jax.state import (Curves, Draws, Previous, State, StepRecord, bin_steps, childhood_phase, draw_block,
                             for_phase, init_state, learning_until, phase_params)
+from imrl_jax.timescale import ends, next_option
 
 
 class LifetimeResult(NamedTuple):
@@ -106,15 +107,24 @@ def step(key: jax.Array, config: Config, phase: Phase, params: LearningParams, t
     xb, prev_xb = take_row(xbs, now), take_row(xbs, 1 - now)
     selection = expressed_only(agent, act(agent.selector_actor, xb))
     k = select(draws.u, selection) if selection.shape[0] > 1 else jnp.int32(0)
+    option = state.option
+    if option is not None:  # a selector on its own time-scale: it chooses only where the option ends
+        choose = ends(config, option, prev, xb, prev_xb)
+        k = jnp.where(choose, k, prev.k)
     same = k == prev.k
 
     # 3: learn from the transition t-1 -> t.
     surprise = jnp.zeros((), xb.dtype)
     if phase.experts_learn:
         agent, traces, surprise = learn_experts(phase, params, agent, traces, prev, xb, prev_xb, same)
-    if phase.selector_learns:
+    if phase.selector_learns and option is not None:
+        agent, traces, baseline, option = learn_selector_over_option(phase, params, agent, traces, prev, option, xb,
+                                                                     choose, same, surprise, baseline)
+    elif phase.selector_learns:
         agent, traces, baseline = learn_selector(phase, params, agent, traces, prev, xbs, now, k, same, surprise,
                                                  baseline)
+    if option is not None:
+        option = next_option(option, choose, xb, selection)
 
     # 4: act: the expert in control's output, with noise where the phase has it.
     output = act(pick_row(agent.actor, k), xb)
@@ -124,7 +134,7 @@ def step(key: jax.Array, config: Config, phase: Phase, params: LearningParams, t
     robot, events = env.transition(robot, action, task, draws.spawn)
     prev = Previous(k, action, output, selection, ~(events.timeout | events.respawned), events.reached)
     state = State(agent, traces, robot.pose, robot.direction, xbs, prev, robot.trial_step, state.t + 1, block,
-                  robot.pinned, baseline)
+                  robot.pinned, baseline, option)
     return state, StepRecord(robot.pose, k, events.reached, events.timeout, events.respawned)
 
 

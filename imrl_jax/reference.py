@@ -292,7 +292,7 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
 
     # What the previous step left behind.
     prev_valid = False
-    prev_xb = prev_a = prev_o = prev_s = None
+    prev_xb = prev_a = prev_o = None
     prev_k = -1
     prev_reached = False
     trial_steps = 0
@@ -305,15 +305,27 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
     out_timeout = np.zeros(num_steps, dtype=bool)
     out_respawned = np.zeros(num_steps, dtype=bool)
 
+    # The selector's option (docs/TIMESCALE.md): chosen at x~ opt_xb with outputs opt_s; its reward so far
+    # sum_i gamma^i r_{i+1}, gamma^tau for its tau transitions, whether its expert learned on one of them (the
+    # childhood selector's reward exists), and gamma^tau of the option last learned from (the traces' decay).
+    # With selector_period 1 every option lasts one step: the paper's per-step rules.
+    period = config.selector_period
+    opt_xb = opt_s = None
+    opt_reward, opt_discount, opt_learned, opt_steps, opt_trace_discount = 0.0, 1.0, False, 0, 1.0
+
     for t in range(num_steps):
         # 1. What the robot sees now.
         xb = _with_bias(observe(config, x, y, heading))
 
-        # 2. The selector picks an expert (weights before this step's learning).
+        # 2. The selector picks an expert (weights before this step's learning), where its option ends.
         s = _sigmoid(w["selector_actor"] @ xb)
         if "expressed" in w:  # an unexpressed expert's output is 0: it is never chosen
             s = s * w["expressed"]
-        k = _choose_expert(s, u[t])
+        choose = (not prev_valid) or prev_reached or opt_steps + 1 >= period
+        if config.selector_termination == "colour" and not choose:
+            seen_now, seen_before = xb[:-1].reshape(-1, 3).max(0), prev_xb[:-1].reshape(-1, 3).max(0)
+            choose = bool(np.any(seen_now > seen_before))  # a colour came into view
+        k = _choose_expert(s, u[t]) if choose else prev_k
 
         # 3. Learning from the transition t-1 -> t.
         terminal = prev_valid and prev_reached
@@ -353,20 +365,27 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
                             baseline[prev_k] += config.progress_rate * (expert_delta - baseline[prev_k])
                 else:
                     selector_reward = 1.0 if prev_reached else 0.0
-            if selector_reward is not None:
+                # Semi-Markov TD: the option's reward is summed, discounted, over its steps; it learns when it ends.
+                opt_reward += opt_discount * (0.0 if selector_reward is None else selector_reward)
+                opt_discount *= gamma
+                opt_learned = opt_learned or selector_reward is not None
+            if selector_learns and learning(t) and choose and opt_learned:
                 u_now = w["selector_critic"] @ xb
-                u_prev = w["selector_critic"] @ prev_xb
+                u_start = w["selector_critic"] @ opt_xb
                 if terminal:
-                    selector_delta = selector_reward - u_prev
+                    selector_delta = opt_reward - u_start
                 else:
-                    selector_delta = selector_reward + gamma * u_now - u_prev
-                trace_u = decay * trace_u + prev_xb
+                    selector_delta = opt_reward + opt_discount * u_now - u_start
+                selector_decay = opt_trace_discount * (config.childhood_trace_lambda if childhood
+                                                       else config.trace_lambda)
+                trace_u = selector_decay * trace_u + opt_xb
                 onehot = np.zeros(num_experts)
                 onehot[prev_k] = 1.0
-                slope = (onehot - prev_s) * prev_s * (1.0 - prev_s)
-                trace_s = decay * trace_s + np.outer(slope, prev_xb)
+                slope = (onehot - opt_s) * opt_s * (1.0 - opt_s)
+                trace_s = selector_decay * trace_s + np.outer(slope, opt_xb)
                 w["selector_critic"] = w["selector_critic"] + eta_selector_critic * selector_delta * trace_u
                 w["selector_actor"] = w["selector_actor"] + eta_selector_actor * selector_delta * trace_s
+                opt_trace_discount = opt_discount
 
         # Trace clears after this step's learning.
         if (not prev_valid) or (not same_expert) or terminal:
@@ -414,7 +433,12 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
         out_respawned[t] = respawned
 
         prev_valid = not (timeout or respawned)
-        prev_xb, prev_k, prev_a, prev_o, prev_s = xb, k, a, o, s
+        prev_xb, prev_k, prev_a, prev_o = xb, k, a, o
+        if choose:  # a new option starts at x~_t
+            opt_xb, opt_s = xb, s
+            opt_reward, opt_discount, opt_learned, opt_steps = 0.0, 1.0, False, 0
+        else:
+            opt_steps += 1
         prev_reached = reached
 
     return {

@@ -19,6 +19,7 @@ from imrl_jax.arena import Pose, heading_vector
 from imrl_jax.conditions import CHILDHOOD, Phase
 from imrl_jax.config import Config, ConfigError, LearningParams
 from imrl_jax.networks import Agent
+from imrl_jax.timescale import Option, init_option
 
 
 def bin_steps(num_steps: int, num_bins: int) -> int:
@@ -101,6 +102,7 @@ class State(NamedTuple):
     block: Draws  # the random numbers of the current block of steps
     pinned: jnp.ndarray  # steps on a wall in a row (childhood with respawns)
     baseline: jnp.ndarray  # (K,): each expert's running mean surprise (childhood "progress" reward)
+    option: Option | None = None  # the selector's running choice (a selector on its own time-scale only)
 
 
 class StepRecord(NamedTuple):
@@ -162,6 +164,7 @@ def init_state(config: Config, agent: Agent, pose: Pose) -> State:
         block=Draws(zeros(config.draw_block), zeros(config.draw_block, 2)),
         pinned=jnp.int32(0),
         baseline=zeros(k),
+        option=init_option(k, n, dtype) if config.selector_options else None,
     )
 
 

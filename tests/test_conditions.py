@@ -18,7 +18,7 @@ from imrl_jax.networks import decode, encode
 #: meets retina points exactly 3 cm from a line, where the reference and JAX may see different colours.
 TASK = Task(start=(300.25, 200.5), heading_deg=1.0, target=(340.25, 201.2))
 #: A value other than the paper's for every field some condition ignores (all valid together with the rest).
-OTHER_VALUES = dict(childhood_steps=90, childhood_walls="respawn", wall_respawn_steps=3,
+OTHER_VALUES = dict(selector_period=4, selector_termination="colour", childhood_steps=90, childhood_walls="respawn", wall_respawn_steps=3,
                     childhood_selector_reward="progress", progress_rate=0.5, childhood_trace_lambda=0.5,
                     childhood_eta_selector_actor=0.3, childhood_eta_selector_critic=0.2, eta_actor=0.3,
                     eta_evaluator=0.2, initial_speed_bias=2.0, eta_selector_actor=0.4, eta_selector_critic=0.25,
@@ -240,14 +240,15 @@ def test_an_evolved_childhood_length_stops_learning_and_noise_at_its_end(tiny):
                                    rtol=1e-8, atol=1e-10, err_msg=name)
     # In the reference: 600 steps learning for 300 end with the weights of the first 300 steps alone.
     weights = reference.decode(config, genome)
-    weights.pop("childhood_length"), weights.pop("parameters")
+    weights.pop("childhood_length")
+    weights.pop("parameters")
     rng = np.random.default_rng(0)
     u, z = rng.random(600), rng.standard_normal((600, 2))
     whole = reference.run_phase(config, "childhood", weights, (200.0, 200.0, 0.3), u, z, learning_steps=300)
     first = reference.run_phase(config, "childhood", weights, (200.0, 200.0, 0.3), u[:300], z[:300], phase_steps=600)
-    for name in ("actor", "evaluator"):
-        np.testing.assert_array_equal(whole["weights"][name], first["weights"][name])
-    assert not np.array_equal(first["weights"]["actor"], weights["actor"])  # it did learn in the first 300
+    for name in ("actor", "evaluator", "selector_actor", "selector_critic"):
+        np.testing.assert_array_equal(whole["weights"][name], first["weights"][name], err_msg=name)
+        assert not np.array_equal(first["weights"][name], weights[name]), name  # it did learn in the first 300
     genome[-1] = 1.0  # all 600 steps
     longer = jax.jit(L.live, static_argnums=1)(key, config, config.learning_params(), jnp.asarray(genome))
     assert not np.allclose(np.asarray(longer.agent.actor), np.asarray(result.agent.actor))

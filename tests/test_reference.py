@@ -203,3 +203,62 @@ def test_sle_noise_horizon_matches_reference(tiny):
         _assert_weights_close(jax.tree.map(lambda x: x[t], result.adult_agents), ref["task_weights"][t])
     whole = _live(key, config.replace(sle_noise_steps=0), params, genome)  # noise over all 300 steps
     assert not np.allclose(np.asarray(whole.adult_agents.actor), np.asarray(result.adult_agents.actor))
+
+
+#: A selector on its own time-scale (docs/TIMESCALE.md): options of 7 steps, or until a colour comes into view
+#: (at most 25 steps).
+TIMESCALES = {"period-7": dict(selector_period=7), "colour-25": dict(selector_period=25, selector_termination="colour")}
+
+
+@pytest.mark.usefixtures("x64")
+@pytest.mark.parametrize("timescale", TIMESCALES.values(), ids=TIMESCALES)
+def test_childhood_options_match_reference(tiny, timescale):
+    """Semi-Markov TD in childhood: the selector learns once per option from the surprise summed over it."""
+    config = tiny("LE-LS", childhood_steps=STEPS, **CHILDHOOD_OPTIONS, **timescale)
+    params = config.replace(**EXTENDED).learning_params()
+    genome = jax.random.uniform(jax.random.key(7), (config.num_genes,), jnp.float64, -1.0, 1.0)
+    agent = decode(config, genome)
+    pose = Pose(jnp.array([40.0, 60.0]), jnp.array(math.pi))  # heading into the west wall
+    events = _compare_phase(config, L.childhood_phase(config), "childhood", agent, pose, None, params)
+    assert events["walls"] > 0 and events["respawns"] > 0 and 20 < events["switches"] < STEPS / 7, events
+    assert np.abs(np.asarray(events["agent"].selector_actor)).max() > 1e-3  # the selector learned
+
+
+@pytest.mark.usefixtures("x64")
+@pytest.mark.parametrize("rules", [PAPER, EXTENDED], ids=["paper-rules", "traces-and-rates"])
+@pytest.mark.parametrize("timescale", TIMESCALES.values(), ids=TIMESCALES)
+def test_adult_options_match_reference(tiny, timescale, rules):
+    """Semi-Markov TD in adulthood: the reward summed and discounted over the option, gamma^tau to its length."""
+    config = tiny("EE-LS", tasks=(SHORT_TASK,), task_steps=STEPS, num_bins=1, **timescale)
+    params = config.replace(**rules).learning_params()
+    n = config.num_inputs + 1
+    agent = decode(config, jnp.zeros((config.num_genes,), jnp.float64))._replace(actor=jnp.asarray(hand_experts(n)))
+    task = L.task_spec(config, 0, jnp.float64)
+    events = _compare_phase(config, C.ADULT_LEARNING_SELECTOR, "adult-ls", agent, task.start, 0, params)
+    assert events["reaches"] > 0 and events["timeouts"] > 0 and events["switches"] > 20, events
+    assert np.abs(np.asarray(events["agent"].selector_critic)).max() > 1e-4
+
+
+@pytest.mark.usefixtures("x64")
+def test_evolved_selector_keeps_its_choice_for_the_period(tiny):
+    """EE-ES with options: nothing learns, and the expert changes only where an option ends."""
+    config = tiny("EE-ES", tasks=(SHORT_TASK,), task_steps=STEPS, num_bins=1, selector_period=7)
+    n = config.num_inputs + 1
+    selector = jax.random.uniform(jax.random.key(3), (3, n), jnp.float64, -1.0, 1.0)
+    agent = decode(config, jnp.zeros((config.num_genes,), jnp.float64))._replace(
+        actor=jnp.asarray(hand_experts(n)), selector_actor=selector)
+    task = L.task_spec(config, 0, jnp.float64)
+    key = jax.random.key(0)
+    final, record = jax.jit(L.simulate, static_argnums=(1, 2, 6))(
+        key, config, C.ADULT_EVOLVED_SELECTOR, config.learning_params(), task, L.init_state(config, agent, task.start),
+        STEPS)
+    events = _compare_phase(config, C.ADULT_EVOLVED_SELECTOR, "adult-es", agent, task.start, 0,
+                            config.learning_params())
+    k, ended = np.asarray(record.k), np.asarray(record.reached | record.timeout)
+    # Hand-counted: an option starts at step 0 and after every trial end, and lasts 7 steps at most.
+    since = 0
+    for t in range(1, STEPS):
+        since = 0 if ended[t - 1] or since + 1 >= 7 else since + 1
+        if since:
+            assert k[t] == k[t - 1], t
+    assert events["switches"] > 20 and events["reaches"] > 0, events
