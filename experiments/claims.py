@@ -174,6 +174,12 @@ def _claim(verdict: str, measured: str, **numbers) -> dict:
     return dict(verdict=verdict, measured=measured, numbers=numbers)
 
 
+def _standard_error(a: np.ndarray, b: np.ndarray) -> float:
+    """The standard error of mean(a) - mean(b): sqrt(sd_a^2/n_a + sd_b^2/n_b), sd with ddof 1 (0 for one value)."""
+    var = lambda x: float(x.var(ddof=1)) / len(x) if len(x) > 1 else 0.0  # noqa: E731
+    return math.sqrt(var(a) + var(b))
+
+
 def _fmt(value, digits: int = 3) -> str:
     if value is None:
         return "-"
@@ -212,8 +218,7 @@ def claim_ee_ls_higher(ee_ls, le_ls) -> dict:
         return _claim(NOT_AVAILABLE, "-")
     ee_ls, le_ls = np.asarray(ee_ls, float), np.asarray(le_ls, float)
     d = float(ee_ls.mean() - le_ls.mean())
-    var = lambda x: float(x.var(ddof=1)) / len(x) if len(x) > 1 else 0.0  # noqa: E731
-    se = math.sqrt(var(ee_ls) + var(le_ls))
+    se = _standard_error(ee_ls, le_ls)
     verdict = HOLDS if d > 2 * se else PARTLY if d > 0 else DOES_NOT
     return _claim(verdict, f"EE-LS {ee_ls.mean():.3f} vs LE-LS {le_ls.mean():.3f}: d = {d:+.3f}, se = {se:.3f}",
                   difference=d, standard_error=se, ee_ls=float(ee_ls.mean()), le_ls=float(le_ls.mean()))
@@ -282,8 +287,7 @@ def claim_learning_speed(curves: dict, steady: dict, sle_noise_steps: int | None
 def pair_order(a, b, num_se: float = ORDER_SE) -> str:
     """"in order" if mean(a) - mean(b) > num_se standard errors, "reversed" if < -num_se se, else "tied"."""
     a, b = np.asarray(a, float), np.asarray(b, float)
-    var = lambda x: float(x.var(ddof=1)) / len(x) if len(x) > 1 else 0.0  # noqa: E731
-    d, se = float(a.mean() - b.mean()), math.sqrt(var(a) + var(b))
+    d, se = float(a.mean() - b.mean()), _standard_error(a, b)
     return "in order" if d > num_se * se else "reversed" if d < -num_se * se else "tied"
 
 
@@ -417,10 +421,9 @@ def claim_experts(final: dict, steady: dict | None = None) -> dict:
                 continue
             a, b = np.asarray(base, float), np.asarray(numbers, float)
             ratio = float(b.mean() / a.mean()) if a.mean() > 0 else None
-            var = lambda x: float(x.var(ddof=1)) / len(x) if len(x) > 1 else 0.0  # noqa: E731
             unchanged = ratio is not None and ABOUT[0] <= ratio <= ABOUT[1]
             compared[f"{condition} {measure} {k} vs 3"] = dict(ratio=ratio, difference=float(b.mean() - a.mean()),
-                                                              standard_error=math.sqrt(var(a) + var(b)),
+                                                              standard_error=_standard_error(a, b),
                                                               unchanged=unchanged)
             parts.append(f"{condition} {measure} {k}/3 experts {b.mean():.3f}/{a.mean():.3f} = {_fmt(ratio, 2)}")
     if not compared:

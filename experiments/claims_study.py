@@ -137,9 +137,24 @@ EXPERT_RULE_SETS = ("skills",)
 EXPERT_CONDITIONS = ("LE-LS", "EE-LS")
 
 
+#: The name ``--only`` (and the screen's default order, last) gives claim 8's runs.
+EXPERTS = "experts"
+
+
 def experts_variant(rule: str, num_experts: int) -> str:
     """The stage variant of a claim-8 run: the rule set and the number of experts."""
     return f"{rule}+experts{num_experts}"
+
+
+class ExpertsRun(NamedTuple):
+    """What a claim-8 stage runs: a rule set with more experts."""
+
+    rule: RuleSet
+    num_experts: int
+
+
+#: Claim 8's stage variants (:func:`experts_variant`), each to the run it is.
+EXPERTS_RUNS = {experts_variant(rule.name, k): ExpertsRun(rule, k) for rule in RULE_SETS for k in EXPERT_COUNTS}
 
 
 def experts_dir(rule: str, condition: str, num_experts: int, kind: str = "evolve", out: str = OUT) -> str:
@@ -163,13 +178,13 @@ def plan_experts(rules=EXPERT_RULE_SETS, scale: dict = SCREEN, out: str = OUT) -
 
 def stage_command(stage: Stage, scale: dict, out: str = OUT) -> tuple[list[str], None]:
     """A stage's command line: the package's evolve or learning_test with the rule set's preset and overrides."""
-    if "+experts" in stage.variant:  # claim 8: the rule set with more experts
-        name, k = stage.variant.split("+experts")
-        rule = BY_NAME[name]
+    experts = EXPERTS_RUNS.get(stage.variant)
+    if experts is not None:  # claim 8: the rule set with more experts
+        rule = experts.rule
         if stage.kind == "evolve":
             return evolve_command(scale, rule.preset, stage.condition, stage.out_dir,
-                                  sets=(*rule.sets, f"num_experts={k}")), None
-        evolved = experts_dir(name, stage.condition, int(k), "evolve", out)
+                                  sets=(*rule.sets, f"num_experts={experts.num_experts}")), None
+        evolved = experts_dir(rule.name, stage.condition, experts.num_experts, "evolve", out)
         return test_command(scale, rule.preset, stage.condition, evolved, stage.out_dir), None
     rule = BY_NAME[stage.variant]
     if stage.kind == "evolve":
@@ -205,14 +220,21 @@ def load_rule(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION) -
     return data
 
 
-def shared_numbers(reproduction_summary: dict, rule: RuleSet, condition: str):
-    """The reproduction report's probe of a shared run: (colours followed per best individual, best life) or None."""
+class SharedProbes(NamedTuple):
+    """The reproduction report's probes of a shared run (None where the report has none)."""
+
+    colours: dict | None  # colours followed per best individual
+    best_life: dict | None  # the relived best individual (its fresh lives per seed among them)
+
+
+def shared_numbers(reproduction_summary: dict, rule: RuleSet, condition: str) -> SharedProbes | None:
+    """The reproduction report's probes of a shared run, or None if the run is not the reproduction's."""
     owner = {"LE-LS": rule.le_ls, "EE-LS": rule.ee_ls, "EE-ES": "paper"}[condition]
     if not is_reproduction(owner):
         return None
     key = f"{owner}/{condition}"
-    return (reproduction_summary.get("colours_followed", {}).get(key),
-            reproduction_summary.get("best_individuals", {}).get(key))
+    return SharedProbes(reproduction_summary.get("colours_followed", {}).get(key),
+                        reproduction_summary.get("best_individuals", {}).get(key))
 
 
 def measure_rule(rule: RuleSet, reproduction_summary: dict, out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
@@ -228,13 +250,13 @@ def measure_rule(rule: RuleSet, reproduction_summary: dict, out: str = OUT, repr
 
     data = load_rule(rule, out, reproduction)
     probes, lives, fresh = {}, {}, {}
-    for condition in ("LE-LS", "EE-LS", "EE-ES"):
+    shared_runs = {c: shared_numbers(reproduction_summary, rule, c) for c in ("LE-LS", "EE-LS", "EE-ES")}
+    for condition, shared in shared_runs.items():
         run = data["evolutions"].get((rule.name, condition))
-        shared = shared_numbers(reproduction_summary, rule, condition)
         if shared is not None:
             if condition != "EE-ES":
-                probes[rule.name, condition] = shared[0]
-            per_seed = (shared[1] or {}).get("fresh_mean_per_seed")
+                probes[rule.name, condition] = shared.colours
+            per_seed = (shared.best_life or {}).get("fresh_mean_per_seed")
         else:
             population = os.path.join(run_dir(rule, condition, out, reproduction), "final_population.npz")
             per_seed = None
@@ -246,9 +268,9 @@ def measure_rule(rule: RuleSet, reproduction_summary: dict, out: str = OUT, repr
         if run is not None and per_seed is not None:  # the recorded best beside the same genomes' fresh lives
             fresh[condition] = dict(recorded=float(final_best(run["best"]).mean()), fresh=float(np.mean(per_seed)),
                                     fresh_sd_over_seeds=float(np.std(per_seed, ddof=1)), seeds=len(per_seed))
-    ee_es = shared_numbers(reproduction_summary, rule, "EE-ES")
-    if ee_es is not None and ee_es[1] is not None:
-        lives["paper", "EE-ES"] = ee_es[1]
+    ee_es = shared_runs["EE-ES"]
+    if ee_es is not None and ee_es.best_life is not None:
+        lives["paper", "EE-ES"] = ee_es.best_life
     measured = measure(data, lives, probes, sle_whole_test=rule.sle_noise_steps == 0)[rule.name]
     measured["fresh"] = fresh
     return measured
@@ -403,17 +425,18 @@ def experts_table(measured: dict) -> str:
 
 def parse_names(text: str | None) -> list[str]:
     """The rule sets named on the command line (default: the screen's order); unknown names are an error."""
-    names = text.split(",") if text else [*SCREEN_ORDER, "experts"]
-    unknown = [n for n in names if n not in BY_NAME and n != "experts"]
+    names = text.split(",") if text else [*SCREEN_ORDER, EXPERTS]
+    unknown = [n for n in names if n not in BY_NAME and n != EXPERTS]
     if unknown:
-        raise ValueError(f"--only: unknown rule set {unknown[0]!r} (choose from {', '.join(BY_NAME)})")
+        raise ValueError(f"--only: unknown rule set {unknown[0]!r} (choose from {', '.join([*BY_NAME, EXPERTS])})")
     return names
 
 
 def main(argv=None) -> int:
+    """The command line: run (or go on with) the chosen rule sets' stages, or write the claims table."""
     p = argparse.ArgumentParser(prog="python -m experiments.claims_study", description=__doc__.split("\n\n")[0])
-    p.add_argument("--only", help="comma-separated rule sets to run, in order, and 'experts' for claim 8's runs "
-                                  "(default: the screen's order, then experts)")
+    p.add_argument("--only", help=f"comma-separated rule sets to run, in order, and '{EXPERTS}' for claim 8's runs "
+                                  f"(default: the screen's order, then {EXPERTS})")
     p.add_argument("--out", default=OUT, help=f"results directory (default: {OUT})")
     p.add_argument("--table", action="store_true", help="write the claims of every finished rule set into "
                    "docs/CLAIMS.md and experiments/results/claims/claims.json (runs nothing)")
@@ -429,9 +452,9 @@ def main(argv=None) -> int:
             return 2
         return write_claims(args.out, [rule.name for rule in RULE_SETS])
     manifest, manifest_path = load_manifest(args.out, study="claims", sizes=SCREEN, rule_sets=names)
-    # "experts": claim 8's runs, after the rule sets' (the screen's default order ends with them)
-    stages = plan([n for n in names if n != "experts"], SCREEN, args.out)
-    stages += plan_experts(EXPERT_RULE_SETS, SCREEN, args.out) if "experts" in names else []
+    # claim 8's runs after the rule sets' (the screen's default order ends with them)
+    stages = plan([n for n in names if n != EXPERTS], SCREEN, args.out)
+    stages += plan_experts(EXPERT_RULE_SETS, SCREEN, args.out) if EXPERTS in names else []
     return run_stages(stages, SCREEN, manifest, manifest_path, lambda stage: stage_command(stage, SCREEN, args.out))
 
 
@@ -456,10 +479,10 @@ def write_claims(out: str, names) -> int:
     write_table(os.path.join("docs", "CLAIMS.md"), table(measured, names))
     write_table(os.path.join("docs", "CLAIMS.md"), fresh_table(measured, names), FRESH_START, FRESH_END)
     figure(measured, names)
-    experts = {name: measure_experts(BY_NAME[name], out) for name in EXPERT_RULE_SETS}
+    claim8 = {name: measure_experts(BY_NAME[name], out) for name in EXPERT_RULE_SETS}
     with open(os.path.join(out, "claim8.json"), "w") as f:
-        json.dump(experts, f, indent=2, default=str)
-    write_table(os.path.join("docs", "CLAIMS.md"), experts_table(experts), EXPERTS_START, EXPERTS_END)
+        json.dump(claim8, f, indent=2, default=str)
+    write_table(os.path.join("docs", "CLAIMS.md"), experts_table(claim8), EXPERTS_START, EXPERTS_END)
     print(f"wrote docs/CLAIMS.md's table and {os.path.join(out, 'claims.json')}: {len(measured)} of {len(names)} "
           f"rule sets finished")
     return 0

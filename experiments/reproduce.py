@@ -137,6 +137,8 @@ def test_command(scale: dict, variant: str, condition: str, run_dir: str, out_di
 DEFAULT_RATE = 1.2e6
 #: Where an unfinished evolution's newest checkpoint is copied (committed: checkpoints/ is not).
 PUBLISHED = "resume_checkpoint"
+#: What a "measure" stage writes last, into its out_dir: its presence means the stage is done.
+MEASURED = "result.json"
 _PROGRESS = re.compile(r"\((\d+)/(\d+)\)")
 
 
@@ -144,27 +146,28 @@ class Stage(NamedTuple):
     """One stage of the pipeline: what it is, where it writes, what it costs (lane-steps, estimated)."""
 
     name: str
-    kind: str  # evolve, test, report
+    kind: str  # evolve, test, report, measure (a command that writes MEASURED into out_dir when it is done)
     variant: str
     condition: str
     out_dir: str
     cost: float
 
 
-def life_steps(scale: dict, condition: str, task_steps: int) -> int:
-    """Steps of one life of ``condition`` at ``scale`` with tasks of ``task_steps`` (its childhood, if any, included)."""
-    return (scale["childhood_steps"] if conditions.get(condition).has_childhood else 0) + 6 * task_steps
+def life_steps(scale: dict, condition: str, task_steps: int, *, num_tasks: int = 6) -> int:
+    """Steps of one life of ``condition`` at ``scale``: its childhood, if any, then ``num_tasks`` of ``task_steps``."""
+    return (scale["childhood_steps"] if conditions.get(condition).has_childhood else 0) + num_tasks * task_steps
 
 
-def evolution_cost(scale: dict, condition: str) -> float:
+def evolution_cost(scale: dict, condition: str, *, num_tasks: int = 6) -> float:
     """Lane-steps of an evolution of ``condition`` at ``scale`` (every life of every generation and seed)."""
     return float(scale["seeds"] * scale.get("population", 50) * scale["generations"]
-                 * life_steps(scale, condition, scale["task_steps"]))
+                 * life_steps(scale, condition, scale["task_steps"], num_tasks=num_tasks))
 
 
-def test_cost(scale: dict, condition: str) -> float:
-    """Lane-steps of a learning test of ``condition`` at ``scale``."""
-    return float(scale["seeds"] * scale["best"] * scale["tests"] * life_steps(scale, condition, scale["test_steps"]))
+def test_cost(scale: dict, condition: str, *, num_tasks: int = 6) -> float:
+    """Lane-steps of a learning test of ``condition`` at ``scale`` on ``num_tasks`` tasks."""
+    return float(scale["seeds"] * scale["best"] * scale["tests"]
+                 * life_steps(scale, condition, scale["test_steps"], num_tasks=num_tasks))
 
 
 def plan(scale: dict, out: str, variants, report: bool = True) -> list[Stage]:
@@ -208,11 +211,14 @@ def partial_runs(test_dir: str) -> int:
 
 
 def stage_done(stage: Stage, scale: dict) -> bool:
-    """A finished evolution (all generations in its history) or learning test (its steady.json); the report never."""
+    """A finished evolution (all generations in its history), learning test (its steady.json) or measurement (its
+    result.json); the report never."""
     if stage.kind == "evolve":
         return generations_done(stage.out_dir) >= scale["generations"]
     if stage.kind == "test":
         return os.path.exists(os.path.join(stage.out_dir, "steady.json"))
+    if stage.kind == "measure":
+        return os.path.exists(os.path.join(stage.out_dir, MEASURED))
     return False
 
 

@@ -26,21 +26,19 @@ from experiments.reproduce import (Stage, evolution_cost, evolve_command, load_m
                                    test_cost)
 
 OUT = os.path.join("experiments", "results", "search")
-#: The GA's runs: the reproduction's skills evolutions and learning tests.
-GA_RESULTS = os.path.join("experiments", "results", "paper", "skills")
 PRESET = "skills"
 CONDITIONS = ("EE-LS", "EE-ES", "LE-LS")
 
 
 class Row(NamedTuple):
-    """One row of the study: a strategy (and its --strategy-set values) evolving a condition."""
+    """One row of the study: a strategy, at evosax's defaults, evolving a condition."""
 
     strategy: str
     condition: str
-    settings: tuple[str, ...] = ()
 
     @property
     def name(self) -> str:
+        """The row's name: its strategy and condition (``--only`` takes it; its stages are named after it)."""
         return f"{self.strategy}-{self.condition}"
 
 
@@ -66,14 +64,13 @@ def stage_command(stage: Stage, scale: dict = SCREEN) -> tuple[list[str], None]:
     """A stage's command line: evolve with the row's strategy, or the learning test of its run."""
     row = BY_NAME[stage.variant]
     if stage.kind == "evolve":
-        command = evolve_command(scale, PRESET, row.condition, stage.out_dir)
-        command += ["--strategy", row.strategy, *[o for s in row.settings for o in ("--strategy-set", s)]]
-        return command, None
+        return evolve_command(scale, PRESET, row.condition, stage.out_dir) + ["--strategy", row.strategy], None
     evolved = os.path.join(os.path.dirname(stage.out_dir), "evolve")
     return test_command(scale, PRESET, row.condition, evolved, stage.out_dir), None
 
 
 def main(argv=None) -> int:
+    """The command line: list the chosen rows' stages, or run (or go on with) them."""
     p = argparse.ArgumentParser(prog="python -m experiments.search", description=__doc__.split("\n\n")[0])
     strategies = sorted({row.strategy for row in ROWS})
     p.add_argument("--only", help=f"comma-separated strategies or rows (default: all: {', '.join(strategies)})")

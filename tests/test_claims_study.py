@@ -42,7 +42,17 @@ def test_plan_runs_only_what_no_other_run_provides():
 
 def test_unknown_rule_set_is_refused(capsys):
     assert study.main(["--only", "skills,skils"]) == 2
-    assert "unknown rule set 'skils'" in capsys.readouterr().err
+    err = capsys.readouterr().err.strip()
+    assert "unknown rule set 'skils'" in err and "\n" not in err
+    assert err.endswith(", paper-sle-test, experts)")  # claim 8's runs are a choice too
+
+
+def test_shared_runs_read_the_reproduction_reports_probes():
+    summary = dict(colours_followed={"skills/EE-LS": {"red": 3}}, best_individuals={"paper/EE-ES": {"fitness": 0.4}})
+    rule = study.BY_NAME["paper-selector"]  # its EE-LS is skills', EE-ES paper's, LE-LS its own
+    assert study.shared_numbers(summary, rule, "EE-LS") == study.SharedProbes(colours={"red": 3}, best_life=None)
+    assert study.shared_numbers(summary, rule, "EE-ES").best_life == {"fitness": 0.4}
+    assert study.shared_numbers(summary, rule, "LE-LS") is None
 
 
 def test_claim_5_under_the_whole_test_reading_is_measured_not_na():

@@ -24,3 +24,15 @@ def test_plan_and_commands(tmp_path):
     assert tasks.load(files["seen"]) == tuple(paper_tasks()[n - 1] for n in study.SEEN)
     with open(files["unseen"]) as f:
         assert len(json.load(f)["tasks"]) == 2
+
+
+def test_held_out_stages_cost_the_tasks_they_run_and_one_childhood():
+    costs = {s.name: s.cost for s in study.plan() if s.name.startswith("held out")}
+    generations, tests = 5 * 50 * 100, 5 * 5 * 4  # seeds x population x generations; runs x best x tests
+    assert costs == {  # LE-LS: one 150,000-step childhood a life, then 100,000 (evolution) or 1,000,000 per task
+        "held out: evolve LE-LS on tasks (1, 3, 4, 6)": generations * (150_000 + 4 * 100_000),
+        "held out: LE-LS tested on the seen tasks": tests * (150_000 + 4 * 1_000_000),
+        "held out: LE-LS tested on the unseen tasks": tests * (150_000 + 2 * 1_000_000),
+        "held out: evolve EE-LS on tasks (1, 3, 4, 6)": generations * 4 * 100_000,
+        "held out: EE-LS tested on the seen tasks": tests * 4 * 1_000_000,
+        "held out: EE-LS tested on the unseen tasks": tests * 2 * 1_000_000}

@@ -74,16 +74,9 @@ def _evolve_args(generations, strategy=None, *extra):
     return args + (["--strategy", strategy] if strategy else []) + list(extra)
 
 
-def _outputs(out):
-    from helpers import read_population
-
-    with open(f"{out}/history.csv") as f:
-        return f.read(), read_population(out)
-
-
 def test_evolve_with_an_evosax_strategy_resumes_and_extends_bitwise(tmp_path, capsys):
     """--strategy snes: 2 generations then --resume to 3 end as 3 uninterrupted (the strategy's state checkpointed)."""
-    import json
+    from helpers import assert_same_outputs, outputs
 
     from imrl_jax import evolve
 
@@ -91,14 +84,11 @@ def test_evolve_with_an_evosax_strategy_resumes_and_extends_bitwise(tmp_path, ca
     assert evolve.main([*_evolve_args(3, "snes", "--strategy-set", "lr_std_init=0.2"), "--out", whole]) == 0
     assert evolve.main([*_evolve_args(2, "snes", "--strategy-set", "lr_std_init=0.2"), "--out", split]) == 0
     assert evolve.main(["--resume", "--out", split, "--generations", "3", "--quiet"]) == 0
-    history, arrays = _outputs(whole)
-    history_split, arrays_split = _outputs(split)
-    assert history == history_split and len(history.splitlines()) == 1 + 3 * 2
-    for name in arrays:
-        np.testing.assert_array_equal(arrays[name], arrays_split[name], err_msg=name)
-    with open(f"{whole}/config.json") as f:
-        assert json.load(f)["search"] == {"strategy": "snes", "settings": {"lr_std_init": 0.2}}
-    assert not np.array_equal(arrays["evaluated"][:, 0], arrays["evaluated"][:, 1])  # drawn, not copies
+    want = outputs(whole)
+    assert_same_outputs(outputs(split), want)
+    assert len(want["history.csv"].splitlines()) == 1 + 3 * 2
+    assert want["config.json"]["search"] == {"strategy": "snes", "settings": {"lr_std_init": 0.2}}
+    assert not np.array_equal(want["evaluated"][:, 0], want["evaluated"][:, 1])  # drawn, not copies
     capsys.readouterr()
     for argv, message in ((["--strategy", "ga"], f"error: --strategy: {split} was evolved with snes (lr_std_init=0.2), "
                                                  f"not ga; resume it with its own (leave out --strategy)"),
@@ -106,7 +96,7 @@ def test_evolve_with_an_evosax_strategy_resumes_and_extends_bitwise(tmp_path, ca
         assert evolve.main(["--resume", "--out", split, "--generations", "4", *argv]) == 2
         err = capsys.readouterr().err.strip()
         assert message in err and "\n" not in err
-    assert _outputs(split)[0] == history  # nothing written by the refused resumes
+    assert outputs(split)["history.csv"] == want["history.csv"]  # nothing written by the refused resumes
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -129,7 +119,8 @@ def test_bad_strategies_exit_2_with_one_line_and_write_nothing(tmp_path, capsys,
 @pytest.mark.slow  # evolve's evosax step runs in the default suite in the resume test above
 @pytest.mark.parametrize("name", list(strategies.STRATEGIES))
 def test_a_tiny_evolution_with_each_offered_strategy(tiny, name):
-    """Two generations of each strategy through evolve's own step equal search.generation run generation by generation."""
+    """Two generations of each strategy through evolve's own step equal search.generation run generation by generation:
+    the populations asked (bitwise) and their fitness."""
     from imrl_jax import evolve
     from imrl_jax.lifetime import live
 
@@ -143,15 +134,22 @@ def test_a_tiny_evolution_with_each_offered_strategy(tiny, name):
     step = evolve.make_step(config, strategy, sharding)
     keys = evolve.evolution_keys(state.key_data)
     params = config.learning_params()
-    populations, search_state, fitness = state.populations, state.search, []
+    populations, search_state, asked, fitness = state.populations, state.search, [], []
     for g in range(2):
+        asked.append(np.asarray(populations)[0])  # the genomes generation g lives
         populations, search_state, stats = step(keys, params, populations, search_state, g)
         fitness.append(np.asarray(stats.fitness))
+    asked.append(np.asarray(populations)[0])  # asked for generation 2 after generation 1's tell
     # the same by hand: init, then ask, live, tell per generation
     search_params = strategy.default_params()
     hand = strategy.init(jax.random.fold_in(jax.random.key(0), 0), search_params)
+    by_hand = []
     for g in range(2):
         hand, result = search.generation(keys[0], strategy, lambda k, genome: live(k, config, params, genome), hand,
                                          search_params, g)
+        by_hand.append(np.asarray(result.genomes))
         np.testing.assert_array_equal(np.asarray(result.fitness), fitness[g][0])
-    assert np.asarray(populations).shape == (1, 4, config.num_genes)
+    by_hand.append(np.asarray(search.ask(keys[0], strategy, hand, search_params, 2)[0]))
+    for g, (got, want) in enumerate(zip(asked, by_hand)):
+        assert got.shape == want.shape == (4, config.num_genes) and got.dtype == want.dtype, g
+        assert got.tobytes() == want.tobytes(), f"generation {g}'s population differs"
