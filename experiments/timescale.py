@@ -1,0 +1,350 @@
+"""A selector on its own time-scale (docs/TIMESCALE.md): the composition ceiling per option, then evolutions.
+
+    python -m experiments.timescale --list      # the stages and their commands, nothing run
+    python -m experiments.timescale             # run (or go on with) every stage, in order
+    python -m experiments.timescale --measures-only  # the ceiling and the rate sweep only (minutes)
+    python -m experiments.timescale ceiling|rates --out DIR [--lives N]   # one of them by hand
+
+Stage 1 (``ceiling``) measures what composing ideal colour followers is worth when the
+selector chooses options (:data:`OPTIONS`, ``Config.selector_period`` and
+``selector_termination``) rather than every step: EE-LS individuals whose experts are
+``controllers.perceptron_followers``, the selector learning as in adulthood, at the paper's task
+length (6 x 100,000 steps), under the paper's one-step adult rules, under ``skills``' adult rules
+and with a selector that does not learn (:data:`RULES`). Stage 2 (``rates``) sweeps the
+selector's trace decay and rates for some options (:data:`RATE_GRID`: ``skills``' values were
+chosen for a selector that learns every step). Then (:func:`evolution_groups`) LE-LS and EE-LS
+under ``skills`` with the best option at its best rates (5 seeds x 100 generations, paper
+lengths) with learning tests of their best (5 x 4 tests of 1,000,000 cycles per task); and, if
+an option lets the paper's own rules compose (a ceiling of at least :data:`COMPOSES`), LE-LS,
+EE-LS and EE-ES under ``paper`` with it, for the claims. The stages run through the
+reproduction's resumable stage runner (:func:`experiments.reproduce.run_stages`): run the same
+command again after an interruption.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import itertools
+import json
+import os
+import sys
+import time
+
+from experiments.claims_study import SCREEN
+from experiments.reproduce import (MEASURED, Stage, evolution_cost, evolve_command, load_manifest, run_stages,
+                                   test_command, test_cost)
+
+OUT = os.path.join("experiments", "results", "timescale")
+#: The selector's options: name -> Config fields. "per-step" is the paper's selector.
+OPTIONS = {
+    "per-step": dict(selector_period=1),
+    "period-5": dict(selector_period=5),
+    "period-10": dict(selector_period=10),
+    "period-20": dict(selector_period=20),
+    "period-40": dict(selector_period=40),
+    "colour-20": dict(selector_period=20, selector_termination="colour"),
+    "colour-60": dict(selector_period=60, selector_termination="colour"),
+}
+#: Adult learning rules of the ceiling: the paper's one-step rules, and skills' adult selector (traces, rates).
+RULES = {
+    "paper": {},
+    "skills": dict(trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001),
+    # The selector does not learn: what choosing at random (s = 0.5 for every expert) is worth, per option.
+    "random": dict(eta_selector_actor=0.0, eta_selector_critic=0.0),
+}
+RULE_LABELS = {"paper": "paper's one-step selector rules", "skills": "skills' adult selector (traces, rates)",
+               "random": "selector does not learn (random choices)"}
+#: A ceiling at least this high means composition pays under those rules: above what one colour follower
+#: gets on the paper's tasks (it can solve at most one task of each pair) and half the hand-written composition.
+COMPOSES = 0.5
+#: The ceiling's size: lives per (option, rules), and its task length (the paper's).
+LIVES, TASK_STEPS = 8, 100_000
+#: Stage 2: the selector's rates and trace decay swept for these options (skills' values were chosen for a
+#: per-step selector, which learns once a step; an option's selector learns once an option).
+RATE_OPTIONS = ("per-step", "period-5", "period-10", "colour-20", "colour-60")
+RATE_GRID = dict(trace_lambda=(0.0, 0.9, 0.98), eta_selector_actor=(0.01, 0.1, 0.3, 1.0, 3.0, 10.0),
+                 eta_selector_critic=(0.001, 0.01, 0.1))
+RATE_LIVES = 3
+
+
+def ceiling_path(out: str = OUT) -> str:
+    """Where the ceiling stage writes its result."""
+    return os.path.join(out, "ceiling", MEASURED)
+
+
+def read_ceiling(out: str = OUT) -> list[dict] | None:
+    """The ceiling's rows (None before it has run)."""
+    path = ceiling_path(out)
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        return json.load(f)["rows"]
+
+
+def read_rates(out: str = OUT) -> list[dict] | None:
+    """The rate sweep's rows (None before it has run)."""
+    path = os.path.join(out, "rates", MEASURED)
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        return json.load(f)["rows"]
+
+
+def best_rates(rows: list[dict], option: str, trace_lambda: float | None = None) -> dict:
+    """The swept row of ``option`` with the highest mean fitness (at ``trace_lambda`` only, if given)."""
+    mine = [r for r in rows if r["option"] == option and (trace_lambda is None or r["trace_lambda"] == trace_lambda)]
+    return max(mine, key=lambda r: r["fitness"])
+
+
+def best_option(rows: list[dict], rules: str) -> tuple[str, float]:
+    """The option other than per-step with the highest mean ceiling under ``rules``, and that ceiling."""
+    candidates = [r for r in rows if r["rules"] == rules and r["option"] != "per-step"]
+    best = max(candidates, key=lambda r: r["fitness"])
+    return best["option"], best["fitness"]
+
+
+def option_sets(option: str) -> tuple[str, ...]:
+    """The ``--set`` assignments of an option."""
+    return tuple(f"{field}={value}" for field, value in OPTIONS[option].items())
+
+
+def evolution_groups(out: str = OUT) -> dict[str, tuple[tuple[str, ...], tuple[str, ...]]]:
+    """The evolutions the measures call for: {"PRESET+OPTION": (--set assignments, conditions)} (none before both ran).
+
+    Under ``skills``: LE-LS and EE-LS with the option (other than per-step) whose best point of the rate
+    sweep is highest, at that point's rates. Under ``paper``: LE-LS, EE-LS and EE-ES with the option of the
+    highest ceiling under the paper's own rules, if that ceiling reaches :data:`COMPOSES`.
+    """
+    ceiling, rates = read_ceiling(out), read_rates(out)
+    if ceiling is None or rates is None:
+        return {}
+    best = max((best_rates(rates, option) for option in RATE_OPTIONS if option != "per-step"),
+               key=lambda r: r["fitness"])
+    tuned = tuple(f"{field}={best[field]}" for field in RATE_GRID)
+    groups = {f"skills+{best['option']}": (option_sets(best["option"]) + tuned, ("LE-LS", "EE-LS"))}
+    option, value = best_option(ceiling, "paper")
+    if value >= COMPOSES:
+        groups[f"paper+{option}"] = (option_sets(option), ("LE-LS", "EE-LS", "EE-ES"))
+    return groups
+
+
+def plan(out: str = OUT, scale: dict = SCREEN) -> list[Stage]:
+    """The ceiling and the rate sweep, then (once they have run) the evolutions and learning tests they call for."""
+    cost = len(OPTIONS) * len(RULES) * LIVES * 6 * TASK_STEPS
+    stages = [Stage("ceiling: ideal followers composed, per option and rules", "measure", "", "EE-LS",
+                    os.path.join(out, "ceiling"), float(cost))]
+    points = len(RATE_OPTIONS) * len(list(itertools.product(*RATE_GRID.values())))
+    stages.append(Stage("rates: the selector's rates and traces swept per option", "measure", "", "EE-LS",
+                        os.path.join(out, "rates"), float(points * RATE_LIVES * 6 * TASK_STEPS)))
+    for variant, (_, names) in evolution_groups(out).items():
+        for condition in names:
+            folder = os.path.join(out, variant, condition)
+            stages.append(Stage(f"evolve {variant} {condition}", "evolve", variant, condition,
+                                os.path.join(folder, "evolve"), evolution_cost(scale, condition)))
+            stages.append(Stage(f"learning test {variant} {condition}", "test", variant, condition,
+                                os.path.join(folder, "test"), test_cost(scale, condition)))
+    return stages
+
+
+def stage_command(stage: Stage, out: str = OUT, scale: dict = SCREEN) -> tuple[list[str], dict | None]:
+    """A stage's command line: this module's ceiling, or evolve / learning_test with the option's fields."""
+    if stage.kind == "measure":
+        root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+        path = os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)
+        which = os.path.basename(stage.out_dir)  # "ceiling" or "rates": the subcommand writing there
+        return ([sys.executable, "-m", "experiments.timescale", which, "--out", stage.out_dir],
+                {**os.environ, "PYTHONPATH": path})
+    preset = stage.variant.split("+")[0]
+    if stage.kind == "evolve":
+        sets = evolution_groups(out)[stage.variant][0]
+        return evolve_command(scale, preset, stage.condition, stage.out_dir, sets=sets), None
+    return test_command(scale, preset, stage.condition, os.path.join(os.path.dirname(stage.out_dir), "evolve"),
+                        stage.out_dir), None
+
+
+def measure_ceiling(out_dir: str, lives: int = LIVES, key: int = 0, task_steps: int = TASK_STEPS) -> list[dict]:
+    """Stage 1: the composition ceiling of every option under every rule set; writes ceiling.csv, the figure,
+    and result.json last."""
+    import jax
+    import numpy as np
+
+    from imrl_jax.checkpoint import git_commit
+    from imrl_jax.config import make_config
+    from imrl_jax.controllers import composition_ceiling
+
+    rows, total = [], len(OPTIONS) * len(RULES)
+    for rules, values in RULES.items():
+        for option, fields in OPTIONS.items():
+            # 10 bins: the last one is the last tenth of each task.
+            config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **values, **fields)
+            tick = time.perf_counter()
+            result = composition_ceiling(jax.random.key(key), config, lives)
+            fitness, top = np.asarray(result.fitness), _top_share(result)
+            # The last tenth of each task (its last bin): how well the selector composes once it has learned.
+            last = np.asarray(result.reward_curve)[..., -1] * 10 / np.asarray(config.theoretical_max())
+            rows.append(dict(rules=rules, option=option, lives=lives, task_steps=task_steps,
+                             fitness=float(fitness.mean()), fitness_sd=float(fitness.std()),
+                             last_tenth=float(last.mean()),
+                             **{f"task_{t + 1}": float(v) for t, v in enumerate(np.asarray(result.performance).mean(0))},
+                             top_share=top))
+            print(f"ceiling ({len(rows)}/{total}) {rules:>6} {option:>9}: ideal followers {fitness.mean():.3f} "
+                  f"(sd {fitness.std():.3f}; {time.perf_counter() - tick:.0f} s)", file=sys.stderr, flush=True)
+    os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, "ceiling.csv"), "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    plot_ceiling(rows, os.path.join(out_dir, "ceiling.png"))
+    with open(os.path.join(out_dir, MEASURED), "w") as f:
+        json.dump(dict(command=f"python -m experiments.timescale ceiling --out {out_dir} --lives {lives} --key {key}",
+                       git_commit=git_commit(), options=OPTIONS, rules=RULES, rows=rows), f, indent=2)
+    return rows
+
+
+def measure_rates(out_dir: str, lives: int = RATE_LIVES, key: int = 0, task_steps: int = TASK_STEPS) -> list[dict]:
+    """Stage 2: the ceiling over a grid of the selector's trace decay and rates (:data:`RATE_GRID`), per option of
+    :data:`RATE_OPTIONS`: one compiled program per option, every point living the same lanes with the same keys."""
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    from imrl_jax import sweeps
+    from imrl_jax.checkpoint import git_commit
+    from imrl_jax.config import make_config
+    from imrl_jax.controllers import perceptron_followers
+
+    rows = []
+    for index, option in enumerate(RATE_OPTIONS):
+        config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **OPTIONS[option])
+        sweep = sweeps.grid(config, **RATE_GRID)
+        genome = perceptron_followers(config).reshape(-1)
+        tick = time.perf_counter()
+        result = sweeps.make_lifetime_sweep(config)(jax.random.key(key), jnp.broadcast_to(genome, (lives,) + genome.shape),
+                                                    sweep.points)
+        fitness = np.asarray(result.fitness)  # (points, lives)
+        last = (np.asarray(result.reward_curve)[..., -1] * 10 / np.asarray(config.theoretical_max())).mean(axis=(1, 2))
+        for settings, values, tenth in zip(sweep.settings, fitness, last):
+            rows.append(dict(option=option, **settings, lives=lives, fitness=float(values.mean()),
+                             fitness_sd=float(values.std()), last_tenth=float(tenth)))
+        best = max(rows[-len(sweep.settings):], key=lambda r: r["fitness"])
+        print(f"rates ({index + 1}/{len(RATE_OPTIONS)}) {option:>9}: best {best['fitness']:.3f} at lambda "
+              f"{best['trace_lambda']}, selector actor {best['eta_selector_actor']}, critic {best['eta_selector_critic']} "
+              f"({time.perf_counter() - tick:.0f} s)", file=sys.stderr, flush=True)
+    os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, "rates.csv"), "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    plot_rates(rows, os.path.join(out_dir, "rates.png"))
+    with open(os.path.join(out_dir, MEASURED), "w") as f:
+        json.dump(dict(command=f"python -m experiments.timescale rates --out {out_dir} --lives {lives} --key {key}",
+                       git_commit=git_commit(), grid=RATE_GRID, rows=rows), f, indent=2)
+    return rows
+
+
+def plot_rates(rows: list[dict], path: str) -> None:
+    """Per option, the best point of the rate sweep for each trace decay (bars) and that point's last tenth."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from imrl_jax.plotting import wrap_title
+
+    options = list(dict.fromkeys(r["option"] for r in rows))
+    lambdas = list(dict.fromkeys(r["trace_lambda"] for r in rows))
+    fig, ax = plt.subplots(figsize=(8.0, 4.0))
+    width = 0.8 / len(lambdas)
+    for i, lam in enumerate(lambdas):
+        best = [best_rates(rows, option, lam) for option in options]
+        xs = [j + (i - (len(lambdas) - 1) / 2) * width for j in range(len(options))]
+        ax.bar(xs, [b["fitness"] for b in best], width, yerr=[b["fitness_sd"] for b in best], capsize=2,
+               color=plt.cm.viridis(0.15 + 0.7 * i / max(len(lambdas) - 1, 1)), label=f"lambda {lam}: best rates")
+        ax.plot(xs, [b["last_tenth"] for b in best], "v", color="black", ms=4,
+                label="the last tenth of each task" if i == 0 else None)
+    ax.set_xticks(range(len(options)), options)
+    ax.set_ylabel(f"fitness (mean of {rows[0]['lives']} lives)")
+    ax.set_ylim(0, 1.2)  # room for the legend above the bars
+    ax.legend(fontsize=7, loc="upper left", ncol=4)
+    ax.set_title(wrap_title(ax, "Ideal colour followers composed: the best selector rates for each option and trace "
+                            "decay", 10), fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _top_share(result) -> float:
+    """The mean share of a task's steps that its most used expert was in control (1: one expert does it all)."""
+    import numpy as np
+
+    selections = np.asarray(result.adult_selections).sum(axis=2)  # (lives, tasks, K)
+    return float((selections.max(-1) / selections.sum(-1)).mean())
+
+
+def plot_ceiling(rows: list[dict], path: str) -> None:
+    """Bars of the ceiling per option, one group per rule set, with the hand-written composition's level."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from imrl_jax.plotting import wrap_title
+
+    options = list(OPTIONS)
+    fig, ax = plt.subplots(figsize=(8.0, 4.0))
+    width = 0.8 / len(RULES)
+    for i, rules in enumerate(RULES):
+        values = {r["option"]: r for r in rows if r["rules"] == rules}
+        xs = [j + (i - (len(RULES) - 1) / 2) * width for j in range(len(options))]
+        colour = ("0.35", "tab:orange", "0.75")[i % 3]
+        ax.bar(xs, [values[o]["fitness"] for o in options], width, yerr=[values[o]["fitness_sd"] for o in options],
+               label=RULE_LABELS.get(rules, rules), color=colour, capsize=2)
+        ax.plot(xs, [values[o]["last_tenth"] for o in options], "v", color="black", ms=4,
+                label="the last tenth of each task" if i == 0 else None)
+    ax.axhline(COMPOSES, color="0.5", lw=0.8, ls=":", label=f"composition pays ({COMPOSES})")
+    ax.set_xticks(range(len(options)), options)
+    ax.set_ylabel(f"fitness (mean of {rows[0]['lives']} lives)")
+    ax.set_ylim(0, 1.2)  # room for the legend above the bars
+    ax.legend(fontsize=7, loc="upper left", ncol=2)
+    ax.set_title(wrap_title(ax, "Ideal colour followers composed by a learning selector, per option of the "
+                            f"selector ({rows[0]['task_steps']:,} steps per task)", 10), fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    measures = {"ceiling": (measure_ceiling, LIVES), "rates": (measure_rates, RATE_LIVES)}
+    if argv[:1] and argv[0] in measures:
+        measure, lives = measures[argv[0]]
+        p = argparse.ArgumentParser(prog=f"python -m experiments.timescale {argv[0]}")
+        p.add_argument("--out", default=os.path.join(OUT, argv[0]))
+        p.add_argument("--lives", type=int, default=lives)
+        p.add_argument("--key", type=int, default=0)
+        p.add_argument("--task-steps", type=int, default=TASK_STEPS)
+        args = p.parse_args(argv[1:])
+        measure(args.out, args.lives, args.key, args.task_steps)
+        return 0
+    p = argparse.ArgumentParser(prog="python -m experiments.timescale", description=__doc__.split("\n\n")[0])
+    p.add_argument("--out", default=OUT, help=f"results directory (default: {OUT})")
+    p.add_argument("--list", action="store_true", help="print the stages and their commands, run nothing")
+    p.add_argument("--measures-only", action="store_true",
+                   help="run the ceiling and the rate sweep only (minutes, not hours)")
+    args = p.parse_args(argv)
+    if args.list:
+        for stage in plan(args.out):
+            print(f"{stage.name}: {' '.join(stage_command(stage, args.out)[0][1:])}")
+        if read_ceiling(args.out) is None or read_rates(args.out) is None:
+            print("(the evolutions are planned from the ceiling's and the rate sweep's results, once they have run)")
+        return 0
+    manifest, manifest_path = load_manifest(args.out, study="timescale", sizes=SCREEN)
+    code = run_stages(plan(args.out)[:2], SCREEN, manifest, manifest_path, lambda s: stage_command(s, args.out))
+    if code or args.measures_only:
+        return code
+    return run_stages(plan(args.out), SCREEN, manifest, manifest_path, lambda s: stage_command(s, args.out))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,91 @@
+"""The time-scale study: the ceiling stage, and the evolutions planned from its result."""
+
+import json
+import os
+
+from experiments import reproduce
+from experiments import timescale as study
+
+
+def _fake_ceiling(out, paper_best):
+    skills = dict(zip(study.OPTIONS, (0.7, 0.2, 0.6, 0.3, 0.2, 0.4, 0.1)))  # per-step is never the choice
+    paper = {option: paper_best if option == "colour-20" else 0.1 for option in study.OPTIONS}
+    rows = [dict(rules=rules, option=option, fitness=value)
+            for rules, values in (("paper", paper), ("skills", skills)) for option, value in values.items()]
+    os.makedirs(os.path.dirname(study.ceiling_path(out)))
+    with open(study.ceiling_path(out), "w") as f:
+        json.dump(dict(rows=rows), f)
+
+
+def _fake_rates(out, best_option="colour-60"):
+    rows = [dict(option=option, trace_lambda=lam, eta_selector_actor=actor, eta_selector_critic=critic,
+                 fitness=0.1 + (option == best_option) * 0.5 * (actor == 1.0) * (critic == 0.01) * (lam == 0.9))
+            for option in study.RATE_OPTIONS for lam in (0.0, 0.9, 0.98) for actor in (0.3, 1.0) for critic in (0.01,)]
+    rows.append(dict(option="per-step", trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001,
+                     fitness=0.9))  # per-step is never the option evolved
+    os.makedirs(os.path.join(out, "rates"))
+    with open(os.path.join(out, "rates", "result.json"), "w") as f:
+        json.dump(dict(rows=rows), f)
+
+
+def test_the_plan_waits_for_the_measures(tmp_path):
+    out = str(tmp_path / "timescale")
+    ceiling, rates = study.plan(out)
+    assert ceiling.kind == rates.kind == "measure" and ceiling.cost == 7 * 3 * 8 * 600_000
+    assert rates.cost == 5 * (3 * 6 * 3) * 3 * 600_000  # options x grid points x lives x steps
+    for stage, which in ((ceiling, "ceiling"), (rates, "rates")):
+        command, env = study.stage_command(stage, out)
+        assert command[-4:] == ["experiments.timescale", which, "--out", stage.out_dir] and "PYTHONPATH" in env
+    _fake_ceiling(out, paper_best=0.45)
+    assert len(study.plan(out)) == 2  # the rate sweep has not run
+
+
+def test_evolutions_under_the_best_option(tmp_path):
+    out = str(tmp_path / "timescale")
+    _fake_ceiling(out, paper_best=0.45)  # the paper's rules still do not compose: skills' evolutions only
+    _fake_rates(out)
+    stages = study.plan(out)
+    assert [s.name for s in stages[2:]] == ["evolve skills+colour-60 LE-LS", "learning test skills+colour-60 LE-LS",
+                                            "evolve skills+colour-60 EE-LS", "learning test skills+colour-60 EE-LS"]
+    assert reproduce.stage_done(stages[0], study.SCREEN) and reproduce.stage_done(stages[1], study.SCREEN)
+    evolve = study.stage_command(stages[2], out)[0]
+    assert evolve[evolve.index("--preset") + 1] == "skills"
+    sets = [evolve[i + 1] for i, word in enumerate(evolve) if word == "--set"]
+    assert sets == ["selector_period=60", "selector_termination=colour", "trace_lambda=0.9", "eta_selector_actor=1.0",
+                    "eta_selector_critic=0.01"]
+    test = study.stage_command(stages[3], out)[0]
+    assert test[test.index("imrl_jax.learning_test") + 1] == stages[2].out_dir  # the run's own config
+    _fake_ceiling(str(tmp_path / "composes"), paper_best=0.55)
+    _fake_rates(str(tmp_path / "composes"))
+    paper = [s for s in study.plan(str(tmp_path / "composes")) if s.variant.startswith("paper")]
+    assert [s.name for s in paper if s.kind == "evolve"] == [f"evolve paper+colour-20 {c}"
+                                                            for c in ("LE-LS", "EE-LS", "EE-ES")]
+    sets = study.stage_command(paper[0], str(tmp_path / "composes"))[0]
+    assert " ".join(sets).count("--set") == 2 and "selector_termination=colour" in sets
+
+
+def test_ceiling_stage_writes_its_result_last(tmp_path, monkeypatch):
+    """A tiny ceiling (2 options, one rule set, 200-step tasks): rows, CSV, figure, then result.json."""
+    monkeypatch.setattr(study, "OPTIONS", {"per-step": dict(selector_period=1), "period-5": dict(selector_period=5)})
+    monkeypatch.setattr(study, "RULES", {"paper": {}})
+    out = str(tmp_path / "ceiling")
+    rows = study.measure_ceiling(out, lives=2, task_steps=200)
+    assert [(r["rules"], r["option"]) for r in rows] == [("paper", "per-step"), ("paper", "period-5")]
+    assert all(0.0 <= r["fitness"] <= 1.0 and 0.0 <= r["last_tenth"] <= 1.5 and 1 / 3 <= r["top_share"] <= 1.0
+               for r in rows)
+    assert sorted(os.listdir(out)) == ["ceiling.csv", "ceiling.png", "result.json"]
+    with open(os.path.join(out, "result.json")) as f:
+        assert json.load(f)["rows"] == rows
+
+
+def test_rate_sweep_writes_its_result_last(tmp_path, monkeypatch):
+    """A tiny sweep (one option, 2 points, 200-step tasks): one row per point, the best at the top of the figure."""
+    monkeypatch.setattr(study, "RATE_OPTIONS", ("period-5",))
+    monkeypatch.setattr(study, "RATE_GRID", dict(trace_lambda=(0.0,), eta_selector_actor=(0.0, 1.0),
+                                                 eta_selector_critic=(0.01,)))
+    out = str(tmp_path / "rates")
+    rows = study.measure_rates(out, lives=2, task_steps=200)
+    assert [(r["option"], r["eta_selector_actor"]) for r in rows] == [("period-5", 0.0), ("period-5", 1.0)]
+    assert all(0.0 <= r["fitness"] <= 1.0 for r in rows)
+    assert study.best_rates(rows, "period-5") == max(rows, key=lambda r: r["fitness"])
+    assert sorted(os.listdir(out)) == ["rates.csv", "rates.png", "result.json"]
