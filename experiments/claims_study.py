@@ -438,6 +438,7 @@ def main(argv=None) -> int:
     p.add_argument("--only", help=f"comma-separated rule sets to run, in order, and '{EXPERTS}' for claim 8's runs "
                                   f"(default: the screen's order, then {EXPERTS})")
     p.add_argument("--out", default=OUT, help=f"results directory (default: {OUT})")
+    p.add_argument("--list", action="store_true", help="print the stages and their commands, run nothing")
     p.add_argument("--table", action="store_true", help="write the claims of every finished rule set into "
                    "docs/CLAIMS.md and experiments/results/claims/claims.json (runs nothing)")
     args = p.parse_args(argv)
@@ -451,10 +452,15 @@ def main(argv=None) -> int:
             print("error: --table: measures every finished rule set; leave out --only", file=sys.stderr)
             return 2
         return write_claims(args.out, [rule.name for rule in RULE_SETS])
-    manifest, manifest_path = load_manifest(args.out, study="claims", sizes=SCREEN, rule_sets=names)
     # claim 8's runs after the rule sets' (the screen's default order ends with them)
     stages = plan([n for n in names if n != EXPERTS], SCREEN, args.out)
     stages += plan_experts(EXPERT_RULE_SETS, SCREEN, args.out) if EXPERTS in names else []
+    if args.list:
+        for stage in stages:
+            command = stage_command(stage, SCREEN, args.out)[0]
+            print(f"{stage.name}: {' '.join(command[1:])}")
+        return 0
+    manifest, manifest_path = load_manifest(args.out, study="claims", sizes=SCREEN, rule_sets=names)
     return run_stages(stages, SCREEN, manifest, manifest_path, lambda stage: stage_command(stage, SCREEN, args.out))
 
 

@@ -117,3 +117,13 @@ def test_fresh_table_shows_the_recorded_best_beside_the_fresh_lives():
 def test_table_with_only_is_refused_so_no_row_is_dropped(capsys):
     assert study.main(["--table", "--only", "skills"]) == 2
     assert capsys.readouterr().err.strip() == "error: --table: measures every finished rule set; leave out --only"
+
+
+def test_list_prints_every_stage_and_runs_nothing(tmp_path, capsys):
+    out = str(tmp_path / "claims")
+    assert study.main(["--list", "--only", "skills-clamp,experts", "--out", out]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    stages = study.plan(["skills-clamp"], study.SCREEN, out) + study.plan_experts(study.EXPERT_RULE_SETS, study.SCREEN,
+                                                                                  out)
+    assert [line.split(": ", 1)[0] for line in lines] == [s.name for s in stages]
+    assert "--set childhood_walls=clamp" in lines[0] and not (tmp_path / "claims").exists()
