@@ -431,3 +431,43 @@ def claim_experts(final: dict, steady: dict | None = None) -> dict:
     held = sum(c["unchanged"] for c in compared.values())
     verdict = HOLDS if held == len(compared) else PARTLY if held else DOES_NOT
     return _claim(verdict, "; ".join(parts) + f" ({held} of {len(compared)} unchanged)", compared=compared)
+
+
+# ----------------------------------------------------------------------------- tasks never met in evolution
+
+#: The paper's Discussion on tasks never met in evolution (docs/NOVEL_TASKS.md).
+UNSEEN_CLAIM = ("The advantages provided by learning would surely be much stronger if the systems were tested with "
+                "tasks which have never been encountered during evolution.")
+UNSEEN_RULE = (f"Learning's advantage of a condition on a set of tasks is its steady state minus EE-ES's on the same "
+               f"tasks (EE-ES learns nothing), from the steady state of each learning-test run, with the standard "
+               f"error of that difference as in claim 3. A condition's advantage is *stronger on unseen tasks* when "
+               f"its advantage there exceeds its advantage on the tasks of its evolution by more than {ORDER_SE} "
+               f"standard errors of the two together. **holds** if every learning condition compared is stronger on "
+               f"unseen tasks; **partly** if at least one is; **does not hold** if none is; **n/a** without a "
+               f"comparison.")
+
+
+def advantage(per_run, ee_es_per_run) -> dict:
+    """Learning's advantage: mean steady state of ``per_run`` minus EE-ES's on the same tasks, and its standard error."""
+    a, b = np.asarray(per_run, float), np.asarray(ee_es_per_run, float)
+    return dict(advantage=float(a.mean() - b.mean()), standard_error=_standard_error(a, b), steady=float(a.mean()),
+                ee_es=float(b.mean()))
+
+
+def claim_unseen(seen: dict, unseen: dict, num_se: float = ORDER_SE) -> dict:
+    """The Discussion's expectation from ``seen[name]`` and ``unseen[name]`` (each an :func:`advantage`): is learning's
+    advantage of every compared condition stronger on tasks never met in evolution?"""
+    compared, parts = {}, []
+    for name in sorted(set(seen) & set(unseen)):
+        s, u = seen[name], unseen[name]
+        difference = u["advantage"] - s["advantage"]
+        error = math.hypot(s["standard_error"], u["standard_error"])
+        stronger = difference > num_se * error
+        compared[name] = dict(difference=difference, standard_error=error, stronger=stronger)
+        parts.append(f"{name}: {u['advantage']:+.3f} unseen vs {s['advantage']:+.3f} seen "
+                     f"({difference:+.3f} +- {error:.3f})")
+    if not compared:
+        return _claim(NOT_AVAILABLE, "-", compared=compared)
+    held = sum(c["stronger"] for c in compared.values())
+    verdict = HOLDS if held == len(compared) else PARTLY if held else DOES_NOT
+    return _claim(verdict, "; ".join(parts) + f" ({held} of {len(compared)} stronger unseen)", compared=compared)

@@ -2,6 +2,7 @@
 
     python -m experiments.novel_tasks --list      # the stages and their commands, nothing run
     python -m experiments.novel_tasks             # run (or go on with) every stage, in order
+    python -m experiments.novel_tasks --report    # the advantage table, figure and verdict of what has finished
 
 Three groups, all at the paper's test length (1,000,000 cycles per task):
 
@@ -9,9 +10,15 @@ Three groups, all at the paper's test length (1,000,000 cycles per task):
   and ``paper``; EE-ES, shared) learn the ``novel`` task set. Their final populations were not
   kept, so the tests take the 10 best of each seed from ``best_genomes.npz`` (here 5 best x 4
   tests of each of the 10 seeds), against SLE from scratch on the same set (5 runs x 5 x 4).
-- **held out**: LE-LS and EE-LS under ``skills`` evolved on tasks 1, 3, 4 and 6 of the paper's
-  six (5 seeds x 100 generations, paper lengths), then tested on those and on the other two
-  (2 and 5: one of each pair the evolution saw, whose partner turns the other way).
+- **held out**: LE-LS, EE-LS and EE-ES under ``skills`` evolved on tasks 1, 3, 4 and 6 of the
+  paper's six (5 seeds x 100 generations, paper lengths), then tested on those and on the other
+  two (2 and 5: one of each pair the evolution saw, whose partner turns the other way).
+- **baselines**: brax's PPO and ES from scratch on the novel set, 1,000,000 cycles per task, 5 seeds.
+
+``--report`` (:func:`report`) measures learning's advantage (a condition's steady state minus
+EE-ES's) on the tasks of evolution and on tasks never met in it, judges the paper's sentence
+(``claims.claim_unseen``), draws the figures and writes the table into docs/NOVEL_TASKS.md, from
+whatever stages have finished.
 
 The stages run through the reproduction's resumable stage runner
 (:func:`experiments.reproduce.run_stages`): run the same command again after an interruption.
@@ -32,6 +39,8 @@ from imrl_jax.tasks import to_json
 
 OUT = os.path.join("experiments", "results", "novel_tasks")
 BEST_GENOMES = os.path.join(REPRODUCTION, "best_genomes.npz")
+#: brax's baselines on the paper's six (docs/BASELINES.md), beside the same on the novel set.
+BASELINES = os.path.join("experiments", "results", "baselines")
 #: The finished runs tested on the novel set: (variant, condition).
 FINISHED = (("skills", "LE-LS"), ("skills", "EE-LS"), ("paper", "LE-LS"), ("paper", "EE-LS"), ("paper", "EE-ES"))
 #: The paper's tasks (1-based) the held-out evolutions see, and those they never meet.
@@ -40,6 +49,12 @@ SEEN, UNSEEN = (1, 3, 4, 6), (2, 5)
 HELD_OUT = {"seen": SEEN, "unseen": UNSEEN}
 #: The task set of the novel stages (the package's own).
 NOVEL = "novel"
+#: The conditions evolved on the seen tasks and tested on both sets (EE-ES: the gap's reference, learning nothing).
+HELD_OUT_CONDITIONS = ("LE-LS", "EE-LS", "EE-ES")
+#: Seeds of brax's PPO and ES on the novel set (as docs/BASELINES.md's 1,000,000-cycle budget).
+BASELINE_SEEDS = 5
+#: The learning conditions whose advantage over EE-ES the verdict compares.
+LEARNING = ("LE-LS", "EE-LS", "SLE")
 
 
 class Variant(NamedTuple):
@@ -81,7 +96,11 @@ def plan(out: str = OUT) -> list[Stage]:
               for variant, condition in FINISHED]
     stages += [Stage(f"novel {variant} SLE", "test", variant, "SLE", os.path.join(out, "novel", variant, "SLE"),
                      test_cost(SCREEN, "SLE")) for variant in ("skills", "paper")]
-    for condition in ("LE-LS", "EE-LS"):
+    # brax's PPO and ES from scratch on the novel set, at the learning test's length (docs/BASELINES.md's budgets)
+    stages += [Stage(f"novel baseline {agent}", "baseline", NOVEL, agent.upper(), os.path.join(out, "novel", "baselines",
+                                                                                              f"{agent}_1M"),
+                     float(BASELINE_SEEDS * 6 * FINISHED_TEST["test_steps"])) for agent in ("ppo", "es")]
+    for condition in HELD_OUT_CONDITIONS:
         folder = os.path.join(out, "held_out", condition)
         # a life is the childhood (if any) then each task of the set once: the childhood is not per task
         stages.append(Stage(f"held out: evolve {condition} on tasks {SEEN}", "evolve", held_out_variant("seen"),
@@ -96,6 +115,10 @@ def plan(out: str = OUT) -> list[Stage]:
 
 def stage_command(stage: Stage, out: str = OUT) -> tuple[list[str], None]:
     """A stage's command line: evolve or learning_test with the stage's task set."""
+    if stage.kind == "baseline":
+        return [sys.executable, "-m", "imrl_jax.baselines", "--agent", stage.condition.lower(), "--steps",
+                str(FINISHED_TEST["test_steps"]), "--seeds", str(BASELINE_SEEDS), "--evals", "11", "--task-set", NOVEL,
+                "--out", stage.out_dir], None
     variant = VARIANTS[stage.variant]
     if variant.tasks != NOVEL:  # held out: evolved on the seen tasks, tested on the seen or the unseen ones
         task_set = ["--task-set", task_files(out)[variant.tasks]]
@@ -110,12 +133,144 @@ def stage_command(stage: Stage, out: str = OUT) -> tuple[list[str], None]:
         "--best-genomes", BEST_GENOMES, "--task-set", NOVEL], None
 
 
+#: Where the report's table goes in docs/NOVEL_TASKS.md.
+TABLE_START = "<!-- advantage table: python -m experiments.novel_tasks --report -->"
+TABLE_END = "<!-- end of advantage table -->"
+
+
+def _per_run(test: dict | None, tasks=None) -> list[float] | None:
+    """A finished learning test's steady state per run (None if unfinished); ``tasks``: its mean per task instead."""
+    if test is None:
+        return None
+    if tasks is None:
+        return list(test["steady"]["steady_per_run"])
+    per_task = test["steady"]["steady_per_task"]
+    return [sum(per_task[t - 1] for t in tasks) / len(tasks)]
+
+
+def measure(out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
+    """Learning's advantage over EE-ES per comparison and set of tasks, and the verdicts, from the finished tests."""
+    from experiments.claims import advantage, claim_unseen
+    from experiments.loading import read_json, read_test
+
+    seen_tests = {(v, c): read_test(os.path.join(reproduction, v if c != "EE-ES" else "paper", "test", c))
+                  for v in ("skills", "paper") for c in (*LEARNING, "EE-ES")}
+    novel_tests = {(v, c): read_test(os.path.join(out, "novel", v if c != "EE-ES" else "paper", c))
+                   for v in ("skills", "paper") for c in (*LEARNING, "EE-ES")}
+    held = {(c, which): read_test(os.path.join(out, "held_out", c, f"test_{which}"))
+            for c in HELD_OUT_CONDITIONS for which in HELD_OUT}
+    rows, seen, unseen = [], {}, {}
+    for variant in ("skills", "paper"):
+        for condition in LEARNING:
+            name = f"{variant} {condition}"
+            for kind, tests, target in (("paper's six (seen)", seen_tests, seen), ("novel (unseen)", novel_tests, unseen)):
+                mine, reference = _per_run(tests[variant, condition]), _per_run(tests[variant, "EE-ES"])
+                if mine and reference:
+                    target[name] = dict(advantage(mine, reference), tasks=kind, runs=len(mine))
+                    rows.append(dict(name=name, **target[name]))
+    held_seen, held_unseen = {}, {}
+    for condition in ("LE-LS", "EE-LS"):
+        name = f"held out {condition}"
+        for which, target in (("seen", held_seen), ("unseen", held_unseen)):
+            mine, reference = _per_run(held[condition, which]), _per_run(held["EE-ES", which])
+            if mine and reference:
+                target[name] = dict(advantage(mine, reference), tasks=f"tasks {HELD_OUT[which]} ({which})",
+                                    runs=len(mine))
+                rows.append(dict(name=name, **target[name]))
+    verdicts = {"novel set": claim_unseen(seen, unseen), "held-out tasks": claim_unseen(held_seen, held_unseen)}
+    curves = {key: test for key, test in novel_tests.items() if test is not None}
+    scratch = []  # brax's agents from scratch: nothing of them was evolved, so they learn each set alike
+    for tasks, folder in (("paper's six", BASELINES), ("novel", os.path.join(out, "novel", "baselines"))):
+        for agent in ("ppo", "es"):
+            summary = read_json(os.path.join(folder, f"{agent}_1M", "summary.json"))
+            if summary is not None:
+                scratch.append(dict(agent=agent.upper(), tasks=tasks, seeds=len(summary["seeds"]),
+                                    performance=summary["performance_mean"],
+                                    sd=summary["performance_sd_over_seeds"]))
+    return dict(rows=rows, verdicts=verdicts, curves=curves, scratch=scratch)
+
+
+def table(measured: dict) -> str:
+    """The report's markdown: learning's advantage per comparison and set of tasks, then the verdicts."""
+    from experiments.claims import UNSEEN_RULE
+
+    lines = ["| comparison | tasks | runs | steady state | EE-ES | advantage | se |", "|---|---|---|---|---|---|---|"]
+    lines += [f"| {r['name']} | {r['tasks']} | {r['runs']} | {r['steady']:.3f} | {r['ee_es']:.3f} | "
+              f"{r['advantage']:+.3f} | {r['standard_error']:.3f} |" for r in measured["rows"]]
+    if not measured["rows"]:
+        lines.append("| (no stage has finished yet) | | | | | | |")
+    if measured["scratch"]:
+        lines += ["", "brax's agents from scratch, 1,000,000 cycles per task (docs/BASELINES.md's measure):", "",
+                  "| agent | tasks | seeds | performance | sd over seeds |", "|---|---|---|---|---|"]
+        lines += [f"| {r['agent']} | {r['tasks']} | {r['seeds']} | {r['performance']:.3f} | {r['sd']:.3f} |"
+                  for r in measured["scratch"]]
+    lines += ["", f"Rule: {UNSEEN_RULE}", ""]
+    lines += [f"- **{where}: {v['verdict']}.** {v['measured']}" for where, v in measured["verdicts"].items()]
+    return "\n".join(lines)
+
+
+def figure(measured: dict, path: str) -> str | None:
+    """Fig. 3b-style curves on the novel set (a panel per preset) beside learning's advantage per comparison."""
+    from experiments.figures import _draw_curves
+    from imrl_jax.plotting import new_figure, save, style_axis
+
+    if not measured["rows"] and not measured["curves"]:
+        return None
+    fig = new_figure(13.0, 3.8)
+    axes = fig.subplots(1, 3, gridspec_kw=dict(width_ratios=[1.0, 1.0, 1.2]))
+    for ax, variant in zip(axes, ("skills", "paper")):
+        series = {c: (t["steps"], t["mean"], t["sd"], c) for (v, c), t in measured["curves"].items()
+                  if v == variant or c == "EE-ES"}
+        if series:
+            _draw_curves(ax, series, f"novel set, {variant}: learning tests", "cycles of the task",
+                         "performance per bin")
+        else:  # an unfinished stage: say so rather than leave a blank panel
+            style_axis(ax, f"novel set, {variant}: learning tests", "cycles of the task", "performance per bin")
+            ax.text(0.5, 0.5, "not run yet", transform=ax.transAxes, ha="center", va="center", color="0.4")
+    bars = axes[2]
+    names, labelled = list(dict.fromkeys(r["name"] for r in measured["rows"])), set()
+    for i, name in enumerate(names):
+        for j, row in enumerate(r for r in measured["rows"] if r["name"] == name):  # seen, then unseen
+            label = ("tasks of its evolution", "tasks never met in it")[j]
+            bars.bar(i + (j - 0.5) * 0.38, row["advantage"], 0.38, yerr=row["standard_error"], capsize=2,
+                     color=("0.35", "tab:orange")[j], label=None if label in labelled else label)
+            labelled.add(label)
+    bars.axhline(0.0, color="black", lw=0.6)
+    bars.set_xticks(range(len(names)), names, rotation=30, ha="right", fontsize=7)
+    style_axis(bars, "learning's advantage over EE-ES", "", "steady state minus EE-ES's")
+    if names:
+        bars.legend(fontsize=7)
+    fig.tight_layout()
+    return save(fig, path)
+
+
+def report(out: str = OUT, document: str = os.path.join("docs", "NOVEL_TASKS.md")) -> int:
+    """Measure, write advantage.json and the figure under ``out``, and the table into ``document``."""
+    import json
+
+    from experiments.claims_study import write_table
+
+    measured = measure(out)
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, "advantage.json"), "w") as f:
+        json.dump(dict(rows=measured["rows"], verdicts=measured["verdicts"], scratch=measured["scratch"]), f, indent=2)
+    drawn = figure(measured, os.path.join(out, "advantage.png"))
+    write_table(document, table(measured), TABLE_START, TABLE_END)
+    print(f"{len(measured['rows'])} comparisons measured; wrote {os.path.join(out, 'advantage.json')}"
+          f"{', ' + drawn if drawn else ''} and the table of {document}")
+    return 0
+
+
 def main(argv=None) -> int:
     """The command line: list the stages, or write the held-out task sets and run (or go on with) every stage."""
     p = argparse.ArgumentParser(prog="python -m experiments.novel_tasks", description=__doc__.split("\n\n")[0])
     p.add_argument("--out", default=OUT, help=f"results directory (default: {OUT})")
     p.add_argument("--list", action="store_true", help="print the stages and their commands, run nothing")
+    p.add_argument("--report", action="store_true", help="measure the finished stages, draw the figure and write "
+                   "docs/NOVEL_TASKS.md's table (runs nothing)")
     args = p.parse_args(argv)
+    if args.report:
+        return report(args.out)
     stages = plan(args.out)
     if args.list:
         for stage in stages:

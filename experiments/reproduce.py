@@ -146,7 +146,7 @@ class Stage(NamedTuple):
     """One stage of the pipeline: what it is, where it writes, what it costs (lane-steps, estimated)."""
 
     name: str
-    kind: str  # evolve, test, report, measure (a command that writes MEASURED into out_dir when it is done)
+    kind: str  # evolve, test, report, measure (a command that writes MEASURED into out_dir when it is done), baseline
     variant: str
     condition: str
     out_dir: str
@@ -211,14 +211,16 @@ def partial_runs(test_dir: str) -> int:
 
 
 def stage_done(stage: Stage, scale: dict) -> bool:
-    """A finished evolution (all generations in its history), learning test (its steady.json) or measurement (its
-    result.json); the report never."""
+    """A finished evolution (all generations in its history), learning test (its steady.json), measurement (its
+    result.json) or baseline (its summary.json); the report never."""
     if stage.kind == "evolve":
         return generations_done(stage.out_dir) >= scale["generations"]
     if stage.kind == "test":
         return os.path.exists(os.path.join(stage.out_dir, "steady.json"))
     if stage.kind == "measure":
         return os.path.exists(os.path.join(stage.out_dir, MEASURED))
+    if stage.kind == "baseline":  # python -m imrl_jax.baselines writes its summary last
+        return os.path.exists(os.path.join(stage.out_dir, "summary.json"))
     return False
 
 

@@ -123,3 +123,23 @@ def test_a_fresh_clone_continues_from_the_published_checkpoint(tmp_path):
     assert got["history.csv"] == want["history.csv"]
     for name in ("evaluated", "fitness", "next_population"):
         assert got[name].tobytes() == want[name].tobytes(), name
+
+
+def test_a_stage_is_done_when_its_last_file_exists(tmp_path):
+    """Each kind of stage is done by the file its command writes last; the report never is."""
+    from experiments import reproduce
+
+    scale = dict(generations=3)
+    for kind, last in (("test", "steady.json"), ("measure", "result.json"), ("baseline", "summary.json")):
+        stage = reproduce.Stage("s", kind, "", "", str(tmp_path / kind), 1.0)
+        assert not reproduce.stage_done(stage, scale)
+        (tmp_path / kind).mkdir()
+        (tmp_path / kind / last).write_text("{}")
+        assert reproduce.stage_done(stage, scale), kind
+    evolve = reproduce.Stage("e", "evolve", "", "", str(tmp_path / "evolve"), 1.0)
+    (tmp_path / "evolve").mkdir()
+    (tmp_path / "evolve" / "history.csv").write_text("generation,seed,best\n0,0,0.1\n1,0,0.2\n")
+    assert not reproduce.stage_done(evolve, scale)  # 2 of 3 generations
+    (tmp_path / "evolve" / "history.csv").write_text("generation,seed,best\n0,0,0.1\n1,0,0.2\n2,0,0.3\n")
+    assert reproduce.stage_done(evolve, scale)
+    assert not reproduce.stage_done(reproduce.Stage("r", "report", "", "", str(tmp_path), 1.0), scale)
