@@ -1,5 +1,7 @@
 """The search study's plan: each strategy evolves each condition under skills, then its best are tested."""
 
+import json
+
 from experiments import search as study
 
 
@@ -22,3 +24,71 @@ def test_unknown_rows_are_refused_and_a_strategy_selects_its_rows(capsys):
     assert study.main(["--only", "snes", "--list"]) == 0
     printed = capsys.readouterr().out.splitlines()
     assert len(printed) == 6 and all("snes" in line for line in printed)
+
+
+def _fake_evolution(folder, best_per_seed):
+    """An evolution's history.csv as the report reads it: a row per generation and seed (a short seed: unfinished)."""
+    folder.mkdir(parents=True)
+    rows = [f"{g},{seed},{v},0.0,0.0" for seed, curve in enumerate(best_per_seed) for g, v in enumerate(curve)]
+    (folder / "history.csv").write_text("generation,seed,best,mean,std\n" + "\n".join(rows) + "\n")
+
+
+def _fake_test(folder, per_run):
+    """A finished learning test as the report reads it: steady.json and curve.csv."""
+    folder.mkdir(parents=True)
+    (folder / "steady.json").write_text(json.dumps(dict(steady_per_run=list(per_run), pairs_both_ways=0.5)))
+    (folder / "curve.csv").write_text("bin,end_step,mean,sd_over_runs\n0,1000,0.1,0.01\n1,2000,0.3,0.01\n")
+
+
+def test_report_measures_each_strategy_and_judges_its_claims(tmp_path):
+    """Hand-made GA and SNES runs of 6 generations: final best, plateau, steady state and verdicts; tables, figure."""
+    reproduction, out = tmp_path / "paper", tmp_path / "search"
+    _fake_evolution(reproduction / "skills" / "evolve" / "LE-LS", [[0.5] + [0.8] * 5, [0.5] + [0.76] * 5])
+    _fake_evolution(reproduction / "skills" / "evolve" / "EE-LS", [[0.0, 0.1, 0.2, 0.3, 0.4, 0.5],
+                                                                   [0.2, 0.3, 0.4, 0.5, 0.6, 0.7]])
+    _fake_evolution(reproduction / "paper" / "evolve" / "EE-ES", [[0.1] * 3 + [0.5] * 3, [0.1] * 3 + [0.3] * 3])
+    _fake_test(reproduction / "skills" / "test" / "EE-LS", [0.5, 0.52, 0.48])
+    _fake_test(reproduction / "skills" / "test" / "SLE", [0.4, 0.4, 0.4])
+    _fake_test(reproduction / "skills" / "test" / "LE-LS", [0.45, 0.45, 0.45])
+    _fake_test(reproduction / "paper" / "test" / "EE-ES", [0.1, 0.1, 0.1])
+    _fake_evolution(out / "snes" / "EE-LS" / "evolve", [[0.9] * 6, [0.8] * 6])
+    _fake_evolution(out / "snes" / "LE-LS" / "evolve", [[0.7] * 6, [0.7] * 6])
+    _fake_evolution(out / "snes" / "EE-ES" / "evolve", [[0.3] * 4, [0.3] * 3])  # running: generation 3 half written
+    _fake_test(out / "snes" / "EE-LS" / "test", [0.6, 0.7, 0.8])
+    summary = tmp_path / "summary.json"  # the GA's relived EE-ES: one circular task of two
+    summary.write_text(json.dumps(dict(best_individuals={"paper/EE-ES": dict(stereotypy_per_task=[0.9, 0.5],
+                                                                             speed=2.0)})))
+    measured = study.measure(str(out), str(reproduction), str(summary), generations=6)
+    rows = {(r["strategy"], r["condition"]): r for r in measured["rows"]}
+    assert sorted(rows) == [("ga", "EE-ES"), ("ga", "EE-LS"), ("ga", "LE-LS"),
+                            ("snes", "EE-ES"), ("snes", "EE-LS"), ("snes", "LE-LS")]  # Sep-CMA-ES: nothing run
+    ee_ls = rows["ga", "EE-LS"]  # seeds' last 5: 0.3 and 0.5; mean curve 0.1..0.6 reaches 0.9 x 0.4 at generation 3
+    assert abs(ee_ls["final_best_mean"] - 0.4) < 1e-12 and abs(ee_ls["final_best_sd"] - 0.1) < 1e-12
+    assert ee_ls["plateau_generation"] == 3 and rows["ga", "LE-LS"]["plateau_generation"] == 1
+    assert abs(rows["ga", "EE-ES"]["final_best_mean"] - 0.28) < 1e-12  # (0.1 + 0.1 + 3 x 0.5) / 5, (0.2 + 0.9) / 5
+    assert abs(rows["ga", "LE-LS"]["final_best_sd"] - 0.02) < 1e-12
+    assert rows["snes", "EE-ES"]["generations"] == 3 and not rows["snes", "EE-ES"]["finished"]
+    assert "final_best_mean" not in rows["snes", "EE-ES"]
+    assert abs(rows["snes", "EE-LS"]["steady_mean"] - 0.7) < 1e-12 and rows["snes", "EE-LS"]["test_runs"] == 3
+    ga, snes = measured["claims"]["ga"], measured["claims"]["snes"]
+    assert ga[1]["verdict"] == "holds"  # plateau LE-LS 1 against 3 and 3
+    assert ga[2]["verdict"] == "holds"  # sd 0.02 at most half of 0.1 and of 0.06
+    assert ga[3]["verdict"] == "does not hold"  # 0.40 against 0.78
+    assert ga[4]["verdict"] == "partly"  # 0.28 / 0.78 = 0.36 not about, one circular task
+    assert ga[4]["numbers"]["circular_tasks"] == 1 and ga[4]["path_probe"]
+    assert ga[6]["verdict"] == "partly" and ga[6]["numbers"]["pairs_held"] == 5  # SLE 0.40 < LE-LS 0.45: reversed
+    # SNES: 0.85 against 0.70, se = sqrt(0.005 / 2) = 0.05 < 0.15 / 2; its EE-ES is running, so claims 1, 2, 4 wait
+    assert snes[3]["verdict"] == "holds" and abs(snes[3]["numbers"]["standard_error"] - 0.05) < 1e-12
+    assert [snes[n]["verdict"] for n in (1, 2, 4, 6)] == ["n/a"] * 4 and not snes[4]["path_probe"]
+    text = study.table(measured)
+    assert "| ga | EE-LS | 2 | 6 | 0.400 | 0.100 | 3 | 3 | 0.500 | 0.016 |" in text
+    assert "| snes | EE-ES | 2 | 3 of 6 | - | - | - | - | - | - |" in text
+    assert "| snes | **holds** | EE-LS 0.850 vs LE-LS 0.700: d = +0.150, se = 0.050 |" in text
+    assert "sep_cma_es" not in text and "0.400 +- 0.000 over 3 runs" in text
+    assert study.figure(measured, str(tmp_path / "search.png")) and (tmp_path / "search.png").stat().st_size > 0
+    document = tmp_path / "SEARCH.md"
+    document.write_text(f"intro\n{study.TABLE_START}\nold\n{study.TABLE_END}\nend\n")
+    assert study.report(str(out), str(document), str(reproduction), str(summary)) == 0  # 100 generations: all running
+    written = document.read_text()
+    assert "old" not in written and written.startswith("intro\n") and written.endswith(f"{study.TABLE_END}\nend\n")
+    assert json.loads((out / "report.json").read_text())["claims"]["ga"]["3"]["verdict"] == "n/a"
