@@ -28,18 +28,16 @@ import json
 import os
 import sys
 import time
-from typing import Sequence
+from typing import Callable, NamedTuple, Sequence
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from imrl_jax.cli import HelpFormatter, UsageError, add_task_set, parse_sets, user_errors
+from imrl_jax.cli import HelpFormatter, Parser, UsageError, add_task_set, apply_task_set, parse_sets, user_errors
 from imrl_jax.config import Config, ConfigError
 from imrl_jax.env import make_env
 from imrl_jax.progress import Progress
-
-AGENTS = ("ppo", "es")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -82,7 +80,7 @@ def _validate(b: Baseline) -> None:
     def fail(field: str, why: str):
         raise ConfigError(f"{field}: {why} (got {getattr(b, field)!r})")
 
-    if b.agent not in AGENTS:
+    if b.agent not in AGENTS:  # (defined below the training functions it names)
         fail("agent", f"must be one of {', '.join(AGENTS)}")
     for name in ("steps", "seeds", "num_evals", "eval_lanes", "eval_steps", "num_envs", "unroll_length",
                  "batch_size", "num_minibatches", "updates_per_batch", "population", "episode_length"):
@@ -108,22 +106,17 @@ def _validate(b: Baseline) -> None:
 
 def steps_per_update(b: Baseline) -> int:
     """Control cycles between two policy updates (PPO: one batch of unrolls; ES: one generation)."""
-    if b.agent == "ppo":
-        return b.batch_size * b.num_minibatches * b.unroll_length
-    return 2 * b.population * b.episode_length
+    return AGENTS[b.agent].steps_per_update(b)
 
 
 def steps_trained(b: Baseline) -> int:
     """Control cycles brax trains for ``b.steps`` asked: whole updates, rounded up as its trainers do.
 
     PPO: ``num_evals - 1`` epochs of ceil(steps / ((num_evals - 1) x update)) updates each;
-    ES: generations until the count reaches ``steps``.
+    ES: generations until the count reaches ``steps`` (one epoch).
     """
-    update = steps_per_update(b)
-    if b.agent == "ppo":
-        epochs = max(b.num_evals - 1, 1)
-        return epochs * math.ceil(b.steps / (epochs * update)) * update
-    return math.ceil(b.steps / update) * update
+    update, epochs = steps_per_update(b), AGENTS[b.agent].epochs(b)
+    return epochs * math.ceil(b.steps / (epochs * update)) * update
 
 
 # ----------------------------------------------------------------------------- measuring
@@ -276,6 +269,23 @@ def final_performance(run: Run) -> tuple[float, float]:
     return getattr(run, "final", (run.stochastic[-1], run.deterministic[-1]))
 
 
+class Agent(NamedTuple):
+    """What differs between the agents: how one trains, and the whole updates brax trains it in."""
+
+    train: Callable[..., Run]  # train(b, config, task, seed, report) -> Run
+    update: str  # what one update is called
+    steps_per_update: Callable[[Baseline], int]  # control cycles between two policy updates
+    epochs: Callable[[Baseline], int]  # training epochs, each of whole updates (brax rounds each one up)
+
+
+#: The agents, by the name ``--agent`` takes.
+AGENTS = {
+    "ppo": Agent(train_ppo, "updates", lambda b: b.batch_size * b.num_minibatches * b.unroll_length,
+                 lambda b: max(b.num_evals - 1, 1)),  # an epoch between two evaluations
+    "es": Agent(train_es, "generations", lambda b: 2 * b.population * b.episode_length, lambda b: 1),
+}
+
+
 # ----------------------------------------------------------------------------- the run
 
 OUTPUTS = ("runs.csv", "curves.csv", "learning_curve.png", "summary.json")
@@ -288,11 +298,13 @@ def run(b: Baseline, out_dir: str, config: Config | None = None, quiet: bool = F
     from imrl_jax.rundir import write_atomic
 
     config = Config() if config is None else config
-    train = {"ppo": train_ppo, "es": train_es}[b.agent]
+    if max(b.tasks) > config.num_tasks:
+        raise ConfigError(f"tasks: task {max(b.tasks)} is not in the task set (tasks 1 to {config.num_tasks})")
+    agent = AGENTS[b.agent]
     jobs = [(task, seed) for task in b.tasks for seed in b.seed_list]
     progress = Progress(len(jobs), quiet=quiet, unit="run")
     total = steps_trained(b)
-    rounded = (f" (brax trains whole {'updates' if b.agent == 'ppo' else 'generations'} of "
+    rounded = (f" (brax trains whole {agent.update} of "
                f"{steps_per_update(b):,} cycles: {b.steps:,} asked)") if total != b.steps else ""
     progress.note(f"{b.agent.upper()} baseline: {len(b.tasks)} task(s) x {b.seeds} seed(s), {total:,} cycles "
                      f"each{rounded}, {len(jobs) * total:,} in all")
@@ -305,7 +317,7 @@ def run(b: Baseline, out_dir: str, config: Config | None = None, quiet: bool = F
                 progress.message(f"  task {task} seed {seed}: {current.steps[-1]:,} / {b.steps:,} cycles, "
                                  f"performance {current.stochastic[-1]:.3f}{rate}")
 
-        trained = train(b, config, task, seed, report)
+        trained = agent.train(b, config, task, seed, report)
         sto, det = final_performance(trained)
         sps = float(np.median(trained.sps)) if trained.sps else float("nan")
         rows.append(dict(agent=b.agent, task=task, seed=seed, steps=trained.steps[-1], performance=round(sto, 5),
@@ -404,16 +416,16 @@ def _ints(text: str) -> tuple[int, ...]:
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m imrl_jax.baselines",
-                                description="Modern deep RL baselines from brax.training (PPO, ES) on the six "
-                                            "tasks, measured as the paper measures its agents.",
-                                formatter_class=HelpFormatter)
+    p = Parser(prog="python -m imrl_jax.baselines",
+               description="Modern deep RL baselines from brax.training (PPO, ES) on the six tasks, measured as the "
+                           "paper measures its agents.",
+               formatter_class=HelpFormatter)
     defaults = Baseline()
     p.add_argument("--agent", default=defaults.agent, help=f"one of {', '.join(AGENTS)}")
     p.add_argument("--steps", type=int, default=defaults.steps, help="control cycles of experience per task and seed")
     p.add_argument("--seeds", type=int, default=defaults.seeds, help="seeds per task")
     p.add_argument("--first-seed", type=int, default=defaults.first_seed, help="the first seed")
-    p.add_argument("--tasks", default="1,2,3,4,5,6", help="tasks to learn, e.g. 3,6")
+    p.add_argument("--tasks", help="tasks to learn, e.g. 3,6 (default: every task of the task set)")
     add_task_set(p, "whose tasks --tasks numbers", default="paper")
     p.add_argument("--evals", type=int, default=defaults.num_evals, help="evaluations per run, the untrained one included")
     p.add_argument("--eval-steps", type=int, default=defaults.eval_steps, help="cycles of each evaluation replay")
@@ -427,11 +439,13 @@ def parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = parser().parse_args(argv)
     command = "python -m imrl_jax.baselines " + " ".join(sys.argv[1:] if argv is None else argv)
     try:
+        args = parser().parse_args(argv)
+        config = apply_task_set(Config(), args)
         try:
-            tasks, hidden = _ints(args.tasks), _ints(args.hidden)
+            hidden = _ints(args.hidden)
+            tasks = tuple(range(1, config.num_tasks + 1)) if args.tasks is None else _ints(args.tasks)
         except ValueError:
             raise UsageError(f"--tasks/--hidden: expected comma-separated integers (got {args.tasks!r}, "
                              f"{args.hidden!r})") from None
@@ -446,12 +460,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             from imrl_jax import brax_env  # noqa: F401
         except ImportError as error:
             raise UsageError(str(error)) from None
-        from imrl_jax.tasks import load
-
-        config = Config(tasks=load(args.task_set))
-        if max(settings.tasks) > config.num_tasks:
-            raise UsageError(f"--tasks: task {max(settings.tasks)} is not in the task set {args.task_set!r} "
-                             f"(tasks 1 to {config.num_tasks})")
         summary = run(settings, args.out, config=config, quiet=args.quiet, command=command)
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)

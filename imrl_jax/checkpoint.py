@@ -152,7 +152,7 @@ def _search_from_saved(template: Any, saved: dict | None) -> Any:
     if saved is None or len(saved) != treedef.num_leaves:
         raise ValueError(f"the checkpoint holds {0 if saved is None else len(saved)} search state arrays, "
                          f"the strategy {treedef.num_leaves}")
-    return jax.tree.unflatten(treedef, [saved[name] for name in sorted(saved)])
+    return jax.tree.unflatten(treedef, [saved[name] for name in sorted(saved, key=int)])  # "1000" after "999"
 
 
 class Checkpointer:

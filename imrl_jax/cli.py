@@ -117,6 +117,15 @@ def add_task_set(parser: argparse.ArgumentParser, what: str, default: str | None
                              f"or a .json file")
 
 
+def apply_task_set(config, args):
+    """``config`` with the tasks of ``args.task_set`` (None: its own), checked on its geometry (raises ConfigError)."""
+    if args.task_set is None:
+        return config
+    from imrl_jax.tasks import load
+
+    return config.replace(tasks=load(args.task_set, config))
+
+
 def check_at_most(flag: str, value: int | None, limit: int) -> None:
     """Raise UsageError naming ``flag`` and the limit if ``value`` (None: not given) is above ``limit``."""
     if value is not None and value > limit:

@@ -12,7 +12,6 @@ expert in control) and ``summary.json``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
@@ -21,7 +20,7 @@ import time
 import jax
 import numpy as np
 
-from imrl_jax.cli import HelpFormatter, add_task_set, user_errors
+from imrl_jax.cli import HelpFormatter, Parser, add_task_set, apply_task_set, user_errors
 from imrl_jax.config import CONDITIONS, PRESETS, Config, make_config
 from imrl_jax.rundir import check_outputs_dir, check_writable, write_atomic
 
@@ -99,8 +98,7 @@ def run(config: Config, out_dir: str, seed: int = 0, overwrite: bool = False) ->
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m imrl_jax.demo", description=__doc__.split("\n")[0],
-                                     formatter_class=HelpFormatter)
+    parser = Parser(prog="python -m imrl_jax.demo", description=__doc__.split("\n")[0], formatter_class=HelpFormatter)
     parser.add_argument("--out", default="out/demo", help="output directory")
     parser.add_argument("--condition", default="LE-LS", choices=CONDITIONS, help="condition of the random individual")
     parser.add_argument("--seed", type=int, default=0, help="random seed of the individual and its life")
@@ -108,12 +106,9 @@ def main(argv=None) -> int:
                         help="config preset (small: reduced scale, about a minute on a CPU)")
     add_task_set(parser, "the tasks", default="paper")
     parser.add_argument("--overwrite", action="store_true", help="replace the outputs of an earlier demo in --out")
-    args = parser.parse_args(argv)
     try:
-        from imrl_jax.tasks import load
-
-        config = make_config(args.preset, condition=args.condition)
-        config = config.replace(tasks=load(args.task_set, config))
+        args = parser.parse_args(argv)
+        config = apply_task_set(make_config(args.preset, condition=args.condition), args)
         summary = run(config, args.out, args.seed, args.overwrite)
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)

@@ -46,7 +46,8 @@ from imrl_jax.lifetime import live
 from imrl_jax.networks import trait_names, traits
 from imrl_jax.progress import Progress
 from imrl_jax.rundir import (RunDirError, RunWriteError, check_unlocked, check_writable, entries, lock_run_dir,
-                             read_config, write_atomic, write_errno)
+                             make_dir, not_empty, read_config, write_atomic, write_errno)
+from imrl_jax.strategies import GA_NAME, GA_RECORD, describe, make_strategy, parse_settings
 
 __all__ = ["UsageError", "parse_sets", "write_atomic", "run", "main"]  # the first three re-exported
 
@@ -181,7 +182,8 @@ def _is_paper_scale(config: Config) -> bool:
 def check_run_dir(out_dir: str, config: Config, seeds: Sequence[int], resume: bool,
                   search_record: dict | None = None) -> None:
     """Refuse to write into anything but a new or empty directory or (resuming) a run of this config and search
-    strategy (``search_record``, :func:`imrl_jax.strategies.describe`; the GA if None). Raises UsageError."""
+    strategy (``search_record``, :func:`imrl_jax.strategies.describe`; the GA if None). Raises UsageError
+    (RunDirError for a directory holding something else)."""
     config_path = os.path.join(out_dir, "config.json")
     if os.path.exists(out_dir) and not os.path.isdir(out_dir):
         raise UsageError(f"--out: {out_dir} is not a directory")
@@ -193,8 +195,7 @@ def check_run_dir(out_dir: str, config: Config, seeds: Sequence[int], resume: bo
         raise UsageError(f"--resume: {out_dir} holds no run to resume (no config.json)")
     found = [] if exists else entries(out_dir)
     if found:  # its files could have the names of a run's outputs
-        raise UsageError(f"--out: {out_dir} is not empty and holds no run (no config.json; it holds "
-                         f"{', '.join(found[:3])}{', ...' if len(found) > 3 else ''}); choose a new or empty directory")
+        raise not_empty(out_dir, "run", found, missing="config.json")
     if exists:
         saved_config, saved_seeds = read_config(out_dir)
         if saved_seeds != list(seeds):
@@ -217,9 +218,6 @@ def _difference(name: str, config: Config, saved: Config) -> str:
         return f"tasks: {differ} of the run's {len(saved.tasks)} tasks differ (--task-set)"
     return (f"{name} is {getattr(config, name)!r} but the run used {getattr(saved, name)!r}"
             + (" (a resumed run may only grow it)" if name == "num_generations" else ""))
-
-
-GA_RECORD = {"strategy": "ga", "settings": {}}  # what a run made before --strategy existed was evolved with
 
 
 def read_search(out_dir: str) -> dict:
@@ -265,6 +263,7 @@ def _write_failed(error: BaseException, what: str, out_dir: str, generation: int
 
 
 def resume_command(out_dir: str) -> str:
+    """The command line that resumes the run in ``out_dir``."""
     return f"python -m imrl_jax.evolve --resume --out {shlex.quote(out_dir)}"
 
 
@@ -277,8 +276,6 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=N
     locked for the whole run (:func:`imrl_jax.rundir.lock_run_dir`). ``warnings`` are printed once the
     checks pass, ``notes`` too unless ``quiet``.
     """
-    from imrl_jax.strategies import describe
-
     strategy = GA(config) if strategy is None else strategy
     if not config.spec.evolved:
         raise UsageError(f"--cond: {config.condition} is not evolved (it learns each task from scratch); "
@@ -306,7 +303,7 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=N
         failure = None
         if leader:
             try:
-                _make_dir(out_dir)
+                make_dir(out_dir)
                 stack.enter_context(lock_run_dir(out_dir))
                 check_run_dir(out_dir, config, seeds, resume, describe(strategy))  # again, locked: another writer may have begun
                 if not resume:  # first, so that the directory is this run's from the start
@@ -329,7 +326,7 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=N
             if not leader and not int(ok):
                 raise RunDirError(f"--out: process 0 could not take {out_dir} (its error says why)")
             if not leader:
-                _make_dir(out_dir)
+                make_dir(out_dir)
         if failure is not None:
             raise failure
         for line in [*warnings, *([] if quiet else notes)] if leader else []:
@@ -341,13 +338,6 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=N
                        checkpoint_every=checkpoint_every, quiet=quiet or not leader, leader=leader)
 
 
-def _make_dir(out_dir: str) -> None:
-    try:
-        os.makedirs(out_dir, exist_ok=True)
-    except OSError as error:
-        raise UsageError(f"--out: cannot create {out_dir} ({error.strerror or error})") from None
-
-
 def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sharding, mesh,
             checkpointer: Checkpointer, strategy, *, resume: bool, checkpoint_every: int, quiet: bool,
             leader: bool) -> RunState:
@@ -355,10 +345,7 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
 
     Ctrl-C raises :class:`RunInterrupted`; a write the user can fix, :class:`RunWriteError`.
     """
-    progress = Progress(config.num_generations, quiet=quiet, first_index=0)
-    note = (lambda text: None) if quiet else progress.message  # --quiet: errors, warnings and the summary only
-    from imrl_jax.strategies import describe
-
+    progress = Progress(config.num_generations, quiet=quiet, first_index=0)  # --quiet: no notes
     meta = {"config": config.to_dict(), "seeds": seeds, "search": describe(strategy)}
     checkpointed = 0
     try:
@@ -367,12 +354,12 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
             if restored is None:
                 if checkpointer.steps():
                     raise UsageError(f"--resume: no readable checkpoint in {checkpointer.directory}")
-                note(f"no checkpoint in {checkpointer.directory} yet: starting from generation 0")
+                progress.note(f"no checkpoint in {checkpointer.directory} yet: starting from generation 0")
             else:
                 state, saved_meta = restored
-                if saved_meta.get("search", GA_RECORD) != describe(strategy):
-                    raise UsageError(f"--strategy: the checkpoint was made by {saved_meta['search']}, not "
-                                     f"{describe(strategy)}")
+                made_by = saved_meta.get("search", GA_RECORD)
+                if made_by != describe(strategy):
+                    raise UsageError(f"--strategy: the checkpoint was made by {made_by}, not {describe(strategy)}")
                 if not np.array_equal(state.key_data, np.asarray(jax.random.key_data(seed_keys(seeds)))):
                     raise UsageError("--resume: the checkpoint's keys do not match the seeds")
                 if int(state.generation) > config.num_generations:  # only if config.json was edited by hand
@@ -383,9 +370,9 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
                     extend_config_json(out_dir, config)
                 progress = Progress(config.num_generations, done=int(state.generation), quiet=quiet, first_index=0,
                                     elapsed=float(saved_meta.get("elapsed_seconds", 0.0)))
-                note(f"resuming {out_dir} after generation {int(state.generation) - 1} "
-                     f"({int(state.generation)} of {config.num_generations} done; checkpoint of commit "
-                     f"{saved_meta.get('git_commit', 'unknown')[:12]})")
+                progress.note(f"resuming {out_dir} after generation {int(state.generation) - 1} "
+                              f"({int(state.generation)} of {config.num_generations} done; checkpoint of commit "
+                              f"{saved_meta.get('git_commit', 'unknown')[:12]})")
 
         generation = make_step(config, strategy, sharding)
         keys = to_global(evolution_keys(state.key_data), replicated(mesh))
@@ -419,8 +406,8 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
                 checkpointed = g + 1
                 _write_outputs_from_leader(out_dir, config, seeds, state, leader, checkpointed)
         if first == config.num_generations:  # a finished run resumed: its outputs are rewritten once
-            note(f"{out_dir} is finished ({first} of {first} generations): its outputs are rewritten; "
-                 f"--generations N (more than {first}) extends it")
+            progress.note(f"{out_dir} is finished ({first} of {first} generations): its outputs are rewritten; "
+                          f"--generations N (more than {first}) extends it")
             _write_outputs_from_leader(out_dir, config, seeds, state, leader, checkpointed)
     except KeyboardInterrupt:
         raise RunInterrupted(out_dir, int(state.generation), checkpointed, config.num_generations) from None
@@ -465,7 +452,8 @@ def _write_outputs_from_leader(out_dir: str, config: Config, seeds: Sequence[int
 # ----------------------------------------------------------------------------- CLI
 
 
-#: The config fields that options of the command line set (``--set`` may not set them): field -> option.
+#: The config fields that options of the command line set (``--set`` may not set them): field -> option
+#: (:func:`build_config` reads each option's value into its field).
 OPTION_FIELDS = {"condition": "--cond", "num_generations": "--generations", "population_size": "--population",
                  "num_parents": "--parents", "num_elites": "--elites", "childhood_steps": "--childhood-steps",
                  "task_steps": "--task-steps", "num_bins": "--bins"}
@@ -498,39 +486,35 @@ def build_config(args, saved: tuple[Config, list[int]] | None = None) -> tuple[C
     only ``--generations`` extends a run).
     """
     cli.refuse_option_fields(args.set, OPTION_FIELDS)
-    overrides = {} if args.cond is None else {"condition": args.cond}
-    for flag, field in (("generations", "num_generations"), ("population", "population_size"),
-                        ("parents", "num_parents"), ("childhood_steps", "childhood_steps"),
-                        ("task_steps", "task_steps"), ("bins", "num_bins"), ("elites", "num_elites")):
-        value = getattr(args, flag)
-        if value is not None:
-            overrides[field] = value
+    given = {field: getattr(args, _dest(flag)) for field, flag in OPTION_FIELDS.items()}
+    overrides = {field: value for field, value in given.items() if value is not None}
     overrides.update(parse_sets(args.set))
-    if args.task_set is not None:  # checked against the preset's geometry when the config is made
-        from imrl_jax.tasks import load
-
-        overrides["tasks"] = load(args.task_set)
     if saved is None:
         config = make_config(args.preset or "paper", **overrides)
         first, count = args.first_seed or 0, args.seeds or 1
+        seeds = list(range(first, first + count))
     else:
-        saved_config, saved_seeds = saved
+        saved_config, seeds = saved
         if args.preset is None:
             config = saved_config.replace(**overrides)
         else:
             config = make_config(args.preset, **{"num_generations": saved_config.num_generations, **overrides})
-        first = saved_seeds[0] if args.first_seed is None else args.first_seed
-        count = len(saved_seeds) if args.seeds is None else args.seeds
-        if args.first_seed is None and args.seeds is None:
-            return config, saved_seeds
-    return config, list(range(first, first + count))
+        if args.first_seed is not None or args.seeds is not None:
+            first = seeds[0] if args.first_seed is None else args.first_seed
+            count = len(seeds) if args.seeds is None else args.seeds
+            seeds = list(range(first, first + count))
+    # The tasks are checked against the geometry of this config (its preset and --set): loaded once it is made.
+    return cli.apply_task_set(config, args), seeds
+
+
+def _dest(flag: str) -> str:
+    """The attribute of the parsed arguments that an option sets (argparse's name for it)."""
+    return flag.lstrip("-").replace("-", "_")
 
 
 def build_strategy(args, config: Config, saved: dict | None = None):
     """The search strategy the command line asks for; resuming, the run's own (``saved``) for what it leaves out."""
-    from imrl_jax.strategies import make_strategy, parse_settings
-
-    name = args.strategy or (saved["strategy"] if saved else "ga")
+    name = args.strategy or (saved["strategy"] if saved else GA_NAME)
     if args.strategy_set is not None:
         settings = parse_settings(args.strategy_set)
     else:
@@ -634,6 +618,11 @@ def main(argv=None) -> int:
             raise UsageError("--resume: give the run to continue with --out RUN")
         if args.cond is None and not args.resume:
             raise UsageError("--cond: required (or --resume --out RUN to continue a run with its own config)")
+        if args.cpu_devices < 0:
+            raise UsageError("--cpu-devices: must be 0 (one per core) or more")
+        # Before anything starts JAX (the task set's checks, a strategy's arrays): later, neither takes effect.
+        use_host_cores(args.cpu_devices or None)
+        init_distributed(args)
         out_dir = args.out or os.path.join("runs", args.cond)
         saved = None
         if args.resume:
@@ -641,12 +630,8 @@ def main(argv=None) -> int:
                 raise UsageError(f"--resume: {out_dir} holds no run to resume (no config.json)")
             saved = read_config(out_dir)
         config, seeds = build_config(args, saved)
-        if args.cpu_devices < 0:
-            raise UsageError("--cpu-devices: must be 0 (one per core) or more")
         strategy = build_strategy(args, config, read_search(out_dir) if args.resume else None)
         notes = cli.ignored_notes(config, parse_sets(args.set))
-        use_host_cores(args.cpu_devices or None)
-        init_distributed(args)
         state = run(config, out_dir, seeds, strategy=strategy, resume=args.resume,
                     checkpoint_every=args.checkpoint_every,
                     keep=args.keep, quiet=args.quiet, warnings=cli.device_warnings(config, args.cpu_devices),

@@ -130,20 +130,13 @@ def evaluate(key: jax.Array, config: Config, params: LearningParams,
     lives = jax.vmap(lambda k, g: live(k, config, params, g), (0, None))
     result: LifetimeResult = jax.vmap(lives)(keys, population)
     return result.fitness.mean(1), result.performance.mean(1)
+
+
 def make_generation(config: Config, sharding=None):
     """A jitted ``generation(keys, params, populations, generation)`` vmapped over seeds.
 
     ``keys`` (seeds,) are the seeds' own keys; ``populations`` (seeds, P, genes). Returns
     the next populations and each seed's :class:`GenerationStats`. With ``sharding`` (of
-    the populations), the next populations keep it: otherwise XLA returns them replicated
-    (reproduction gathers parents across the population axis), and every later
-    generation would run unsharded, each device living every life.
+    the populations), the next populations keep it (:func:`imrl_jax.search.over_seeds`).
     """
-
-    def generation(keys, params, populations, index):
-        children, stats = jax.vmap(lambda k, p: evolve_step(k, config, params, p, index))(keys, populations)
-        if sharding is not None:
-            children = jax.lax.with_sharding_constraint(children, sharding)
-        return children, stats
-
-    return jax.jit(generation)
+    return search.over_seeds(lambda k, p, g, i: evolve_step(k, config, p, g, i), (0, None, 0, None), sharding)

@@ -54,8 +54,9 @@ from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
 from imrl_jax.lifetime import grow_up, lifetime_keys, run_phase, task_spec, task_start
 from imrl_jax.state import State
 from imrl_jax.progress import Progress
-from imrl_jax.rundir import (RunWriteError, best_genomes, check_unlocked, check_writable, entries,
-                             load_run as read_run, lock_run_dir, write_atomic, write_errno)
+from imrl_jax.rundir import (RunDirError, RunWriteError, best_genomes, check_unlocked, check_writable, entries,
+                             is_output, load_run as read_run, lock_run_dir, make_dir, not_empty, read_config,
+                             read_kept_best, write_atomic, write_errno)
 
 
 class TestState(NamedTuple):
@@ -217,25 +218,14 @@ def load_run(run_dir: str, num_best: int) -> tuple[Config, list[int], np.ndarray
 def load_kept_best(run_dir: str, path: str, num_best: int) -> tuple[Config, list[int], np.ndarray]:
     """A run's config and the ``num_best`` best genomes of each seed kept in a report's ``best_genomes.npz``
     (for a run whose final population was not kept); its key is the run's ``VARIANT/evolve/CONDITION`` path."""
-    from imrl_jax.rundir import RunDirError, read_config
-
     config, _ = read_config(run_dir)
     variant = os.path.basename(os.path.dirname(os.path.dirname(os.path.abspath(run_dir))))
-    key = f"{variant}__{config.condition}"
-    try:
-        with np.load(path) as kept:
-            arrays = {name: kept[name] for name in kept.files}
-    except (OSError, ValueError) as error:
-        raise RunDirError(f"--best-genomes: {path} is unreadable ({error})") from None
-    if f"{key}__genomes" not in arrays:
-        found = sorted({name.rsplit("__", 1)[0].replace("__", "/") for name in arrays})
-        raise RunDirError(f"--best-genomes: {path} holds no {variant}/{config.condition} (it holds "
-                          f"{', '.join(found)})")
-    genomes, seeds = arrays[f"{key}__genomes"], [int(s) for s in arrays[f"{key}__seeds"]]
+    genomes, seeds, _ = read_kept_best(path, variant, config.condition)
     if not 1 <= num_best <= genomes.shape[1]:
         raise RunDirError(f"--best: must be between 1 and the {genomes.shape[1]} kept in {path}")
     if genomes.shape[-1] != config.num_genes:
-        raise RunDirError(f"--best-genomes: {key} has {genomes.shape[-1]} genes, the run's config {config.num_genes}")
+        raise RunDirError(f"--best-genomes: {variant}__{config.condition} has {genomes.shape[-1]} genes, the run's "
+                          f"config {config.num_genes}")
     return config, seeds, genomes[:, :num_best]
 
 
@@ -297,7 +287,7 @@ OUTPUTS = ("curves.npz", "curve.csv", "learning_curve.png", "steady.json")
 
 
 def check_out_dir(out_dir: str) -> None:
-    """Refuse an ``--out`` that is neither new, nor empty, nor an unfinished learning test (raises UsageError)."""
+    """Refuse an ``--out`` that is neither new, nor empty, nor an unfinished learning test (raises a user error)."""
     if os.path.exists(os.path.join(out_dir, "steady.json")):
         raise UsageError(f"--out: {out_dir} already holds a learning test; choose another directory")
     found = entries(out_dir)
@@ -307,14 +297,9 @@ def check_out_dir(out_dir: str) -> None:
     unfinished = os.path.isdir(partial) and (os.path.exists(os.path.join(partial, "spec.json"))
                                              or not os.listdir(partial))
     # An interrupted test may also have written some outputs (and a temporary file) before steady.json.
-    others = [name for name in found if name != PARTIAL and not any(
-        name == output or name.startswith(f"{output}.tmp-") or name.startswith(f".{os.path.splitext(output)[0]}.tmp-")
-        for output in OUTPUTS)]
+    others = [name for name in found if name != PARTIAL and not is_output(name, OUTPUTS)]
     if not unfinished or others:
-        shown = (others or found)[:3]
-        raise UsageError(f"--out: {out_dir} is not empty and holds no unfinished learning test (it holds "
-                         f"{', '.join(shown)}{', ...' if len(others or found) > 3 else ''}); choose a new or empty "
-                         f"directory")
+        raise not_empty(out_dir, "unfinished learning test", others or found)
 
 
 def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, steady_steps: int, num_chunks: int,
@@ -328,11 +313,8 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
     steady_bins(config, steady_steps)
     check_writable(out_dir)
     check_unlocked(out_dir)
-    check_out_dir(out_dir)
-    try:
-        os.makedirs(out_dir, exist_ok=True)
-    except OSError as error:
-        raise UsageError(f"--out: cannot create {out_dir} ({error.strerror or error})") from None
+    check_out_dir(out_dir)  # before the directory is made or locked: nothing is written into another's
+    make_dir(out_dir)
     with lock_run_dir(out_dir):
         check_out_dir(out_dir)  # again, locked: another test may have written there in between
         for line in [*warnings, *([] if quiet else notes)]:
@@ -481,18 +463,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     command = "python -m imrl_jax.learning_test " + " ".join(sys.argv[1:] if argv is None else argv)
     try:
         args = parser().parse_args(argv)
-        if os.path.exists(os.path.join(args.out, "steady.json")):
-            raise UsageError(f"--out: {args.out} already holds a learning test; choose another directory")
         check_sizes(args)
         if args.cond is not None and args.cond not in CONDITIONS:
             raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(CONDITIONS)}; "
                              f"only {', '.join(FROM_SCRATCH)} are tested without a run directory)")
+        if args.cpu_devices < 0:
+            raise UsageError("--cpu-devices: must be 0 (one per core) or more")
+        use_host_cores(args.cpu_devices or None)  # before anything starts JAX (the task set's checks)
         cli.refuse_option_fields(args.set, OPTION_FIELDS)
         sets = parse_sets(args.set)
         if args.cond in FROM_SCRATCH:
             if args.run_dir:
                 raise UsageError(f"run_dir: {args.cond} is tested from scratch; give either a run directory or "
                                  f"--cond {args.cond}")
+            if args.best_genomes:
+                raise UsageError("--best-genomes: only with a run directory")
             base = make_config(args.preset, **{**sets, "condition": args.cond})
             genomes = np.zeros((args.runs, args.best, base.num_genes), np.float32)
             source = f"{args.cond} from scratch, preset {args.preset}" + "".join(f", {s}" for s in args.set or [])
@@ -500,9 +485,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             if not args.run_dir:
                 raise UsageError("run_dir: give an evolution's run directory, or --cond SLE")
             if args.best_genomes:
-                base, seeds, genomes = load_kept_best(args.run_dir, args.best_genomes, args.best)
+                base, _, genomes = load_kept_best(args.run_dir, args.best_genomes, args.best)
             else:
-                base, seeds, genomes = load_run(args.run_dir, args.best)
+                base, _, genomes = load_run(args.run_dir, args.best)
             if args.cond is not None and args.cond != base.condition:
                 raise UsageError(f"--cond: {args.run_dir} is a {base.condition} run, not {args.cond}")
             source = os.path.abspath(args.run_dir) + "".join(f", {s}" for s in args.set or [])
@@ -512,20 +497,13 @@ def main(argv: Sequence[str] | None = None) -> int:
                     raise UsageError(f"--set: {', '.join(sets)} changes the genome ({base.num_genes} genes evolved, "
                                      f"{tested.num_genes} asked)")
                 base = tested
-        config = base.replace(task_steps=args.task_steps, num_bins=args.bins)
-        if args.task_set is not None:  # evolved genomes tested on other tasks (they encode no task)
-            from imrl_jax.tasks import load
-
-            config = config.replace(tasks=load(args.task_set, config))
+        # Evolved genomes may be tested on other tasks (they encode none).
+        config = cli.apply_task_set(base.replace(task_steps=args.task_steps, num_bins=args.bins), args)
+        if args.task_set is not None:
             source += f", task set {args.task_set}"
         if config.num_bins % args.chunks:
             raise UsageError(f"--chunks: {args.bins} bins cannot be split into {args.chunks} chunks")
         steady_bins(config, args.steady_steps)
-        check_writable(args.out)
-        check_out_dir(args.out)
-        if args.cpu_devices < 0:
-            raise UsageError("--cpu-devices: must be 0 (one per core) or more")
-        use_host_cores(args.cpu_devices or None)
         summary = run(config, genomes, args.out, num_tests=args.tests, steady_steps=args.steady_steps,
                       num_chunks=args.chunks, seed=args.seed, quiet=args.quiet, source=source, command=command,
                       warnings=cli.device_warnings(config, args.cpu_devices), notes=cli.ignored_notes(config, sets))

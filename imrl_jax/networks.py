@@ -7,12 +7,12 @@ an :class:`Agent` pytree; :func:`decode` turns a genome into the weights a condi
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Callable, NamedTuple
 
 import jax
 import jax.numpy as jnp
 
-from imrl_jax.conditions import EVOLVED_PARAMETERS, network_shape
+from imrl_jax.conditions import EVOLVED_FIELDS, EVOLVED_PARAMETERS, network_shape
 from imrl_jax.config import Config, LearningParams
 
 
@@ -52,12 +52,16 @@ def pick(values: jnp.ndarray, k) -> jnp.ndarray:
     return jnp.sum(jnp.where(jax.lax.broadcasted_iota(jnp.int32, values.shape, 0) == k, values, 0.0))
 
 
+def _unit(gene):
+    """Where a gene in [-1, 1] puts its value in the value's range: u in [0, 1] (clipped)."""
+    return jnp.clip((gene + 1.0) / 2.0, 0.0, 1.0)
+
+
 def parameter_values(genes) -> dict:
     """The learning values that parameter genes encode (:data:`~imrl_jax.conditions.EVOLVED_PARAMETERS`' maps)."""
     values = {}
     for gene, (name, kind, lo, hi) in zip(genes, EVOLVED_PARAMETERS):
-        u = jnp.clip((gene + 1.0) / 2.0, 0.0, 1.0)
-        exponent = lo + u * (hi - lo)
+        exponent = lo + _unit(gene) * (hi - lo)
         values[name] = {"log": 10.0 ** exponent, "1-log": 1.0 - 10.0 ** exponent, "linear": exponent}[kind]
     return values
 
@@ -126,32 +130,48 @@ def zero_agent(config: Config, dtype=jnp.float32) -> Agent:
     )
 
 
+def _parameter_traits(config: Config, agent: Agent) -> list:
+    # The speed bias is no learning value: decode puts it into the actors' weights.
+    return [agent.actor[0, 1, -1] if name == "initial_speed_bias" else getattr(agent.params, name)
+            for name in EVOLVED_FIELDS]
+
+
+def _expression_names(config: Config) -> tuple[str, ...]:
+    return ("expressed_experts",) + tuple(f"share_{k}_experts" for k in range(1, config.num_experts + 1))
+
+
+def _expression_traits(config: Config, agent: Agent) -> list:
+    count = agent.expressed.sum()
+    return [count] + [(count == k).astype(count.dtype) for k in range(1, config.num_experts + 1)]
+
+
+class _Traits(NamedTuple):
+    """The evolved values one part of the genome carries besides weights."""
+
+    part: str  # the genome part (``Condition.genome``)
+    names: Callable[[Config], tuple[str, ...]]
+    values: Callable[[Config, Agent], list]  # one () value per name, from the decoded agent
+
+
+#: The genome parts whose values :func:`trait_names` and :func:`traits` report, in their order.
+_TRAITS = (
+    _Traits("parameters", lambda config: EVOLVED_FIELDS, _parameter_traits),
+    _Traits("childhood_length", lambda config: ("childhood_length",), lambda config, agent: [agent.childhood_length]),
+    _Traits("expressed", _expression_names, _expression_traits),
+)
+
+
 def trait_names(config: Config) -> tuple[str, ...]:
     """The evolved values a condition's genomes carry besides weights (recorded per generation by ``evolve``)."""
-    names = ()
-    if "parameters" in config.spec.genome:
-        names += tuple(name for name, *_ in EVOLVED_PARAMETERS)
-    if "childhood_length" in config.spec.genome:
-        names += ("childhood_length",)
-    if "expressed" in config.spec.genome:
-        names += ("expressed_experts",) + tuple(f"share_{k}_experts" for k in range(1, config.num_experts + 1))
-    return names
+    return tuple(name for row in _TRAITS if row.part in config.spec.genome for name in row.names(config))
 
 
 def traits(config: Config, genome: jnp.ndarray) -> jnp.ndarray:
     """The values of :func:`trait_names` for one genome (the learning values its genes decode to; how many experts it
     expresses, and 1 in the ``share_k_experts`` entry of that number): a population's mean of those is the share."""
     agent = decode(config, genome)
-    values = []
-    if "parameters" in config.spec.genome:
-        values += [getattr(agent.params, name) for name, *_ in EVOLVED_PARAMETERS if name != "initial_speed_bias"]
-        values.append(agent.actor[0, 1, -1])  # the learned actors' initial speed bias
-    if "childhood_length" in config.spec.genome:
-        values.append(agent.childhood_length.astype(genome.dtype))
-    if "expressed" in config.spec.genome:
-        count = agent.expressed.sum()
-        values += [count] + [(count == k).astype(genome.dtype) for k in range(1, config.num_experts + 1)]
-    return jnp.stack(values) if values else jnp.zeros((0,), genome.dtype)
+    values = [value for row in _TRAITS if row.part in config.spec.genome for value in row.values(config, agent)]
+    return jnp.stack([jnp.asarray(v, genome.dtype) for v in values]) if values else jnp.zeros((0,), genome.dtype)
 
 
 def decode(config: Config, genome: jnp.ndarray) -> Agent:
@@ -173,8 +193,7 @@ def decode(config: Config, genome: jnp.ndarray) -> Agent:
     if "expressed" in networks:  # expression genes: which experts exist (an evolved number of experts)
         networks["expressed"] = express(networks["expressed"])
     if "childhood_length" in networks:  # learning and noise stop after this many steps of childhood
-        u = jnp.clip((networks["childhood_length"][0] + 1.0) / 2.0, 0.0, 1.0)
-        networks["childhood_length"] = jnp.round(u * config.childhood_steps)
+        networks["childhood_length"] = jnp.round(_unit(networks["childhood_length"][0]) * config.childhood_steps)
     if "parameters" in networks:  # the individual's own learning values; the config's for the others
         values = parameter_values(networks.pop("parameters"))
         bias = values.pop("initial_speed_bias")

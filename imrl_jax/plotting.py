@@ -619,8 +619,9 @@ def plot_traits(config: Config, names, traits: np.ndarray, title: str = ""):
     """The evolved values per generation (``traits`` (G, S, T, 2): population mean and the best's, per seed).
 
     One panel per learning value (log scale for rates and for 1 - discount), the run's config value
-    (what its preset fixes by hand) and the paper's dashed; the expressed experts as their mean count
-    and the population's shares of each count, stacked.
+    (what its preset fixes by hand) and the paper's dashed; the evolved childhood length in steps, its
+    longest (``childhood_steps``) dashed; the expressed experts as their mean count and the population's
+    shares of each count, stacked.
     """
     from matplotlib.ticker import MaxNLocator
 
@@ -629,7 +630,7 @@ def plot_traits(config: Config, names, traits: np.ndarray, title: str = ""):
 
     kinds = {name: kind for name, kind, *_ in EVOLVED_PARAMETERS}
     paper = make_config("paper")
-    values = [n for n in names if n in kinds]
+    values = [n for n in names if n in kinds or n == "childhood_length"]
     panels = values + (["expressed_experts", "shares"] if "expressed_experts" in names else [])
     columns = min(4, len(panels))
     rows = -(-len(panels) // columns)
@@ -656,9 +657,12 @@ def plot_traits(config: Config, names, traits: np.ndarray, title: str = ""):
             ax.axhline(shown(getattr(config, panel)), color="tab:blue", lw=1, ls="--", label="the preset's value")
             if getattr(paper, panel) != getattr(config, panel):
                 ax.axhline(shown(getattr(paper, panel)), color="0.5", lw=1, ls=":", label="the paper's value")
+        elif panel == "childhood_length":  # the gene chooses a length up to the whole childhood
+            ax.axhline(config.childhood_steps, color="tab:blue", lw=1, ls="--", label="the longest (childhood_steps)")
         if kind in ("log", "1-log"):
             ax.set_yscale("log")
-        style_axis(ax, f"1 - {panel}" if kind == "1-log" else panel, "generation" if i >= len(panels) - columns else "")
+        label = f"1 - {panel}" if kind == "1-log" else f"{panel} (steps)" if panel == "childhood_length" else panel
+        style_axis(ax, label, "generation" if i >= len(panels) - columns else "")
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
         if i == 0:
             ax.legend(fontsize=6)

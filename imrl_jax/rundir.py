@@ -84,20 +84,38 @@ def check_writable(path: str, flag: str = "--out") -> None:
         raise RunDirError(f"{flag}: cannot write to {path} ({folder}: {error.strerror or error})") from None
 
 
-def check_outputs_dir(path: str, outputs: tuple[str, ...], kind: str, overwrite: bool = False,
-                      flag: str = "--out") -> None:
+def is_output(name: str, outputs: tuple[str, ...]) -> bool:
+    """Whether a directory entry is one of ``outputs`` or a temporary file an interrupted write of one left."""
+    # write_atomic leaves ``x.tmp-PID``; matplotlib's save, ``.x.tmp-PID.png``
+    return any(name == out or name.startswith(f"{out}.tmp-") or name.startswith(f".{os.path.splitext(out)[0]}.tmp-")
+               for out in outputs)
+
+
+def not_empty(path: str, kind: str, found: list[str], missing: str = "") -> RunDirError:
+    """The refusal of an ``--out`` holding ``found``, none of it a ``kind`` (``missing``: the file that would say so)."""
+    shown = ", ".join(found[:3]) + (", ..." if len(found) > 3 else "")
+    why = f"no {missing}; " if missing else ""
+    return RunDirError(f"--out: {path} is not empty and holds no {kind} ({why}it holds {shown}); choose a new or empty "
+                       f"directory")
+
+
+def make_dir(path: str) -> None:
+    """Create the ``--out`` directory ``path`` if it is new (raises RunDirError naming it)."""
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError as error:
+        raise RunDirError(f"--out: cannot create {path} ({error.strerror or error})") from None
+
+
+def check_outputs_dir(path: str, outputs: tuple[str, ...], kind: str, overwrite: bool = False) -> None:
     """Refuse (RunDirError) an output directory holding anything but a ``kind``'s ``outputs``, or those without ``overwrite``."""
     found = entries(path)
-    # an interrupted command may leave its outputs' temporary files (``x.tmp-PID``, ``.x.tmp-PID.png``)
-    ours = [name for name in found if any(name == out or name.startswith(f"{out}.tmp-")
-                                          or name.startswith(f".{os.path.splitext(out)[0]}.tmp-") for out in outputs)]
+    ours = [name for name in found if is_output(name, outputs)]
     others = [name for name in found if name not in ours]
     if others:
-        shown = ", ".join(others[:3]) + (", ..." if len(others) > 3 else "")
-        raise RunDirError(f"{flag}: {path} is not empty and holds no {kind} (it holds {shown}); choose a new or empty "
-                          f"directory")
+        raise not_empty(path, kind, others)
     if ours and not overwrite:
-        raise RunDirError(f"{flag}: {path} already holds a {kind} (pass --overwrite to replace it)")
+        raise RunDirError(f"--out: {path} already holds a {kind} (pass --overwrite to replace it)")
 
 
 def read_config(run_dir: str) -> tuple[Config, list[int]]:
@@ -133,6 +151,31 @@ def load_run(run_dir: str) -> Run:
     return Run(config, seeds, generation, evaluated, fitness)
 
 
+class KeptBest(NamedTuple):
+    """The best genomes of one run that a report keeps in its ``best_genomes.npz``."""
+
+    genomes: np.ndarray  # (seeds, best, genes) fittest first
+    seeds: list[int]
+    fitness: np.ndarray | None  # (seeds, best) their fitness, where the file keeps it
+
+
+def read_kept_best(path: str, variant: str, condition: str) -> KeptBest:
+    """The best genomes a report's ``best_genomes.npz`` keeps of its ``variant``'s ``condition`` run, under
+    ``VARIANT__CONDITION__genomes`` (``__seeds``, ``__fitness``) (raises RunDirError naming the file)."""
+    try:
+        with np.load(path) as kept:
+            arrays = {name: kept[name] for name in kept.files}
+    except (OSError, ValueError) as error:
+        raise RunDirError(f"--best-genomes: {path} is unreadable ({error})") from None
+    key = f"{variant}__{condition}"
+    if f"{key}__genomes" not in arrays:
+        found = sorted({name.rsplit("__", 1)[0].replace("__", "/") for name in arrays})
+        raise RunDirError(f"--best-genomes: {path} holds no {variant}/{condition} (it holds {', '.join(found)})")
+    if f"{key}__seeds" not in arrays:
+        raise RunDirError(f"--best-genomes: {path} holds no {key}__seeds beside {key}__genomes")
+    return KeptBest(arrays[f"{key}__genomes"], [int(s) for s in arrays[f"{key}__seeds"]], arrays.get(f"{key}__fitness"))
+
+
 def best_genomes(run: Run, num_best: int) -> np.ndarray:
     """The ``num_best`` fittest genomes of each seed, fittest first: (seeds, num_best, genes)."""
     if not 1 <= num_best <= run.evaluated.shape[1]:
@@ -155,19 +198,26 @@ class LockHolder(NamedTuple):
     start: int  # the process's start time (clock ticks after boot, /proc), 0 where unknown: tells a reused pid
 
 
-def _proc_stat(pid: int) -> tuple[str, int] | None:
+class ProcStat(NamedTuple):
+    """What /proc tells of a process."""
+
+    state: str  # its state letter ("Z": killed but not yet reaped)
+    start: int  # its start time (clock ticks after boot)
+
+
+def _proc_stat(pid: int) -> ProcStat | None:
     """A process's state letter and start time from /proc (None off Linux or if it is gone)."""
     try:
         with open(f"/proc/{pid}/stat") as f:
             fields = f.read().rsplit(")", 1)[1].split()  # the name before ")" may hold spaces
-        return fields[0], int(fields[19])
+        return ProcStat(fields[0], int(fields[19]))
     except (OSError, IndexError, ValueError):
         return None
 
 
 def _me() -> LockHolder:
     stat = _proc_stat(os.getpid())
-    return LockHolder(os.getpid(), socket.gethostname(), stat[1] if stat else 0)
+    return LockHolder(os.getpid(), socket.gethostname(), stat.start if stat else 0)
 
 
 def read_lock(path: str, tries: int = 20) -> LockHolder | None:
@@ -195,7 +245,7 @@ def holder_alive(holder: LockHolder) -> bool | None:
     except PermissionError:
         pass  # another user's process: it exists
     stat = _proc_stat(holder.pid)
-    if stat is not None and (stat[0] == "Z" or (holder.start and stat[1] != holder.start)):
+    if stat is not None and (stat.state == "Z" or (holder.start and stat.start != holder.start)):
         return False  # killed but not yet reaped, or the pid now belongs to a later process
     return True
 

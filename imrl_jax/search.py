@@ -111,11 +111,21 @@ def make_generation(strategy: Strategy, live: Callable, lives_per_fitness: int =
         following, state = ask(key, strategy, state, search_params, index + 1)
         return following, state, Evaluated(result.fitness, result.lives.performance.mean(1))
 
-    def step(keys, params, populations, states, search_params, index):
-        following, states, evaluated = jax.vmap(one, (0, None, 0, 0, None, None))(keys, params, populations, states,
-                                                                                  search_params, index)
+    return over_seeds(one, (0, None, 0, 0, None, None), sharding)
+
+
+def over_seeds(one: Callable, in_axes: tuple, sharding=None):
+    """``one`` generation of one seed, vmapped over the seeds (``in_axes``) and jitted.
+
+    Its first output, the next populations, is kept in ``sharding``: otherwise XLA returns them
+    replicated (reproduction gathers genomes across the population axis), and every later
+    generation would run unsharded, each device living every life.
+    """
+
+    def step(*args):
+        following, *rest = jax.vmap(one, in_axes)(*args)
         if sharding is not None:
             following = jax.lax.with_sharding_constraint(following, sharding)
-        return following, states, evaluated
+        return (following, *rest)
 
     return jax.jit(step)

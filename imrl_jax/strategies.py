@@ -27,6 +27,10 @@ from imrl_jax.search import split_search_key
 #: hundred or a few hundred genes and 50 lives a generation.
 STRATEGIES = {"sep_cma_es": "Sep_CMA_ES", "cma_es": "CMA_ES", "snes": "SNES", "xnes": "xNES", "open_es": "Open_ES",
               "pgpe": "PGPE"}
+#: The paper's genetic algorithm, by the name ``--strategy`` takes (the default), and what a run records of it (also
+#: what a run made before ``--strategy`` existed was evolved with).
+GA_NAME = "ga"
+GA_RECORD = {"strategy": GA_NAME, "settings": {}}
 
 
 def _import_evosax():
@@ -87,7 +91,7 @@ class Evosax:
 
 def make_strategy(name: str, config: Config, settings: dict | None = None):
     """The search strategy ``name`` for ``config``'s population and genome: ``"ga"`` (the paper's) or an evosax one."""
-    if name == "ga":
+    if name == GA_NAME:
         if settings:
             raise ConfigError("strategy ga: its settings are config fields (mutation_prob, mutation_scale, ...); "
                               "use --set")
@@ -95,7 +99,7 @@ def make_strategy(name: str, config: Config, settings: dict | None = None):
 
         return GA(config)
     if name not in STRATEGIES:
-        raise ConfigError(f"strategy: unknown strategy {name!r} (choose from ga, {', '.join(STRATEGIES)})")
+        raise ConfigError(f"strategy: unknown strategy {name!r} (choose from {GA_NAME}, {', '.join(STRATEGIES)})")
     strategy = Evosax(name, config.population_size, config.num_genes, config.init_scale,
                       tuple(sorted((settings or {}).items())))
     strategy.default_params()  # checks the settings now: one line naming a bad one
@@ -106,7 +110,7 @@ def describe(strategy) -> dict:
     """What a run records of its strategy (config.json's ``search``): its name and the settings given."""
     if isinstance(strategy, Evosax):
         return {"strategy": strategy.name, "settings": dict(strategy.settings)}
-    return {"strategy": "ga", "settings": {}}
+    return GA_RECORD
 
 
 def parse_settings(items) -> dict:

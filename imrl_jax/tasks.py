@@ -22,9 +22,7 @@ import json
 import math
 import os
 
-from imrl_jax.config import Config, ConfigError, Task, paper_tasks
-
-_S = 20.0 * math.sqrt(3.0)  # the hexagons' apothem at the paper's 40 cm edges: vertices lie at y = 200 + k s
+from imrl_jax.config import _S, Config, ConfigError, Task, paper_tasks  # _S: vertices lie at y = 200 + k _S
 
 
 def novel_tasks() -> tuple[Task, ...]:

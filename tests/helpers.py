@@ -145,6 +145,24 @@ def run_python(code: str, devices: int = 1, timeout: float = TIMEOUT) -> subproc
                           timeout=timeout)
 
 
+def devices_seen(module: str, args) -> int:
+    """The devices ``python -m module args`` has once it calls its ``run`` (replaced: nothing runs), in a fresh
+    interpreter on CPU with no device count forced (the command asks for its own)."""
+    code = (f"import sys, jax, {module} as command\n"
+            "def run(*args, **kwargs):\n"
+            "    print(len(jax.devices()))\n"
+            "    raise SystemExit(0)\n"
+            "command.run = run\n"
+            f"sys.exit(command.main({list(args)!r}))\n")
+    env = environment()
+    env["XLA_FLAGS"] = " ".join(f for f in env["XLA_FLAGS"].split()
+                                if not f.startswith("--xla_force_host_platform_device_count"))
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True,
+                          timeout=TIMEOUT)
+    assert done.returncode == 0 and done.stdout.strip(), done.stderr[-2000:]
+    return int(done.stdout.split()[-1])
+
+
 def environment(devices: int = 1) -> dict:
     """The environment of a run on ``devices`` forced CPU devices (nothing of ours inherited)."""
     env = {k: v for k, v in os.environ.items() if k not in _DISTRIBUTED_ENV}

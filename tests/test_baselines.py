@@ -90,6 +90,8 @@ def test_es_run_writes_its_outputs(tmp_path):
     (["--agent", "sac"], "agent"),
     (["--tasks", "3,7"], "tasks"),
     (["--tasks", "three"], "--tasks"),
+    (["--steps", "many"], "--steps: invalid int value"),
+    (["--task-set", "nov"], "--task-set: unknown task set"),
     (["--steps", "0"], "steps"),
     (["--evals", "1"], "num_evals"),
     (["--set", "entropy=0.1"], "entropy_cost"),
@@ -131,3 +133,27 @@ def test_the_learning_curve_shows_its_last_point_past_the_budget_asked():
     curves = [dict(task=3, seed=0, step=s, performance=p) for s, p in ((0, 0.0), (20_480, 0.5))]
     ax = baselines.plot_learning_curve(b, curves).axes[0]
     assert ax.get_xlim() == (0, 20_480) and ax.get_lines()[0].get_xdata()[-1] == 20_480
+
+
+def test_run_refuses_a_task_the_task_set_lacks(tmp_path):
+    from imrl_jax.config import ConfigError
+
+    with pytest.raises(ConfigError, match=r"^tasks: task 2 is not in the task set \(tasks 1 to 1\)$"):
+        baselines.run(tiny_baseline(tasks=(2,)), str(tmp_path / "out"), config=Config(tasks=Config().tasks[:1]))
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_tasks_default_to_every_task_of_the_task_set(tmp_path, monkeypatch):
+    from imrl_jax import tasks
+
+    two = tmp_path / "two.json"
+    two.write_text(tasks.to_json(Config().tasks[2:4], "two"))
+    seen = {}
+
+    def run(b, out_dir, config, **options):
+        seen.update(b=b, config=config)
+        return dict(agent=b.agent, steps=b.steps, performance_mean=0.0, performance_sd_over_seeds=0.0)
+
+    monkeypatch.setattr(baselines, "run", run)
+    assert baselines.main(["--agent", "es", "--task-set", str(two), "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    assert seen["b"].tasks == (1, 2) and seen["config"].tasks == Config().tasks[2:4]

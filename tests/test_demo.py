@@ -28,6 +28,18 @@ def test_demo_refuses_an_unwritable_out(tmp_path, capsys):
     assert os.listdir(tmp_path) == ["file"]
 
 
+@pytest.mark.parametrize("args, message", [
+    (["--seed", "x"], "error: argument --seed: invalid int value: 'x'"),
+    (["--condition", "XX"], "error: argument --condition: invalid choice: 'XX'"),
+])
+def test_a_bad_value_is_one_line_exit_2(tmp_path, capsys, args, message):
+    out = tmp_path / "demo"
+    assert demo.main([*args, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(message) and len(err.splitlines()) == 1
+    assert not out.exists()
+
+
 def test_composition_trajectories_agree_with_its_reaches(tiny):
     config = tiny("EE-LS")
     paths = controllers.trajectories(config, 300)

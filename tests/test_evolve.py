@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 import pytest
-from helpers import evolve_args, evolve_command, interruptible_command, read_population, snapshot
+from helpers import devices_seen, evolve_args, evolve_command, interruptible_command, read_population, snapshot
 
 from imrl_jax import evolve
 
@@ -325,10 +325,13 @@ def test_notes_and_warnings(finished_run, tmp_path, capsys):
     assert capsys.readouterr().err.splitlines() == [warning]
 
 
-def test_the_gpu_kernel_off_a_gpu_is_warned_about():
+def test_the_gpu_kernel_off_a_gpu_is_warned_about(monkeypatch):
+    import jax
+
     from imrl_jax.cli import device_warnings
     from imrl_jax.config import make_config
 
+    monkeypatch.setattr(jax, "default_backend", lambda: "cpu")  # as on a CPU host, whichever this one is
     assert device_warnings(make_config("small", condition="EE-LS")) == []
     assert device_warnings(make_config("small", condition="EE-LS", step_kernel="pallas")) == [
         "warning: step_kernel=pallas without a GPU (backend cpu): the kernel runs in Pallas's interpreter, several "
@@ -401,3 +404,49 @@ def test_a_full_disk_mid_run_is_one_line_exit_1_and_resumable(tmp_path, monkeypa
     assert evolve.main(["--resume", "--out", out, "--quiet"]) == 0  # checkpointed, it is finished: outputs written
     with open(os.path.join(out, "history.csv")) as f:
         assert len(f.read().splitlines()) == 1 + 2
+
+
+def test_cpu_devices_are_set_up_before_the_task_set_starts_jax(tmp_path):
+    """The task set's checks run JAX: the devices asked for after them would be ignored (and --coordinator refused)."""
+    args = [*evolve_args(seeds=2), "--task-set", "paper", "--cpu-devices", "2", "--out", str(tmp_path / "run")]
+    assert devices_seen("imrl_jax.evolve", args) == 2
+
+
+def test_the_task_set_is_checked_against_the_geometry_the_command_line_sets(tmp_path, capsys, monkeypatch):
+    """Paper task 3's target lies 69.3 cm from its start: within a 70 cm target radius."""
+    monkeypatch.setattr(evolve, "run", lambda *a, **k: pytest.fail("the task set passed a check of another config"))
+    out = tmp_path / "run"
+    args = [*evolve_args(seeds=1), "--task-set", "paper", "--set", "target_radius=70", "--out", str(out)]
+    assert evolve.main(args) == 2
+    assert capsys.readouterr().err == ("error: --task-set: paper task 3: target: lies within the target radius of the "
+                                       "start\n")
+    assert not out.exists()
+
+
+def test_a_checkpoint_that_records_no_strategy_is_taken_for_the_gas(tmp_path):
+    """Checkpoints made before --strategy existed hold no "search": resuming one with another strategy is refused."""
+    from imrl_jax.config import make_config
+    from imrl_jax.strategies import Evosax
+
+    class Restores:  # a checkpoint of such a run (its state does not matter before the strategy is checked)
+        directory = str(tmp_path)
+
+        def restore_latest(self, template, warn):
+            return template, {"generation": 1}
+
+    config = make_config("small", condition="EE-LS")
+    strategy = Evosax("snes", config.population_size, config.num_genes)
+    with pytest.raises(evolve.UsageError) as error:
+        evolve._evolve(config, str(tmp_path), [0], None, None, None, Restores(), strategy, resume=True,
+                       checkpoint_every=1, quiet=True, leader=True)
+    assert str(error.value) == ("--strategy: the checkpoint was made by {'strategy': 'ga', 'settings': {}}, not "
+                                "{'strategy': 'snes', 'settings': {}}")
+
+
+def test_search_states_of_more_than_a_thousand_arrays_come_back_in_order():
+    """Their leaves are saved as "000", "001", ...: "1000" sorts before "101" as text."""
+    from imrl_jax.checkpoint import RunState, _saved, _search_from_saved
+
+    leaves = [np.float32(i) for i in range(1001)]
+    saved = _saved(RunState(np.asarray(1), None, None, None, None, None, search=leaves))
+    assert [float(x) for x in _search_from_saved(leaves, saved["search"])] == list(range(1001))

@@ -124,6 +124,11 @@ def test_an_interrupted_test_goes_on_from_its_first_unfinished_run(tiny_run, tmp
     assert not (cut / learning_test.PARTIAL).exists()
 
 
+#: A test from scratch of one short life (what an option that is wrongly accepted runs).
+TINY_SLE = ["--runs", "1", "--best", "1", "--tests", "1", "--task-steps", "200", "--bins", "2", "--steady-steps", "100",
+            "--chunks", "1", "--quiet"]
+
+
 @pytest.mark.parametrize("argv, message", [
     (["/nonexistent/run"], "/nonexistent/run: not a directory"),
     (["--cond", "SLE", "--set", "eta_actor=nan"], "eta_actor: must be a finite number"),
@@ -132,6 +137,7 @@ def test_an_interrupted_test_goes_on_from_its_first_unfinished_run(tiny_run, tmp
     (["--cond", "SLE", "--task-steps", "1000", "--bins", "10", "--steady-steps", "150"], "steady_steps"),
     (["--cond", "XX"], "--cond"),
     (["--cond", "SLE", "--set", "trace_lambda=2"], "trace_lambda"),
+    (["--cond", "SLE", "--best-genomes", "best_genomes.npz", *TINY_SLE], "--best-genomes: only with a run directory"),
     ([], "run_dir"),
 ])
 def test_bad_input(tmp_path, capsys, argv, message):
@@ -168,9 +174,8 @@ def test_help(capsys):
         learning_test.main(["--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert "``" not in text and "(default: None)" not in text
-    from imrl_jax.config import CONDITIONS
-
-    assert f"--cond {{{','.join(CONDITIONS)}}}" in text and "--quiet no progress lines" in text
+    assert "--cond {LE-LS,EE-LS,EE-ES,SLE,EV-LS,EV-LS-diff,LE-LS-N,LE-LS-P,LE-LS-PC,EXT-LS}" in text
+    assert "--quiet no progress lines" in text
 
 
 def test_the_step_counter_is_shared_so_block_draws_stay_a_branch(tiny):
@@ -292,7 +297,7 @@ def test_set_with_a_run_directory_tests_the_evolved_genomes_under_the_values_set
     monkeypatch.setattr(learning_test, "run", run)
     argv = [tiny_run, "--best", "1", "--tests", "1", "--task-steps", "400", "--bins", "4", "--steady-steps", "200",
             "--chunks", "1", "--quiet"]
-    learning_test.main([*argv, "--set", "eta_selector_actor=0.05", "--out", str(tmp_path / "a")])
+    assert learning_test.main([*argv, "--set", "eta_selector_actor=0.05", "--out", str(tmp_path / "a")]) == 0
     evolved, _ = learning_test.load_run(tiny_run, 1)[:2]
     assert seen["config"] == evolved.replace(task_steps=400, num_bins=4, eta_selector_actor=0.05)
     assert seen["source"].endswith(", eta_selector_actor=0.05")
@@ -318,3 +323,16 @@ def test_the_best_genomes_a_report_kept_stand_in_for_a_lost_final_population(tin
     assert learning_test.main([str(other), "--best-genomes", str(kept), "--best", "1", "--out", str(tmp_path / "t")]) == 2
     assert capsys.readouterr().err.strip() == (f"error: --best-genomes: {kept} holds no w/{config.condition} (it holds "
                                                f"v/{config.condition})")
+    np.savez(kept, **{f"v__{config.condition}__genomes": best})  # the seeds left out
+    assert learning_test.main([str(run), "--best-genomes", str(kept), "--best", "1", "--out", str(tmp_path / "t")]) == 2
+    assert capsys.readouterr().err.strip() == (f"error: --best-genomes: {kept} holds no v__{config.condition}__seeds "
+                                               f"beside v__{config.condition}__genomes")
+    assert not (tmp_path / "t").exists()
+
+
+def test_cpu_devices_are_set_up_before_the_task_set_starts_jax(tmp_path):
+    """The task set's checks run JAX: the devices asked for after them would be ignored."""
+    from helpers import devices_seen
+
+    args = ["--cond", "SLE", "--task-set", "paper", "--cpu-devices", "2", "--out", str(tmp_path / "test")]
+    assert devices_seen("imrl_jax.learning_test", args) == 2
