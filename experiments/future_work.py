@@ -3,6 +3,7 @@
     python -m experiments.future_work               # run (or go on with) every stage, in order
     python -m experiments.future_work --only EV-LS,EXT-LS
     python -m experiments.future_work --list        # the stages and their commands, nothing run
+    python -m experiments.future_work --report      # the tables and figure of whatever has finished
 
 Each row of :data:`RUNS` is a condition of the table (``imrl_jax.conditions``) under a preset
 and ``--set`` overrides, evolved (5 seeds x 100 generations at the paper's life lengths, then
@@ -11,18 +12,25 @@ scratch (5 runs x 5 x 4). The paper's four conditions under the same rules come 
 finished paper-scale reproduction (``experiments/results/paper``). The stages run through
 the reproduction's resumable stage runner (:func:`experiments.reproduce.run_stages`): run the
 same command again after an interruption.
+
+``--report`` (:func:`report`) measures every finished row beside the reproduction's: final best
+fitness, its spread and plateau, and the learning tests' steady state; (c)'s evolved learning
+values beside the presets'; (d)'s number of expressed experts and its fitness against 6 and 3
+experts. It writes report.json and future_work.png under ``--out`` and the tables into
+docs/FUTURE_WORK.md, from whatever has finished.
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
 import os
 import sys
 from typing import NamedTuple
 
-from experiments.claims_study import SCREEN
-from experiments.reproduce import (Stage, evolution_cost, evolve_command, load_manifest, run_stages, test_command,
-                                   test_cost)
+from experiments.claims_study import REPRODUCTION, SCREEN
+from experiments.reproduce import (Stage, evolution_cost, evolution_dir, evolve_command, load_manifest, run_stages,
+                                   test_command, test_cost, test_dir)
 from imrl_jax import conditions
 
 OUT = os.path.join("experiments", "results", "future_work")
@@ -76,12 +84,311 @@ def stage_command(stage: Stage, scale: dict = SCREEN, out: str = OUT) -> tuple[l
                         sle_noise_steps=int(noise[0].split("=")[1]) if noise else None), None
 
 
+#: The paper's four conditions under ``skills``, from the finished reproduction (EE-ES's runs are shared, under
+#: ``paper``: :func:`experiments.reproduce.evolution_dir` finds them).
+REPRODUCED = ("LE-LS", "EE-LS", "EE-ES", "SLE")
+#: SLE with its noise annealed over the whole test (the claims study's ``skills-sle-test``): EXT-LS-whole's
+#: reference, as the reproduction's SLE (noise over 100,000 cycles) is EXT-LS's.
+SLE_WHOLE = os.path.join("experiments", "results", "claims", "skills-sle-test", "test", "SLE")
+#: The reproduction's evolutions drawn beside the study's (the paper's Fig. 3a).
+DRAWN_BESIDE = ("LE-LS", "EE-LS")
+#: (c)'s rows: their evolved learning values beside the preset's.
+PARAMETER_ROWS = ("LE-LS-P", "LE-LS-PC")
+#: (d)'s row, and what its fitness is compared with: 6 experts all expressed, and the reproduction's 3.
+EXPERTS_ROW, EXPERTS_COMPARED = "LE-LS-N6", ("LE-LS-6", "skills LE-LS")
+#: The generations of (d)'s table of expressed experts (the last one is added).
+GENERATIONS_SHOWN = (0, 10, 25, 50)
+NOT_RUN = "not run yet"
+DOCUMENT = os.path.join("docs", "FUTURE_WORK.md")
+#: Where the report's tables go in docs/FUTURE_WORK.md.
+TABLE_START = "<!-- future-work tables: python -m experiments.future_work --report -->"
+TABLE_END = "<!-- end of future-work tables -->"
+#: Line styles of the rows that share their condition with another drawn row (the rest take their condition's).
+STYLES = {"LE-LS-6": dict(color="0.3", lw=1.2, ls="-."), "EXT-LS-whole": dict(color="tab:purple", lw=1.0, ls=":")}
+
+
+def read_traits(run_dir: str) -> dict | None:
+    """An evolution's evolved values from its history.csv: names and (generations, seeds, values, 2) (population
+    mean, the best's), or None without any."""
+    import numpy as np
+
+    path = os.path.join(run_dir, "history.csv")
+    if not os.path.isfile(path):
+        return None
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    names = [c[len("mean_"):] for c in (rows[0] if rows else ()) if c.startswith("mean_")
+             and f"best_{c[len('mean_'):]}" in rows[0]]
+    if not names:
+        return None
+    seeds = sorted({int(r["seed"]) for r in rows})
+    values = np.full((max(int(r["generation"]) for r in rows) + 1, len(seeds), len(names), 2), np.nan)
+    for r in rows:
+        values[int(r["generation"]), seeds.index(int(r["seed"]))] = [[float(r[f"{which}_{n}"]) for which in
+                                                                      ("mean", "best")] for n in names]
+    return dict(names=names, values=values)
+
+
+def _evolution(run_dir: str) -> dict | None:
+    """A row's evolution as the report shows it: its size and, once finished, its final best, spread and plateau."""
+    from experiments.claims import final_best, plateau_generation
+    from experiments.loading import read_evolution
+
+    run = read_evolution(run_dir)
+    if run is None:
+        return None
+    best, planned = run["best"], (run["config"] or {}).get("num_generations")
+    entry = dict(dir=run_dir, seeds=len(run["seeds"]), generations=len(best), planned=planned,
+                 finished=planned is None or len(best) >= planned)
+    if entry["finished"]:
+        final = final_best(best)
+        # sd with ddof 0 over seeds, as the reproduction's report (claims.measure) gives it
+        entry.update(final_best=float(final.mean()), final_best_sd=float(final.std()),
+                     final_best_per_seed=final.tolist(), plateau_generation=plateau_generation(best.mean(1)),
+                     best_per_generation_mean=best.mean(1).tolist(), best_per_generation_sd=best.std(1).tolist())
+    return entry
+
+
+def _test(out_dir: str) -> dict | None:
+    """A finished learning test's steady state per run, its mean and sd (ddof 0, as steady.json's) and best run."""
+    import numpy as np
+
+    from experiments.loading import read_test
+
+    test = read_test(out_dir)
+    if test is None:
+        return None
+    per_run = np.asarray(test["steady"]["steady_per_run"], float)
+    return dict(dir=out_dir, runs=len(per_run), steady_mean=float(per_run.mean()), steady_sd=float(per_run.std()),
+                steady_best_run=float(per_run.max()), steady_per_run=per_run.tolist(),
+                sle_noise_steps=(test["steady"].get("config") or {}).get("sle_noise_steps"))
+
+
+def _last_values(run_dir: str, evolution: dict | None) -> dict | None:
+    """A finished evolution's evolved values in its last generation, mean over seeds: {name: dict(mean, best)}."""
+    traits = read_traits(run_dir) if evolution and evolution["finished"] else None
+    if traits is None:
+        return None
+    last = traits["values"][-1].mean(0)  # (values, 2)
+    return {n: dict(mean=float(last[t, 0]), best=float(last[t, 1])) for t, n in enumerate(traits["names"])}
+
+
+def _expressed(run_dir: str, evolution: dict | None) -> list[dict] | None:
+    """(d): per shown generation, the expressed experts (population mean, the best's) and the population's share
+    expressing each number, mean over seeds."""
+    traits = read_traits(run_dir) if evolution and evolution["finished"] else None
+    if traits is None or "expressed_experts" not in traits["names"]:
+        return None
+    names, values = traits["names"], traits["values"].mean(1)  # (generations, values, 2)
+    counts = sorted(int(n.split("_")[1]) for n in names if n.startswith("share_") and n.endswith("_experts"))
+    shown = sorted({g for g in GENERATIONS_SHOWN if g < len(values)} | {len(values) - 1})
+    e = names.index("expressed_experts")
+    return [dict(generation=g, mean=float(values[g, e, 0]), best=float(values[g, e, 1]),
+                 shares={k: float(values[g, names.index(f"share_{k}_experts"), 0]) for k in counts}) for g in shown]
+
+
+def _noise(test: dict | None) -> str:
+    """How a finished SLE test annealed its noise, in words ("" before it has finished or without its config)."""
+    steps = (test or {}).get("sle_noise_steps")
+    if steps is None:
+        return ""
+    return ", noise over the whole test" if not steps else f", noise over {steps:,} cycles"
+
+
+def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = SLE_WHOLE) -> dict:
+    """Every row's evolution and learning test, (c)'s evolved learning values and (d)'s experts, from what finished."""
+    import numpy as np
+
+    from experiments.claims import _standard_error
+    from imrl_jax import networks
+    from imrl_jax.config import make_config
+
+    rows = [dict(name=f"skills {c}", condition=c, about=f"the reproduction's {c}", evolved=conditions.get(c).evolved,
+                 evolution=_evolution(evolution_dir(reproduction, "skills", c)) if conditions.get(c).evolved else None,
+                 test=_test(test_dir(reproduction, "skills", c))) for c in REPRODUCED]
+    rows.append(dict(name="skills SLE-whole", condition="SLE", about="the claims study's SLE (skills-sle-test)",
+                     evolved=False, evolution=None, test=_test(sle_whole)))
+    for row in rows:
+        row["about"] += _noise(row["test"]) if row["condition"] == "SLE" else ""
+    for run in RUNS:
+        evolved = conditions.get(run.condition).evolved
+        rows.append(dict(name=run.name, condition=run.condition, about=run.about, evolved=evolved,
+                         evolution=_evolution(os.path.join(out, run.name, "evolve")) if evolved else None,
+                         test=_test(os.path.join(out, run.name, "test"))))
+    by_name = {row["name"]: row for row in rows}
+    # (c): the values of the genes LE-LS-PC carries (LE-LS-P's and the childhood's length), beside the presets'
+    names = networks.trait_names(make_config("skills", condition="LE-LS-PC"))
+    hand = {preset: {n: float(config.childhood_steps if n == "childhood_length" else getattr(config, n)) for n in names}
+            for preset, config in (("skills", make_config("skills")), ("paper", make_config("paper")))}
+    evolved_values = {name: _last_values(os.path.join(out, name, "evolve"), by_name[name]["evolution"])
+                      for name in PARAMETER_ROWS}
+    # (d): the expressed experts over generations, and the final best against 6 experts all expressed and 3
+    final = lambda name: (by_name[name]["evolution"] or {}).get("final_best_per_seed")  # noqa: E731
+    mine, compared = final(EXPERTS_ROW), []
+    for other in EXPERTS_COMPARED:
+        theirs = final(other)
+        if mine and theirs:
+            a, b = np.asarray(mine), np.asarray(theirs)
+            compared.append(dict(name=other, final_best=float(b.mean()), seeds=len(b),
+                                 difference=float(a.mean() - b.mean()), standard_error=_standard_error(a, b)))
+    experts = dict(row=EXPERTS_ROW, generations=_expressed(os.path.join(out, EXPERTS_ROW, "evolve"),
+                                                           by_name[EXPERTS_ROW]["evolution"]), compared=compared)
+    return dict(rows=rows, learning_values=dict(names=list(names), hand=hand, evolved=evolved_values),
+                experts=experts)
+
+
+def _value(v: float) -> str:
+    """A learning value for the table: 3 significant digits, a count of steps in full."""
+    return f"{v:,.0f}" if abs(v) >= 1000 else f"{v:.3g}"
+
+
+def _row_cells(row: dict) -> list[str]:
+    """The main table's cells of a row after its name, condition and description."""
+    e, t = row["evolution"], row["test"]
+    if not row["evolved"]:
+        cells = ["not evolved", "-", "-", "-"]
+    elif e is None:
+        cells = ["-", NOT_RUN, "-", "-"]
+    elif not e["finished"]:
+        cells = [f"{e['seeds']} x {e['generations']} of {e['planned']}", "running", "-", "-"]
+    else:
+        plateau = "-" if e["plateau_generation"] is None else str(e["plateau_generation"])
+        cells = [f"{e['seeds']} x {e['generations']}", f"{e['final_best']:.3f}", f"{e['final_best_sd']:.3f}", plateau]
+    return cells + ([NOT_RUN, "-"] if t is None else [f"{t['steady_mean']:.3f} +- {t['steady_sd']:.3f}",
+                                                        str(t["runs"])])
+
+
+def table(measured: dict) -> str:
+    """The report's markdown: every row's fitness and steady state, (c)'s evolved learning values, (d)'s experts."""
+    from experiments.claims import LAST_GENERATIONS, PLATEAU_FRACTION
+
+    lines = ["| row | condition | what | seeds x generations | final best fitness (best of a generation's noisy lives) "
+             "| sd over seeds | plateau generation | steady state (mean +- sd over runs) | runs |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    lines += [f"| {r['name']} | {r['condition']} | {r['about']} | " + " | ".join(_row_cells(r)) + " |"
+              for r in measured["rows"]]
+    lines += ["", f"Final best fitness: a seed's mean of its last {LAST_GENERATIONS} generations' best, then the mean "
+              f"over seeds; plateau: the first generation whose best (mean over seeds) reaches {PLATEAU_FRACTION:.0%} "
+              f"of that; steady state: each learning-test run's last cycles (docs/CLAIMS.md's claims 1, 2 and 6).",
+              "", "(c) The evolved learning values, last generation, mean over seeds, beside the values set by hand:", ""]
+    values = measured["learning_values"]
+    lines += ["| value | skills (by hand) | paper | " + " | ".join(f"{r}: population mean | {r}: the best's"
+                                                                  for r in PARAMETER_ROWS) + " |",
+              "|---|---|---|" + "---|---|" * len(PARAMETER_ROWS)]
+    for name in values["names"]:
+        cells = [_value(values["hand"]["skills"][name]), _value(values["hand"]["paper"][name])]
+        for row in PARAMETER_ROWS:
+            evolved = values["evolved"][row]
+            if evolved is None:
+                cells += [NOT_RUN, NOT_RUN]
+            else:  # a value the row does not evolve (LE-LS-P's childhood) is the preset's
+                cells += [_value(evolved[name][w]) if name in evolved else "-" for w in ("mean", "best")]
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    experts = measured["experts"]
+    lines += ["", f"(d) {experts['row']}: the experts expressed, mean over seeds:", ""]
+    if experts["generations"] is None:
+        lines.append(f"{experts['row']}: {NOT_RUN}.")
+    else:
+        counts = list(experts["generations"][0]["shares"])
+        lines += ["| generation | expressed: population mean | the best's | " + " | ".join(
+            f"share with {k}" for k in counts) + " |", "|---|---|---|" + "---|" * len(counts)]
+        lines += [f"| {g['generation']} | {g['mean']:.2f} | {g['best']:.2f} | " + " | ".join(
+            f"{g['shares'][k]:.3f}" for k in counts) + " |" for g in experts["generations"]]
+    if experts["generations"] is not None and not experts["compared"]:
+        lines.append(f"\nIts final best fitness against {' and '.join(EXPERTS_COMPARED)}: {NOT_RUN}.")
+    if experts["compared"]:
+        mine = next(r for r in measured["rows"] if r["name"] == experts["row"])["evolution"]
+        lines += ["", f"| final best fitness of {experts['row']} ({mine['seeds']} seeds) | its | theirs | their seeds | "
+                  "difference | se |", "|---|---|---|---|---|---|"]
+        lines += [f"| against {c['name']} | {mine['final_best']:.3f} | {c['final_best']:.3f} | {c['seeds']} | "
+                  f"{c['difference']:+.3f} | {c['standard_error']:.3f} |" for c in experts["compared"]]
+    return "\n".join(lines)
+
+
+def _style(row: dict) -> dict:
+    from imrl_jax.plotting import CONDITION_STYLES
+
+    return STYLES.get(row["name"], CONDITION_STYLES[row["condition"]])
+
+
+def figure(measured: dict, path: str) -> str:
+    """Fig. 3a-style best fitness per generation of every finished evolution (the study's and the reproduction's
+    LE-LS and EE-LS) beside Fig. 3c-style steady states of every finished learning test; written to ``path``."""
+    import numpy as np
+    from matplotlib.ticker import MaxNLocator
+
+    from experiments.figures import _band
+    from imrl_jax.plotting import new_figure, save, style_axis
+
+    fig = new_figure(13.0, 4.2)
+    curves, bars = fig.subplots(1, 2, gridspec_kw=dict(width_ratios=[1.0, 1.1]))
+    drawn = [r for r in measured["rows"] if (r["evolution"] or {}).get("finished")
+             and (not r["name"].startswith("skills ") or r["condition"] in DRAWN_BESIDE)]
+    banded = set()
+    # figures._draw_curves styles by condition: LE-LS-6 shares LE-LS's, so the rows are drawn here with _style
+    for row in drawn:
+        e = row["evolution"]
+        mean, sd = np.asarray(e["best_per_generation_mean"]), np.asarray(e["best_per_generation_sd"])
+        style = _style(row)
+        curves.plot(np.arange(len(mean)), mean, label=f"{row['name']} ({e['seeds']} seeds)", **style)
+        _band(curves, np.arange(len(mean)), mean, sd, style, banded)
+    curves.xaxis.set_major_locator(MaxNLocator(integer=True))
+    style_axis(curves, "(a) best fitness, mean +-1 sd over seeds", "generation",
+               "best fitness (best of a generation's noisy lives)")
+    tested = [r for r in measured["rows"] if r["test"] is not None]
+    x = np.arange(len(tested))
+    bars.bar(x - 0.19, [r["test"]["steady_mean"] for r in tested], 0.38, yerr=[r["test"]["steady_sd"] for r in tested],
+             color="0.35", capsize=3, label="mean over runs (+-1 sd)")
+    bars.bar(x + 0.19, [r["test"]["steady_best_run"] for r in tested], 0.38, color="0.75", label="best run")
+    bars.set_xticks(x, [r["name"] for r in tested], rotation=30, ha="right", fontsize=7)
+    style_axis(bars, "(c) steady state of the learning tests", "", "steady-state performance")
+    bars.grid(False, axis="x")
+    for ax, rows in ((curves, drawn), (bars, tested)):
+        if not rows:  # an unfinished study: say so rather than leave a blank panel
+            ax.set_ylim(0, 1)
+            ax.text(0.5, 0.5, NOT_RUN, transform=ax.transAxes, ha="center", va="center", color="0.4")
+            continue
+        # room above the highest bar or curve for the legend and the note
+        ax.set_ylim(0, 1.3 * max(max(np.asarray(r["evolution"]["best_per_generation_mean"]).max() for r in drawn)
+                                 if ax is curves else max(r["test"]["steady_best_run"] for r in tested), 1e-9))
+        ax.legend(fontsize=6, loc="upper left", ncol=2)
+        if all(r["name"].startswith("skills ") for r in rows):  # only the references: the study's rows are to come
+            ax.text(0.98, 0.97, f"the study's rows: {NOT_RUN}", transform=ax.transAxes, ha="right", va="top",
+                    color="0.4", fontsize=8)
+    fig.suptitle("The paper's future work beside the reproduction's skills runs", fontsize=10)
+    fig.tight_layout()
+    return save(fig, path)
+
+
+def report(out: str = OUT, document: str = DOCUMENT, reproduction: str = REPRODUCTION, sle_whole: str = SLE_WHOLE) -> int:
+    """Measure, write report.json and future_work.png under ``out``, and the tables into ``document``."""
+    import json
+
+    from experiments.claims_study import write_table
+
+    measured = measure(out, reproduction, sle_whole)
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, "report.json"), "w") as f:
+        json.dump(measured, f, indent=2)
+    drawn = figure(measured, os.path.join(out, "future_work.png"))
+    write_table(document, table(measured), TABLE_START, TABLE_END)
+    done = [r["name"] for r in measured["rows"] if (r["evolution"] or {}).get("finished") or r["test"]]
+    print(f"{len(done)} of {len(measured['rows'])} rows have finished stages ({', '.join(done) or 'none'}); wrote "
+          f"{os.path.join(out, 'report.json')}, {drawn} and the tables of {document}")
+    return 0
+
+
 def main(argv=None) -> int:
+    """The command line: list the stages, run (or go on with) them, or write the report of what has finished."""
     p = argparse.ArgumentParser(prog="python -m experiments.future_work", description=__doc__.split("\n\n")[0])
     p.add_argument("--only", help=f"comma-separated rows, in order (default: all: {', '.join(BY_NAME)})")
     p.add_argument("--out", default=OUT, help=f"results directory (default: {OUT})")
     p.add_argument("--list", action="store_true", help="print the stages and their commands, run nothing")
+    p.add_argument("--report", action="store_true", help="measure every finished row, draw the figure and write "
+                   "docs/FUTURE_WORK.md's tables (runs nothing)")
     args = p.parse_args(argv)
+    if args.report:
+        return report(args.out)
     names = args.only.split(",") if args.only else list(BY_NAME)
     unknown = [n for n in names if n not in BY_NAME]
     if unknown:

@@ -5,6 +5,7 @@ import os
 import pytest
 
 from experiments import future_work as study
+from imrl_jax.conditions import EVOLVED_FIELDS
 
 
 def test_plan_evolves_the_evolved_rows_and_tests_the_others_from_scratch():
@@ -44,6 +45,26 @@ def test_traits_of_a_hand_made_genome():
     genome[-4:] = [0.5, -0.2, 0.1, -0.9]  # the expression genes come last: experts 1 and 3 expressed
     assert np.asarray(networks.traits(config, genome)).tolist() == [2, 0, 1, 0, 0]
     assert networks.trait_names(make_config("skills", condition="LE-LS")) == ()
+    config = make_config("skills", condition="LE-LS-PC")  # the last gene chooses the childhood's length
+    names = networks.trait_names(config)
+    assert names == EVOLVED_FIELDS + ("childhood_length",)
+    values = np.asarray(networks.traits(config, np.zeros(config.num_genes, np.float32)))
+    assert values[-1] == config.childhood_steps / 2 and values[-2] == pytest.approx(2.0)  # and the speed bias
+
+
+def test_the_traits_figure_has_a_panel_for_each_evolved_value():
+    import numpy as np
+
+    from imrl_jax import networks
+    from imrl_jax.config import make_config
+    from imrl_jax.plotting import plot_traits
+
+    config = make_config("skills", condition="LE-LS-PC")
+    names = networks.trait_names(config)
+    traits = np.tile(np.asarray(networks.traits(config, np.zeros(config.num_genes, np.float32)))[:, None], 2)
+    fig = plot_traits(config, names, np.broadcast_to(traits, (3, 2) + traits.shape))
+    titles = [" ".join(ax.get_title().split()) for ax in fig.axes]
+    assert len(titles) == len(names) and titles[-1] == "childhood_length (steps)"
 
 
 @pytest.mark.slow
@@ -93,3 +114,122 @@ def test_record_traits_and_their_history_columns_by_hand():
     text = evolve.history_csv(empty_history(2, 1, 6), 1, [7], traits, ("a", "b"))
     header, row = text.splitlines()
     assert header.endswith(",mean_a,best_a,mean_b,best_b") and row.endswith(",2,3,20,30")
+
+
+def _fake_evolution(folder, best, planned, traits=None):
+    """A history.csv as evolve writes it: ``best[seed][generation]``; ``traits[name] = (mean, best's)``, each
+    [seed][generation]; and the config.json with the planned number of generations."""
+    import json
+
+    folder.mkdir(parents=True)
+    names = list(traits or {})
+    lines = ["generation,seed,best,mean,std" + "".join(f",mean_{n},best_{n}" for n in names)]
+    for g in range(len(best[0])):
+        for s in range(len(best)):
+            lines.append(f"{g},{s},{best[s][g]},0.1,0.01" + "".join(f",{traits[n][0][s][g]},{traits[n][1][s][g]}"
+                                                                   for n in names))
+    (folder / "history.csv").write_text("\n".join(lines) + "\n")
+    (folder / "config.json").write_text(json.dumps(dict(config=dict(num_generations=planned))))
+
+
+def _fake_test(folder, per_run, sle_noise_steps=None):
+    """A finished learning test as the report reads it: steady.json and curve.csv."""
+    import json
+
+    folder.mkdir(parents=True)
+    steady = dict(steady_per_run=list(per_run), pairs_both_ways=0.5)
+    if sle_noise_steps is not None:
+        steady["config"] = dict(sle_noise_steps=sle_noise_steps)
+    (folder / "steady.json").write_text(json.dumps(steady))
+    (folder / "curve.csv").write_text("bin,end_step,mean,sd_over_runs\n0,1000,0.1,0.01\n1,2000,0.3,0.01\n")
+
+
+def _fake_study(tmp_path):
+    """The reproduction's LE-LS, EE-LS and tests, and the study's LE-LS-6, LE-LS-N6, LE-LS-P, a running EV-LS, EXT-LS."""
+    reproduction, out = tmp_path / "paper", tmp_path / "future_work"
+    _fake_evolution(reproduction / "skills" / "evolve" / "LE-LS", [[0.2, 0.4, 0.6, 0.6, 0.6], [0.4, 0.6, 0.8, 0.8, 0.8]], 5)
+    _fake_evolution(reproduction / "skills" / "evolve" / "EE-LS", [[0.5] * 5, [0.7] * 5], 5)
+    _fake_test(reproduction / "skills" / "test" / "LE-LS", [0.8, 0.9])
+    _fake_test(reproduction / "skills" / "test" / "SLE", [0.3, 0.5], sle_noise_steps=100_000)
+    _fake_test(reproduction / "paper" / "test" / "EE-ES", [0.4, 0.4, 0.4])  # EE-ES's runs are shared, under paper
+    _fake_evolution(out / "LE-LS-6" / "evolve", [[0.5] * 5, [0.6] * 5], 5)
+    share = lambda k: ([{3: [0, 0.5, 1, 1, 1], 6: [1, 0.5, 0, 0, 0]}.get(k, [0] * 5)] * 2, [[0] * 5] * 2)  # noqa: E731
+    _fake_evolution(out / "LE-LS-N6" / "evolve", [[0.7] * 5, [0.8] * 5], 5, dict(
+        expressed_experts=([[6, 5, 4, 4, 3], [6, 5, 4, 4, 5]], [[6, 4, 4, 3, 3], [6, 5, 4, 3, 3]]),
+        **{f"share_{k}_experts": share(k) for k in range(1, 7)}))
+    _fake_evolution(out / "LE-LS-P" / "evolve", [[0.6] * 5] * 2, 5, dict(  # the last generation's values count
+        gamma=([[0.5] * 4 + [0.95], [0.5] * 4 + [0.97]], [[0.5] * 4 + [0.98], [0.5] * 4 + [0.99]]),
+        eta_actor=([[0.5] * 4 + [0.02], [0.5] * 4 + [0.04]], [[0.5] * 4 + [0.01], [0.5] * 4 + [0.03]])))
+    _fake_evolution(out / "EV-LS" / "evolve", [[0.1, 0.2]], 100)  # still running
+    _fake_test(out / "EXT-LS" / "test", [0.6, 0.7, 0.8])
+    return str(out), str(reproduction), str(tmp_path / "claims_sle")
+
+
+def test_measure_reads_every_finished_row_and_the_reproductions(tmp_path):
+    """Hand-made runs: final best, its sd and plateau; steady states; (c)'s last values; (d)'s experts and fitness."""
+    out, reproduction, sle_whole = _fake_study(tmp_path)
+    measured = study.measure(out, reproduction, sle_whole)
+    rows = {r["name"]: r for r in measured["rows"]}
+    assert list(rows) == ["skills LE-LS", "skills EE-LS", "skills EE-ES", "skills SLE", "skills SLE-whole",
+                          *study.BY_NAME]
+    le_ls = rows["skills LE-LS"]["evolution"]  # seeds' means of 5 generations: 2.4 / 5 and 3.4 / 5
+    assert le_ls["final_best"] == pytest.approx(0.58) and le_ls["final_best_sd"] == pytest.approx(0.1)
+    assert le_ls["plateau_generation"] == 2  # the mean curve 0.3, 0.5, 0.7: 0.7 >= 0.9 x 0.58 first at generation 2
+    assert rows["skills EE-ES"]["evolution"] is None and rows["skills EE-ES"]["test"]["runs"] == 3
+    assert rows["EV-LS"]["evolution"]["finished"] is False and "final_best" not in rows["EV-LS"]["evolution"]
+    assert rows["EXT-LS"]["test"]["steady_mean"] == pytest.approx(0.7)
+    assert rows["EXT-LS"]["test"]["steady_sd"] == pytest.approx((0.02 / 3) ** 0.5)  # ddof 0
+    evolved = measured["learning_values"]["evolved"]
+    assert evolved["LE-LS-PC"] is None and set(evolved["LE-LS-P"]) == {"gamma", "eta_actor"}
+    assert evolved["LE-LS-P"]["gamma"] == pytest.approx(dict(mean=0.96, best=0.985))
+    assert measured["learning_values"]["hand"]["skills"]["trace_lambda"] == 0.98
+    assert measured["learning_values"]["hand"]["paper"]["childhood_length"] == 150_000
+    first, last = measured["experts"]["generations"]  # generations 0 and the last, 4
+    assert (first["generation"], first["mean"], first["shares"][6]) == (0, 6.0, 1.0)
+    assert (last["generation"], last["mean"], last["best"], last["shares"][3]) == (4, 4.0, 3.0, 1.0)
+    against_6, against_3 = measured["experts"]["compared"]
+    assert against_6["name"] == "LE-LS-6" and against_6["difference"] == pytest.approx(0.2)
+    assert against_6["standard_error"] == pytest.approx(0.005 ** 0.5)  # sqrt(0.005 / 2 + 0.005 / 2)
+    assert against_3["difference"] == pytest.approx(0.17) and against_3["standard_error"] == pytest.approx(0.0125 ** 0.5)
+
+
+def test_table_shows_finished_running_and_not_run_rows(tmp_path):
+    text = study.table(study.measure(*_fake_study(tmp_path)))
+    for line in ("| skills LE-LS | LE-LS | the reproduction's LE-LS | 2 x 5 | 0.580 | 0.100 | 2 | 0.850 +- 0.050 | 2 |",
+                 "| skills EE-ES | EE-ES | the reproduction's EE-ES | - | not run yet | - | - | 0.400 +- 0.000 | 3 |",
+                 "| skills SLE | SLE | the reproduction's SLE, noise over 100,000 cycles | not evolved | - | - | - | "
+                 "0.400 +- 0.100 | 2 |",
+                 "| skills SLE-whole | SLE | the claims study's SLE (skills-sle-test) | not evolved | - | - | - | "
+                 "not run yet | - |",
+                 f"| EV-LS | EV-LS | {study.BY_NAME['EV-LS'].about} | 1 x 2 of 100 | running | - | - | not run yet | - |",
+                 f"| EXT-LS | EXT-LS | {study.BY_NAME['EXT-LS'].about} | not evolved | - | - | - | 0.700 +- 0.082 | 3 |",
+                 "| gamma | 0.99 | 0.99 | 0.96 | 0.985 | not run yet | not run yet |",
+                 "| eta_actor | 0.01 | 0.01 | 0.03 | 0.02 | not run yet | not run yet |",
+                 "| trace_lambda | 0.98 | 0 | - | - | not run yet | not run yet |",
+                 "| childhood_length | 150,000 | 150,000 | - | - | not run yet | not run yet |",
+                 "| 0 | 6.00 | 6.00 | 0.000 | 0.000 | 0.000 | 0.000 | 0.000 | 1.000 |",
+                 "| 4 | 4.00 | 3.00 | 0.000 | 0.000 | 1.000 | 0.000 | 0.000 | 0.000 |",
+                 "| against LE-LS-6 | 0.750 | 0.550 | 2 | +0.200 | 0.071 |",
+                 "| against skills LE-LS | 0.750 | 0.580 | 2 | +0.170 | 0.112 |"):
+        assert line in text.splitlines(), line
+    empty = study.table(study.measure(str(tmp_path / "none"), str(tmp_path / "none"), str(tmp_path / "none")))
+    assert "LE-LS-N6: not run yet." in empty.splitlines() and "| 2 x 5 |" not in empty
+
+
+def test_report_writes_the_json_the_figure_and_the_tables(tmp_path, capsys):
+    import json
+
+    out, reproduction, sle_whole = _fake_study(tmp_path)
+    document = tmp_path / "FUTURE_WORK.md"
+    document.write_text(f"intro\n{study.TABLE_START}\nold\n{study.TABLE_END}\nend\n")
+    assert study.report(out, str(document), reproduction, sle_whole) == 0
+    text = document.read_text()
+    assert text.startswith(f"intro\n{study.TABLE_START}\n| row |") and text.endswith(f"{study.TABLE_END}\nend\n")
+    assert "old" not in text and "| against LE-LS-6 | 0.750 |" in text
+    with open(os.path.join(out, "report.json")) as f:
+        saved = json.load(f)
+    assert saved["rows"][0]["evolution"]["final_best_per_seed"] == pytest.approx([0.48, 0.68])
+    assert os.path.getsize(os.path.join(out, "future_work.png")) > 10_000
+    assert "8 of 13 rows have finished stages" in capsys.readouterr().out
+    # nothing finished: both panels say so
+    assert os.path.getsize(study.figure(study.measure(*(str(tmp_path / "none"),) * 3), str(tmp_path / "empty.png")))
