@@ -13,10 +13,13 @@ from imrl_jax.ga import init_population
 from imrl_jax.lifetime import live
 
 
-@pytest.mark.parametrize("condition", ["LE-LS", "SLE"])
-def test_chunked_test_equals_one_life(tiny, condition):
-    """A test run in 2 chunks is the same computation as live() with the test's task length (counts bitwise)."""
-    config = tiny(condition, task_steps=400, num_bins=4)
+@pytest.mark.parametrize("condition, options", [("LE-LS", {}), ("SLE", {}),
+                                                ("LE-LS", dict(selector_period=7, selector_termination="colour"))],
+                         ids=["LE-LS", "SLE", "LE-LS-options"])
+def test_chunked_test_equals_one_life(tiny, condition, options):
+    """A test run in 2 chunks is the same computation as live() with the test's task length (counts bitwise);
+    with the selector's options, an option running across the chunks' boundary goes on."""
+    config = tiny(condition, task_steps=400, num_bins=4, **options)
     keys = jax.random.split(jax.random.key(3), 2)
     genomes = np.asarray(init_population(jax.random.key(4), config))[:2]
     params = config.learning_params()
