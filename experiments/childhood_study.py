@@ -282,17 +282,17 @@ def stage_ceiling(args) -> int:
 
 def best_of_run(run_dir: str, num_best: int):
     """A run's config, seeds, and per seed the ``num_best`` best genomes of its last evaluated generation and their fitness."""
-    from imrl_jax.rundir import best_genomes, load_run, read_config
+    from imrl_jax.rundir import best_genomes, load_run, read_config, read_kept_best
 
     if not os.path.isfile(os.path.join(run_dir, "final_population.npz")):
         # A reproduction's run directory keeps its best genomes in best_genomes.npz, three levels up
         # (RESULTS/VARIANT/evolve/COND), under VARIANT__COND__*.
         config, _ = read_config(run_dir)
-        parts = os.path.normpath(run_dir).split(os.sep)
-        prefix = f"{parts[-3]}__{parts[-1]}__"
-        with np.load(os.path.join(*parts[:-3], "best_genomes.npz")) as data:
-            return (config, data[prefix + "seeds"], data[prefix + "genomes"][:, :num_best],
-                    data[prefix + "fitness"][:, :num_best])
+        run_dir = os.path.normpath(run_dir)
+        variant_dir = os.path.dirname(os.path.dirname(run_dir))
+        kept = read_kept_best(os.path.join(os.path.dirname(variant_dir), "best_genomes.npz"),
+                              os.path.basename(variant_dir), os.path.basename(run_dir))
+        return config, np.asarray(kept.seeds), kept.genomes[:, :num_best], kept.fitness[:, :num_best]
     run = load_run(run_dir)
     return run.config, np.asarray(run.seeds), best_genomes(run, num_best), -np.sort(-run.fitness, axis=1)[:, :num_best]
 
