@@ -119,6 +119,7 @@ def test_corrupt_checkpoint_falls_back_to_the_previous_one(finished_run, tmp_pat
     _assert_same_outputs(out, finished_run)
 
 
+@pytest.mark.slow  # 50 s; the default suite extends a finished run in tests/test_strategies.py (the same path)
 def test_finished_run_extended_is_bitwise_an_uninterrupted_longer_run(tmp_path, capsys):
     import json
 

@@ -14,8 +14,8 @@ from imrl_jax.lifetime import live
 
 
 @pytest.mark.parametrize("condition, options", [("LE-LS", {}), ("SLE", {}),
-                                                ("LE-LS", dict(selector_period=7, selector_termination="colour"))],
-                         ids=["LE-LS", "SLE", "LE-LS-options"])
+                                                ("EE-LS", dict(selector_period=7, selector_termination="colour"))],
+                         ids=["LE-LS", "SLE", "EE-LS-options"])
 def test_chunked_test_equals_one_life(tiny, condition, options):
     """A test run in 2 chunks is the same computation as live() with the test's task length (counts bitwise);
     with the selector's options, an option running across the chunks' boundary goes on."""
