@@ -2,8 +2,8 @@
 
     python -m experiments.timescale --list      # the stages and their commands, nothing run
     python -m experiments.timescale             # run (or go on with) every stage, in order
-    python -m experiments.timescale --measures-only  # the ceiling and the rate sweep only (minutes)
-    python -m experiments.timescale ceiling|rates --out DIR [--lives N]   # one of them by hand
+    python -m experiments.timescale --measures-only  # the three measurements only (minutes)
+    python -m experiments.timescale ceiling|rates|confirm --out DIR [--lives N]   # one of them by hand
 
 Stage 1 (``ceiling``) measures what composing ideal colour followers is worth when the
 selector chooses options (:data:`OPTIONS`, ``Config.selector_period`` and
@@ -12,8 +12,9 @@ selector chooses options (:data:`OPTIONS`, ``Config.selector_period`` and
 length (6 x 100,000 steps), under the paper's one-step adult rules, under ``skills``' adult rules
 and with a selector that does not learn (:data:`RULES`). Stage 2 (``rates``) sweeps the
 selector's trace decay and rates for some options (:data:`RATE_GRID`: ``skills``' values were
-chosen for a selector that learns every step). Then (:func:`evolution_groups`) LE-LS and EE-LS
-under ``skills`` with the best option at its best rates (5 seeds x 100 generations, paper
+chosen for a selector that learns every step); stage 3 (``confirm``) lives each option's best point
+again in 8 fresh lives. Then (:func:`evolution_groups`) LE-LS and EE-LS under ``skills`` with the
+option that scores highest there, at its best rates (5 seeds x 100 generations, paper
 lengths) with learning tests of their best (5 x 4 tests of 1,000,000 cycles per task); and, if
 an option lets the paper's own rules compose (a ceiling of at least :data:`COMPOSES`), LE-LS,
 EE-LS and EE-ES under ``paper`` with it, for the claims. The stages run through the
@@ -91,6 +92,15 @@ def read_rates(out: str = OUT) -> list[dict] | None:
         return json.load(f)["rows"]
 
 
+def read_confirmed(out: str = OUT) -> list[dict] | None:
+    """The confirmation's rows (None before it has run)."""
+    path = os.path.join(out, "confirm", MEASURED)
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        return json.load(f)["rows"]
+
+
 def best_rates(rows: list[dict], option: str, trace_lambda: float | None = None) -> dict:
     """The swept row of ``option`` with the highest mean fitness (at ``trace_lambda`` only, if given)."""
     mine = [r for r in rows if r["option"] == option and (trace_lambda is None or r["trace_lambda"] == trace_lambda)]
@@ -110,17 +120,16 @@ def option_sets(option: str) -> tuple[str, ...]:
 
 
 def evolution_groups(out: str = OUT) -> dict[str, tuple[tuple[str, ...], tuple[str, ...]]]:
-    """The evolutions the measures call for: {"PRESET+OPTION": (--set assignments, conditions)} (none before both ran).
+    """The evolutions the measures call for: {"PRESET+OPTION": (--set assignments, conditions)} (none before they ran).
 
     Under ``skills``: LE-LS and EE-LS with the option (other than per-step) whose best point of the rate
-    sweep is highest, at that point's rates. Under ``paper``: LE-LS, EE-LS and EE-ES with the option of the
+    sweep scores highest in the confirmation's fresh lives, at that point's rates. Under ``paper``: LE-LS, EE-LS and EE-ES with the option of the
     highest ceiling under the paper's own rules, if that ceiling reaches :data:`COMPOSES`.
     """
-    ceiling, rates = read_ceiling(out), read_rates(out)
-    if ceiling is None or rates is None:
+    ceiling, confirmed = read_ceiling(out), read_confirmed(out)
+    if ceiling is None or confirmed is None:
         return {}
-    best = max((best_rates(rates, option) for option in RATE_OPTIONS if option != "per-step"),
-               key=lambda r: r["fitness"])
+    best = max((r for r in confirmed if r["option"] != "per-step"), key=lambda r: r["fitness"])
     tuned = tuple(f"{field}={best[field]}" for field in RATE_GRID)
     groups = {f"skills+{best['option']}": (option_sets(best["option"]) + tuned, ("LE-LS", "EE-LS"))}
     option, value = best_option(ceiling, "paper")
@@ -137,6 +146,8 @@ def plan(out: str = OUT, scale: dict = SCREEN) -> list[Stage]:
     points = len(RATE_OPTIONS) * len(list(itertools.product(*RATE_GRID.values())))
     stages.append(Stage("rates: the selector's rates and traces swept per option", "measure", "", "EE-LS",
                         os.path.join(out, "rates"), float(points * RATE_LIVES * 6 * TASK_STEPS)))
+    stages.append(Stage("confirm: each option's best rates in fresh lives", "measure", "", "EE-LS",
+                        os.path.join(out, "confirm"), float(len(RATE_OPTIONS) * LIVES * 6 * TASK_STEPS)))
     for variant, (_, names) in evolution_groups(out).items():
         for condition in names:
             folder = os.path.join(out, variant, condition)
@@ -152,7 +163,7 @@ def stage_command(stage: Stage, out: str = OUT, scale: dict = SCREEN) -> tuple[l
     if stage.kind == "measure":
         root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
         path = os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)
-        which = os.path.basename(stage.out_dir)  # "ceiling" or "rates": the subcommand writing there
+        which = os.path.basename(stage.out_dir)  # "ceiling", "rates" or "confirm": the subcommand writing there
         return ([sys.executable, "-m", "experiments.timescale", which, "--out", stage.out_dir],
                 {**os.environ, "PYTHONPATH": path})
     preset = stage.variant.split("+")[0]
@@ -243,6 +254,43 @@ def measure_rates(out_dir: str, lives: int = RATE_LIVES, key: int = 0, task_step
     return rows
 
 
+def measure_confirm(out_dir: str, lives: int = LIVES, key: int = 1, task_steps: int = TASK_STEPS) -> list[dict]:
+    """Stage 3: each option of :data:`RATE_OPTIONS` at its best point of the rate sweep (in the sibling ``rates``
+    folder), in ``lives`` fresh lives of another key: the sweep's best of 54 points of 3 lives flatters itself."""
+    import jax
+    import numpy as np
+
+    from imrl_jax.checkpoint import git_commit
+    from imrl_jax.config import make_config
+    from imrl_jax.controllers import composition_ceiling
+
+    rates = read_rates(os.path.dirname(os.path.normpath(out_dir)))
+    if rates is None:
+        raise SystemExit(f"error: {out_dir}: the rate sweep has not run (its result.json is missing)")
+    rows = []
+    for index, option in enumerate(RATE_OPTIONS):
+        best = best_rates(rates, option)
+        values = {field: best[field] for field in RATE_GRID}
+        config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **OPTIONS[option],
+                             **values)
+        result = composition_ceiling(jax.random.key(key), config, lives)
+        fitness = np.asarray(result.fitness)
+        last = np.asarray(result.reward_curve)[..., -1] * 10 / np.asarray(config.theoretical_max())
+        rows.append(dict(option=option, **values, lives=lives, fitness=float(fitness.mean()),
+                         fitness_sd=float(fitness.std()), last_tenth=float(last.mean()), sweep_fitness=best["fitness"]))
+        print(f"confirm ({index + 1}/{len(RATE_OPTIONS)}) {option:>9}: {fitness.mean():.3f} (sd {fitness.std():.3f}) "
+              f"in {lives} fresh lives, {best['fitness']:.3f} in the sweep", file=sys.stderr, flush=True)
+    os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, "confirm.csv"), "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    with open(os.path.join(out_dir, MEASURED), "w") as f:
+        json.dump(dict(command=f"python -m experiments.timescale confirm --out {out_dir} --lives {lives} --key {key}",
+                       git_commit=git_commit(), rows=rows), f, indent=2)
+    return rows
+
+
 def plot_rates(rows: list[dict], path: str) -> None:
     """Per option, the best point of the rate sweep for each trace decay (bars) and that point's last tenth."""
     import matplotlib
@@ -316,13 +364,14 @@ def plot_ceiling(rows: list[dict], path: str) -> None:
 
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    measures = {"ceiling": (measure_ceiling, LIVES), "rates": (measure_rates, RATE_LIVES)}
+    measures = {"ceiling": (measure_ceiling, LIVES), "rates": (measure_rates, RATE_LIVES),
+                "confirm": (measure_confirm, LIVES)}
     if argv[:1] and argv[0] in measures:
         measure, lives = measures[argv[0]]
         p = argparse.ArgumentParser(prog=f"python -m experiments.timescale {argv[0]}")
         p.add_argument("--out", default=os.path.join(OUT, argv[0]))
         p.add_argument("--lives", type=int, default=lives)
-        p.add_argument("--key", type=int, default=0)
+        p.add_argument("--key", type=int, default=1 if argv[0] == "confirm" else 0)
         p.add_argument("--task-steps", type=int, default=TASK_STEPS)
         args = p.parse_args(argv[1:])
         measure(args.out, args.lives, args.key, args.task_steps)
@@ -331,16 +380,16 @@ def main(argv=None) -> int:
     p.add_argument("--out", default=OUT, help=f"results directory (default: {OUT})")
     p.add_argument("--list", action="store_true", help="print the stages and their commands, run nothing")
     p.add_argument("--measures-only", action="store_true",
-                   help="run the ceiling and the rate sweep only (minutes, not hours)")
+                   help="run the ceiling, the rate sweep and its confirmation only (minutes, not hours)")
     args = p.parse_args(argv)
     if args.list:
         for stage in plan(args.out):
             print(f"{stage.name}: {' '.join(stage_command(stage, args.out)[0][1:])}")
-        if read_ceiling(args.out) is None or read_rates(args.out) is None:
-            print("(the evolutions are planned from the ceiling's and the rate sweep's results, once they have run)")
+        if not evolution_groups(args.out):
+            print("(the evolutions are planned from the measurements' results, once they have run)")
         return 0
     manifest, manifest_path = load_manifest(args.out, study="timescale", sizes=SCREEN)
-    code = run_stages(plan(args.out)[:2], SCREEN, manifest, manifest_path, lambda s: stage_command(s, args.out))
+    code = run_stages(plan(args.out)[:3], SCREEN, manifest, manifest_path, lambda s: stage_command(s, args.out))
     if code or args.measures_only:
         return code
     return run_stages(plan(args.out), SCREEN, manifest, manifest_path, lambda s: stage_command(s, args.out))

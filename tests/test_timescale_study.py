@@ -28,23 +28,38 @@ def _fake_rates(out, best_option="colour-60"):
         json.dump(dict(rows=rows), f)
 
 
+def _fake_confirm(out, best_option="colour-60"):
+    """The confirmation of _fake_rates' best points: ``best_option`` stays the best in fresh lives."""
+    rows = [dict(option=option, trace_lambda=0.9, eta_selector_actor=1.0, eta_selector_critic=0.01,
+                 fitness=0.5 if option == best_option else 0.3) for option in study.RATE_OPTIONS]
+    rows[0]["fitness"] = 0.9  # per-step is never the option evolved
+    os.makedirs(os.path.join(out, "confirm"))
+    with open(os.path.join(out, "confirm", "result.json"), "w") as f:
+        json.dump(dict(rows=rows), f)
+
+
 def test_the_plan_waits_for_the_measures(tmp_path):
     out = str(tmp_path / "timescale")
-    ceiling, rates = study.plan(out)
-    assert ceiling.kind == rates.kind == "measure" and ceiling.cost == 7 * 3 * 8 * 600_000
+    ceiling, rates, confirm = study.plan(out)
+    assert ceiling.kind == rates.kind == confirm.kind == "measure" and ceiling.cost == 7 * 3 * 8 * 600_000
     assert rates.cost == 5 * (3 * 6 * 3) * 3 * 600_000  # options x grid points x lives x steps
-    for stage, which in ((ceiling, "ceiling"), (rates, "rates")):
+    assert confirm.cost == 5 * 8 * 600_000
+    for stage, which in ((ceiling, "ceiling"), (rates, "rates"), (confirm, "confirm")):
         command, env = study.stage_command(stage, out)
         assert command[-4:] == ["experiments.timescale", which, "--out", stage.out_dir] and "PYTHONPATH" in env
     _fake_ceiling(out, paper_best=0.45)
-    assert len(study.plan(out)) == 2  # the rate sweep has not run
+    _fake_rates(out)
+    assert len(study.plan(out)) == 3  # the confirmation has not run
 
 
 def test_evolutions_under_the_best_option(tmp_path):
     out = str(tmp_path / "timescale")
     _fake_ceiling(out, paper_best=0.45)  # the paper's rules still do not compose: skills' evolutions only
     _fake_rates(out)
+    _fake_confirm(out)
     stages = study.plan(out)
+    assert all(reproduce.stage_done(stage, study.SCREEN) for stage in stages[:3])
+    stages = stages[1:]  # the indices below as before the confirmation stage
     assert [s.name for s in stages[2:]] == ["evolve skills+colour-60 LE-LS", "learning test skills+colour-60 LE-LS",
                                             "evolve skills+colour-60 EE-LS", "learning test skills+colour-60 EE-LS"]
     assert reproduce.stage_done(stages[0], study.SCREEN) and reproduce.stage_done(stages[1], study.SCREEN)
@@ -52,11 +67,12 @@ def test_evolutions_under_the_best_option(tmp_path):
     assert evolve[evolve.index("--preset") + 1] == "skills"
     sets = [evolve[i + 1] for i, word in enumerate(evolve) if word == "--set"]
     assert sets == ["selector_period=60", "selector_termination=colour", "trace_lambda=0.9", "eta_selector_actor=1.0",
-                    "eta_selector_critic=0.01"]
+                    "eta_selector_critic=0.01"]  # the confirmed point's rates
     test = study.stage_command(stages[3], out)[0]
     assert test[test.index("imrl_jax.learning_test") + 1] == stages[2].out_dir  # the run's own config
     _fake_ceiling(str(tmp_path / "composes"), paper_best=0.55)
     _fake_rates(str(tmp_path / "composes"))
+    _fake_confirm(str(tmp_path / "composes"))
     paper = [s for s in study.plan(str(tmp_path / "composes")) if s.variant.startswith("paper")]
     assert [s.name for s in paper if s.kind == "evolve"] == [f"evolve paper+colour-20 {c}"
                                                             for c in ("LE-LS", "EE-LS", "EE-ES")]
@@ -89,3 +105,17 @@ def test_rate_sweep_writes_its_result_last(tmp_path, monkeypatch):
     assert all(0.0 <= r["fitness"] <= 1.0 for r in rows)
     assert study.best_rates(rows, "period-5") == max(rows, key=lambda r: r["fitness"])
     assert sorted(os.listdir(out)) == ["rates.csv", "rates.png", "result.json"]
+
+
+def test_confirmation_relives_each_options_best_point(tmp_path, monkeypatch):
+    """One option, its best point from a (fake) sweep, 2 fresh lives of 200-step tasks: one row, result.json last."""
+    monkeypatch.setattr(study, "RATE_OPTIONS", ("period-5",))
+    out = tmp_path / "timescale"
+    (out / "rates").mkdir(parents=True)
+    sweep = [dict(option="period-5", trace_lambda=lam, eta_selector_actor=1.0, eta_selector_critic=0.01,
+                  fitness=value) for lam, value in ((0.0, 0.2), (0.9, 0.4))]
+    (out / "rates" / "result.json").write_text(json.dumps(dict(rows=sweep)))
+    rows = study.measure_confirm(str(out / "confirm"), lives=2, task_steps=200)
+    assert [(r["option"], r["trace_lambda"], r["sweep_fitness"]) for r in rows] == [("period-5", 0.9, 0.4)]
+    assert 0.0 <= rows[0]["fitness"] <= 1.0
+    assert sorted(os.listdir(out / "confirm")) == ["confirm.csv", "result.json"]
