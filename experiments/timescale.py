@@ -69,36 +69,33 @@ RATE_GRID = dict(trace_lambda=(0.0, 0.9, 0.98), eta_selector_actor=(0.01, 0.1, 0
 RATE_LIVES = 3
 
 
-def ceiling_path(out: str = OUT) -> str:
-    """Where the ceiling stage writes its result."""
-    return os.path.join(out, "ceiling", MEASURED)
+def result_path(out: str, folder: str) -> str:
+    """Where the measure stage of ``folder`` ("ceiling", "rates", "confirm") writes its result."""
+    return os.path.join(out, folder, MEASURED)
+
+
+def _read_measure(out: str, folder: str) -> list[dict] | None:
+    """The rows a measure stage wrote into ``out/folder`` (None before it has run)."""
+    path = result_path(out, folder)
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        return json.load(f)["rows"]
 
 
 def read_ceiling(out: str = OUT) -> list[dict] | None:
     """The ceiling's rows (None before it has run)."""
-    path = ceiling_path(out)
-    if not os.path.exists(path):
-        return None
-    with open(path) as f:
-        return json.load(f)["rows"]
+    return _read_measure(out, "ceiling")
 
 
 def read_rates(out: str = OUT) -> list[dict] | None:
     """The rate sweep's rows (None before it has run)."""
-    path = os.path.join(out, "rates", MEASURED)
-    if not os.path.exists(path):
-        return None
-    with open(path) as f:
-        return json.load(f)["rows"]
+    return _read_measure(out, "rates")
 
 
 def read_confirmed(out: str = OUT) -> list[dict] | None:
     """The confirmation's rows (None before it has run)."""
-    path = os.path.join(out, "confirm", MEASURED)
-    if not os.path.exists(path):
-        return None
-    with open(path) as f:
-        return json.load(f)["rows"]
+    return _read_measure(out, "confirm")
 
 
 def best_rates(rows: list[dict], option: str, trace_lambda: float | None = None) -> dict:
@@ -174,13 +171,35 @@ def stage_command(stage: Stage, out: str = OUT, scale: dict = SCREEN) -> tuple[l
                         stage.out_dir), None
 
 
+def _last_tenth(config, result):
+    """Each lane's performance in the last tenth of each task (its last of 10 bins): the composition once learned."""
+    import numpy as np
+
+    return np.asarray(result.reward_curve)[..., -1] * 10 / np.asarray(config.theoretical_max())
+
+
+def _write_measure(out_dir: str, name: str, rows: list[dict], lives: int, key: int, plot=None, **recorded) -> None:
+    """A measure stage's outputs: NAME.csv, the figure NAME.png (if ``plot``), then result.json (the stage is done)."""
+    from imrl_jax.checkpoint import git_commit
+
+    os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, f"{name}.csv"), "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    if plot is not None:
+        plot(rows, os.path.join(out_dir, f"{name}.png"))
+    with open(os.path.join(out_dir, MEASURED), "w") as f:
+        json.dump(dict(command=f"python -m experiments.timescale {name} --out {out_dir} --lives {lives} --key {key}",
+                       git_commit=git_commit(), **recorded, rows=rows), f, indent=2)
+
+
 def measure_ceiling(out_dir: str, lives: int = LIVES, key: int = 0, task_steps: int = TASK_STEPS) -> list[dict]:
     """Stage 1: the composition ceiling of every option under every rule set; writes ceiling.csv, the figure,
     and result.json last."""
     import jax
     import numpy as np
 
-    from imrl_jax.checkpoint import git_commit
     from imrl_jax.config import make_config
     from imrl_jax.controllers import composition_ceiling
 
@@ -193,7 +212,7 @@ def measure_ceiling(out_dir: str, lives: int = LIVES, key: int = 0, task_steps: 
             result = composition_ceiling(jax.random.key(key), config, lives)
             fitness, top = np.asarray(result.fitness), _top_share(result)
             # The last tenth of each task (its last bin): how well the selector composes once it has learned.
-            last = np.asarray(result.reward_curve)[..., -1] * 10 / np.asarray(config.theoretical_max())
+            last = _last_tenth(config, result)
             rows.append(dict(rules=rules, option=option, lives=lives, task_steps=task_steps,
                              fitness=float(fitness.mean()), fitness_sd=float(fitness.std()),
                              last_tenth=float(last.mean()),
@@ -201,15 +220,7 @@ def measure_ceiling(out_dir: str, lives: int = LIVES, key: int = 0, task_steps: 
                              top_share=top))
             print(f"ceiling ({len(rows)}/{total}) {rules:>6} {option:>9}: ideal followers {fitness.mean():.3f} "
                   f"(sd {fitness.std():.3f}; {time.perf_counter() - tick:.0f} s)", file=sys.stderr, flush=True)
-    os.makedirs(out_dir, exist_ok=True)
-    with open(os.path.join(out_dir, "ceiling.csv"), "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    plot_ceiling(rows, os.path.join(out_dir, "ceiling.png"))
-    with open(os.path.join(out_dir, MEASURED), "w") as f:
-        json.dump(dict(command=f"python -m experiments.timescale ceiling --out {out_dir} --lives {lives} --key {key}",
-                       git_commit=git_commit(), options=OPTIONS, rules=RULES, rows=rows), f, indent=2)
+    _write_measure(out_dir, "ceiling", rows, lives, key, plot_ceiling, options=OPTIONS, rules=RULES)
     return rows
 
 
@@ -221,7 +232,6 @@ def measure_rates(out_dir: str, lives: int = RATE_LIVES, key: int = 0, task_step
     import numpy as np
 
     from imrl_jax import sweeps
-    from imrl_jax.checkpoint import git_commit
     from imrl_jax.config import make_config
     from imrl_jax.controllers import perceptron_followers
 
@@ -234,7 +244,7 @@ def measure_rates(out_dir: str, lives: int = RATE_LIVES, key: int = 0, task_step
         result = sweeps.make_lifetime_sweep(config)(jax.random.key(key), jnp.broadcast_to(genome, (lives,) + genome.shape),
                                                     sweep.points)
         fitness = np.asarray(result.fitness)  # (points, lives)
-        last = (np.asarray(result.reward_curve)[..., -1] * 10 / np.asarray(config.theoretical_max())).mean(axis=(1, 2))
+        last = _last_tenth(config, result).mean(axis=(1, 2))
         for settings, values, tenth in zip(sweep.settings, fitness, last):
             rows.append(dict(option=option, **settings, lives=lives, fitness=float(values.mean()),
                              fitness_sd=float(values.std()), last_tenth=float(tenth)))
@@ -242,15 +252,7 @@ def measure_rates(out_dir: str, lives: int = RATE_LIVES, key: int = 0, task_step
         print(f"rates ({index + 1}/{len(RATE_OPTIONS)}) {option:>9}: best {best['fitness']:.3f} at lambda "
               f"{best['trace_lambda']}, selector actor {best['eta_selector_actor']}, critic {best['eta_selector_critic']} "
               f"({time.perf_counter() - tick:.0f} s)", file=sys.stderr, flush=True)
-    os.makedirs(out_dir, exist_ok=True)
-    with open(os.path.join(out_dir, "rates.csv"), "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    plot_rates(rows, os.path.join(out_dir, "rates.png"))
-    with open(os.path.join(out_dir, MEASURED), "w") as f:
-        json.dump(dict(command=f"python -m experiments.timescale rates --out {out_dir} --lives {lives} --key {key}",
-                       git_commit=git_commit(), grid=RATE_GRID, rows=rows), f, indent=2)
+    _write_measure(out_dir, "rates", rows, lives, key, plot_rates, grid=RATE_GRID)
     return rows
 
 
@@ -260,7 +262,6 @@ def measure_confirm(out_dir: str, lives: int = LIVES, key: int = 1, task_steps: 
     import jax
     import numpy as np
 
-    from imrl_jax.checkpoint import git_commit
     from imrl_jax.config import make_config
     from imrl_jax.controllers import composition_ceiling
 
@@ -275,19 +276,12 @@ def measure_confirm(out_dir: str, lives: int = LIVES, key: int = 1, task_steps: 
                              **values)
         result = composition_ceiling(jax.random.key(key), config, lives)
         fitness = np.asarray(result.fitness)
-        last = np.asarray(result.reward_curve)[..., -1] * 10 / np.asarray(config.theoretical_max())
+        last = _last_tenth(config, result)
         rows.append(dict(option=option, **values, lives=lives, fitness=float(fitness.mean()),
                          fitness_sd=float(fitness.std()), last_tenth=float(last.mean()), sweep_fitness=best["fitness"]))
         print(f"confirm ({index + 1}/{len(RATE_OPTIONS)}) {option:>9}: {fitness.mean():.3f} (sd {fitness.std():.3f}) "
               f"in {lives} fresh lives, {best['fitness']:.3f} in the sweep", file=sys.stderr, flush=True)
-    os.makedirs(out_dir, exist_ok=True)
-    with open(os.path.join(out_dir, "confirm.csv"), "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    with open(os.path.join(out_dir, MEASURED), "w") as f:
-        json.dump(dict(command=f"python -m experiments.timescale confirm --out {out_dir} --lives {lives} --key {key}",
-                       git_commit=git_commit(), rows=rows), f, indent=2)
+    _write_measure(out_dir, "confirm", rows, lives, key)
     return rows
 
 

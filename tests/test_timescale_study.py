@@ -12,8 +12,8 @@ def _fake_ceiling(out, paper_best):
     paper = {option: paper_best if option == "colour-20" else 0.1 for option in study.OPTIONS}
     rows = [dict(rules=rules, option=option, fitness=value)
             for rules, values in (("paper", paper), ("skills", skills)) for option, value in values.items()]
-    os.makedirs(os.path.dirname(study.ceiling_path(out)))
-    with open(study.ceiling_path(out), "w") as f:
+    os.makedirs(os.path.dirname(study.result_path(out, "ceiling")))
+    with open(study.result_path(out, "ceiling"), "w") as f:
         json.dump(dict(rows=rows), f)
 
 
@@ -24,7 +24,7 @@ def _fake_rates(out, best_option="colour-60"):
     rows.append(dict(option="per-step", trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001,
                      fitness=0.9))  # per-step is never the option evolved
     os.makedirs(os.path.join(out, "rates"))
-    with open(os.path.join(out, "rates", "result.json"), "w") as f:
+    with open(study.result_path(out, "rates"), "w") as f:
         json.dump(dict(rows=rows), f)
 
 
@@ -34,7 +34,7 @@ def _fake_confirm(out, best_option="colour-60"):
                  fitness=0.5 if option == best_option else 0.3) for option in study.RATE_OPTIONS]
     rows[0]["fitness"] = 0.9  # per-step is never the option evolved
     os.makedirs(os.path.join(out, "confirm"))
-    with open(os.path.join(out, "confirm", "result.json"), "w") as f:
+    with open(study.result_path(out, "confirm"), "w") as f:
         json.dump(dict(rows=rows), f)
 
 
