@@ -432,6 +432,12 @@ def parse_names(text: str | None) -> list[str]:
     return names
 
 
+def all_stages(out: str = OUT) -> tuple[list[Stage], dict]:
+    """Every stage the command runs by default (each rule set, then claim 8's), and their scale."""
+    names = [name for name in parse_names(None) if name != EXPERTS]
+    return plan(names, SCREEN, out) + plan_experts(EXPERT_RULE_SETS, SCREEN, out), SCREEN
+
+
 def main(argv=None) -> int:
     """The command line: run (or go on with) the chosen rule sets' stages, or write the claims table."""
     p = argparse.ArgumentParser(prog="python -m experiments.claims_study", description=__doc__.split("\n\n")[0])

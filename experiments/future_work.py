@@ -378,6 +378,11 @@ def report(out: str = OUT, document: str = DOCUMENT, reproduction: str = REPRODU
     return 0
 
 
+def all_stages(out: str = OUT) -> tuple[list[Stage], dict]:
+    """Every stage the command runs by default (every row), and their scale."""
+    return plan(list(BY_NAME), SCREEN, out), SCREEN
+
+
 def main(argv=None) -> int:
     """The command line: list the stages, run (or go on with) them, or write the report of what has finished."""
     p = argparse.ArgumentParser(prog="python -m experiments.future_work", description=__doc__.split("\n\n")[0])

@@ -261,6 +261,11 @@ def report(out: str = OUT, document: str = os.path.join("docs", "NOVEL_TASKS.md"
     return 0
 
 
+def all_stages(out: str = OUT) -> tuple[list[Stage], dict]:
+    """Every stage of the study, and their scale."""
+    return plan(out), SCREEN
+
+
 def main(argv=None) -> int:
     """The command line: list the stages, or write the held-out task sets and run (or go on with) every stage."""
     p = argparse.ArgumentParser(prog="python -m experiments.novel_tasks", description=__doc__.split("\n\n")[0])

@@ -275,6 +275,11 @@ def report(out: str = OUT, document: str = os.path.join("docs", "SEARCH.md"), re
     return 0
 
 
+def all_stages(out: str = OUT) -> tuple[list[Stage], dict]:
+    """Every stage the command runs by default (every row), and their scale."""
+    return plan(ROWS, SCREEN, out), SCREEN
+
+
 def main(argv=None) -> int:
     """The command line: list the chosen rows' stages, or run (or go on with) them."""
     p = argparse.ArgumentParser(prog="python -m experiments.search", description=__doc__.split("\n\n")[0])

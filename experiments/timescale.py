@@ -356,6 +356,11 @@ def plot_ceiling(rows: list[dict], path: str) -> None:
     plt.close(fig)
 
 
+def all_stages(out: str = OUT) -> tuple[list[Stage], dict]:
+    """Every stage planned so far (the evolutions once the measurements have run), and their scale."""
+    return plan(out), SCREEN
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     measures = {"ceiling": (measure_ceiling, LIVES), "rates": (measure_rates, RATE_LIVES),
