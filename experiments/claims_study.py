@@ -76,6 +76,10 @@ RULE_SETS: tuple[RuleSet, ...] = (
     RuleSet("paper-selector", "paper", ("trace_lambda=0.98", "eta_selector_actor=0.3", "eta_selector_critic=0.001"),
             "the paper's rules with only the adult selector's unstated values of skills (traces, selector rates)",
             ee_ls="skills", sle="skills-bias0"),
+    RuleSet("paper-selector-sle-test", "paper", ("trace_lambda=0.98", "eta_selector_actor=0.3",
+                                                 "eta_selector_critic=0.001"),
+            "paper-selector with SLE's noise annealed over the whole 1,000,000-cycle test (every run shared)",
+            ee_ls="skills", sle="skills-bias0-sle-test", le_ls="paper-selector", sle_noise_steps=0),
     RuleSet("extension", "extension", (), "MODEL.md's learning extensions, in childhood too", ee_ls="skills",
             sle="skills-bias0"),
     RuleSet("skills-sle-test", "skills", (), "skills, SLE's noise annealed over the whole 1,000,000-cycle test",
@@ -89,7 +93,7 @@ RULE_SETS: tuple[RuleSet, ...] = (
 BY_NAME = {rule.name: rule for rule in RULE_SETS}
 #: The order the screen runs its stages in: the cheap SLE tests first, then the evolutions that matter most.
 SCREEN_ORDER = ("skills-sle-test", "paper-sle-test", "skills-bias0", "skills-bias0-sle-test", "paper-selector",
-                "skills-bias2",
+                "paper-selector-sle-test", "skills-bias2",
                 "skills-clamp", "extension", "skills-bias1")
 
 
