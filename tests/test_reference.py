@@ -192,12 +192,7 @@ def test_sle_noise_horizon_matches_reference(tiny):
     key = jax.random.key(11)
     genome = jnp.zeros((0,), jnp.float64)
     result = _live(key, config, params, genome)
-    keys = L.lifetime_keys(key, config.num_tasks)
-    pose = L.random_pose(keys.pose, config, jnp.float64)
-    tasks = jax.vmap(S.draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
-    none = np.zeros((0,))
-    ref = reference.live(config, np.asarray(genome), (float(pose.pos[0]), float(pose.pos[1]), float(pose.heading)),
-                         none, np.zeros((0, 2)), np.asarray(tasks.u), np.asarray(tasks.z))
+    ref = reference_life(config, key, genome)
     np.testing.assert_array_equal(np.asarray(result.reaches), ref["reaches"])
     for t in range(config.num_tasks):
         _assert_weights_close(jax.tree.map(lambda x: x[t], result.adult_agents), ref["task_weights"][t])
