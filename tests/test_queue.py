@@ -24,5 +24,5 @@ def test_studies_run_in_order_and_a_failure_stops_the_queue(monkeypatch, capsys)
 
     monkeypatch.setattr(queue.subprocess, "run", fake_run)
     assert queue.main([]) == 3
-    assert ran == ["experiments.claims_study", "experiments.timescale", "experiments.novel_tasks"]
+    assert ran == ["experiments.timescale", "experiments.novel_tasks"]
     assert "study novel_tasks stopped with exit code 3" in capsys.readouterr().err
