@@ -207,20 +207,37 @@ def finished(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION) ->
         t is not None for t in tests)
 
 
-def load_rule(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
-    """A rule set's runs in the form the report's claims read (one variant: the rule set)."""
+class RowRuns(NamedTuple):
+    """Where one row's runs live: an evolution folder per evolved condition, a learning-test folder per tested
+    condition, and the owner (``paper`` or ``skills``) of each run that is the finished reproduction's."""
+
+    evolutions: dict  # condition -> the evolution's folder
+    tests: dict  # condition -> the learning test's folder
+    reproduction: dict  # condition -> the reproduction's variant whose run it is (absent: the row's own run)
+
+
+def rule_runs(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION) -> RowRuns:
+    """A rule set's runs: its own and the ones it shares (:func:`run_dir`, :func:`learning_dir`)."""
+    owners = {"LE-LS": rule.le_ls or rule.name, "EE-LS": rule.ee_ls, "EE-ES": "paper"}
+    return RowRuns({c: run_dir(rule, c, out, reproduction) for c in EVOLVED},
+                   {c: learning_dir(rule, c, out, reproduction) for c in TESTED},
+                   {c: owner for c, owner in owners.items() if is_reproduction(owner)})
+
+
+def load_runs(name: str, runs: RowRuns) -> dict:
+    """A row's runs in the form the report's claims read (one variant: ``name``)."""
     from experiments.loading import read_evolution, read_test
 
-    data = dict(results=out, manifest=dict(sizes=dict(generations=SCREEN["generations"])), variants=[rule.name],
+    data = dict(results=None, manifest=dict(sizes=dict(generations=SCREEN["generations"])), variants=[name],
                 evolutions={}, tests={})
-    for condition in EVOLVED:
-        run = read_evolution(run_dir(rule, condition, out, reproduction))
+    for condition, folder in runs.evolutions.items():
+        run = read_evolution(folder)
         if run is not None:
-            data["evolutions"][rule.name, condition] = run
-    for condition in TESTED:
-        test = read_test(learning_dir(rule, condition, out, reproduction))
+            data["evolutions"][name, condition] = run
+    for condition, folder in runs.tests.items():
+        test = read_test(folder)
         if test is not None:
-            data["tests"][rule.name, condition] = test
+            data["tests"][name, condition] = test
     return data
 
 
@@ -231,43 +248,44 @@ class SharedProbes(NamedTuple):
     best_life: dict | None  # the relived best individual (its fresh lives per seed among them)
 
 
-def shared_numbers(reproduction_summary: dict, rule: RuleSet, condition: str) -> SharedProbes | None:
-    """The reproduction report's probes of a shared run, or None if the run is not the reproduction's."""
-    owner = {"LE-LS": rule.le_ls, "EE-LS": rule.ee_ls, "EE-ES": "paper"}[condition]
-    if not is_reproduction(owner):
+def shared_numbers(reproduction_summary: dict, owner: str | None, condition: str) -> SharedProbes | None:
+    """The reproduction report's probes of the run of ``condition`` under variant ``owner`` (None: not the
+    reproduction's run)."""
+    if owner is None or not is_reproduction(owner):
         return None
     key = f"{owner}/{condition}"
     return SharedProbes(reproduction_summary.get("colours_followed", {}).get(key),
                         reproduction_summary.get("best_individuals", {}).get(key))
 
 
-def measure_rule(rule: RuleSet, reproduction_summary: dict, out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
-    """The seven claims of one rule set by the report's own rules, with the numbers behind them.
+def measure_runs(name: str, runs: RowRuns, reproduction_summary: dict, sle_whole_test: bool = False) -> dict:
+    """The seven claims of one row of runs by the report's own rules, with the numbers behind them.
 
     Shared runs reuse the reproduction report's probes (docs/reproduction/summary.json: colours
-    followed by the 10 best of each seed, the relived best EE-ES individual); a rule set's own
-    LE-LS is probed here as the report probes it (a fresh childhood, then the junction probe).
+    followed by the 10 best of each seed, the relived best EE-ES individual); a row's own
+    LE-LS and EE-LS are probed here as the report probes them (LE-LS after a fresh childhood, then
+    the junction probe), and each seed's best genome lives 10 fresh lives.
     """
     from experiments.claims import final_best, measure
     from experiments.loading import best_of_population
     from experiments.relive import fresh_fitness, probe_best
 
-    data = load_rule(rule, out, reproduction)
+    data = load_runs(name, runs)
     probes, lives, fresh = {}, {}, {}
-    shared_runs = {c: shared_numbers(reproduction_summary, rule, c) for c in ("LE-LS", "EE-LS", "EE-ES")}
+    shared_runs = {c: shared_numbers(reproduction_summary, runs.reproduction.get(c), c) for c in EVOLVED}
     for condition, shared in shared_runs.items():
-        run = data["evolutions"].get((rule.name, condition))
+        run = data["evolutions"].get((name, condition))
         if shared is not None:
             if condition != "EE-ES":
-                probes[rule.name, condition] = shared.colours
+                probes[name, condition] = shared.colours
             per_seed = (shared.best_life or {}).get("fresh_mean_per_seed")
         else:
-            population = os.path.join(run_dir(rule, condition, out, reproduction), "final_population.npz")
+            population = os.path.join(runs.evolutions[condition], "final_population.npz")
             per_seed = None
             if run is not None and os.path.isfile(population):
                 best = best_of_population(population)
-                probes[rule.name, condition] = probe_best(run["config"], best)
-                print(f"fresh lives of each seed's best {condition} genome ({rule.name})", flush=True)
+                probes[name, condition] = probe_best(run["config"], best)
+                print(f"fresh lives of each seed's best {condition} genome ({name})", flush=True)
                 per_seed = fresh_fitness(run["config"], best)["mean"].tolist()
         if run is not None and per_seed is not None:  # the recorded best beside the same genomes' fresh lives
             fresh[condition] = dict(recorded=float(final_best(run["best"]).mean()), fresh=float(np.mean(per_seed)),
@@ -275,9 +293,15 @@ def measure_rule(rule: RuleSet, reproduction_summary: dict, out: str = OUT, repr
     ee_es = shared_runs["EE-ES"]
     if ee_es is not None and ee_es.best_life is not None:
         lives["paper", "EE-ES"] = ee_es.best_life
-    measured = measure(data, lives, probes, sle_whole_test=rule.sle_noise_steps == 0)[rule.name]
+    measured = measure(data, lives, probes, sle_whole_test=sle_whole_test)[name]
     measured["fresh"] = fresh
     return measured
+
+
+def measure_rule(rule: RuleSet, reproduction_summary: dict, out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
+    """The seven claims of one rule set (:func:`measure_runs` on its own and shared runs)."""
+    return measure_runs(rule.name, rule_runs(rule, out, reproduction), reproduction_summary,
+                        sle_whole_test=rule.sle_noise_steps == 0)
 
 
 def config_of(rule: RuleSet, condition: str):

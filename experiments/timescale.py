@@ -4,6 +4,7 @@
     python -m experiments.timescale             # run (or go on with) every stage, in order
     python -m experiments.timescale --measures-only  # the three measurements only (minutes)
     python -m experiments.timescale ceiling|rates|confirm --out DIR [--lives N]   # one of them by hand
+    python -m experiments.timescale --report    # the evolutions' tables, claims and figure (runs nothing)
 
 Stage 1 (``ceiling``) measures what composing ideal colour followers is worth when the
 selector chooses options (:data:`OPTIONS`, ``Config.selector_period`` and
@@ -32,7 +33,9 @@ import os
 import sys
 import time
 
-from experiments.claims_study import SCREEN
+import numpy as np
+
+from experiments.claims_study import REPRODUCTION, SCREEN
 from experiments.reproduce import (MEASURED, Stage, evolution_cost, evolve_command, load_manifest, run_stages,
                                    test_command, test_cost)
 
@@ -356,6 +359,170 @@ def plot_ceiling(rows: list[dict], path: str) -> None:
     plt.close(fig)
 
 
+# ----------------------------------------------------------------------------- the evolutions' report
+
+#: The per-step selector the evolutions are compared with: the reproduction's run of this rule set (10 x 100).
+BASELINE = "skills"
+#: The conditions evolved with an option; EE-ES and SLE are the reproduction's (see :func:`option_runs`).
+OPTION_CONDITIONS = ("LE-LS", "EE-LS")
+#: Where the report's tables go in docs/TIMESCALE.md.
+REPORT_START = "<!-- timescale evolutions: python -m experiments.timescale --report -->"
+REPORT_END = "<!-- end of timescale evolutions -->"
+
+
+def option_runs(variant: str, out: str = OUT, reproduction: str = REPRODUCTION):
+    """An option's row of runs: its own LE-LS and EE-LS (evolution and learning test), and the reproduction's
+    EE-ES (``paper``'s: it learns nothing, its evolved selector chooses every step) and SLE (``skills``': no
+    selector)."""
+    from experiments.claims_study import RowRuns
+    from experiments.reproduce import evolution_dir, test_dir
+
+    evolutions = {c: os.path.join(out, variant, c, "evolve") for c in OPTION_CONDITIONS}
+    tests = {c: os.path.join(out, variant, c, "test") for c in OPTION_CONDITIONS}
+    evolutions["EE-ES"], tests["EE-ES"] = evolution_dir(reproduction, "paper", "EE-ES"), test_dir(reproduction, "paper",
+                                                                                                    "EE-ES")
+    tests["SLE"] = test_dir(reproduction, BASELINE, "SLE")
+    return RowRuns(evolutions, tests, {"EE-ES": "paper"})
+
+
+def _progress(folder: str) -> tuple[int, int] | None:
+    """Generations done and seeds of an evolution folder (None before its first generation)."""
+    from experiments.loading import read_evolution
+
+    run = read_evolution(folder)
+    return None if run is None else (len(run["best"]), int(run["best"].shape[1]))
+
+
+def measure_evolutions(out: str = OUT, reproduction: str = REPRODUCTION, summary: dict | None = None) -> dict:
+    """The per-step baseline's claims and each planned option's: {variant: measured or progress}.
+
+    An option's claims are measured once both of its evolutions and learning tests have finished
+    (its own best genomes then live their fresh lives and are probed); until then its row shows
+    how far the evolutions are.
+    """
+    from experiments.claims_study import BY_NAME, measure_rule, measure_runs
+    from experiments.loading import read_test
+
+    summary = summary if summary is not None else _reproduction_summary()
+    rows = {BASELINE: dict(measured=measure_rule(BY_NAME[BASELINE], summary, reproduction=reproduction),
+                           label=f"{BASELINE}, per-step selector (the paper's)")}
+    for variant in evolution_groups(out):
+        runs = option_runs(variant, out, reproduction)
+        progress = {c: _progress(runs.evolutions[c]) for c in OPTION_CONDITIONS}
+        done = all(p is not None and p[0] >= SCREEN["generations"] for p in progress.values()) and all(
+            read_test(runs.tests[c]) is not None for c in OPTION_CONDITIONS)
+        rows[variant] = dict(progress=progress, label=variant.replace("+", ", ") + " selector",
+                             measured=measure_runs(variant, runs, summary) if done else None)
+    return rows
+
+
+def _reproduction_summary() -> dict:
+    """The reproduction report's probes (docs/reproduction/summary.json)."""
+    with open(os.path.join("docs", "reproduction", "summary.json")) as f:
+        return json.load(f)
+
+
+def report_table(rows: dict) -> str:
+    """Markdown: per row and condition the recorded and fresh fitness and the steady state, then claims 1-7."""
+    from experiments.claims import CLAIMS
+
+    lines = ["| selector | condition | seeds x generations | final best fitness (recorded) | fresh lives of each "
+             "seed's best | plateau generation | steady state (learning test) |", "|---|---|---|---|---|---|---|"]
+    for variant, row in rows.items():
+        measured = row["measured"]
+        for condition in OPTION_CONDITIONS:
+            if measured is None:
+                done = row["progress"][condition]
+                size = "not started" if done is None else f"{done[1]} x {done[0]} of {SCREEN['generations']}, running"
+                lines.append(f"| {row['label']} | {condition} | {size} | - | - | - | - |")
+                continue
+            e, t = measured["evolution"].get(condition), measured["learning_tests"].get(condition)
+            f = measured["fresh"].get(condition)
+            lines.append(f"| {row['label']} | {condition} | {len(e['final_best_per_seed'])} x {e['generations']} | {e['final_best_mean']:.3f} +- {e['final_best_sd']:.3f} | "
+                         + ("-" if f is None else f"{f['fresh']:.3f} (sd {f['fresh_sd_over_seeds']:.3f} over seeds)")
+                         + f" | {e['plateau_generation']} | "
+                         + ("-" if t is None else f"{t['steady_mean']:.3f} +- {t['steady_sd']:.3f} "
+                            f"({t['num_runs']} runs)") + " |")
+    lines += ["", "| claim | " + " | ".join(row["label"] for row in rows.values()) + " |",
+              "|---|" + "---|" * len(rows)]
+    short = {"holds": "**holds**", "partly": "partly", "does not hold": "no", "n/a": "n/a"}
+    for k in range(1, 8):
+        cells = []
+        for row in rows.values():
+            claim = None if row["measured"] is None else row["measured"]["claims"][k]
+            cells.append("not finished" if claim is None else f"{short[claim['verdict']]}: "
+                                                               f"{claim['measured'].split(';')[0]}")
+        lines.append(f"| {k}: {CLAIMS[k]} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def report_figure(out: str, path: str, reproduction: str = REPRODUCTION) -> str:
+    """Fig. 3a and 3b side by side: best fitness per generation and the learning tests' curves, per-step (dashed)
+    against each option (solid), LE-LS and EE-LS."""
+    from matplotlib.ticker import MaxNLocator
+
+    from experiments.claims_study import BY_NAME, rule_runs
+    from experiments.figures import _band
+    from experiments.loading import read_evolution, read_test
+    from imrl_jax.plotting import new_figure, save, style_axis
+
+    colours = {"LE-LS": "tab:blue", "EE-LS": "tab:orange"}
+    sources = {f"{BASELINE}, per-step": (rule_runs(BY_NAME[BASELINE], reproduction=reproduction), "--")}
+    for variant in evolution_groups(out):
+        sources[variant.replace("+", ", ")] = (option_runs(variant, out, reproduction), "-")
+    fig = new_figure(12.0, 4.0)
+    evolution_ax, test_ax = fig.subplots(1, 2)
+    style_axis(evolution_ax, "Best fitness per generation (best of a generation's lives; mean over seeds, +-1 sd)",
+               "generation", "best fitness")
+    style_axis(test_ax, "Learning tests of the best (mean over tests and tasks, +-1 sd over runs)",
+               "cycles of the task", "performance per bin")
+    for label, (runs, ls) in sources.items():
+        for condition in OPTION_CONDITIONS:
+            style = dict(color=colours[condition], ls=ls, lw=1.5)
+            run = read_evolution(runs.evolutions[condition])
+            if run is not None:
+                best = run["best"][~np.isnan(run["best"]).any(1)]  # a running generation's seeds may be partial
+                x = np.arange(len(best))
+                evolution_ax.plot(x, best.mean(1), label=f"{condition}, {label} ({best.shape[1]} seeds)", **style)
+                _band(evolution_ax, x, best.mean(1), best.std(1), style, set())
+            test = read_test(runs.tests[condition])
+            if test is not None:
+                test_ax.plot(test["steps"], test["mean"], label=f"{condition}, {label}", **style)
+                _band(test_ax, np.asarray(test["steps"]), np.asarray(test["mean"]), np.asarray(test["sd"]), style,
+                      set())
+    evolution_ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    for ax in (evolution_ax, test_ax):
+        ax.set_ylim(0, 1)
+        if ax.lines:
+            ax.legend(fontsize=7, loc="lower right")
+        else:
+            ax.text(0.5, 0.5, "not run yet", transform=ax.transAxes, ha="center", va="center", color="0.4")
+    fig.tight_layout()
+    return save(fig, path)
+
+
+def report(out: str = OUT, document: str = os.path.join("docs", "TIMESCALE.md"),
+           reproduction: str = REPRODUCTION, summary: dict | None = None) -> int:
+    """Measure what has finished; write evolutions.json and evolutions.png under ``out`` and the tables into
+    ``document``."""
+    from experiments.claims_study import write_table
+
+    if not evolution_groups(out):
+        print(f"error: {out}: the measurements have not run, so no evolution is planned yet", file=sys.stderr)
+        return 2
+    rows = measure_evolutions(out, reproduction, summary)
+    with open(os.path.join(out, "evolutions.json"), "w") as f:
+        json.dump({variant: dict(label=row["label"], progress=row.get("progress"),
+                                 claims=None if row["measured"] is None else
+                                 {str(k): v for k, v in row["measured"]["claims"].items()},
+                                 fresh=None if row["measured"] is None else row["measured"]["fresh"])
+                   for variant, row in rows.items()}, f, indent=2, default=str)
+    drawn = report_figure(out, os.path.join(out, "evolutions.png"), reproduction)
+    write_table(document, report_table(rows), REPORT_START, REPORT_END)
+    print(f"wrote {os.path.join(out, 'evolutions.json')}, {drawn} and the tables of {document}")
+    return 0
+
+
 def all_stages(out: str = OUT) -> tuple[list[Stage], dict]:
     """Every stage planned so far (the evolutions once the measurements have run), and their scale."""
     return plan(out), SCREEN
@@ -380,7 +547,11 @@ def main(argv=None) -> int:
     p.add_argument("--list", action="store_true", help="print the stages and their commands, run nothing")
     p.add_argument("--measures-only", action="store_true",
                    help="run the ceiling, the rate sweep and its confirmation only (minutes, not hours)")
+    p.add_argument("--report", action="store_true", help="measure the finished evolutions, draw their figure and "
+                   "write docs/TIMESCALE.md's tables (runs nothing)")
     args = p.parse_args(argv)
+    if args.report:
+        return report(args.out)
     if args.list:
         for stage in plan(args.out):
             print(f"{stage.name}: {' '.join(stage_command(stage, args.out)[0][1:])}")

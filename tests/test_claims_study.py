@@ -49,10 +49,12 @@ def test_unknown_rule_set_is_refused(capsys):
 
 def test_shared_runs_read_the_reproduction_reports_probes():
     summary = dict(colours_followed={"skills/EE-LS": {"red": 3}}, best_individuals={"paper/EE-ES": {"fitness": 0.4}})
-    rule = study.BY_NAME["paper-selector"]  # its EE-LS is skills', EE-ES paper's, LE-LS its own
-    assert study.shared_numbers(summary, rule, "EE-LS") == study.SharedProbes(colours={"red": 3}, best_life=None)
-    assert study.shared_numbers(summary, rule, "EE-ES").best_life == {"fitness": 0.4}
-    assert study.shared_numbers(summary, rule, "LE-LS") is None
+    owners = study.rule_runs(study.BY_NAME["paper-selector"]).reproduction  # EE-LS skills', EE-ES paper's
+    assert owners == {"EE-LS": "skills", "EE-ES": "paper"}  # its LE-LS is its own: not the reproduction's
+    assert study.shared_numbers(summary, owners.get("EE-LS"), "EE-LS") == study.SharedProbes(colours={"red": 3},
+                                                                                              best_life=None)
+    assert study.shared_numbers(summary, owners.get("EE-ES"), "EE-ES").best_life == {"fitness": 0.4}
+    assert study.shared_numbers(summary, owners.get("LE-LS"), "LE-LS") is None
 
 
 def test_claim_5_under_the_whole_test_reading_is_measured_not_na():

@@ -119,3 +119,73 @@ def test_confirmation_relives_each_options_best_point(tmp_path, monkeypatch):
     assert [(r["option"], r["trace_lambda"], r["sweep_fitness"]) for r in rows] == [("period-5", 0.9, 0.4)]
     assert 0.0 <= rows[0]["fitness"] <= 1.0
     assert sorted(os.listdir(out / "confirm")) == ["confirm.csv", "result.json"]
+
+
+def _fake_evolution(folder, best_per_seed):
+    """An evolution's history.csv as the report reads it: a row per generation and seed."""
+    os.makedirs(folder)
+    rows = [f"{g},{seed},{v},0.0,0.0" for seed, curve in enumerate(best_per_seed) for g, v in enumerate(curve)]
+    with open(os.path.join(folder, "history.csv"), "w") as f:
+        f.write("generation,seed,best,mean,std\n" + "\n".join(rows) + "\n")
+
+
+def _fake_test(folder, per_run):
+    """A finished learning test as the report reads it: steady.json and curve.csv."""
+    os.makedirs(folder)
+    with open(os.path.join(folder, "steady.json"), "w") as f:
+        json.dump(dict(steady_per_run=list(per_run), steady_mean=sum(per_run) / len(per_run), steady_sd=0.0,
+                       num_runs=len(per_run), pairs_both_ways=0.5), f)
+    with open(os.path.join(folder, "curve.csv"), "w") as f:
+        f.write("bin,end_step,mean,sd_over_runs\n0,1000,0.1,0.01\n1,2000,0.3,0.01\n")
+
+
+def test_report_compares_the_option_with_the_per_step_runs(tmp_path):
+    """Hand-made runs of 100 generations: a running option shows its progress; a finished one its claims."""
+    reproduction, out = str(tmp_path / "paper"), str(tmp_path / "timescale")
+    constant = lambda *values: [[v] * 100 for v in values]  # noqa: E731  one flat curve per seed
+    _fake_evolution(os.path.join(reproduction, "skills", "evolve", "LE-LS"), constant(0.8, 0.76))
+    _fake_evolution(os.path.join(reproduction, "skills", "evolve", "EE-LS"), constant(0.4, 0.5))
+    _fake_evolution(os.path.join(reproduction, "paper", "evolve", "EE-ES"), constant(0.3, 0.4))
+    for variant, condition, runs in (("skills", "LE-LS", (0.8, 0.8)), ("skills", "EE-LS", (0.5, 0.5)),
+                                     ("skills", "SLE", (0.4, 0.4)), ("paper", "EE-ES", (0.3, 0.3))):
+        _fake_test(os.path.join(reproduction, variant, "test", condition), runs)
+    _fake_ceiling(out, paper_best=0.45)
+    _fake_rates(out)
+    _fake_confirm(out)  # colour-60 is evolved
+    option = os.path.join(out, "skills+colour-60")
+    _fake_evolution(os.path.join(option, "LE-LS", "evolve"), constant(0.6, 0.62))
+    _fake_evolution(os.path.join(option, "EE-LS", "evolve"), [[0.7] * 40, [0.74] * 40])  # running
+    rows = study.measure_evolutions(out, reproduction, summary={})
+    assert list(rows) == ["skills", "skills+colour-60"] and rows["skills+colour-60"]["measured"] is None
+    assert rows["skills"]["measured"]["claims"][3]["verdict"] == "does not hold"  # 0.45 against 0.78
+    text = study.report_table(rows)
+    assert "| skills, colour-60 selector | EE-LS | 2 x 40 of 100, running | - | - | - | - |" in text
+    assert "| skills, per-step selector (the paper's) | LE-LS | 2 x 100 | 0.780 +- 0.020 | - | 0 | 0.800 +- 0.000 " \
+           "(2 runs) |" in text
+    os.remove(os.path.join(option, "EE-LS", "evolve", "history.csv"))
+    os.rmdir(os.path.join(option, "EE-LS", "evolve"))
+    _fake_evolution(os.path.join(option, "EE-LS", "evolve"), constant(0.7, 0.74))
+    _fake_test(os.path.join(option, "LE-LS", "test"), (0.6, 0.6))
+    _fake_test(os.path.join(option, "EE-LS", "test"), (0.7, 0.7))
+    rows = study.measure_evolutions(out, reproduction, summary={})
+    claims = rows["skills+colour-60"]["measured"]["claims"]
+    # EE-LS 0.72 against LE-LS 0.61; se = sqrt(0.0002 / 2 + 0.0008 / 2) (sd with ddof 1 over 2 seeds)
+    assert claims[3]["verdict"] == "holds" and abs(claims[3]["numbers"]["standard_error"] - 0.0005 ** 0.5) < 1e-9
+    assert claims[6]["measured"].startswith("EE-LS > LE-LS > SLE > EE-ES")  # the option's tests beside skills' SLE
+    text = study.report_table(rows)
+    assert "| skills, colour-60 selector | LE-LS | 2 x 100 | 0.610 +- 0.010 | - | 0 | 0.600 +- 0.000 (2 runs) |" in text
+    assert "| 3: EE-LS ends with a higher best fitness than LE-LS. | no: EE-LS 0.450 vs LE-LS 0.780" in text
+    document = tmp_path / "TIMESCALE.md"
+    document.write_text(f"intro\n{study.REPORT_START}\nSTALE\n{study.REPORT_END}\nend\n")
+    assert study.report(out, str(document), reproduction, summary={}) == 0
+    written = document.read_text()
+    assert "STALE" not in written and "**holds**: EE-LS 0.720 vs LE-LS 0.610" in written
+    assert json.loads(open(os.path.join(out, "evolutions.json")).read())["skills+colour-60"]["claims"]["3"][
+        "verdict"] == "holds"
+    assert os.path.getsize(os.path.join(out, "evolutions.png")) > 0
+
+
+def test_report_before_the_measurements_is_refused(tmp_path, capsys):
+    assert study.main(["--report", "--out", str(tmp_path / "none")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "the measurements have not run" in err and "\n" not in err
