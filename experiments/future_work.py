@@ -44,6 +44,9 @@ class Run(NamedTuple):
     preset: str
     sets: tuple[str, ...]
     about: str
+    # > 0: the claims study's claim-8 run with this many experts under this preset is this row's run, the same
+    # command: the row reads it there and runs nothing of its own
+    claims_experts: int = 0
 
 
 RUNS: tuple[Run, ...] = (
@@ -54,9 +57,22 @@ RUNS: tuple[Run, ...] = (
     Run("LE-LS-P", "LE-LS-P", "skills", (), "(c) evolved learning parameters"),
     Run("LE-LS-PC", "LE-LS-PC", "skills", (), "(c) evolved learning parameters and childhood length"),
     Run("LE-LS-N6", "LE-LS-N", "skills", ("num_experts=6",), "(d) up to 6 experts, each expressed by a gene"),
-    Run("LE-LS-6", "LE-LS", "skills", ("num_experts=6",), "(d)'s comparison: 6 experts, all expressed"),
+    Run("LE-LS-6", "LE-LS", "skills", ("num_experts=6",), "(d)'s comparison: 6 experts, all expressed (the claims "
+        "study's claim-8 run)", claims_experts=6),
 )
 BY_NAME = {run.name: run for run in RUNS}
+#: The claims study's results, where rows with ``claims_experts`` find their runs.
+CLAIMS_OUT = os.path.join("experiments", "results", "claims")
+
+
+def run_dirs(run: Run, out: str = OUT, claims: str = CLAIMS_OUT) -> tuple[str, str]:
+    """A row's evolution and learning-test folders: its own, or the claims study's identical claim-8 run."""
+    if run.claims_experts:
+        from experiments.claims_study import experts_dir
+
+        return tuple(experts_dir(run.preset, run.condition, run.claims_experts, kind, claims)
+                     for kind in ("evolve", "test"))
+    return os.path.join(out, run.name, "evolve"), os.path.join(out, run.name, "test")
 
 
 def plan(names, scale: dict = SCREEN, out: str = OUT) -> list[Stage]:
@@ -64,6 +80,8 @@ def plan(names, scale: dict = SCREEN, out: str = OUT) -> list[Stage]:
     stages = []
     for name in names:
         run = BY_NAME[name]
+        if run.claims_experts:
+            continue  # the claims study runs it
         if conditions.get(run.condition).evolved:
             stages.append(Stage(f"evolve {name}", "evolve", name, run.condition,
                                 os.path.join(out, name, "evolve"), evolution_cost(scale, run.condition)))
@@ -195,7 +213,8 @@ def _noise(test: dict | None) -> str:
     return ", noise over the whole test" if not steps else f", noise over {steps:,} cycles"
 
 
-def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = SLE_WHOLE) -> dict:
+def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = SLE_WHOLE,
+            claims: str = CLAIMS_OUT) -> dict:
     """Every row's evolution and learning test, (c)'s evolved learning values and (d)'s experts, from what finished."""
     import numpy as np
 
@@ -212,9 +231,9 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = S
         row["about"] += _noise(row["test"]) if row["condition"] == "SLE" else ""
     for run in RUNS:
         evolved = conditions.get(run.condition).evolved
+        evolution, test = run_dirs(run, out, claims)
         rows.append(dict(name=run.name, condition=run.condition, about=run.about, evolved=evolved,
-                         evolution=_evolution(os.path.join(out, run.name, "evolve")) if evolved else None,
-                         test=_test(os.path.join(out, run.name, "test"))))
+                         evolution=_evolution(evolution) if evolved else None, test=_test(test)))
     by_name = {row["name"]: row for row in rows}
     # (c): the values of the genes LE-LS-PC carries (LE-LS-P's and the childhood's length), beside the presets'
     names = networks.trait_names(make_config("skills", condition="LE-LS-PC"))
@@ -360,13 +379,14 @@ def figure(measured: dict, path: str) -> str:
     return save(fig, path)
 
 
-def report(out: str = OUT, document: str = DOCUMENT, reproduction: str = REPRODUCTION, sle_whole: str = SLE_WHOLE) -> int:
+def report(out: str = OUT, document: str = DOCUMENT, reproduction: str = REPRODUCTION, sle_whole: str = SLE_WHOLE,
+           claims: str = CLAIMS_OUT) -> int:
     """Measure, write report.json and future_work.png under ``out``, and the tables into ``document``."""
     import json
 
     from experiments.claims_study import write_table
 
-    measured = measure(out, reproduction, sle_whole)
+    measured = measure(out, reproduction, sle_whole, claims)
     os.makedirs(out, exist_ok=True)
     with open(os.path.join(out, "report.json"), "w") as f:
         json.dump(measured, f, indent=2)

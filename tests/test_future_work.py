@@ -24,6 +24,21 @@ def test_plan_evolves_the_evolved_rows_and_tests_the_others_from_scratch():
     assert stages[2].cost == 5 * 5 * 4 * 6 * 1_000_000
 
 
+def test_the_fixed_six_experts_row_is_the_claims_studys_run_not_run_twice():
+    from experiments import claims_study
+
+    assert study.plan(["LE-LS-6"]) == []
+    run = study.BY_NAME["LE-LS-6"]
+    evolved, tested = study.run_dirs(run)
+    claim8 = {s.out_dir: s for s in claims_study.plan_experts()}
+    assert set(claim8) >= {evolved, tested}
+    ours = study.evolve_command(study.SCREEN, run.preset, run.condition, "OUT", sets=run.sets)
+    theirs = claims_study.stage_command(claim8[evolved], claims_study.SCREEN)[0]
+    assert ours == theirs[:theirs.index("--out") + 1] + ["OUT"] + theirs[theirs.index("--out") + 2:]
+    assert study.run_dirs(study.BY_NAME["LE-LS-N6"]) == (os.path.join(study.OUT, "LE-LS-N6", "evolve"),
+                                                         os.path.join(study.OUT, "LE-LS-N6", "test"))
+
+
 def test_unknown_row_is_refused(capsys):
     assert study.main(["--only", "EV-LS,XX"]) == 2
     assert "unknown row 'XX'" in capsys.readouterr().err
@@ -152,7 +167,8 @@ def _fake_study(tmp_path):
     _fake_test(reproduction / "skills" / "test" / "LE-LS", [0.8, 0.9])
     _fake_test(reproduction / "skills" / "test" / "SLE", [0.3, 0.5], sle_noise_steps=100_000)
     _fake_test(reproduction / "paper" / "test" / "EE-ES", [0.4, 0.4, 0.4])  # EE-ES's runs are shared, under paper
-    _fake_evolution(out / "LE-LS-6" / "evolve", [[0.5] * 5, [0.6] * 5], 5)
+    # LE-LS-6 is the claims study's claim-8 run
+    _fake_evolution(tmp_path / "claims" / "skills" / "experts6" / "evolve" / "LE-LS", [[0.5] * 5, [0.6] * 5], 5)
     share = lambda k: ([{3: [0, 0.5, 1, 1, 1], 6: [1, 0.5, 0, 0, 0]}.get(k, [0] * 5)] * 2, [[0] * 5] * 2)  # noqa: E731
     _fake_evolution(out / "LE-LS-N6" / "evolve", [[0.7] * 5, [0.8] * 5], 5, dict(
         expressed_experts=([[6, 5, 4, 4, 3], [6, 5, 4, 4, 5]], [[6, 4, 4, 3, 3], [6, 5, 4, 3, 3]]),
@@ -162,13 +178,13 @@ def _fake_study(tmp_path):
         eta_actor=([[0.5] * 4 + [0.02], [0.5] * 4 + [0.04]], [[0.5] * 4 + [0.01], [0.5] * 4 + [0.03]])))
     _fake_evolution(out / "EV-LS" / "evolve", [[0.1, 0.2]], 100)  # still running
     _fake_test(out / "EXT-LS" / "test", [0.6, 0.7, 0.8])
-    return str(out), str(reproduction), str(tmp_path / "claims_sle")
+    return str(out), str(reproduction), str(tmp_path / "claims_sle"), str(tmp_path / "claims")
 
 
 def test_measure_reads_every_finished_row_and_the_reproductions(tmp_path):
     """Hand-made runs: final best, its sd and plateau; steady states; (c)'s last values; (d)'s experts and fitness."""
-    out, reproduction, sle_whole = _fake_study(tmp_path)
-    measured = study.measure(out, reproduction, sle_whole)
+    out, reproduction, sle_whole, claims = _fake_study(tmp_path)
+    measured = study.measure(out, reproduction, sle_whole, claims)
     rows = {r["name"]: r for r in measured["rows"]}
     assert list(rows) == ["skills LE-LS", "skills EE-LS", "skills EE-ES", "skills SLE", "skills SLE-whole",
                           *study.BY_NAME]
@@ -219,10 +235,10 @@ def test_table_shows_finished_running_and_not_run_rows(tmp_path):
 def test_report_writes_the_json_the_figure_and_the_tables(tmp_path, capsys):
     import json
 
-    out, reproduction, sle_whole = _fake_study(tmp_path)
+    out, reproduction, sle_whole, claims = _fake_study(tmp_path)
     document = tmp_path / "FUTURE_WORK.md"
     document.write_text(f"intro\n{study.TABLE_START}\nold\n{study.TABLE_END}\nend\n")
-    assert study.report(out, str(document), reproduction, sle_whole) == 0
+    assert study.report(out, str(document), reproduction, sle_whole, claims) == 0
     text = document.read_text()
     assert text.startswith(f"intro\n{study.TABLE_START}\n| row |") and text.endswith(f"{study.TABLE_END}\nend\n")
     assert "old" not in text and "| against LE-LS-6 | 0.750 |" in text
