@@ -268,7 +268,7 @@ def measure_runs(name: str, runs: RowRuns, reproduction_summary: dict, sle_whole
     """
     from experiments.claims import final_best, measure
     from experiments.loading import best_of_population
-    from experiments.relive import fresh_fitness, probe_best
+    from experiments.relive import probe_best, run_fresh
 
     data = load_runs(name, runs)
     probes, lives, fresh = {}, {}, {}
@@ -286,7 +286,7 @@ def measure_runs(name: str, runs: RowRuns, reproduction_summary: dict, sle_whole
                 best = best_of_population(population)
                 probes[name, condition] = probe_best(run["config"], best)
                 print(f"fresh lives of each seed's best {condition} genome ({name})", flush=True)
-                per_seed = fresh_fitness(run["config"], best)["mean"].tolist()
+                per_seed = run_fresh(runs.evolutions[condition], run["config"])["mean_per_seed"]
         if run is not None and per_seed is not None:  # the recorded best beside the same genomes' fresh lives
             fresh[condition] = dict(recorded=float(final_best(run["best"]).mean()), fresh=float(np.mean(per_seed)),
                                     fresh_sd_over_seeds=float(np.std(per_seed, ddof=1)), seeds=len(per_seed))

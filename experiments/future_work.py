@@ -117,6 +117,8 @@ EXPERTS_ROW, EXPERTS_COMPARED = "LE-LS-N6", ("LE-LS-6", "skills LE-LS")
 #: The generations of (d)'s table of expressed experts (the last one is added).
 GENERATIONS_SHOWN = (0, 10, 25, 50)
 NOT_RUN = "not run yet"
+#: The reproduction's report, whose fresh lives of its runs' best genomes the reference rows show.
+SUMMARY = os.path.join("docs", "reproduction", "summary.json")
 DOCUMENT = os.path.join("docs", "FUTURE_WORK.md")
 #: Where the report's tables go in docs/FUTURE_WORK.md.
 TABLE_START = "<!-- future-work tables: python -m experiments.future_work --report -->"
@@ -147,8 +149,9 @@ def read_traits(run_dir: str) -> dict | None:
     return dict(names=names, values=values)
 
 
-def _evolution(run_dir: str) -> dict | None:
-    """A row's evolution as the report shows it: its size and, once finished, its final best, spread and plateau."""
+def _evolution(run_dir: str, fresh=None) -> dict | None:
+    """A row's evolution as the report shows it: its size and, once finished, its final best, spread and plateau,
+    and ``fresh(run)``: the fresh lives of each seed's best genome (None: not measured)."""
     from experiments.claims import final_best, plateau_generation
     from experiments.loading import read_evolution
 
@@ -164,6 +167,9 @@ def _evolution(run_dir: str) -> dict | None:
         entry.update(final_best=float(final.mean()), final_best_sd=float(final.std()),
                      final_best_per_seed=final.tolist(), plateau_generation=plateau_generation(best.mean(1)),
                      best_per_generation_mean=best.mean(1).tolist(), best_per_generation_sd=best.std(1).tolist())
+        lives = fresh(run) if fresh is not None else None
+        if lives is not None:
+            entry.update(fresh=lives["mean"], fresh_sd=lives["sd_over_seeds"])
     return entry
 
 
@@ -214,7 +220,7 @@ def _noise(test: dict | None) -> str:
 
 
 def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = SLE_WHOLE,
-            claims: str = CLAIMS_OUT) -> dict:
+            claims: str = CLAIMS_OUT, summary: str = SUMMARY) -> dict:
     """Every row's evolution and learning test, (c)'s evolved learning values and (d)'s experts, from what finished."""
     import numpy as np
 
@@ -222,8 +228,15 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = S
     from imrl_jax import networks
     from imrl_jax.config import make_config
 
+    from experiments.loading import read_json
+    from experiments.relive import reproduction_fresh, run_fresh
+    from experiments.reproduce import owner
+
+    report = read_json(summary) or {}
+    shared = lambda c: lambda run: reproduction_fresh(report, owner("skills", c), c)  # noqa: E731
     rows = [dict(name=f"skills {c}", condition=c, about=f"the reproduction's {c}", evolved=conditions.get(c).evolved,
-                 evolution=_evolution(evolution_dir(reproduction, "skills", c)) if conditions.get(c).evolved else None,
+                 evolution=_evolution(evolution_dir(reproduction, "skills", c), shared(c))
+                 if conditions.get(c).evolved else None,
                  test=_test(test_dir(reproduction, "skills", c))) for c in REPRODUCED]
     rows.append(dict(name="skills SLE-whole", condition="SLE", about="the claims study's SLE (skills-sle-test)",
                      evolved=False, evolution=None, test=_test(sle_whole)))
@@ -233,7 +246,8 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = S
         evolved = conditions.get(run.condition).evolved
         evolution, test = run_dirs(run, out, claims)
         rows.append(dict(name=run.name, condition=run.condition, about=run.about, evolved=evolved,
-                         evolution=_evolution(evolution) if evolved else None, test=_test(test)))
+                         evolution=_evolution(evolution, lambda r, d=evolution: run_fresh(d, r["config"]))
+                         if evolved else None, test=_test(test)))
     by_name = {row["name"]: row for row in rows}
     # (c): the values of the genes LE-LS-PC carries (LE-LS-P's and the childhood's length), beside the presets'
     names = networks.trait_names(make_config("skills", condition="LE-LS-PC"))
@@ -265,14 +279,16 @@ def _row_cells(row: dict) -> list[str]:
     """The main table's cells of a row after its name, condition and description."""
     e, t = row["evolution"], row["test"]
     if not row["evolved"]:
-        cells = ["not evolved", "-", "-", "-"]
+        cells = ["not evolved", "-", "-", "-", "-"]
     elif e is None:
-        cells = ["-", NOT_RUN, "-", "-"]
+        cells = ["-", NOT_RUN, "-", "-", "-"]
     elif not e["finished"]:
-        cells = [f"{e['seeds']} x {e['generations']} of {e['planned']}", "running", "-", "-"]
+        cells = [f"{e['seeds']} x {e['generations']} of {e['planned']}", "running", "-", "-", "-"]
     else:
         plateau = "-" if e["plateau_generation"] is None else str(e["plateau_generation"])
-        cells = [f"{e['seeds']} x {e['generations']}", f"{e['final_best']:.3f}", f"{e['final_best_sd']:.3f}", plateau]
+        fresh = "-" if e.get("fresh") is None else f"{e['fresh']:.3f} ({e['fresh_sd']:.3f})"
+        cells = [f"{e['seeds']} x {e['generations']}", f"{e['final_best']:.3f}", f"{e['final_best_sd']:.3f}", fresh,
+                 plateau]
     return cells + ([NOT_RUN, "-"] if t is None else [f"{t['steady_mean']:.3f} +- {t['steady_sd']:.3f}",
                                                         str(t["runs"])])
 
@@ -282,12 +298,13 @@ def table(measured: dict) -> str:
     from experiments.claims import LAST_GENERATIONS, PLATEAU_FRACTION
 
     lines = ["| row | condition | what | seeds x generations | final best fitness (best of a generation's noisy lives) "
-             "| sd over seeds | plateau generation | steady state (mean +- sd over runs) | runs |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "| sd over seeds | fresh lives (sd over seeds) | plateau generation | steady state (mean +- sd over runs) "
+             "| runs |", "|---|---|---|---|---|---|---|---|---|---|"]
     lines += [f"| {r['name']} | {r['condition']} | {r['about']} | " + " | ".join(_row_cells(r)) + " |"
               for r in measured["rows"]]
     lines += ["", f"Final best fitness: a seed's mean of its last {LAST_GENERATIONS} generations' best, then the mean "
-              f"over seeds; plateau: the first generation whose best (mean over seeds) reaches {PLATEAU_FRACTION:.0%} "
+              f"over seeds; fresh lives: each seed's best genome of the last generation in 10 new lives (keys the GA "
+              f"never used), mean and sd over seeds (ddof 1); plateau: the first generation whose best (mean over seeds) reaches {PLATEAU_FRACTION:.0%} "
               f"of that; steady state: each learning-test run's last cycles (docs/CLAIMS.md's claims 1, 2 and 6).",
               "", "(c) The evolved learning values, last generation, mean over seeds, beside the values set by hand:", ""]
     values = measured["learning_values"]
@@ -380,13 +397,13 @@ def figure(measured: dict, path: str) -> str:
 
 
 def report(out: str = OUT, document: str = DOCUMENT, reproduction: str = REPRODUCTION, sle_whole: str = SLE_WHOLE,
-           claims: str = CLAIMS_OUT) -> int:
+           claims: str = CLAIMS_OUT, summary: str = SUMMARY) -> int:
     """Measure, write report.json and future_work.png under ``out``, and the tables into ``document``."""
     import json
 
     from experiments.claims_study import write_table
 
-    measured = measure(out, reproduction, sle_whole, claims)
+    measured = measure(out, reproduction, sle_whole, claims, summary)
     os.makedirs(out, exist_ok=True)
     with open(os.path.join(out, "report.json"), "w") as f:
         json.dump(measured, f, indent=2)

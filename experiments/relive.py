@@ -74,6 +74,53 @@ def fresh_fitness(config_dict: dict, best: dict, num_lives: int = FRESH_LIVES, s
     return dict(fitness=fitness, mean=fitness.mean(1), sd=fitness.std(1, ddof=1), num_lives=num_lives, seed=seed)
 
 
+#: Where :func:`run_fresh` keeps an evolution's fresh lives, beside its final population.
+FRESH_FILE = "fresh.json"
+
+
+def run_fresh(run_dir: str, config_dict: dict | None = None, num_lives: int = FRESH_LIVES,
+              seed: int = FRESH_SEED) -> dict | None:
+    """Fresh lives of each seed's best genome of an evolution's last generation (its final_population.npz).
+
+    Kept in ``run_dir/fresh.json`` and lived again only when the population has moved on (another
+    generation, other seeds, lives or key); None without a population. Returns the mean per seed,
+    their mean and sd over seeds (ddof 1), and each genome's sd over its lives.
+    """
+    import json
+    import os
+
+    from experiments.loading import best_of_population, read_json
+
+    population = os.path.join(run_dir, "final_population.npz")
+    best = best_of_population(population) if os.path.isfile(population) else None
+    if best is None:
+        return None
+    key = dict(generations=int(best["generations"]), seeds=[int(s) for s in best["seeds"]], num_lives=num_lives,
+               seed=seed)
+    path = os.path.join(run_dir, FRESH_FILE)
+    cached = read_json(path)
+    if cached is not None and all(cached.get(k) == v for k, v in key.items()):
+        return cached
+    if config_dict is None:
+        config_dict = (read_json(os.path.join(run_dir, "config.json")) or {})["config"]
+    lives = fresh_fitness(config_dict, best, num_lives, seed)
+    means = [float(v) for v in lives["mean"]]
+    out = dict(key, mean_per_seed=means, sd_per_seed=[float(v) for v in lives["sd"]], mean=float(np.mean(means)),
+               sd_over_seeds=float(np.std(means, ddof=1)) if len(means) > 1 else 0.0)
+    with open(path, "w") as f:
+        json.dump(out, f, indent=2)
+    return out
+
+
+def reproduction_fresh(summary: dict, variant: str, condition: str) -> dict | None:
+    """The reproduction report's fresh lives of a run (docs/reproduction/summary.json), in :func:`run_fresh`'s form."""
+    means = ((summary.get("best_individuals") or {}).get(f"{variant}/{condition}") or {}).get("fresh_mean_per_seed")
+    if not means:
+        return None
+    return dict(mean_per_seed=[float(v) for v in means], mean=float(np.mean(means)),
+                sd_over_seeds=float(np.std(means, ddof=1)) if len(means) > 1 else 0.0, num_lives=FRESH_LIVES)
+
+
 def probe_best(config_dict: dict, best: dict, key: int = 0) -> list[int]:
     """Distinct colours followed (``Specialisation.num_colours``) by each genome of ``best`` (seeds x best, in order).
 

@@ -136,8 +136,11 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, ga_summary: str = 
     """Per strategy and condition the evolution's and learning test's numbers, and claims 1-4 and 6 per strategy."""
     from experiments.claims import (EVOLVED, claim_evolvability, claim_ee_es_about, claim_ee_ls_higher,
                                     claim_ordering, claim_reliability, final_best, plateau_generation)
-    from experiments.loading import read_evolution, read_test
+    from experiments.loading import read_evolution, read_json, read_test
+    from experiments.relive import reproduction_fresh, run_fresh
+    from experiments.reproduce import owner
 
+    summary = read_json(ga_summary) or {}
     rows, curves = [], {}
     for strategy in COMPARED:
         for condition in CONDITIONS:
@@ -156,6 +159,11 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, ga_summary: str = 
                 row.update(final_best_mean=float(final.mean()), final_best_sd=float(final.std()),
                            final_best_per_seed=[float(v) for v in final],
                            plateau_generation=plateau_generation(best.mean(1)))
+                # each seed's best genome in fresh lives: the GA's from the reproduction's report
+                fresh = (reproduction_fresh(summary, owner(PRESET, condition), condition) if strategy == GA_NAME
+                         else run_fresh(evolved, run["config"]))
+                if fresh is not None:
+                    row.update(fresh_mean=fresh["mean"], fresh_sd=fresh["sd_over_seeds"])
             if test is not None:
                 row.update(_steady(test))
             rows.append(row)
@@ -190,19 +198,23 @@ def table(measured: dict) -> str:
     """The report's markdown: a row per strategy and condition, then the claims' verdicts per strategy."""
     from experiments.claims import CLAIMS, LAST_GENERATIONS, PLATEAU_FRACTION
 
-    lines = ["| strategy | condition | seeds | generations | final best fitness | sd over seeds | plateau generation "
-             "| test runs | steady state | sd over runs |", "|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| strategy | condition | seeds | generations | final best fitness | sd over seeds | fresh lives (sd over "
+             "seeds) | plateau generation | test runs | steady state | sd over runs |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in measured["rows"]:
         generations = str(r["generations"]) if r["finished"] else f"{r['generations']} of {measured['generations']}"
         lines.append(f"| {r['strategy']} | {r['condition']} | {r.get('seeds', '-')} | {generations} | "
                      f"{_number(r.get('final_best_mean'))} | {_number(r.get('final_best_sd'))} | "
-                     f"{_number(r.get('plateau_generation'))} | {r.get('test_runs', '-')} | "
+                     + ("-" if r.get("fresh_mean") is None else f"{r['fresh_mean']:.3f} ({r['fresh_sd']:.3f})")
+                     + f" | {_number(r.get('plateau_generation'))} | {r.get('test_runs', '-')} | "
                      f"{_number(r.get('steady_mean'))} | {_number(r.get('steady_sd'))} |")
     if not measured["rows"]:
-        lines.append("| (no stage has finished yet) | | | | | | | | | |")
+        lines.append("| (no stage has finished yet) | | | | | | | | | | |")
     sle = measured["sle"]
     lines += ["", f"Final best fitness: the best of a generation's noisy lives, mean of the last {LAST_GENERATIONS} "
-              f"generations per seed, then mean and sd (ddof 0) over seeds; plateau generation: the first at which the "
+              f"generations per seed, then mean and sd (ddof 0) over seeds; fresh lives: each seed's best genome "
+              f"of the last generation in 10 new lives (keys the search never used), mean over seeds and sd over seeds (ddof 1; "
+              f"the GA's from the reproduction's report); plateau generation: the first at which the "
               f"mean over seeds reaches {PLATEAU_FRACTION:.0%} of its final value; steady state: the learning test's "
               f"last {SCREEN['steady_steps']:,} cycles of each task, mean and sd over runs. A running evolution shows "
               "its generations so far and is drawn, not measured. SLE evolves "

@@ -1,5 +1,6 @@
 """The future-work study's plan (each new row evolved or tested from scratch), and the evolved values evolve records."""
 
+import json
 import os
 
 import pytest
@@ -178,13 +179,15 @@ def _fake_study(tmp_path):
         eta_actor=([[0.5] * 4 + [0.02], [0.5] * 4 + [0.04]], [[0.5] * 4 + [0.01], [0.5] * 4 + [0.03]])))
     _fake_evolution(out / "EV-LS" / "evolve", [[0.1, 0.2]], 100)  # still running
     _fake_test(out / "EXT-LS" / "test", [0.6, 0.7, 0.8])
-    return str(out), str(reproduction), str(tmp_path / "claims_sle"), str(tmp_path / "claims")
+    summary = tmp_path / "summary.json"  # the reproduction report's fresh lives of skills' LE-LS best genomes
+    summary.write_text(json.dumps(dict(best_individuals={"skills/LE-LS": dict(fresh_mean_per_seed=[0.5, 0.6])})))
+    return str(out), str(reproduction), str(tmp_path / "claims_sle"), str(tmp_path / "claims"), str(summary)
 
 
 def test_measure_reads_every_finished_row_and_the_reproductions(tmp_path):
     """Hand-made runs: final best, its sd and plateau; steady states; (c)'s last values; (d)'s experts and fitness."""
-    out, reproduction, sle_whole, claims = _fake_study(tmp_path)
-    measured = study.measure(out, reproduction, sle_whole, claims)
+    out, reproduction, sle_whole, claims, summary = _fake_study(tmp_path)
+    measured = study.measure(out, reproduction, sle_whole, claims, summary)
     rows = {r["name"]: r for r in measured["rows"]}
     assert list(rows) == ["skills LE-LS", "skills EE-LS", "skills EE-ES", "skills SLE", "skills SLE-whole",
                           *study.BY_NAME]
@@ -211,14 +214,17 @@ def test_measure_reads_every_finished_row_and_the_reproductions(tmp_path):
 
 def test_table_shows_finished_running_and_not_run_rows(tmp_path):
     text = study.table(study.measure(*_fake_study(tmp_path)))
-    for line in ("| skills LE-LS | LE-LS | the reproduction's LE-LS | 2 x 5 | 0.580 | 0.100 | 2 | 0.850 +- 0.050 | 2 |",
-                 "| skills EE-ES | EE-ES | the reproduction's EE-ES | - | not run yet | - | - | 0.400 +- 0.000 | 3 |",
-                 "| skills SLE | SLE | the reproduction's SLE, noise over 100,000 cycles | not evolved | - | - | - | "
+    for line in ("| skills LE-LS | LE-LS | the reproduction's LE-LS | 2 x 5 | 0.580 | 0.100 | 0.550 (0.071) | 2 | "
+                 "0.850 +- 0.050 | 2 |",
+                 "| skills EE-LS | EE-LS | the reproduction's EE-LS | 2 x 5 | 0.600 | 0.100 | - | 0 | not run yet | - |",
+                 "| skills EE-ES | EE-ES | the reproduction's EE-ES | - | not run yet | - | - | - | 0.400 +- 0.000 | 3 |",
+                 "| skills SLE | SLE | the reproduction's SLE, noise over 100,000 cycles | not evolved | - | - | - | - | "
                  "0.400 +- 0.100 | 2 |",
-                 "| skills SLE-whole | SLE | the claims study's SLE (skills-sle-test) | not evolved | - | - | - | "
+                 "| skills SLE-whole | SLE | the claims study's SLE (skills-sle-test) | not evolved | - | - | - | - | "
                  "not run yet | - |",
-                 f"| EV-LS | EV-LS | {study.BY_NAME['EV-LS'].about} | 1 x 2 of 100 | running | - | - | not run yet | - |",
-                 f"| EXT-LS | EXT-LS | {study.BY_NAME['EXT-LS'].about} | not evolved | - | - | - | 0.700 +- 0.082 | 3 |",
+                 f"| EV-LS | EV-LS | {study.BY_NAME['EV-LS'].about} | 1 x 2 of 100 | running | - | - | - | not run yet "
+                 "| - |",
+                 f"| EXT-LS | EXT-LS | {study.BY_NAME['EXT-LS'].about} | not evolved | - | - | - | - | 0.700 +- 0.082 | 3 |",
                  "| gamma | 0.99 | 0.99 | 0.96 | 0.985 | not run yet | not run yet |",
                  "| eta_actor | 0.01 | 0.01 | 0.03 | 0.02 | not run yet | not run yet |",
                  "| trace_lambda | 0.98 | 0 | - | - | not run yet | not run yet |",
@@ -228,17 +234,17 @@ def test_table_shows_finished_running_and_not_run_rows(tmp_path):
                  "| against LE-LS-6 | 0.750 | 0.550 | 2 | +0.200 | 0.071 |",
                  "| against skills LE-LS | 0.750 | 0.580 | 2 | +0.170 | 0.112 |"):
         assert line in text.splitlines(), line
-    empty = study.table(study.measure(str(tmp_path / "none"), str(tmp_path / "none"), str(tmp_path / "none")))
+    empty = study.table(study.measure(*(str(tmp_path / "none"),) * 5))
     assert "LE-LS-N6: not run yet." in empty.splitlines() and "| 2 x 5 |" not in empty
 
 
 def test_report_writes_the_json_the_figure_and_the_tables(tmp_path, capsys):
     import json
 
-    out, reproduction, sle_whole, claims = _fake_study(tmp_path)
+    out, reproduction, sle_whole, claims, summary = _fake_study(tmp_path)
     document = tmp_path / "FUTURE_WORK.md"
     document.write_text(f"intro\n{study.TABLE_START}\nold\n{study.TABLE_END}\nend\n")
-    assert study.report(out, str(document), reproduction, sle_whole, claims) == 0
+    assert study.report(out, str(document), reproduction, sle_whole, claims, summary) == 0
     text = document.read_text()
     assert text.startswith(f"intro\n{study.TABLE_START}\n| row |") and text.endswith(f"{study.TABLE_END}\nend\n")
     assert "old" not in text and "| against LE-LS-6 | 0.750 |" in text
@@ -248,4 +254,4 @@ def test_report_writes_the_json_the_figure_and_the_tables(tmp_path, capsys):
     assert os.path.getsize(os.path.join(out, "future_work.png")) > 10_000
     assert "8 of 13 rows have finished stages" in capsys.readouterr().out
     # nothing finished: both panels say so
-    assert os.path.getsize(study.figure(study.measure(*(str(tmp_path / "none"),) * 3), str(tmp_path / "empty.png")))
+    assert os.path.getsize(study.figure(study.measure(*(str(tmp_path / "none"),) * 5), str(tmp_path / "empty.png")))

@@ -327,6 +327,40 @@ def test_fresh_lives_of_each_seeds_best_genome(tiny):
     assert not np.array_equal(fresh_fitness(config.to_dict(), best, num_lives=4, seed=6)["fitness"], fresh["fitness"])
 
 
+def test_run_fresh_keeps_its_lives_until_the_population_moves_on(tmp_path, monkeypatch):
+    """run_fresh lives each seed's best of final_population.npz once, keeps the result, and lives again when the
+    population has another generation; without a population there is nothing to live."""
+    from experiments import relive
+
+    calls = []
+
+    def fake_fresh(config_dict, best, num_lives, seed):
+        calls.append((best["genomes"][:, 0, 0].tolist(), num_lives, seed))
+        fitness = np.asarray([[0.2, 0.4], [0.6, 0.6], [0.1, 0.3]])[:len(best["genomes"])]
+        return dict(fitness=fitness, mean=fitness.mean(1), sd=fitness.std(1, ddof=1))
+
+    monkeypatch.setattr(relive, "fresh_fitness", fake_fresh)
+    assert relive.run_fresh(str(tmp_path)) is None  # no population yet
+    evaluated = np.arange(3 * 4 * 2, dtype=np.float32).reshape(3, 4, 2)  # 3 seeds, 4 lives, 2 genes
+    fitness = np.asarray([[0.1, 0.9, 0.2, 0.3], [0.5, 0.4, 0.8, 0.0], [0.7, 0.1, 0.1, 0.1]])
+
+    def save(generation):
+        np.savez(tmp_path / "final_population.npz", evaluated=evaluated, fitness=fitness, generation=generation,
+                 seeds=np.asarray([4, 5, 6]))
+
+    save(7)
+    first = relive.run_fresh(str(tmp_path), {"unused": True}, num_lives=2, seed=9)
+    assert calls == [([2.0, 12.0, 16.0], 2, 9)]  # each seed's fittest: lives 1, 2 and 0
+    assert first["mean_per_seed"] == pytest.approx([0.3, 0.6, 0.2]) and first["mean"] == pytest.approx(1.1 / 3)
+    assert first["sd_over_seeds"] == pytest.approx(np.std([0.3, 0.6, 0.2], ddof=1))
+    assert (first["generations"], first["seeds"]) == (7, [4, 5, 6])
+    assert relive.run_fresh(str(tmp_path), {"unused": True}, num_lives=2, seed=9) == first and len(calls) == 1
+    relive.run_fresh(str(tmp_path), {"unused": True}, num_lives=2, seed=10)  # another key: lived again
+    save(8)
+    relive.run_fresh(str(tmp_path), {"unused": True}, num_lives=2, seed=10)  # another generation: lived again
+    assert len(calls) == 3
+
+
 def test_a_childhood_that_stays_put_is_marked_and_said(tiny):
     """fig_paths: a childhood path under 2 cm across is drawn as a mark, and its title says where the robot stays."""
     from experiments.figures import fig_paths

@@ -57,7 +57,8 @@ def test_report_measures_each_strategy_and_judges_its_claims(tmp_path):
     _fake_test(out / "snes" / "EE-LS" / "test", [0.6, 0.7, 0.8])
     summary = tmp_path / "summary.json"  # the GA's relived EE-ES: one circular task of two
     summary.write_text(json.dumps(dict(best_individuals={"paper/EE-ES": dict(stereotypy_per_task=[0.9, 0.5],
-                                                                             speed=2.0)})))
+                                                                             speed=2.0),
+                                                         "skills/EE-LS": dict(fresh_mean_per_seed=[0.3, 0.4])})))
     measured = study.measure(str(out), str(reproduction), str(summary), generations=6)
     rows = {(r["strategy"], r["condition"]): r for r in measured["rows"]}
     assert sorted(rows) == [("ga", "EE-ES"), ("ga", "EE-LS"), ("ga", "LE-LS"),
@@ -81,8 +82,9 @@ def test_report_measures_each_strategy_and_judges_its_claims(tmp_path):
     assert snes[3]["verdict"] == "holds" and abs(snes[3]["numbers"]["standard_error"] - 0.05) < 1e-12
     assert [snes[n]["verdict"] for n in (1, 2, 4, 6)] == ["n/a"] * 4 and not snes[4]["path_probe"]
     text = study.table(measured)
-    assert "| ga | EE-LS | 2 | 6 | 0.400 | 0.100 | 3 | 3 | 0.500 | 0.016 |" in text
-    assert "| snes | EE-ES | 2 | 3 of 6 | - | - | - | - | - | - |" in text
+    assert "| ga | EE-LS | 2 | 6 | 0.400 | 0.100 | 0.350 (0.071) | 3 | 3 | 0.500 | 0.016 |" in text
+    assert "| snes | EE-ES | 2 | 3 of 6 | - | - | - | - | - | - | - |" in text
+    assert "| snes | EE-LS | 2 | 6 | 0.850 | 0.050 | - | 0 | 3 | 0.700 | 0.082 |" in text  # no population kept
     assert "| snes | **holds** | EE-LS 0.850 vs LE-LS 0.700: d = +0.150, se = 0.050 |" in text
     assert "sep_cma_es" not in text and "0.400 +- 0.000 over 3 runs" in text
     assert study.figure(measured, str(tmp_path / "search.png")) and (tmp_path / "search.png").stat().st_size > 0
