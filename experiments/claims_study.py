@@ -280,8 +280,8 @@ def measure_runs(name: str, runs: RowRuns, reproduction_summary: dict, sle_whole
                 probes[name, condition] = shared.colours
             per_seed = (shared.best_life or {}).get("fresh_mean_per_seed")
         else:
-            population = os.path.join(runs.evolutions[condition], "final_population.npz")
-            per_seed = None
+            per_seed = None  # a row without this condition's run (runs.evolutions lacks it) has nothing to live
+            population = os.path.join(runs.evolutions.get(condition, ""), "final_population.npz")
             if run is not None and os.path.isfile(population):
                 best = best_of_population(population)
                 probes[name, condition] = probe_best(run["config"], best)

@@ -396,12 +396,11 @@ def _progress(folder: str) -> tuple[int, int] | None:
 def measure_evolutions(out: str = OUT, reproduction: str = REPRODUCTION, summary: dict | None = None) -> dict:
     """The per-step baseline's claims and each planned option's: {variant: measured or progress}.
 
-    An option's claims are measured once both of its evolutions and learning tests have finished
-    (its own best genomes then live their fresh lives and are probed); until then its row shows
-    how far the evolutions are.
+    An option's finished evolutions are measured (their best genomes live fresh lives and are
+    probed) as soon as they finish, a running one shows how far it is, and a claim that needs a
+    run still to come is n/a.
     """
-    from experiments.claims_study import BY_NAME, measure_rule, measure_runs
-    from experiments.loading import read_test
+    from experiments.claims_study import BY_NAME, RowRuns, measure_rule, measure_runs
 
     summary = summary if summary is not None else _reproduction_summary()
     rows = {BASELINE: dict(measured=measure_rule(BY_NAME[BASELINE], summary, reproduction=reproduction),
@@ -409,10 +408,13 @@ def measure_evolutions(out: str = OUT, reproduction: str = REPRODUCTION, summary
     for variant in evolution_groups(out):
         runs = option_runs(variant, out, reproduction)
         progress = {c: _progress(runs.evolutions[c]) for c in OPTION_CONDITIONS}
-        done = all(p is not None and p[0] >= SCREEN["generations"] for p in progress.values()) and all(
-            read_test(runs.tests[c]) is not None for c in OPTION_CONDITIONS)
+        finished = {c for c, p in progress.items() if p is not None and p[0] >= SCREEN["generations"]}
+        # only finished evolutions are measured: a running one's population is not its last
+        done = RowRuns({c: d for c, d in runs.evolutions.items() if c in finished or c not in OPTION_CONDITIONS},
+                       {c: d for c, d in runs.tests.items() if c in finished or c not in OPTION_CONDITIONS},
+                       runs.reproduction)
         rows[variant] = dict(progress=progress, label=variant.replace("+", ", ") + " selector",
-                             measured=measure_runs(variant, runs, summary) if done else None)
+                             measured=measure_runs(variant, done, summary) if finished else None)
     return rows
 
 
@@ -431,7 +433,7 @@ def report_table(rows: dict) -> str:
     for variant, row in rows.items():
         measured = row["measured"]
         for condition in OPTION_CONDITIONS:
-            if measured is None:
+            if measured is None or condition not in measured["evolution"]:
                 done = row["progress"][condition]
                 size = "not started" if done is None else f"{done[1]} x {done[0]} of {SCREEN['generations']}, running"
                 lines.append(f"| {row['label']} | {condition} | {size} | - | - | - | - |")

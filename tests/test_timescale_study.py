@@ -153,12 +153,19 @@ def test_report_compares_the_option_with_the_per_step_runs(tmp_path):
     _fake_rates(out)
     _fake_confirm(out)  # colour-60 is evolved
     option = os.path.join(out, "skills+colour-60")
-    _fake_evolution(os.path.join(option, "LE-LS", "evolve"), constant(0.6, 0.62))
     _fake_evolution(os.path.join(option, "EE-LS", "evolve"), [[0.7] * 40, [0.74] * 40])  # running
     rows = study.measure_evolutions(out, reproduction, summary={})
     assert list(rows) == ["skills", "skills+colour-60"] and rows["skills+colour-60"]["measured"] is None
     assert rows["skills"]["measured"]["claims"][3]["verdict"] == "does not hold"  # 0.45 against 0.78
     text = study.report_table(rows)
+    assert "| skills, colour-60 selector | LE-LS | not started | - | - | - | - |" in text
+    assert "| skills, colour-60 selector | EE-LS | 2 x 40 of 100, running | - | - | - | - |" in text
+    _fake_evolution(os.path.join(option, "LE-LS", "evolve"), constant(0.6, 0.62))  # finished, not yet tested
+    rows = study.measure_evolutions(out, reproduction, summary={})
+    measured = rows["skills+colour-60"]["measured"]
+    assert set(measured["evolution"]) == {"LE-LS", "EE-ES"} and measured["claims"][3]["verdict"] == "n/a"
+    text = study.report_table(rows)
+    assert "| skills, colour-60 selector | LE-LS | 2 x 100 | 0.610 +- 0.010 | - | 0 | - |" in text
     assert "| skills, colour-60 selector | EE-LS | 2 x 40 of 100, running | - | - | - | - |" in text
     assert "| skills, per-step selector (the paper's) | LE-LS | 2 x 100 | 0.780 +- 0.020 | - | 0 | 0.800 +- 0.000 " \
            "(2 runs) |" in text
