@@ -485,7 +485,9 @@ def report_figure(out: str, path: str, reproduction: str = REPRODUCTION) -> str:
             if run is not None:
                 best = run["best"][~np.isnan(run["best"]).any(1)]  # a running generation's seeds may be partial
                 x = np.arange(len(best))
-                evolution_ax.plot(x, best.mean(1), label=f"{condition}, {label} ({best.shape[1]} seeds)", **style)
+                running = ", running" if len(best) < (run["config"] or {}).get("num_generations", 0) else ""
+                evolution_ax.plot(x, best.mean(1), label=f"{condition}, {label} ({best.shape[1]} seeds{running})",
+                                  **style)
                 _band(evolution_ax, x, best.mean(1), best.std(1), style, set())
             test = read_test(runs.tests[condition])
             if test is not None:
