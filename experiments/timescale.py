@@ -482,8 +482,8 @@ def report_figure(out: str, path: str, reproduction: str = REPRODUCTION) -> str:
         for condition in OPTION_CONDITIONS:
             style = dict(color=colours[condition], ls=ls, lw=1.5)
             run = read_evolution(runs.evolutions[condition])
-            if run is not None:
-                best = run["best"][~np.isnan(run["best"]).any(1)]  # a running generation's seeds may be partial
+            best = None if run is None else run["best"][~np.isnan(run["best"]).any(1)]  # seeds may be partial
+            if best is not None and len(best):
                 x = np.arange(len(best))
                 running = ", running" if len(best) < (run["config"] or {}).get("num_generations", 0) else ""
                 evolution_ax.plot(x, best.mean(1), label=f"{condition}, {label} ({best.shape[1]} seeds{running})",
