@@ -31,6 +31,8 @@ import os
 import sys
 from typing import NamedTuple
 
+import numpy as np
+
 from experiments.claims_study import REPRODUCTION, SCREEN
 from experiments.reproduce import (SCALES, Stage, evolution_cost, evolve_command, load_manifest, run_stages,
                                    test_command, test_cost)
@@ -53,8 +55,11 @@ NOVEL = "novel"
 HELD_OUT_CONDITIONS = ("LE-LS", "EE-LS", "EE-ES")
 #: Seeds of brax's PPO and ES on the novel set (as docs/BASELINES.md's 1,000,000-cycle budget).
 BASELINE_SEEDS = 5
-#: The learning conditions whose advantage over EE-ES the verdict compares.
+#: The learning conditions whose advantage over EE-ES the table shows.
 LEARNING = ("LE-LS", "EE-LS", "SLE")
+#: Those the verdict judges: evolved ones. SLE evolves nothing, so every set is new to it; its rows
+#: show how much harder a set is to learn from scratch, not what evolution left unprepared.
+JUDGED = ("LE-LS", "EE-LS")
 
 
 class Variant(NamedTuple):
@@ -151,7 +156,7 @@ def _per_run(test: dict | None, tasks=None) -> list[float] | None:
 def measure(out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
     """Learning's advantage over EE-ES per comparison and set of tasks, and the verdicts, from the finished tests."""
     from experiments.claims import advantage, claim_unseen
-    from experiments.loading import read_json, read_test
+    from experiments.loading import read_evolution, read_json, read_test
 
     seen_tests = {(v, c): read_test(os.path.join(reproduction, v if c != "EE-ES" else "paper", "test", c))
                   for v in ("skills", "paper") for c in (*LEARNING, "EE-ES")}
@@ -169,7 +174,7 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
                     target[name] = dict(advantage(mine, reference), tasks=kind, runs=len(mine))
                     rows.append(dict(name=name, **target[name]))
     held_seen, held_unseen = {}, {}
-    for condition in ("LE-LS", "EE-LS"):
+    for condition in JUDGED:
         name = f"held out {condition}"
         for which, target in (("seen", held_seen), ("unseen", held_unseen)):
             mine, reference = _per_run(held[condition, which]), _per_run(held["EE-ES", which])
@@ -177,8 +182,13 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
                 target[name] = dict(advantage(mine, reference), tasks=f"tasks {HELD_OUT[which]} ({which})",
                                     runs=len(mine))
                 rows.append(dict(name=name, **target[name]))
-    verdicts = {"novel set": claim_unseen(seen, unseen), "held-out tasks": claim_unseen(held_seen, held_unseen)}
+    judged = {name for name in seen if name.split(" ", 1)[1] in JUDGED}
+    verdicts = {"novel set": claim_unseen({n: seen[n] for n in judged}, {n: a for n, a in unseen.items() if n in judged}),
+                "held-out tasks": claim_unseen(held_seen, held_unseen)}
     curves = {key: test for key, test in novel_tests.items() if test is not None}
+    held_curves = {key: test for key, test in held.items() if test is not None}
+    evolutions = {c: e for c in HELD_OUT_CONDITIONS
+                  if (e := read_evolution(os.path.join(out, "held_out", c, "evolve"))) is not None}
     scratch = []  # brax's agents from scratch: nothing of them was evolved, so they learn each set alike
     for tasks, folder in (("paper's six", BASELINES), ("novel", os.path.join(out, "novel", "baselines"))):
         for agent in ("ppo", "es"):
@@ -187,7 +197,11 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
                 scratch.append(dict(agent=agent.upper(), tasks=tasks, seeds=len(summary["seeds"]),
                                     performance=summary["performance_mean"],
                                     sd=summary["performance_sd_over_seeds"]))
-    return dict(rows=rows, verdicts=verdicts, curves=curves, scratch=scratch)
+    evolved = [dict(condition=c, seeds=e["best"].shape[1], generations=e["best"].shape[0],
+                    final_best=float(np.nanmean(e["best"][-5:].mean(0))), sd=float(np.nanstd(e["best"][-5:].mean(0))))
+               for c, e in evolutions.items()]
+    return dict(rows=rows, verdicts=verdicts, curves=curves, scratch=scratch, held_curves=held_curves,
+                evolutions=evolutions, evolved=evolved)
 
 
 def table(measured: dict) -> str:
@@ -204,7 +218,16 @@ def table(measured: dict) -> str:
                   "| agent | tasks | seeds | performance | sd over seeds |", "|---|---|---|---|---|"]
         lines += [f"| {r['agent']} | {r['tasks']} | {r['seeds']} | {r['performance']:.3f} | {r['sd']:.3f} |"
                   for r in measured["scratch"]]
-    lines += ["", f"Rule: {UNSEEN_RULE}", ""]
+    if measured["evolved"]:
+        generations = SCALES["paper"]["generations"]
+        lines += ["", f"The held-out evolutions on tasks {SEEN} (best fitness: the best of each generation's noisy "
+                  f"lives, the mean of the last 5 generations per seed, then over seeds):", "",
+                  "| condition | seeds x generations | final best fitness (recorded) |", "|---|---|---|"]
+        lines += [f"| {r['condition']} | {r['seeds']} x {r['generations']}"
+                  f"{'' if r['generations'] >= generations else f' of {generations}, running'} | "
+                  f"{r['final_best']:.3f} +- {r['sd']:.3f} |" for r in measured["evolved"]]
+    lines += ["", f"Rule: {UNSEEN_RULE} SLE's rows are shown, not judged: it evolves nothing, so every set is new "
+              f"to it.", ""]
     lines += [f"- **{where}: {v['verdict']}.** {v['measured']}" for where, v in measured["verdicts"].items()]
     return "\n".join(lines)
 
@@ -216,8 +239,9 @@ def figure(measured: dict, path: str) -> str | None:
 
     if not measured["rows"] and not measured["curves"]:
         return None
-    fig = new_figure(13.0, 3.8)
-    axes = fig.subplots(1, 3, gridspec_kw=dict(width_ratios=[1.0, 1.0, 1.2]))
+    fig = new_figure(13.0, 7.4)
+    grid = fig.subplots(2, 3, gridspec_kw=dict(width_ratios=[1.0, 1.0, 1.2]))
+    axes = grid[0]
     for ax, variant in zip(axes, ("skills", "paper")):
         series = {c: (t["steps"], t["mean"], t["sd"], c) for (v, c), t in measured["curves"].items()
                   if v == variant or c == "EE-ES"}
@@ -236,12 +260,36 @@ def figure(measured: dict, path: str) -> str | None:
                      color=("0.35", "tab:orange")[j], label=None if label in labelled else label)
             labelled.add(label)
     bars.axhline(0.0, color="black", lw=0.6)
-    bars.set_xticks(range(len(names)), names, rotation=30, ha="right", fontsize=7)
+    ticks = [name if name.split(" ", 1)[-1] in JUDGED else f"{name} (not judged)" for name in names]
+    bars.set_xticks(range(len(names)), ticks, rotation=30, ha="right", fontsize=7)
     style_axis(bars, "learning's advantage over EE-ES", "", "steady state minus EE-ES's")
     if names:
         bars.legend(fontsize=7)
+    _draw_held_out(grid[1], measured)
     fig.tight_layout()
     return save(fig, path)
+
+
+def _draw_held_out(axes, measured: dict) -> None:
+    """The held-out row: learning tests on the seen and the unseen tasks, and the evolutions' best fitness."""
+    from experiments.figures import _draw_curves, _fitness_series
+    from imrl_jax.plotting import style_axis
+
+    for ax, which in zip(axes, HELD_OUT):
+        title = f"held out, tasks {', '.join(map(str, HELD_OUT[which]))} ({which}): learning tests"
+        series = {c: (t["steps"], t["mean"], t["sd"], c) for (c, w), t in measured["held_curves"].items() if w == which}
+        if series:
+            _draw_curves(ax, series, title, "cycles of the task", "performance per bin")
+        else:
+            style_axis(ax, title, "cycles of the task", "performance per bin")
+            ax.text(0.5, 0.5, "not run yet", transform=ax.transAxes, ha="center", va="center", color="0.4")
+    title = f"held out: evolved on tasks {', '.join(map(str, SEEN))} (best of each generation's lives)"
+    if measured["evolutions"]:
+        _draw_curves(axes[2], _fitness_series({c: e["best"] for c, e in measured["evolutions"].items()}), title,
+                     "generation", "best fitness", integer_x=True)
+    else:
+        style_axis(axes[2], title, "generation", "best fitness")
+        axes[2].text(0.5, 0.5, "not run yet", transform=axes[2].transAxes, ha="center", va="center", color="0.4")
 
 
 def report(out: str = OUT, document: str = os.path.join("docs", "NOVEL_TASKS.md")) -> int:
@@ -253,7 +301,8 @@ def report(out: str = OUT, document: str = os.path.join("docs", "NOVEL_TASKS.md"
     measured = measure(out)
     os.makedirs(out, exist_ok=True)
     with open(os.path.join(out, "advantage.json"), "w") as f:
-        json.dump(dict(rows=measured["rows"], verdicts=measured["verdicts"], scratch=measured["scratch"]), f, indent=2)
+        json.dump(dict(rows=measured["rows"], verdicts=measured["verdicts"], scratch=measured["scratch"],
+                       evolved=measured["evolved"]), f, indent=2)
     drawn = figure(measured, os.path.join(out, "advantage.png"))
     write_table(document, table(measured), TABLE_START, TABLE_END)
     print(f"{len(measured['rows'])} comparisons measured; wrote {os.path.join(out, 'advantage.json')}"

@@ -73,10 +73,38 @@ def test_report_measures_the_advantage_and_judges_it(tmp_path):
     assert verdict["verdict"] == "partly"  # LE-LS: +0.45 against +0.20, stronger; EE-LS: +0.10 against +0.10
     assert verdict["numbers"]["compared"]["skills LE-LS"]["stronger"]
     assert not verdict["numbers"]["compared"]["skills EE-LS"]["stronger"]
-    assert measured["verdicts"]["held-out tasks"]["verdict"] == "n/a"
+    assert measured["verdicts"]["held-out tasks"]["verdict"] == "n/a" and measured["evolved"] == []
     document = tmp_path / "NOVEL_TASKS.md"
     document.write_text(f"intro\n{study.TABLE_START}\nold\n{study.TABLE_END}\nend\n")
     assert study.figure(measured, str(tmp_path / "advantage.png"))
     text = study.table(measured)
     assert "| skills LE-LS | novel (unseen) | 3 | 0.500 | 0.050 | +0.450 | 0.012 |" in text
     assert "**novel set: partly.**" in text
+
+
+def test_report_judges_held_out_tasks_and_leaves_sle_unjudged(tmp_path):
+    """SLE's rows are shown but not judged; held-out tests and a running evolution enter the table and figure."""
+    reproduction, out = tmp_path / "paper", tmp_path / "novel_tasks"
+    _fake_test(reproduction / "skills" / "test" / "SLE", [0.5, 0.5, 0.5])
+    _fake_test(reproduction / "paper" / "test" / "EE-ES", [0.4, 0.4, 0.4])
+    _fake_test(out / "novel" / "skills" / "SLE", [0.9, 0.9, 0.9])  # far stronger unseen: would be "holds"
+    _fake_test(out / "novel" / "paper" / "EE-ES", [0.05, 0.05, 0.05])
+    for condition, seen, unseen in (("LE-LS", 0.6, 0.55), ("EE-LS", 0.5, 0.2), ("EE-ES", 0.3, 0.1)):
+        _fake_test(out / "held_out" / condition / "test_seen", [seen - 0.01, seen + 0.01])
+        _fake_test(out / "held_out" / condition / "test_unseen", [unseen - 0.01, unseen + 0.01])
+    evolve = out / "held_out" / "LE-LS" / "evolve"
+    evolve.mkdir(parents=True)
+    rows = "".join(f"{g},{s},{0.1 * g + 0.01 * s},0.1\n" for g in range(7) for s in range(2))
+    (evolve / "history.csv").write_text("generation,seed,best,mean\n" + rows)
+    measured = study.measure(str(out), str(reproduction))
+    assert measured["verdicts"]["novel set"]["verdict"] == "n/a"  # only SLE compared: not judged
+    held = measured["verdicts"]["held-out tasks"]
+    # LE-LS: +0.45 unseen vs +0.30 seen (se 0.01): stronger; EE-LS: +0.10 vs +0.20: not
+    assert held["verdict"] == "partly" and held["numbers"]["compared"]["held out LE-LS"]["stronger"]
+    assert abs(held["numbers"]["compared"]["held out LE-LS"]["difference"] - 0.15) < 1e-9
+    [evolved] = measured["evolved"]  # the last 5 generations (2-6), per seed, then over seeds
+    assert evolved["condition"] == "LE-LS" and evolved["generations"] == 7 and evolved["seeds"] == 2
+    assert abs(evolved["final_best"] - 0.405) < 1e-9 and abs(evolved["sd"] - 0.005) < 1e-9
+    text = study.table(measured)
+    assert "| LE-LS | 2 x 7 of 100, running | 0.405 +- 0.005 |" in text
+    assert study.figure(measured, str(tmp_path / "advantage.png"))
