@@ -137,7 +137,9 @@ def plan(names, scale: dict = SCREEN, out: str = OUT) -> list[Stage]:
 #: Claim 8 (the paper: "the quality of results did not change in tests with a higher number of experts"):
 #: LE-LS and EE-LS with these many experts, under these rule sets, against their own 3-expert runs.
 EXPERT_COUNTS = (4, 6)
-EXPERT_RULE_SETS = ("skills",)
+#: skills, and the screen's most faithful row that composes (paper-selector: its LE-LS is also
+#: paper-selector-sle-test's; its EE-LS is skills', as with 3 experts).
+EXPERT_RULE_SETS = ("skills", "paper-selector")
 EXPERT_CONDITIONS = ("LE-LS", "EE-LS")
 
 
@@ -161,22 +163,32 @@ class ExpertsRun(NamedTuple):
 EXPERTS_RUNS = {experts_variant(rule.name, k): ExpertsRun(rule, k) for rule in RULE_SETS for k in EXPERT_COUNTS}
 
 
+def experts_owner(rule: RuleSet, condition: str) -> str:
+    """The rule set whose claim-8 run of ``condition`` this one's is (shared as its 3-expert run is)."""
+    return {"LE-LS": rule.le_ls or rule.name, "EE-LS": rule.ee_ls}[condition]
+
+
 def experts_dir(rule: str, condition: str, num_experts: int, kind: str = "evolve", out: str = OUT) -> str:
     """Where a claim-8 evolution (``kind`` "evolve") or its learning test ("test") lives."""
     return os.path.join(out, rule, f"experts{num_experts}", kind, condition)
 
 
 def plan_experts(rules=EXPERT_RULE_SETS, scale: dict = SCREEN, out: str = OUT) -> list[Stage]:
-    """Claim 8's stages: each rule set's LE-LS and EE-LS with 4 and 6 experts, evolved then tested."""
-    stages = []
+    """Claim 8's stages: each rule set's LE-LS and EE-LS with 4 and 6 experts, evolved then tested, each run once
+    (a rule set that shares a condition's run with another, as with 3 experts, shares it here too)."""
+    stages, planned = [], set()
     for name in rules:
         for k in EXPERT_COUNTS:
             for condition in EXPERT_CONDITIONS:
-                variant = experts_variant(name, k)
-                stages.append(Stage(f"evolve {name} {condition} {k} experts", "evolve", variant, condition,
-                                    experts_dir(name, condition, k, "evolve", out), evolution_cost(scale, condition)))
-                stages.append(Stage(f"learning test {name} {condition} {k} experts", "test", variant, condition,
-                                    experts_dir(name, condition, k, "test", out), test_cost(scale, condition)))
+                owner = experts_owner(BY_NAME[name], condition)
+                if (owner, condition, k) in planned:
+                    continue
+                planned.add((owner, condition, k))
+                variant = experts_variant(owner, k)
+                stages.append(Stage(f"evolve {owner} {condition} {k} experts", "evolve", variant, condition,
+                                    experts_dir(owner, condition, k, "evolve", out), evolution_cost(scale, condition)))
+                stages.append(Stage(f"learning test {owner} {condition} {k} experts", "test", variant, condition,
+                                    experts_dir(owner, condition, k, "test", out), test_cost(scale, condition)))
     return stages
 
 
@@ -304,12 +316,14 @@ def measure_rule(rule: RuleSet, reproduction_summary: dict, out: str = OUT, repr
                         sle_whole_test=rule.sle_noise_steps == 0)
 
 
-def config_of(rule: RuleSet, condition: str):
-    """The config a rule set's run of ``condition`` has (its learning test's, for SLE)."""
+def config_of(rule: RuleSet, condition: str, num_experts: int | None = None):
+    """The config a rule set's run of ``condition`` has (its learning test's, for SLE; claim 8's with ``num_experts``)."""
     from imrl_jax.cli import parse_sets
     from imrl_jax.config import make_config
 
     overrides = parse_sets(list(rule.sets))
+    if num_experts is not None:
+        overrides["num_experts"] = num_experts
     if condition == "SLE":
         noise = SCREEN["task_steps"] if rule.sle_noise_steps is None else rule.sle_noise_steps
         overrides["sle_noise_steps"] = noise
@@ -427,10 +441,11 @@ def measure_experts(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCT
     final, steady, sizes_ = {}, {}, {}
     for condition in EXPERT_CONDITIONS:
         for k in (3, *EXPERT_COUNTS):
-            evolved = run_dir(rule, condition, out, reproduction) if k == 3 else experts_dir(rule.name, condition, k,
+            owner = experts_owner(rule, condition)
+            evolved = run_dir(rule, condition, out, reproduction) if k == 3 else experts_dir(owner, condition, k,
                                                                                           "evolve", out)
-            tested = learning_dir(rule, condition, out, reproduction) if k == 3 else experts_dir(rule.name, condition,
-                                                                                              k, "test", out)
+            tested = learning_dir(rule, condition, out, reproduction) if k == 3 else experts_dir(owner, condition, k,
+                                                                                              "test", out)
             run, test = read_evolution(evolved), read_test(tested)
             done = run is not None and run["config"] and len(run["best"]) >= run["config"]["num_generations"]
             if done:

@@ -108,6 +108,22 @@ def test_claim_8_stages_evolve_more_experts_and_test_their_own_runs():
     assert study.parse_names(None)[-1] == "experts" and study.parse_names("experts") == ["experts"]
 
 
+def test_claim_8_runs_are_shared_as_the_three_expert_runs_are():
+    """paper-selector evolves its own LE-LS with more experts; its EE-LS is skills' (and the share is sound)."""
+    stages = study.plan_experts(("skills", "paper-selector"))
+    assert [s.name for s in stages[8:]] == [
+        "evolve paper-selector LE-LS 4 experts", "learning test paper-selector LE-LS 4 experts",
+        "evolve paper-selector LE-LS 6 experts", "learning test paper-selector LE-LS 6 experts"]
+    evolve = study.stage_command(stages[8], study.SCREEN)[0]
+    assert evolve[evolve.index("--preset") + 1] == "paper" and "num_experts=4" in evolve and "trace_lambda=0.98" in evolve
+    assert [s.name for s in study.plan_experts(("paper-selector",))][2] == "evolve skills EE-LS 4 experts"
+    selector, skills = study.BY_NAME["paper-selector"], study.BY_NAME["skills"]
+    for k in study.EXPERT_COUNTS:
+        own, shared = study.config_of(selector, "EE-LS", k), study.config_of(skills, "EE-LS", k)
+        assert own.num_experts == k and own.model_differences(shared) == []
+        assert study.config_of(selector, "LE-LS", k).model_differences(study.config_of(skills, "LE-LS", k))
+
+
 def test_fresh_table_shows_the_recorded_best_beside_the_fresh_lives():
     measured = {"skills-bias0": {"fresh": {"LE-LS": dict(recorded=0.412, fresh=0.371, fresh_sd_over_seeds=0.0123,
                                                          seeds=5)}}}
