@@ -192,8 +192,23 @@ def plan_experts(rules=EXPERT_RULE_SETS, scale: dict = SCREEN, out: str = OUT) -
     return stages
 
 
+#: Claim 4 and the arena: what a circular path can score on the six tasks (experiments/circular_paths.py).
+CIRCLES = "circles"
+
+
+def plan_circles(out: str = OUT) -> list[Stage]:
+    """The measure stage of claim 4's circular path: one constant action from each task's start, a grid of them."""
+    from experiments import circular_paths
+
+    cost = len(circular_paths.actions()) * 6 * circular_paths.TASK_STEPS
+    return [Stage("circles: one constant action per task (claim 4's circular path)", "measure", CIRCLES, "EE-ES",
+                  os.path.join(out, CIRCLES), cost)]
+
+
 def stage_command(stage: Stage, scale: dict, out: str = OUT) -> tuple[list[str], None]:
     """A stage's command line: the package's evolve or learning_test with the rule set's preset and overrides."""
+    if stage.kind == "measure":  # the circular paths
+        return [sys.executable, "-m", "experiments.circular_paths", "--out", stage.out_dir], None
     experts = EXPERTS_RUNS.get(stage.variant)
     if experts is not None:  # claim 8: the rule set with more experts
         rule = experts.rule
@@ -478,7 +493,7 @@ def parse_names(text: str | None) -> list[str]:
 def all_stages(out: str = OUT) -> tuple[list[Stage], dict]:
     """Every stage the command runs by default (each rule set, then claim 8's), and their scale."""
     names = [name for name in parse_names(None) if name != EXPERTS]
-    return plan(names, SCREEN, out) + plan_experts(EXPERT_RULE_SETS, SCREEN, out), SCREEN
+    return plan_circles(out) + plan(names, SCREEN, out) + plan_experts(EXPERT_RULE_SETS, SCREEN, out), SCREEN
 
 
 def main(argv=None) -> int:
@@ -501,8 +516,9 @@ def main(argv=None) -> int:
             print("error: --table: measures every finished rule set; leave out --only", file=sys.stderr)
             return 2
         return write_claims(args.out, [rule.name for rule in RULE_SETS])
-    # claim 8's runs after the rule sets' (the screen's default order ends with them)
-    stages = plan([n for n in names if n != EXPERTS], SCREEN, args.out)
+    # the circular paths (seconds) first when nothing is chosen; claim 8's runs after the rule sets'
+    stages = plan_circles(args.out) if args.only is None else []
+    stages += plan([n for n in names if n != EXPERTS], SCREEN, args.out)
     stages += plan_experts(EXPERT_RULE_SETS, SCREEN, args.out) if EXPERTS in names else []
     if args.list:
         for stage in stages:

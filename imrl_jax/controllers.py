@@ -220,6 +220,29 @@ def follower_performance(config: Config, num_steps: int) -> jnp.ndarray:
     return reaches / trips
 
 
+@functools.partial(jax.jit, static_argnums=(0, 2))
+def constant_performance(config: Config, actions: jnp.ndarray, num_steps: int) -> jnp.ndarray:
+    """(actions, tasks) performance of a robot that ignores its retina and repeats one action (turn, speed) from
+    each task's start: a circle (a straight line at turn 0.5) through the start, begun again at every trial's end.
+    The stereotyped circular path of the paper's EE-ES (section 4), at its simplest."""
+    trips = num_steps / jnp.asarray(config.steps_per_trip(), jnp.float32)
+    arena = make_env(config)
+
+    def one(action, task_index):
+        task = task_spec(config, task_index)
+
+        def one_step(state: EnvState, _):
+            state, events = arena.transition(state, action.astype(task.start.pos.dtype), task)
+            return state, events.reached
+
+        _, reached = jax.lax.scan(one_step, arena.at(task.start), None, length=num_steps)
+        return reached.sum()
+
+    tasks = jnp.arange(config.num_tasks)
+    reaches = jax.vmap(lambda a: jax.vmap(lambda t: one(a, t))(tasks))(jnp.asarray(actions))
+    return reaches / trips
+
+
 def perceptron_followers(config: Config, turn_gain: float = 0.1, speed_bias: float = 6.0) -> jnp.ndarray:
     """Expert actor weights (K, 2, n+1) that follow colour k: perceptrons, as an evolved expert could be.
 

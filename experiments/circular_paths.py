@@ -1,0 +1,125 @@
+"""Claim 4 and the arena (docs/CLAIMS.md): what a stereotyped circular path can score on MODEL.md's six tasks.
+
+    python -m experiments.circular_paths --out experiments/results/claims/circles
+
+The paper (section 4) explains EE-ES's good fitness by "a stereotyped behavior such that the robot
+follows a circular path at maximum speed which includes most of the target positions". Whether
+such a path exists depends on where the targets lie, which the paper draws (Fig. 1) but does not
+give in numbers; MODEL.md fixed the six tasks in pairs that look alike and turn the other way. This
+measures the simplest circular path: a robot that ignores its retina and repeats one action (turn,
+speed) from each task's start, trial after trial (``controllers.constant_performance``), for every
+action of a grid. It is a measure stage of the claims study (``experiments.claims_study``), done
+when ``result.json`` is written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import sys
+
+import numpy as np
+
+from experiments.reproduce import MEASURED
+
+OUT = os.path.join("experiments", "results", "claims", "circles")
+#: The action grid: turn in [0, 1] (0.5 straight; 0 and 1 the 30 deg turns; steps of 0.06 deg), speed up to full.
+TURNS = np.linspace(0.0, 1.0, 1001)
+SPEEDS = np.linspace(0.5, 1.0, 6)
+#: Steps per task: 20,000 (about 300-670 trips of the theoretical maximum; a constant action's
+#: reaches repeat exactly trial after trial, so a longer task changes only the rounding).
+TASK_STEPS = 20_000
+#: MODEL.md's pairs (0-based): the tasks of a pair look alike up to their first junction.
+PAIRS = ((0, 1), (2, 3), (4, 5))
+
+
+def actions() -> np.ndarray:
+    """(turns x speeds, 2) every action of the grid, turn-major."""
+    turn, speed = np.meshgrid(TURNS, SPEEDS, indexing="ij")
+    return np.stack([turn.ravel(), speed.ravel()], axis=1)
+
+
+def summarise(grid: np.ndarray, performance: np.ndarray, pairs=PAIRS) -> dict:
+    """The numbers the document quotes, from each action's (actions, tasks) performance."""
+    mean = performance.mean(1)
+    best = int(mean.argmax())
+    per_task = [dict(task=t + 1, performance=float(performance[:, t].max()),
+                     turn=float(grid[performance[:, t].argmax(), 0]), speed=float(grid[performance[:, t].argmax(), 1]))
+                for t in range(performance.shape[1])]
+    per_pair = []
+    for i, j in pairs:  # one action for both tasks of a pair: what it scores on the two together
+        both = performance[:, i] + performance[:, j]
+        k = int(both.argmax())
+        per_pair.append(dict(tasks=[i + 1, j + 1], performance=[float(performance[k, i]), float(performance[k, j])],
+                             turn=float(grid[k, 0])))
+    # One action per pair (a controller that tells the pairs apart by their first colour, but not the
+    # tasks of a pair): the mean over the six tasks of each pair's best action.
+    per_pair_mean = float(sum(sum(p["performance"]) for p in per_pair) / performance.shape[1])
+    return dict(one_action=dict(performance=float(mean[best]), turn=float(grid[best, 0]), speed=float(grid[best, 1]),
+                                per_task=[float(v) for v in performance[best]]),
+                per_task=per_task, per_pair=per_pair, one_action_per_pair=per_pair_mean)
+
+
+def figure(grid: np.ndarray, performance: np.ndarray, path: str) -> str:
+    """Performance per task against the turn, at full speed; the mean over tasks in black."""
+    from imrl_jax.plotting import new_figure, save, style_axis
+
+    full = np.isclose(grid[:, 1], 1.0)
+    fig = new_figure(6.4, 3.6)
+    ax = fig.add_subplot()
+    turn_deg = (grid[full, 0] - 0.5) * 60.0  # degrees per step, positive = left
+    for t in range(performance.shape[1]):
+        ax.plot(turn_deg, performance[full, t], lw=1.0, label=f"task {t + 1}")
+    ax.plot(turn_deg, performance[full].mean(1), color="black", lw=2.0, label="mean of the six")
+    ax.set_xlim(-4, 4)
+    ax.set_ylim(0, 1)
+    style_axis(ax, "one constant action from each task's start, at full speed", "turn per step (deg, + left)",
+               "task performance")
+    ax.legend(fontsize=7, loc="upper right")
+    fig.tight_layout()
+    return save(fig, path)
+
+
+def measure(out_dir: str = OUT, task_steps: int = TASK_STEPS) -> dict:
+    """Every action of the grid on the six tasks; writes circles.csv, circles.png, then result.json (done)."""
+    from imrl_jax import controllers
+    from imrl_jax.checkpoint import git_commit
+    from imrl_jax.config import make_config
+
+    config = make_config("paper")
+    grid = actions()
+    performance = np.asarray(controllers.constant_performance(config, grid, task_steps), float)
+    os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, "circles.csv"), "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(["turn", "speed", *(f"task_{t + 1}" for t in range(config.num_tasks)), "mean"])
+        for action, row in zip(grid, performance):
+            writer.writerow([f"{action[0]:.3f}", f"{action[1]:.2f}", *(f"{v:.4f}" for v in row), f"{row.mean():.4f}"])
+    figure(grid, performance, os.path.join(out_dir, "circles.png"))
+    summary = summarise(grid, performance)
+    with open(os.path.join(out_dir, MEASURED), "w") as f:
+        json.dump(dict(command=f"python -m experiments.circular_paths --out {out_dir} --task-steps {task_steps}",
+                       git_commit=git_commit(), task_steps=task_steps, actions=len(grid), **summary), f, indent=2)
+    return summary
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m experiments.circular_paths", description=__doc__.split("\n\n")[0])
+    p.add_argument("--out", default=OUT, help=f"results directory (default: {OUT})")
+    p.add_argument("--task-steps", type=int, default=TASK_STEPS, help="steps per task (default: %(default)s)")
+    args = p.parse_args(argv)
+    if args.task_steps <= 0:
+        print("error: --task-steps: must be positive", file=sys.stderr)
+        return 2
+    summary = measure(args.out, args.task_steps)
+    one = summary["one_action"]
+    print(f"one action for all six tasks: {one['performance']:.3f} (turn {one['turn']:.3f}, speed {one['speed']:.2f}); "
+          f"one per pair: {summary['one_action_per_pair']:.3f}; each task's best: "
+          + ", ".join(f"{t['performance']:.3f}" for t in summary["per_task"]) + f"; wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,60 @@
+"""A robot that repeats one action (claim 4's circular path): hand-computed trips, a loop over the environment, the summary."""
+
+import math
+
+import numpy as np
+
+from experiments import circular_paths as study
+from imrl_jax import controllers
+from imrl_jax.config import Task, make_config
+from imrl_jax.env import make_env, task_spec
+
+
+def _one_edge_config():
+    """One task: the target is the next vertex straight ahead, 40 cm along a red edge."""
+    s = 20 * math.sqrt(3)
+    return make_config("paper", tasks=(Task(start=(140.0, 200 - s), heading_deg=0.0, target=(180.0, 200 - s)),))
+
+
+def test_straight_ahead_reaches_at_the_theoretical_maximum():
+    """40 cm at 2 cm a step: within 10 cm after ceil(30 / 2) = 15 steps, a trip every 15 steps; half speed every 30."""
+    config = _one_edge_config()
+    assert config.steps_per_trip() == (15,)
+    performance = controllers.constant_performance(config, np.array([[0.5, 1.0], [0.5, 0.5], [1.0, 1.0]]), 600)
+    assert np.allclose(np.asarray(performance)[:, 0], [1.0, 0.5, 0.0])  # the full turn circles on the spot (r 3.8 cm)
+
+
+def test_constant_action_follows_the_environment_step_by_step():
+    """The scanned, vmapped measure equals a Python loop over the environment's own transition."""
+    config, steps = make_config("paper"), 400
+    action = np.array([0.51, 1.0], np.float32)  # task 1's best arc: reaches within 400 steps
+    arena = make_env(config)
+    for task_index in (0, 1):
+        task = task_spec(config, task_index)
+        state, reaches = arena.at(task.start), 0
+        for _ in range(steps):
+            state, events = arena.transition(state, action, task)
+            reaches += int(events.reached)
+        expected = reaches / (steps / config.steps_per_trip()[task_index])
+        got = float(controllers.constant_performance(config, action[None], steps)[0, task_index])
+        assert abs(got - expected) < 1e-6, (task_index, got, expected)
+        assert (reaches > 0) == (task_index == 0)  # the arc that serves task 1 misses task 2's target
+
+
+def test_summary_on_hand_made_performance():
+    grid = np.array([[0.4, 1.0], [0.5, 1.0], [0.6, 1.0]])
+    performance = np.array([[0.9, 0.0, 0.2, 0.0],   # mean 0.275
+                            [0.3, 0.3, 0.3, 0.3],   # mean 0.3
+                            [0.0, 0.8, 0.0, 0.7]])  # mean 0.375: the best single action
+    summary = study.summarise(grid, performance, pairs=((0, 1), (2, 3)))
+    assert summary["one_action"]["turn"] == 0.6 and abs(summary["one_action"]["performance"] - 0.375) < 1e-12
+    assert [t["performance"] for t in summary["per_task"]] == [0.9, 0.8, 0.3, 0.7]
+    assert summary["per_pair"][0]["turn"] == 0.4 and summary["per_pair"][0]["performance"] == [0.9, 0.0]
+    assert summary["per_pair"][1]["turn"] == 0.6  # 0.0 + 0.7 beats 0.3 + 0.3 and 0.2 + 0.0
+    assert abs(summary["one_action_per_pair"] - (0.9 + 0.7) / 4) < 1e-12
+
+
+def test_bad_task_steps_exit_2(capsys, tmp_path):
+    assert study.main(["--out", str(tmp_path / "c"), "--task-steps", "0"]) == 2
+    assert capsys.readouterr().err.strip() == "error: --task-steps: must be positive"
+    assert not (tmp_path / "c").exists()
