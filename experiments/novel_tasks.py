@@ -97,7 +97,8 @@ def task_files(out: str = OUT, write: bool = False) -> dict[str, str]:
 def plan(out: str = OUT) -> list[Stage]:
     """Every stage, in order: the finished runs and SLE on the novel set, then the held-out evolutions and tests."""
     stages = [Stage(f"novel {variant} {condition}", "test", variant, condition,
-                    os.path.join(out, "novel", variant, condition), test_cost(FINISHED_TEST, condition))
+                    os.path.join(out, "novel", variant, condition), test_cost(FINISHED_TEST, condition),
+                    runs=FINISHED_TEST["seeds"])
               for variant, condition in FINISHED]
     stages += [Stage(f"novel {variant} SLE", "test", variant, "SLE", os.path.join(out, "novel", variant, "SLE"),
                      test_cost(SCREEN, "SLE")) for variant in ("skills", "paper")]
@@ -182,7 +183,7 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
                 target[name] = dict(advantage(mine, reference), tasks=f"tasks {HELD_OUT[which]} ({which})",
                                     runs=len(mine))
                 rows.append(dict(name=name, **target[name]))
-    judged = {name for name in seen if name.split(" ", 1)[1] in JUDGED}
+    judged = {name for name in seen if is_judged(name)}
     verdicts = {"novel set": claim_unseen({n: seen[n] for n in judged}, {n: a for n, a in unseen.items() if n in judged}),
                 "held-out tasks": claim_unseen(held_seen, held_unseen)}
     curves = {key: test for key, test in novel_tests.items() if test is not None}
@@ -232,12 +233,22 @@ def table(measured: dict) -> str:
     return "\n".join(lines)
 
 
+def is_judged(name: str) -> bool:
+    """Whether the verdict judges a comparison ("skills LE-LS", "held out EE-LS"): its condition is evolved."""
+    return name.rsplit(" ", 1)[-1] in JUDGED
+
+
+def bar_label(name: str) -> str:
+    """A comparison's label under its bars: SLE's say that the verdict leaves them out."""
+    return name if is_judged(name) else f"{name} (not judged)"
+
+
 def figure(measured: dict, path: str) -> str | None:
     """Fig. 3b-style curves on the novel set (a panel per preset) beside learning's advantage per comparison."""
     from experiments.figures import _draw_curves
     from imrl_jax.plotting import new_figure, save, style_axis
 
-    if not measured["rows"] and not measured["curves"]:
+    if not any(measured[part] for part in ("rows", "curves", "held_curves", "evolutions")):
         return None
     fig = new_figure(13.0, 7.4)
     grid = fig.subplots(2, 3, gridspec_kw=dict(width_ratios=[1.0, 1.0, 1.2]))
@@ -260,8 +271,7 @@ def figure(measured: dict, path: str) -> str | None:
                      color=("0.35", "tab:orange")[j], label=None if label in labelled else label)
             labelled.add(label)
     bars.axhline(0.0, color="black", lw=0.6)
-    ticks = [name if name.split(" ", 1)[-1] in JUDGED else f"{name} (not judged)" for name in names]
-    bars.set_xticks(range(len(names)), ticks, rotation=30, ha="right", fontsize=7)
+    bars.set_xticks(range(len(names)), [bar_label(name) for name in names], rotation=30, ha="right", fontsize=7)
     style_axis(bars, "learning's advantage over EE-ES", "", "steady state minus EE-ES's")
     if names:
         bars.legend(fontsize=7)

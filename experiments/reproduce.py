@@ -151,6 +151,7 @@ class Stage(NamedTuple):
     condition: str
     out_dir: str
     cost: float
+    runs: int = 0  # a test stage's runs when they are not the scale's seeds (0: the scale's)
 
 
 def life_steps(scale: dict, condition: str, task_steps: int, *, num_tasks: int = 6) -> int:
@@ -226,7 +227,8 @@ def stage_done(stage: Stage, scale: dict) -> bool:
 
 def measured_rate(manifest: dict) -> float | None:
     """Lane-steps per second over the timed stages of the manifest (None when none is)."""
-    timed = [s for s in manifest.get("stages", {}).values() if s.get("cost") and s.get("seconds")]
+    # a cost of 0 or less is no measurement (a manifest written before resumed stages counted their runs right)
+    timed = [s for s in manifest.get("stages", {}).values() if (s.get("cost") or 0) > 0 and s.get("seconds")]
     return sum(s["cost"] for s in timed) / sum(s["seconds"] for s in timed) if timed else None
 
 
@@ -382,9 +384,9 @@ def run_stages(stages: list[Stage], scale: dict, manifest: dict, manifest_path: 
                 if restored is not None:
                     print(f"== {stage.name}: continuing from the published checkpoint of generation {restored - 1} "
                           f"({os.path.join(stage.out_dir, PUBLISHED)})")
-                done_before = generations_done(stage.out_dir) / scale["generations"]
+                done_before = min(1.0, generations_done(stage.out_dir) / scale["generations"])
             elif stage.kind == "test":
-                done_before = partial_runs(stage.out_dir) / scale["seeds"]
+                done_before = min(1.0, partial_runs(stage.out_dir) / (stage.runs or scale["seeds"]))
             command, env = command_for(stage)
             run_stage(stage, index, command, overall, manifest_path, done_before, env)
     except subprocess.CalledProcessError as error:

@@ -108,3 +108,5 @@ def test_report_judges_held_out_tasks_and_leaves_sle_unjudged(tmp_path):
     text = study.table(measured)
     assert "| LE-LS | 2 x 7 of 100, running | 0.405 +- 0.005 |" in text
     assert study.figure(measured, str(tmp_path / "advantage.png"))
+    assert [study.bar_label(n) for n in ("held out LE-LS", "held out EE-LS", "skills SLE", "paper EE-LS")] == [
+        "held out LE-LS", "held out EE-LS", "skills SLE (not judged)", "paper EE-LS"]

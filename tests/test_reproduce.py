@@ -143,3 +143,21 @@ def test_a_stage_is_done_when_its_last_file_exists(tmp_path):
     (tmp_path / "evolve" / "history.csv").write_text("generation,seed,best\n0,0,0.1\n1,0,0.2\n2,0,0.3\n")
     assert reproduce.stage_done(evolve, scale)
     assert not reproduce.stage_done(reproduce.Stage("r", "report", "", "", str(tmp_path), 1.0), scale)
+
+
+def test_a_resumed_test_stage_counts_its_own_runs(tmp_path, capsys):
+    """9 of a 10-run stage's runs kept: 10 % of its cost is left, whatever the scale's seeds (5 here)."""
+    out = tmp_path / "test"
+    (out / "partial").mkdir(parents=True)
+    for i in range(9):
+        (out / "partial" / f"run_{i:03d}.npz").write_bytes(b"")
+    stage = reproduce.Stage("a test of 10 runs", "test", "paper", "EE-ES", str(out), 1000.0, runs=10)
+    scale = dict(reproduce.SCALES["tiny"], seeds=5)
+    manifest, path = {"stages": {}, "sizes": scale}, str(tmp_path / "manifest.json")
+    code = reproduce.run_stages([stage], scale, manifest, path,
+                                lambda s: ([sys.executable, "-c", "pass"], None))
+    assert code == 0
+    with open(path) as f:
+        assert json.load(f)["stages"]["a test of 10 runs"]["cost"] == 100
+    # a cost recorded wrongly before (negative) is no measurement
+    assert reproduce.measured_rate({"stages": {"a": dict(cost=300, seconds=3), "bad": dict(cost=-900, seconds=1)}}) == 100
