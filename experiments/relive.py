@@ -78,12 +78,24 @@ def fresh_fitness(config_dict: dict, best: dict, num_lives: int = FRESH_LIVES, s
 FRESH_FILE = "fresh.json"
 
 
+def fresh_key(best: dict, config_dict: dict, num_lives: int = FRESH_LIVES, seed: int = FRESH_SEED) -> dict:
+    """What :func:`run_fresh`'s kept lives depend on: the generation, seeds, genomes, config, lives and key."""
+    import hashlib
+    import json
+
+    genomes = np.ascontiguousarray(np.asarray(best["genomes"])[:, 0], np.float32)
+    return dict(generations=int(best["generations"]), seeds=[int(s) for s in best["seeds"]], num_lives=num_lives,
+                seed=seed, genomes_sha256=hashlib.sha256(genomes.tobytes()).hexdigest(),
+                config_sha256=hashlib.sha256(json.dumps(config_dict, sort_keys=True).encode()).hexdigest())
+
+
 def run_fresh(run_dir: str, config_dict: dict | None = None, num_lives: int = FRESH_LIVES,
               seed: int = FRESH_SEED) -> dict | None:
     """Fresh lives of each seed's best genome of an evolution's last generation (its final_population.npz).
 
-    Kept in ``run_dir/fresh.json`` and lived again only when the population has moved on (another
-    generation, other seeds, lives or key); None without a population. Returns the mean per seed,
+    Kept in ``run_dir/fresh.json`` and lived again only when what they depend on changed
+    (:func:`fresh_key`: another generation, seeds, genomes, config, lives or key); None without a
+    population. Returns the mean per seed,
     their mean and sd over seeds (ddof 1), and each genome's sd over its lives.
     """
     import json
@@ -95,20 +107,20 @@ def run_fresh(run_dir: str, config_dict: dict | None = None, num_lives: int = FR
     best = best_of_population(population) if os.path.isfile(population) else None
     if best is None:
         return None
-    key = dict(generations=int(best["generations"]), seeds=[int(s) for s in best["seeds"]], num_lives=num_lives,
-               seed=seed)
+    if config_dict is None:
+        config_dict = (read_json(os.path.join(run_dir, "config.json")) or {})["config"]
+    key = fresh_key(best, config_dict, num_lives, seed)
     path = os.path.join(run_dir, FRESH_FILE)
     cached = read_json(path)
     if cached is not None and all(cached.get(k) == v for k, v in key.items()):
         return cached
-    if config_dict is None:
-        config_dict = (read_json(os.path.join(run_dir, "config.json")) or {})["config"]
     lives = fresh_fitness(config_dict, best, num_lives, seed)
     means = [float(v) for v in lives["mean"]]
     out = dict(key, mean_per_seed=means, sd_per_seed=[float(v) for v in lives["sd"]], mean=float(np.mean(means)),
                sd_over_seeds=float(np.std(means, ddof=1)) if len(means) > 1 else 0.0)
-    with open(path, "w") as f:
+    with open(path + ".tmp", "w") as f:  # renamed when complete: a killed report leaves no half file
         json.dump(out, f, indent=2)
+    os.replace(path + ".tmp", path)
     return out
 
 

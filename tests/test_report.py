@@ -359,6 +359,13 @@ def test_run_fresh_keeps_its_lives_until_the_population_moves_on(tmp_path, monke
     save(8)
     relive.run_fresh(str(tmp_path), {"unused": True}, num_lives=2, seed=10)  # another generation: lived again
     assert len(calls) == 3
+    relive.run_fresh(str(tmp_path), {"other": True}, num_lives=2, seed=10)  # another config: lived again
+    evaluated[0, 1, 0] += 1.0  # seed 4's fittest genome changed in place, same generation and seeds
+    save(8)
+    again = relive.run_fresh(str(tmp_path), {"other": True}, num_lives=2, seed=10)
+    assert len(calls) == 5 and calls[-1][0] == [3.0, 12.0, 16.0]
+    assert relive.run_fresh(str(tmp_path), {"other": True}, num_lives=2, seed=10) == again and len(calls) == 5
+    assert not os.path.exists(tmp_path / "fresh.json.tmp")
 
 
 def test_a_childhood_that_stays_put_is_marked_and_said(tiny):
