@@ -5,11 +5,10 @@
 
 Each study is its own resumable command on the shared stage runner (``reproduce.run_stages``),
 run as a subprocess; a finished study passes in seconds, an interrupted one goes on where it
-stopped, and a failed one stops the queue with its exit code. The order: shortest first among the
-studies that need nothing from another, so that whole questions are answered early: the selector's
-time-scale and tasks never met in evolution (together one issue, about a third of the claims
-study's cost), then the claims map, the search strategies, and last the paper's future work, the
-one study that needs the claims map (docs/CLAIMS.md names the faithful rule set it also runs).
+stopped, and a failed one stops the queue with its exit code. The order answers whole questions
+early: the selector's time-scale and tasks never met in evolution (together one issue, about a
+third of the claims study's cost), then the claims map (it decides which rule set reproduces the
+paper, and the future work needs it), the search strategies, and last the paper's future work.
 """
 
 from __future__ import annotations
@@ -55,7 +54,11 @@ def main(argv=None) -> int:
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}
     for module, _ in STUDIES:
         print(f"\n=== study {module}", flush=True)
-        code = subprocess.run([sys.executable, "-m", f"experiments.{module}"], env=env).returncode
+        try:
+            code = subprocess.run([sys.executable, "-m", f"experiments.{module}"], env=env).returncode
+        except KeyboardInterrupt:  # the study has stopped at the same signal and kept what it finished
+            print(f"\ninterrupted in study {module}: run the same command again to go on", file=sys.stderr)
+            return 130
         if code:
             print(f"error: study {module} stopped with exit code {code}; run the same command again to go on",
                   file=sys.stderr)

@@ -126,11 +126,13 @@ def run_fresh(run_dir: str, config_dict: dict | None = None, num_lives: int = FR
 
 def reproduction_fresh(summary: dict, variant: str, condition: str) -> dict | None:
     """The reproduction report's fresh lives of a run (docs/reproduction/summary.json), in :func:`run_fresh`'s form."""
-    means = ((summary.get("best_individuals") or {}).get(f"{variant}/{condition}") or {}).get("fresh_mean_per_seed")
+    entry = (summary.get("best_individuals") or {}).get(f"{variant}/{condition}") or {}
+    means = entry.get("fresh_mean_per_seed")
     if not means:
         return None
     return dict(mean_per_seed=[float(v) for v in means], mean=float(np.mean(means)),
-                sd_over_seeds=float(np.std(means, ddof=1)) if len(means) > 1 else 0.0, num_lives=FRESH_LIVES)
+                sd_over_seeds=float(np.std(means, ddof=1)) if len(means) > 1 else 0.0,
+                num_lives=int(entry.get("fresh_lives", FRESH_LIVES)))
 
 
 def probe_best(config_dict: dict, best: dict, key: int = 0) -> list[int]:

@@ -138,6 +138,29 @@ def evolution_groups(out: str = OUT) -> dict[str, tuple[tuple[str, ...], tuple[s
     return groups
 
 
+def mismatched_runs(out: str = OUT) -> list[str]:
+    """Evolutions already under ``out`` whose config differs from what the measures call for now (one line each).
+
+    A run's folder names its option, not its rates: if the sweep or its confirmation ran again and
+    chose other rates, the old run must not pass for the new one.
+    """
+    from experiments.loading import read_json
+    from imrl_jax.cli import parse_sets
+
+    lines = []
+    for variant, (sets, names) in evolution_groups(out).items():
+        for condition in names:
+            folder = os.path.join(out, variant, condition, "evolve")
+            saved = (read_json(os.path.join(folder, "config.json")) or {}).get("config")
+            if saved is None:
+                continue
+            for field, value in parse_sets(list(sets)).items():
+                if saved.get(field) != value:
+                    lines.append(f"{folder}: evolved with {field}={saved.get(field)}, but the measures now call for "
+                                 f"{field}={value}; move the run away to evolve it again")
+    return lines
+
+
 def plan(out: str = OUT, scale: dict = SCREEN) -> list[Stage]:
     """The ceiling and the rate sweep, then (once they have run) the evolutions and learning tests they call for."""
     cost = len(OPTIONS) * len(RULES) * LIVES * 6 * TASK_STEPS
@@ -270,7 +293,7 @@ def measure_confirm(out_dir: str, lives: int = LIVES, key: int = 1, task_steps: 
 
     rates = read_rates(os.path.dirname(os.path.normpath(out_dir)))
     if rates is None:
-        raise SystemExit(f"error: {out_dir}: the rate sweep has not run (its result.json is missing)")
+        raise ValueError(f"{out_dir}: the rate sweep has not run (its result.json is missing)")
     rows = []
     for index, option in enumerate(RATE_OPTIONS):
         best = best_rates(rates, option)
@@ -434,7 +457,7 @@ def report_table(rows: dict) -> str:
         measured = row["measured"]
         for condition in OPTION_CONDITIONS:
             if measured is None or condition not in measured["evolution"]:
-                done = row["progress"][condition]
+                done = (row.get("progress") or {}).get(condition)
                 size = "not started" if done is None else f"{done[1]} x {done[0]} of {SCREEN['generations']}, running"
                 lines.append(f"| {row['label']} | {condition} | {size} | - | - | - | - |")
                 continue
@@ -514,6 +537,10 @@ def report(out: str = OUT, document: str = os.path.join("docs", "TIMESCALE.md"),
     if not evolution_groups(out):
         print(f"error: {out}: the measurements have not run, so no evolution is planned yet", file=sys.stderr)
         return 2
+    mismatched = mismatched_runs(out)
+    if mismatched:
+        print(f"error: {mismatched[0]}", file=sys.stderr)
+        return 2
     rows = measure_evolutions(out, reproduction, summary)
     with open(os.path.join(out, "evolutions.json"), "w") as f:
         json.dump({variant: dict(label=row["label"], progress=row.get("progress"),
@@ -544,7 +571,11 @@ def main(argv=None) -> int:
         p.add_argument("--key", type=int, default=1 if argv[0] == "confirm" else 0)
         p.add_argument("--task-steps", type=int, default=TASK_STEPS)
         args = p.parse_args(argv[1:])
-        measure(args.out, args.lives, args.key, args.task_steps)
+        try:
+            measure(args.out, args.lives, args.key, args.task_steps)
+        except ValueError as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 2
         return 0
     p = argparse.ArgumentParser(prog="python -m experiments.timescale", description=__doc__.split("\n\n")[0])
     p.add_argument("--out", default=OUT, help=f"results directory (default: {OUT})")
@@ -566,6 +597,10 @@ def main(argv=None) -> int:
     code = run_stages(plan(args.out)[:3], SCREEN, manifest, manifest_path, lambda s: stage_command(s, args.out))
     if code or args.measures_only:
         return code
+    mismatched = mismatched_runs(args.out)
+    if mismatched:
+        print(f"error: {mismatched[0]}", file=sys.stderr)
+        return 2
     return run_stages(plan(args.out), SCREEN, manifest, manifest_path, lambda s: stage_command(s, args.out))
 
 

@@ -2,6 +2,8 @@
 
 import subprocess
 
+import pytest
+
 from experiments import queue
 
 
@@ -12,7 +14,7 @@ def test_list_shows_every_study_and_what_is_left(capsys):
     left, count, hours = queue.remaining("novel_tasks", rate=1.0)
     stages, scale = queue.importlib.import_module("experiments.novel_tasks").all_stages()
     assert count == len(stages) and 0 <= left <= count
-    assert hours * 3600 == sum(s.cost for s in stages if not queue.stage_done(s, scale))
+    assert hours * 3600 == pytest.approx(sum(s.cost for s in stages if not queue.stage_done(s, scale)))
 
 
 def test_studies_run_in_order_and_a_failure_stops_the_queue(monkeypatch, capsys):
@@ -26,3 +28,13 @@ def test_studies_run_in_order_and_a_failure_stops_the_queue(monkeypatch, capsys)
     assert queue.main([]) == 3
     assert ran == ["experiments.timescale", "experiments.novel_tasks"]
     assert "study novel_tasks stopped with exit code 3" in capsys.readouterr().err
+
+
+def test_ctrl_c_stops_the_queue_with_one_line(monkeypatch, capsys):
+    def interrupted(command, env):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(queue.subprocess, "run", interrupted)
+    assert queue.main([]) == 130
+    err = capsys.readouterr().err.strip()
+    assert err == "interrupted in study timescale: run the same command again to go on"

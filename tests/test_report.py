@@ -410,3 +410,12 @@ def test_fig3_has_the_papers_three_panels():
     heights = [round(p.get_height(), 3) for p in c.patches]
     assert heights == [0.2, 0.3, 0.4, 0.5, 0.25, 0.35, 0.45, 0.55]  # means, then best runs, in TESTED order
     assert [t.get_text() for t in c.get_xticklabels()] == list(reproduce.TESTED)
+
+
+def test_reproduction_fresh_reads_the_reports_lives():
+    from experiments import relive
+
+    summary = {"best_individuals": {"skills/LE-LS": dict(fresh_mean_per_seed=[0.7, 0.8, 0.9], fresh_lives=7)}}
+    fresh = relive.reproduction_fresh(summary, "skills", "LE-LS")
+    assert fresh["num_lives"] == 7 and fresh["mean"] == pytest.approx(0.8) and fresh["sd_over_seeds"] == pytest.approx(0.1)
+    assert relive.reproduction_fresh(summary, "paper", "LE-LS") is None

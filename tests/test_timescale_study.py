@@ -196,3 +196,33 @@ def test_report_before_the_measurements_is_refused(tmp_path, capsys):
     assert study.main(["--report", "--out", str(tmp_path / "none")]) == 2
     err = capsys.readouterr().err.strip()
     assert "the measurements have not run" in err and "\n" not in err
+
+
+def test_a_run_evolved_at_other_rates_is_refused(tmp_path, capsys):
+    """The folder names the option, not its rates: a run whose config differs from the confirmed point is refused."""
+    out = str(tmp_path / "timescale")
+    _fake_ceiling(out, paper_best=0.45)
+    _fake_rates(out)
+    _fake_confirm(out)
+    folder = os.path.join(out, "skills+colour-60", "LE-LS", "evolve")
+    os.makedirs(folder)
+    config = dict(selector_period=60, selector_termination="colour", trace_lambda=0.9, eta_selector_actor=1.0,
+                  eta_selector_critic=0.01)
+    with open(os.path.join(folder, "config.json"), "w") as f:
+        json.dump(dict(config=config), f)
+    assert study.mismatched_runs(out) == []
+    with open(os.path.join(folder, "config.json"), "w") as f:
+        json.dump(dict(config=dict(config, eta_selector_actor=3.0)), f)
+    [line] = study.mismatched_runs(out)
+    assert "eta_selector_actor=3.0" in line and "eta_selector_actor=1.0" in line
+    assert study.main(["--report", "--out", out]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"error: {folder}: evolved with eta_selector_actor=3.0") and "\n" not in err
+
+
+def test_confirm_before_the_rate_sweep_exits_2(tmp_path, capsys):
+    out = str(tmp_path / "timescale" / "confirm")
+    assert study.main(["confirm", "--out", out]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: ") and "the rate sweep has not run" in err and "\n" not in err
+    assert not os.path.exists(os.path.join(out, "result.json"))
