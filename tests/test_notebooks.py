@@ -38,9 +38,11 @@ def test_stored_without_outputs(name):
             assert cell.execution_count is None, f"{name}: a code cell has an execution count"
 
 
-@pytest.mark.parametrize("name", [NAMES[0], pytest.param(NAMES[1], marks=pytest.mark.slow)])
-def test_runs_at_tiny_scale(name, monkeypatch):
+@pytest.mark.parametrize("name, task_set", [(NAMES[0], "paper"), pytest.param(NAMES[1], "novel",
+                                                                               marks=pytest.mark.slow)])
+def test_runs_at_tiny_scale(name, task_set, monkeypatch):
     monkeypatch.setenv("IMRL_NOTEBOOK_SCALE", "tiny")
+    monkeypatch.setenv("IMRL_TASK_SET", task_set)
     monkeypatch.setenv("JAX_PLATFORMS", "cpu")
     monkeypatch.delenv("IMRL_RUN_DIR", raising=False)
     # Less LLVM optimisation: the kernel compiles about twice as fast, and tiny runs are compile-bound.
