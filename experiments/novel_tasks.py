@@ -205,6 +205,49 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
                 evolutions=evolutions, evolved=evolved)
 
 
+#: The held-out individuals probed at junctions per seed (the report's claim-7 probe), and the key of their childhoods.
+PROBED, PROBE_KEY = 10, 0
+PROBE_FILE = "probe.json"
+COLOUR_NAMES = ("red", "green", "blue")
+
+
+def colour_summary(followed: list[list[int]]) -> dict:
+    """Per individual the colour each expert follows (-1 none): how many follow 0-3 distinct colours, and the share
+    of individuals with an expert following each colour."""
+    distinct = [set(f) - {-1} for f in followed]
+    counts = [sum(len(d) == k for d in distinct) for k in range(4)]
+    shares = {name: sum(c in d for d in distinct) / max(len(followed), 1) for c, name in enumerate(COLOUR_NAMES)}
+    return dict(individuals=len(followed), counts=counts, shares=shares)
+
+
+def probe_held_out(out: str = OUT) -> dict:
+    """The junction probe of each finished held-out evolution's best individuals (kept in ``probe.json``)."""
+    import json
+
+    from experiments.loading import best_of_population, read_json
+    from experiments.relive import followed_best, fresh_key
+
+    probes = {}
+    for condition in JUDGED:
+        folder = os.path.join(out, "held_out", condition, "evolve")
+        population, saved = os.path.join(folder, "final_population.npz"), read_json(os.path.join(folder, "config.json"))
+        if saved is None or not os.path.isfile(population):
+            continue
+        best = best_of_population(population, PROBED)
+        if best is None or int(best["generations"]) < saved["config"]["num_generations"]:
+            continue
+        key = fresh_key(best, saved["config"], num_lives=PROBED, seed=PROBE_KEY)
+        cached = read_json(os.path.join(folder, PROBE_FILE))
+        if cached is None or any(cached.get(k) != v for k, v in key.items()):
+            print(f"probing the best individuals of {folder}", flush=True)
+            cached = dict(key, followed=followed_best(saved["config"], best, PROBE_KEY))
+            with open(os.path.join(folder, PROBE_FILE + ".tmp"), "w") as f:
+                json.dump(cached, f)
+            os.replace(os.path.join(folder, PROBE_FILE + ".tmp"), os.path.join(folder, PROBE_FILE))
+        probes[condition] = colour_summary(cached["followed"])
+    return probes
+
+
 def table(measured: dict) -> str:
     """The report's markdown: learning's advantage per comparison and set of tasks, then the verdicts."""
     from experiments.claims import UNSEEN_RULE
@@ -227,6 +270,13 @@ def table(measured: dict) -> str:
         lines += [f"| {r['condition']} | {r['seeds']} x {r['generations']}"
                   f"{'' if r['generations'] >= generations else f' of {generations}, running'} | "
                   f"{r['final_best']:.3f} +- {r['sd']:.3f} |" for r in measured["evolved"]]
+    if measured.get("probes"):
+        lines += ["", f"The colours the held-out individuals' experts follow (the junction probe of claim 7, the "
+                  f"{PROBED} best of each seed; LE-LS after a fresh childhood):", "",
+                  "| condition | individuals | following 0 / 1 / 2 / 3 colours | with an expert following red / green / "
+                  "blue |", "|---|---|---|---|"]
+        lines += [f"| held out {c} | {p['individuals']} | {' / '.join(map(str, p['counts']))} | "
+                  + " / ".join(f"{p['shares'][n]:.0%}" for n in COLOUR_NAMES) + " |" for c, p in measured["probes"].items()]
     lines += ["", f"Rule: {UNSEEN_RULE} SLE's rows are shown, not judged: it evolves nothing, so every set is new "
               f"to it.", ""]
     lines += [f"- **{where}: {v['verdict']}.** {v['measured']}" for where, v in measured["verdicts"].items()]
@@ -309,10 +359,11 @@ def report(out: str = OUT, document: str = os.path.join("docs", "NOVEL_TASKS.md"
     from experiments.claims_study import write_table
 
     measured = measure(out)
+    measured["probes"] = probe_held_out(out)
     os.makedirs(out, exist_ok=True)
     with open(os.path.join(out, "advantage.json"), "w") as f:
         json.dump(dict(rows=measured["rows"], verdicts=measured["verdicts"], scratch=measured["scratch"],
-                       evolved=measured["evolved"]), f, indent=2)
+                       evolved=measured["evolved"], probes=measured["probes"]), f, indent=2)
     drawn = figure(measured, os.path.join(out, "advantage.png"))
     write_table(document, table(measured), TABLE_START, TABLE_END)
     print(f"{len(measured['rows'])} comparisons measured; wrote {os.path.join(out, 'advantage.json')}"

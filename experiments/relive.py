@@ -135,8 +135,9 @@ def reproduction_fresh(summary: dict, variant: str, condition: str) -> dict | No
                 num_lives=int(entry.get("fresh_lives", FRESH_LIVES)))
 
 
-def probe_best(config_dict: dict, best: dict, key: int = 0) -> list[int]:
-    """Distinct colours followed (``Specialisation.num_colours``) by each genome of ``best`` (seeds x best, in order).
+def followed_best(config_dict: dict, best: dict, key: int = 0) -> list[list[int]]:
+    """The colour each expert follows (``Specialisation.followed``: 0 red, 1 green, 2 blue, -1 none) for each genome
+    of ``best`` (seeds x best, in order).
 
     LE-LS genomes first live a fresh childhood with their run's config (keys from ``key``);
     evolved experts are probed as they are.
@@ -149,5 +150,10 @@ def probe_best(config_dict: dict, best: dict, key: int = 0) -> list[int]:
     config = Config.from_dict(config_dict)
     genomes = np.asarray(best["genomes"])
     agents, _ = grown_agents(config, genomes.reshape(-1, genomes.shape[-1]), key)
-    return [specialisation(config, jax.tree.map(lambda x: x[i], agents)).num_colours
+    return [[int(c) for c in specialisation(config, jax.tree.map(lambda x: x[i], agents)).followed]
             for i in range(genomes.shape[0] * genomes.shape[1])]
+
+
+def probe_best(config_dict: dict, best: dict, key: int = 0) -> list[int]:
+    """Distinct colours followed (``Specialisation.num_colours``) by each genome of ``best`` (seeds x best, in order)."""
+    return [len(set(followed) - {-1}) for followed in followed_best(config_dict, best, key)]

@@ -110,3 +110,12 @@ def test_report_judges_held_out_tasks_and_leaves_sle_unjudged(tmp_path):
     assert study.figure(measured, str(tmp_path / "advantage.png"))
     assert [study.bar_label(n) for n in ("held out LE-LS", "held out EE-LS", "skills SLE", "paper EE-LS")] == [
         "held out LE-LS", "held out EE-LS", "skills SLE (not judged)", "paper EE-LS"]
+
+
+def test_colour_summary_counts_individuals_and_colours():
+    followed = [[1, 1, 1], [-1, 1, 0], [0, 1, 2], [-1, -1, -1]]  # green; green and red; all three; none
+    summary = study.colour_summary(followed)
+    assert summary["individuals"] == 4 and summary["counts"] == [1, 1, 1, 1]
+    assert summary["shares"] == {"red": 0.5, "green": 0.75, "blue": 0.25}
+    measured = dict(rows=[], scratch=[], evolved=[], verdicts={}, probes={"LE-LS": summary})
+    assert "| held out LE-LS | 4 | 1 / 1 / 1 / 1 | 50% / 75% / 25% |" in study.table(measured)
