@@ -89,12 +89,27 @@ RULE_SETS: tuple[RuleSet, ...] = (
             sle="skills-bias0-sle-test", le_ls="skills-bias0", sle_noise_steps=0),
     RuleSet("paper-sle-test", "paper", (), "paper, SLE's noise annealed over the whole 1,000,000-cycle test",
             ee_ls="paper", sle="paper-sle-test", le_ls="paper", sle_noise_steps=0),
+    # Every other row under the second SLE reading too: claims 5 and 6 depend on it. Each shares its
+    # LE-LS with its row; SLE reads neither the walls nor the childhood, so most share an SLE test too.
+    RuleSet("skills-bias1-sle-test", "skills", ("initial_speed_bias=1.0",),
+            "skills-bias1 with SLE's noise annealed over the whole test", ee_ls="skills",
+            sle="skills-bias1-sle-test", le_ls="skills-bias1", sle_noise_steps=0),
+    RuleSet("skills-bias2-sle-test", "skills", ("initial_speed_bias=2.0",),
+            "skills-bias2 with SLE's noise annealed over the whole test", ee_ls="skills",
+            sle="skills-bias2-sle-test", le_ls="skills-bias2", sle_noise_steps=0),
+    RuleSet("skills-clamp-sle-test", "skills", ("childhood_walls=clamp",),
+            "skills-clamp with SLE's noise annealed over the whole test (every run shared)", ee_ls="skills",
+            sle="skills-sle-test", le_ls="skills-clamp", sle_noise_steps=0),
+    RuleSet("extension-sle-test", "extension", (),
+            "extension with SLE's noise annealed over the whole test (every run shared)", ee_ls="skills",
+            sle="skills-bias0-sle-test", le_ls="extension", sle_noise_steps=0),
 )
 BY_NAME = {rule.name: rule for rule in RULE_SETS}
 #: The order the screen runs its stages in: the cheap SLE tests first, then the evolutions that matter most.
 SCREEN_ORDER = ("skills-sle-test", "paper-sle-test", "skills-bias0", "skills-bias0-sle-test", "paper-selector",
                 "paper-selector-sle-test", "skills-bias2",
-                "skills-clamp", "extension", "skills-bias1")
+                "skills-clamp", "extension", "skills-bias1",
+                "skills-bias2-sle-test", "skills-clamp-sle-test", "extension-sle-test", "skills-bias1-sle-test")
 
 
 def is_reproduction(name: str) -> bool:

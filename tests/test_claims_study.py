@@ -44,7 +44,7 @@ def test_unknown_rule_set_is_refused(capsys):
     assert study.main(["--only", "skills,skils"]) == 2
     err = capsys.readouterr().err.strip()
     assert "unknown rule set 'skils'" in err and "\n" not in err
-    assert err.endswith(", paper-sle-test, experts)")  # claim 8's runs are a choice too
+    assert err.endswith(", extension-sle-test, experts)")  # claim 8's runs are a choice too
 
 
 def test_shared_runs_read_the_reproduction_reports_probes():
