@@ -12,7 +12,10 @@ and ``extension`` (MODEL.md's learning extensions at the values found by
 three evolved conditions, then the learning tests of LE-LS, EE-LS, EE-ES and SLE (EE-ES
 learns nothing, so its evolution and its test are the same under every variant: each is run
 once, under ``paper``, where the first variant needs it). So the first variant's Fig. 3 is
-whole before the second's evolutions start. Then
+whole before the second's evolutions start. A row of the claims map (docs/CLAIMS.md,
+``experiments.claims_study.RULE_SETS``) is a variant too: ``--variants skills,paper,ROW`` runs it
+at the scale's sizes with its preset and overrides (SLE's noise schedule included), its EE-LS
+shared with the preset's whose EE-LS it shares in the map. Then
 ``python -m experiments.report`` writes the report and its figures (docs/REPRODUCTION.md at the
 paper scale, docs/REPRODUCTION_CPU.md at the cpu scale).
 
@@ -72,10 +75,39 @@ EVOLVED = conditions.PAPER_EVOLVED
 TESTED = conditions.PAPER
 
 
+class Variant(NamedTuple):
+    """How a variant's runs are made: a preset, overrides, SLE's noise horizon, and the runs it shares."""
+
+    preset: str
+    sets: tuple[str, ...] = ()
+    sle_noise_steps: int | None = None  # None: one task's length (the pipeline's); 0: the whole test
+    shares: tuple[tuple[str, str], ...] = ()  # (condition, the variant whose run of it this one's is)
+
+
+def variant_spec(name: str) -> Variant:
+    """A variant by name: a preset of :data:`VARIANTS`, or a row of the claims map (its EE-LS shared as there).
+
+    Raises ValueError for an unknown name."""
+    if name in VARIANTS:
+        return Variant(name)
+    from experiments.claims_study import BY_NAME  # the map's rows (it imports this module: lazily)
+
+    rule = BY_NAME.get(name)
+    if rule is None:
+        raise ValueError(f"unknown variant {name!r} (choose from {', '.join(VARIANTS)} or a row of docs/CLAIMS.md: "
+                         f"{', '.join(n for n in BY_NAME if n not in VARIANTS)})")
+    shares = (("EE-LS", rule.ee_ls),) if rule.ee_ls in VARIANTS else ()
+    return Variant(rule.preset, rule.sets, rule.sle_noise_steps, shares)
+
+
 def owner(variant: str, condition: str) -> str:
     """The variant whose folder holds a condition's runs: one that learns nothing (EE-ES) is the same under
-    every variant, so every variant shares paper's."""
-    return variant if conditions.get(condition).learns else "paper"
+    every variant, so every variant shares paper's; a claims-map row shares its EE-LS as the map does."""
+    if not conditions.get(condition).learns:
+        return "paper"
+    if variant in VARIANTS:
+        return variant
+    return dict(variant_spec(variant).shares).get(condition, variant)
 
 
 def shared(condition: str) -> bool:
@@ -353,11 +385,12 @@ def run_stage(stage: Stage, index: int, command: list[str], overall: Overall, ma
 
 def stage_command(stage: Stage, scale: dict, out: str, kernel: str) -> tuple[list[str], dict | None]:
     """The command line of a stage and its environment (None: this one's)."""
+    spec = variant_spec(stage.variant) if stage.kind in ("evolve", "test") else None
     if stage.kind == "evolve":
-        return evolve_command(scale, stage.variant, stage.condition, stage.out_dir, kernel), None
+        return evolve_command(scale, spec.preset, stage.condition, stage.out_dir, kernel, sets=spec.sets), None
     if stage.kind == "test":
-        return test_command(scale, stage.variant, stage.condition, evolution_dir(out, stage.variant, stage.condition),
-                            stage.out_dir, kernel), None
+        return test_command(scale, spec.preset, stage.condition, evolution_dir(out, stage.variant, stage.condition),
+                            stage.out_dir, kernel, sets=spec.sets, sle_noise_steps=spec.sle_noise_steps), None
     # The report is a module of the experiments package: the repository root goes on its path.
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     path = os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)
@@ -417,8 +450,8 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--scale", choices=sorted(SCALES), default="cpu")
     p.add_argument("--out", help="results directory (default: experiments/results/SCALE)")
-    p.add_argument("--variants", help="comma-separated, in the order to run: skills, paper, extension "
-                   "(default: skills,paper at the paper scale, paper,extension at the cpu scale)")
+    p.add_argument("--variants", help="comma-separated, in the order to run: skills, paper, extension or a row of "
+                   "docs/CLAIMS.md (default: skills,paper at the paper scale, paper,extension at the cpu scale)")
     p.add_argument("--no-report", action="store_true", help="skip the report (python -m experiments.report)")
     p.add_argument("--kernel", choices=("xla", "pallas"), default="xla",
                    help="the step kernel (Config.step_kernel): pallas runs each bin of steps as one GPU kernel")
@@ -426,9 +459,11 @@ def main(argv=None) -> int:
     scale = SCALES[args.scale]
     out = args.out or os.path.join("experiments", "results", args.scale)
     variants = args.variants.split(",") if args.variants else list(DEFAULT_VARIANTS[args.scale])
-    unknown = [v for v in variants if v not in VARIANTS]
-    if unknown:
-        print(f"error: --variants: unknown variant {unknown[0]!r} (choose from {', '.join(VARIANTS)})", file=sys.stderr)
+    try:
+        for name in variants:
+            variant_spec(name)
+    except ValueError as error:
+        print(f"error: --variants: {error}", file=sys.stderr)
         return 2
     manifest, manifest_path = load_manifest(out, scale=args.scale, sizes=scale, variants=variants, kernel=args.kernel)
     stages = plan(scale, out, variants, report=not args.no_report)

@@ -161,3 +161,33 @@ def test_a_resumed_test_stage_counts_its_own_runs(tmp_path, capsys):
         assert json.load(f)["stages"]["a test of 10 runs"]["cost"] == 100
     # a cost recorded wrongly before (negative) is no measurement
     assert reproduce.measured_rate({"stages": {"a": dict(cost=300, seconds=3), "bad": dict(cost=-900, seconds=1)}}) == 100
+
+
+def test_a_claims_map_row_is_a_variant_with_its_overrides_and_shares():
+    """paper-selector-sle-test at full scale: its own LE-LS and SLE, skills' EE-LS, paper's EE-ES."""
+    scale = reproduce.SCALES["paper"]
+    stages = reproduce.plan(scale, "out", ("skills", "paper-selector-sle-test"), report=False)
+    row = [s for s in stages if s.variant == "paper-selector-sle-test"]
+    assert [s.name for s in row] == ["evolve paper-selector-sle-test LE-LS", "learning test paper-selector-sle-test LE-LS",
+                                     "learning test paper-selector-sle-test SLE"]
+    assert reproduce.evolution_dir("out", "paper-selector-sle-test", "EE-LS") == os.path.join("out", "skills", "evolve",
+                                                                                               "EE-LS")
+    evolve = reproduce.stage_command(row[0], scale, "out", "xla")[0]
+    assert evolve[evolve.index("--preset") + 1] == "paper" and evolve[evolve.index("--seeds") + 1] == "10"
+    assert [evolve[i + 1] for i, w in enumerate(evolve) if w == "--set"] == [
+        "trace_lambda=0.98", "eta_selector_actor=0.3", "eta_selector_critic=0.001"]
+    sle = reproduce.stage_command(row[2], scale, "out", "xla")[0]
+    assert sle[sle.index("--preset") + 1] == "paper" and "sle_noise_steps=0" in sle and "trace_lambda=0.98" in sle
+    test = reproduce.stage_command(row[1], scale, "out", "xla")[0]
+    assert test[test.index("imrl_jax.learning_test") + 1] == row[0].out_dir
+    # a preset variant is unchanged: skills' SLE anneals over one task's length
+    skills_sle = reproduce.stage_command([s for s in stages if s.name == "learning test skills SLE"][0], scale, "out",
+                                         "xla")[0]
+    assert "sle_noise_steps=100000" in skills_sle and "--set" in skills_sle
+
+
+def test_an_unknown_variant_exits_2_with_one_line(tmp_path, capsys):
+    assert reproduce.main(["--scale", "tiny", "--out", str(tmp_path / "r"), "--variants", "paper,skils"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: --variants: unknown variant 'skils' (choose from skills, paper, extension or a row")
+    assert "paper-selector-sle-test" in err and "\n" not in err and not (tmp_path / "r").exists()
