@@ -108,8 +108,8 @@ BY_NAME = {rule.name: rule for rule in RULE_SETS}
 #: The order the screen runs its stages in: the cheap SLE tests first, then the evolutions that matter most.
 SCREEN_ORDER = ("skills-sle-test", "paper-sle-test", "skills-bias0", "skills-bias0-sle-test", "paper-selector",
                 "paper-selector-sle-test", "skills-bias2",
-                "skills-clamp", "extension", "skills-bias1",
-                "skills-bias2-sle-test", "skills-clamp-sle-test", "extension-sle-test", "skills-bias1-sle-test")
+                "skills-clamp", "skills-bias1", "extension",  # bias 1: where between 0 and 2 claim 3 turns
+                "skills-bias2-sle-test", "skills-clamp-sle-test", "skills-bias1-sle-test", "extension-sle-test")
 
 
 def is_reproduction(name: str) -> bool:
