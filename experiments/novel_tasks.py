@@ -31,7 +31,6 @@ import os
 import sys
 from typing import NamedTuple
 
-import numpy as np
 
 from experiments.claims_study import REPRODUCTION, SCREEN
 from experiments.reproduce import (SCALES, Stage, evolution_cost, evolve_command, load_manifest, run_stages,
@@ -156,7 +155,7 @@ def _per_run(test: dict | None, tasks=None) -> list[float] | None:
 
 def measure(out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
     """Learning's advantage over EE-ES per comparison and set of tasks, and the verdicts, from the finished tests."""
-    from experiments.claims import advantage, claim_unseen
+    from experiments.claims import advantage, claim_unseen, final_best
     from experiments.loading import read_evolution, read_json, read_test
 
     seen_tests = {(v, c): read_test(os.path.join(reproduction, v if c != "EE-ES" else "paper", "test", c))
@@ -198,9 +197,9 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
                 scratch.append(dict(agent=agent.upper(), tasks=tasks, seeds=len(summary["seeds"]),
                                     performance=summary["performance_mean"],
                                     sd=summary["performance_sd_over_seeds"]))
+    finals = {c: final_best(e["best"]) for c, e in evolutions.items()}  # the report's own rule, per seed
     evolved = [dict(condition=c, seeds=e["best"].shape[1], generations=e["best"].shape[0],
-                    final_best=float(np.nanmean(e["best"][-5:].mean(0))), sd=float(np.nanstd(e["best"][-5:].mean(0))))
-               for c, e in evolutions.items()]
+                    final_best=float(finals[c].mean()), sd=float(finals[c].std())) for c, e in evolutions.items()]
     return dict(rows=rows, verdicts=verdicts, curves=curves, scratch=scratch, held_curves=held_curves,
                 evolutions=evolutions, evolved=evolved)
 
