@@ -337,12 +337,13 @@ def claim_specialisation(colours: dict, pairs: dict | None = None) -> dict:
     return _claim(verdict, measured, **numbers)
 
 
-def measure(data: dict, lives: dict, probes: dict | None = None, sle_whole_test: bool = False) -> dict:
+def measure(data: dict, lives: dict, probes: dict | None = None, sle_whole_test=False) -> dict:
     """Every number of the report: per variant, the evolutions' and tests' statistics and the claims.
 
     ``lives[(variant, condition)]``: the relived best individuals (claim 4's paths);
     ``probes[(variant, condition)]``: the colours followed by each probed individual (claim 7);
-    ``sle_whole_test``: claim 5 measured under SLE's noise over the whole test (the claims study's reading).
+    ``sle_whole_test``: claim 5 measured under SLE's noise over the whole test (the claims study's reading):
+    True for every variant, or the variants it is for (a collection of names).
     """
     probes = probes or {}
     planned = ((data.get("manifest") or {}).get("sizes") or {}).get("generations")
@@ -388,7 +389,8 @@ def measure(data: dict, lives: dict, probes: dict | None = None, sle_whole_test:
                                  ee_es_life["speed"] if ee_es_life else None),
             5: claim_learning_speed({c: (data["tests"][variant, c]["steps"], data["tests"][variant, c]["mean"])
                                      for c in TESTED if (variant, c) in data["tests"]}, steady, sle_noise,
-                                    sle_whole_test),
+                                    sle_whole_test if isinstance(sle_whole_test, bool) else
+                                    variant in sle_whole_test),
             6: claim_ordering({c: get(tests, c, "steady_per_run") for c in TESTED}),
             7: claim_specialisation({c: probes.get((variant, c)) for c in ("LE-LS", "EE-LS")},
                                     {c: data["tests"][variant, c]["pairs_both_ways"] for c in EVOLVED

@@ -34,13 +34,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from experiments.reproduce import (EVOLVED, SCALES, TESTED, Stage, evolution_cost, evolution_dir, evolve_command,
-                                   load_manifest, run_stages, test_command, test_cost, test_dir)
+from experiments.reproduce import (DEFAULT_VARIANTS, EVOLVED, SCALES, TESTED, Stage, evolution_cost, evolution_dir,
+                                   evolve_command, load_manifest, run_stages, test_command, test_cost, test_dir)
 
 #: The screen's sizes: the paper's life lengths, fewer seeds and tests.
 SCREEN = dict(SCALES["paper"], seeds=5, best=5, tests=4)
 FULL = SCALES["paper"]
-#: Where the finished paper-scale reproduction lives (the ``paper`` and ``skills`` rows, shared runs).
+#: Where the paper-scale reproduction lives (the ``paper``, ``skills`` and ``faithful`` rows, shared runs).
 REPRODUCTION = os.path.join("experiments", "results", "paper")
 OUT = os.path.join("experiments", "results", "claims")
 
@@ -80,6 +80,8 @@ RULE_SETS: tuple[RuleSet, ...] = (
                                                  "eta_selector_critic=0.001"),
             "paper-selector with SLE's noise annealed over the whole 1,000,000-cycle test (every run shared)",
             ee_ls="skills", sle="skills-bias0-sle-test", le_ls="paper-selector", sle_noise_steps=0),
+    RuleSet("faithful", "faithful", (), "paper-selector-sle-test at full scale: the `faithful` preset of the "
+            "reproduction (`make reproduce`)", ee_ls="skills", sle="faithful", le_ls="faithful", sle_noise_steps=0),
     RuleSet("extension", "extension", (), "MODEL.md's learning extensions, in childhood too", ee_ls="skills",
             sle="skills-bias0"),
     RuleSet("skills-sle-test", "skills", (), "skills, SLE's noise annealed over the whole 1,000,000-cycle test",
@@ -113,8 +115,8 @@ SCREEN_ORDER = ("skills-sle-test", "paper-sle-test", "skills-bias0", "skills-bia
 
 
 def is_reproduction(name: str) -> bool:
-    """The rule sets whose runs are the finished paper-scale reproduction's."""
-    return name in ("paper", "skills")
+    """The rule sets whose runs are the paper-scale reproduction's (``make reproduce``'s variants)."""
+    return name in DEFAULT_VARIANTS["paper"]
 
 
 def run_dir(rule: RuleSet, condition: str, out: str = OUT, reproduction: str = REPRODUCTION) -> str:
@@ -251,7 +253,7 @@ def finished(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION) ->
 
 class RowRuns(NamedTuple):
     """Where one row's runs live: an evolution folder per evolved condition, a learning-test folder per tested
-    condition, and the owner (``paper`` or ``skills``) of each run that is the finished reproduction's."""
+    condition, and the owner (a variant of ``make reproduce``) of each run that is the finished reproduction's."""
 
     evolutions: dict  # condition -> the evolution's folder
     tests: dict  # condition -> the learning test's folder
@@ -496,31 +498,56 @@ def experts_table(measured: dict) -> str:
     return "\n".join(lines)
 
 
+#: The name ``--only`` gives the whole screen: the circular paths, then every rule set in SCREEN_ORDER.
+SCREEN_NAME = "screen"
+
+
 def parse_names(text: str | None) -> list[str]:
-    """The rule sets named on the command line (default: the screen's order); unknown names are an error."""
-    names = text.split(",") if text else [*SCREEN_ORDER, EXPERTS]
+    """The rule sets named on the command line, ``screen`` for SCREEN_ORDER (default: the screen's order, then
+    claim 8's); unknown names are an error."""
+    chosen = text.split(",") if text else [SCREEN_NAME, EXPERTS]
+    names = [n for name in chosen for n in (SCREEN_ORDER if name == SCREEN_NAME else (name,))]
     unknown = [n for n in names if n not in BY_NAME and n != EXPERTS]
     if unknown:
-        raise ValueError(f"--only: unknown rule set {unknown[0]!r} (choose from {', '.join([*BY_NAME, EXPERTS])})")
+        raise ValueError(f"--only: unknown rule set {unknown[0]!r} (choose from "
+                         f"{', '.join([*BY_NAME, SCREEN_NAME, EXPERTS])})")
     return names
+
+
+def selected_stages(only: str | None, out: str = OUT) -> list[Stage]:
+    """The stages ``--only`` chooses: the circular paths (seconds) with the screen, the rule sets', claim 8's last."""
+    names = parse_names(only)
+    stages = plan_circles(out) if SCREEN_NAME in (only or SCREEN_NAME).split(",") else []
+    stages += plan([n for n in names if n != EXPERTS], SCREEN, out)
+    return stages + (plan_experts(EXPERT_RULE_SETS, SCREEN, out) if EXPERTS in names else [])
 
 
 def all_stages(out: str = OUT) -> tuple[list[Stage], dict]:
     """Every stage the command runs by default (each rule set, then claim 8's), and their scale."""
-    names = [name for name in parse_names(None) if name != EXPERTS]
-    return plan_circles(out) + plan(names, SCREEN, out) + plan_experts(EXPERT_RULE_SETS, SCREEN, out), SCREEN
+    return selected_stages(None, out), SCREEN
 
 
-def main(argv=None) -> int:
-    """The command line: run (or go on with) the chosen rule sets' stages, or write the claims table."""
+def parser() -> argparse.ArgumentParser:
+    """The command line's options."""
     p = argparse.ArgumentParser(prog="python -m experiments.claims_study", description=__doc__.split("\n\n")[0])
-    p.add_argument("--only", help=f"comma-separated rule sets to run, in order, and '{EXPERTS}' for claim 8's runs "
-                                  f"(default: the screen's order, then {EXPERTS})")
+    p.add_argument("--only", help=f"comma-separated rule sets to run, in order, '{SCREEN_NAME}' for the whole screen "
+                                  f"and '{EXPERTS}' for claim 8's runs (default: {SCREEN_NAME},{EXPERTS})")
     p.add_argument("--out", default=OUT, help=f"results directory (default: {OUT})")
     p.add_argument("--list", action="store_true", help="print the stages and their commands, run nothing")
     p.add_argument("--table", action="store_true", help="write the claims of every finished rule set into "
                    "docs/CLAIMS.md and experiments/results/claims/claims.json (runs nothing)")
-    args = p.parse_args(argv)
+    return p
+
+
+def stages_for(argv) -> tuple[list[Stage], dict]:
+    """The stages the command line ``argv`` runs, and their scale (for the queue's estimates)."""
+    args = parser().parse_args(argv)
+    return selected_stages(args.only, args.out), SCREEN
+
+
+def main(argv=None) -> int:
+    """The command line: run (or go on with) the chosen rule sets' stages, or write the claims table."""
+    args = parser().parse_args(argv)
     try:
         names = parse_names(args.only)
     except ValueError as error:
@@ -531,10 +558,7 @@ def main(argv=None) -> int:
             print("error: --table: measures every finished rule set; leave out --only", file=sys.stderr)
             return 2
         return write_claims(args.out, [rule.name for rule in RULE_SETS])
-    # the circular paths (seconds) first when nothing is chosen; claim 8's runs after the rule sets'
-    stages = plan_circles(args.out) if args.only is None else []
-    stages += plan([n for n in names if n != EXPERTS], SCREEN, args.out)
-    stages += plan_experts(EXPERT_RULE_SETS, SCREEN, args.out) if EXPERTS in names else []
+    stages = selected_stages(args.only, args.out)
     if args.list:
         for stage in stages:
             command = stage_command(stage, SCREEN, args.out)[0]

@@ -100,6 +100,8 @@ VARIANT_TEXT = {
     "extension": "`extension`: MODEL.md's learning extensions at the `extension` preset",
     "skills": "`skills`: the paper's rules in childhood with a respawning wall and fast-starting experts, the "
               "extension's selector in adulthood (docs/CHILDHOOD.md)",
+    "faithful": "`faithful`: the learning rules as written but for the extension's selector in adulthood, SLE's "
+                "noise annealed over the whole test (the reading that reproduces the most of Fig. 3: docs/CLAIMS.md)",
 }
 
 
@@ -173,11 +175,12 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
                    os.path.basename(path) != "REPRODUCTION.md" else "")]
     commits = sorted({c for c in [run.get("git_commit") for run in data["evolutions"].values()]
                       + [t["steady"].get("git_commit") for t in data["tests"].values()] if c})
+    about = "; ".join(VARIANT_TEXT.get(v, f"`{v}`: a row of docs/CLAIMS.md") for v in data["variants"])
     out += ["", f"- Command: {pipeline_command(results, manifest)}",
             f"- Results made at commit `{(manifest or {}).get('git_commit', 'unknown')}`"
             + (f" (stages ran at {', '.join(f'`{c[:10]}`' for c in commits)})" if len(commits) > 1 else ""),
             f"- Report written at commit `{git_commit()}`" + (" (with uncommitted changes)" if _dirty() else ""),
-            f"- Variants: {', '.join(data['variants'])} ({'; '.join(VARIANT_TEXT[v] for v in data['variants'])}). "
+            f"- Variants: {', '.join(data['variants'])} ({about}). "
             f"EE-ES learns nothing, so its one evolution serves every variant."]
     missing = missing_stages(results, manifest)
     if missing:

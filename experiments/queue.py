@@ -7,8 +7,10 @@ Each study is its own resumable command on the shared stage runner (``reproduce.
 run as a subprocess; a finished study passes in seconds, an interrupted one goes on where it
 stopped, and a failed one stops the queue with its exit code. The order answers whole questions
 early: the selector's time-scale and tasks never met in evolution (together one issue, about a
-third of the claims study's cost), then the claims map (it decides which rule set reproduces the
-paper, and the future work needs it), the search strategies, and last the paper's future work.
+third of the claims study's cost), then the claims map's screen (it decides which rule set
+reproduces the paper, and the future work needs it), that rule set at full scale (the
+reproduction's ``faithful`` variant: ``make reproduce``), claim 8's runs, the search strategies,
+and last the paper's future work.
 """
 
 from __future__ import annotations
@@ -18,20 +20,32 @@ import importlib
 import os
 import subprocess
 import sys
+from typing import NamedTuple
 
 from experiments.reproduce import stage_done
 
-#: The studies, in order: (module under experiments/, document).
-STUDIES = (("timescale", "docs/TIMESCALE.md"), ("novel_tasks", "docs/NOVEL_TASKS.md"),
-           ("claims_study", "docs/CLAIMS.md"), ("search", "docs/SEARCH.md"),
-           ("future_work", "docs/FUTURE_WORK.md"))
+class Study(NamedTuple):
+    """One entry of the queue: a module under experiments/, its document, and its command line's options."""
+
+    module: str
+    document: str
+    argv: tuple[str, ...] = ()  # (): the module's default stages (its ``all_stages``)
+
+
+#: The studies, in order.
+STUDIES = (Study("timescale", "docs/TIMESCALE.md"), Study("novel_tasks", "docs/NOVEL_TASKS.md"),
+           Study("claims_study", "docs/CLAIMS.md", ("--only", "screen")),
+           Study("reproduce", "docs/REPRODUCTION.md", ("--scale", "paper")),
+           Study("claims_study", "docs/CLAIMS.md", ("--only", "experts")),
+           Study("search", "docs/SEARCH.md"), Study("future_work", "docs/FUTURE_WORK.md"))
 #: Lane-steps per second of the estimates: the claims study's paper-length evolutions on 2 cores.
 RATE = 1.9e6
 
 
-def remaining(module: str, rate: float = RATE) -> tuple[int, int, float]:
+def remaining(module: str, rate: float = RATE, argv: tuple[str, ...] = ()) -> tuple[int, int, float]:
     """Stages left, stages in all, and the hours the stages left cost at ``rate`` lane-steps a second."""
-    stages, scale = importlib.import_module(f"experiments.{module}").all_stages()
+    study = importlib.import_module(f"experiments.{module}")
+    stages, scale = study.stages_for(list(argv)) if argv else study.all_stages()
     left = [s for s in stages if not stage_done(s, scale)]
     return len(left), len(stages), sum(s.cost for s in left) / rate / 3600
 
@@ -43,19 +57,22 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     if args.list:
         total = 0.0
-        for module, document in STUDIES:
-            left, count, hours = remaining(module)
+        for study in STUDIES:
+            left, count, hours = remaining(study.module, argv=study.argv)
             total += hours
-            print(f"{module:>13}: {left:>2} of {count:>2} stages left, about {hours:5.1f} h ({document})")
-        print(f"{'in all':>13}: about {total:.0f} h at {RATE / 1e6:.1f} million lane-steps a second (the claims "
+            name = " ".join((study.module, *study.argv[1:2]))
+            print(f"{name:>21}: {left:>2} of {count:>2} stages left, about {hours:5.1f} h ({study.document})")
+        print(f"{'in all':>21}: about {total:.0f} h at {RATE / 1e6:.1f} million lane-steps a second (the claims "
               f"study's evolutions on 2 cores)")
         return 0
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}
-    for module, _ in STUDIES:
+    for study in STUDIES:
+        module = " ".join((study.module, *study.argv))
         print(f"\n=== study {module}", flush=True)
         try:
-            code = subprocess.run([sys.executable, "-m", f"experiments.{module}"], env=env).returncode
+            code = subprocess.run([sys.executable, "-m", f"experiments.{study.module}", *study.argv],
+                                  env=env).returncode
         except KeyboardInterrupt:  # the study has stopped at the same signal and kept what it finished
             print(f"\ninterrupted in study {module}: run the same command again to go on", file=sys.stderr)
             return 130

@@ -46,7 +46,7 @@ from experiments.document import (ROOT, pipeline_command, report_paths, scale_la
 from experiments.figures import fig3, fig_baselines, fig_fitness, fig_learning, fig_paths, fig_steady
 from experiments.loading import load, read_baselines, read_json, update_best_genomes
 from experiments.relive import DRAWN_STEPS, FRESH_LIVES, PATH_STEPS, fresh_fitness, probe_best, relive_best
-from experiments.reproduce import EVOLVED, TESTED, shared
+from experiments.reproduce import EVOLVED, TESTED, shared, variant_spec
 
 
 def _jsonable(value):
@@ -133,7 +133,9 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True, baselines_
                       f"every seed ({variant})", flush=True)
                 probes[variant, condition] = probe_best(entry["config"], entry)
 
-    numbers = measure(data, lives, probes)
+    # a variant whose SLE explores the whole test by definition (faithful) has claim 5 measured at the test's length
+    whole = {v for v in data["variants"] if variant_spec(v).sle_noise_steps == 0}
+    numbers = measure(data, lives, probes, sle_whole_test=whole)
     spec_rows = specialisation_rows(lives)
     written["specialisation"] = os.path.join(figures, "specialisation.csv")
     with open(written["specialisation"], "w", newline="") as f:

@@ -6,9 +6,12 @@
 
 Variants of the learning rules (presets of ``imrl_jax.config``), run one after the other:
 ``skills`` (the rules docs/CHILDHOOD.md chose: experts learn one colour each in childhood and
-a selector composes them; the paper scale's first variant), ``paper`` (the rules as written)
-and ``extension`` (MODEL.md's learning extensions at the values found by
-``experiments/selector_sweep.py``; the cpu scale's second variant). For each variant: the
+a selector composes them; the paper scale's first variant), ``paper`` (the rules as written),
+``faithful`` (the rules as written but for the adult selector's unstated values, SLE's noise
+over the whole test: the reading under which the most of the paper's claims hold,
+docs/CLAIMS.md; the paper scale's third variant, its EE-LS ``skills``') and ``extension``
+(MODEL.md's learning extensions at the values found by ``experiments/selector_sweep.py``; the
+cpu scale's second variant). For each variant: the
 three evolved conditions, then the learning tests of LE-LS, EE-LS, EE-ES and SLE (EE-ES
 learns nothing, so its evolution and its test are the same under every variant: each is run
 once, under ``paper``, where the first variant needs it). So the first variant's Fig. 3 is
@@ -67,9 +70,10 @@ SCALES = {
     "tiny": dict(seeds=2, generations=2, childhood_steps=400, task_steps=400, bins=2,
                  best=2, tests=1, test_steps=800, test_bins=4, steady_steps=200, population=6, parents=2),
 }
-VARIANTS = ("skills", "paper", "extension")
+VARIANTS = ("skills", "paper", "extension", "faithful")
 #: The variants a scale runs unless ``--variants`` says otherwise.
-DEFAULT_VARIANTS = {"paper": ("skills", "paper"), "cpu": ("paper", "extension"), "tiny": ("paper", "extension")}
+DEFAULT_VARIANTS = {"paper": ("skills", "paper", "faithful"), "cpu": ("paper", "extension"),
+                    "tiny": ("paper", "extension")}
 #: The paper's conditions (rows of imrl_jax.conditions): those evolved, and those learning-tested.
 EVOLVED = conditions.PAPER_EVOLVED
 TESTED = conditions.PAPER
@@ -84,12 +88,18 @@ class Variant(NamedTuple):
     shares: tuple[tuple[str, str], ...] = ()  # (condition, the variant whose run of it this one's is)
 
 
+#: The preset variants that are not plain presets: ``faithful`` is the claims map's
+#: ``paper-selector-sle-test`` at full scale (docs/CLAIMS.md): SLE's noise over the whole test, and
+#: skills' EE-LS (EE-LS reads only the adult selector's values, which the two presets share).
+PRESET_VARIANTS = {"faithful": Variant("faithful", sle_noise_steps=0, shares=(("EE-LS", "skills"),))}
+
+
 def variant_spec(name: str) -> Variant:
     """A variant by name: a preset of :data:`VARIANTS`, or a row of the claims map (its EE-LS shared as there).
 
     Raises ValueError for an unknown name."""
     if name in VARIANTS:
-        return Variant(name)
+        return PRESET_VARIANTS.get(name, Variant(name))
     from experiments.claims_study import BY_NAME  # the map's rows (it imports this module: lazily)
 
     rule = BY_NAME.get(name)
@@ -105,8 +115,6 @@ def owner(variant: str, condition: str) -> str:
     every variant, so every variant shares paper's; a claims-map row shares its EE-LS as the map does."""
     if not conditions.get(condition).learns:
         return "paper"
-    if variant in VARIANTS:
-        return variant
     return dict(variant_spec(variant).shares).get(condition, variant)
 
 
@@ -446,19 +454,36 @@ def load_manifest(out: str, **fields) -> tuple[dict, str]:
     return manifest, manifest_path
 
 
-def main(argv=None) -> int:
+def parser() -> argparse.ArgumentParser:
+    """The command line's options."""
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--scale", choices=sorted(SCALES), default="cpu")
     p.add_argument("--out", help="results directory (default: experiments/results/SCALE)")
-    p.add_argument("--variants", help="comma-separated, in the order to run: skills, paper, extension or a row of "
-                   "docs/CLAIMS.md (default: skills,paper at the paper scale, paper,extension at the cpu scale)")
+    p.add_argument("--variants", help="comma-separated, in the order to run: skills, paper, extension, faithful "
+                   "or a row of docs/CLAIMS.md (default: skills,paper,faithful at the paper scale, paper,extension "
+                   "at the cpu scale)")
     p.add_argument("--no-report", action="store_true", help="skip the report (python -m experiments.report)")
     p.add_argument("--kernel", choices=("xla", "pallas"), default="xla",
                    help="the step kernel (Config.step_kernel): pallas runs each bin of steps as one GPU kernel")
-    args = p.parse_args(argv)
-    scale = SCALES[args.scale]
+    return p
+
+
+def _chosen(args) -> tuple[dict, str, list[str]]:
+    """A parsed command line's scale, results directory and variants."""
     out = args.out or os.path.join("experiments", "results", args.scale)
-    variants = args.variants.split(",") if args.variants else list(DEFAULT_VARIANTS[args.scale])
+    return SCALES[args.scale], out, args.variants.split(",") if args.variants else list(DEFAULT_VARIANTS[args.scale])
+
+
+def stages_for(argv) -> tuple[list[Stage], dict]:
+    """The stages the command line ``argv`` runs, and their scale (for the queue's estimates)."""
+    args = parser().parse_args(argv)
+    scale, out, variants = _chosen(args)
+    return plan(scale, out, variants, report=not args.no_report), scale
+
+
+def main(argv=None) -> int:
+    args = parser().parse_args(argv)
+    scale, out, variants = _chosen(args)
     try:
         for name in variants:
             variant_spec(name)

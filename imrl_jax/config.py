@@ -301,6 +301,12 @@ PRESETS: dict[str, dict] = {
     # Learned experts start near full speed (a retina-only reward never pays for speed).
     "skills": dict(trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001, childhood_walls="respawn",
                    initial_speed_bias=4.0),
+    # The paper's rules with only the adult selector's unstated values of ``skills`` (traces and
+    # rates): the reading under which the most of the paper's claims hold (docs/CLAIMS.md, the
+    # claims map's ``paper-selector-sle-test``). SLE's noise anneals over the whole test (the
+    # default ``sle_noise_steps`` 0): the paper's "SLE can train its only expert during a very
+    # long period of test".
+    "faithful": dict(trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001),
     "small": dict(
         childhood_steps=15_000,
         task_steps=5_000,

@@ -40,11 +40,33 @@ def test_plan_runs_only_what_no_other_run_provides():
     assert study.run_dir(study.BY_NAME["skills-clamp"], "EE-LS").endswith("paper/skills/evolve/EE-LS")
 
 
+def test_the_faithful_row_is_the_reproductions_and_the_screens_closest_row_at_full_scale():
+    """Its runs are make reproduce's (none planned here); its lives are paper-selector-sle-test's."""
+    faithful, screened = study.BY_NAME["faithful"], study.BY_NAME["paper-selector-sle-test"]
+    assert study.plan(["faithful"]) == []
+    assert study.run_dir(faithful, "LE-LS").endswith("paper/faithful/evolve/LE-LS")
+    assert study.learning_dir(faithful, "SLE").endswith("paper/faithful/test/SLE")
+    assert study.run_dir(faithful, "EE-LS").endswith("paper/skills/evolve/EE-LS")
+    for condition in ("LE-LS", "SLE"):
+        assert study.config_of(faithful, condition).model_differences(study.config_of(screened, condition)) == []
+
+
 def test_unknown_rule_set_is_refused(capsys):
     assert study.main(["--only", "skills,skils"]) == 2
     err = capsys.readouterr().err.strip()
     assert "unknown rule set 'skils'" in err and "\n" not in err
-    assert err.endswith(", extension-sle-test, experts)")  # claim 8's runs are a choice too
+    assert err.endswith(", extension-sle-test, screen, experts)")  # the screen and claim 8's runs are choices too
+
+
+def test_the_screen_and_claim_8_are_chosen_apart():
+    """The queue runs the screen, then the reproduction, then claim 8: each a --only of its own."""
+    assert study.parse_names("screen") == list(study.SCREEN_ORDER)
+    assert study.parse_names(None) == [*study.SCREEN_ORDER, study.EXPERTS]
+    screen, experts = study.selected_stages("screen", "out"), study.selected_stages("experts", "out")
+    assert screen[0].kind == "measure" and not any("+experts" in s.variant for s in screen)
+    assert experts and all("+experts" in s.variant for s in experts)
+    assert [s.name for s in study.selected_stages(None, "out")] == [s.name for s in screen + experts]
+    assert study.stages_for(["--only", "experts", "--out", "out"])[0] == experts
 
 
 def test_shared_runs_read_the_reproduction_reports_probes():

@@ -138,11 +138,11 @@ def test_claim_7_specialisation():
     assert claims.claim_specialisation({}, composes)["verdict"] == NOT_AVAILABLE
 
 
-def _write_results(root, generations=8, seeds=(0, 1, 2)):
+def _write_results(root, generations=8, seeds=(0, 1, 2), variants=("paper", "extension")):
     """A results directory in reproduce.py's layout with made-up numbers (no population: no behaviour)."""
     plateau = {"LE-LS": 1, "EE-LS": 6, "EE-ES": 3}
     final = {"LE-LS": 0.5, "EE-LS": 0.7, "EE-ES": 0.45}
-    for variant in ("paper", "extension"):
+    for variant in variants:
         for condition in reproduce.EVOLVED:
             run_dir = reproduce.evolution_dir(str(root), variant, condition)
             os.makedirs(run_dir, exist_ok=True)
@@ -173,11 +173,12 @@ def _write_results(root, generations=8, seeds=(0, 1, 2)):
                                steady_per_run=[level - 0.02, level + 0.02], steady_per_task=[level] * 6,
                                whole_test_mean=float(np.mean(curve)), num_runs=2, num_best=2, num_tests=1,
                                task_steps=1000, steady_steps=200, num_bins=10, git_commit="abc",
-                               config=dict(sle_noise_steps=100 if condition == "SLE" else 0)), f)
+                               config=dict(sle_noise_steps=100 if condition == "SLE" and variant != "faithful"
+                                           else 0)), f)
     sizes = dict(seeds=len(seeds), generations=generations, childhood_steps=30_000, task_steps=20_000, bins=20,
                  best=2, tests=1, test_steps=1000, test_bins=10, steady_steps=200)
     with open(os.path.join(root, "manifest.json"), "w") as f:
-        json.dump(dict(scale="cpu", sizes=sizes, variants=["paper", "extension"],
+        json.dump(dict(scale="cpu", sizes=sizes, variants=list(variants),
                        stages={"evolve paper LE-LS": {"command": "python -m imrl_jax.evolve ...", "seconds": 1.0}},
                        git_commit="abc"), f)
 
@@ -206,6 +207,20 @@ def test_report_of_a_fabricated_results_directory(tmp_path):
     assert "## Discussion\n\nHand-written words." in text
     assert "`make reproduce-cpu`" not in text  # the results are not in the default directory
     assert "brax" not in text and not (figures / "baselines.png").exists()  # no baselines: no section
+
+
+def test_the_faithful_variant_has_claim_5_measured_over_the_whole_test(tmp_path):
+    """Its SLE explores the whole test by definition: claim 5 is measured at the test's length, not n/a."""
+    results, doc, figures = tmp_path / "results", tmp_path / "docs" / "REPRODUCTION.md", tmp_path / "docs" / "fig"
+    _write_results(results, variants=("paper", "faithful"))
+    assert main([str(results), "--doc", str(doc), "--figures", str(figures), "--no-behaviour",
+                 "--baselines", str(tmp_path / "no_baselines")]) == 0
+    claim5 = json.loads((figures / "claims.json").read_text())["claims"]["5"]["variants"]
+    # paper's SLE anneals over 100 cycles: measured; faithful's over the whole test: measured too, at its length
+    assert claim5["paper"]["verdict"] == PARTLY and claim5["faithful"]["verdict"] == PARTLY
+    assert "the whole test of 1,000 cycles, the paper's length" in claim5["faithful"]["measured"]
+    assert os.path.isdir(results / "skills" / "evolve" / "EE-LS")  # faithful's EE-LS is skills'
+    assert "`faithful`: the learning rules as written but for the extension's selector" in doc.read_text()
 
 
 def test_paper_and_cpu_reports_each_name_the_other_and_an_unfinished_run_says_so(tmp_path):

@@ -64,7 +64,7 @@ def test_plan_costs_and_eta():
     assert first[5].out_dir == os.path.join("out", "paper", "test", "EE-ES")
     assert reproduce.test_dir("out", "skills", "EE-ES") == first[5].out_dir
     assert [sum(s.condition == "EE-ES" and s.kind == kind for s in first) for kind in ("evolve", "test")] == [1, 1]
-    assert reproduce.DEFAULT_VARIANTS["paper"] == ("skills", "paper")
+    assert reproduce.DEFAULT_VARIANTS["paper"] == ("skills", "paper", "faithful")
     # 2 seeds x 6 individuals x 2 generations x (400 childhood + 6 x 400 task steps)
     assert stages[0].cost == 2 * 6 * 2 * (400 + 6 * 400) and stages[1].cost == 2 * 6 * 2 * 6 * 400
     # 2 runs x 2 best x 1 test x 6 x 800 cycles; the report: a childhood per probed LE-LS individual
@@ -186,8 +186,29 @@ def test_a_claims_map_row_is_a_variant_with_its_overrides_and_shares():
     assert "sle_noise_steps=100000" in skills_sle and "--set" in skills_sle
 
 
+def test_the_faithful_preset_is_the_claims_maps_closest_row_at_full_scale():
+    """make reproduce's third variant: its own LE-LS and SLE (noise over the whole test), skills' EE-LS."""
+    scale = reproduce.SCALES["paper"]
+    stages = reproduce.plan(scale, "out", reproduce.DEFAULT_VARIANTS["paper"], report=False)
+    row = [s for s in stages if s.variant == "faithful"]
+    assert [s.name for s in row] == ["evolve faithful LE-LS", "learning test faithful LE-LS",
+                                     "learning test faithful SLE"]
+    assert reproduce.evolution_dir("out", "faithful", "EE-LS") == os.path.join("out", "skills", "evolve", "EE-LS")
+    assert reproduce.test_dir("out", "faithful", "EE-ES") == os.path.join("out", "paper", "test", "EE-ES")
+    evolve = reproduce.stage_command(row[0], scale, "out", "xla")[0]
+    assert evolve[evolve.index("--preset") + 1] == "faithful" and "--set" not in evolve
+    sle = reproduce.stage_command(row[2], scale, "out", "xla")[0]
+    assert sle[sle.index("--set") + 1] == "sle_noise_steps=0" and sle.count("--set") == 1
+    # the preset is the screen's row: the same lives as paper + the adult selector's values of skills
+    from imrl_jax.config import make_config
+
+    screened = make_config("paper", trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001)
+    assert make_config("faithful") == screened and make_config("faithful") != make_config("paper")
+
+
 def test_an_unknown_variant_exits_2_with_one_line(tmp_path, capsys):
     assert reproduce.main(["--scale", "tiny", "--out", str(tmp_path / "r"), "--variants", "paper,skils"]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.startswith("error: --variants: unknown variant 'skils' (choose from skills, paper, extension or a row")
+    assert err.startswith("error: --variants: unknown variant 'skils' "
+                          "(choose from skills, paper, extension, faithful or a row")
     assert "paper-selector-sle-test" in err and "\n" not in err and not (tmp_path / "r").exists()
