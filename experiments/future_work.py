@@ -45,8 +45,9 @@ class Run(NamedTuple):
     sets: tuple[str, ...]
     about: str
     # > 0: the claims study's claim-8 run with this many experts under this preset is this row's run, the same
-    # command: the row reads it there and runs nothing of its own
+    # lives: the row reads it there and runs nothing of its own
     claims_experts: int = 0
+    claims_rule: str = ""  # the claims study's rule set of that run ("": the preset's name)
 
 
 RUNS: tuple[Run, ...] = (
@@ -59,6 +60,14 @@ RUNS: tuple[Run, ...] = (
     Run("LE-LS-N6", "LE-LS-N", "skills", ("num_experts=6",), "(d) up to 6 experts, each expressed by a gene"),
     Run("LE-LS-6", "LE-LS", "skills", ("num_experts=6",), "(d)'s comparison: 6 experts, all expressed (the claims "
         "study's claim-8 run)", claims_experts=6),
+    # The same questions under the claims map's chosen rule set (docs/CLAIMS.md, "The decision"): run after skills'.
+    Run("EV-LS-faithful", "EV-LS", "faithful", (), "(a) under `faithful`"),
+    Run("EXT-LS-faithful", "EXT-LS", "faithful", ("sle_noise_steps=0",),
+        "(b) under `faithful`, the noise over the whole test (its SLE's reading)"),
+    Run("LE-LS-P-faithful", "LE-LS-P", "faithful", (), "(c) under `faithful`"),
+    Run("LE-LS-N6-faithful", "LE-LS-N", "faithful", ("num_experts=6",), "(d) under `faithful`"),
+    Run("LE-LS-6-faithful", "LE-LS", "faithful", ("num_experts=6",), "(d)'s comparison under `faithful` (the claims "
+        "study's claim-8 run of paper-selector, the same lives)", claims_experts=6, claims_rule="paper-selector"),
 )
 BY_NAME = {run.name: run for run in RUNS}
 #: The claims study's results, where rows with ``claims_experts`` find their runs.
@@ -70,7 +79,7 @@ def run_dirs(run: Run, out: str = OUT, claims: str = CLAIMS_OUT) -> tuple[str, s
     if run.claims_experts:
         from experiments.claims_study import experts_dir
 
-        return tuple(experts_dir(run.preset, run.condition, run.claims_experts, kind, claims)
+        return tuple(experts_dir(run.claims_rule or run.preset, run.condition, run.claims_experts, kind, claims)
                      for kind in ("evolve", "test"))
     return os.path.join(out, run.name, "evolve"), os.path.join(out, run.name, "test")
 
@@ -105,15 +114,20 @@ def stage_command(stage: Stage, scale: dict = SCREEN, out: str = OUT) -> tuple[l
 #: The paper's four conditions under ``skills``, from the finished reproduction (EE-ES's runs are shared, under
 #: ``paper``: :func:`experiments.reproduce.evolution_dir` finds them).
 REPRODUCED = ("LE-LS", "EE-LS", "EE-ES", "SLE")
+#: The reproduction's runs of the ``faithful`` variant that are its own (its EE-LS is skills', EE-ES paper's).
+FAITHFUL_REPRODUCED = ("LE-LS", "SLE")
 #: SLE with its noise annealed over the whole test (the claims study's ``skills-sle-test``): EXT-LS-whole's
 #: reference, as the reproduction's SLE (noise over 100,000 cycles) is EXT-LS's.
 SLE_WHOLE = os.path.join("experiments", "results", "claims", "skills-sle-test", "test", "SLE")
 #: The reproduction's evolutions drawn beside the study's (the paper's Fig. 3a).
 DRAWN_BESIDE = ("LE-LS", "EE-LS")
-#: (c)'s rows: their evolved learning values beside the preset's.
-PARAMETER_ROWS = ("LE-LS-P", "LE-LS-PC")
-#: (d)'s row, and what its fitness is compared with: 6 experts all expressed, and the reproduction's 3.
-EXPERTS_ROW, EXPERTS_COMPARED = "LE-LS-N6", ("LE-LS-6", "skills LE-LS")
+#: (c)'s rows: their evolved learning values beside the presets'.
+PARAMETER_ROWS = ("LE-LS-P", "LE-LS-PC", "LE-LS-P-faithful")
+#: The presets whose values (c)'s table shows beside the evolved ones.
+HAND_PRESETS = ("skills", "paper", "faithful")
+#: (d)'s rows, each with what its fitness is compared with: 6 experts all expressed, and the reproduction's 3.
+EXPERTS_ROWS = (("LE-LS-N6", ("LE-LS-6", "skills LE-LS")),
+                ("LE-LS-N6-faithful", ("LE-LS-6-faithful", "faithful LE-LS")))
 #: The generations of (d)'s table of expressed experts (the last one is added).
 GENERATIONS_SHOWN = (0, 10, 25, 50)
 NOT_RUN = "not run yet"
@@ -124,7 +138,8 @@ DOCUMENT = os.path.join("docs", "FUTURE_WORK.md")
 TABLE_START = "<!-- future-work tables: python -m experiments.future_work --report -->"
 TABLE_END = "<!-- end of future-work tables -->"
 #: Line styles of the rows that share their condition with another drawn row (the rest take their condition's).
-STYLES = {"LE-LS-6": dict(color="0.3", lw=1.2, ls="-."), "EXT-LS-whole": dict(color="tab:purple", lw=1.0, ls=":")}
+STYLES = {"LE-LS-6": dict(color="0.3", lw=1.2, ls="-."), "EXT-LS-whole": dict(color="tab:purple", lw=1.0, ls=":"),
+          "LE-LS-6-faithful": dict(color="0.3", lw=1.0, ls=":")}
 
 
 def read_traits(run_dir: str) -> dict | None:
@@ -233,13 +248,19 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = S
     from experiments.reproduce import owner
 
     report = read_json(summary) or {}
-    shared = lambda c: lambda run: reproduction_fresh(report, owner("skills", c), c)  # noqa: E731
-    rows = [dict(name=f"skills {c}", condition=c, about=f"the reproduction's {c}", evolved=conditions.get(c).evolved,
-                 evolution=_evolution(evolution_dir(reproduction, "skills", c), shared(c))
-                 if conditions.get(c).evolved else None,
-                 test=_test(test_dir(reproduction, "skills", c))) for c in REPRODUCED]
+    shared = lambda v, c: lambda run: reproduction_fresh(report, owner(v, c), c)  # noqa: E731
+
+    def reference(variant: str, c: str) -> dict:
+        evolved = conditions.get(c).evolved
+        return dict(name=f"{variant} {c}", condition=c, about=f"the reproduction's {c}", evolved=evolved,
+                    evolution=_evolution(evolution_dir(reproduction, variant, c), shared(variant, c))
+                    if evolved else None, test=_test(test_dir(reproduction, variant, c)), reference=True,
+                    preset=variant)
+
+    rows = [reference("skills", c) for c in REPRODUCED]
     rows.append(dict(name="skills SLE-whole", condition="SLE", about="the claims study's SLE (skills-sle-test)",
-                     evolved=False, evolution=None, test=_test(sle_whole)))
+                     evolved=False, evolution=None, test=_test(sle_whole), reference=True, preset="skills"))
+    rows += [reference("faithful", c) for c in FAITHFUL_REPRODUCED]
     for row in rows:
         row["about"] += _noise(row["test"]) if row["condition"] == "SLE" else ""
     for run in RUNS:
@@ -247,25 +268,27 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = S
         evolution, test = run_dirs(run, out, claims)
         rows.append(dict(name=run.name, condition=run.condition, about=run.about, evolved=evolved,
                          evolution=_evolution(evolution, lambda r, d=evolution: run_fresh(d, r["config"]))
-                         if evolved else None, test=_test(test)))
+                         if evolved else None, test=_test(test), reference=False, preset=run.preset))
     by_name = {row["name"]: row for row in rows}
     # (c): the values of the genes LE-LS-PC carries (LE-LS-P's and the childhood's length), beside the presets'
     names = networks.trait_names(make_config("skills", condition="LE-LS-PC"))
     hand = {preset: {n: float(config.childhood_steps if n == "childhood_length" else getattr(config, n)) for n in names}
-            for preset, config in (("skills", make_config("skills")), ("paper", make_config("paper")))}
+            for preset, config in ((p, make_config(p)) for p in HAND_PRESETS)}
     evolved_values = {name: _last_values(os.path.join(out, name, "evolve"), by_name[name]["evolution"])
                       for name in PARAMETER_ROWS}
     # (d): the expressed experts over generations, and the final best against 6 experts all expressed and 3
     final = lambda name: (by_name[name]["evolution"] or {}).get("final_best_per_seed")  # noqa: E731
-    mine, compared = final(EXPERTS_ROW), []
-    for other in EXPERTS_COMPARED:
-        theirs = final(other)
-        if mine and theirs:
-            a, b = np.asarray(mine), np.asarray(theirs)
-            compared.append(dict(name=other, final_best=float(b.mean()), seeds=len(b),
-                                 difference=float(a.mean() - b.mean()), standard_error=_standard_error(a, b)))
-    experts = dict(row=EXPERTS_ROW, generations=_expressed(os.path.join(out, EXPERTS_ROW, "evolve"),
-                                                           by_name[EXPERTS_ROW]["evolution"]), compared=compared)
+    experts = []
+    for row, others in EXPERTS_ROWS:
+        mine, compared = final(row), []
+        for other in others:
+            theirs = final(other)
+            if mine and theirs:
+                a, b = np.asarray(mine), np.asarray(theirs)
+                compared.append(dict(name=other, final_best=float(b.mean()), seeds=len(b),
+                                     difference=float(a.mean() - b.mean()), standard_error=_standard_error(a, b)))
+        experts.append(dict(row=row, against=list(others), compared=compared,
+                            generations=_expressed(os.path.join(out, row, "evolve"), by_name[row]["evolution"])))
     return dict(rows=rows, learning_values=dict(names=list(names), hand=hand, evolved=evolved_values),
                 experts=experts)
 
@@ -308,11 +331,11 @@ def table(measured: dict) -> str:
               f"of that; steady state: each learning-test run's last cycles (docs/CLAIMS.md's claims 1, 2 and 6).",
               "", "(c) The evolved learning values, last generation, mean over seeds, beside the values set by hand:", ""]
     values = measured["learning_values"]
-    lines += ["| value | skills (by hand) | paper | " + " | ".join(f"{r}: population mean | {r}: the best's"
-                                                                  for r in PARAMETER_ROWS) + " |",
-              "|---|---|---|" + "---|---|" * len(PARAMETER_ROWS)]
+    lines += ["| value | " + " | ".join(f"{p} (by hand)" for p in values["hand"]) + " | " + " | ".join(
+        f"{r}: population mean | {r}: the best's" for r in PARAMETER_ROWS) + " |",
+              "|---|" + "---|" * len(values["hand"]) + "---|---|" * len(PARAMETER_ROWS)]
     for name in values["names"]:
-        cells = [_value(values["hand"]["skills"][name]), _value(values["hand"]["paper"][name])]
+        cells = [_value(hand[name]) for hand in values["hand"].values()]
         for row in PARAMETER_ROWS:
             evolved = values["evolved"][row]
             if evolved is None:
@@ -320,8 +343,14 @@ def table(measured: dict) -> str:
             else:  # a value the row does not evolve (LE-LS-P's childhood) is the preset's
                 cells += [_value(evolved[name][w]) if name in evolved else "-" for w in ("mean", "best")]
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
-    experts = measured["experts"]
-    lines += ["", f"(d) {experts['row']}: the experts expressed, mean over seeds:", ""]
+    for experts in measured["experts"]:
+        lines += _experts_lines(experts, measured["rows"])
+    return "\n".join(lines)
+
+
+def _experts_lines(experts: dict, rows: list[dict]) -> list[str]:
+    """(d)'s tables of one row: the experts expressed over generations, and its final best against the others."""
+    lines = ["", f"(d) {experts['row']}: the experts expressed, mean over seeds:", ""]
     if experts["generations"] is None:
         lines.append(f"{experts['row']}: {NOT_RUN}.")
     else:
@@ -331,20 +360,22 @@ def table(measured: dict) -> str:
         lines += [f"| {g['generation']} | {g['mean']:.2f} | {g['best']:.2f} | " + " | ".join(
             f"{g['shares'][k]:.3f}" for k in counts) + " |" for g in experts["generations"]]
     if experts["generations"] is not None and not experts["compared"]:
-        lines.append(f"\nIts final best fitness against {' and '.join(EXPERTS_COMPARED)}: {NOT_RUN}.")
+        lines.append(f"\nIts final best fitness against {' and '.join(experts['against'])}: {NOT_RUN}.")
     if experts["compared"]:
-        mine = next(r for r in measured["rows"] if r["name"] == experts["row"])["evolution"]
+        mine = next(r for r in rows if r["name"] == experts["row"])["evolution"]
         lines += ["", f"| final best fitness of {experts['row']} ({mine['seeds']} seeds) | its | theirs | their seeds | "
                   "difference | se |", "|---|---|---|---|---|---|"]
         lines += [f"| against {c['name']} | {mine['final_best']:.3f} | {c['final_best']:.3f} | {c['seeds']} | "
                   f"{c['difference']:+.3f} | {c['standard_error']:.3f} |" for c in experts["compared"]]
-    return "\n".join(lines)
+    return lines
 
 
 def _style(row: dict) -> dict:
+    """A row's line style: its own, else its condition's; dashed under ``faithful`` (the same condition twice)."""
     from imrl_jax.plotting import CONDITION_STYLES
 
-    return STYLES.get(row["name"], CONDITION_STYLES[row["condition"]])
+    style = STYLES.get(row["name"], CONDITION_STYLES[row["condition"]])
+    return dict(style, ls="--") if row.get("preset") == "faithful" and row["name"] not in STYLES else style
 
 
 def figure(measured: dict, path: str) -> str:
@@ -359,7 +390,7 @@ def figure(measured: dict, path: str) -> str:
     fig = new_figure(13.0, 4.2)
     curves, bars = fig.subplots(1, 2, gridspec_kw=dict(width_ratios=[1.0, 1.1]))
     drawn = [r for r in measured["rows"] if (r["evolution"] or {}).get("finished")
-             and (not r["name"].startswith("skills ") or r["condition"] in DRAWN_BESIDE)]
+             and (not r.get("reference") or r["condition"] in DRAWN_BESIDE)]
     banded = set()
     # figures._draw_curves styles by condition: LE-LS-6 shares LE-LS's, so the rows are drawn here with _style
     for row in drawn:
@@ -388,10 +419,10 @@ def figure(measured: dict, path: str) -> str:
         ax.set_ylim(0, 1.3 * max(max(np.asarray(r["evolution"]["best_per_generation_mean"]).max() for r in drawn)
                                  if ax is curves else max(r["test"]["steady_best_run"] for r in tested), 1e-9))
         ax.legend(fontsize=6, loc="upper left", ncol=2)
-        if all(r["name"].startswith("skills ") for r in rows):  # only the references: the study's rows are to come
+        if all(r.get("reference") for r in rows):  # only the references: the study's rows are to come
             ax.text(0.98, 0.97, f"the study's rows: {NOT_RUN}", transform=ax.transAxes, ha="right", va="top",
                     color="0.4", fontsize=8)
-    fig.suptitle("The paper's future work beside the reproduction's skills runs", fontsize=10)
+    fig.suptitle("The paper's future work beside the reproduction's runs (dashed: under faithful)", fontsize=10)
     fig.tight_layout()
     return save(fig, path)
 

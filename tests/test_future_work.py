@@ -38,6 +38,28 @@ def test_the_fixed_six_experts_row_is_the_claims_studys_run_not_run_twice():
     assert ours == theirs[:theirs.index("--out") + 1] + ["OUT"] + theirs[theirs.index("--out") + 2:]
     assert study.run_dirs(study.BY_NAME["LE-LS-N6"]) == (os.path.join(study.OUT, "LE-LS-N6", "evolve"),
                                                          os.path.join(study.OUT, "LE-LS-N6", "test"))
+    # under faithful: the claims study's paper-selector run of 6 experts, whose lives are the same
+    from imrl_jax.cli import parse_sets
+    from imrl_jax.config import make_config
+
+    faithful = study.BY_NAME["LE-LS-6-faithful"]
+    assert study.plan(["LE-LS-6-faithful"]) == []
+    evolved, tested = study.run_dirs(faithful)
+    assert set(claim8) >= {evolved, tested} and "paper-selector" in evolved
+    screened = claims_study.config_of(claims_study.BY_NAME["paper-selector"], "LE-LS", num_experts=6)
+    ours = make_config(faithful.preset, condition="LE-LS", **parse_sets(list(faithful.sets)))
+    assert ours.model_differences(screened) == []
+
+
+def test_the_faithful_rows_run_under_the_faithful_preset():
+    stages = study.plan(["EV-LS-faithful", "EXT-LS-faithful"])
+    assert [s.name for s in stages] == ["evolve EV-LS-faithful", "learning test EV-LS-faithful",
+                                        "learning test EXT-LS-faithful"]
+    evolve = study.stage_command(stages[0])[0]
+    assert evolve[evolve.index("--preset") + 1] == "faithful" and evolve[evolve.index("--cond") + 1] == "EV-LS"
+    scratch = study.stage_command(stages[2])[0]
+    assert scratch[scratch.index("--preset") + 1] == "faithful" and "sle_noise_steps=0" in scratch
+    assert [r.name for r in study.RUNS].index("EV-LS-faithful") > [r.name for r in study.RUNS].index("LE-LS-6")
 
 
 def test_unknown_row_is_refused(capsys):
@@ -168,6 +190,7 @@ def _fake_study(tmp_path):
     _fake_test(reproduction / "skills" / "test" / "LE-LS", [0.8, 0.9])
     _fake_test(reproduction / "skills" / "test" / "SLE", [0.3, 0.5], sle_noise_steps=100_000)
     _fake_test(reproduction / "paper" / "test" / "EE-ES", [0.4, 0.4, 0.4])  # EE-ES's runs are shared, under paper
+    _fake_test(reproduction / "faithful" / "test" / "SLE", [0.2, 0.2], sle_noise_steps=0)
     # LE-LS-6 is the claims study's claim-8 run
     _fake_evolution(tmp_path / "claims" / "skills" / "experts6" / "evolve" / "LE-LS", [[0.5] * 5, [0.6] * 5], 5)
     share = lambda k: ([{3: [0, 0.5, 1, 1, 1], 6: [1, 0.5, 0, 0, 0]}.get(k, [0] * 5)] * 2, [[0] * 5] * 2)  # noqa: E731
@@ -190,7 +213,8 @@ def test_measure_reads_every_finished_row_and_the_reproductions(tmp_path):
     measured = study.measure(out, reproduction, sle_whole, claims, summary)
     rows = {r["name"]: r for r in measured["rows"]}
     assert list(rows) == ["skills LE-LS", "skills EE-LS", "skills EE-ES", "skills SLE", "skills SLE-whole",
-                          *study.BY_NAME]
+                          "faithful LE-LS", "faithful SLE", *study.BY_NAME]
+    assert rows["faithful LE-LS"]["evolution"] is None and rows["faithful SLE"]["test"]["runs"] == 2
     le_ls = rows["skills LE-LS"]["evolution"]  # seeds' means of 5 generations: 2.4 / 5 and 3.4 / 5
     assert le_ls["final_best"] == pytest.approx(0.58) and le_ls["final_best_sd"] == pytest.approx(0.1)
     assert le_ls["plateau_generation"] == 2  # the mean curve 0.3, 0.5, 0.7: 0.7 >= 0.9 x 0.58 first at generation 2
@@ -203,10 +227,14 @@ def test_measure_reads_every_finished_row_and_the_reproductions(tmp_path):
     assert evolved["LE-LS-P"]["gamma"] == pytest.approx(dict(mean=0.96, best=0.985))
     assert measured["learning_values"]["hand"]["skills"]["trace_lambda"] == 0.98
     assert measured["learning_values"]["hand"]["paper"]["childhood_length"] == 150_000
-    first, last = measured["experts"]["generations"]  # generations 0 and the last, 4
+    assert measured["learning_values"]["hand"]["faithful"]["trace_lambda"] == 0.98
+    assert measured["learning_values"]["hand"]["faithful"]["initial_speed_bias"] == 0.0  # paper's
+    assert evolved["LE-LS-P-faithful"] is None
+    first, last = measured["experts"][0]["generations"]  # generations 0 and the last, 4
     assert (first["generation"], first["mean"], first["shares"][6]) == (0, 6.0, 1.0)
     assert (last["generation"], last["mean"], last["best"], last["shares"][3]) == (4, 4.0, 3.0, 1.0)
-    against_6, against_3 = measured["experts"]["compared"]
+    assert measured["experts"][1]["generations"] is None and measured["experts"][1]["compared"] == []
+    against_6, against_3 = measured["experts"][0]["compared"]
     assert against_6["name"] == "LE-LS-6" and against_6["difference"] == pytest.approx(0.2)
     assert against_6["standard_error"] == pytest.approx(0.005 ** 0.5)  # sqrt(0.005 / 2 + 0.005 / 2)
     assert against_3["difference"] == pytest.approx(0.17) and against_3["standard_error"] == pytest.approx(0.0125 ** 0.5)
@@ -225,10 +253,14 @@ def test_table_shows_finished_running_and_not_run_rows(tmp_path):
                  f"| EV-LS | EV-LS | {study.BY_NAME['EV-LS'].about} | 1 x 2 of 100 | running | - | - | - | not run yet "
                  "| - |",
                  f"| EXT-LS | EXT-LS | {study.BY_NAME['EXT-LS'].about} | not evolved | - | - | - | - | 0.700 +- 0.082 | 3 |",
-                 "| gamma | 0.99 | 0.99 | 0.96 | 0.985 | not run yet | not run yet |",
-                 "| eta_actor | 0.01 | 0.01 | 0.03 | 0.02 | not run yet | not run yet |",
-                 "| trace_lambda | 0.98 | 0 | - | - | not run yet | not run yet |",
-                 "| childhood_length | 150,000 | 150,000 | - | - | not run yet | not run yet |",
+                 "| gamma | 0.99 | 0.99 | 0.99 | 0.96 | 0.985 | not run yet | not run yet | not run yet | not run yet |",
+                 "| eta_actor | 0.01 | 0.01 | 0.01 | 0.03 | 0.02 | not run yet | not run yet | not run yet | not run yet |",
+                 "| trace_lambda | 0.98 | 0 | 0.98 | - | - | not run yet | not run yet | not run yet | not run yet |",
+                 "| childhood_length | 150,000 | 150,000 | 150,000 | - | - | not run yet | not run yet | not run yet | "
+                 "not run yet |",
+                 "| faithful SLE | SLE | the reproduction's SLE, noise over the whole test | not evolved | - | - | - | - | "
+                 "0.200 +- 0.000 | 2 |",
+                 "LE-LS-N6-faithful: not run yet.",
                  "| 0 | 6.00 | 6.00 | 0.000 | 0.000 | 0.000 | 0.000 | 0.000 | 1.000 |",
                  "| 4 | 4.00 | 3.00 | 0.000 | 0.000 | 1.000 | 0.000 | 0.000 | 0.000 |",
                  "| against LE-LS-6 | 0.750 | 0.550 | 2 | +0.200 | 0.071 |",
@@ -236,6 +268,7 @@ def test_table_shows_finished_running_and_not_run_rows(tmp_path):
         assert line in text.splitlines(), line
     empty = study.table(study.measure(*(str(tmp_path / "none"),) * 5))
     assert "LE-LS-N6: not run yet." in empty.splitlines() and "| 2 x 5 |" not in empty
+    assert "LE-LS-N6-faithful: not run yet." in empty.splitlines()
 
 
 def test_report_writes_the_json_the_figure_and_the_tables(tmp_path, capsys):
@@ -252,6 +285,6 @@ def test_report_writes_the_json_the_figure_and_the_tables(tmp_path, capsys):
         saved = json.load(f)
     assert saved["rows"][0]["evolution"]["final_best_per_seed"] == pytest.approx([0.48, 0.68])
     assert os.path.getsize(os.path.join(out, "future_work.png")) > 10_000
-    assert "8 of 13 rows have finished stages" in capsys.readouterr().out
+    assert "9 of 20 rows have finished stages" in capsys.readouterr().out
     # nothing finished: both panels say so
     assert os.path.getsize(study.figure(study.measure(*(str(tmp_path / "none"),) * 5), str(tmp_path / "empty.png")))
