@@ -307,7 +307,7 @@ def claim_ordering(per_run: dict, order=STEADY_ORDER) -> dict:
                 f"(> {ORDER_SE:g} se)" + (f"; tied: {', '.join(tied)}" if tied else "")
                 + (f"; reversed: {', '.join(reversed_)}" if reversed_ else ""))
     verdict = HOLDS if held == 6 else PARTLY if held >= 4 else DOES_NOT
-    return _claim(verdict, measured, pairs=pairs, outcome=outcome, pairs_held=held)
+    return _claim(verdict, measured, pairs=pairs, outcome=outcome, pairs_held=held, mean=mean)
 
 
 def claim_specialisation(colours: dict, pairs: dict | None = None) -> dict:

@@ -431,6 +431,70 @@ def figure(measured: dict, names, path: str = FIGURE) -> str:
     return path
 
 
+#: The rows that differ from ``skills`` only in the learned actors' initial speed bias (``skills`` is bias 4).
+DIAL_ROWS = ("skills-bias0", "skills-bias1", "skills-bias2", "skills")
+DIAL_FIGURE = os.path.join("docs", "claims", "speed_dial.png")
+
+
+class DialPoint(NamedTuple):
+    """One speed bias's LE-LS against the shared EE-LS: final best (recorded and fresh) and learning-test level."""
+
+    bias: float
+    speed: float  # the learned actors' initial speed, sigmoid(bias), as a fraction of full speed
+    le_ls_recorded: float
+    le_ls_fresh: float
+    le_ls_fresh_sd: float
+    le_ls_steady: float
+    ee_ls_recorded: float
+    ee_ls_steady: float
+
+
+def speed_dial(claims: dict, rows=DIAL_ROWS) -> list[DialPoint]:
+    """Claim 3's two sides against the initial speed bias, from claims.json's ``claims`` (rows not measured are left out)."""
+    points = []
+    for name in rows:
+        if name not in claims:
+            continue
+        bias = float(config_of(BY_NAME[name], "LE-LS").initial_speed_bias)
+        three, fresh = claims[name]["3"]["numbers"], claims[name]["fresh"]["LE-LS"]
+        levels = claims[name]["6"]["numbers"]["mean"]  # the learning tests' steady states, per condition
+        points.append(DialPoint(bias, float(1 / (1 + np.exp(-bias))), three["le_ls"], fresh["fresh"],
+                                fresh["fresh_sd_over_seeds"], float(levels["LE-LS"]), three["ee_ls"],
+                                float(levels["EE-LS"])))
+    return sorted(points)
+
+
+def dial_figure(points: list[DialPoint], path: str = DIAL_FIGURE) -> str:
+    """LE-LS's final best and learning-test level against the learned actors' initial speed, EE-LS's as lines."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    speed = [100 * p.speed for p in points]
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.6), sharey=True)
+    ax = axes[0]
+    ax.plot(speed, [p.le_ls_recorded for p in points], "o-", color="C0", label="LE-LS, recorded best")
+    ax.errorbar(speed, [p.le_ls_fresh for p in points], [p.le_ls_fresh_sd for p in points], fmt="s--", color="C0",
+                alpha=0.6, capsize=3, label="LE-LS, fresh lives (sd over seeds)")
+    ax.axhline(points[0].ee_ls_recorded, color="C1", label="EE-LS, recorded best (shared)")
+    ax.set_title("a. final best fitness (claim 3)", fontsize=10)
+    ax.set_ylabel("fitness")
+    axes[1].plot(speed, [p.le_ls_steady for p in points], "o-", color="C0", label="LE-LS")
+    axes[1].axhline(points[0].ee_ls_steady, color="C1", label="EE-LS (shared)")
+    axes[1].set_title("b. learning tests' steady state", fontsize=10)
+    for ax in axes:
+        ax.set_xlabel("learned actors' initial speed (% of full; bias 0, 1, 2, 4)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="lower right")
+    fig.suptitle("skills with only the initial speed bias changed: where LE-LS passes EE-LS", fontsize=10)
+    fig.tight_layout()
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
 #: Where the fresh-life table goes in docs/CLAIMS.md.
 FRESH_START = "<!-- fresh-life table: python -m experiments.claims_study --table -->"
 FRESH_END = "<!-- end of fresh-life table -->"
@@ -589,6 +653,9 @@ def write_claims(out: str, names) -> int:
     write_table(os.path.join("docs", "CLAIMS.md"), table(measured, names))
     write_table(os.path.join("docs", "CLAIMS.md"), fresh_table(measured, names), FRESH_START, FRESH_END)
     figure(measured, names)
+    points = speed_dial(numbers)
+    if len(points) > 1:
+        dial_figure(points)
     claim8 = {name: measure_experts(BY_NAME[name], out) for name in EXPERT_RULE_SETS}
     with open(os.path.join(out, "claim8.json"), "w") as f:
         json.dump(claim8, f, indent=2, default=str)

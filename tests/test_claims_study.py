@@ -154,6 +154,20 @@ def test_fresh_table_shows_the_recorded_best_beside_the_fresh_lives():
     assert len(text.splitlines()) == 3  # rule sets not measured are left out
 
 
+def test_speed_dial_reads_claim_3_fresh_lives_and_claim_6_levels_per_bias():
+    def row(le_ls, steady):
+        six = claims.claim_ordering({"EE-LS": np.full(5, 0.51), "SLE": np.full(5, 0.2), "LE-LS": np.full(5, steady),
+                                     "EE-ES": np.full(5, 0.37)})
+        return {"3": dict(numbers=dict(le_ls=le_ls, ee_ls=0.446)), "6": six,
+                "fresh": {"LE-LS": dict(fresh=le_ls - 0.06, fresh_sd_over_seeds=0.02)}}
+
+    points = study.speed_dial({"skills": row(0.79, 0.84), "skills-bias1": row(0.58, 0.60), "paper": row(0.2, 0.2)})
+    assert [p.bias for p in points] == [1.0, 4.0]  # sorted by bias; rows off the dial are left out
+    assert points[0].speed == pytest.approx(1 / (1 + np.exp(-1)))  # sigmoid(1) = 0.731
+    assert (points[1].le_ls_recorded, points[1].le_ls_steady, points[1].ee_ls_steady) == pytest.approx((0.79, 0.84, 0.51))
+    assert points[1].le_ls_fresh == pytest.approx(0.73)
+
+
 def test_table_with_only_is_refused_so_no_row_is_dropped(capsys):
     assert study.main(["--table", "--only", "skills"]) == 2
     assert capsys.readouterr().err.strip() == "error: --table: measures every finished rule set; leave out --only"
