@@ -265,6 +265,15 @@ def stage_done(stage: Stage, scale: dict) -> bool:
     return False
 
 
+def cost_left(stage: Stage, scale: dict) -> float:
+    """The lane-steps a stage has still to run: none when done, an evolution's generations not yet in its history."""
+    if stage_done(stage, scale):
+        return 0.0
+    if stage.kind == "evolve":
+        return stage.cost * (1.0 - min(generations_done(stage.out_dir), scale["generations"]) / scale["generations"])
+    return stage.cost
+
+
 def measured_rate(manifest: dict) -> float | None:
     """Lane-steps per second over the timed stages of the manifest (None when none is)."""
     # a cost of 0 or less is no measurement (a manifest written before resumed stages counted their runs right)

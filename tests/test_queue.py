@@ -16,7 +16,7 @@ def test_list_shows_every_study_and_what_is_left(capsys):
     left, count, hours = queue.remaining("novel_tasks", rate=1.0)
     stages, scale = queue.importlib.import_module("experiments.novel_tasks").all_stages()
     assert count == len(stages) and 0 <= left <= count
-    assert hours * 3600 == pytest.approx(sum(s.cost for s in stages if not queue.stage_done(s, scale)))
+    assert hours * 3600 == pytest.approx(sum(queue.cost_left(s, scale) for s in stages))
     # a study with options counts the stages those options run: the reproduction's, with its faithful variant
     left, count, _ = queue.remaining("reproduce", argv=("--scale", "paper"))
     stages = queue.importlib.import_module("experiments.reproduce").stages_for(["--scale", "paper"])[0]

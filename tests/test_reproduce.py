@@ -140,8 +140,11 @@ def test_a_stage_is_done_when_its_last_file_exists(tmp_path):
     (tmp_path / "evolve").mkdir()
     (tmp_path / "evolve" / "history.csv").write_text("generation,seed,best\n0,0,0.1\n1,0,0.2\n")
     assert not reproduce.stage_done(evolve, scale)  # 2 of 3 generations
+    evolve = evolve._replace(cost=300.0)
+    assert reproduce.cost_left(evolve, scale) == pytest.approx(100.0)  # one generation of three left
+    assert reproduce.cost_left(stage, scale) == 0.0  # the finished baseline
     (tmp_path / "evolve" / "history.csv").write_text("generation,seed,best\n0,0,0.1\n1,0,0.2\n2,0,0.3\n")
-    assert reproduce.stage_done(evolve, scale)
+    assert reproduce.stage_done(evolve, scale) and reproduce.cost_left(evolve, scale) == 0.0
     assert not reproduce.stage_done(reproduce.Stage("r", "report", "", "", str(tmp_path), 1.0), scale)
 
 
