@@ -43,11 +43,11 @@ RATE = 1.9e6
 
 
 def remaining(module: str, rate: float = RATE, argv: tuple[str, ...] = ()) -> tuple[int, int, float]:
-    """Stages left, stages in all, and the hours what is left costs at ``rate`` lane-steps a second (a started evolution counts its generations left)."""
+    """Stages left, stages in all, and the hours what is left costs at ``rate`` lane-steps a second (a started stage counts its part left)."""
     study = importlib.import_module(f"experiments.{module}")
     stages, scale = study.stages_for(list(argv)) if argv else study.all_stages()
     left = [s for s in stages if not stage_done(s, scale)]
-    return len(left), len(stages), sum(cost_left(s, scale) for s in left) / rate / 3600
+    return len(left), len(stages), sum(cost_left(s, scale) for s in stages) / rate / 3600
 
 
 def main(argv=None) -> int:

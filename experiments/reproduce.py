@@ -265,13 +265,18 @@ def stage_done(stage: Stage, scale: dict) -> bool:
     return False
 
 
-def cost_left(stage: Stage, scale: dict) -> float:
-    """The lane-steps a stage has still to run: none when done, an evolution's generations not yet in its history."""
-    if stage_done(stage, scale):
-        return 0.0
+def fraction_done(stage: Stage, scale: dict) -> float:
+    """How much of an unfinished stage its files already hold: an evolution's generations, a test's finished runs."""
     if stage.kind == "evolve":
-        return stage.cost * (1.0 - min(generations_done(stage.out_dir), scale["generations"]) / scale["generations"])
-    return stage.cost
+        return min(1.0, generations_done(stage.out_dir) / scale["generations"])
+    if stage.kind == "test":
+        return min(1.0, partial_runs(stage.out_dir) / (stage.runs or scale["seeds"]))
+    return 0.0
+
+
+def cost_left(stage: Stage, scale: dict) -> float:
+    """The lane-steps a stage has still to run: none when done, else the part its files do not hold yet."""
+    return 0.0 if stage_done(stage, scale) else stage.cost * (1.0 - fraction_done(stage, scale))
 
 
 def measured_rate(manifest: dict) -> float | None:
@@ -428,17 +433,13 @@ def run_stages(stages: list[Stage], scale: dict, manifest: dict, manifest_path: 
                 if stage.kind == "evolve":  # its last checkpoint stays published: a clone can extend the run
                     publish_checkpoint(stage.out_dir)
                 continue
-            done_before = 0.0
             if stage.kind == "evolve":
                 restored = restore_published(stage.out_dir)
                 if restored is not None:
                     print(f"== {stage.name}: continuing from the published checkpoint of generation {restored - 1} "
                           f"({os.path.join(stage.out_dir, PUBLISHED)})")
-                done_before = min(1.0, generations_done(stage.out_dir) / scale["generations"])
-            elif stage.kind == "test":
-                done_before = min(1.0, partial_runs(stage.out_dir) / (stage.runs or scale["seeds"]))
             command, env = command_for(stage)
-            run_stage(stage, index, command, overall, manifest_path, done_before, env)
+            run_stage(stage, index, command, overall, manifest_path, fraction_done(stage, scale), env)
     except subprocess.CalledProcessError as error:
         print(f"error: stage failed with exit code {error.returncode}: {' '.join(error.cmd[1:])}", file=sys.stderr)
         return error.returncode or 1
