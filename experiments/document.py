@@ -181,7 +181,9 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
             + (f" (stages ran at {', '.join(f'`{c[:10]}`' for c in commits)})" if len(commits) > 1 else ""),
             f"- Report written at commit `{git_commit()}`" + (" (with uncommitted changes)" if _dirty() else ""),
             f"- Variants: {', '.join(data['variants'])} ({about}). "
-            f"EE-ES learns nothing, so its one evolution serves every variant."]
+            f"EE-ES learns nothing, so its one evolution serves every variant"
+            + "".join(f"; {v}'s {c} is {owner(v, c)}'{'' if owner(v, c).endswith('s') else 's'} (the same rules for it)" for v in data["variants"]
+                      for c in ("LE-LS", "EE-LS") if owner(v, c) != v) + "."]
     missing = missing_stages(results, manifest)
     if missing:
         out += ["", f"**Unfinished run: {len(missing)} stage(s) not done yet** ({', '.join(missing)}). What they "
@@ -277,7 +279,9 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
         out += ["", "(not drawn: no population or best_genomes.npz, or `--no-behaviour`)"]
     for (variant, condition), name in written["paths"].items():
         life = lives[variant, condition]
-        header = f"{condition} (both variants)" if shared(condition) else f"{condition}, {variant}"
+        sharers = [v for v in data["variants"] if owner(v, condition) == variant]  # faithful's EE-LS is skills'
+        header = (f"{condition} (every variant)" if shared(condition) else
+                  f"{condition}, {' and '.join(sharers) if len(sharers) > 1 else variant}")
         out += ["", f"**{header}**: stereotypy (share of turns the same way) {_fmt(life['stereotypy'], 2)}, "
                     f"speed {_fmt(life['speed'], 2)} cm/step (at most {life['config'].max_speed:g}), most-used "
                     f"expert in control {life['dominant_expert']:.0%} of the steps", "",

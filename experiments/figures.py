@@ -195,7 +195,8 @@ def fig_baselines(baselines: dict, tests: dict, title: str):
     """The brax baselines beside the paper's architecture: learning curves (log cycles) and performance per task.
 
     ``baselines``: :func:`experiments.loading.read_baselines`; ``tests``: ``{(variant, condition): test}``
-    of the report's learning tests (their curves, and steady states per task), drawn thin.
+    of the report's learning tests (their curves, and steady states per task), drawn thin, a run shared by
+    several variants once (``variant`` is then the label, e.g. "every variant").
     """
     from imrl_jax.plotting import CONDITION_STYLES, new_figure
 
@@ -208,8 +209,12 @@ def fig_baselines(baselines: dict, tests: dict, title: str):
         x = np.maximum(b["steps"], 1)
         curves.plot(x[1:], b["mean"][1:], color=BASELINE_COLOURS.get(agent, "0.3"), lw=2.0,
                     ls="--" if dashed else "-", marker="o", ms=2.5, label=baseline_label(b))
+    # variants apart by shade (and hatch below), conditions by colour and line as everywhere
+    order = list(dict.fromkeys(variant for variant, _ in tests))
+    alpha = {v: (0.95, 0.55, 0.3)[min(i, 2)] for i, v in enumerate(order)}
+    hatch = {v: (None, "//", "..")[min(i, 2)] for i, v in enumerate(order)}
     for (variant, condition), t in tests.items():
-        style = dict(CONDITION_STYLES[condition], lw=1.0, alpha=0.9 if variant == "paper" else 0.45)
+        style = dict(CONDITION_STYLES[condition], lw=1.0, alpha=alpha[variant])
         curves.plot(t["steps"], t["mean"], label=f"{condition} ({variant})", **style)
     curves.set_xscale("log")
     curves.set_ylim(0, 1)
@@ -221,8 +226,8 @@ def fig_baselines(baselines: dict, tests: dict, title: str):
                                                         alpha=1.0 if b["summary"]["steps"] == budgets[0] else 0.55))
                 for b in baselines.values()]
     learners += [(f"{condition} ({variant}), steady state", t["steady"]["steady_per_task"],
-                  dict(color=CONDITION_STYLES[condition]["color"], alpha=0.35 if variant != "paper" else 0.75,
-                       hatch="//" if variant != "paper" else None))
+                  dict(color=CONDITION_STYLES[condition]["color"], alpha=min(1.0, alpha[variant] + 0.1),
+                       hatch=hatch[variant]))
                  for (variant, condition), t in tests.items()]
     width = 0.85 / max(len(learners), 1)
     tasks = np.arange(1, 7)

@@ -46,7 +46,7 @@ from experiments.document import (ROOT, pipeline_command, report_paths, scale_la
 from experiments.figures import fig3, fig_baselines, fig_fitness, fig_learning, fig_paths, fig_steady
 from experiments.loading import load, read_baselines, read_json, update_best_genomes
 from experiments.relive import DRAWN_STEPS, FRESH_LIVES, PATH_STEPS, fresh_fitness, probe_best, relive_best
-from experiments.reproduce import EVOLVED, TESTED, shared, variant_spec
+from experiments.reproduce import EVOLVED, TESTED, owner, shared, variant_spec
 
 
 def _jsonable(value):
@@ -105,7 +105,7 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True, baselines_
 
     baselines = read_baselines(baselines_dir)
     if baselines:
-        tests = {k: t for k, t in data["tests"].items()}
+        tests = shared_once(data["tests"], data["variants"])
         written["baselines"] = save(fig_baselines(baselines, tests, f"brax.training baselines beside the learning "
                                                                     f"tests ({short})"),
                                     os.path.join(figures, "baselines.png"))
@@ -133,6 +133,7 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True, baselines_
                       f"every seed ({variant})", flush=True)
                 probes[variant, condition] = probe_best(entry["config"], entry)
 
+    probes = share_probes(probes, data["variants"])
     # a variant whose SLE explores the whole test by definition (faithful) has claim 5 measured at the test's length
     whole = {v for v in data["variants"] if variant_spec(v).sle_noise_steps == 0}
     numbers = measure(data, lives, probes, sle_whole_test=whole)
@@ -181,6 +182,30 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True, baselines_
     write_document(doc, figures, data, numbers, lives, spec_rows, written, baselines)
     written["doc"] = doc
     return written
+
+
+def shared_once(runs: dict, variants) -> dict:
+    """``{(variant, condition): run}`` with a run that several variants share once, labelled by them all."""
+    out = {}
+    for (variant, condition), run in runs.items():
+        if owner(variant, condition) != variant:
+            continue
+        if shared(condition):
+            out["every variant", condition] = run
+            continue
+        sharers = [v for v in variants if owner(v, condition) == variant]
+        out[", ".join(sharers) if sharers else variant, condition] = run
+    return out
+
+
+def share_probes(probes: dict, variants) -> dict:
+    """The probes of every variant: one that shares a condition's runs (faithful's EE-LS) shares their probes."""
+    out = dict(probes)
+    for variant in variants:
+        for condition in ("LE-LS", "EE-LS"):
+            if (owner(variant, condition), condition) in probes:
+                out.setdefault((variant, condition), probes[owner(variant, condition), condition])
+    return out
 
 
 def main(argv=None) -> int:

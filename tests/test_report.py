@@ -12,7 +12,7 @@ import pytest
 from experiments import claims
 from experiments import reproduce
 from experiments.claims import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY
-from experiments.report import main
+from experiments.report import main, share_probes, shared_once
 
 
 def test_measures():
@@ -221,6 +221,15 @@ def test_the_faithful_variant_has_claim_5_measured_over_the_whole_test(tmp_path)
     assert "the whole test of 1,000 cycles, the paper's length" in claim5["faithful"]["measured"]
     assert os.path.isdir(results / "skills" / "evolve" / "EE-LS")  # faithful's EE-LS is skills'
     assert "`faithful`: the learning rules as written but for the extension's selector" in doc.read_text()
+    assert "faithful's EE-LS is skills' (the same rules for it)" in doc.read_text()
+
+
+def test_a_variant_that_shares_a_run_shares_its_probes():
+    """faithful's EE-LS is skills': claim 7 reads skills' EE-LS probes for it; its own LE-LS keeps its own."""
+    probes = {("skills", "EE-LS"): [3, 2], ("skills", "LE-LS"): [1], ("faithful", "LE-LS"): [2, 2]}
+    shared = share_probes(probes, ("skills", "paper", "faithful"))
+    assert shared[("faithful", "EE-LS")] == [3, 2] and shared[("faithful", "LE-LS")] == [2, 2]
+    assert ("paper", "EE-LS") not in shared and probes.keys() <= shared.keys() and len(shared) == 4
 
 
 def test_paper_and_cpu_reports_each_name_the_other_and_an_unfinished_run_says_so(tmp_path):
@@ -434,3 +443,12 @@ def test_reproduction_fresh_reads_the_reports_lives():
     fresh = relive.reproduction_fresh(summary, "skills", "LE-LS")
     assert fresh["num_lives"] == 7 and fresh["mean"] == pytest.approx(0.8) and fresh["sd_over_seeds"] == pytest.approx(0.1)
     assert relive.reproduction_fresh(summary, "paper", "LE-LS") is None
+
+
+def test_runs_shared_by_variants_are_drawn_once():
+    """faithful's EE-LS is skills' and EE-ES is every variant's: each appears once, labelled by its sharers."""
+    runs = {(v, c): f"{v}/{c}" for v in ("skills", "paper", "faithful") for c in ("LE-LS", "EE-LS", "EE-ES")}
+    assert shared_once(runs, ("skills", "paper", "faithful")) == {
+        ("skills", "LE-LS"): "skills/LE-LS", ("skills, faithful", "EE-LS"): "skills/EE-LS",
+        ("every variant", "EE-ES"): "paper/EE-ES", ("paper", "LE-LS"): "paper/LE-LS",
+        ("paper", "EE-LS"): "paper/EE-LS", ("faithful", "LE-LS"): "faithful/LE-LS"}
