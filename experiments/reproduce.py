@@ -253,7 +253,9 @@ def partial_runs(test_dir: str) -> int:
 
 def stage_done(stage: Stage, scale: dict) -> bool:
     """A finished evolution (all generations in its history), learning test (its steady.json), measurement (its
-    result.json) or baseline (its summary.json); the report never."""
+    result.json) or baseline (its summary.json); the report when it ran after every stage its manifest records
+    now, each as recorded then (a stage run since, or run again, makes it due; after a change to the report
+    itself, ``python -m experiments.report RESULTS_DIR`` writes it again)."""
     if stage.kind == "evolve":
         return generations_done(stage.out_dir) >= scale["generations"]
     if stage.kind == "test":
@@ -262,6 +264,14 @@ def stage_done(stage: Stage, scale: dict) -> bool:
         return os.path.exists(os.path.join(stage.out_dir, MEASURED))
     if stage.kind == "baseline":  # python -m imrl_jax.baselines writes its summary last
         return os.path.exists(os.path.join(stage.out_dir, "summary.json"))
+    if stage.kind == "report":
+        path = os.path.join(stage.out_dir, "manifest.json")
+        if not os.path.isfile(path):
+            return False
+        with open(path) as f:
+            recorded = json.load(f).get("stages", {})
+        after = recorded.get(stage.name, {}).get("after")
+        return after is not None and after == {k: v for k, v in recorded.items() if k != stage.name}
     return False
 
 
@@ -398,9 +408,11 @@ def run_stage(stage: Stage, index: int, command: list[str], overall: Overall, ma
             publish_checkpoint(stage.out_dir)
     if code:
         raise subprocess.CalledProcessError(code, command)
-    manifest["stages"][stage.name] = dict(command=" ".join(["python"] + command[1:]),
-                                          seconds=round(time.perf_counter() - start, 1),
-                                          cost=round(stage.cost * (1.0 - done_before)))
+    entry = dict(command=" ".join(["python"] + command[1:]), seconds=round(time.perf_counter() - start, 1),
+                 cost=round(stage.cost * (1.0 - done_before)))
+    if stage.kind == "report":  # what it reported on: it is due again when any of these changes
+        entry["after"] = {k: v for k, v in manifest["stages"].items() if k != stage.name}
+    manifest["stages"][stage.name] = entry
     with open(manifest_path, "w") as f:
         json.dump(manifest, f, indent=2)
 
