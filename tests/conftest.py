@@ -1,7 +1,15 @@
 """Tiny shared fixtures: short lifetimes, so the whole suite stays fast on 2 CPU cores."""
 
-import jax
-import pytest
+import os
+
+# One compilation cache for the suite, shared by the xdist workers and the command lines tests start in
+# subprocesses (each of which would compile again what another process already did); set before jax is
+# imported so that those subprocesses inherit it. Programs are keyed by their HLO and jax's version.
+os.environ.setdefault("JAX_COMPILATION_CACHE_DIR",
+                      os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), ".pytest_cache", "jax"))
+
+import jax  # noqa: E402
+import pytest  # noqa: E402
 
 from helpers import TINY_RUN, tiny_config
 
