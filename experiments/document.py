@@ -10,7 +10,7 @@ import numpy as np
 from experiments.claims import (CLAIMS, LAST_GENERATIONS, PAPER, PLATEAU_FRACTION, RULES, SEEN,
                                 _fmt, specialisation_score)
 from experiments.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEPS, FRESH_LIVES, PATH_STEPS
-from experiments.reproduce import DEFAULT_VARIANTS, SCALES, owner, shared
+from experiments.reproduce import DEFAULT_VARIANTS, SCALES, owner, shared, sharers
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -182,7 +182,7 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
             f"- Report written at commit `{git_commit()}`" + (" (with uncommitted changes)" if _dirty() else ""),
             f"- Variants: {', '.join(data['variants'])} ({about}). "
             f"EE-ES learns nothing, so its one evolution serves every variant"
-            + "".join(f"; {v}'s {c} is {owner(v, c)}'{'' if owner(v, c).endswith('s') else 's'} (the same rules for it)" for v in data["variants"]
+            + "".join(f"; {v}'s {c} is the {owner(v, c)} run (the same rules for it)" for v in data["variants"]
                       for c in ("LE-LS", "EE-LS") if owner(v, c) != v) + "."]
     missing = missing_stages(results, manifest)
     if missing:
@@ -279,9 +279,8 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
         out += ["", "(not drawn: no population or best_genomes.npz, or `--no-behaviour`)"]
     for (variant, condition), name in written["paths"].items():
         life = lives[variant, condition]
-        sharers = [v for v in data["variants"] if owner(v, condition) == variant]  # faithful's EE-LS is skills'
         header = (f"{condition} (every variant)" if shared(condition) else
-                  f"{condition}, {' and '.join(sharers) if len(sharers) > 1 else variant}")
+                  f"{condition}, {' and '.join(sharers(variant, condition, data['variants'])) or variant}")
         out += ["", f"**{header}**: stereotypy (share of turns the same way) {_fmt(life['stereotypy'], 2)}, "
                     f"speed {_fmt(life['speed'], 2)} cm/step (at most {life['config'].max_speed:g}), most-used "
                     f"expert in control {life['dominant_expert']:.0%} of the steps", "",

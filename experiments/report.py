@@ -46,7 +46,7 @@ from experiments.document import (ROOT, pipeline_command, report_paths, scale_la
 from experiments.figures import fig3, fig_baselines, fig_fitness, fig_learning, fig_paths, fig_steady
 from experiments.loading import load, read_baselines, read_json, update_best_genomes
 from experiments.relive import DRAWN_STEPS, FRESH_LIVES, PATH_STEPS, fresh_fitness, probe_best, relive_best
-from experiments.reproduce import EVOLVED, TESTED, owner, shared, variant_spec
+from experiments.reproduce import EVOLVED, TESTED, owner, shared, sharers, variant_spec
 
 
 def _jsonable(value):
@@ -193,8 +193,7 @@ def shared_once(runs: dict, variants) -> dict:
         if shared(condition):
             out["every variant", condition] = run
             continue
-        sharers = [v for v in variants if owner(v, condition) == variant]
-        out[", ".join(sharers) if sharers else variant, condition] = run
+        out[", ".join(sharers(variant, condition, variants)) or variant, condition] = run
     return out
 
 

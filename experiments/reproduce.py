@@ -118,6 +118,11 @@ def owner(variant: str, condition: str) -> str:
     return dict(variant_spec(variant).shares).get(condition, variant)
 
 
+def sharers(variant: str, condition: str, variants) -> list[str]:
+    """Those of ``variants`` whose runs of a condition are ``variant``'s (faithful's EE-LS: skills and faithful)."""
+    return [v for v in variants if owner(v, condition) == variant]
+
+
 def shared(condition: str) -> bool:
     """Whether a condition's runs are one for every variant (it learns nothing: EE-ES)."""
     return not conditions.get(condition).learns
@@ -251,6 +256,11 @@ def partial_runs(test_dir: str) -> int:
     return sum(name.startswith("run_") for name in os.listdir(folder)) if os.path.isdir(folder) else 0
 
 
+def followed(recorded: dict, report: str) -> dict:
+    """What a report reads of the other stages a manifest records: each one's seconds (a rerun changes them)."""
+    return {name: entry.get("seconds") for name, entry in recorded.items() if name != report}
+
+
 def stage_done(stage: Stage, scale: dict) -> bool:
     """A finished evolution (all generations in its history), learning test (its steady.json), measurement (its
     result.json) or baseline (its summary.json); the report when it ran after every stage its manifest records
@@ -271,7 +281,7 @@ def stage_done(stage: Stage, scale: dict) -> bool:
         with open(path) as f:
             recorded = json.load(f).get("stages", {})
         after = recorded.get(stage.name, {}).get("after")
-        return after is not None and after == {k: v for k, v in recorded.items() if k != stage.name}
+        return after is not None and after == followed(recorded, stage.name)
     return False
 
 
@@ -411,7 +421,7 @@ def run_stage(stage: Stage, index: int, command: list[str], overall: Overall, ma
     entry = dict(command=" ".join(["python"] + command[1:]), seconds=round(time.perf_counter() - start, 1),
                  cost=round(stage.cost * (1.0 - done_before)))
     if stage.kind == "report":  # what it reported on: it is due again when any of these changes
-        entry["after"] = {k: v for k, v in manifest["stages"].items() if k != stage.name}
+        entry["after"] = followed(manifest["stages"], stage.name)
     manifest["stages"][stage.name] = entry
     with open(manifest_path, "w") as f:
         json.dump(manifest, f, indent=2)

@@ -221,7 +221,7 @@ def test_the_faithful_variant_has_claim_5_measured_over_the_whole_test(tmp_path)
     assert "the whole test of 1,000 cycles, the paper's length" in claim5["faithful"]["measured"]
     assert os.path.isdir(results / "skills" / "evolve" / "EE-LS")  # faithful's EE-LS is skills'
     assert "`faithful`: the learning rules as written but for the extension's selector" in doc.read_text()
-    assert "faithful's EE-LS is skills' (the same rules for it)" in doc.read_text()
+    assert "faithful's EE-LS is the skills run (the same rules for it)" in doc.read_text()
 
 
 def test_a_variant_that_shares_a_run_shares_its_probes():
