@@ -42,11 +42,22 @@ def _import_evosax():
     return evosax.algorithms
 
 
+#: Strategies whose spread is not a parameter but a schedule given when the algorithm is built (Open-ES's
+#: ``std_schedule``): here a constant ``std_init``, set like the others' parameter.
+SCHEDULED_STD = ("open_es",)
+
+
 @functools.lru_cache(maxsize=16)
-def _algorithm(name: str, population_size: int, num_genes: int):
-    """One evosax algorithm object per (name, sizes): its jitted methods take it as a static argument."""
+def _algorithm(name: str, population_size: int, num_genes: int, std: float | None = None):
+    """One evosax algorithm object per (name, sizes, scheduled spread): its jitted methods take it as static."""
     algorithms = _import_evosax()
-    return getattr(algorithms, STRATEGIES[name])(population_size=population_size, solution=jnp.zeros(num_genes))
+    options = {}
+    if name in SCHEDULED_STD:
+        import optax
+
+        options["std_schedule"] = optax.constant_schedule(std)
+    return getattr(algorithms, STRATEGIES[name])(population_size=population_size, solution=jnp.zeros(num_genes),
+                                                 **options)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -60,24 +71,43 @@ class Evosax:
     settings: tuple = ()  # (field, value) pairs replacing evosax's default params
 
     @property
+    def std_init(self) -> float:
+        """The initial spread: the setting ``std_init`` if given, else the paper's init_scale / sqrt(3)."""
+        return float(dict(self.settings).get("std_init", self.init_scale / math.sqrt(3.0)))
+
+    @property
     def algorithm(self):
-        return _algorithm(self.name, self.population_size, self.num_genes)
+        return _algorithm(self.name, self.population_size, self.num_genes,
+                          self.std_init if self.name in SCHEDULED_STD else None)
 
     def default_params(self):
         """evosax's defaults, with the initial spread of the paper's start and the given settings."""
         params = self.algorithm.default_params
         changes = dict(self.settings)
-        if hasattr(params, "std_init") and "std_init" not in changes:
-            changes["std_init"] = self.init_scale / math.sqrt(3.0)
-        unknown = [k for k in changes if not hasattr(params, k)]
-        if unknown:
-            fields = ", ".join(f.name for f in dataclasses.fields(params))
-            raise ConfigError(f"strategy {self.name}: {unknown[0]} is not a parameter (choose from {fields})")
+        if self.name in SCHEDULED_STD:
+            changes.pop("std_init", None)  # built into the algorithm's schedule
+        elif hasattr(params, "std_init"):
+            changes["std_init"] = self.std_init
+        settable = [f.name for f in dataclasses.fields(params) if jnp.ndim(getattr(params, f.name)) == 0]
+        settable += ["std_init"] if self.name in SCHEDULED_STD else []
+        for name, value in dict(self.settings).items():
+            if name not in settable:
+                kind = "a scalar parameter" if hasattr(params, name) else "a parameter"
+                raise ConfigError(f"strategy {self.name}: {name} is not {kind} (choose from {', '.join(settable)})")
+            positive = name == "std_init" or name.startswith("lr_")  # a spread or a rate
+            if not math.isfinite(value) or (positive and value <= 0):
+                raise ConfigError(f"strategy {self.name}: {name} must be a finite number{' > 0' if positive else ''}, "
+                                  f"got {value}")
         return params.replace(**{k: jnp.asarray(v, jnp.float32) for k, v in changes.items()})
 
     def init(self, key: jax.Array, params):
         """The search distribution at the paper's start: mean 0."""
-        return self.algorithm.init(key, jnp.zeros(self.num_genes), params)
+        state = self.algorithm.init(key, jnp.zeros(self.num_genes), params)
+        if self.name == "xnes":
+            # xNES samples mean + std z B with B of determinant 1 at the start (Glasmachers et al. 2010); evosax
+            # 0.3.2 starts B at std_init I, which makes the first spread std_init^2 (0.33, not the paper's 0.577).
+            state = state.replace(B=jnp.eye(self.num_genes, dtype=state.B.dtype))
+        return state
 
     def ask(self, key: jax.Array, state, params):
         """A population drawn from the search distribution."""

@@ -40,6 +40,41 @@ def test_an_evosax_strategy_maximises_the_fitness_it_is_told(name):
     assert abs(mean.mean() - 0.5) < 0.15, mean.mean()
 
 
+@pytest.mark.parametrize("name", list(strategies.STRATEGIES))
+def test_every_strategy_starts_at_the_papers_spread(name):
+    """The first population asked has mean 0 and sd 1/sqrt(3), the paper's U[-1, 1] genes (Open-ES: its schedule)."""
+    config = make_config("paper", condition="LE-LS", population_size=50, num_parents=10)
+    strategy = strategies.make_strategy(name, config)
+    params = strategy.default_params()
+    genomes, _ = strategy.ask(jax.random.key(1), strategy.init(jax.random.key(0), params), params)
+    genomes = np.asarray(genomes)
+    assert genomes.shape == (50, config.num_genes)
+    # 50 x 111 draws: the sd of the sample sd is about 0.577 / sqrt(2 * 5550) = 0.006
+    assert abs(genomes.mean()) < 0.03 and genomes.std() == pytest.approx(1 / np.sqrt(3), abs=0.03), genomes.std()
+    if name == "open_es":
+        wide = strategies.make_strategy(name, config, {"std_init": 0.2})
+        params = wide.default_params()
+        genomes, _ = wide.ask(jax.random.key(1), wide.init(jax.random.key(0), params), params)
+        assert float(np.asarray(genomes).std()) == pytest.approx(0.2, abs=0.01)
+
+
+def test_without_evosax_an_evosax_strategy_says_how_to_install_it(tmp_path, capsys, monkeypatch):
+    """evosax unimportable: --strategy snes exits 2 with one line naming the extra, writing nothing; the GA runs on."""
+    from imrl_jax import evolve
+
+    monkeypatch.setitem(__import__("sys").modules, "evosax.algorithms", None)
+    strategies._algorithm.cache_clear()
+    try:
+        out = tmp_path / "run"
+        assert evolve.main([*_evolve_args(1, "snes"), "--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith('error: strategy: evosax strategies need the evosax extra: pip install -e ".[evosax]"')
+        assert "\n" not in err and not out.exists()
+        assert type(strategies.make_strategy("ga", _config())).__name__ == "GA"
+    finally:
+        strategies._algorithm.cache_clear()
+
+
 def test_strategies_by_name_and_bad_input():
     config = _config()
     assert type(strategies.make_strategy("ga", config)).__name__ == "GA"
@@ -105,6 +140,13 @@ def test_evolve_with_an_evosax_strategy_resumes_and_extends_bitwise(tmp_path, ca
     (["--strategy", "snes", "--strategy-set", "sigma=1"], "error: strategy snes: sigma is not a parameter"),
     (["--strategy", "snes", "--strategy-set", "std_init"], "error: --strategy-set: expected FIELD=NUMBER, got 'std_init'"),
     (["--strategy", "ga", "--strategy-set", "std_init=1"], "error: strategy ga: its settings are config fields"),
+    (["--strategy", "snes", "--strategy-set", "weights=1"],
+     "error: strategy snes: weights is not a scalar parameter (choose from std_init, lr_std_init)"),
+    (["--strategy", "snes", "--strategy-set", "std_init=nan"], "error: strategy snes: std_init must be a finite number > 0"),
+    (["--strategy", "sep_cma_es", "--strategy-set", "std_init=-1"],
+     "error: strategy sep_cma_es: std_init must be a finite number > 0, got -1.0"),
+    (["--strategy", "open_es", "--strategy-set", "lr_std_init=0.1"],
+     "error: strategy open_es: lr_std_init is not a parameter (choose from std_init)"),
 ])
 def test_bad_strategies_exit_2_with_one_line_and_write_nothing(tmp_path, capsys, argv, message):
     from imrl_jax import evolve
