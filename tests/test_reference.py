@@ -38,7 +38,7 @@ def _assert_weights_close(jax_agent: Agent, ref: dict):
             np.testing.assert_allclose(np.asarray(value), ref[name], rtol=1e-8, atol=1e-10, err_msg=name)
 
 
-def _compare_phase(config, phase, phase_name, agent, pose, task_index, params, seed=0):
+def _compare_phase(config, phase, phase_name, agent, pose, task_index, params, seed=0, learning_steps=None):
     key = jax.random.key(seed)
     draws = S.draw_many(key, STEPS, config.draw_block, spawn=phase.respawn)
     task = L.childhood_task(config, jnp.float64) if task_index is None else L.task_spec(config, task_index, jnp.float64)
@@ -47,7 +47,8 @@ def _compare_phase(config, phase, phase_name, agent, pose, task_index, params, s
     ref = reference.run_phase(config.replace(**params._asdict()), phase_name, _to_numpy(agent),
                               (float(pose.pos[0]), float(pose.pos[1]), float(pose.heading)),
                               np.asarray(draws.u), np.asarray(draws.z), task=task_index,
-                              spawn=None if draws.spawn is None else np.asarray(draws.spawn))
+                              spawn=None if draws.spawn is None else np.asarray(draws.spawn),
+                              learning_steps=learning_steps)
     np.testing.assert_array_equal(np.asarray(record.k), ref["k"])
     np.testing.assert_array_equal(np.asarray(record.reached), ref["reached"])
     np.testing.assert_array_equal(np.asarray(record.timeout), ref["timeout"])
@@ -132,6 +133,41 @@ def test_adult_phase_matches_reference(tiny, condition, rules):
     task = L.task_spec(config, 0, jnp.float64)
     events = _compare_phase(config, phase, name, agent, task.start, 0, params)
     assert events["reaches"] > 0 and events["timeouts"] > 0 and events["walls"] > 0, events
+
+
+@pytest.mark.usefixtures("x64")
+@pytest.mark.parametrize("condition", ["LE-LS-N", "LE-LS-P", "LE-LS-PC"])
+def test_evolved_traits_match_reference_step_by_step(tiny, condition):
+    """The future-work rows step by step: childhood with the evolved traits, then LE-LS-N's adulthood.
+
+    LE-LS-N: expert 1 is not expressed (never chosen, never learns); LE-LS-P: the decoded rates and
+    discount drive learning; LE-LS-PC: learning and noise stop at the evolved childhood length (half)."""
+    config = tiny(condition, childhood_steps=STEPS, task_steps=STEPS, tasks=(SHORT_TASK,), num_bins=1,
+                  **CHILDHOOD_OPTIONS)
+    genome = jax.random.uniform(jax.random.key(7), (config.num_genes,), jnp.float64, -1.0, 1.0)
+    if condition == "LE-LS-N":
+        genome = genome.at[-3:].set(jnp.asarray([0.5, -0.3, 0.8]))
+    if condition == "LE-LS-PC":
+        genome = genome.at[-1].set(0.0)  # u = 0.5: learning for the first half of the childhood
+    agent = decode(config, genome)
+    params = config.learning_params() if agent.params is None else agent.params
+    learning_steps = None if agent.childhood_length is None else int(agent.childhood_length)
+    assert learning_steps in (None, STEPS // 2)
+    pose = Pose(jnp.array([40.0, 60.0]), jnp.array(math.pi))  # heading into the west wall
+    events = _compare_phase(config, L.childhood_phase(config), "childhood", agent, pose, None, params,
+                            learning_steps=learning_steps)
+    assert events["walls"] > 0 and events["switches"] > 100 and events["respawns"] > 0, events
+    assert np.abs(np.asarray(events["agent"].actor - agent.actor)).max() > 1e-3  # its own learning occurred
+    if condition == "LE-LS-P":  # the evolved values, not the config's, are the ones that learned
+        assert not np.isclose(float(params.eta_actor), config.eta_actor)
+    if condition != "LE-LS-N":
+        return
+    np.testing.assert_array_equal(events["agent"].actor[1], agent.actor[1])  # never in control: never learned
+    n = config.num_inputs + 1
+    adult = L.adult_agent(config, events["agent"])._replace(actor=jnp.asarray(hand_experts(n)))
+    task = L.task_spec(config, 0, jnp.float64)
+    events = _compare_phase(config, config.spec.adult, "adult-ls", adult, task.start, 0, params)
+    assert events["reaches"] > 0 and events["timeouts"] > 0 and events["switches"] > 20, events
 
 
 _live = jax.jit(L.live, static_argnums=1)
