@@ -3,6 +3,7 @@
     python -m experiments.claims_study                  # run (or go on with) the screen, then the table
     python -m experiments.claims_study --only skills-bias0,paper-selector
     python -m experiments.claims_study --table          # docs/CLAIMS.md's table from what has run
+    python -m experiments.claims_study --table --only experts   # claim 8's table and figure alone (seconds)
 
 A rule set is a row of :data:`RULE_SETS`: a preset of ``imrl_jax.config`` and ``--set``
 overrides of values the paper does not state. Every run is at the paper's life lengths
@@ -550,16 +551,98 @@ def measure_experts(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCT
             if test is not None:
                 steady[condition, k] = test["steady"]["steady_per_run"]
     claim = claim_experts(final, steady)
-    return dict(claim, sizes=sizes_)
+    expected = [(m, c, k) for m in ("final", "steady") for c in EXPERT_CONDITIONS for k in (3, *EXPERT_COUNTS)]
+    have = {"final": final, "steady": steady}
+    missing = [f"{c} {m} {k}" for m, c, k in expected if (c, k) not in have[m]]
+    levels = [ExpertsLevel(rule.name, c, m, k, float(np.mean(v)), float(np.std(v, ddof=1)) if len(v) > 1 else 0.0,
+                           len(v)) for m, values in have.items() for (c, k), v in sorted(values.items())]
+    return dict(claim, sizes=sizes_, missing=missing, levels=[level._asdict() for level in levels])
+
+
+class ExpertsLevel(NamedTuple):
+    """One point of claim 8's figure: a rule set's condition with ``num_experts`` experts, by one measure."""
+
+    rule: str
+    condition: str
+    measure: str  # "final": final best fitness per seed; "steady": the learning test's steady state per run
+    num_experts: int
+    mean: float
+    sd: float  # over seeds (final) or runs (steady), ddof 1
+    count: int
 
 
 def experts_table(measured: dict) -> str:
-    """Claim 8 as markdown: one row per rule set, the verdict and the comparisons."""
+    """Claim 8 as markdown: one row per rule set, the verdict and the comparisons (``so far`` while runs are missing)."""
     lines = ["| rule set | runs (seeds x generations) | claim 8 |", "|---|---|---|"]
     for name, claim in measured.items():
         runs = ", ".join(f"{k}: {v}" for k, v in claim["sizes"].items()) or "none finished"
-        lines.append(f"| `{name}` | {runs} | {claim['verdict']}: {claim['measured']} |")
+        missing = claim.get("missing") or []
+        verdict = f"{claim['verdict']} so far (not finished: {', '.join(missing)})" if missing else claim["verdict"]
+        lines.append(f"| `{name}` | {runs} | {verdict}: {claim['measured']} |")
     return "\n".join(lines)
+
+
+#: Claim 8's figure.
+EXPERTS_FIGURE = os.path.join("docs", "claims", "experts.png")
+
+
+def experts_figure(measured: dict, path: str = EXPERTS_FIGURE) -> str:
+    """Final best fitness and steady state against the number of experts, a line per rule set and condition."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from experiments.claims import ABOUT
+
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.8), sharey=True)
+    titles = {"final": "a. final best fitness (recorded best; sd over seeds)",
+              "steady": "b. learning tests' steady state (sd over runs)"}
+    markers = {"LE-LS": "o", "EE-LS": "s"}
+    colours: dict = {}  # one colour per run, the same in both panels
+    for ax, measure in zip(axes, ("final", "steady")):
+        drawn = set()
+        for name, claim in measured.items():
+            for condition in EXPERT_CONDITIONS:
+                points = sorted((p["num_experts"], p["mean"], p["sd"]) for p in claim.get("levels", [])
+                                if p["measure"] == measure and p["condition"] == condition)
+                shared = (experts_owner(BY_NAME[name], condition), condition, measure)
+                if not points or shared in drawn:
+                    continue  # a shared run (paper-selector's EE-LS is skills') is drawn once
+                drawn.add(shared)
+                colour, style = colours.setdefault(shared[:2], f"C{len(colours)}"), "-" if name == EXPERT_RULE_SETS[0] else "--"
+                k, mean, sd = (np.array(v) for v in zip(*points))
+                ax.errorbar(k + (0.05 if style == "--" else 0), mean, sd, fmt=markers[condition] + style, color=colour,
+                            capsize=3, label=f"{condition}, {shared[0]}")
+                base = dict(zip(k, mean)).get(3)
+                if base is not None:  # the rule's band: within [0.8, 1.25] of 3 experts is "unchanged"
+                    ax.fill_between([2.8, 6.2], ABOUT[0] * base, min(ABOUT[1] * base, 1), color=colour, alpha=0.06)
+        ax.set_title(titles[measure], fontsize=10)
+        ax.set_xticks([3, *EXPERT_COUNTS])
+        ax.set_xlabel("number of experts")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="upper right")
+    axes[0].set_ylabel("fitness")
+    fig.suptitle("claim 8: more experts, 100 generations (shaded: within [0.8, 1.25] of 3 experts)", fontsize=10)
+    fig.tight_layout()
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def write_experts(out: str) -> dict:
+    """Claim 8 of every rule set that runs it: claim8.json, docs/CLAIMS.md's table and the figure (runs nothing)."""
+    import json
+
+    claim8 = {name: measure_experts(BY_NAME[name], out) for name in EXPERT_RULE_SETS}
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, "claim8.json"), "w") as f:
+        json.dump(claim8, f, indent=2, default=str)
+    write_table(os.path.join("docs", "CLAIMS.md"), experts_table(claim8), EXPERTS_START, EXPERTS_END)
+    if any(claim["levels"] for claim in claim8.values()):
+        experts_figure(claim8)
+    return claim8
 
 
 #: The name ``--only`` gives the whole screen: the circular paths, then every rule set in SCREEN_ORDER.
@@ -599,7 +682,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default=OUT, help=f"results directory (default: {OUT})")
     p.add_argument("--list", action="store_true", help="print the stages and their commands, run nothing")
     p.add_argument("--table", action="store_true", help="write the claims of every finished rule set into "
-                   "docs/CLAIMS.md and experiments/results/claims/claims.json (runs nothing)")
+                   "docs/CLAIMS.md and experiments/results/claims/claims.json (runs nothing; with --only "
+                   f"{EXPERTS}, claim 8's table and figure alone)")
     return p
 
 
@@ -618,8 +702,13 @@ def main(argv=None) -> int:
         print(f"error: {error}", file=sys.stderr)
         return 2
     if args.table:
+        if args.only == EXPERTS:  # claim 8 alone: reads finished runs, measures nothing (seconds)
+            for name, claim in write_experts(args.out).items():
+                print(f"claim 8, {name}: {claim['verdict']}{' so far' if claim['missing'] else ''}")
+            return 0
         if args.only:  # the table has every rule set: a subset would drop the others' rows from docs/CLAIMS.md
-            print("error: --table: measures every finished rule set; leave out --only", file=sys.stderr)
+            print(f"error: --table: measures every finished rule set; leave out --only (or --only {EXPERTS} for "
+                  f"claim 8 alone)", file=sys.stderr)
             return 2
         return write_claims(args.out, [rule.name for rule in RULE_SETS])
     stages = selected_stages(args.only, args.out)
@@ -656,10 +745,7 @@ def write_claims(out: str, names) -> int:
     points = speed_dial(numbers)
     if len(points) > 1:
         dial_figure(points)
-    claim8 = {name: measure_experts(BY_NAME[name], out) for name in EXPERT_RULE_SETS}
-    with open(os.path.join(out, "claim8.json"), "w") as f:
-        json.dump(claim8, f, indent=2, default=str)
-    write_table(os.path.join("docs", "CLAIMS.md"), experts_table(claim8), EXPERTS_START, EXPERTS_END)
+    write_experts(out)
     print(f"wrote docs/CLAIMS.md's table and {os.path.join(out, 'claims.json')}: {len(measured)} of {len(names)} "
           f"rule sets finished")
     return 0

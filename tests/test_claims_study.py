@@ -170,7 +170,8 @@ def test_speed_dial_reads_claim_3_fresh_lives_and_claim_6_levels_per_bias():
 
 def test_table_with_only_is_refused_so_no_row_is_dropped(capsys):
     assert study.main(["--table", "--only", "skills"]) == 2
-    assert capsys.readouterr().err.strip() == "error: --table: measures every finished rule set; leave out --only"
+    assert capsys.readouterr().err.strip() == ("error: --table: measures every finished rule set; leave out --only (or "
+                                              "--only experts for claim 8 alone)")
 
 
 def test_list_prints_every_stage_and_runs_nothing(tmp_path, capsys):
@@ -181,3 +182,61 @@ def test_list_prints_every_stage_and_runs_nothing(tmp_path, capsys):
                                                                                   out)
     assert [line.split(": ", 1)[0] for line in lines] == [s.name for s in stages]
     assert "--set childhood_walls=clamp" in lines[0] and not (tmp_path / "claims").exists()
+
+
+def _hand_made_run(folder, best_per_generation, steady_per_run):
+    """An evolution (history.csv, config.json) with ``best_per_generation`` (generations, seeds) and its test."""
+    import json
+
+    evolve, test = folder / "evolve", folder / "test"
+    evolve.mkdir(parents=True)
+    best = np.asarray(best_per_generation, float)
+    rows = ["generation,seed,best"] + [f"{g},{s},{best[g, s]}" for g in range(best.shape[0]) for s in range(best.shape[1])]
+    (evolve / "history.csv").write_text("\n".join(rows) + "\n")
+    (evolve / "config.json").write_text(json.dumps({"config": {"num_generations": best.shape[0]}}))
+    test.mkdir(parents=True)
+    (test / "steady.json").write_text(json.dumps({"steady_per_run": list(steady_per_run)}))
+    (test / "curve.csv").write_text("bin,end_step,mean,sd_over_runs\n0,10,0.5,0.1\n")
+    return str(evolve), str(test)
+
+
+def test_claim_8_alone_measures_hand_made_runs_and_says_so_far_while_one_is_missing(tmp_path, monkeypatch):
+    """``--table --only experts``: each 3-expert run against its 4- and 6-expert runs, with the sizes and the levels."""
+    runs = {}
+    for condition, k, level in (("LE-LS", 3, 0.8), ("LE-LS", 4, 0.72), ("LE-LS", 6, 0.4), ("EE-LS", 3, 0.5),
+                                ("EE-LS", 4, 0.45)):  # EE-LS with 6 experts has not run
+        runs[condition, k] = _hand_made_run(tmp_path / f"{condition}{k}", [[0.1, 0.1]] * 5 + [[level - 0.01, level + 0.01]] * 5,
+                                            [level, level, level + 0.02])
+    monkeypatch.setattr(study, "run_dir", lambda rule, c, out, reproduction: runs[c, 3][0])
+    monkeypatch.setattr(study, "learning_dir", lambda rule, c, out, reproduction: runs[c, 3][1])
+    monkeypatch.setattr(study, "experts_dir", lambda rule, c, k, kind, out: (runs[c, k] if (c, k) in runs else
+                                                                            ("/nonexistent", "/nonexistent"))[kind == "test"])
+    claim = study.measure_experts(study.BY_NAME["skills"], str(tmp_path))
+    assert claim["sizes"] == {"LE-LS 3": "2x10", "LE-LS 4": "2x10", "LE-LS 6": "2x10", "EE-LS 3": "2x10", "EE-LS 4": "2x10"}
+    assert claim["missing"] == ["EE-LS final 6", "EE-LS steady 6"]
+    # final best: mean of the last 5 generations, per seed; 0.72 / 0.8 = 0.9 and 0.45 / 0.5 = 0.9 are unchanged, 0.5 not
+    assert claim["numbers"]["compared"]["LE-LS final 4 vs 3"]["ratio"] == pytest.approx(0.9)
+    assert claim["numbers"]["compared"]["LE-LS final 6 vs 3"]["ratio"] == pytest.approx(0.5)
+    assert claim["verdict"] == claims.PARTLY
+    level = next(p for p in claim["levels"] if (p["condition"], p["measure"], p["num_experts"]) == ("LE-LS", "final", 4))
+    assert (level["mean"], level["sd"], level["count"]) == pytest.approx((0.72, 0.01 * np.sqrt(2), 2))
+    row = study.experts_table({"skills": claim}).splitlines()[2]
+    assert row.startswith("| `skills` | LE-LS 3: 2x10, ") and "| partly so far (not finished: EE-LS final 6, EE-LS steady 6): " in row
+    done = dict(claim, missing=[])
+    assert "| partly: EE-LS final 4/3 experts 0.450/0.500 = 0.90; LE-LS final 4/3 experts 0.720/0.800 = 0.90;" in study.experts_table({"skills": done})
+
+
+def test_claim_8_alone_writes_its_table_json_and_figure_and_keeps_the_rest(tmp_path, monkeypatch, capsys):
+    (tmp_path / "docs").mkdir()
+    document = f"keep\n{study.TABLE_START}\nthe map\n{study.TABLE_END}\n{study.EXPERTS_START}\nold\n{study.EXPERTS_END}\n"
+    (tmp_path / "docs" / "CLAIMS.md").write_text(document)
+    hand = dict(verdict=claims.HOLDS, measured="m", numbers={}, sizes={"LE-LS 4": "5x100"}, missing=[],
+                levels=[dict(rule="skills", condition="LE-LS", measure=m, num_experts=k, mean=0.8, sd=0.01, count=5)
+                        for m in ("final", "steady") for k in (3, 4, 6)])
+    monkeypatch.setattr(study, "measure_experts", lambda rule, out: dict(hand))
+    monkeypatch.chdir(tmp_path)
+    assert study.main(["--table", "--only", "experts", "--out", "claims"]) == 0
+    assert capsys.readouterr().out.splitlines() == ["claim 8, skills: holds", "claim 8, paper-selector: holds"]
+    text = (tmp_path / "docs" / "CLAIMS.md").read_text()
+    assert text.startswith(f"keep\n{study.TABLE_START}\nthe map\n") and "| `paper-selector` | LE-LS 4: 5x100 | holds: m |" in text
+    assert (tmp_path / "claims" / "claim8.json").exists() and (tmp_path / study.EXPERTS_FIGURE).stat().st_size > 10_000
