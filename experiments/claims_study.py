@@ -398,6 +398,17 @@ def table(measured: dict, names) -> str:
 FIGURE = os.path.join("docs", "claims", "claims_map.png")
 
 
+def save_figure(fig, path: str) -> str:
+    """Lay out, write (creating its folder) and close a figure; its path."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
 def figure(measured: dict, names, path: str = FIGURE) -> str:
     """The claims map as a grid: rule sets as rows, claims as columns, coloured by verdict; written to ``path``."""
     import matplotlib
@@ -425,11 +436,7 @@ def figure(measured: dict, names, path: str = FIGURE) -> str:
         side.set_visible(False)
     ax.set_title("The paper's seven claims under each rule set (the report's verdict rules; paper lengths)",
                  fontsize=10)
-    fig.tight_layout()
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 #: The rows that differ from ``skills`` only in the learned actors' initial speed bias (``skills`` is bias 4).
@@ -489,11 +496,7 @@ def dial_figure(points: list[DialPoint], path: str = DIAL_FIGURE) -> str:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="lower right")
     fig.suptitle("skills with only the initial speed bias changed: where LE-LS passes EE-LS", fontsize=10)
-    fig.tight_layout()
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 #: Where the fresh-life table goes in docs/CLAIMS.md.
@@ -624,11 +627,7 @@ def experts_figure(measured: dict, path: str = EXPERTS_FIGURE) -> str:
         ax.legend(fontsize=8, loc="upper right")
     axes[0].set_ylabel("fitness")
     fig.suptitle("claim 8: more experts, 100 generations (shaded: within [0.8, 1.25] of 3 experts)", fontsize=10)
-    fig.tight_layout()
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def write_experts(out: str) -> dict:
