@@ -3,7 +3,7 @@
     python -m experiments.claims_study                  # run (or go on with) the screen, then the table
     python -m experiments.claims_study --only skills-bias0,paper-selector
     python -m experiments.claims_study --table          # docs/CLAIMS.md's table from what has run
-    python -m experiments.claims_study --table --only experts   # claim 8's table and figure alone (seconds)
+    python -m experiments.claims_study --table --only experts   # claim 8's tables and figure alone
 
 A rule set is a row of :data:`RULE_SETS`: a preset of ``imrl_jax.config`` and ``--set``
 overrides of values the paper does not state. Every run is at the paper's life lengths
@@ -533,12 +533,14 @@ EXPERTS_START = "<!-- claim 8 table: python -m experiments.claims_study --table 
 EXPERTS_END = "<!-- end of claim 8 table -->"
 
 
-def measure_experts(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
-    """Claim 8 for a rule set: its finished 4- and 6-expert runs against its own 3-expert ones."""
+def measure_experts(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION,
+                    summary: dict | None = None) -> dict:
+    """Claim 8 for a rule set: its finished 4- and 6-expert runs against its own 3-expert ones, and what each
+    run's best individuals do (:func:`experts_probe`; ``summary``: the reproduction report's, for its runs)."""
     from experiments.claims import claim_experts, final_best
     from experiments.loading import read_evolution, read_test
 
-    final, steady, sizes_ = {}, {}, {}
+    final, steady, sizes_, runs = {}, {}, {}, []
     for condition in EXPERT_CONDITIONS:
         for k in (3, *EXPERT_COUNTS):
             owner = experts_owner(rule, condition)
@@ -553,13 +555,40 @@ def measure_experts(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCT
                 sizes_[f"{condition} {k}"] = f"{len(run['seeds'])}x{len(run['best'])}"
             if test is not None:
                 steady[condition, k] = test["steady"]["steady_per_run"]
+            if done:
+                shared = summary if k == 3 and is_reproduction(owner) else None
+                runs.append(dict(rule=owner, condition=condition, num_experts=k, size=sizes_[f"{condition} {k}"],
+                                 **experts_probe(evolved, run["config"], shared, owner, condition)))
     claim = claim_experts(final, steady)
     expected = [(m, c, k) for m in ("final", "steady") for c in EXPERT_CONDITIONS for k in (3, *EXPERT_COUNTS)]
     have = {"final": final, "steady": steady}
     missing = [f"{c} {m} {k}" for m, c, k in expected if (c, k) not in have[m]]
     levels = [ExpertsLevel(rule.name, c, m, k, float(np.mean(v)), float(np.std(v, ddof=1)) if len(v) > 1 else 0.0,
                            len(v)) for m, values in have.items() for (c, k), v in sorted(values.items())]
-    return dict(claim, sizes=sizes_, missing=missing, levels=[level._asdict() for level in levels])
+    return dict(claim, sizes=sizes_, missing=missing, levels=[level._asdict() for level in levels], runs=runs)
+
+
+def experts_probe(evolved: str, config: dict, summary: dict | None = None, owner: str = "",
+                  condition: str = "") -> dict:
+    """A finished run's best genomes: each seed's best in 10 fresh lives, and the junction probe of each seed's 10
+    best (claim 7's: how many distinct colours an individual's experts follow, and how many experts follow none).
+
+    Kept beside the run (fresh.json, probe.json); a reproduction run (``summary`` given) is read from its report,
+    which keeps only the number of colours each individual follows."""
+    from experiments.claims import NUM_BEST
+    from experiments.relive import reproduction_fresh, run_fresh, run_probe
+
+    if summary is not None:
+        fresh = reproduction_fresh(summary, owner, condition)
+        distinct, idle = (summary.get("colours_followed") or {}).get(f"{owner}/{condition}"), None
+    else:
+        fresh, probe = run_fresh(evolved, config), run_probe(evolved, config, NUM_BEST)
+        followed = probe["followed"] if probe else None
+        distinct = None if followed is None else [len(set(f) - {-1}) for f in followed]
+        idle = None if followed is None else float(np.mean([sum(c == -1 for c in f) for f in followed]))
+    return dict(fresh=None if fresh is None else fresh["mean"], fresh_sd=None if fresh is None else fresh["sd_over_seeds"],
+                colours=None if distinct is None else [int(sum(d == c for d in distinct)) for c in range(4)],
+                idle_experts=idle)
 
 
 class ExpertsLevel(NamedTuple):
@@ -583,6 +612,36 @@ def experts_table(measured: dict) -> str:
         verdict = f"{claim['verdict']} so far (not finished: {', '.join(missing)})" if missing else claim["verdict"]
         lines.append(f"| `{name}` | {runs} | {verdict}: {claim['measured']} |")
     return "\n".join(lines)
+
+
+def experts_runs_table(measured: dict) -> str:
+    """Claim 8's runs as markdown, each once (a shared run under its owner): fitness, and what the best do."""
+    levels = {(p["rule"], p["condition"], p["measure"], p["num_experts"]): p
+              for claim in measured.values() for p in claim.get("levels", [])}
+    lines = ["| run | experts | seeds x generations | final best (recorded) | fresh lives (sd over seeds) | steady state "
+             "(sd over runs) | best individuals following 0/1/2/3 colours | experts following none (mean) |",
+             "|---|---|---|---|---|---|---|---|"]
+    seen = set()
+    for name, claim in measured.items():
+        for run in claim.get("runs", []):
+            if (run["rule"], run["condition"], run["num_experts"]) in seen:
+                continue
+            seen.add((run["rule"], run["condition"], run["num_experts"]))
+            final = levels.get((name, run["condition"], "final", run["num_experts"]))
+            steady = levels.get((name, run["condition"], "steady", run["num_experts"]))
+            cells = [f"{final['mean']:.3f}" if final else "-",
+                     "-" if run["fresh"] is None else f"{run['fresh']:.3f} ({run['fresh_sd']:.3f})",
+                     f"{steady['mean']:.3f} ({steady['sd']:.3f})" if steady else "-",
+                     "-" if run["colours"] is None else "/".join(map(str, run["colours"])),
+                     "-" if run["idle_experts"] is None else f"{run['idle_experts']:.1f}"]
+            lines.append(f"| {run['rule']} {run['condition']} | {run['num_experts']} | {run['size']} | "
+                         + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+#: Where claim 8's runs table goes in docs/CLAIMS.md.
+EXPERTS_RUNS_START = "<!-- claim 8 runs: python -m experiments.claims_study --table --only experts -->"
+EXPERTS_RUNS_END = "<!-- end of claim 8 runs -->"
 
 
 #: Claim 8's figure.
@@ -631,14 +690,21 @@ def experts_figure(measured: dict, path: str = EXPERTS_FIGURE) -> str:
 
 
 def write_experts(out: str) -> dict:
-    """Claim 8 of every rule set that runs it: claim8.json, docs/CLAIMS.md's table and the figure (runs nothing)."""
+    """Claim 8 of every rule set that runs it: claim8.json, docs/CLAIMS.md's tables and the figure (a run's fresh
+    lives and probe are computed once, about a minute, then kept beside it)."""
     import json
 
-    claim8 = {name: measure_experts(BY_NAME[name], out) for name in EXPERT_RULE_SETS}
+    summary_path = os.path.join("docs", "reproduction", "summary.json")
+    summary = None
+    if os.path.isfile(summary_path):
+        with open(summary_path) as f:
+            summary = json.load(f)
+    claim8 = {name: measure_experts(BY_NAME[name], out, summary=summary) for name in EXPERT_RULE_SETS}
     os.makedirs(out, exist_ok=True)
     with open(os.path.join(out, "claim8.json"), "w") as f:
         json.dump(claim8, f, indent=2, default=str)
     write_table(os.path.join("docs", "CLAIMS.md"), experts_table(claim8), EXPERTS_START, EXPERTS_END)
+    write_table(os.path.join("docs", "CLAIMS.md"), experts_runs_table(claim8), EXPERTS_RUNS_START, EXPERTS_RUNS_END)
     if any(claim["levels"] for claim in claim8.values()):
         experts_figure(claim8)
     return claim8
@@ -701,7 +767,7 @@ def main(argv=None) -> int:
         print(f"error: {error}", file=sys.stderr)
         return 2
     if args.table:
-        if args.only == EXPERTS:  # claim 8 alone: reads finished runs, measures nothing (seconds)
+        if args.only == EXPERTS:  # claim 8 alone: seconds, once each run's fresh lives and probe are kept
             for name, claim in write_experts(args.out).items():
                 print(f"claim 8, {name}: {claim['verdict']}{' so far' if claim['missing'] else ''}")
             return 0

@@ -206,7 +206,6 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
 
 #: The held-out individuals probed at junctions per seed (the report's claim-7 probe), and the key of their childhoods.
 PROBED, PROBE_KEY = 10, 0
-PROBE_FILE = "probe.json"
 COLOUR_NAMES = ("red", "green", "blue")
 
 
@@ -221,29 +220,16 @@ def colour_summary(followed: list[list[int]]) -> dict:
 
 def probe_held_out(out: str = OUT) -> dict:
     """The junction probe of each finished held-out evolution's best individuals (kept in ``probe.json``)."""
-    import json
-
-    from experiments.loading import best_of_population, read_json
-    from experiments.relive import followed_best, fresh_key
+    from experiments.loading import read_json
+    from experiments.relive import last_generation, run_probe
 
     probes = {}
     for condition in JUDGED:
         folder = os.path.join(out, "held_out", condition, "evolve")
-        population, saved = os.path.join(folder, "final_population.npz"), read_json(os.path.join(folder, "config.json"))
-        if saved is None or not os.path.isfile(population):
+        saved, best = read_json(os.path.join(folder, "config.json")), last_generation(folder)
+        if saved is None or best is None or int(best["generations"]) < saved["config"]["num_generations"]:
             continue
-        best = best_of_population(population, PROBED)
-        if best is None or int(best["generations"]) < saved["config"]["num_generations"]:
-            continue
-        key = fresh_key(best, saved["config"], num_lives=PROBED, seed=PROBE_KEY)
-        cached = read_json(os.path.join(folder, PROBE_FILE))
-        if cached is None or any(cached.get(k) != v for k, v in key.items()):
-            print(f"probing the best individuals of {folder}", flush=True)
-            cached = dict(key, followed=followed_best(saved["config"], best, PROBE_KEY))
-            with open(os.path.join(folder, PROBE_FILE + ".tmp"), "w") as f:
-                json.dump(cached, f)
-            os.replace(os.path.join(folder, PROBE_FILE + ".tmp"), os.path.join(folder, PROBE_FILE))
-        probes[condition] = colour_summary(cached["followed"])
+        probes[condition] = colour_summary(run_probe(folder, saved["config"], PROBED, PROBE_KEY)["followed"])
     return probes
 
 

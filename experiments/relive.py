@@ -89,6 +89,43 @@ def fresh_key(best: dict, config_dict: dict, num_lives: int = FRESH_LIVES, seed:
                 config_sha256=hashlib.sha256(json.dumps(config_dict, sort_keys=True).encode()).hexdigest())
 
 
+def last_generation(run_dir: str, num_best: int = 1) -> dict | None:
+    """Each seed's ``num_best`` fittest of an evolution's last evaluated generation (None without a population)."""
+    import os
+
+    from experiments.loading import best_of_population
+
+    population = os.path.join(run_dir, "final_population.npz")
+    return best_of_population(population, num_best) if os.path.isfile(population) else None
+
+
+def kept(path: str, key: dict, compute) -> dict:
+    """``compute()``'s numbers with ``key``, kept in ``path``: read back while ``key`` is the same, else computed
+    again and written whole (a killed report leaves no half file)."""
+    import json
+    import os
+
+    from experiments.loading import read_json
+
+    cached = read_json(path)
+    if cached is not None and all(cached.get(k) == v for k, v in key.items()):
+        return cached
+    out = dict(key, **compute())
+    with open(path + ".tmp", "w") as f:
+        json.dump(out, f, indent=2)
+    os.replace(path + ".tmp", path)
+    return out
+
+
+def run_config(run_dir: str, config_dict: dict | None = None) -> dict:
+    """An evolution's config as its config.json holds it (``config_dict`` when given)."""
+    import os
+
+    from experiments.loading import read_json
+
+    return config_dict if config_dict is not None else (read_json(os.path.join(run_dir, "config.json")) or {})["config"]
+
+
 def run_fresh(run_dir: str, config_dict: dict | None = None, num_lives: int = FRESH_LIVES,
               seed: int = FRESH_SEED) -> dict | None:
     """Fresh lives of each seed's best genome of an evolution's last generation (its final_population.npz).
@@ -98,30 +135,45 @@ def run_fresh(run_dir: str, config_dict: dict | None = None, num_lives: int = FR
     population. Returns the mean per seed,
     their mean and sd over seeds (ddof 1), and each genome's sd over its lives.
     """
-    import json
     import os
 
-    from experiments.loading import best_of_population, read_json
-
-    population = os.path.join(run_dir, "final_population.npz")
-    best = best_of_population(population) if os.path.isfile(population) else None
+    best = last_generation(run_dir)
     if best is None:
         return None
-    if config_dict is None:
-        config_dict = (read_json(os.path.join(run_dir, "config.json")) or {})["config"]
-    key = fresh_key(best, config_dict, num_lives, seed)
-    path = os.path.join(run_dir, FRESH_FILE)
-    cached = read_json(path)
-    if cached is not None and all(cached.get(k) == v for k, v in key.items()):
-        return cached
-    lives = fresh_fitness(config_dict, best, num_lives, seed)
-    means = [float(v) for v in lives["mean"]]
-    out = dict(key, mean_per_seed=means, sd_per_seed=[float(v) for v in lives["sd"]], mean=float(np.mean(means)),
-               sd_over_seeds=float(np.std(means, ddof=1)) if len(means) > 1 else 0.0)
-    with open(path + ".tmp", "w") as f:  # renamed when complete: a killed report leaves no half file
-        json.dump(out, f, indent=2)
-    os.replace(path + ".tmp", path)
-    return out
+    config_dict = run_config(run_dir, config_dict)
+
+    def live():
+        lives = fresh_fitness(config_dict, best, num_lives, seed)
+        means = [float(v) for v in lives["mean"]]
+        return dict(mean_per_seed=means, sd_per_seed=[float(v) for v in lives["sd"]], mean=float(np.mean(means)),
+                    sd_over_seeds=float(np.std(means, ddof=1)) if len(means) > 1 else 0.0)
+
+    return kept(os.path.join(run_dir, FRESH_FILE), fresh_key(best, config_dict, num_lives, seed), live)
+
+
+#: Where :func:`run_probe` keeps the junction probe of an evolution's best genomes, beside its final population.
+PROBE_FILE = "probe.json"
+
+
+def run_probe(run_dir: str, config_dict: dict | None = None, num_best: int = 10, key: int = 0) -> dict | None:
+    """The colour each expert follows (:func:`followed_best`) for each seed's ``num_best`` fittest genomes of an
+    evolution's last generation, as ``followed`` (seeds x best, in order).
+
+    Kept in ``run_dir/probe.json`` and probed again only when what it depends on changed (:func:`fresh_key`
+    with ``num_best`` and ``key`` for the lives and their key); None without a population.
+    """
+    import os
+
+    best = last_generation(run_dir, num_best)
+    if best is None:
+        return None
+    config_dict = run_config(run_dir, config_dict)
+
+    def probe():
+        print(f"probing the best individuals of {run_dir}", flush=True)
+        return dict(followed=followed_best(config_dict, best, key))
+
+    return kept(os.path.join(run_dir, PROBE_FILE), fresh_key(best, config_dict, num_lives=num_best, seed=key), probe)
 
 
 def reproduction_fresh(summary: dict, variant: str, condition: str) -> dict | None:

@@ -214,6 +214,10 @@ def test_claim_8_alone_measures_hand_made_runs_and_says_so_far_while_one_is_miss
     claim = study.measure_experts(study.BY_NAME["skills"], str(tmp_path))
     assert claim["sizes"] == {"LE-LS 3": "2x10", "LE-LS 4": "2x10", "LE-LS 6": "2x10", "EE-LS 3": "2x10", "EE-LS 4": "2x10"}
     assert claim["missing"] == ["EE-LS final 6", "EE-LS steady 6"]
+    # hand-made runs have no population to live or probe again
+    assert [(r["condition"], r["num_experts"], r["fresh"], r["colours"]) for r in claim["runs"]] == [
+        ("LE-LS", 3, None, None), ("LE-LS", 4, None, None), ("LE-LS", 6, None, None), ("EE-LS", 3, None, None),
+        ("EE-LS", 4, None, None)]
     # final best: mean of the last 5 generations, per seed; 0.72 / 0.8 = 0.9 and 0.45 / 0.5 = 0.9 are unchanged, 0.5 not
     assert claim["numbers"]["compared"]["LE-LS final 4 vs 3"]["ratio"] == pytest.approx(0.9)
     assert claim["numbers"]["compared"]["LE-LS final 6 vs 3"]["ratio"] == pytest.approx(0.5)
@@ -228,15 +232,66 @@ def test_claim_8_alone_measures_hand_made_runs_and_says_so_far_while_one_is_miss
 
 def test_claim_8_alone_writes_its_table_json_and_figure_and_keeps_the_rest(tmp_path, monkeypatch, capsys):
     (tmp_path / "docs").mkdir()
-    document = f"keep\n{study.TABLE_START}\nthe map\n{study.TABLE_END}\n{study.EXPERTS_START}\nold\n{study.EXPERTS_END}\n"
+    document = (f"keep\n{study.TABLE_START}\nthe map\n{study.TABLE_END}\n{study.EXPERTS_START}\nold\n{study.EXPERTS_END}\n"
+                f"{study.EXPERTS_RUNS_START}\nold\n{study.EXPERTS_RUNS_END}\n")
     (tmp_path / "docs" / "CLAIMS.md").write_text(document)
-    hand = dict(verdict=claims.HOLDS, measured="m", numbers={}, sizes={"LE-LS 4": "5x100"}, missing=[],
+    hand = dict(verdict=claims.HOLDS, measured="m", numbers={}, sizes={"LE-LS 4": "5x100"}, missing=[], runs=[],
                 levels=[dict(rule="skills", condition="LE-LS", measure=m, num_experts=k, mean=0.8, sd=0.01, count=5)
                         for m in ("final", "steady") for k in (3, 4, 6)])
-    monkeypatch.setattr(study, "measure_experts", lambda rule, out: dict(hand))
+    monkeypatch.setattr(study, "measure_experts", lambda rule, out, summary: dict(hand))
     monkeypatch.chdir(tmp_path)
     assert study.main(["--table", "--only", "experts", "--out", "claims"]) == 0
     assert capsys.readouterr().out.splitlines() == ["claim 8, skills: holds", "claim 8, paper-selector: holds"]
     text = (tmp_path / "docs" / "CLAIMS.md").read_text()
     assert text.startswith(f"keep\n{study.TABLE_START}\nthe map\n") and "| `paper-selector` | LE-LS 4: 5x100 | holds: m |" in text
     assert (tmp_path / "claims" / "claim8.json").exists() and (tmp_path / study.EXPERTS_FIGURE).stat().st_size > 10_000
+
+
+def test_claim_8_runs_table_shows_each_run_once_with_its_probe():
+    """A run two rule sets share (paper-selector's EE-LS is skills') is one row; what was not measured is '-'."""
+    def level(rule, condition, measure, k, mean):
+        return dict(rule=rule, condition=condition, measure=measure, num_experts=k, mean=mean, sd=0.01, count=5)
+
+    def run(rule, condition, k, **probe):
+        return dict(rule=rule, condition=condition, num_experts=k, size="5x100",
+                    **{**dict(fresh=None, fresh_sd=None, colours=None, idle_experts=None), **probe})
+
+    skills = dict(levels=[level("skills", "EE-LS", "final", 4, 0.344), level("skills", "EE-LS", "steady", 4, 0.378)],
+                  runs=[run("skills", "EE-LS", 4, fresh=0.322, fresh_sd=0.038, colours=[0, 20, 29, 1],
+                            idle_experts=1.6)])
+    faithful = dict(levels=[level("paper-selector", "EE-LS", "final", 4, 0.344),
+                            level("paper-selector", "LE-LS", "final", 4, 0.398)],
+                    runs=[run("skills", "EE-LS", 4), run("paper-selector", "LE-LS", 4)])
+    lines = study.experts_runs_table({"skills": skills, "paper-selector": faithful}).splitlines()
+    assert lines[2:] == ["| skills EE-LS | 4 | 5x100 | 0.344 | 0.322 (0.038) | 0.378 (0.010) | 0/20/29/1 | 1.6 |",
+                         "| paper-selector LE-LS | 4 | 5x100 | 0.398 | - | - | - | - |"]
+
+
+def test_run_probe_keeps_its_probe_until_the_population_moves_on(tmp_path, monkeypatch):
+    """run_probe probes each seed's best of final_population.npz once, keeps it in probe.json, probes again for
+    another generation or key; without a population there is nothing to probe."""
+    from experiments import relive
+
+    calls = []
+
+    def fake_followed(config_dict, best, key):
+        calls.append((best["genomes"][:, :, 0].tolist(), key))
+        return [[0, -1, 2]] * best["genomes"].shape[0] * best["genomes"].shape[1]
+
+    monkeypatch.setattr(relive, "followed_best", fake_followed)
+    assert relive.run_probe(str(tmp_path), {"c": 1}) is None
+    evaluated = np.arange(2 * 3 * 1, dtype=np.float32).reshape(2, 3, 1)  # 2 seeds, 3 lives, 1 gene
+
+    def save(generation):
+        np.savez(tmp_path / "final_population.npz", evaluated=evaluated, fitness=np.asarray([[0.1, 0.9, 0.5],
+                 [0.3, 0.2, 0.4]]), generation=generation, seeds=np.asarray([0, 1]))
+
+    save(3)
+    first = relive.run_probe(str(tmp_path), {"c": 1}, num_best=2, key=0)
+    assert calls == [([[1.0, 2.0], [5.0, 3.0]], 0)]  # each seed's two fittest, fittest first
+    assert first["followed"] == [[0, -1, 2]] * 4 and first["generations"] == 3
+    assert relive.run_probe(str(tmp_path), {"c": 1}, num_best=2, key=0) == first and len(calls) == 1
+    relive.run_probe(str(tmp_path), {"c": 1}, num_best=2, key=1)  # another key: probed again
+    save(4)
+    relive.run_probe(str(tmp_path), {"c": 1}, num_best=2, key=1)  # another generation: probed again
+    assert len(calls) == 3 and not (tmp_path / "probe.json.tmp").exists()
