@@ -311,9 +311,8 @@ def measure_runs(name: str, runs: RowRuns, reproduction_summary: dict, sle_whole
     LE-LS and EE-LS are probed here as the report probes them (LE-LS after a fresh childhood, then
     the junction probe), and each seed's best genome lives 10 fresh lives.
     """
-    from experiments.claims import final_best, measure
-    from experiments.loading import best_of_population
-    from experiments.relive import probe_best, run_fresh
+    from experiments.claims import NUM_BEST, final_best, measure
+    from experiments.relive import colours_followed, run_fresh, run_probe
 
     data = load_runs(name, runs)
     probes, lives, fresh = {}, {}, {}
@@ -328,8 +327,8 @@ def measure_runs(name: str, runs: RowRuns, reproduction_summary: dict, sle_whole
             per_seed = None  # a row without this condition's run (runs.evolutions lacks it) has nothing to live
             population = os.path.join(runs.evolutions.get(condition, ""), "final_population.npz")
             if run is not None and os.path.isfile(population):
-                best = best_of_population(population)
-                probes[name, condition] = probe_best(run["config"], best)
+                followed = run_probe(runs.evolutions[condition], run["config"], NUM_BEST)["followed"]
+                probes[name, condition] = colours_followed(followed)  # claim 7's probe, kept beside the run
                 print(f"fresh lives of each seed's best {condition} genome ({name})", flush=True)
                 per_seed = run_fresh(runs.evolutions[condition], run["config"])["mean_per_seed"]
         if run is not None and per_seed is not None:  # the recorded best beside the same genomes' fresh lives
@@ -576,7 +575,7 @@ def experts_probe(evolved: str, config: dict, summary: dict | None = None, owner
     Kept beside the run (fresh.json, probe.json); a reproduction run (``summary`` given) is read from its report,
     which keeps only the number of colours each individual follows."""
     from experiments.claims import NUM_BEST
-    from experiments.relive import reproduction_fresh, run_fresh, run_probe
+    from experiments.relive import colours_followed, reproduction_fresh, run_fresh, run_probe
 
     if summary is not None:
         fresh = reproduction_fresh(summary, owner, condition)
@@ -584,7 +583,7 @@ def experts_probe(evolved: str, config: dict, summary: dict | None = None, owner
     else:
         fresh, probe = run_fresh(evolved, config), run_probe(evolved, config, NUM_BEST)
         followed = probe["followed"] if probe else None
-        distinct = None if followed is None else [len(set(f) - {-1}) for f in followed]
+        distinct = None if followed is None else colours_followed(followed)
         idle = None if followed is None else float(np.mean([sum(c == -1 for c in f) for f in followed]))
     return dict(fresh=None if fresh is None else fresh["mean"], fresh_sd=None if fresh is None else fresh["sd_over_seeds"],
                 colours=None if distinct is None else [int(sum(d == c for d in distinct)) for c in range(4)],

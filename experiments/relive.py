@@ -206,6 +206,11 @@ def followed_best(config_dict: dict, best: dict, key: int = 0) -> list[list[int]
             for i in range(genomes.shape[0] * genomes.shape[1])]
 
 
+def colours_followed(followed: list[list[int]]) -> list[int]:
+    """Distinct colours followed (``Specialisation.num_colours``) by each individual, from the colour each expert follows."""
+    return [len(set(f) - {-1}) for f in followed]
+
+
 def probe_best(config_dict: dict, best: dict, key: int = 0) -> list[int]:
     """Distinct colours followed (``Specialisation.num_colours``) by each genome of ``best`` (seeds x best, in order)."""
-    return [len(set(followed) - {-1}) for followed in followed_best(config_dict, best, key)]
+    return colours_followed(followed_best(config_dict, best, key))

@@ -295,3 +295,36 @@ def test_run_probe_keeps_its_probe_until_the_population_moves_on(tmp_path, monke
     save(4)
     relive.run_probe(str(tmp_path), {"c": 1}, num_best=2, key=1)  # another generation: probed again
     assert len(calls) == 3 and not (tmp_path / "probe.json.tmp").exists()
+
+
+def test_a_rows_own_run_is_probed_once_for_claim_7_and_kept(tmp_path, monkeypatch):
+    """measure_runs probes a row's own LE-LS (claim 7's 10 best per seed, key 0) through run_probe: kept in
+    probe.json, so a second table probes nothing."""
+    import json
+
+    from experiments import relive
+
+    folder = tmp_path / "evolve" / "LE-LS"
+    folder.mkdir(parents=True)
+    rows = ["generation,seed,best"] + [f"{g},{s},0.4" for g in range(2) for s in range(2)]
+    (folder / "history.csv").write_text("\n".join(rows) + "\n")
+    (folder / "config.json").write_text(json.dumps({"config": {"num_generations": 2}}))
+    np.savez(folder / "final_population.npz", evaluated=np.zeros((2, 12, 3), np.float32),
+             fitness=np.tile(np.linspace(0, 1, 12), (2, 1)), generation=2, seeds=np.asarray([0, 1]))
+    calls = []
+
+    def fake_followed(config_dict, best, key):
+        calls.append((best["genomes"].shape, key))
+        return [[0, 1, 2], [0, -1, 0]] * 10  # 20 individuals: 3 colours, then 1
+
+    monkeypatch.setattr(relive, "followed_best", fake_followed)
+    monkeypatch.setattr(relive, "fresh_fitness", lambda c, b, n, s: dict(mean=np.asarray([0.3, 0.35]),
+                                                                         sd=np.asarray([0.01, 0.02])))
+    runs = study.RowRuns({"LE-LS": str(folder)}, {}, {})
+    first = study.measure_runs("row", runs, {})
+    assert calls == [((2, 10, 3), 0)] and (folder / "probe.json").exists()
+    assert first["fresh"]["LE-LS"] == pytest.approx(dict(recorded=0.4, fresh=0.325, fresh_sd_over_seeds=np.std(
+        [0.3, 0.35], ddof=1), seeds=2))
+    assert "LE-LS 0/10/0/10" in first["claims"][7]["measured"]  # 10 follow one colour, 10 all three
+    study.measure_runs("row", runs, {})
+    assert len(calls) == 1
