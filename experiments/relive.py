@@ -176,6 +176,32 @@ def run_probe(run_dir: str, config_dict: dict | None = None, num_best: int = 10,
     return kept(os.path.join(run_dir, PROBE_FILE), fresh_key(best, config_dict, num_lives=num_best, seed=key), probe)
 
 
+#: Where :func:`run_path` keeps the path probe of an evolution's fittest genome, beside its final population.
+PATH_FILE = "path.json"
+
+
+def run_path(run_dir: str, config_dict: dict | None = None) -> dict | None:
+    """The fittest genome of an evolution's last generation relived (:func:`relive_best`): claim 4's path probe.
+
+    Returns its stereotypy per task, speed, seed, recorded and relived fitness; kept in ``run_dir/path.json``
+    and relived again only when what it depends on changed (:func:`fresh_key`); None without a population.
+    """
+    import os
+
+    best = last_generation(run_dir)
+    if best is None:
+        return None
+    config_dict = run_config(run_dir, config_dict)
+
+    def path():
+        print(f"reliving the best individual of {run_dir} (its path)", flush=True)
+        life = relive_best(config_dict, best)
+        return dict(stereotypy_per_task=[float(v) for v in life["stereotypy_per_task"]], speed=float(life["speed"]),
+                    best_seed=life["seed"], fitness=life["fitness"], relived_fitness=life["relived_fitness"])
+
+    return kept(os.path.join(run_dir, PATH_FILE), fresh_key(best, config_dict, num_lives=1, seed=0), path)
+
+
 def reproduction_fresh(summary: dict, variant: str, condition: str) -> dict | None:
     """The reproduction report's fresh lives of a run (docs/reproduction/summary.json), in :func:`run_fresh`'s form."""
     entry = (summary.get("best_individuals") or {}).get(f"{variant}/{condition}") or {}

@@ -95,10 +95,10 @@ GA_SUMMARY = os.path.join("docs", "reproduction", "summary.json")
 SLE = "SLE"
 #: The claims that depend on the search (the evolutions, or the learning tests of what they found).
 CLAIM_NUMBERS = (1, 2, 3, 4, 6)
-#: Claim 4 for a strategy whose best EE-ES individual was not relived (no file holds its path).
-NO_PATH = ("the path probe (stereotypy) is not measured here: it needs the best EE-ES individual relived, so the "
-           "verdict rests on the fitness ratio alone and is at most partly")
 GA_PATH = f"the path is that of the reproduction's relived best EE-ES individual ({GA_SUMMARY})"
+#: Claim 4's path for a strategy: its own best EE-ES individual relived (experiments.relive.run_path).
+OWN_PATH = ("the fittest genome of the last generation relived, then each task driven "
+            "(`experiments.relive.run_path`, kept in the run's `path.json`)")
 #: Where the report's tables go in docs/SEARCH.md.
 TABLE_START = "<!-- search tables: python -m experiments.search --report -->"
 TABLE_END = "<!-- end of search tables -->"
@@ -137,7 +137,7 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, ga_summary: str = 
     from experiments.claims import (EVOLVED, claim_evolvability, claim_ee_es_about, claim_ee_ls_higher,
                                     claim_ordering, claim_reliability, final_best, plateau_generation)
     from experiments.loading import read_evolution, read_json, read_test
-    from experiments.relive import reproduction_fresh, run_fresh
+    from experiments.relive import reproduction_fresh, run_fresh, run_path
     from experiments.reproduce import owner
 
     summary = read_json(ga_summary) or {}
@@ -175,7 +175,9 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, ga_summary: str = 
         mine = {r["condition"]: r for r in rows if r["strategy"] == strategy}
         done = {c: r for c, r in mine.items() if r["finished"]}  # the claims judge finished evolutions only
         get = lambda d, c, k: d[c].get(k) if c in d else None  # noqa: E731
-        path = ga_path if strategy == GA_NAME else None
+        # the path of the best EE-ES individual: the GA's from the reproduction's report, a strategy's relived here
+        path = (ga_path if strategy == GA_NAME else
+                run_path(run_dirs(strategy, "EE-ES", out, reproduction)[0]) if "EE-ES" in done else None)
         claims[strategy] = {
             1: claim_evolvability({c: get(done, c, "plateau_generation") for c in EVOLVED}),
             2: claim_reliability({c: get(done, c, "final_best_sd") for c in EVOLVED}),
@@ -226,11 +228,12 @@ def table(measured: dict) -> str:
     for number in CLAIM_NUMBERS:
         for i, strategy in enumerate(shown):
             claim = measured["claims"][strategy][number]
-            note = "" if number != 4 else "; path: " + ("the GA's relived best EE-ES" if claim["path_probe"] else
-                                                         "not measured here")
+            note = "" if number != 4 else "; path: " + ("not measured" if not claim["path_probe"] else
+                                                         "the GA's relived best EE-ES" if strategy == GA_NAME else
+                                                         "its relived best EE-ES")
             lines.append(f"| {'' if i else f'{number}: {CLAIMS[number]}'} | {strategy} | **{claim['verdict']}** | "
                          f"{claim['measured']}{note} |")
-    lines += ["", f"Claim 4's path: for the GA, {GA_PATH}; for the others, {NO_PATH}. The rules are "
+    lines += ["", f"Claim 4's path: for the GA, {GA_PATH}; for the others, {OWN_PATH}. The rules are "
               "`experiments.claims.RULES`, as in [REPRODUCTION.md](REPRODUCTION.md); the claims judge finished "
               "evolutions only (n/a: a condition not finished), and a strategy with nothing run yet is left out."]
     return "\n".join(lines)

@@ -94,3 +94,55 @@ def test_report_measures_each_strategy_and_judges_its_claims(tmp_path):
     written = document.read_text()
     assert "old" not in written and written.startswith("intro\n") and written.endswith(f"{study.TABLE_END}\nend\n")
     assert json.loads((out / "report.json").read_text())["claims"]["ga"]["3"]["verdict"] == "n/a"
+
+
+def test_a_strategys_claim_4_uses_its_own_relived_best_ee_es(tmp_path, monkeypatch):
+    """A strategy's finished EE-ES is relived for claim 4's path (run_path on its run directory): with one circular
+    task of six and a fitness ratio of 0.5, the claim holds partly, and the table names the path's source."""
+    from experiments import relive
+
+    reproduction, out = tmp_path / "paper", tmp_path / "search"
+    for condition, value in (("EE-ES", 0.4), ("LE-LS", 0.8), ("EE-LS", 0.5)):
+        _fake_evolution(out / "snes" / condition / "evolve", [[value] * 6, [value] * 6])
+    asked = []
+
+    def fake_path(run_dir, config_dict=None):
+        asked.append(run_dir)
+        return dict(stereotypy_per_task=[0.9] + [0.5] * 5, speed=2.0)
+
+    monkeypatch.setattr(relive, "run_path", fake_path)
+    measured = study.measure(str(out), str(reproduction), str(tmp_path / "none.json"), generations=6)
+    claim = measured["claims"]["snes"][4]
+    assert asked == [str(out / "snes" / "EE-ES" / "evolve")]
+    assert claim["path_probe"] and claim["numbers"]["circular_tasks"] == 1 and claim["verdict"] == "partly"
+    assert "path: its relived best EE-ES |" in study.table(measured)
+
+
+def test_run_path_relives_the_fittest_once_until_the_population_moves_on(tmp_path, monkeypatch):
+    """run_path relives the fittest genome of final_population.npz's last generation once and keeps its path in
+    path.json; a later generation is relived again; without a population there is nothing to relive."""
+    import numpy as np
+
+    from experiments import relive
+
+    calls = []
+
+    def fake_relive(config_dict, best):
+        calls.append((best["genomes"][:, 0, 0].tolist(), best["fitness"][:, 0].tolist()))
+        return dict(stereotypy_per_task=[0.8] * 6, speed=1.5, seed=1, fitness=0.4, relived_fitness=0.4)
+
+    monkeypatch.setattr(relive, "relive_best", fake_relive)
+    assert relive.run_path(str(tmp_path), {"c": 1}) is None
+    evaluated = np.arange(2 * 3 * 1, dtype=np.float32).reshape(2, 3, 1)
+
+    def save(generation):
+        np.savez(tmp_path / "final_population.npz", evaluated=evaluated, fitness=np.asarray([[0.1, 0.9, 0.5],
+                 [0.3, 0.2, 0.4]]), generation=generation, seeds=np.asarray([0, 1]))
+
+    save(5)
+    first = relive.run_path(str(tmp_path), {"c": 1})
+    assert calls == [([1.0, 5.0], [0.9, 0.4])]  # each seed's fittest
+    assert first["stereotypy_per_task"] == [0.8] * 6 and first["best_seed"] == 1 and first["generations"] == 5
+    assert relive.run_path(str(tmp_path), {"c": 1}) == first and len(calls) == 1
+    save(6)
+    assert relive.run_path(str(tmp_path), {"c": 1})["generations"] == 6 and len(calls) == 2
