@@ -473,3 +473,146 @@ def claim_unseen(seen: dict, unseen: dict, num_se: float = ORDER_SE) -> dict:
     held = sum(c["stronger"] for c in compared.values())
     verdict = HOLDS if held == len(compared) else PARTLY if held else DOES_NOT
     return _claim(verdict, "; ".join(parts) + f" ({held} of {len(compared)} stronger unseen)", compared=compared)
+
+
+# ----------------------------------------------------------------------------- the paper's future work
+
+#: The paper's four future-work questions as statements to judge (docs/FUTURE_WORK.md), one per condition.
+FUTURE = {
+    "a": "Evolving criteria that guide learning (reinforcers, LE-LS; evaluators, EV-LS) is much easier than "
+         "evolving the behaviours themselves (actors, EE-LS).",
+    "b": "Intrinsic motivation is needed: with skills learned from evolved reinforcers (LE-LS) the hierarchy learns "
+         "much faster and ends higher than on the task's reward alone (EXT-LS).",
+    "c": "Evolution finds the learning values that `skills` set by hand, rather than the paper's.",
+    "d": "Three experts are enough: evolution keeps about three, and more do not pay.",
+}
+FEWEST_KEPT = 3.5  # (d): "keeps about three": the best's expressed experts, mean over seeds, at most this
+FUTURE_RULES = {
+    "a": f"For each criterion row against EE-LS: *much faster* = its plateau generation (claim 1's) is at most "
+         f"1/{MUCH_FASTER:g} of EE-LS's; *higher* = its final best fitness (claim 2's, per seed) exceeds EE-LS's by "
+         f"more than {ORDER_SE:g} standard errors (claim 3's). Easier = both. **holds** if every criterion row is "
+         f"easier; **partly** if one is much faster or higher; **does not hold** otherwise. Genome sizes and "
+         f"fresh-life fitness are shown, not judged.",
+    "b": f"Steady states (claim 6's, per run): *higher* = LE-LS's exceeds EXT-LS's by more than {ORDER_SE:g} "
+         f"standard errors. Speed: level = {PLATEAU_FRACTION:.0%} of the lower of the two steady states; cycles to "
+         f"it = the end of the first bin of the mean learning curve at or above it; *much faster* = LE-LS needs at "
+         f"most 1/{MUCH_FASTER:g} of EXT-LS's cycles (or EXT-LS never reaches it). **holds** if both; **partly** "
+         f"if one; **does not hold** (the hierarchy on the task's reward is enough) if neither. EXT-LS against SLE "
+         f"(the hierarchy against a flat learner, the same noise) is shown as claim 6's pairs are.",
+    "c": f"For each learning value on which `skills` and the paper differ: its position in its gene's range (the "
+         f"decoding map of MODEL.md, log scale for rates and for 1 - discount; 0-1) for each seed's best individual "
+         f"of the last generation, mean over seeds; *nearer skills* when that is nearer `skills`' position than the "
+         f"paper's. **holds** if every such value is nearer skills; **partly** if some; **does not hold** if none. "
+         f"The values on which they agree and the evolved childhood length are shown, not judged.",
+    "d": f"*Keeps about three* = each seed's best individual of the last generation expresses at most "
+         f"{FEWEST_KEPT:g} experts on average over seeds; *more do not pay* = the evolved-number row's final best "
+         f"fitness is not above LE-LS's with 3 experts by more than {ORDER_SE:g} standard errors. **holds** if both; "
+         f"**partly** if one; **does not hold** if neither. The comparison with 6 experts all expressed is shown.",
+}
+
+
+def _difference(a, b) -> tuple[float, float]:
+    """mean(a) - mean(b) and its standard error (claim 3's)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return float(a.mean() - b.mean()), _standard_error(a, b)
+
+
+def _easier(faster: bool, higher: bool) -> str:
+    return "easier" if faster and higher else "faster" if faster else "higher" if higher else "not easier"
+
+
+def claim_criteria_easier(criteria: dict, actors: dict | None) -> dict:
+    """(a) from each criterion row's and EE-LS's evolution: ``dict(plateau, final_per_seed, fresh, genes)`` each."""
+    if actors is None or not criteria:
+        return _claim(NOT_AVAILABLE, "-")
+    compared, parts = {}, []
+    for name, row in criteria.items():
+        d, se = _difference(row["final_per_seed"], actors["final_per_seed"])
+        p, q = row["plateau"], actors["plateau"]
+        faster = p is not None and q is not None and MUCH_FASTER * p <= q
+        higher = d > ORDER_SE * se
+        compared[name] = dict(difference=d, standard_error=se, much_faster=faster, higher=higher)
+        parts.append(f"{name} ({row['genes']} genes): plateau {_fmt(p)}, final {np.mean(row['final_per_seed']):.3f}, "
+                     f"fresh {_fmt(row.get('fresh'))}; d = {d:+.3f} +- {se:.3f}"
+                     f" ({_easier(faster, higher)})")
+    measured = (f"EE-LS ({actors['genes']} genes): plateau {_fmt(actors['plateau'])}, final "
+                f"{np.mean(actors['final_per_seed']):.3f}, fresh {_fmt(actors.get('fresh'))}; " + "; ".join(parts))
+    easier = [c["much_faster"] and c["higher"] for c in compared.values()]
+    some = any(c["much_faster"] or c["higher"] for c in compared.values())
+    verdict = HOLDS if all(easier) else PARTLY if some else DOES_NOT
+    return _claim(verdict, measured, compared=compared)
+
+
+def claim_motivation_needed(extrinsic: dict | None, skilled: dict | None, flat: dict | None = None) -> dict:
+    """(b) from EXT-LS's, LE-LS's and SLE's learning tests: ``dict(steps, mean, per_run)`` each (the mean curve)."""
+    if extrinsic is None or skilled is None:
+        return _claim(NOT_AVAILABLE, "-")
+    ext, le = np.asarray(extrinsic["per_run"], float), np.asarray(skilled["per_run"], float)
+    order = pair_order(le, ext)
+    level = PLATEAU_FRACTION * min(ext.mean(), le.mean())
+    cycles = {n: first_reach(t["steps"], t["mean"], level) if level > 0 else None
+              for n, t in (("LE-LS", skilled), ("EXT-LS", extrinsic))}
+    own, theirs = cycles["LE-LS"], cycles["EXT-LS"]
+    faster = own is not None and (theirs is None or MUCH_FASTER * own <= theirs)
+    measured = (f"steady LE-LS {le.mean():.3f} vs EXT-LS {ext.mean():.3f} ({order}); cycles to {level:.3f}: LE-LS "
+                f"{_fmt(cycles['LE-LS'])}, EXT-LS {_fmt(cycles['EXT-LS'])}")
+    numbers = dict(order=order, level=level, cycles=cycles, much_faster=faster)
+    if flat is not None:
+        numbers["against_flat"] = pair_order(ext, flat["per_run"])
+        measured += f"; EXT-LS vs SLE {np.mean(flat['per_run']):.3f}: {numbers['against_flat']}"
+    higher = order == "in order"
+    verdict = HOLDS if faster and higher else PARTLY if faster or higher else DOES_NOT
+    return _claim(verdict, measured, **numbers)
+
+
+def map_position(name: str, value: float) -> float:
+    """Where a learning value lies in its gene's range (:data:`imrl_jax.conditions.EVOLVED_PARAMETERS`): 0-1."""
+    from imrl_jax.conditions import EVOLVED_PARAMETERS
+
+    kind, lo, hi = next((kind, lo, hi) for n, kind, lo, hi in EVOLVED_PARAMETERS if n == name)
+    x = {"log": lambda v: math.log10(max(v, 1e-300)), "1-log": lambda v: math.log10(max(1.0 - v, 1e-300)),
+         "linear": lambda v: v}[kind](value)
+    return min(max((x - lo) / (hi - lo), 0.0), 1.0)
+
+
+def claim_hand_values(best_values: dict, skills: dict, paper: dict) -> dict:
+    """(c) from each seed's best individual's evolved values ``best_values[name]`` (a list over seeds) and the
+    values `skills` and the paper set by hand."""
+    from imrl_jax.conditions import EVOLVED_FIELDS
+
+    if not best_values:
+        return _claim(NOT_AVAILABLE, "-")
+    differing = [n for n in EVOLVED_FIELDS if n in best_values and skills[n] != paper[n]]
+    nearer, parts = {}, []
+    for name in differing:
+        u = float(np.mean([map_position(name, v) for v in best_values[name]]))
+        us, up = map_position(name, skills[name]), map_position(name, paper[name])
+        nearer[name] = "skills" if abs(u - us) < abs(u - up) else "paper"
+        parts.append(f"{name} {np.mean(best_values[name]):.3g} at {u:.2f} (skills {skills[name]:g} at {us:.2f}, "
+                     f"paper {paper[name]:g} at {up:.2f}): {nearer[name]}")
+    if "childhood_length" in best_values:
+        parts.append(f"childhood length {np.mean(best_values['childhood_length']):,.0f} of "
+                     f"{skills['childhood_length']:,.0f}")
+    held = sum(v == "skills" for v in nearer.values())
+    verdict = NOT_AVAILABLE if not nearer else HOLDS if held == len(nearer) else PARTLY if held else DOES_NOT
+    return _claim(verdict, "; ".join(parts) + f" ({held} of {len(nearer)} nearer skills)", nearer=nearer)
+
+
+def claim_three_enough(kept, evolved_final, three_final, six_final=None) -> dict:
+    """(d) from each seed's best's expressed experts ``kept`` and the per-seed final best fitness of the evolved
+    number, of 3 experts and (shown) of 6 all expressed."""
+    if kept is None or not len(kept) or evolved_final is None or three_final is None:
+        return _claim(NOT_AVAILABLE, "-")
+    about_three = float(np.mean(kept)) <= FEWEST_KEPT
+    d, se = _difference(evolved_final, three_final)
+    no_gain = d <= ORDER_SE * se
+    measured = (f"the best express {np.mean(kept):.2f} experts (mean over seeds); final best "
+                f"{np.mean(evolved_final):.3f} vs 3 experts {np.mean(three_final):.3f}: d = {d:+.3f} +- {se:.3f}")
+    numbers = dict(kept=float(np.mean(kept)), about_three=about_three, difference=d, standard_error=se,
+                   no_gain=no_gain)
+    if six_final is not None:
+        d6, se6 = _difference(evolved_final, six_final)
+        numbers.update(difference_six=d6, standard_error_six=se6)
+        measured += f"; vs 6 all expressed {np.mean(six_final):.3f}: d = {d6:+.3f} +- {se6:.3f}"
+    verdict = HOLDS if about_three and no_gain else PARTLY if about_three or no_gain else DOES_NOT
+    return _claim(verdict, measured, **numbers)

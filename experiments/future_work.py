@@ -128,6 +128,29 @@ HAND_PRESETS = ("skills", "paper", "faithful")
 #: (d)'s rows, each with what its fitness is compared with: 6 experts all expressed, and the reproduction's 3.
 EXPERTS_ROWS = (("LE-LS-N6", ("LE-LS-6", "skills LE-LS")),
                 ("LE-LS-N6-faithful", ("LE-LS-6-faithful", "faithful LE-LS")))
+
+
+class Judged(NamedTuple):
+    """One verdict of the report: a question of the paper's (``claims.FUTURE``) on some rows, under a rule set."""
+
+    question: str  # "a" to "d"
+    rules: str  # the rule set, in words
+    rows: tuple[str, ...]  # (a): EE-LS, then the criterion rows; (b): EXT-LS, LE-LS, SLE; (c): the row;
+    # (d): the evolved number, 3 experts, 6 all expressed
+
+
+JUDGED: tuple[Judged, ...] = (
+    Judged("a", "skills", ("skills EE-LS", "skills LE-LS", "EV-LS", "EV-LS-diff")),
+    Judged("a", "faithful (its EE-LS is skills')", ("skills EE-LS", "faithful LE-LS", "EV-LS-faithful")),
+    Judged("b", "skills, noise over 100,000 cycles", ("EXT-LS", "skills LE-LS", "skills SLE")),
+    Judged("b", "skills, noise over the whole test", ("EXT-LS-whole", "skills LE-LS", "skills SLE-whole")),
+    Judged("b", "faithful", ("EXT-LS-faithful", "faithful LE-LS", "faithful SLE")),
+    Judged("c", "skills", ("LE-LS-P",)),
+    Judged("c", "skills, childhood length evolved", ("LE-LS-PC",)),
+    Judged("c", "faithful", ("LE-LS-P-faithful",)),
+    Judged("d", "skills", ("LE-LS-N6", "skills LE-LS", "LE-LS-6")),
+    Judged("d", "faithful", ("LE-LS-N6-faithful", "faithful LE-LS", "LE-LS-6-faithful")),
+)
 #: The generations of (d)'s table of expressed experts (the last one is added).
 GENERATIONS_SHOWN = (0, 10, 25, 50)
 NOT_RUN = "not run yet"
@@ -200,7 +223,8 @@ def _test(out_dir: str) -> dict | None:
     per_run = np.asarray(test["steady"]["steady_per_run"], float)
     return dict(dir=out_dir, runs=len(per_run), steady_mean=float(per_run.mean()), steady_sd=float(per_run.std()),
                 steady_best_run=float(per_run.max()), steady_per_run=per_run.tolist(),
-                sle_noise_steps=(test["steady"].get("config") or {}).get("sle_noise_steps"))
+                sle_noise_steps=(test["steady"].get("config") or {}).get("sle_noise_steps"),
+                curve_steps=[int(v) for v in test["steps"]], curve_mean=[float(v) for v in test["mean"]])
 
 
 def _last_values(run_dir: str, evolution: dict | None) -> dict | None:
@@ -208,8 +232,10 @@ def _last_values(run_dir: str, evolution: dict | None) -> dict | None:
     traits = read_traits(run_dir) if evolution and evolution["finished"] else None
     if traits is None:
         return None
-    last = traits["values"][-1].mean(0)  # (values, 2)
-    return {n: dict(mean=float(last[t, 0]), best=float(last[t, 1])) for t, n in enumerate(traits["names"])}
+    values = traits["values"][-1]  # (seeds, values, 2)
+    last = values.mean(0)
+    return {n: dict(mean=float(last[t, 0]), best=float(last[t, 1]), best_per_seed=values[:, t, 1].tolist())
+            for t, n in enumerate(traits["names"])}
 
 
 def _expressed(run_dir: str, evolution: dict | None) -> list[dict] | None:
@@ -223,7 +249,8 @@ def _expressed(run_dir: str, evolution: dict | None) -> list[dict] | None:
     shown = sorted({g for g in GENERATIONS_SHOWN if g < len(values)} | {len(values) - 1})
     e = names.index("expressed_experts")
     return [dict(generation=g, mean=float(values[g, e, 0]), best=float(values[g, e, 1]),
-                 shares={k: float(values[g, names.index(f"share_{k}_experts"), 0]) for k in counts}) for g in shown]
+                 shares={k: float(values[g, names.index(f"share_{k}_experts"), 0]) for k in counts},
+                 best_per_seed=traits["values"][g, :, e, 1].tolist()) for g in shown]
 
 
 def _noise(test: dict | None) -> str:
@@ -289,8 +316,72 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = S
                                      difference=float(a.mean() - b.mean()), standard_error=_standard_error(a, b)))
         experts.append(dict(row=row, against=list(others), compared=compared,
                             generations=_expressed(os.path.join(out, row, "evolve"), by_name[row]["evolution"])))
-    return dict(rows=rows, learning_values=dict(names=list(names), hand=hand, evolved=evolved_values),
-                experts=experts)
+    measured = dict(rows=rows, learning_values=dict(names=list(names), hand=hand, evolved=evolved_values),
+                    experts=experts)
+    measured["verdicts"] = judge(measured)
+    return measured
+
+
+def judge(measured: dict) -> list[dict]:
+    """The verdicts of :data:`JUDGED` from :func:`measure`'s rows, (c)'s evolved values and (d)'s experts."""
+    from experiments import claims
+    from imrl_jax.config import make_config
+
+    rows = {r["name"]: r for r in measured["rows"]}
+
+    def evolution(name):
+        r = rows[name]
+        e = r["evolution"]
+        if not (e or {}).get("finished"):
+            return None
+        return dict(plateau=e["plateau_generation"], final_per_seed=e["final_best_per_seed"], fresh=e.get("fresh"),
+                    genes=make_config(r["preset"], condition=r["condition"]).num_genes)
+
+    def test(name):
+        t = rows[name]["test"]
+        return None if t is None else dict(steps=t["curve_steps"], mean=t["curve_mean"], per_run=t["steady_per_run"])
+
+    final = lambda name: (rows[name]["evolution"] or {}).get("final_best_per_seed")  # noqa: E731
+    experts = {e["row"]: e for e in measured["experts"]}
+    hand = measured["learning_values"]["hand"]
+    out = []
+    for j in JUDGED:
+        if j.question == "a":
+            criteria = {n: evolution(n) for n in j.rows[1:]}
+            claim = claims.claim_criteria_easier({n: c for n, c in criteria.items() if c is not None},
+                                                 evolution(j.rows[0]))
+        elif j.question == "b":
+            claim = claims.claim_motivation_needed(*(test(n) for n in j.rows))
+        elif j.question == "c":
+            evolved = measured["learning_values"]["evolved"].get(j.rows[0])
+            claim = claims.claim_hand_values({n: v["best_per_seed"] for n, v in (evolved or {}).items()},
+                                             hand["skills"], hand["paper"])
+        else:
+            shown = (experts.get(j.rows[0]) or {}).get("generations")
+            claim = claims.claim_three_enough(shown[-1]["best_per_seed"] if shown else None, final(j.rows[0]),
+                                              final(j.rows[1]), final(j.rows[2]))
+        # (a) judges the criterion rows that finished; the others are named until they have
+        missing = [n for n in j.rows[1:] if j.question == "a" and evolution(n) is None]
+        out.append(dict(question=j.question, rules=j.rules, rows=list(j.rows), missing=missing, **claim))
+    return out
+
+
+def verdict_lines(verdicts: list[dict]) -> list[str]:
+    """The verdicts' table and the rules behind them."""
+    from experiments.claims import FUTURE, FUTURE_RULES
+
+    lines = ["| question | rules | rows | verdict | measured |", "|---|---|---|---|---|"]
+    shown = set()
+    for v in verdicts:
+        first = v["question"] not in shown
+        shown.add(v["question"])
+        question = f"({v['question']}) {FUTURE[v['question']]}" if first else ""
+        verdict = f"**{v['verdict']}**" + (f" so far (not finished: {', '.join(v['missing'])})"
+                                             if v["missing"] and v["verdict"] != "n/a" else "")
+        lines.append(f"| {question} | {v['rules']} | {', '.join(v['rows'])} | {verdict} | {v['measured']} |")
+    lines += ["", "Rules (n/a: a row not finished yet):", ""]
+    lines += [f"- ({q}) {rule}" for q, rule in FUTURE_RULES.items()]
+    return lines
 
 
 def _value(v: float) -> str:
@@ -345,6 +436,7 @@ def table(measured: dict) -> str:
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
     for experts in measured["experts"]:
         lines += _experts_lines(experts, measured["rows"])
+    lines += ["", "The paper's questions, each with its verdict:", ""] + verdict_lines(measured["verdicts"])
     return "\n".join(lines)
 
 

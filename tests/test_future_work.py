@@ -1,6 +1,7 @@
 """The future-work study's plan (each new row evolved or tested from scratch), and the evolved values evolve records."""
 
 import json
+import math
 import os
 
 import pytest
@@ -225,7 +226,9 @@ def test_measure_reads_every_finished_row_and_the_reproductions(tmp_path):
     assert rows["EXT-LS"]["test"]["steady_sd"] == pytest.approx((0.02 / 3) ** 0.5)  # ddof 0
     evolved = measured["learning_values"]["evolved"]
     assert evolved["LE-LS-PC"] is None and set(evolved["LE-LS-P"]) == {"gamma", "eta_actor"}
-    assert evolved["LE-LS-P"]["gamma"] == pytest.approx(dict(mean=0.96, best=0.985))
+    gamma = evolved["LE-LS-P"]["gamma"]
+    assert (gamma["mean"], gamma["best"]) == pytest.approx((0.96, 0.985))
+    assert gamma["best_per_seed"] == pytest.approx([0.98, 0.99])
     assert measured["learning_values"]["hand"]["skills"]["trace_lambda"] == 0.98
     assert measured["learning_values"]["hand"]["paper"]["childhood_length"] == 150_000
     assert measured["learning_values"]["hand"]["faithful"]["trace_lambda"] == 0.98
@@ -281,7 +284,7 @@ def test_report_writes_the_json_the_figure_and_the_tables(tmp_path, capsys):
     assert study.report(out, str(document), reproduction, sle_whole, claims, summary) == 0
     text = document.read_text()
     assert text.startswith(f"intro\n{study.TABLE_START}\n| row |") and text.endswith(f"{study.TABLE_END}\nend\n")
-    assert "old" not in text and "| against LE-LS-6 | 0.750 |" in text
+    assert "\nold\n" not in text and "| against LE-LS-6 | 0.750 |" in text
     with open(os.path.join(out, "report.json")) as f:
         saved = json.load(f)
     assert saved["rows"][0]["evolution"]["final_best_per_seed"] == pytest.approx([0.48, 0.68])
@@ -289,3 +292,94 @@ def test_report_writes_the_json_the_figure_and_the_tables(tmp_path, capsys):
     assert "9 of 20 rows have finished stages" in capsys.readouterr().out
     # nothing finished: both panels say so
     assert os.path.getsize(study.figure(study.measure(*(str(tmp_path / "none"),) * 5), str(tmp_path / "empty.png")))
+
+
+def test_criteria_are_easier_when_much_faster_and_higher():
+    """(a): LE-LS plateaus at 7 against EE-LS's 50 (<= 25) and ends 0.34 higher (se 0.051): easier; EV-LS at 30
+    (> 25) and 0.1 higher with se 0.071 (< 2 se): not easier."""
+    from experiments import claims
+
+    actors = dict(plateau=50, final_per_seed=[0.4, 0.5], fresh=0.4, genes=222)
+    le_ls = dict(plateau=7, final_per_seed=[0.8, 0.78], fresh=0.7, genes=111)
+    ev_ls = dict(plateau=30, final_per_seed=[0.5, 0.6], fresh=None, genes=111)
+    both = claims.claim_criteria_easier({"LE-LS": le_ls, "EV-LS": ev_ls}, actors)
+    assert both["verdict"] == "partly" and both["numbers"]["compared"]["LE-LS"]["much_faster"]
+    assert both["numbers"]["compared"]["LE-LS"]["standard_error"] == pytest.approx(0.0026 ** 0.5)
+    assert not both["numbers"]["compared"]["EV-LS"]["higher"]
+    assert "LE-LS (111 genes): plateau 7, final 0.790, fresh 0.700; d = +0.340 +- 0.051 (easier)" in both["measured"]
+    assert claims.claim_criteria_easier({"LE-LS": le_ls}, actors)["verdict"] == "holds"
+    assert claims.claim_criteria_easier({"EV-LS": ev_ls}, actors)["verdict"] == "does not hold"
+    assert claims.claim_criteria_easier({"LE-LS": le_ls}, None)["verdict"] == "n/a"
+
+
+def test_motivation_is_needed_when_skills_learn_much_faster_and_end_higher():
+    """(b): the level is 0.9 x 0.6 = 0.54; LE-LS reaches it at 2,000 cycles, EXT-LS at 4,000 (2x): much faster,
+    and 0.85 against 0.6 is in order; with EXT-LS at 0.54 by 2,000 only the steady state differs."""
+    from experiments import claims
+
+    steps = [1000, 2000, 3000, 4000]
+    skilled = dict(steps=steps, mean=[0.5, 0.8, 0.85, 0.85], per_run=[0.84, 0.86])
+    extrinsic = dict(steps=steps, mean=[0.1, 0.3, 0.5, 0.6], per_run=[0.59, 0.61])
+    claim = claims.claim_motivation_needed(extrinsic, skilled, dict(per_run=[0.4, 0.4]))
+    assert claim["verdict"] == "holds" and claim["numbers"]["cycles"] == {"LE-LS": 2000, "EXT-LS": 4000}
+    assert claim["numbers"]["level"] == pytest.approx(0.54) and claim["numbers"]["against_flat"] == "in order"
+    quick = dict(extrinsic, mean=[0.1, 0.6, 0.6, 0.6])
+    assert claims.claim_motivation_needed(quick, skilled)["verdict"] == "partly"
+    level = dict(quick, per_run=[0.84, 0.86])  # as high and as fast: the hierarchy alone is enough
+    assert claims.claim_motivation_needed(dict(level, mean=[0.5, 0.8, 0.85, 0.85]), skilled)["verdict"] == \
+        "does not hold"
+    assert claims.claim_motivation_needed(None, skilled)["verdict"] == "n/a"
+
+
+def test_map_positions_and_which_hand_values_evolution_finds():
+    """(c): positions in the genes' ranges by hand (MODEL.md's maps), then trace_lambda evolved nearer skills'
+    0.98 and the speed bias nearer the paper's 0: partly; gamma, the same in both, is not judged."""
+    from experiments import claims
+
+    assert claims.map_position("gamma", 0.99) == pytest.approx(0.4)  # log10(0.01) = -2 in [-3, -0.5]
+    assert claims.map_position("trace_lambda", 0.0) == 1.0 and claims.map_position("eta_actor", 1e-6) == 0.0
+    assert claims.map_position("eta_selector_actor", 0.3) == pytest.approx((4 + math.log10(0.3)) / 4)
+    assert claims.map_position("initial_speed_bias", 4.0) == pytest.approx(0.75)
+    skills = dict(trace_lambda=0.98, initial_speed_bias=4.0, gamma=0.99, childhood_length=150_000.0)
+    paper = dict(skills, trace_lambda=0.0, initial_speed_bias=0.0)
+    claim = claims.claim_hand_values(dict(trace_lambda=[0.97, 0.99], initial_speed_bias=[0.5, 1.0], gamma=[0.9],
+                                          childhood_length=[100_000, 120_000]), skills, paper)
+    assert claim["verdict"] == "partly"
+    assert claim["numbers"]["nearer"] == {"trace_lambda": "skills", "initial_speed_bias": "paper"}
+    assert "childhood length 110,000 of 150,000" in claim["measured"]
+    assert claims.claim_hand_values(dict(trace_lambda=[0.98]), skills, paper)["verdict"] == "holds"
+    assert claims.claim_hand_values(dict(gamma=[0.9]), skills, paper)["verdict"] == "n/a"  # nothing to tell apart
+    assert claims.claim_hand_values({}, skills, paper)["verdict"] == "n/a"
+
+
+def test_three_experts_are_enough_when_evolution_keeps_about_three_and_more_do_not_pay():
+    """(d): 3.5 kept is about three; 0.81 against 0.79 is +0.02 with se 0.014 (< 2 se): no gain."""
+    from experiments import claims
+
+    claim = claims.claim_three_enough([3, 4], [0.8, 0.82], [0.78, 0.8], [0.6, 0.6])
+    assert claim["verdict"] == "holds" and claim["numbers"]["standard_error"] == pytest.approx(0.0002 ** 0.5)
+    assert claim["numbers"]["difference_six"] == pytest.approx(0.21)
+    assert claims.claim_three_enough([4, 5], [0.8, 0.82], [0.78, 0.8])["verdict"] == "partly"
+    assert claims.claim_three_enough([4, 5], [0.9, 0.92], [0.78, 0.8])["verdict"] == "does not hold"
+    assert claims.claim_three_enough(None, [0.9], [0.8])["verdict"] == "n/a"
+
+
+def test_the_report_judges_each_question_from_its_rows(tmp_path):
+    """The hand-made study: (d) holds (its best keep 3 experts; 0.75 against 0.58 is +0.17 with se 0.112); (a)
+    does not hold so far (LE-LS 0.58 against EE-LS 0.60, plateau 2 against 0), EV-LS still running; (c) has
+    nothing to tell apart (gamma and eta_actor are the same under skills and the paper)."""
+    measured = study.measure(*_fake_study(tmp_path))
+    verdicts = {(v["question"], v["rules"]): v for v in measured["verdicts"]}
+    assert len(verdicts) == len(study.JUDGED)
+    d = verdicts["d", "skills"]
+    assert d["verdict"] == "holds" and d["numbers"]["kept"] == 3.0 and d["numbers"]["difference"] == pytest.approx(0.17)
+    a = verdicts["a", "skills"]
+    assert a["verdict"] == "does not hold" and a["missing"] == ["EV-LS", "EV-LS-diff"]
+    assert verdicts["c", "skills"]["verdict"] == "n/a" and verdicts["d", "faithful"]["verdict"] == "n/a"
+    b = verdicts["b", "skills, noise over 100,000 cycles"]  # 0.85 against 0.70: d 0.15 < 2 x 0.076; 0.63 not reached
+    assert b["verdict"] == "does not hold" and b["numbers"]["order"] == "tied"
+    assert b["numbers"]["against_flat"] == "in order"
+    text = study.table(measured).splitlines()
+    assert any(line.startswith("| (a) Evolving criteria") and "**does not hold** so far (not finished: EV-LS, "
+               "EV-LS-diff)" in line for line in text)
+    assert any(line.startswith("| (d) Three experts are enough") and "| **holds** |" in line for line in text)
