@@ -96,6 +96,8 @@ SLE = "SLE"
 #: The claims that depend on the search (the evolutions, or the learning tests of what they found).
 CLAIM_NUMBERS = (1, 2, 3, 4, 6)
 GA_PATH = f"the path is that of the reproduction's relived best EE-ES individual ({GA_SUMMARY})"
+#: The conditions whose experts the junction probe checks (claim 7's probe: does the search find accurate experts?).
+PROBED = ("EE-LS", "LE-LS")
 #: Claim 4's path for a strategy: its own best EE-ES individual relived (experiments.relive.run_path).
 OWN_PATH = ("the fittest genome of the last generation relived, then each task driven "
             "(`experiments.relive.run_path`, kept in the run's `path.json`)")
@@ -134,10 +136,12 @@ def _ga_path(summary_path: str) -> dict | None:
 def measure(out: str = OUT, reproduction: str = REPRODUCTION, ga_summary: str = GA_SUMMARY,
             generations: int = SCREEN["generations"]) -> dict:
     """Per strategy and condition the evolution's and learning test's numbers, and claims 1-4 and 6 per strategy."""
+    import numpy as np
+
     from experiments.claims import (EVOLVED, claim_evolvability, claim_ee_es_about, claim_ee_ls_higher,
                                     claim_ordering, claim_reliability, final_best, plateau_generation)
     from experiments.loading import read_evolution, read_json, read_test
-    from experiments.relive import reproduction_fresh, run_fresh, run_path
+    from experiments.relive import colours_followed, reproduction_fresh, run_fresh, run_path, run_probe
     from experiments.reproduce import owner
 
     summary = read_json(ga_summary) or {}
@@ -164,6 +168,15 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, ga_summary: str = 
                          else run_fresh(evolved, run["config"]))
                 if fresh is not None:
                     row.update(fresh_mean=fresh["mean"], fresh_sd=fresh["sd_over_seeds"])
+                if condition in PROBED:  # claim 7's probe of each seed's 10 best: the GA's from the reproduction
+                    if strategy == GA_NAME:
+                        colours = (summary.get("colours_followed") or {}).get(f"{owner(PRESET, condition)}/{condition}")
+                    else:
+                        probe = run_probe(evolved, run["config"])
+                        colours = None if probe is None else colours_followed(probe["followed"])
+                    if colours:
+                        row.update(colours_mean=float(np.mean(colours)),
+                                   specialised_share=float(np.mean(np.asarray(colours) == 3)), probed=len(colours))
             if test is not None:
                 row.update(_steady(test))
             rows.append(row)
@@ -201,23 +214,29 @@ def table(measured: dict) -> str:
     from experiments.claims import CLAIMS, LAST_GENERATIONS, PLATEAU_FRACTION
 
     lines = ["| strategy | condition | seeds | generations | final best fitness | sd over seeds | fresh lives (sd over "
-             "seeds) | plateau generation | test runs | steady state | sd over runs |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "seeds) | plateau generation | colours followed (share with 3) | test runs | steady state | sd over runs |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in measured["rows"]:
         generations = str(r["generations"]) if r["finished"] else f"{r['generations']} of {measured['generations']}"
         lines.append(f"| {r['strategy']} | {r['condition']} | {r.get('seeds', '-')} | {generations} | "
                      f"{_number(r.get('final_best_mean'))} | {_number(r.get('final_best_sd'))} | "
                      + ("-" if r.get("fresh_mean") is None else f"{r['fresh_mean']:.3f} ({r['fresh_sd']:.3f})")
-                     + f" | {_number(r.get('plateau_generation'))} | {r.get('test_runs', '-')} | "
+                     + f" | {_number(r.get('plateau_generation'))} | "
+                     + ("-" if r.get("colours_mean") is None else
+                        f"{r['colours_mean']:.2f} ({r['specialised_share']:.2f})")
+                     + f" | {r.get('test_runs', '-')} | "
                      f"{_number(r.get('steady_mean'))} | {_number(r.get('steady_sd'))} |")
     if not measured["rows"]:
-        lines.append("| (no stage has finished yet) | | | | | | | | | | |")
+        lines.append("| (no stage has finished yet) | | | | | | | | | | | |")
     sle = measured["sle"]
     lines += ["", f"Final best fitness: the best of a generation's noisy lives, mean of the last {LAST_GENERATIONS} "
               f"generations per seed, then mean and sd (ddof 0) over seeds; fresh lives: each seed's best genome "
               f"of the last generation in 10 new lives (keys the search never used), mean over seeds and sd over seeds (ddof 1; "
               f"the GA's from the reproduction's report); plateau generation: the first at which the "
-              f"mean over seeds reaches {PLATEAU_FRACTION:.0%} of its final value; steady state: the learning test's "
+              f"mean over seeds reaches {PLATEAU_FRACTION:.0%} of its final value; colours followed: claim 7's junction "
+              f"probe of each seed's 10 best genomes of the last generation (LE-LS after a fresh childhood), the mean "
+              f"number of colours their experts follow and the share following all 3 (the GA's from the "
+              f"reproduction's report; EE-LS and LE-LS only); steady state: the learning test's "
               f"last {SCREEN['steady_steps']:,} cycles of each task, mean and sd over runs. A running evolution shows "
               "its generations so far and is drawn, not measured. SLE evolves "
               "nothing: every strategy's claim 6 uses the reproduction's `skills` test of it"

@@ -58,7 +58,8 @@ def test_report_measures_each_strategy_and_judges_its_claims(tmp_path):
     summary = tmp_path / "summary.json"  # the GA's relived EE-ES: one circular task of two
     summary.write_text(json.dumps(dict(best_individuals={"paper/EE-ES": dict(stereotypy_per_task=[0.9, 0.5],
                                                                              speed=2.0),
-                                                         "skills/EE-LS": dict(fresh_mean_per_seed=[0.3, 0.4])})))
+                                                         "skills/EE-LS": dict(fresh_mean_per_seed=[0.3, 0.4])},
+                                   colours_followed={"skills/EE-LS": [3, 2, 1, 2]})))
     measured = study.measure(str(out), str(reproduction), str(summary), generations=6)
     rows = {(r["strategy"], r["condition"]): r for r in measured["rows"]}
     assert sorted(rows) == [("ga", "EE-ES"), ("ga", "EE-LS"), ("ga", "LE-LS"),
@@ -82,9 +83,10 @@ def test_report_measures_each_strategy_and_judges_its_claims(tmp_path):
     assert snes[3]["verdict"] == "holds" and abs(snes[3]["numbers"]["standard_error"] - 0.05) < 1e-12
     assert [snes[n]["verdict"] for n in (1, 2, 4, 6)] == ["n/a"] * 4 and not snes[4]["path_probe"]
     text = study.table(measured)
-    assert "| ga | EE-LS | 2 | 6 | 0.400 | 0.100 | 0.350 (0.071) | 3 | 3 | 0.500 | 0.016 |" in text
-    assert "| snes | EE-ES | 2 | 3 of 6 | - | - | - | - | - | - | - |" in text
-    assert "| snes | EE-LS | 2 | 6 | 0.850 | 0.050 | - | 0 | 3 | 0.700 | 0.082 |" in text  # no population kept
+    assert "| ga | EE-LS | 2 | 6 | 0.400 | 0.100 | 0.350 (0.071) | 3 | 2.00 (0.25) | 3 | 0.500 | 0.016 |" in text
+    assert "| ga | LE-LS | 2 | 6 | 0.780 | 0.020 | - | 1 | - | 3 | 0.450 | 0.000 |" in text  # no probe kept
+    assert "| snes | EE-ES | 2 | 3 of 6 | - | - | - | - | - | - | - | - |" in text
+    assert "| snes | EE-LS | 2 | 6 | 0.850 | 0.050 | - | 0 | - | 3 | 0.700 | 0.082 |" in text  # no population kept
     assert "| snes | **holds** | EE-LS 0.850 vs LE-LS 0.700: d = +0.150, se = 0.050 |" in text
     assert "sep_cma_es" not in text and "0.400 +- 0.000 over 3 runs" in text
     assert study.figure(measured, str(tmp_path / "search.png")) and (tmp_path / "search.png").stat().st_size > 0
@@ -96,9 +98,10 @@ def test_report_measures_each_strategy_and_judges_its_claims(tmp_path):
     assert json.loads((out / "report.json").read_text())["claims"]["ga"]["3"]["verdict"] == "n/a"
 
 
-def test_a_strategys_claim_4_uses_its_own_relived_best_ee_es(tmp_path, monkeypatch):
+def test_a_strategys_own_runs_are_relived_for_claim_4_and_probed_for_their_experts(tmp_path, monkeypatch):
     """A strategy's finished EE-ES is relived for claim 4's path (run_path on its run directory): with one circular
-    task of six and a fitness ratio of 0.5, the claim holds partly, and the table names the path's source."""
+    task of six and a fitness ratio of 0.5, the claim holds partly, and the table names the path's source; its
+    EE-LS and LE-LS experts are probed (run_probe)."""
     from experiments import relive
 
     reproduction, out = tmp_path / "paper", tmp_path / "search"
@@ -110,8 +113,18 @@ def test_a_strategys_claim_4_uses_its_own_relived_best_ee_es(tmp_path, monkeypat
         asked.append(run_dir)
         return dict(stereotypy_per_task=[0.9] + [0.5] * 5, speed=2.0)
 
+    probed = []
+
+    def fake_probe(run_dir, config_dict=None):
+        probed.append(run_dir)
+        return dict(followed=[[0, 1, 2], [0, -1, 2]])  # 3 colours and 2
+
     monkeypatch.setattr(relive, "run_path", fake_path)
+    monkeypatch.setattr(relive, "run_probe", fake_probe)
     measured = study.measure(str(out), str(reproduction), str(tmp_path / "none.json"), generations=6)
+    assert sorted(probed) == [str(out / "snes" / c / "evolve") for c in ("EE-LS", "LE-LS")]  # EE-ES has no learning
+    ee_ls = next(r for r in measured["rows"] if r["condition"] == "EE-LS")
+    assert (ee_ls["colours_mean"], ee_ls["specialised_share"], ee_ls["probed"]) == (2.5, 0.5, 2)
     claim = measured["claims"]["snes"][4]
     assert asked == [str(out / "snes" / "EE-ES" / "evolve")]
     assert claim["path_probe"] and claim["numbers"]["circular_tasks"] == 1 and claim["verdict"] == "partly"
