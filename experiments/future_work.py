@@ -162,6 +162,7 @@ TABLE_START = "<!-- future-work tables: python -m experiments.future_work --repo
 TABLE_END = "<!-- end of future-work tables -->"
 #: Line styles of the rows that share their condition with another drawn row (the rest take their condition's).
 STYLES = {"LE-LS-6": dict(color="0.3", lw=1.2, ls="-."), "EXT-LS-whole": dict(color="tab:purple", lw=1.0, ls=":"),
+          "skills SLE-whole": dict(color="tab:blue", lw=1.2, ls="-."),
           "LE-LS-6-faithful": dict(color="0.3", lw=1.0, ls=":")}
 
 
@@ -471,16 +472,17 @@ def _style(row: dict) -> dict:
 
 
 def figure(measured: dict, path: str) -> str:
-    """Fig. 3a-style best fitness per generation of every finished evolution (the study's and the reproduction's
-    LE-LS and EE-LS) beside Fig. 3c-style steady states of every finished learning test; written to ``path``."""
+    """Fig. 3's three panels: (a) best fitness per generation of every finished evolution (the study's and the
+    reproduction's LE-LS and EE-LS), (b) the mean learning curve and (c) the steady state of every finished
+    learning test (EE-ES's in (c) only, as in the paper); written to ``path``."""
     import numpy as np
     from matplotlib.ticker import MaxNLocator
 
     from experiments.figures import _band
     from imrl_jax.plotting import new_figure, save, style_axis
 
-    fig = new_figure(13.0, 4.2)
-    curves, bars = fig.subplots(1, 2, gridspec_kw=dict(width_ratios=[1.0, 1.1]))
+    fig = new_figure(17.0, 4.4)
+    curves, learning, bars = fig.subplots(1, 3, gridspec_kw=dict(width_ratios=[1.0, 1.0, 1.1]))
     drawn = [r for r in measured["rows"] if (r["evolution"] or {}).get("finished")
              and (not r.get("reference") or r["condition"] in DRAWN_BESIDE)]
     banded = set()
@@ -495,6 +497,11 @@ def figure(measured: dict, path: str) -> str:
     style_axis(curves, "(a) best fitness, mean +-1 sd over seeds", "generation",
                "best fitness (best of a generation's noisy lives)")
     tested = [r for r in measured["rows"] if r["test"] is not None]
+    learned = [r for r in tested if r["condition"] != "EE-ES"]  # as the paper's Fig. 3b: EE-ES learns nothing
+    for row in learned:
+        learning.plot(np.asarray(row["test"]["curve_steps"]) / 1e6, row["test"]["curve_mean"], label=row["name"],
+                      **_style(row))
+    style_axis(learning, "(b) learning tests, mean over runs", "million cycles of the task", "performance per bin")
     x = np.arange(len(tested))
     bars.bar(x - 0.19, [r["test"]["steady_mean"] for r in tested], 0.38, yerr=[r["test"]["steady_sd"] for r in tested],
              color="0.35", capsize=3, label="mean over runs (+-1 sd)")
@@ -502,14 +509,16 @@ def figure(measured: dict, path: str) -> str:
     bars.set_xticks(x, [r["name"] for r in tested], rotation=30, ha="right", fontsize=7)
     style_axis(bars, "(c) steady state of the learning tests", "", "steady-state performance")
     bars.grid(False, axis="x")
-    for ax, rows in ((curves, drawn), (bars, tested)):
+    for ax, rows in ((curves, drawn), (learning, learned), (bars, tested)):
         if not rows:  # an unfinished study: say so rather than leave a blank panel
             ax.set_ylim(0, 1)
             ax.text(0.5, 0.5, NOT_RUN, transform=ax.transAxes, ha="center", va="center", color="0.4")
             continue
         # room above the highest bar or curve for the legend and the note
-        ax.set_ylim(0, 1.3 * max(max(np.asarray(r["evolution"]["best_per_generation_mean"]).max() for r in drawn)
-                                 if ax is curves else max(r["test"]["steady_best_run"] for r in tested), 1e-9))
+        top = (max(np.asarray(r["evolution"]["best_per_generation_mean"]).max() for r in drawn) if ax is curves else
+               max(max(r["test"]["curve_mean"]) for r in learned) if ax is learning else
+               max(r["test"]["steady_best_run"] for r in tested))
+        ax.set_ylim(0, 1.3 * max(top, 1e-9))
         ax.legend(fontsize=6, loc="upper left", ncol=2)
         if all(r.get("reference") for r in rows):  # only the references: the study's rows are to come
             ax.text(0.98, 0.97, f"the study's rows: {NOT_RUN}", transform=ax.transAxes, ha="right", va="top",
