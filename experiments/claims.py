@@ -494,9 +494,11 @@ FUTURE_RULES = {
          f"easier; **partly** if one is much faster or higher; **does not hold** otherwise. Genome sizes and "
          f"fresh-life fitness are shown, not judged.",
     "b": f"Steady states (claim 6's, per run): *higher* = LE-LS's exceeds EXT-LS's by more than {ORDER_SE:g} "
-         f"standard errors. Speed: level = {PLATEAU_FRACTION:.0%} of the lower of the two steady states; cycles to "
-         f"it = the end of the first bin of the mean learning curve at or above it; *much faster* = LE-LS needs at "
-         f"most 1/{MUCH_FASTER:g} of EXT-LS's cycles (or EXT-LS never reaches it). **holds** if both; **partly** "
+         f"standard errors. Speed, timed from where both start (start = the higher of the two mean curves' "
+         f"first bins): level = start + {PLATEAU_FRACTION:.0%} of the way from it to the lower of the steady states "
+         f"above it (a row whose steady state is not above the start never reaches it); cycles to it = the end of "
+         f"the first bin of the mean learning curve at or above it; *much faster* = LE-LS needs at most "
+         f"1/{MUCH_FASTER:g} of EXT-LS's cycles (or EXT-LS never reaches it). **holds** if both; **partly** "
          f"if one; **does not hold** (the hierarchy on the task's reward is enough) if neither. EXT-LS against SLE "
          f"(the hierarchy against a flat learner, the same noise) is shown as claim 6's pairs are.",
     "c": f"For each learning value on which `skills` and the paper differ: its position in its gene's range (the "
@@ -549,17 +551,24 @@ def claim_motivation_needed(extrinsic: dict | None, skilled: dict | None, flat: 
         return _claim(NOT_AVAILABLE, "-")
     ext, le = np.asarray(extrinsic["per_run"], float), np.asarray(skilled["per_run"], float)
     order = pair_order(le, ext)
-    level = PLATEAU_FRACTION * min(ext.mean(), le.mean())
-    cycles = {n: first_reach(t["steps"], t["mean"], level) if level > 0 else None
-              for n, t in (("LE-LS", skilled), ("EXT-LS", extrinsic))}
+    curves = {"LE-LS": skilled, "EXT-LS": extrinsic}
+    steady = {"LE-LS": float(le.mean()), "EXT-LS": float(ext.mean())}
+    # Timed from where both start, so that a level both curves are at in their first bin times nothing; a row
+    # whose steady state is not above that start has learned nothing above it and never reaches a level.
+    start = max(float(np.asarray(t["mean"], float)[0]) for t in curves.values())
+    learned = [n for n in curves if steady[n] > start]
+    level = start + PLATEAU_FRACTION * (min(steady[n] for n in learned) - start) if learned else None
+    cycles = {n: first_reach(curves[n]["steps"], curves[n]["mean"], level) if n in learned else None for n in curves}
     own, theirs = cycles["LE-LS"], cycles["EXT-LS"]
     faster = own is not None and (theirs is None or MUCH_FASTER * own <= theirs)
-    measured = (f"steady LE-LS {le.mean():.3f} vs EXT-LS {ext.mean():.3f} ({order}); cycles to {level:.3f}: LE-LS "
-                f"{_fmt(cycles['LE-LS'])}, EXT-LS {_fmt(cycles['EXT-LS'])}")
-    numbers = dict(order=order, level=level, cycles=cycles, much_faster=faster)
+    reach = f"cycles to {level:.3f}" if level is not None else f"neither learns above {start:.3f}"
+    measured = (f"steady LE-LS {le.mean():.3f} vs EXT-LS {ext.mean():.3f} ({order}); start {start:.3f}, {reach}: "
+                f"LE-LS {cycles['LE-LS'] or 'never'}, EXT-LS {cycles['EXT-LS'] or 'never'}")
+    numbers = dict(order=order, start=start, level=level, cycles=cycles, much_faster=faster)
     if flat is not None:
         numbers["against_flat"] = pair_order(ext, flat["per_run"])
-        measured += f"; EXT-LS vs SLE {np.mean(flat['per_run']):.3f}: {numbers['against_flat']}"
+        said = {"in order": "EXT-LS higher", "reversed": "SLE higher"}.get(numbers["against_flat"], "tied")
+        measured += f"; EXT-LS vs SLE {np.mean(flat['per_run']):.3f}: {said}"
     higher = order == "in order"
     verdict = HOLDS if faster and higher else PARTLY if faster or higher else DOES_NOT
     return _claim(verdict, measured, **numbers)

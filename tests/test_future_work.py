@@ -313,8 +313,9 @@ def test_criteria_are_easier_when_much_faster_and_higher():
 
 
 def test_motivation_is_needed_when_skills_learn_much_faster_and_end_higher():
-    """(b): the level is 0.9 x 0.6 = 0.54; LE-LS reaches it at 2,000 cycles, EXT-LS at 4,000 (2x): much faster,
-    and 0.85 against 0.6 is in order; with EXT-LS at 0.54 by 2,000 only the steady state differs."""
+    """(b): from the start 0.5 (LE-LS's first bin) the level is 0.5 + 0.9 x (0.6 - 0.5) = 0.59; LE-LS reaches it at
+    2,000 cycles, EXT-LS at 4,000 (2x): much faster, and 0.85 against 0.6 is in order; with EXT-LS at 0.6 by 2,000
+    only the steady state differs; an EXT-LS that ends below LE-LS's start never reaches a level."""
     from experiments import claims
 
     steps = [1000, 2000, 3000, 4000]
@@ -322,7 +323,17 @@ def test_motivation_is_needed_when_skills_learn_much_faster_and_end_higher():
     extrinsic = dict(steps=steps, mean=[0.1, 0.3, 0.5, 0.6], per_run=[0.59, 0.61])
     claim = claims.claim_motivation_needed(extrinsic, skilled, dict(per_run=[0.4, 0.4]))
     assert claim["verdict"] == "holds" and claim["numbers"]["cycles"] == {"LE-LS": 2000, "EXT-LS": 4000}
-    assert claim["numbers"]["level"] == pytest.approx(0.54) and claim["numbers"]["against_flat"] == "in order"
+    assert claim["numbers"]["level"] == pytest.approx(0.59) and claim["numbers"]["against_flat"] == "in order"
+    # At chance and below where LE-LS starts (as at 0.03 against 0.32): it never reaches; LE-LS reaches 0.5 + 0.9 x
+    # (0.85 - 0.5) = 0.815 at 3,000 cycles.
+    flat = dict(steps=steps, mean=[0.02, 0.03, 0.0, 0.0], per_run=[0.0, 0.0])
+    claim = claims.claim_motivation_needed(flat, skilled)
+    assert claim["verdict"] == "holds" and claim["numbers"]["cycles"] == {"LE-LS": 3000, "EXT-LS": None}
+    assert claim["numbers"]["level"] == pytest.approx(0.815) and "EXT-LS never" in claim["measured"]
+    # Neither above the start: no speed to compare; only the steady states (in order) count.
+    stuck = dict(skilled, mean=[0.5, 0.5, 0.5, 0.5], per_run=[0.5, 0.5])
+    claim = claims.claim_motivation_needed(flat, stuck)
+    assert claim["numbers"]["level"] is None and claim["verdict"] == "partly"
     quick = dict(extrinsic, mean=[0.1, 0.6, 0.6, 0.6])
     assert claims.claim_motivation_needed(quick, skilled)["verdict"] == "partly"
     level = dict(quick, per_run=[0.84, 0.86])  # as high and as fast: the hierarchy alone is enough
