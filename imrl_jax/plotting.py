@@ -664,9 +664,15 @@ def plot_traits(config: Config, names, traits: np.ndarray, title: str = ""):
         label = f"1 - {panel}" if kind == "1-log" else f"{panel} (steps)" if panel == "childhood_length" else panel
         style_axis(ax, label, "generation" if i >= len(panels) - columns else "")
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-        if i == 0:
-            ax.legend(fontsize=6)
+    # One legend for the figure: the paper's value is drawn only in panels where the preset differs from it.
+    legend = {}
+    for ax in fig.axes:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            if ax.get_legend() is None:  # the shares' legend stays its own
+                legend.setdefault(label, handle)
     if title:
         fig.suptitle(title, fontsize=9)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.06 if legend else 0, 1, 1))
+    if legend:
+        fig.legend(legend.values(), legend.keys(), loc="lower center", fontsize=7, ncol=len(legend), frameon=False)
     return fig

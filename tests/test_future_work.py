@@ -105,6 +105,10 @@ def test_the_traits_figure_has_a_panel_for_each_evolved_value():
     fig = plot_traits(config, names, np.broadcast_to(traits, (3, 2) + traits.shape))
     titles = [" ".join(ax.get_title().split()) for ax in fig.axes]
     assert len(titles) == len(names) and titles[-1] == "childhood_length (steps)"
+    # One legend for the figure, with the paper's value (drawn where skills differs from it, as for trace_lambda).
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert labels == ["population mean", "the best's", "the preset's value", "the paper's value",
+                      "the longest (childhood_steps)"]
 
 
 @pytest.mark.slow
