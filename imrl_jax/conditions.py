@@ -198,7 +198,7 @@ CONDITIONS: dict[str, Condition] = {c.name: c for c in (
     Condition("LE-LS-PC", "LE-LS-P whose genome also carries the childhood's length: the experts and the selector "
               "learn and explore for the first round(u x childhood_steps) steps of childhood only, u = clip((g + 1) / "
               "2, 0, 1) of the last gene", genome=("reinforcer", "parameters", "childhood_length"),
-              adult=ADULT_LEARNING_SELECTOR, childhood=CHILDHOOD, style=dict(color="tab:brown", lw=1.4, ls="--")),
+              adult=ADULT_LEARNING_SELECTOR, childhood=CHILDHOOD, style=dict(color="tab:orange", lw=1.6)),
     # The paper's future work (b): the whole hierarchy trained on the task's reward only; no evolution, no
     # childhood, everything reset at each task as SLE is (MODEL.md "Future-work conditions").
     Condition("EXT-LS", "the hierarchy on extrinsic reward only: no evolution, no childhood; in each task, reset, "
