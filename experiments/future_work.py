@@ -153,6 +153,9 @@ JUDGED: tuple[Judged, ...] = (
 )
 #: The generations of (d)'s table of expressed experts (the last one is added).
 GENERATIONS_SHOWN = (0, 10, 25, 50)
+#: (d): how many of each seed's fittest genomes (last generation) the junction probe drives, after a fresh childhood.
+NUM_PROBED = 5
+COLOUR_NAMES = ("red", "green", "blue")
 NOT_RUN = "not run yet"
 #: The reproduction's report, whose fresh lives of its runs' best genomes the reference rows show.
 SUMMARY = os.path.join("docs", "reproduction", "summary.json")
@@ -254,6 +257,21 @@ def _expressed(run_dir: str, evolution: dict | None) -> list[dict] | None:
                  best_per_seed=traits["values"][g, :, e, 1].tolist()) for g in shown]
 
 
+def colour_sets(followed: list[list[int]] | None) -> dict | None:
+    """(d): from the colour each probed genome's experts follow (-1: none, or not expressed), how many genomes
+    follow each set of colours (``"blue + red"``; ``"none"``) and the mean number of experts following one."""
+    if not followed:
+        return None
+    sets: dict[str, int] = {}
+    for experts in followed:
+        colours = sorted({c for c in experts if c >= 0})
+        name = " + ".join(COLOUR_NAMES[c] for c in colours) or "none"
+        sets[name] = sets.get(name, 0) + 1
+    following = [sum(c >= 0 for c in experts) for experts in followed]
+    return dict(genomes=len(followed), sets=dict(sorted(sets.items(), key=lambda kv: (-kv[1], kv[0]))),
+                experts_following=float(sum(following) / len(following)))
+
+
 def _noise(test: dict | None) -> str:
     """How a finished SLE test annealed its noise, in words ("" before it has finished or without its config)."""
     steps = (test or {}).get("sle_noise_steps")
@@ -272,7 +290,7 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = S
     from imrl_jax.config import make_config
 
     from experiments.loading import read_json
-    from experiments.relive import reproduction_fresh, run_fresh
+    from experiments.relive import reproduction_fresh, run_fresh, run_probe
     from experiments.reproduce import owner
 
     report = read_json(summary) or {}
@@ -315,8 +333,11 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = S
                 a, b = np.asarray(mine), np.asarray(theirs)
                 compared.append(dict(name=other, final_best=float(b.mean()), seeds=len(b),
                                      difference=float(a.mean() - b.mean()), standard_error=_standard_error(a, b)))
+        run_dir, finished = os.path.join(out, row, "evolve"), (by_name[row]["evolution"] or {}).get("finished")
+        probe = run_probe(run_dir, num_best=NUM_PROBED) if finished else None
         experts.append(dict(row=row, against=list(others), compared=compared,
-                            generations=_expressed(os.path.join(out, row, "evolve"), by_name[row]["evolution"])))
+                            generations=_expressed(run_dir, by_name[row]["evolution"]),
+                            colours=colour_sets(probe["followed"] if probe else None)))
     measured = dict(rows=rows, learning_values=dict(names=list(names), hand=hand, evolved=evolved_values),
                     experts=experts)
     measured["verdicts"] = judge(measured)
@@ -452,6 +473,12 @@ def _experts_lines(experts: dict, rows: list[dict]) -> list[str]:
             f"share with {k}" for k in counts) + " |", "|---|---|---|" + "---|" * len(counts)]
         lines += [f"| {g['generation']} | {g['mean']:.2f} | {g['best']:.2f} | " + " | ".join(
             f"{g['shares'][k]:.3f}" for k in counts) + " |" for g in experts["generations"]]
+    colours = experts.get("colours")
+    if colours:
+        lines += ["", f"The colours its experts follow (claim 7's junction probe of each seed's {NUM_PROBED} fittest "
+                  f"genomes of the last generation, after a fresh childhood; an expert not expressed follows none), "
+                  f"{colours['genomes']} genomes: " + ", ".join(f"{name} {n}" for name, n in colours["sets"].items())
+                  + f"; experts following a colour per genome: {colours['experts_following']:.2f}."]
     if experts["generations"] is not None and not experts["compared"]:
         lines.append(f"\nIts final best fitness against {' and '.join(experts['against'])}: {NOT_RUN}.")
     if experts["compared"]:

@@ -218,7 +218,7 @@ def followed_best(config_dict: dict, best: dict, key: int = 0) -> list[list[int]
     of ``best`` (seeds x best, in order).
 
     LE-LS genomes first live a fresh childhood with their run's config (keys from ``key``);
-    evolved experts are probed as they are.
+    evolved experts are probed as they are. An expert its genome does not express follows nothing (-1).
     """
     import jax
 
@@ -228,8 +228,19 @@ def followed_best(config_dict: dict, best: dict, key: int = 0) -> list[list[int]
     config = Config.from_dict(config_dict)
     genomes = np.asarray(best["genomes"])
     agents, _ = grown_agents(config, genomes.reshape(-1, genomes.shape[-1]), key)
-    return [[int(c) for c in specialisation(config, jax.tree.map(lambda x: x[i], agents)).followed]
+    expressed = None if agents.expressed is None else np.asarray(agents.expressed)
+    return [expressed_followed(specialisation(config, jax.tree.map(lambda x: x[i], agents)).followed,
+                               None if expressed is None else expressed[i])
             for i in range(genomes.shape[0] * genomes.shape[1])]
+
+
+def expressed_followed(followed, expressed=None) -> list[int]:
+    """The colour each expert follows, -1 for an expert that ``expressed`` (1 / 0 per expert; None: all) leaves out:
+    it is never selected, so in a life it follows nothing, whatever its untrained actor would do alone."""
+    followed = np.asarray(followed, int)
+    if expressed is not None:
+        followed = np.where(np.asarray(expressed) > 0, followed, -1)
+    return [int(c) for c in followed]
 
 
 def colours_followed(followed: list[list[int]]) -> list[int]:

@@ -242,10 +242,27 @@ def test_measure_reads_every_finished_row_and_the_reproductions(tmp_path):
     assert (first["generation"], first["mean"], first["shares"][6]) == (0, 6.0, 1.0)
     assert (last["generation"], last["mean"], last["best"], last["shares"][3]) == (4, 4.0, 3.0, 1.0)
     assert measured["experts"][1]["generations"] is None and measured["experts"][1]["compared"] == []
+    assert measured["experts"][0]["colours"] is None  # no final population to probe
     against_6, against_3 = measured["experts"][0]["compared"]
     assert against_6["name"] == "LE-LS-6" and against_6["difference"] == pytest.approx(0.2)
     assert against_6["standard_error"] == pytest.approx(0.005 ** 0.5)  # sqrt(0.005 / 2 + 0.005 / 2)
     assert against_3["difference"] == pytest.approx(0.17) and against_3["standard_error"] == pytest.approx(0.0125 ** 0.5)
+
+
+def test_colour_sets_count_the_colours_each_probed_genome_follows():
+    from experiments.relive import expressed_followed
+
+    # an expert left out by its genome follows nothing, whatever its untrained actor does alone
+    assert expressed_followed([2, 2, 0, 1], [1, 0, 1, 0]) == [2, -1, 0, -1]
+    assert expressed_followed([2, -1, 0]) == [2, -1, 0]
+    sets = study.colour_sets([[2, -1, 0, -1], [0, 2, -1, -1], [1, -1, -1, -1], [-1] * 4, [2, 2, -1, -1]])
+    assert sets["genomes"] == 5 and sets["experts_following"] == pytest.approx((2 + 2 + 1 + 0 + 2) / 5)
+    assert sets["sets"] == {"red + blue": 2, "blue": 1, "green": 1, "none": 1}  # most often first, then by name
+    assert study.colour_sets(None) is None and study.colour_sets([]) is None
+    lines = study._experts_lines(dict(row="LE-LS-N6", generations=None, compared=[], against=["LE-LS-6"],
+                                      colours=sets), [])
+    assert any(line.endswith("5 genomes: red + blue 2, blue 1, green 1, none 1; experts following a colour per "
+                             "genome: 1.40.") for line in lines)
 
 
 def test_table_shows_finished_running_and_not_run_rows(tmp_path):
