@@ -153,8 +153,9 @@ JUDGED: tuple[Judged, ...] = (
 )
 #: The generations of (d)'s table of expressed experts (the last one is added).
 GENERATIONS_SHOWN = (0, 10, 25, 50)
-#: (d): how many of each seed's fittest genomes (last generation) the junction probe drives, after a fresh childhood.
-NUM_PROBED = 5
+#: How many of each seed's fittest genomes (last generation) the junction probe drives, after a fresh childhood:
+#: claim 7's number (``claims.NUM_BEST``), so that a run shared with the claims study keeps one probe.
+NUM_PROBED = 10
 COLOUR_NAMES = ("red", "green", "blue")
 NOT_RUN = "not run yet"
 #: The reproduction's report, whose fresh lives of its runs' best genomes the reference rows show.
@@ -258,8 +259,9 @@ def _expressed(run_dir: str, evolution: dict | None) -> list[dict] | None:
 
 
 def colour_sets(followed: list[list[int]] | None) -> dict | None:
-    """(d): from the colour each probed genome's experts follow (-1: none, or not expressed), how many genomes
-    follow each set of colours (``"blue + red"``; ``"none"``) and the mean number of experts following one."""
+    """From the colour each probed genome's experts follow (-1: none, or not expressed), how many genomes
+    follow each set of colours (``"blue + red"``; ``"none"``), the mean number of experts following one and of
+    distinct colours followed (claim 7's colours followed)."""
     if not followed:
         return None
     sets: dict[str, int] = {}
@@ -268,8 +270,10 @@ def colour_sets(followed: list[list[int]] | None) -> dict | None:
         name = " + ".join(COLOUR_NAMES[c] for c in colours) or "none"
         sets[name] = sets.get(name, 0) + 1
     following = [sum(c >= 0 for c in experts) for experts in followed]
+    distinct = [len({c for c in experts if c >= 0}) for experts in followed]  # Specialisation.num_colours
     return dict(genomes=len(followed), sets=dict(sorted(sets.items(), key=lambda kv: (-kv[1], kv[0]))),
-                experts_following=float(sum(following) / len(following)))
+                experts_following=float(sum(following) / len(following)),
+                colours=float(sum(distinct) / len(distinct)))
 
 
 def _noise(test: dict | None) -> str:
@@ -312,9 +316,12 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = S
     for run in RUNS:
         evolved = conditions.get(run.condition).evolved
         evolution, test = run_dirs(run, out, claims)
-        rows.append(dict(name=run.name, condition=run.condition, about=run.about, evolved=evolved,
-                         evolution=_evolution(evolution, lambda r, d=evolution: run_fresh(d, r["config"]))
-                         if evolved else None, test=_test(test), reference=False, preset=run.preset))
+        entry = _evolution(evolution, lambda r, d=evolution: run_fresh(d, r["config"])) if evolved else None
+        # what the experts do (claim 7's junction probe), kept beside the run as its fresh lives are
+        probe = run_probe(evolution, num_best=NUM_PROBED) if (entry or {}).get("finished") else None
+        rows.append(dict(name=run.name, condition=run.condition, about=run.about, evolved=evolved, evolution=entry,
+                         test=_test(test), reference=False, preset=run.preset,
+                         colours=colour_sets(probe["followed"] if probe else None)))
     by_name = {row["name"]: row for row in rows}
     # (c): the values of the genes LE-LS-PC carries (LE-LS-P's and the childhood's length), beside the presets'
     names = networks.trait_names(make_config("skills", condition="LE-LS-PC"))
@@ -333,11 +340,8 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = S
                 a, b = np.asarray(mine), np.asarray(theirs)
                 compared.append(dict(name=other, final_best=float(b.mean()), seeds=len(b),
                                      difference=float(a.mean() - b.mean()), standard_error=_standard_error(a, b)))
-        run_dir, finished = os.path.join(out, row, "evolve"), (by_name[row]["evolution"] or {}).get("finished")
-        probe = run_probe(run_dir, num_best=NUM_PROBED) if finished else None
         experts.append(dict(row=row, against=list(others), compared=compared,
-                            generations=_expressed(run_dir, by_name[row]["evolution"]),
-                            colours=colour_sets(probe["followed"] if probe else None)))
+                            generations=_expressed(os.path.join(out, row, "evolve"), by_name[row]["evolution"])))
     measured = dict(rows=rows, learning_values=dict(names=list(names), hand=hand, evolved=evolved_values),
                     experts=experts)
     measured["verdicts"] = judge(measured)
@@ -442,6 +446,7 @@ def table(measured: dict) -> str:
               f"over seeds; fresh lives: each seed's best genome of the last generation in 10 new lives (keys the GA "
               f"never used), mean and sd over seeds (ddof 1); plateau: the first generation whose best (mean over seeds) reaches {PLATEAU_FRACTION:.0%} "
               f"of that; steady state: each learning-test run's last cycles (docs/CLAIMS.md's claims 1, 2 and 6).",
+              *_colour_lines(measured["rows"]),
               "", "(c) The evolved learning values, last generation, mean over seeds, beside the values set by hand:", ""]
     values = measured["learning_values"]
     lines += ["| value | " + " | ".join(f"{p} (by hand)" for p in values["hand"]) + " | " + " | ".join(
@@ -462,6 +467,25 @@ def table(measured: dict) -> str:
     return "\n".join(lines)
 
 
+def _colour_lines(rows: list[dict]) -> list[str]:
+    """What the experts of the study's finished evolutions do: the colours they follow, as a table."""
+    from imrl_jax.behaviour import FOLLOW_CHOICE
+
+    probed = [r for r in rows if r.get("colours")]
+    if not probed:
+        return []
+    lines = ["", f"What the experts do (claim 7's junction probe of each seed's {NUM_PROBED} fittest genomes of the last "
+             "generation, after a fresh childhood; an expert follows a colour when it takes it at "
+             f"{FOLLOW_CHOICE:.0%} of the junctions "
+             "offering it; an expert not expressed follows none):", "",
+             "| row | genomes | experts following a colour, per genome | distinct colours followed, per genome "
+             "| the colours followed: genomes |", "|---|---|---|---|---|"]
+    lines += [f"| {r['name']} | {r['colours']['genomes']} | {r['colours']['experts_following']:.2f} | "
+              f"{r['colours']['colours']:.2f} | "
+              + ", ".join(f"{name} {n}" for name, n in r["colours"]["sets"].items()) + " |" for r in probed]
+    return lines
+
+
 def _experts_lines(experts: dict, rows: list[dict]) -> list[str]:
     """(d)'s tables of one row: the experts expressed over generations, and its final best against the others."""
     lines = ["", f"(d) {experts['row']}: the experts expressed, mean over seeds:", ""]
@@ -473,12 +497,6 @@ def _experts_lines(experts: dict, rows: list[dict]) -> list[str]:
             f"share with {k}" for k in counts) + " |", "|---|---|---|" + "---|" * len(counts)]
         lines += [f"| {g['generation']} | {g['mean']:.2f} | {g['best']:.2f} | " + " | ".join(
             f"{g['shares'][k]:.3f}" for k in counts) + " |" for g in experts["generations"]]
-    colours = experts.get("colours")
-    if colours:
-        lines += ["", f"The colours its experts follow (claim 7's junction probe of each seed's {NUM_PROBED} fittest "
-                  f"genomes of the last generation, after a fresh childhood; an expert not expressed follows none), "
-                  f"{colours['genomes']} genomes: " + ", ".join(f"{name} {n}" for name, n in colours["sets"].items())
-                  + f"; experts following a colour per genome: {colours['experts_following']:.2f}."]
     if experts["generations"] is not None and not experts["compared"]:
         lines.append(f"\nIts final best fitness against {' and '.join(experts['against'])}: {NOT_RUN}.")
     if experts["compared"]:

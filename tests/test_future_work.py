@@ -242,7 +242,7 @@ def test_measure_reads_every_finished_row_and_the_reproductions(tmp_path):
     assert (first["generation"], first["mean"], first["shares"][6]) == (0, 6.0, 1.0)
     assert (last["generation"], last["mean"], last["best"], last["shares"][3]) == (4, 4.0, 3.0, 1.0)
     assert measured["experts"][1]["generations"] is None and measured["experts"][1]["compared"] == []
-    assert measured["experts"][0]["colours"] is None  # no final population to probe
+    assert rows["LE-LS-N6"]["colours"] is None  # no final population to probe
     against_6, against_3 = measured["experts"][0]["compared"]
     assert against_6["name"] == "LE-LS-6" and against_6["difference"] == pytest.approx(0.2)
     assert against_6["standard_error"] == pytest.approx(0.005 ** 0.5)  # sqrt(0.005 / 2 + 0.005 / 2)
@@ -258,11 +258,11 @@ def test_colour_sets_count_the_colours_each_probed_genome_follows():
     sets = study.colour_sets([[2, -1, 0, -1], [0, 2, -1, -1], [1, -1, -1, -1], [-1] * 4, [2, 2, -1, -1]])
     assert sets["genomes"] == 5 and sets["experts_following"] == pytest.approx((2 + 2 + 1 + 0 + 2) / 5)
     assert sets["sets"] == {"red + blue": 2, "blue": 1, "green": 1, "none": 1}  # most often first, then by name
+    assert sets["colours"] == pytest.approx((2 + 2 + 1 + 0 + 1) / 5)  # distinct: [2, 2] follows one colour
     assert study.colour_sets(None) is None and study.colour_sets([]) is None
-    lines = study._experts_lines(dict(row="LE-LS-N6", generations=None, compared=[], against=["LE-LS-6"],
-                                      colours=sets), [])
-    assert any(line.endswith("5 genomes: red + blue 2, blue 1, green 1, none 1; experts following a colour per "
-                             "genome: 1.40.") for line in lines)
+    lines = study._colour_lines([dict(name="LE-LS-N6", colours=sets), dict(name="EV-LS", colours=None)])
+    assert lines[-1] == "| LE-LS-N6 | 5 | 1.40 | 1.20 | red + blue 2, blue 1, green 1, none 1 |"
+    assert study._colour_lines([dict(name="EV-LS", colours=None)]) == []
 
 
 def test_table_shows_finished_running_and_not_run_rows(tmp_path):
@@ -415,3 +415,10 @@ def test_the_report_judges_each_question_from_its_rows(tmp_path):
     assert any(line.startswith("| (a) Evolving criteria") and "**does not hold** so far (not finished: EV-LS, "
                "EV-LS-diff)" in line for line in text)
     assert any(line.startswith("| (d) Three experts are enough") and "| **holds** |" in line for line in text)
+
+
+def test_the_probe_drives_as_many_genomes_as_claim_7s():
+    """A run shared with the claims study (LE-LS-6) keeps one probe.json: both probe the same number of genomes."""
+    from experiments.claims import NUM_BEST
+
+    assert study.NUM_PROBED == NUM_BEST
