@@ -526,7 +526,7 @@ def figure(measured: dict, path: str) -> str:
     from experiments.figures import _band
     from imrl_jax.plotting import new_figure, save, style_axis
 
-    fig = new_figure(17.0, 4.4)
+    fig = new_figure(17.0, 6.0)
     curves, learning, bars = fig.subplots(1, 3, gridspec_kw=dict(width_ratios=[1.0, 1.0, 1.1]))
     drawn = [r for r in measured["rows"] if (r["evolution"] or {}).get("finished")
              and (not r.get("reference") or r["condition"] in DRAWN_BESIDE)]
@@ -563,8 +563,12 @@ def figure(measured: dict, path: str) -> str:
         top = (max(np.asarray(r["evolution"]["best_per_generation_mean"]).max() for r in drawn) if ax is curves else
                max(max(r["test"]["curve_mean"]) for r in learned) if ax is learning else
                max(r["test"]["steady_best_run"] for r in tested))
-        ax.set_ylim(0, 1.3 * max(top, 1e-9))
-        ax.legend(fontsize=6, loc="upper left", ncol=2)
+        if ax is bars:
+            ax.set_ylim(0, 1.3 * max(top, 1e-9))
+            ax.legend(fontsize=6, loc="upper left", ncol=2)
+        else:  # many rows: the legend below the panel, where it hides no curve
+            ax.set_ylim(0, 1.08 * max(top, 1e-9))
+            ax.legend(fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3)
         if all(r.get("reference") for r in rows):  # only the references: the study's rows are to come
             ax.text(0.98, 0.97, f"the study's rows: {NOT_RUN}", transform=ax.transAxes, ha="right", va="top",
                     color="0.4", fontsize=8)
