@@ -171,6 +171,8 @@ def test_bad_input_exits_2_and_changes_nothing(finished_run, capsys, args, messa
 
 @pytest.mark.parametrize("args, message", [
     (["--cond", "SLE"], "SLE is not evolved"),
+    (["--cond", "EXT-LS"], "EXT-LS is not evolved (it learns each task from scratch)"),
+    (["--cond", "LE-LS-N", "--set", "num_experts=0"], "num_experts: must be a positive integer (got 0)"),
     (["--cond", "XYZ"], "unknown condition"),
     (["--cond", "EE-LS", "--population", "55"], "population_size: must be a multiple"),
     (["--cond", "EE-LS", "--population", "7"], "num_parents: cannot exceed population_size=7"),
