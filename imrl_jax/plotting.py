@@ -521,13 +521,22 @@ def plot_sweep_summary(values_by_field: dict, title: str = "", ylabel: str = "fi
     return fig
 
 
+def legend_experts(num_experts: int, expressed=None) -> list[int]:
+    """The experts a path legend names: all, or those ``expressed`` (1 / 0 per expert) leaves in (the others never
+    drive); the legend keeps their numbers, so a path's colour still tells its expert."""
+    if expressed is None:
+        return list(range(num_experts))
+    return [e for e in range(num_experts) if e >= len(expressed) or expressed[e] > 0]
+
+
 def write_animation(config: Config, trajectory, path: str, task: int | None = None, every: int = 1,
-                    fps: int = 20, title: str = "", dpi: int = 80) -> int:
+                    fps: int = 20, title: str = "", dpi: int = 80, expressed=None) -> int:
     """Animate a :class:`~imrl_jax.behaviour.Trajectory`: the arena with the path coloured by the expert
     in control, the robot with its retina patch, a zoom on the robot and the retina's 2 x 6 view.
 
     ``task`` (0-based) marks that task's start and target. Frame t shows the pose at which
     step t's expert was chosen and the path before it; one frame every ``every`` steps.
+    ``expressed`` (an evolved number of experts: 1 / 0 per expert) leaves unexpressed experts out of the legend.
     ``.gif`` is written with Pillow, ``.mp4`` with ffmpeg (which must be on PATH).
     Returns the number of frames.
     """
@@ -573,7 +582,7 @@ def write_animation(config: Config, trajectory, path: str, task: int | None = No
     ax.add_collection(path_lines)
     robot = _robot_artists(ax, config, zorder=6)
     handles = [Line2D([], [], color=EXPERT_COLOURS[e % len(EXPERT_COLOURS)], lw=2, label=f"expert {e + 1}")
-               for e in range(num_experts)]
+               for e in legend_experts(num_experts, None if expressed is None else np.asarray(expressed))]
     ax.legend(handles=handles, loc="lower left", fontsize=7, framealpha=0.9)
 
     zoom_ax = fig.add_subplot(spec[0, 1])

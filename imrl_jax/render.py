@@ -114,7 +114,8 @@ def run(run_dir: str, task: int, out_path: str, steps: int = 300, every: int = 2
     base, ext = os.path.splitext(os.path.basename(out_path))
     tmp = os.path.join(directory, f".{base}.tmp-{os.getpid()}{ext}")
     try:
-        frames = write_animation(config, trajectory, tmp, task=task - 1, every=every, fps=fps, title=title)
+        frames = write_animation(config, trajectory, tmp, task=task - 1, every=every, fps=fps, title=title,
+                                 expressed=agent.expressed)
         os.replace(tmp, out_path)
     finally:
         if os.path.exists(tmp):

@@ -64,3 +64,12 @@ def test_bad_input(case, tiny_run, tmp_path, capsys, monkeypatch):
     err = capsys.readouterr().err.strip()
     assert err.startswith("error: ") and "\n" not in err
     assert sorted(os.listdir(tmp_path)) == before  # nothing written
+
+
+def test_the_path_legend_names_only_expressed_experts():
+    """LE-LS-N: an unexpressed expert never drives, so the legend leaves it out and keeps the others' numbers."""
+    from imrl_jax.plotting import legend_experts
+
+    assert legend_experts(3) == [0, 1, 2]
+    assert legend_experts(6, np.array([1.0, 0.0, 0.0, 1.0, 0.0, 0.0])) == [0, 3]
+    assert legend_experts(4, np.array([0.0, 0.0, 1.0])) == [2, 3]  # an expert beyond the mask is named
