@@ -28,6 +28,9 @@ import os
 import sys
 from typing import NamedTuple
 
+# NUM_BEST: the junction probe drives claim 7's number of each seed's fittest genomes, so that a run shared with
+# the claims study (LE-LS-6) keeps one probe.json
+from experiments.claims import NUM_BEST
 from experiments.claims_study import REPRODUCTION, SCREEN
 from experiments.reproduce import (Stage, evolution_cost, evolution_dir, evolve_command, load_manifest, run_stages,
                                    test_command, test_cost, test_dir)
@@ -153,10 +156,6 @@ JUDGED: tuple[Judged, ...] = (
 )
 #: The generations of (d)'s table of expressed experts (the last one is added).
 GENERATIONS_SHOWN = (0, 10, 25, 50)
-#: How many of each seed's fittest genomes (last generation) the junction probe drives, after a fresh childhood:
-#: claim 7's number (``claims.NUM_BEST``), so that a run shared with the claims study keeps one probe.
-NUM_PROBED = 10
-COLOUR_NAMES = ("red", "green", "blue")
 NOT_RUN = "not run yet"
 #: The reproduction's report, whose fresh lives of its runs' best genomes the reference rows show.
 SUMMARY = os.path.join("docs", "reproduction", "summary.json")
@@ -262,15 +261,17 @@ def colour_sets(followed: list[list[int]] | None) -> dict | None:
     """From the colour each probed genome's experts follow (-1: none, or not expressed), how many genomes
     follow each set of colours (``"blue + red"``; ``"none"``), the mean number of experts following one and of
     distinct colours followed (claim 7's colours followed)."""
+    from experiments.relive import colours_followed
+    from imrl_jax.behaviour import SEEN
+
     if not followed:
         return None
     sets: dict[str, int] = {}
     for experts in followed:
-        colours = sorted({c for c in experts if c >= 0})
-        name = " + ".join(COLOUR_NAMES[c] for c in colours) or "none"
+        name = " + ".join(SEEN[c] for c in sorted(set(experts) - {-1})) or "none"
         sets[name] = sets.get(name, 0) + 1
     following = [sum(c >= 0 for c in experts) for experts in followed]
-    distinct = [len({c for c in experts if c >= 0}) for experts in followed]  # Specialisation.num_colours
+    distinct = colours_followed(followed)
     return dict(genomes=len(followed), sets=dict(sorted(sets.items(), key=lambda kv: (-kv[1], kv[0]))),
                 experts_following=float(sum(following) / len(following)),
                 colours=float(sum(distinct) / len(distinct)))
@@ -318,7 +319,7 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = S
         evolution, test = run_dirs(run, out, claims)
         entry = _evolution(evolution, lambda r, d=evolution: run_fresh(d, r["config"])) if evolved else None
         # what the experts do (claim 7's junction probe), kept beside the run as its fresh lives are
-        probe = run_probe(evolution, num_best=NUM_PROBED) if (entry or {}).get("finished") else None
+        probe = run_probe(evolution, num_best=NUM_BEST) if (entry or {}).get("finished") else None
         rows.append(dict(name=run.name, condition=run.condition, about=run.about, evolved=evolved, evolution=entry,
                          test=_test(test), reference=False, preset=run.preset,
                          colours=colour_sets(probe["followed"] if probe else None)))
@@ -474,7 +475,7 @@ def _colour_lines(rows: list[dict]) -> list[str]:
     probed = [r for r in rows if r.get("colours")]
     if not probed:
         return []
-    lines = ["", f"What the experts do (claim 7's junction probe of each seed's {NUM_PROBED} fittest genomes of the last "
+    lines = ["", f"What the experts do (claim 7's junction probe of each seed's {NUM_BEST} fittest genomes of the last "
              "generation, after a fresh childhood; an expert follows a colour when it takes it at "
              f"{FOLLOW_CHOICE:.0%} of the junctions "
              "offering it; an expert not expressed follows none):", "",

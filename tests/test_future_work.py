@@ -415,10 +415,3 @@ def test_the_report_judges_each_question_from_its_rows(tmp_path):
     assert any(line.startswith("| (a) Evolving criteria") and "**does not hold** so far (not finished: EV-LS, "
                "EV-LS-diff)" in line for line in text)
     assert any(line.startswith("| (d) Three experts are enough") and "| **holds** |" in line for line in text)
-
-
-def test_the_probe_drives_as_many_genomes_as_claim_7s():
-    """A run shared with the claims study (LE-LS-6) keeps one probe.json: both probe the same number of genomes."""
-    from experiments.claims import NUM_BEST
-
-    assert study.NUM_PROBED == NUM_BEST
