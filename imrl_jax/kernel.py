@@ -26,10 +26,11 @@ from imrl_jax import learning
 from imrl_jax.arena import advance, floor_colour_xy, on_wall, spawn_pose, trial_ends, turn
 from imrl_jax.config import Config, ConfigError, LearningParams
 from imrl_jax.learning import ascend, ascend_row, selector_features, td_error, unit_features
-from imrl_jax.networks import Agent, explore, internal_reward, pick, select
+from imrl_jax.networks import Agent, decode, explore, internal_reward, pick, select
 from imrl_jax.conditions import Phase
 from imrl_jax.env import TaskSpec
-from imrl_jax.state import Curves, Draws, Previous, State, Traces, bin_steps, draw_block, phase_params
+from imrl_jax.state import (Curves, Draws, Previous, State, Traces, bin_steps, childhood_phase, draw_block,
+                            phase_params)
 
 # Slots of the per-lane scalar vectors.
 _X, _Y, _HEADING, _COS, _SIN, _A0, _A1, _O0, _O1 = range(9)  # floats
@@ -415,20 +416,36 @@ def check_supported(phase: Phase) -> None:
                               f"{getattr(phase, name)!r}; use step_kernel=xla")
 
 
+#: The agent's fields of genome parts the kernel does not implement, and what they are.
+UNSUPPORTED_PARTS = {"params": "evolved learning parameters", "childhood_length": "an evolved childhood length",
+                     "expressed": "an evolved number of experts (expression genes)"}
+
+
+def check_agent(agent: Agent) -> None:
+    """Refuse an agent with a genome part the kernel does not implement (ConfigError naming it)."""
+    for field, what in UNSUPPORTED_PARTS.items():
+        if getattr(agent, field) is not None:
+            raise ConfigError(f"step_kernel: the pallas kernel does not implement {what}; use step_kernel=xla")
+
+
+def unsupported(config: Config) -> str | None:
+    """Why the kernel cannot live ``config``'s condition (one line), or None when it can."""
+    try:
+        if config.spec.has_childhood:
+            check_supported(childhood_phase(config))
+        check_supported(config.spec.adult)
+        check_agent(decode(config, jnp.zeros((config.num_genes,))))
+    except ConfigError as error:
+        return str(error)
+    return None
+
+
 def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningParams, task: TaskSpec,
               state: State, num_steps: int, phase_steps: int | None = None,
               num_bins: int | None = None, interpret: bool | None = None) -> tuple[State, Curves]:
     """:func:`imrl_jax.lifetime.run_phase`, each bin one kernel call (``interpret``: default off a GPU)."""
     check_supported(phase)
-    if state.agent.params is not None:
-        raise ConfigError("step_kernel: the pallas kernel does not implement evolved learning parameters; "
-                          "use step_kernel=xla")
-    if state.agent.childhood_length is not None:
-        raise ConfigError("step_kernel: the pallas kernel does not implement an evolved childhood length; "
-                          "use step_kernel=xla")
-    if state.agent.expressed is not None:
-        raise ConfigError("step_kernel: the pallas kernel does not implement an evolved number of experts "
-                          "(expression genes); use step_kernel=xla")
+    check_agent(state.agent)
     phase_steps = num_steps if phase_steps is None else phase_steps
     num_bins = config.num_bins if num_bins is None else num_bins
     steps_per_bin = bin_steps(num_steps, num_bins)

@@ -17,14 +17,14 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from imrl_jax.arena import task_arrays
+from imrl_jax.arena import Pose, task_arrays
 from imrl_jax.conditions import Phase
 from imrl_jax.config import Config, LearningParams
 from imrl_jax.env import EnvState, TaskSpec, childhood_task, make_env, random_pose, task_spec
 from imrl_jax.learning import learn_experts, learn_selector, learn_selector_over_option, pick_row, take_row
 from imrl_jax.networks import Agent, act, decode, explore, expressed_only, select, with_bias, zero_agent
 from imrl_jax.state import (Curves, Draws, Previous, State, StepRecord, bin_steps, childhood_phase, draw_block,
-                            for_phase, init_state, learning_until, phase_params)
+                            draw_many, for_phase, init_state, learning_until, phase_params)
 from imrl_jax.timescale import ends, next_option
 
 
@@ -248,6 +248,23 @@ def live(key: jax.Array, config: Config, params: LearningParams, genome: jnp.nda
         agent=agent,
         adult_agents=adult_agents,
     )
+
+
+class LifeDraws(NamedTuple):
+    """Every random number :func:`live` uses, drawn whole (for the NumPy reference)."""
+
+    pose: Pose  # the childhood's start
+    childhood: Draws  # (childhood_steps, ...)
+    tasks: Draws  # (tasks, task_steps, ...)
+
+
+def life_draws(key: jax.Array, config: Config, dtype=jnp.float32) -> LifeDraws:
+    """The draws ``live(key, config, ...)`` makes, step by step, so that :func:`imrl_jax.reference.live` can use them."""
+    keys = lifetime_keys(key, config.num_tasks)
+    respawn = config.spec.has_childhood and childhood_phase(config).respawn
+    child = draw_many(keys.childhood, config.childhood_steps, config.draw_block, spawn=respawn)
+    tasks = jax.vmap(draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
+    return LifeDraws(random_pose(keys.pose, config, dtype), child, tasks)
 
 
 def make_evaluate(config: Config):

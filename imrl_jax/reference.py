@@ -512,3 +512,32 @@ def live(config, genome, start_pose, childhood_u, childhood_z, task_u, task_z, c
         "childhood_weights": _copy_weights(grown),
         "task_weights": task_weights,
     }
+
+
+def live_with(config, genome, draws) -> dict:
+    """:func:`live` with the draws of a JAX life (a :class:`~imrl_jax.lifetime.LifeDraws`: pose, childhood, tasks)."""
+    pose, child, tasks = draws.pose, draws.childhood, draws.tasks
+    start = (*np.asarray(pose.pos, np.float64), float(pose.heading))
+    spawn = None if child.spawn is None else np.asarray(child.spawn, np.float64)
+    return live(config, np.asarray(genome, np.float64), start, np.asarray(child.u, np.float64),
+                np.asarray(child.z, np.float64), np.asarray(tasks.u, np.float64), np.asarray(tasks.z, np.float64),
+                childhood_spawn=spawn)
+
+
+#: Known inputs for checks against the reference (the tests and ``imrl_jax.gpu_check``).
+#: One task whose target lies 40 cm straight ahead of the start, 85 cm from the east wall:
+#: reaches, timeouts and wall contacts all happen within a few hundred steps.
+SHORT_TASK_FIELDS = dict(start=(300.0, 200.0), heading_deg=0.0, target=(340.0, 200.0))
+#: Learning values other than the paper's, every rule's extension switched on (traces, per-network rates).
+EXTENDED = dict(trace_lambda=0.9, eta_actor=0.05, eta_evaluator=0.02, eta_selector_actor=0.5,
+                eta_selector_critic=0.003, childhood_trace_lambda=0.8, childhood_eta_selector_actor=0.2,
+                childhood_eta_selector_critic=0.02)
+
+
+def hand_experts(n):
+    """Expert actors (3, 2, n): 0 drives straight at full speed, 1 and 2 turn left / right slowly."""
+    actor = np.zeros((3, 2, n))
+    actor[0, 1, -1] = 6.0  # speed unit saturated: 2 cm per step
+    actor[1, 0, -1], actor[1, 1, -1] = 2.0, 0.5
+    actor[2, 0, -1], actor[2, 1, -1] = -2.0, 0.5
+    return actor

@@ -22,6 +22,7 @@ import time
 import jax
 import numpy as np
 
+from imrl_jax import reference as numpy_reference
 from imrl_jax.config import Task, make_config
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -64,21 +65,9 @@ SHARDED_CASES = {
     "population": ("--seeds", "1", "--population", "4") + SHARDED_COMMON,
 }
 
-EXTENDED = dict(trace_lambda=0.9, eta_actor=0.05, eta_evaluator=0.02, eta_selector_actor=0.5,
-                eta_selector_critic=0.003, childhood_trace_lambda=0.8, childhood_eta_selector_actor=0.2,
-                childhood_eta_selector_critic=0.02)
-#: One task whose target lies 40 cm straight ahead of the start, 85 cm from the east wall:
-#: reaches, timeouts and wall contacts all happen within a few hundred steps.
-SHORT_TASK = Task(start=(300.0, 200.0), heading_deg=0.0, target=(340.0, 200.0))
-
-
-def hand_experts(n):
-    """Expert actors: 0 drives straight at full speed, 1 and 2 turn left / right slowly."""
-    actor = np.zeros((3, 2, n))
-    actor[0, 1, -1] = 6.0  # speed unit saturated: 2 cm per step
-    actor[1, 0, -1], actor[1, 1, -1] = 2.0, 0.5
-    actor[2, 0, -1], actor[2, 1, -1] = -2.0, 0.5
-    return actor
+EXTENDED = numpy_reference.EXTENDED
+SHORT_TASK = Task(**numpy_reference.SHORT_TASK_FIELDS)
+hand_experts = numpy_reference.hand_experts
 
 
 def random_genomes(config, n, seed=0):
@@ -297,13 +286,6 @@ def tiny_baseline(agent: str = "ppo", **overrides):
 
 def reference_life(config, key, genome) -> dict:
     """The NumPy reference's whole life of ``genome`` with the draws ``lifetime.live(key, ...)`` makes (float64)."""
-    import jax.numpy as jnp
+    from imrl_jax import lifetime, reference
 
-    from imrl_jax import lifetime, reference, state
-
-    keys = lifetime.lifetime_keys(key, config.num_tasks)
-    pose = lifetime.random_pose(keys.pose, config, jnp.float64)
-    child = state.draw_many(keys.childhood, config.childhood_steps, config.draw_block)
-    tasks = jax.vmap(state.draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
-    return reference.live(config, np.asarray(genome), (float(pose.pos[0]), float(pose.pos[1]), float(pose.heading)),
-                          np.asarray(child.u), np.asarray(child.z), np.asarray(tasks.u), np.asarray(tasks.z))
+    return reference.live_with(config, genome, lifetime.life_draws(key, config, np.float64))
