@@ -65,14 +65,16 @@ class Sizes:
     phase_steps: int = 1000
     repeats: int = 3
     generation_seeds: tuple[int, ...] = (10, 100)
+    generation_condition: str = "LE-LS"  # of the timed generation and sweep
     generation_sizes: tuple = ()  # Config overrides of the timed generation (none: the paper's scale)
     sweep: tuple = (("trace_lambda", (0.0, 0.9, 0.98)), ("eta_selector_actor", (0.01, 0.3)))
     sweep_seeds: int = 10
     scale: float = 1.0  # of the time estimates that the budget is checked against
 
 
-DRY = Sizes(life_steps=(60, 30, 3), presets=("paper", "skills"), conditions=("LE-LS", "EE-LS"), float32_steps=200,
+DRY = Sizes(life_steps=(60, 30, 3), presets=("paper",), conditions=("EE-LS",), float32_steps=200,
             lanes=(6,), life_task_steps=20, phase_steps=20, repeats=1, generation_seeds=(2,),
+            generation_condition="EE-LS",
             generation_sizes=(("childhood_steps", 40), ("task_steps", 20), ("num_bins", 2), ("population_size", 4),
                               ("num_parents", 2)),
             sweep=(("trace_lambda", (0.0, 0.9)),), sweep_seeds=2, scale=0.0)
@@ -277,7 +279,7 @@ def life_cases(sizes: Sizes):
 
 
 def weights_excess(got, want: dict, rtol: float, atol: float) -> tuple[float, float]:
-    """(max |got - want|, max of |got - want| - (atol + rtol |want|)) over the networks both have; ok if the second <= 0."""
+    """(max |got - want|, max of |got - want| - (atol + rtol |want|)) over the networks both have (ok: second <= 0)."""
     from imrl_jax.reference import WEIGHT_KEYS
 
     largest, excess = 0.0, -np.inf
@@ -460,7 +462,7 @@ def generation_inputs(config, num_seeds: int):
 
 
 def generations(check: Check) -> dict:
-    """One paper-scale LE-LS generation (compilation apart) per kernel and seed count."""
+    """One paper-scale generation (LE-LS; compilation apart) per kernel and seed count."""
     import jax
 
     from imrl_jax.config import make_config
@@ -476,7 +478,7 @@ def generations(check: Check) -> dict:
                 continue
             with check.piece(row, rows):
                 check.stage = "api"
-                config = make_config("paper", condition="LE-LS", step_kernel=kernel,
+                config = make_config("paper", condition=check.sizes.generation_condition, step_kernel=kernel,
                                      **dict(check.sizes.generation_sizes))
                 args = generation_inputs(config, seeds)
                 executable, compile_s = compile_program(check, make_generation(config), *args)
@@ -515,7 +517,8 @@ def sweep(check: Check) -> dict:
 
     kernel = fastest_kernel(check)
     check.stage = "api"
-    config = make_config("paper", condition="LE-LS", step_kernel=kernel, **dict(check.sizes.generation_sizes))
+    config = make_config("paper", condition=check.sizes.generation_condition, step_kernel=kernel,
+                         **dict(check.sizes.generation_sizes))
     grid = sweeps.grid(config, **dict(check.sizes.sweep))
     seeds = jnp.arange(check.sizes.sweep_seeds)
     executable, compile_s = compile_program(check, sweeps.make_evolution_sweep(config, 1), seeds, grid.points)
@@ -537,6 +540,8 @@ def phases(check: Check) -> dict:
 
     rows = []
     for name, condition, phase, _ in bench.PHASES:
+        if check.sizes.conditions and condition not in check.sizes.conditions:
+            continue
         for kernel in KERNELS:
             for lanes in check.sizes.lanes:
                 row = {"phase": name, "kernel": kernel, "lanes": lanes}
@@ -605,16 +610,17 @@ def figure(results: dict, path: str, cpu_bench: str | None = None) -> None:
     bar_colours = [colours[r["kernel"]] for r in rows]
     if steps.get("sweep", {}).get("status") == "ok":
         s = steps["sweep"]
-        labels.append(f"sweep ({s['kernel']})\n{s['points']} points x {s['seeds']} seeds")
+        labels.append(f"sweep ({s['kernel']})\n{s['points']} points\nx {s['seeds']} seeds")
         values.append(s["seconds"])
         bar_colours.append(colours[s["kernel"]])
     ax.bar(range(len(values)), values, color=bar_colours)
     for i, v in enumerate(values):
         ax.text(i, v, f"{v:.1f} s", ha="center", va="bottom", fontsize=8)
-    ax.set_xticks(range(len(values)), labels, fontsize=8)
+    ax.set_xticks(range(len(values)), labels, fontsize=7)
     ax.set(ylabel="seconds (compilation apart)", title="One paper-scale LE-LS generation")
     for ax in axes[:2]:
-        ax.legend(fontsize=7, loc="best")
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=7, loc="best")
     machine = results.get("machine", {})
     fig.suptitle(f"gpu_check on {machine.get('device', '?')}, jax {machine.get('versions', {}).get('jax', '?')}"
                  + (" (--dry: tiny sizes, not speeds)" if results.get("dry") else ""), fontsize=10)
@@ -648,7 +654,9 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m imrl_jax.gpu_check", description=__doc__.split("\n")[0])
     parser.add_argument("--out", required=True, help="folder for gpu_check.json, .txt and .png (new, or without them)")
     parser.add_argument("--budget-min", type=float, default=8.0, help="minutes the check may take")
-    parser.add_argument("--dry", action="store_true", help="tiny sizes on any backend (a test of the check itself)")
+    parser.add_argument("--dry", action="store_true", help="tiny sizes on any backend (tests the check itself)")
+    parser.add_argument("--only", help="comma-separated steps (default: all): " + ", ".join(n for n, *_ in STEPS))
+    parser.add_argument("--conditions", help="comma-separated conditions whose lives and phases to check (default: all)")
     args = parser.parse_args(argv)
 
     def fail(message: str) -> int:
@@ -659,6 +667,17 @@ def main(argv=None) -> int:
         return fail("--out: empty")
     if not (0 < args.budget_min <= 600):
         return fail(f"--budget-min: must be above 0 and at most 600, got {args.budget_min:g}")
+    names = [n for n, *_ in STEPS]
+    only = names if args.only is None else [n.strip() for n in args.only.split(",")]
+    unknown = [n for n in only if n not in names]
+    if unknown or not only:
+        return fail(f"--only: unknown step {unknown[0] if unknown else ''!r} (choose from {', '.join(names)})")
+    from imrl_jax.conditions import NAMES
+
+    conditions = None if args.conditions is None else tuple(n.strip() for n in args.conditions.split(","))
+    if conditions is not None and any(n not in NAMES for n in conditions):
+        bad = next(n for n in conditions if n not in NAMES)
+        return fail(f"--conditions: unknown condition {bad!r} (choose from {', '.join(NAMES)})")
     existing = [f for f in FILES if os.path.exists(os.path.join(args.out, f))]
     if existing:
         return fail(f"--out: {os.path.join(args.out, existing[0])} exists (choose a new folder)")
@@ -670,7 +689,10 @@ def main(argv=None) -> int:
         if jax.default_backend() != "gpu":
             return fail(f"no GPU: jax {jax.__version__} sees {jax.default_backend()} devices only "
                         f"({jax.devices()[0].device_kind}); run where one is, or use --dry")
-    results = run(args.out, args.budget_min * 60, DRY if args.dry else Sizes())
+    sizes = DRY if args.dry else Sizes()
+    if conditions is not None:
+        sizes = dataclasses.replace(sizes, conditions=conditions)
+    results = run(args.out, args.budget_min * 60, sizes, steps=[s for s in STEPS if s[0] in only])
     return 1 if results["summary"]["failed"] else 0
 
 

@@ -215,7 +215,8 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
             # 1-2: observe, choose the expert.
             xb = observe(x, y, c, s)
             selection = jnp.where(expert_rows, jax.nn.sigmoid(_dot_rows(selector, xb)), 0.0)
-            k = select(u_ref[i], selection, num_experts) if num_experts > 1 else jnp.int32(0)
+            # One expert: k is 0, computed from the carry (Triton's lowering cannot return a constant from the loop).
+            k = select(u_ref[i], selection, num_experts) if num_experts > 1 else jnp.minimum(prev_k, 0)
             same = k == prev_k
             ends = terminal | ~valid
             extrinsic = terminal.astype(dtype)

@@ -259,7 +259,7 @@ class LifeDraws(NamedTuple):
 
 
 def life_draws(key: jax.Array, config: Config, dtype=jnp.float32) -> LifeDraws:
-    """The draws ``live(key, config, ...)`` makes, step by step, so that :func:`imrl_jax.reference.live` can use them."""
+    """The draws ``live(key, config, ...)`` makes, step by step (for :func:`imrl_jax.reference.live`)."""
     keys = lifetime_keys(key, config.num_tasks)
     respawn = config.spec.has_childhood and childhood_phase(config).respawn
     child = draw_many(keys.childhood, config.childhood_steps, config.draw_block, spawn=respawn)

@@ -103,7 +103,7 @@ def test_life_matches_xla(tiny):
 
 
 def test_kernel_lowers_to_triton_for_gpu(tiny):
-    """Childhood (with the childhood options) and adulthood kernels, vmapped over lanes, lower to Triton for CUDA."""
+    """Childhood (with its options), adulthood and SLE kernels, vmapped over lanes, lower to Triton for CUDA."""
     config = tiny("LE-LS", childhood_steps=400, task_steps=200, num_bins=2, **OPTIONS)
     params = config.learning_params()
 
@@ -113,13 +113,18 @@ def test_kernel_lowers_to_triton_for_gpu(tiny):
         child, _ = K.run_phase(key, config, L.childhood_phase(config), params, L.childhood_task(config), child,
                                config.childhood_steps, interpret=False)
         adult = L.task_start(config, child.agent, 0)
-        return K.run_phase(key, config, C.ADULT_LEARNING_SELECTOR, params, L.task_spec(config, 0), adult,
-                           config.task_steps, interpret=False)
+        adult = K.run_phase(key, config, C.ADULT_LEARNING_SELECTOR, params, L.task_spec(config, 0), adult,
+                            config.task_steps, interpret=False)
+        # One expert (SLE): its choice is computed, not a constant (Triton's loop cannot return one).
+        single = L.task_start(sle, L.adult_agent(sle, decode(sle, jnp.zeros((0,)))), 0)
+        return adult, K.run_phase(key, sle, C.ADULT_SINGLE_EXPERT, params, L.task_spec(sle, 0), single,
+                                  sle.task_steps, interpret=False)
 
+    sle = tiny("SLE", task_steps=200, num_bins=2)
     keys = jax.random.split(jax.random.key(0), 6).reshape(2, 3)
     genomes = jnp.zeros((2, 3, config.num_genes))
     text = jax.jit(jax.vmap(jax.vmap(lanes))).trace(keys, genomes).lower(lowering_platforms=("cuda",)).as_text()
-    assert text.count("__gpu$xla.gpu.triton") == 2
+    assert text.count("__gpu$xla.gpu.triton") == 3
 
 
 def test_a_phase_option_the_kernel_does_not_implement_is_refused():

@@ -1,0 +1,130 @@
+"""``python -m imrl_jax.gpu_check``: its dry run end to end, failures kept to their piece, the budget, bad input."""
+
+import json
+import os
+
+import jax
+import numpy as np
+import pytest
+
+from imrl_jax import gpu_check as G
+
+
+def test_dry_run_checks_and_times_every_step(tmp_path, capsys):
+    """At tiny sizes on CPU: every step runs, the lives agree, and the three files hold the figures."""
+    out = tmp_path / "check"
+    assert G.main(["--out", str(out), "--dry"]) == 0
+    results = json.loads((out / "gpu_check.json").read_text())
+    steps = {s["step"]: s for s in results["steps"]}
+    assert list(steps) == [name for name, *_ in G.STEPS]
+    assert all(s["status"] == "ok" for s in steps.values()), {n: s.get("failures") for n, s in steps.items()}
+    assert results["machine"]["backend"] == jax.default_backend() and results["dry"] is True
+    lives = steps["lives"]["rows"]
+    assert [(r["condition"], r["preset"]) for r in lives] == [("EE-LS", "paper")]
+    assert lives[0]["pallas_vs_xla"]["events_equal"] and lives[0]["xla_vs_reference"]["max_weight_diff"] < 1e-10
+    assert {r["kernel"]: r["reaches"] for r in steps["float32"]["rows"]} == {"xla": 2, "pallas": 2}
+    assert {(r["kernel"], r["seeds"]) for r in steps["generation"]["rows"]} == {("xla", 2), ("pallas", 2)}
+    for row in steps["life"]["rows"] + steps["generation"]["rows"] + steps["phases"]["rows"]:
+        assert row["lane_steps_per_s"] > 0 and row["compile_s"] > 0, row
+    # Only the phases of the checked conditions (EE-LS: the learning selector's adulthood), both kernels.
+    assert {(r["phase"], r["kernel"]) for r in steps["phases"]["rows"]} == {
+        ("LE-LS/EE-LS adulthood", "xla"), ("LE-LS/EE-LS adulthood", "pallas")}
+    assert steps["sweep"]["points"] == 2 and len(steps["sweep"]["best_fitness"]) == 2
+    text = (out / "gpu_check.txt").read_text()
+    assert "done: 7 steps ok, failed: none, skipped: none" in text
+    assert (out / "gpu_check.png").stat().st_size > 10_000
+
+
+def _steps(log):
+    def environment(check):
+        return {}
+
+    def broken(check):
+        check.stage = "lowering"
+        raise ValueError("Operand 18 of operation\nsecond line")
+
+    def pieces(check):
+        rows = []
+        for kernel in ("xla", "pallas"):
+            row = {"kernel": kernel, "lanes": 6}
+            with check.piece(row, rows):
+                check.stage = "compile"
+                if kernel == "pallas":
+                    raise RuntimeError("no Triton")
+                row["status"] = "ok"
+        log.append("pieces ran both kernels")
+        return {"rows": rows}
+
+    return (("environment", environment, 0), ("broken", broken, 0), ("pieces", pieces, 0))
+
+
+def test_a_failure_is_kept_to_its_step_or_piece_and_the_check_goes_on(tmp_path):
+    log = []
+    results = G.run(str(tmp_path), 60, G.DRY, log=lambda line: None, steps=_steps(log))
+    steps = {s["step"]: s for s in results["steps"]}
+    assert steps["environment"]["status"] == "ok"
+    assert (steps["broken"]["status"], steps["broken"]["stage"]) == ("failed", "lowering")
+    assert steps["broken"]["error"] == "ValueError: Operand 18 of operation"  # one line
+    assert log == ["pieces ran both kernels"]
+    assert steps["pieces"]["status"] == "failed"
+    assert steps["pieces"]["failures"] == ["pallas 6: compile: RuntimeError: no Triton"]
+    assert steps["pieces"]["rows"][0]["status"] == "ok"
+    assert results["summary"] == {"failed": ["broken", "pieces"], "skipped": []}
+    written = json.loads((tmp_path / "gpu_check.json").read_text())
+    assert written["summary"] == results["summary"]
+    text = (tmp_path / "gpu_check.txt").read_text()
+    assert "[broken] FAILED at lowering: ValueError: Operand 18 of operation" in text
+
+
+def test_what_does_not_fit_the_budget_is_skipped_and_said(tmp_path):
+    """At the real sizes (scale 1) a step that needs more than is left is skipped; the files are still written."""
+    log = []
+    steps = (("environment", lambda check: {}, 0), ("long", lambda check: log.append("ran") or {}, 120))
+    results = G.run(str(tmp_path), 30, G.Sizes(), log=lambda line: None, steps=steps)
+    long = results["steps"][1]
+    assert log == [] and long["status"] == "skipped" and "about 120 s needed" in long["error"]
+    assert results["summary"] == {"failed": [], "skipped": ["long"]}
+    assert {p.name for p in tmp_path.iterdir()} == set(G.FILES)
+
+
+def test_life_cases_one_per_model_and_the_kernels_first():
+    """A preset that gives the same lives as one before it (Config.model_differences) is not checked again."""
+    cases = G.life_cases(G.Sizes(conditions=("EE-ES", "EV-LS", "LE-LS")))
+    names = [(name, preset) for name, preset, _, _ in cases]
+    # EE-ES learns nothing: every preset lives the same. LE-LS: four models. EV-LS: not in the kernel, so last.
+    assert names == [("EE-ES", "paper"), ("LE-LS", "paper"), ("LE-LS", "extension"), ("LE-LS", "faithful"),
+                     ("LE-LS", "skills"), ("EV-LS", "paper"), ("EV-LS", "extension"), ("EV-LS", "faithful"),
+                     ("EV-LS", "skills")]
+    assert [reason is None for *_, reason in cases] == [True] * 5 + [False] * 4
+    assert "evaluation='discounted'" in cases[-1][3]
+
+
+def test_weights_excess_is_the_tolerance_test():
+    """max |a - b| and how far it is past atol + rtol |b| (hand-computed)."""
+    want = {"actor": np.array([1.0, -2.0]), "selector_critic": np.array([10.0])}
+    got = {"actor": np.array([1.001, -2.0]), "selector_critic": np.array([10.0]), "evaluator": np.array([5.0])}
+    largest, excess = G.weights_excess(got, want, rtol=1e-4, atol=1e-5)
+    assert largest == pytest.approx(1e-3) and excess == pytest.approx(1e-3 - 1e-5 - 1e-4)
+    assert G.weights_excess(got, want, rtol=1e-3, atol=1e-5)[1] <= 0
+
+
+@pytest.mark.parametrize("args, message", [
+    ([], "no GPU: jax"),
+    (["--dry", "--budget-min", "0"], "--budget-min: must be above 0"),
+    (["--dry", "--only", "lives,bogus"], "--only: unknown step 'bogus'"),
+    (["--dry", "--conditions", "LE-LS,XX"], "--conditions: unknown condition 'XX'"),
+], ids=["no-gpu", "budget", "step", "condition"])
+def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, args, message):
+    out = tmp_path / "check"
+    assert G.main(["--out", str(out), *args]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: {message}") and err.count("\n") == 1
+    assert not out.exists()
+
+
+def test_an_earlier_check_is_not_overwritten(tmp_path, capsys):
+    (tmp_path / "gpu_check.json").write_text("{}")
+    assert G.main(["--out", str(tmp_path), "--dry"]) == 2
+    assert "gpu_check.json exists" in capsys.readouterr().err
+    assert (tmp_path / "gpu_check.json").read_text() == "{}" and len(os.listdir(tmp_path)) == 1
+    assert G.main(["--out", "", "--dry"]) == 2
