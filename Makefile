@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 OUT ?= out
 
-.PHONY: install demo test test-all test-min bench reproduce reproduce-cpu clean
+.PHONY: install demo test test-all test-min bench gpu-check reproduce reproduce-cpu clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -36,6 +36,11 @@ test-min:
 
 bench: $(STAMP)
 	$(BIN)/python -m imrl_jax.bench --json $(OUT)/bench.json
+
+# The GPU check (docs/PERFORMANCE.md, "On a GPU: measured"): run by the Python that has JAX with CUDA,
+# from the source tree (nothing is installed or downloaded); `--dry` runs it at tiny sizes anywhere.
+gpu-check:
+	PYTHONPATH=. $(PYTHON) -m imrl_jax.gpu_check --out $(OUT)/gpu_check
 
 # The paper's Fig. 3 and claims, both variants of the learning rules (experiments/reproduce.py).
 # Resumable: run the same target again after an interruption.
