@@ -1,0 +1,156 @@
+"""A run named by what it computes: an evolution's spec, its content key, and where its directory is.
+
+Two evolutions that live the same lives (the same model, seeds and search) are one run, however a
+study came to ask for it. The model is the config less the fields its condition never reads
+(``Condition.ignored_fields``, tested against the NumPy reference) and the compute choices
+(``config.COMPUTE_FIELDS``); so a run's **key** is a hash of those fields, its seeds and its search
+(strategy and settings). ``num_generations`` is left out as well: a run's length is how far it has
+come, not which run it is (``evolve --resume --generations N`` extends it).
+
+Every committed run directory keeps its place: :func:`index` reads the ``config.json`` of every
+run under a results folder and maps its key to its directory, so a study finds a finished run by
+its key wherever it lies, and a new one goes to ``runs/KEY`` (:func:`locate`). The keys of the
+committed runs are recorded in ``experiments/results/run_keys.json`` and a test holds them fixed:
+a change of the key that would orphan a committed run fails it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+from typing import Iterable
+
+from imrl_jax.config import COMPUTE_FIELDS, Config
+
+#: The search a run records when it records none: the paper's GA (``strategies.GA_RECORD``).
+GA_SEARCH = (("strategy", "ga"), ("settings", ()))
+#: Hex digits of a key (64 bits: no two of a project's runs meet by chance).
+KEY_LENGTH = 16
+#: Fields that are no part of a run's identity whatever the condition (see the module's docstring).
+PROGRESS_FIELDS = ("num_generations",)
+
+
+class DuplicateRunError(ValueError):
+    """Two run directories hold the same run (the same key)."""
+
+
+def _frozen(value):
+    """A JSON-like value as nested tuples (hashable), dicts as sorted (key, value) pairs."""
+    if isinstance(value, dict):
+        return tuple(sorted((k, _frozen(v)) for k, v in value.items()))
+    if isinstance(value, (list, tuple)):
+        return tuple(_frozen(v) for v in value)
+    return value
+
+
+def _thawed(value):
+    """Inverse of :func:`_frozen` for the search record: pairs back to a dict."""
+    if isinstance(value, tuple) and all(isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], str) for v in value):
+        return {k: _thawed(v) for k, v in value}
+    return value
+
+
+@dataclasses.dataclass(frozen=True)
+class RunSpec:
+    """An evolution as what it computes: its config, its seeds and its search (strategy, settings)."""
+
+    config: Config
+    seeds: tuple[int, ...]
+    search: tuple = GA_SEARCH  # the config.json ``search`` record, frozen
+
+    @classmethod
+    def make(cls, config: Config, seeds: Iterable[int], search: dict | None = None) -> "RunSpec":
+        """A spec from a config, seeds and a config.json-style search record (None: the paper's GA)."""
+        return cls(config, tuple(int(s) for s in seeds), GA_SEARCH if search is None else _frozen(search))
+
+    @classmethod
+    def from_run_dir(cls, run_dir: str) -> "RunSpec":
+        """The spec a run directory's ``config.json`` records (raises RunDirError naming the file)."""
+        from imrl_jax.rundir import RunDirError, read_config
+
+        config, seeds = read_config(run_dir)
+        path = os.path.join(run_dir, "config.json")
+        try:
+            with open(path) as f:
+                search = json.load(f).get("search")
+        except (OSError, ValueError) as error:
+            raise RunDirError(f"{path} is unreadable ({error})") from None
+        return cls.make(config, seeds, search)
+
+    def identity(self) -> dict:
+        """What the key is made of: the model's fields, the seeds and the search, as plain JSON values."""
+        skip = set(COMPUTE_FIELDS) | set(PROGRESS_FIELDS) | self.config.spec.ignored_fields()
+        model = {k: v for k, v in self.config.to_dict().items() if k not in skip}
+        return {"model": model, "seeds": list(self.seeds), "search": _thawed(self.search)}
+
+    def key(self) -> str:
+        """The run's content key: a hash of :meth:`identity` in canonical JSON."""
+        text = json.dumps(self.identity(), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()[:KEY_LENGTH]
+
+
+def run_dirs(root: str) -> list[str]:
+    """Every evolution's directory under ``root`` (one holding a ``config.json``), sorted, relative to ``root``."""
+    found = []
+    for folder, subfolders, files in os.walk(root):
+        subfolders[:] = sorted(d for d in subfolders if d not in ("checkpoints", "resume_checkpoint", "partial"))
+        if "config.json" in files:
+            found.append(os.path.relpath(folder, root))
+    return sorted(found)
+
+
+def index(root: str) -> dict[str, str]:
+    """``{key: directory relative to root}`` of every run under ``root``; two directories of one run are an error."""
+    keys: dict[str, str] = {}
+    for folder in run_dirs(root):
+        key = RunSpec.from_run_dir(os.path.join(root, folder)).key()
+        if key in keys:
+            raise DuplicateRunError(f"{os.path.join(root, folder)} and {os.path.join(root, keys[key])} hold the "
+                                    f"same run (key {key})")
+        keys[key] = folder
+    return keys
+
+
+def locate(root: str, spec: RunSpec, known: dict[str, str] | None = None) -> tuple[str, bool]:
+    """Where ``spec``'s run lies under ``root``, and whether it exists: the directory that holds it, or
+    ``root/runs/KEY`` for a new one. ``known``: an :func:`index` of ``root`` already read."""
+    key = spec.key()
+    known = index(root) if known is None else known
+    if key in known:
+        return os.path.join(root, known[key]), True
+    return os.path.join(root, "runs", key), False
+
+
+def main(argv=None) -> int:
+    """``python -m imrl_jax.runspec ROOT [--record PATH]``: every run under ROOT with its key."""
+    import argparse
+    import sys
+
+    from imrl_jax.rundir import RunDirError
+
+    parser = argparse.ArgumentParser(prog="python -m imrl_jax.runspec", description=main.__doc__.split(": ", 1)[1])
+    parser.add_argument("root", help="a results folder (for instance experiments/results)")
+    parser.add_argument("--record", help="also write {directory: key} to this JSON file")
+    args = parser.parse_args(argv)
+    if not os.path.isdir(args.root):
+        print(f"error: {args.root}: not a folder", file=sys.stderr)
+        return 2
+    try:
+        known = index(args.root)
+    except (RunDirError, DuplicateRunError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    for key, folder in sorted(known.items(), key=lambda item: item[1]):
+        print(f"{key}  {folder}")
+    if args.record:
+        from imrl_jax.rundir import write_atomic
+
+        record = {folder: key for key, folder in sorted(known.items(), key=lambda item: item[1])}
+        write_atomic(args.record, (json.dumps(record, indent=1) + "\n").encode())
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,81 @@
+"""Runs named by what they compute (imrl_jax.runspec): the key follows the model, committed runs keep theirs."""
+
+import json
+import os
+import shutil
+
+import pytest
+from helpers import ROOT
+
+from imrl_jax import conditions, runspec
+from imrl_jax.config import PRESETS, make_config
+from imrl_jax.runspec import DuplicateRunError, RunSpec
+
+RESULTS = os.path.join(ROOT, "experiments", "results")
+
+
+def test_every_committed_run_keeps_its_recorded_key_and_no_two_share_one():
+    """Each committed evolution maps to one key (run_keys.json); index() refuses two directories of one run."""
+    with open(os.path.join(RESULTS, "run_keys.json")) as f:
+        recorded = json.load(f)
+    found = runspec.index(RESULTS)
+    assert {folder: key for key, folder in found.items()} == recorded
+    assert len(found) == len(runspec.run_dirs(RESULTS)) == len(recorded) >= 49
+    assert all(len(key) == runspec.KEY_LENGTH for key in recorded.values())
+
+
+def test_two_configs_share_a_key_exactly_when_they_are_the_same_model():
+    """Over every condition under every preset: same key <=> Config.model_differences finds nothing."""
+    configs = [make_config(preset, condition=name) for name in conditions.NAMES for preset in PRESETS]
+    pairs = same = 0
+    for a in configs:
+        for b in configs:
+            if a.condition == b.condition:
+                pairs += 1
+                share = RunSpec.make(a, [0]).key() == RunSpec.make(b, [0]).key()
+                assert share == (not a.model_differences(b)), (a.condition, a.model_differences(b))
+                same += share
+    assert pairs == len(conditions.NAMES) * len(PRESETS) ** 2 and len(configs) < same < pairs
+
+
+def test_what_is_and_is_not_part_of_a_run():
+    config = make_config("paper", condition="EE-LS")
+    key = RunSpec.make(config, [0, 1]).key()
+    # How it is computed, and how far it has come, are not.
+    assert RunSpec.make(config.replace(step_kernel="pallas", scan_unroll=2, num_generations=7), [0, 1]).key() == key
+    assert RunSpec.make(config.replace(childhood_steps=10), [0, 1]).key() == key  # EE-LS has no childhood
+    assert RunSpec.make(config, [0, 1], {"strategy": "ga", "settings": {}}).key() == key  # the GA, recorded
+    # The model, the seeds and the search are.
+    assert RunSpec.make(config.replace(target_radius=12.0), [0, 1]).key() != key
+    assert RunSpec.make(config, [0, 2]).key() != key
+    snes = RunSpec.make(config, [0, 1], {"strategy": "snes", "settings": {}})
+    assert snes.key() != key
+    assert RunSpec.make(config, [0, 1], {"strategy": "snes", "settings": {"sigma_init": 0.3}}).key() != snes.key()
+    assert snes.identity()["search"] == {"strategy": "snes", "settings": {}}
+
+
+def _copy_run(source: str, dest) -> None:
+    os.makedirs(dest)
+    shutil.copy(os.path.join(RESULTS, source, "config.json"), os.path.join(dest, "config.json"))
+
+
+def test_locate_finds_a_run_wherever_it_lies_and_places_a_new_one_by_its_key(tmp_path):
+    folder = sorted(json.load(open(os.path.join(RESULTS, "run_keys.json"))))[0]
+    _copy_run(folder, tmp_path / "some" / "study" / "run")
+    spec = RunSpec.from_run_dir(str(tmp_path / "some" / "study" / "run"))
+    assert runspec.locate(str(tmp_path), spec) == (str(tmp_path / "some" / "study" / "run"), True)
+    other = RunSpec.make(spec.config, [*spec.seeds, 99], spec.identity()["search"])
+    assert runspec.locate(str(tmp_path), other) == (str(tmp_path / "runs" / other.key()), False)
+
+
+def test_two_directories_of_one_run_are_refused_naming_both(tmp_path, capsys):
+    folder = sorted(json.load(open(os.path.join(RESULTS, "run_keys.json"))))[0]
+    _copy_run(folder, tmp_path / "a")
+    _copy_run(folder, tmp_path / "b")
+    with pytest.raises(DuplicateRunError, match=f"{tmp_path / 'b'} and {tmp_path / 'a'} hold the same run"):
+        runspec.index(str(tmp_path))
+    assert runspec.main([str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and err.count("\n") == 1 and "hold the same run" in err
+    assert runspec.main([str(tmp_path / "missing")]) == 2
+    assert capsys.readouterr().err == f"error: {tmp_path / 'missing'}: not a folder\n"
