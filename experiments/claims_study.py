@@ -37,6 +37,7 @@ import numpy as np
 
 from experiments.reproduce import (DEFAULT_VARIANTS, EVOLVED, SCALES, TESTED, Stage, evolution_cost, evolution_dir,
                                    evolve_command, load_manifest, run_stages, test_command, test_cost, test_dir)
+from experiments.study import Study
 
 #: The screen's sizes: the paper's life lengths, fewer seeds and tests.
 SCREEN = dict(SCALES["paper"], seeds=5, best=5, tests=4)
@@ -752,7 +753,7 @@ def parser() -> argparse.ArgumentParser:
 
 
 def stages_for(argv) -> tuple[list[Stage], dict]:
-    """The stages the command line ``argv`` runs, and their scale (for the queue's estimates)."""
+    """The stages the command line ``argv`` runs, and their scale (for ``python -m experiments list``)."""
     args = parser().parse_args(argv)
     return selected_stages(args.only, args.out), SCREEN
 
@@ -813,6 +814,12 @@ def write_claims(out: str, names) -> int:
     print(f"wrote docs/CLAIMS.md's table and {os.path.join(out, 'claims.json')}: {len(measured)} of {len(names)} "
           f"rule sets finished")
     return 0
+
+
+#: The studies of this module (python -m experiments finds them).
+STUDIES = (Study("claims-screen", "claims_study", "docs/CLAIMS.md", 3, ("--only", SCREEN_NAME), ("--table",)),
+           Study("claims-experts", "claims_study", "docs/CLAIMS.md", 5, ("--only", EXPERTS),
+                 ("--only", EXPERTS, "--table")))
 
 
 if __name__ == "__main__":

@@ -34,6 +34,7 @@ from experiments.claims import NUM_BEST
 from experiments.claims_study import REPRODUCTION, SCREEN
 from experiments.reproduce import (Stage, evolution_cost, evolution_dir, evolve_command, load_manifest, run_stages,
                                    test_command, test_cost, test_dir)
+from experiments.study import Study
 from imrl_jax import conditions
 
 OUT = os.path.join("experiments", "results", "future_work")
@@ -625,6 +626,10 @@ def main(argv=None) -> int:
         return 0
     manifest, manifest_path = load_manifest(args.out, study="future_work", sizes=SCREEN, rows=names)
     return run_stages(stages, SCREEN, manifest, manifest_path, lambda stage: stage_command(stage, SCREEN, args.out))
+
+
+#: The studies of this module (python -m experiments finds them).
+STUDIES = (Study("future-work", "future_work", "docs/FUTURE_WORK.md", 7),)
 
 
 if __name__ == "__main__":

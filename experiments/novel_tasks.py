@@ -35,6 +35,7 @@ from typing import NamedTuple
 from experiments.claims_study import REPRODUCTION, SCREEN
 from experiments.reproduce import (SCALES, Stage, evolution_cost, evolve_command, load_manifest, run_stages,
                                    test_command, test_cost)
+from experiments.study import Study
 from imrl_jax.config import paper_tasks
 from imrl_jax.tasks import to_json
 
@@ -379,6 +380,10 @@ def main(argv=None) -> int:
     task_files(args.out, write=True)
     manifest, manifest_path = load_manifest(args.out, study="novel_tasks", sizes=SCREEN)
     return run_stages(stages, SCREEN, manifest, manifest_path, lambda stage: stage_command(stage, args.out))
+
+
+#: The studies of this module (python -m experiments finds them).
+STUDIES = (Study("novel-tasks", "novel_tasks", "docs/NOVEL_TASKS.md", 2),)
 
 
 if __name__ == "__main__":

@@ -60,6 +60,7 @@ import time
 from typing import NamedTuple
 
 from imrl_jax import conditions  # the condition table (no JAX)
+from experiments.study import Study
 
 SCALES = {
     "paper": dict(seeds=10, generations=100, childhood_steps=150_000, task_steps=100_000, bins=100,
@@ -507,7 +508,7 @@ def _chosen(args) -> tuple[dict, str, list[str]]:
 
 
 def stages_for(argv) -> tuple[list[Stage], dict]:
-    """The stages the command line ``argv`` runs, and their scale (for the queue's estimates)."""
+    """The stages the command line ``argv`` runs, and their scale (for ``python -m experiments list``)."""
     args = parser().parse_args(argv)
     scale, out, variants = _chosen(args)
     return plan(scale, out, variants, report=not args.no_report), scale
@@ -525,6 +526,13 @@ def main(argv=None) -> int:
     manifest, manifest_path = load_manifest(out, scale=args.scale, sizes=scale, variants=variants, kernel=args.kernel)
     stages = plan(scale, out, variants, report=not args.no_report)
     return run_stages(stages, scale, manifest, manifest_path, lambda stage: stage_command(stage, scale, out, args.kernel))
+
+
+#: The studies of this module (python -m experiments finds them).
+STUDIES = (Study("reproduction", "reproduce", "docs/REPRODUCTION.md", 4, ("--scale", "paper"),
+                 ("experiments/results/paper",), "report"),
+           Study("reproduction-cpu", "reproduce", "docs/REPRODUCTION_CPU.md", 8, ("--scale", "cpu"),
+                 ("experiments/results/cpu",), "report"))
 
 
 if __name__ == "__main__":

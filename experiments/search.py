@@ -30,6 +30,7 @@ from typing import NamedTuple
 from experiments.claims_study import REPRODUCTION, SCREEN
 from experiments.reproduce import (Stage, evolution_cost, evolution_dir, evolve_command, load_manifest, run_stages,
                                    test_command, test_cost, test_dir)
+from experiments.study import Study
 from imrl_jax.strategies import GA_NAME
 
 OUT = os.path.join("experiments", "results", "search")
@@ -340,6 +341,10 @@ def main(argv=None) -> int:
         return 0
     manifest, manifest_path = load_manifest(args.out, study="search", sizes=SCREEN, rows=[r.name for r in rows])
     return run_stages(stages, SCREEN, manifest, manifest_path, lambda stage: stage_command(stage, SCREEN))
+
+
+#: The studies of this module (python -m experiments finds them).
+STUDIES = (Study("search", "search", "docs/SEARCH.md", 6),)
 
 
 if __name__ == "__main__":

@@ -38,6 +38,7 @@ import numpy as np
 from experiments.claims_study import REPRODUCTION, SCREEN
 from experiments.reproduce import (MEASURED, Stage, evolution_cost, evolve_command, load_manifest, run_stages,
                                    test_command, test_cost)
+from experiments.study import Study
 
 OUT = os.path.join("experiments", "results", "timescale")
 #: The selector's options: name -> Config fields. "per-step" is the paper's selector.
@@ -602,6 +603,10 @@ def main(argv=None) -> int:
         print(f"error: {mismatched[0]}", file=sys.stderr)
         return 2
     return run_stages(plan(args.out), SCREEN, manifest, manifest_path, lambda s: stage_command(s, args.out))
+
+
+#: The studies of this module (python -m experiments finds them).
+STUDIES = (Study("timescale", "timescale", "docs/TIMESCALE.md", 1),)
 
 
 if __name__ == "__main__":

@@ -59,7 +59,7 @@ def test_unknown_rule_set_is_refused(capsys):
 
 
 def test_the_screen_and_claim_8_are_chosen_apart():
-    """The queue runs the screen, then the reproduction, then claim 8: each a --only of its own."""
+    """``run all`` runs the screen, then the reproduction, then claim 8: each a --only of its own."""
     assert study.parse_names("screen") == list(study.SCREEN_ORDER)
     assert study.parse_names(None) == [*study.SCREEN_ORDER, study.EXPERTS]
     screen, experts = study.selected_stages("screen", "out"), study.selected_stages("experts", "out")

@@ -1,0 +1,60 @@
+"""A study as one entry the command line finds by itself: ``python -m experiments list|run|report NAME|all``.
+
+A study module declares ``STUDIES``, a tuple of :class:`Study` (a module may hold several: the
+claims map's screen and its claim 8 are two studies of one module). :func:`studies` imports every
+module of the package and collects them, in the order their results are needed (``order``), so a
+new study is its module and its document: nothing else registers it (docs/STUDIES.md).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import os
+import pkgutil
+import sys
+
+
+@dataclasses.dataclass(frozen=True)
+class Study:
+    """A question asked of runs: its module's stages, its command to run them and the one to report."""
+
+    name: str  # what the command line calls it
+    module: str  # its module under experiments/
+    document: str  # the document it writes into
+    order: float  # its place in ``all`` (whole questions early)
+    argv: tuple[str, ...] = ()  # its module's options for its stages ((): the module's default stages)
+    report_argv: tuple[str, ...] | None = ("--report",)  # the options that write its report (None: a stage does)
+    report_module: str | None = None  # the module that writes its report (None: its own)
+
+    def stages(self):
+        """Its stages (``reproduce.Stage``) and their scale, as its run would plan them now."""
+        module = importlib.import_module(f"experiments.{self.module}")
+        return module.stages_for(list(self.argv)) if self.argv else module.all_stages()
+
+    def command(self, report: bool = False) -> list[str]:
+        """The command line that runs (or goes on with) its stages, or writes its report."""
+        if report:
+            return [sys.executable, "-m", f"experiments.{self.report_module or self.module}", *self.report_argv]
+        return [sys.executable, "-m", f"experiments.{self.module}", *self.argv]
+
+
+def studies() -> dict[str, Study]:
+    """Every study the package's modules declare, by name, in order; two of one name are an error."""
+    import experiments
+
+    found: dict[str, Study] = {}
+    for info in sorted(pkgutil.iter_modules(experiments.__path__), key=lambda m: m.name):
+        if info.name.startswith("_"):
+            continue
+        for study in getattr(importlib.import_module(f"experiments.{info.name}"), "STUDIES", ()):
+            if study.name in found:
+                raise ValueError(f"two studies are named {study.name!r} ({found[study.name].module}, {study.module})")
+            found[study.name] = study
+    return dict(sorted(found.items(), key=lambda item: item[1].order))
+
+
+def environment() -> dict:
+    """This environment with the repository root on the path (the studies are modules of the experiments package)."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    return {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}

@@ -1,0 +1,103 @@
+"""``python -m experiments``: every study found by itself, listed, run and reported in order."""
+
+import subprocess
+import sys
+
+import pytest
+
+from experiments import __main__ as cli
+from experiments import study as S
+
+ORDER = ["timescale", "novel-tasks", "claims-screen", "reproduction", "claims-experts", "search", "future-work",
+         "reproduction-cpu"]
+
+
+def test_every_study_is_found_in_order():
+    found = S.studies()
+    assert list(found) == ORDER
+    assert found["claims-experts"].command() == [sys.executable, "-m", "experiments.claims_study", "--only", "experts"]
+    assert found["reproduction"].command(report=True) == [sys.executable, "-m", "experiments.report",
+                                                           "experiments/results/paper"]
+
+
+@pytest.mark.parametrize("name", ORDER)
+def test_each_study_plans_and_lists_its_stages(name, capsys):
+    """Its stages as its run plans them; ``list NAME`` shows each one, done or to run, where it writes."""
+    stages, scale = S.studies()[name].stages()
+    assert stages and scale and len({s.name for s in stages}) == len(stages)
+    assert cli.main(["list", name]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith(f"{name} (docs/") and len(lines) == 1 + len(stages)
+    assert [line.strip().rsplit(": ", 1)[0] for line in lines[1:]] == [s.name for s in stages]
+
+
+def test_list_all_counts_what_is_left(capsys):
+    assert cli.main(["list"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [line.split(":")[0].strip() for line in lines] == [*ORDER, "in all"]
+    study = S.studies()["search"]
+    left, count, hours = cli.remaining(study, rate=1.0)
+    stages, scale = study.stages()
+    assert count == len(stages) and left == sum(not cli.stage_done(s, scale) for s in stages)
+    assert hours * 3600 == pytest.approx(sum(cli.cost_left(s, scale) for s in stages))
+
+
+def test_a_new_study_is_its_module_alone(tmp_path, monkeypatch):
+    """A module that declares STUDIES is found with nothing else to register; two of one name are refused."""
+    import experiments
+
+    (tmp_path / "my_study.py").write_text(
+        "from experiments.study import Study\n"
+        "STUDIES = (Study('mine', 'my_study', 'docs/MINE.md', 0.5),)\n"
+        "def all_stages():\n    return [], {}\n")
+    monkeypatch.setattr(experiments, "__path__", [*experiments.__path__, str(tmp_path)])
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert list(S.studies()) == ["mine", *ORDER]
+    (tmp_path / "my_copy.py").write_text("from my_study import STUDIES\n")
+    with pytest.raises(ValueError, match="two studies are named 'mine'"):
+        S.studies()
+
+
+def _fake_run(ran, fail=None):
+    def run(command, env):
+        ran.append(" ".join(command[2:]))
+        assert env["PYTHONPATH"].split(":")[0] == cli.environment()["PYTHONPATH"].split(":")[0]
+        return subprocess.CompletedProcess(command, 3 if command[2] == fail else 0)
+
+    return run
+
+
+def test_studies_run_in_order_and_a_failure_stops_the_rest(monkeypatch, capsys):
+    ran = []
+    monkeypatch.setattr(cli.subprocess, "run", _fake_run(ran, fail="experiments.reproduce"))
+    assert cli.main(["run", "all"]) == 3
+    assert ran == ["experiments.timescale", "experiments.novel_tasks", "experiments.claims_study --only screen",
+                   "experiments.reproduce --scale paper"]
+    assert "study reproduction stopped with exit code 3" in capsys.readouterr().err
+    ran.clear()
+    assert cli.main(["run", "search"]) == 0 and ran == ["experiments.search"]
+
+
+def test_report_writes_each_studys_tables(monkeypatch):
+    ran = []
+    monkeypatch.setattr(cli.subprocess, "run", _fake_run(ran))
+    assert cli.main(["report"]) == 0
+    assert ran == ["experiments.timescale --report", "experiments.novel_tasks --report",
+                   "experiments.claims_study --table", "experiments.report experiments/results/paper",
+                   "experiments.claims_study --only experts --table", "experiments.search --report",
+                   "experiments.future_work --report", "experiments.report experiments/results/cpu"]
+
+
+def test_ctrl_c_stops_with_one_line(monkeypatch, capsys):
+    def interrupted(command, env):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli.subprocess, "run", interrupted)
+    assert cli.main(["run"]) == 130
+    assert capsys.readouterr().err.strip() == "interrupted in study timescale: run the same command again to go on"
+
+
+def test_an_unknown_study_is_one_line_and_exit_2(capsys):
+    assert cli.main(["run", "serch"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: study: unknown study 'serch' (choose from all, timescale,") and err.count("\n") == 1
