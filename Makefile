@@ -10,7 +10,7 @@ OUT ?= out
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[test,brax,evosax]"
+	$(BIN)/python -m pip install --quiet -e ".[test,brax,evosax,slurm]"
 	touch $(STAMP)
 
 install: $(STAMP)

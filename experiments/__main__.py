@@ -4,6 +4,7 @@
     python -m experiments list search         # a study's stages and their commands, nothing run
     python -m experiments run all             # run (or go on with) every study in order
     python -m experiments run timescale       # one study
+    python -m experiments run search --jobs 2 # its independent stages two at a time (or --executor slurm)
     python -m experiments report all          # every study's tables and figures from what has finished
 
 Each study runs as its own resumable command on the shared stage runner: a finished study passes
@@ -17,6 +18,7 @@ import argparse
 import subprocess
 import sys
 
+from experiments.executor import add_options, options_argv
 from experiments.reproduce import cost_left, stage_done
 from experiments.study import environment, studies
 
@@ -51,7 +53,7 @@ def list_studies(chosen) -> int:
     return 0
 
 
-def run_studies(chosen, report: bool = False) -> int:
+def run_studies(chosen, report: bool = False, options: tuple[str, ...] = ()) -> int:
     """Run (or report) each chosen study in turn; the first failure or Ctrl-C stops the rest."""
     what = "report" if report else "study"
     for study in chosen:
@@ -60,7 +62,7 @@ def run_studies(chosen, report: bool = False) -> int:
             continue
         print(f"\n=== {what} {study.name}", flush=True)
         try:
-            code = subprocess.run(study.command(report), env=environment()).returncode
+            code = subprocess.run(study.command(report, options), env=environment()).returncode
         except KeyboardInterrupt:  # the study has stopped at the same signal and kept what it finished
             print(f"\ninterrupted in {what} {study.name}: run the same command again to go on", file=sys.stderr)
             return 130
@@ -77,6 +79,7 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m experiments", description=__doc__.split("\n\n")[0])
     p.add_argument("action", choices=("list", "run", "report"))
     p.add_argument("study", nargs="?", default="all", help=f"a study or all (default): {', '.join(found)}")
+    add_options(p)
     args = p.parse_args(argv)
     if args.study != "all" and args.study not in found:
         print(f"error: study: unknown study {args.study!r} (choose from all, {', '.join(found)})", file=sys.stderr)
@@ -84,7 +87,7 @@ def main(argv=None) -> int:
     chosen = list(found.values()) if args.study == "all" else [found[args.study]]
     if args.action == "list":
         return list_studies(chosen)
-    return run_studies(chosen, report=args.action == "report")
+    return run_studies(chosen, report=args.action == "report", options=tuple(options_argv(args)))
 
 
 if __name__ == "__main__":

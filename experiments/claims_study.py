@@ -37,6 +37,7 @@ import numpy as np
 
 from experiments.reproduce import (DEFAULT_VARIANTS, EVOLVED, SCALES, TESTED, Stage, evolution_cost, evolution_dir,
                                    evolve_command, load_manifest, run_stages, test_command, test_cost, test_dir)
+from experiments.executor import add_options, from_options
 from experiments.study import Study
 
 #: The screen's sizes: the paper's life lengths, fewer seeds and tests.
@@ -749,6 +750,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--table", action="store_true", help="write the claims of every finished rule set into "
                    "docs/CLAIMS.md and experiments/results/claims/claims.json (runs nothing; with --only "
                    f"{EXPERTS}, claim 8's table and figure alone)")
+    add_options(p)
     return p
 
 
@@ -783,7 +785,8 @@ def main(argv=None) -> int:
             print(f"{stage.name}: {' '.join(command[1:])}")
         return 0
     manifest, manifest_path = load_manifest(args.out, study="claims", sizes=SCREEN, rule_sets=names)
-    return run_stages(stages, SCREEN, manifest, manifest_path, lambda stage: stage_command(stage, SCREEN, args.out))
+    return run_stages(stages, SCREEN, manifest, manifest_path, lambda stage: stage_command(stage, SCREEN, args.out),
+                      **from_options(args, args.out))
 
 
 def write_claims(out: str, names) -> int:

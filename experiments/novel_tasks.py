@@ -35,6 +35,7 @@ from typing import NamedTuple
 from experiments.claims_study import REPRODUCTION, SCREEN
 from experiments.reproduce import (SCALES, Stage, evolution_cost, evolve_command, load_manifest, run_stages,
                                    test_command, test_cost)
+from experiments.executor import add_options, from_options
 from experiments.study import Study
 from imrl_jax.config import paper_tasks
 from imrl_jax.tasks import to_json
@@ -369,6 +370,7 @@ def main(argv=None) -> int:
     p.add_argument("--list", action="store_true", help="print the stages and their commands, run nothing")
     p.add_argument("--report", action="store_true", help="measure the finished stages, draw the figure and write "
                    "docs/NOVEL_TASKS.md's table (runs nothing)")
+    add_options(p)
     args = p.parse_args(argv)
     if args.report:
         return report(args.out)
@@ -379,7 +381,8 @@ def main(argv=None) -> int:
         return 0
     task_files(args.out, write=True)
     manifest, manifest_path = load_manifest(args.out, study="novel_tasks", sizes=SCREEN)
-    return run_stages(stages, SCREEN, manifest, manifest_path, lambda stage: stage_command(stage, args.out))
+    return run_stages(stages, SCREEN, manifest, manifest_path, lambda stage: stage_command(stage, args.out),
+                      **from_options(args, args.out))
 
 
 #: The studies of this module (python -m experiments finds them).

@@ -198,6 +198,7 @@ class Stage(NamedTuple):
     out_dir: str
     cost: float
     runs: int = 0  # a test stage's runs when they are not the scale's seeds (0: the scale's)
+    needs: tuple[str, ...] | None = None  # the stages it waits for when fanned out (None: experiments.executor.needs)
 
 
 def life_steps(scale: dict, condition: str, task_steps: int, *, num_tasks: int = 6) -> int:
@@ -419,7 +420,13 @@ def run_stage(stage: Stage, index: int, command: list[str], overall: Overall, ma
             publish_checkpoint(stage.out_dir)
     if code:
         raise subprocess.CalledProcessError(code, command)
-    entry = dict(command=" ".join(["python"] + command[1:]), seconds=round(time.perf_counter() - start, 1),
+    record_stage(manifest, manifest_path, stage, command, time.perf_counter() - start, done_before)
+
+
+def record_stage(manifest: dict, manifest_path: str, stage: Stage, command: list[str], seconds: float,
+                 done_before: float = 0.0) -> None:
+    """Write a finished stage into the manifest: its command, time and cost (a report: what it reported on)."""
+    entry = dict(command=" ".join(["python"] + command[1:]), seconds=round(seconds, 1),
                  cost=round(stage.cost * (1.0 - done_before)))
     if stage.kind == "report":  # what it reported on: it is due again when any of these changes
         entry["after"] = followed(manifest["stages"], stage.name)
@@ -442,12 +449,33 @@ def stage_command(stage: Stage, scale: dict, out: str, kernel: str) -> tuple[lis
     return [sys.executable, "-m", "experiments.report", out], {**os.environ, "PYTHONPATH": path}
 
 
-def run_stages(stages: list[Stage], scale: dict, manifest: dict, manifest_path: str, command_for) -> int:
-    """The resumable stage runner every study shares: skip finished stages, resume the others, one after another.
+def run_stages(stages: list[Stage], scale: dict, manifest: dict, manifest_path: str, command_for, jobs: int = 1,
+               executor=None) -> int:
+    """The resumable stage runner every study shares: skip finished stages, resume the others, one after another
+    (or, given ``jobs`` above 1 or an executor, each as soon as what it needs is done: ``experiments.executor``).
 
     ``command_for(stage)`` gives a stage's command line and environment (None: this one's).
     Returns the exit code: 0 when every stage is done, a failed stage's code, or 130 on Ctrl-C.
     """
+    if jobs > 1 or executor is not None:
+        from experiments.executor import Local, run_fanned
+
+        done_before = {}  # the part of each stage its files held when it was submitted (its cost is the rest)
+
+        def prepare(stage):
+            if stage.kind == "evolve" and restore_published(stage.out_dir) is not None:
+                print(f"== {stage.name}: continuing from its published checkpoint", flush=True)
+            done_before[stage.name] = fraction_done(stage, scale)
+
+        def record(stage, command, seconds):
+            record_stage(manifest, manifest_path, stage, command, seconds, done_before.get(stage.name, 0.0))
+
+        def finish(stage):
+            if stage.kind == "evolve":
+                publish_checkpoint(stage.out_dir)
+
+        return run_fanned(stages, scale, manifest_path, command_for, jobs, executor or Local(), stage_done, record,
+                          prepare, finish, log=lambda line: print(line, flush=True))
     overall = Overall(stages, manifest)
     try:
         for index, stage in enumerate(stages):
@@ -498,6 +526,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--no-report", action="store_true", help="skip the report (python -m experiments.report)")
     p.add_argument("--kernel", choices=("xla", "pallas"), default="xla",
                    help="the step kernel (Config.step_kernel): pallas runs each bin of steps as one GPU kernel")
+    from experiments.executor import add_options
+
+    add_options(p)
     return p
 
 
@@ -525,7 +556,10 @@ def main(argv=None) -> int:
         return 2
     manifest, manifest_path = load_manifest(out, scale=args.scale, sizes=scale, variants=variants, kernel=args.kernel)
     stages = plan(scale, out, variants, report=not args.no_report)
-    return run_stages(stages, scale, manifest, manifest_path, lambda stage: stage_command(stage, scale, out, args.kernel))
+    from experiments.executor import from_options
+
+    return run_stages(stages, scale, manifest, manifest_path, lambda stage: stage_command(stage, scale, out, args.kernel),
+                      **from_options(args, out))
 
 
 #: The studies of this module (python -m experiments finds them).

@@ -30,6 +30,7 @@ from typing import NamedTuple
 from experiments.claims_study import REPRODUCTION, SCREEN
 from experiments.reproduce import (Stage, evolution_cost, evolution_dir, evolve_command, load_manifest, run_stages,
                                    test_command, test_cost, test_dir)
+from experiments.executor import add_options, from_options
 from experiments.study import Study
 from imrl_jax.strategies import GA_NAME
 
@@ -324,6 +325,7 @@ def main(argv=None) -> int:
     p.add_argument("--list", action="store_true", help="print the stages and their commands, run nothing")
     p.add_argument("--report", action="store_true", help="measure what has finished, draw the figure and write "
                    "docs/SEARCH.md's tables (runs nothing)")
+    add_options(p)
     args = p.parse_args(argv)
     if args.report:
         return report(args.out)
@@ -340,7 +342,8 @@ def main(argv=None) -> int:
             print(f"{stage.name}: {' '.join(stage_command(stage, SCREEN)[0][1:])}")
         return 0
     manifest, manifest_path = load_manifest(args.out, study="search", sizes=SCREEN, rows=[r.name for r in rows])
-    return run_stages(stages, SCREEN, manifest, manifest_path, lambda stage: stage_command(stage, SCREEN))
+    return run_stages(stages, SCREEN, manifest, manifest_path, lambda stage: stage_command(stage, SCREEN),
+                      **from_options(args, args.out))
 
 
 #: The studies of this module (python -m experiments finds them).

@@ -32,11 +32,12 @@ class Study:
         module = importlib.import_module(f"experiments.{self.module}")
         return module.stages_for(list(self.argv)) if self.argv else module.all_stages()
 
-    def command(self, report: bool = False) -> list[str]:
-        """The command line that runs (or goes on with) its stages, or writes its report."""
+    def command(self, report: bool = False, options: tuple[str, ...] = ()) -> list[str]:
+        """The command line that runs (or goes on with) its stages with the runner's ``options`` (--jobs, --executor),
+        or writes its report."""
         if report:
             return [sys.executable, "-m", f"experiments.{self.report_module or self.module}", *self.report_argv]
-        return [sys.executable, "-m", f"experiments.{self.module}", *self.argv]
+        return [sys.executable, "-m", f"experiments.{self.module}", *self.argv, *options]
 
 
 def studies() -> dict[str, Study]:

@@ -38,6 +38,7 @@ import numpy as np
 from experiments.claims_study import REPRODUCTION, SCREEN
 from experiments.reproduce import (MEASURED, Stage, evolution_cost, evolve_command, load_manifest, run_stages,
                                    test_command, test_cost)
+from experiments.executor import add_options, from_options
 from experiments.study import Study
 
 OUT = os.path.join("experiments", "results", "timescale")
@@ -585,6 +586,7 @@ def main(argv=None) -> int:
                    help="run the ceiling, the rate sweep and its confirmation only (minutes, not hours)")
     p.add_argument("--report", action="store_true", help="measure the finished evolutions, draw their figure and "
                    "write docs/TIMESCALE.md's tables (runs nothing)")
+    add_options(p)
     args = p.parse_args(argv)
     if args.report:
         return report(args.out)
@@ -595,14 +597,15 @@ def main(argv=None) -> int:
             print("(the evolutions are planned from the measurements' results, once they have run)")
         return 0
     manifest, manifest_path = load_manifest(args.out, study="timescale", sizes=SCREEN)
-    code = run_stages(plan(args.out)[:3], SCREEN, manifest, manifest_path, lambda s: stage_command(s, args.out))
+    fan = from_options(args, args.out)
+    code = run_stages(plan(args.out)[:3], SCREEN, manifest, manifest_path, lambda s: stage_command(s, args.out), **fan)
     if code or args.measures_only:
         return code
     mismatched = mismatched_runs(args.out)
     if mismatched:
         print(f"error: {mismatched[0]}", file=sys.stderr)
         return 2
-    return run_stages(plan(args.out), SCREEN, manifest, manifest_path, lambda s: stage_command(s, args.out))
+    return run_stages(plan(args.out), SCREEN, manifest, manifest_path, lambda s: stage_command(s, args.out), **fan)
 
 
 #: The studies of this module (python -m experiments finds them).

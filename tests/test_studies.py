@@ -76,6 +76,8 @@ def test_studies_run_in_order_and_a_failure_stops_the_rest(monkeypatch, capsys):
     assert "study reproduction stopped with exit code 3" in capsys.readouterr().err
     ran.clear()
     assert cli.main(["run", "search"]) == 0 and ran == ["experiments.search"]
+    ran.clear()
+    assert cli.main(["run", "search", "--jobs", "3"]) == 0 and ran == ["experiments.search --jobs 3"]
 
 
 def test_report_writes_each_studys_tables(monkeypatch):
@@ -95,6 +97,12 @@ def test_ctrl_c_stops_with_one_line(monkeypatch, capsys):
     monkeypatch.setattr(cli.subprocess, "run", interrupted)
     assert cli.main(["run"]) == 130
     assert capsys.readouterr().err.strip() == "interrupted in study timescale: run the same command again to go on"
+
+
+def test_bad_fan_out_options_exit_2(capsys):
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["run", "search", "--jobs", "0"])
+    assert stop.value.code == 2 and "--jobs: must be a whole number of at least 1, got '0'" in capsys.readouterr().err
 
 
 def test_an_unknown_study_is_one_line_and_exit_2(capsys):

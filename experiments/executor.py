@@ -1,0 +1,271 @@
+"""Stages fanned out over processes or a cluster: what waits for what, and the executors (docs/STUDIES.md).
+
+The stage runner (``reproduce.run_stages``) runs a study's stages one after another; given ``jobs``
+above 1 or another executor it hands them to :func:`run_fanned`, which starts each stage as soon
+as the stages it needs are done, up to ``jobs`` at once:
+
+* an evolution needs nothing (but a measure or report planned before it);
+* a learning test needs the evolutions of its condition planned before it;
+* a measure or a report needs every stage planned before it (a ``Stage.needs`` says otherwise).
+
+The executors run a stage's command line (the same as the sequential runner's, so a stage that was
+killed or preempted resumes from its checkpoint when it is submitted again, bitwise as ever):
+``local`` as processes of this machine, ``slurm`` as SLURM jobs through submitit (its local executor
+too, for a test on one machine). Multi-host runs of one evolution (``jax.distributed``) are the
+evolve command's own (``--coordinator``), and stay as they are.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from typing import Protocol
+
+BARRIERS = ("measure", "report")
+
+
+def needs(stages) -> dict[str, tuple[str, ...]]:
+    """The stages each stage waits for, by name (``Stage.needs`` where given, else the rules above)."""
+    out: dict[str, tuple[str, ...]] = {}
+    for i, stage in enumerate(stages):
+        before = stages[:i]
+        if getattr(stage, "needs", None) is not None:
+            out[stage.name] = tuple(stage.needs)
+        elif stage.kind in BARRIERS:
+            out[stage.name] = tuple(s.name for s in before)
+        else:
+            barriers = [s.name for s in before if s.kind in BARRIERS]
+            evolutions = ([s.name for s in before if s.kind == "evolve" and s.condition == stage.condition]
+                          if stage.kind == "test" else [])
+            out[stage.name] = tuple(barriers + evolutions)
+    return out
+
+
+class Job(Protocol):
+    """A submitted stage: poll it (None while it runs, else its exit code), or stop it."""
+
+    def poll(self) -> int | None: ...
+
+    def stop(self) -> None: ...
+
+
+class LocalJob:
+    """A stage as a process of this machine, its output in a log file."""
+
+    def __init__(self, command: list[str], env: dict | None, log_path: str):
+        os.makedirs(os.path.dirname(log_path), exist_ok=True)
+        self.log = open(log_path, "a")
+        self.process = subprocess.Popen(command, env=env, stdout=self.log, stderr=subprocess.STDOUT)
+        self.id = str(self.process.pid)
+
+    def poll(self) -> int | None:
+        code = self.process.poll()
+        if code is not None:
+            self.log.close()
+        return code
+
+    def stop(self) -> None:
+        """Interrupt it as Ctrl-C would (an evolution keeps its last checkpoint), then wait for it."""
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGINT)
+            try:
+                self.process.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+        self.log.close()
+
+
+class Local:
+    """Processes of this machine (``--executor local``)."""
+
+    name = "local"
+
+    def submit(self, command: list[str], env: dict | None, log_path: str) -> LocalJob:
+        return LocalJob(command, env, log_path)
+
+
+class SubmititJob:
+    """A stage as a submitit job."""
+
+    def __init__(self, job):
+        self.job, self.id = job, str(job.job_id)
+
+    def poll(self) -> int | None:
+        if not self.job.done():
+            return None
+        try:
+            self.job.result()
+        except Exception as error:  # noqa: BLE001 - submitit raises the job's failure; its code is what counts
+            code = getattr(getattr(error, "__cause__", None), "returncode", None)
+            return int(code) if code else 1
+        return 0
+
+    def stop(self) -> None:
+        self.job.cancel(check=False)
+
+
+class Submitit:
+    """SLURM jobs through submitit (``--executor slurm``), or submitit's local executor (``cluster="local"``)."""
+
+    def __init__(self, folder: str, cluster: str | None = None, **parameters):
+        try:
+            import submitit
+        except ImportError:
+            raise ImportError('the slurm executor needs submitit: pip install -e ".[slurm]"') from None
+        self.submitit, self.name = submitit, cluster or "slurm"
+        self.executor = submitit.AutoExecutor(folder=folder, cluster=cluster)
+        if parameters:
+            self.executor.update_parameters(**parameters)
+
+    def submit(self, command: list[str], env: dict | None, log_path: str) -> SubmititJob:
+        function = self.submitit.helpers.CommandFunction(command, env=env, verbose=False)
+        return SubmititJob(self.executor.submit(function))
+
+
+def make_executor(name: str, folder: str, **parameters):
+    """An executor by name: ``local`` (this machine), ``slurm`` (submitit; parameters as submitit's
+    ``update_parameters``: ``slurm_partition``, ``gpus_per_node``, ``timeout_min``...) or ``submitit-local``."""
+    if name == "local":
+        return Local()
+    if name in ("slurm", "submitit-local"):
+        return Submitit(folder, cluster="local" if name == "submitit-local" else None, **parameters)
+    raise ValueError(f"--executor: unknown executor {name!r} (choose from local, slurm, submitit-local)")
+
+
+def run_fanned(stages, scale: dict, manifest_path: str, command_for, jobs: int, executor, stage_done, record,
+               prepare=None, finish=None, poll_s: float = 0.5, log=print) -> int:
+    """Run every unfinished stage as soon as what it needs is done, up to ``jobs`` at once, on ``executor``.
+
+    ``record(stage, command, seconds)`` writes a finished stage into the manifest; ``prepare(stage)`` runs
+    before a stage is submitted and ``finish(stage)`` after it ends (an evolution's checkpoint published).
+    A failed stage stops what needs it (the others go on). Returns 0 when every stage is done, the first failed
+    stage's exit code, or 130 on Ctrl-C (running stages are stopped: an evolution keeps its last checkpoint and
+    resumes from it the next time).
+    """
+    waits = needs(stages)
+    by_name = {s.name: s for s in stages}
+    done = {s.name for s in stages if stage_done(s, scale)}
+    for s in stages:
+        if s.name in done:
+            log(f"== {s.name}: done ({s.out_dir})")
+    pending = [s for s in stages if s.name not in done]
+    running: dict[str, tuple[object, float, list[str]]] = {}
+    logs = os.path.join(os.path.dirname(manifest_path), "logs")
+    failed: dict[str, int] = {}  # failed stages (their exit code) and those that need one (0)
+    try:
+        while pending or running:
+            for name, (job, started, command) in list(running.items()):
+                code = job.poll()
+                if code is None:
+                    continue
+                del running[name]
+                stage = by_name[name]
+                if finish:
+                    finish(stage)
+                if code:
+                    log(f"error: stage {name} failed with exit code {code} (log: {os.path.join(logs, _file(name))})")
+                    failed[name] = code
+                    continue
+                done.add(name)
+                record(stage, command, time.perf_counter() - started)
+                log(f"== {name}: done in {time.perf_counter() - started:.0f} s "
+                    f"({len(done)}/{len(stages)} stages done, {len(running)} running)")
+            for stage in list(pending):  # what needs a failed stage will not run this time
+                if any(n in failed for n in waits[stage.name]):
+                    pending.remove(stage)
+                    failed[stage.name] = 0
+                    log(f"== {stage.name}: not started (it needs a failed stage)")
+            for stage in [s for s in pending if all(n in done for n in waits[s.name] if n in by_name)]:
+                if len(running) >= jobs:
+                    break
+                pending.remove(stage)
+                if prepare:
+                    prepare(stage)
+                command, env = command_for(stage)
+                job = executor.submit(command, env, os.path.join(logs, _file(stage.name)))
+                running[stage.name] = (job, time.perf_counter(), command)
+                log(f"== {stage.name}: started on {executor.name} (job {job.id}): "
+                    f"{' '.join(command[1:] if command[0] == sys.executable else command)}")
+            if pending and not running:
+                blocked = pending[0]
+                log(f"error: stage {blocked.name} waits for {', '.join(waits[blocked.name])}, which cannot run")
+                return 1
+            if running:
+                time.sleep(poll_s)
+    except KeyboardInterrupt:
+        for job, *_ in running.values():
+            job.stop()
+        log("\ninterrupted: run the same command again to go on from here")
+        return 130
+    return next((code for code in failed.values() if code), 0)
+
+
+def _file(name: str) -> str:
+    """A stage's log file name (its name, with what a file name cannot hold replaced)."""
+    return "".join(c if c.isalnum() or c in "-_." else "_" for c in name) + ".log"
+
+
+EXECUTORS = ("local", "slurm", "submitit-local")
+
+
+def _jobs(text: str) -> int:
+    import argparse
+
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a whole number of at least 1, got {text!r}")
+    return value
+
+
+def _executor(name: str) -> str:
+    import argparse
+
+    if name not in EXECUTORS:
+        raise argparse.ArgumentTypeError(f"unknown executor {name!r} (choose from {', '.join(EXECUTORS)})")
+    if name != "local":
+        try:
+            import submitit  # noqa: F401
+        except ImportError:
+            raise argparse.ArgumentTypeError(f'{name} needs submitit: pip install -e ".[slurm]"') from None
+    return name
+
+
+def add_options(parser) -> None:
+    """The fan-out options of a study's command line (checked as they are parsed: nothing is written first)."""
+    parser.add_argument("--jobs", type=_jobs, default=1, help="stages run at once (default 1: one after another)")
+    parser.add_argument("--executor", type=_executor, default="local",
+                        help=f"where stages run: {', '.join(EXECUTORS)} (slurm and submitit-local: submitit)")
+    parser.add_argument("--slurm-partition", help="the SLURM partition of each job (--executor slurm)")
+    parser.add_argument("--gpus-per-job", type=int, default=0, help="GPUs of each SLURM job (--executor slurm)")
+    parser.add_argument("--timeout-min", type=int, default=24 * 60, help="each SLURM job's time limit in minutes")
+
+
+def from_options(args, out: str) -> dict:
+    """``run_stages``'s fan-out arguments (``jobs``, ``executor``) from the parsed options; {} for the sequential
+    runner."""
+    if args.executor == "local" and args.jobs == 1:
+        return {}
+    parameters = {}
+    if args.executor == "slurm":
+        parameters = dict(timeout_min=args.timeout_min, gpus_per_node=args.gpus_per_job, tasks_per_node=1)
+        if args.slurm_partition:
+            parameters["slurm_partition"] = args.slurm_partition
+    return dict(jobs=args.jobs, executor=make_executor(args.executor, os.path.join(out, "jobs"), **parameters))
+
+
+def options_argv(args) -> list[str]:
+    """The fan-out options given, as a command line (for a study's own command)."""
+    argv = []
+    for name, default in (("jobs", 1), ("executor", "local"), ("slurm_partition", None), ("gpus_per_job", 0),
+                          ("timeout_min", 24 * 60)):
+        value = getattr(args, name)
+        if value != default:
+            argv += [f"--{name.replace('_', '-')}", str(value)]
+    return argv
