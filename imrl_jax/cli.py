@@ -8,6 +8,8 @@ import difflib
 import os
 from typing import Mapping, Sequence
 
+from imrl_jax import config as config_bounds  # imports no JAX
+
 
 class UsageError(Exception):
     """Bad input: reported as one line, exit code 2, nothing written."""
@@ -101,13 +103,32 @@ def refuse_option_fields(items: Sequence[str] | None, options: Mapping[str, str]
 
 
 #: The largest sizes the commands accept, checked before anything is allocated (a typo such as
-#: --generations 2147483648 would otherwise start allocating gigabytes).
-MAX_GENERATIONS = 1_000_000
+#: --generations 2147483648 would otherwise start allocating gigabytes); the config's own are its fields' bounds.
+MAX_GENERATIONS = config_bounds.MAX_GENERATIONS
 MAX_SEEDS = 10_000  # seeds of an evolution, runs, best and tests of a learning test
-MAX_POPULATION = 100_000
-MAX_STEPS = 10**9  # per task and per childhood
-MAX_BINS = 100_000
+MAX_POPULATION = config_bounds.MAX_POPULATION
+MAX_STEPS = config_bounds.MAX_STEPS  # per task and per childhood
+MAX_BINS = config_bounds.MAX_BINS
 MAX_LANES = 1_000_000  # lives evaluated at once: seeds x population, best x tests
+#: CPU devices per core that --cpu-devices may ask for: each device holds its own runtime (100,000 took 19 GB).
+CPU_DEVICES_PER_CORE = 4
+
+
+def check_out(value: str | None, flag: str = "--out") -> None:
+    """Raise UsageError if an output path is given but empty (it would silently mean the current directory)."""
+    if value is not None and not value.strip():
+        raise UsageError(f"{flag}: empty path; give a directory")
+
+
+def check_cpu_devices(count: int) -> None:
+    """Raise UsageError unless ``count`` (0: one per core) is at most :data:`CPU_DEVICES_PER_CORE` devices a core."""
+    cores = os.cpu_count() or 1
+    if count < 0:
+        raise UsageError("--cpu-devices: must be 0 (one per core) or more")
+    limit = CPU_DEVICES_PER_CORE * cores
+    if count > limit:
+        raise UsageError(f"--cpu-devices: {count:,} is above the limit of {limit:,} ({CPU_DEVICES_PER_CORE} per core "
+                         f"of this machine's {cores})")
 
 
 def add_task_set(parser: argparse.ArgumentParser, what: str, default: str | None = None) -> None:
@@ -118,12 +139,25 @@ def add_task_set(parser: argparse.ArgumentParser, what: str, default: str | None
 
 
 def apply_task_set(config, args):
-    """``config`` with the tasks of ``args.task_set`` (None: its own), checked on its geometry (raises ConfigError)."""
-    if args.task_set is None:
-        return config
-    from imrl_jax.tasks import load
+    """``config`` with the tasks of ``args.task_set`` (None: its own), checked on its geometry (raises ConfigError).
 
-    return config.replace(tasks=load(args.task_set, config))
+    ``config`` may be a function of config changes that makes it: the task set's tasks are then among them from the
+    start, so that the target radius is checked against these tasks (and not refused by the tasks they replace).
+    """
+    make = config.replace if hasattr(config, "replace") else config
+    if args.task_set is None:
+        return make()
+    from imrl_jax.config import ConfigError
+    from imrl_jax.tasks import check, read
+
+    tasks = read(args.task_set)
+    try:
+        made = make(tasks=tasks)
+    except ConfigError as error:
+        if error.field in ("tasks", "target_radius"):  # the set's tasks do not fit this config
+            raise ConfigError(f"--task-set: {args.task_set}: {error}", error.field) from None
+        raise
+    return made.replace(tasks=check(made, tasks, args.task_set))
 
 
 def check_at_most(flag: str, value: int | None, limit: int) -> None:

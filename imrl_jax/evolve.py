@@ -490,21 +490,22 @@ def build_config(args, saved: tuple[Config, list[int]] | None = None) -> tuple[C
     overrides = {field: value for field, value in given.items() if value is not None}
     overrides.update(parse_sets(args.set))
     if saved is None:
-        config = make_config(args.preset or "paper", **overrides)
+        make = lambda **tasks: make_config(args.preset or "paper", **overrides, **tasks)  # noqa: E731
         first, count = args.first_seed or 0, args.seeds or 1
         seeds = list(range(first, first + count))
     else:
         saved_config, seeds = saved
         if args.preset is None:
-            config = saved_config.replace(**overrides)
+            make = lambda **tasks: saved_config.replace(**overrides, **tasks)  # noqa: E731
         else:
-            config = make_config(args.preset, **{"num_generations": saved_config.num_generations, **overrides})
+            make = lambda **tasks: make_config(args.preset, **{"num_generations": saved_config.num_generations,  # noqa: E731
+                                                               **overrides, **tasks})
         if args.first_seed is not None or args.seeds is not None:
             first = seeds[0] if args.first_seed is None else args.first_seed
             count = len(seeds) if args.seeds is None else args.seeds
             seeds = list(range(first, first + count))
-    # The tasks are checked against the geometry of this config (its preset and --set): loaded once it is made.
-    return cli.apply_task_set(config, args), seeds
+    # The tasks are checked against the geometry of this config (its preset and --set), made with them.
+    return cli.apply_task_set(make, args), seeds
 
 
 def _dest(flag: str) -> str:
@@ -618,8 +619,8 @@ def main(argv=None) -> int:
             raise UsageError("--resume: give the run to continue with --out RUN")
         if args.cond is None and not args.resume:
             raise UsageError("--cond: required (or --resume --out RUN to continue a run with its own config)")
-        if args.cpu_devices < 0:
-            raise UsageError("--cpu-devices: must be 0 (one per core) or more")
+        cli.check_cpu_devices(args.cpu_devices)
+        cli.check_out(args.out)
         # Before anything starts JAX (the task set's checks, a strategy's arrays): later, neither takes effect.
         use_host_cores(args.cpu_devices or None)
         init_distributed(args)

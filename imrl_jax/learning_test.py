@@ -467,8 +467,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.cond is not None and args.cond not in CONDITIONS:
             raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(CONDITIONS)}; "
                              f"only {', '.join(FROM_SCRATCH)} are tested without a run directory)")
-        if args.cpu_devices < 0:
-            raise UsageError("--cpu-devices: must be 0 (one per core) or more")
+        cli.check_cpu_devices(args.cpu_devices)
+        cli.check_out(args.out)
         use_host_cores(args.cpu_devices or None)  # before anything starts JAX (the task set's checks)
         cli.refuse_option_fields(args.set, OPTION_FIELDS)
         sets = parse_sets(args.set)
@@ -498,7 +498,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                                      f"{tested.num_genes} asked)")
                 base = tested
         # Evolved genomes may be tested on other tasks (they encode none).
-        config = cli.apply_task_set(base.replace(task_steps=args.task_steps, num_bins=args.bins), args)
+        config = cli.apply_task_set(lambda **tasks: base.replace(task_steps=args.task_steps, num_bins=args.bins, **tasks),
+                                    args)
         if args.task_set is not None:
             source += f", task set {args.task_set}"
         if config.num_bins % args.chunks:

@@ -10,6 +10,7 @@ from helpers import reference_life
 from imrl_jax import conditions
 from imrl_jax import lifetime as L
 from imrl_jax import reference
+from imrl_jax import config as config_module
 from imrl_jax import state as S
 from imrl_jax.config import ConfigError, Task, make_config
 from imrl_jax.networks import decode, encode
@@ -51,6 +52,46 @@ def test_unknown_condition_names_the_field():
         make_config("paper", condition="XX")
     with pytest.raises(ValueError, match="unknown condition 'XX'"):
         conditions.get("XX")
+
+
+def test_every_number_of_the_config_is_bounded_and_a_value_past_a_bound_is_refused_naming_the_field():
+    config = make_config("paper")
+    bounded = config_module.bounds()
+    numbers = {f.name for f in dataclasses.fields(config)
+               if isinstance(getattr(config, f.name), (int, float, tuple)) and f.name != "tasks"}
+    assert numbers == set(bounded)
+    refused = 0
+    for name, bound in bounded.items():
+        value = getattr(config, name)
+        assert all(bound.holds(v) for v in (value if isinstance(value, tuple) else (value,))), name
+        step = 1 if isinstance(value, int) else 1.0
+        for past in (bound.lo if bound.lo_open else bound.lo - step, bound.hi if bound.hi_open else bound.hi + step):
+            wrong = tuple(past for _ in value) if isinstance(value, tuple) else past
+            with pytest.raises(ConfigError) as error:
+                config.replace(**{name: wrong})
+            assert str(error.value).startswith(f"{name}: must be ") and error.value.field == name, str(error.value)
+            refused += 1
+    assert refused == 2 * len(bounded) == 82
+
+
+def test_the_derived_bounds_refuse_a_model_that_means_nothing():
+    config = make_config("paper")
+    for changes, message in [
+        (dict(target_radius=69.3), "target_radius: must be below every task's start-to-target distance (task 6: 69.3"),
+        (dict(max_speed=20.5), "max_speed: must be at most 2 x target_radius = 20 cm"),
+        (dict(edge_length=401.0), "edge_length: must be at most arena_size=400"),
+        (dict(tiling_origin=(160.0, 401.0)), "tiling_origin: must be a point (x, y) in the arena"),
+        (dict(line_half_width=20.0), "line_half_width: must be below edge_length / 2 = 20"),
+        (dict(colour_tie_tolerance=0.5, line_half_width=0.5), "colour_tie_tolerance: must be below line_half_width"),
+        (dict(robot_radius=200.0), "robot_radius: the robot must fit in the arena"),
+        (dict(tasks=(Task((10.0, 10.0), 0.0, (500.0, 10.0)),)), "tasks: task 1: target: (500, 10) is off the floor"),
+    ]:
+        with pytest.raises(ConfigError) as error:
+            config.replace(**changes)
+        assert str(error.value).startswith(message), str(error.value)
+        assert str(error.value).split(":")[0] in config_module.DERIVED_BOUNDS
+    # A trip takes a step at least: the theoretical maximum is finite for every config the bounds let through.
+    assert config.replace(target_radius=69.28, max_speed=138.56).steps_per_trip() == (1,) * 6
 
 
 def _reference_life(config, genome, seed=0):

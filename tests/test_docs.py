@@ -52,3 +52,15 @@ def test_the_floors_make_test_min_installs_are_the_declared_ones():
     assert {name: Version(v) for name, v in declared.items()} == {
         name: Version(v) for name, v in pinned.items() if name != "jaxlib"}
     assert pinned["jaxlib"] == pinned["jax"]
+
+
+def test_model_md_gives_every_bound_of_the_config():
+    """docs/MODEL.md's "Bounds of the settings" has a row per bounded field with its bounds and derived check."""
+    from imrl_jax.config import DERIVED_BOUNDS, bounds
+
+    with open(os.path.join(ROOT, "docs", "MODEL.md")) as f:
+        text = f.read()
+    for name, bound in bounds().items():
+        assert f"| `{name}` | {bound} | {DERIVED_BOUNDS.get(name, '')} |".replace("|  |", "| |") in text, name
+    for name in set(DERIVED_BOUNDS) - set(bounds()):
+        assert f"| `{name}` | | {DERIVED_BOUNDS[name]} |" in text, name

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from helpers import devices_seen, evolve_args, evolve_command, interruptible_command, read_population, snapshot
 
-from imrl_jax import evolve
+from imrl_jax import evolve, tasks
 
 
 def _tiny(seeds="2", task_steps="1000"):
@@ -208,6 +208,22 @@ def test_bad_arguments(tmp_path, capsys, args, message):
     (["--set", "trace_lamda=0.9"], "did you mean trace_lambda?"),
     (["--set", "bogus=1"], "fields: condition, num_experts"),
     (["--keep", "0"], "--keep: must be at least 1"),
+    # A target radius at or above a task's length scored negative fitness; a step of 1e30 cm divided by zero after
+    # config.json was written; an unroll of 100,000 and a thousand experts exhausted the machine's memory.
+    (["--set", "target_radius=150"], "target_radius: must be below every task's start-to-target distance (task 6: "
+                                     "69.3 cm) (got 150.0)"),
+    (["--set", "target_radius=500"], "target_radius: must be below every task's start-to-target distance"),
+    (["--set", "target_radius=1e30"], "target_radius: must be in (0, 10000] (got 1e+30)"),
+    (["--set", "max_speed=1e30"], "max_speed: must be in (0, 10000] (got 1e+30)"),
+    (["--set", "max_speed=25"], "max_speed: must be at most 2 x target_radius = 20 cm"),
+    (["--set", "scan_unroll=100000"], "scan_unroll: must be in [1, 64] (got 100000)"),
+    (["--set", "num_experts=1000"], "num_experts: must be in [1, 64] (got 1000)"),
+    (["--set", "line_half_width=25"], "line_half_width: must be below edge_length / 2 = 20"),
+    (["--set", "arena_size=20"], "edge_length: must be at most arena_size=20"),
+    (["--set", "draw_block=100000000"], "draw_block: must be in [1, 10_000]"),
+    (["--set", "eta_actor=1e30"], "eta_actor: must be in [0, 10]"),
+    (["--cpu-devices", "100000"], "--cpu-devices: 100,000 is above the limit of"),
+    (["--cpu-devices", "-1"], "--cpu-devices: must be 0 (one per core) or more"),
 ])
 def test_bad_values_exit_2_naming_the_field(tmp_path, capsys, args, message):
     out = str(tmp_path / "new")
@@ -215,6 +231,14 @@ def test_bad_values_exit_2_naming_the_field(tmp_path, capsys, args, message):
     err = capsys.readouterr().err.strip()
     assert message in err and err.startswith("error: ") and len(err.splitlines()) == 1
     assert not os.path.exists(out)
+
+
+@pytest.mark.parametrize("out", ["", " "])
+def test_an_empty_out_is_refused_not_taken_for_the_default(tmp_path, capsys, monkeypatch, out):
+    monkeypatch.chdir(tmp_path)
+    assert evolve.main(["--cond", "EE-LS", "--preset", "small", "--out", out]) == 2
+    assert capsys.readouterr().err == "error: --out: empty path; give a directory\n"
+    assert os.listdir(tmp_path) == []  # not runs/EE-LS
 
 
 def test_unwritable_out_exits_2_naming_it(tmp_path, capsys):
@@ -416,14 +440,25 @@ def test_cpu_devices_are_set_up_before_the_task_set_starts_jax(tmp_path):
 
 
 def test_the_task_set_is_checked_against_the_geometry_the_command_line_sets(tmp_path, capsys, monkeypatch):
-    """Paper task 3's target lies 69.3 cm from its start: within a 70 cm target radius."""
+    """Paper tasks 3 and 6 have their targets 69.3 cm from their starts: within a 70 cm target radius. A set of
+    longer tasks takes that radius (it is checked against the tasks the run will have, not the ones they replace)."""
     monkeypatch.setattr(evolve, "run", lambda *a, **k: pytest.fail("the task set passed a check of another config"))
     out = tmp_path / "run"
     args = [*evolve_args(seeds=1), "--task-set", "paper", "--set", "target_radius=70", "--out", str(out)]
     assert evolve.main(args) == 2
-    assert capsys.readouterr().err == ("error: --task-set: paper task 3: target: lies within the target radius of the "
-                                       "start\n")
+    assert capsys.readouterr().err == ("error: --task-set: paper: target_radius: must be below every task's "
+                                       "start-to-target distance (task 6: 69.3 cm) (got 70.0)\n")
     assert not out.exists()
+    class Ran(Exception):
+        pass
+
+    def run(config, *args, **kwargs):
+        raise Ran(config)
+
+    monkeypatch.setattr(evolve, "run", run)
+    with pytest.raises(Ran) as ran:
+        evolve.main([*evolve_args(seeds=1), "--task-set", "novel", "--set", "target_radius=70", "--out", str(out)])
+    assert ran.value.args[0].target_radius == 70 and ran.value.args[0].tasks == tasks.novel_tasks()
 
 
 def test_a_checkpoint_that_records_no_strategy_is_taken_for_the_gas(tmp_path):

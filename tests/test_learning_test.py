@@ -140,6 +140,10 @@ TINY_SLE = ["--runs", "1", "--best", "1", "--tests", "1", "--task-steps", "200",
     (["--cond", "SLE", "--task-steps", "1000", "--bins", "10", "--steady-steps", "150"], "steady_steps"),
     (["--cond", "XX"], "--cond"),
     (["--cond", "SLE", "--set", "trace_lambda=2"], "trace_lambda"),
+    # Refused before partial/ is made (a step of 1e30 cm divided by zero once the test had begun).
+    (["--cond", "SLE", "--set", "max_speed=1e30"], "max_speed: must be in (0, 10000] (got 1e+30)"),
+    (["--cond", "SLE", "--set", "target_radius=150"], "target_radius: must be below every task's start-to-target"),
+    (["--cond", "SLE", "--cpu-devices", "100000"], "--cpu-devices: 100,000 is above the limit"),
     (["--cond", "SLE", "--best-genomes", "best_genomes.npz", *TINY_SLE], "--best-genomes: only with a run directory"),
     ([], "run_dir"),
 ])
@@ -150,6 +154,13 @@ def test_bad_input(tmp_path, capsys, argv, message):
     err = capsys.readouterr().err.strip()
     assert message in err and len(err.splitlines()) == 1
     assert not out.exists()
+
+
+def test_an_empty_out_is_refused(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert learning_test.main(["--cond", "SLE", *TINY_SLE, "--out", ""]) == 2
+    assert capsys.readouterr().err == "error: --out: empty path; give a directory\n"
+    assert os.listdir(tmp_path) == []
 
 
 def test_pairs_both_ways_by_hand():
