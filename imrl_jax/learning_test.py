@@ -17,11 +17,12 @@ carried between them (the same computation as one scan; memory does not grow wit
 length) so that progress can be shown. Each finished run is kept in ``--out/partial/``, so
 that the same command after an interruption goes on from the first unfinished run (with
 the same results as an uninterrupted test); ``partial/`` is removed once the test is done.
-``--out`` must be new, empty or such an unfinished test, and one process writes it at a
+A run whose evolution is unfinished (killed before its last generation, or still
+running) is refused unless ``--allow-unfinished``. ``--out`` must be new, empty or such an unfinished test, and one process writes it at a
 time (``.lock``). Writes to ``--out``:
 ``curve.csv`` (performance per bin: mean over all tests and per run), ``steady.json``
 (performance over the last ``--steady-steps`` cycles: mean over runs, best run, per run,
-per task; the command and git commit), ``curves.npz`` (every test's reaches per bin)
+per task; the generation of the run tested; the command and git commit), ``curves.npz`` (every test's reaches per bin)
 and ``learning_curve.png``.
 """
 
@@ -54,9 +55,9 @@ from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
 from imrl_jax.lifetime import grow_up, lifetime_keys, run_phase, task_spec, task_start
 from imrl_jax.state import State
 from imrl_jax.progress import Progress
-from imrl_jax.rundir import (RunDirError, RunWriteError, best_genomes, check_unlocked, check_writable, entries,
-                             is_output, load_run as read_run, lock_run_dir, make_dir, not_empty, read_config,
-                             read_kept_best, write_atomic, write_errno)
+from imrl_jax.rundir import (LOCK, Run, RunDirError, RunWriteError, best_genomes, check_unlocked, check_writable,
+                             entries, holder_alive, is_output, load_run as read_run, lock_run_dir, make_dir, not_empty,
+                             read_config, read_kept_best, read_lock, write_atomic, write_errno)
 
 
 class TestState(NamedTuple):
@@ -215,6 +216,16 @@ def load_run(run_dir: str, num_best: int) -> tuple[Config, list[int], np.ndarray
     return found.config, found.seeds, best_genomes(found, num_best)
 
 
+def unfinished(run_dir: str, run: Run) -> str:
+    """Why ``run`` is not a finished evolution ("" if it is): generations left, or a live writer."""
+    holder = read_lock(os.path.join(run_dir, LOCK))
+    writing = holder is not None and holder_alive(holder) is not False
+    if run.generation >= run.config.num_generations and not writing:
+        return ""
+    return (f"{run_dir} has {run.generation} of its {run.config.num_generations} generations evaluated"
+            + (f" and is being written by pid {holder.pid} on {holder.host}" if writing else ""))
+
+
 def load_kept_best(run_dir: str, path: str, num_best: int) -> tuple[Config, list[int], np.ndarray]:
     """A run's config and the ``num_best`` best genomes of each seed kept in a report's ``best_genomes.npz``
     (for a run whose final population was not kept); its key is the run's ``VARIANT/evolve/CONDITION`` path."""
@@ -304,11 +315,12 @@ def check_out_dir(out_dir: str) -> None:
 
 def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, steady_steps: int, num_chunks: int,
         seed: int = 0, quiet: bool = False, source: str = "", command: str = "", warnings: Sequence[str] = (),
-        notes: Sequence[str] = ()) -> dict:
+        notes: Sequence[str] = (), evolved: dict | None = None) -> dict:
     """Run the tests of ``genomes`` (runs, best, genes) run by run, resuming from ``partial/``; write the outputs.
 
     ``out_dir`` is locked for the whole test (:func:`imrl_jax.rundir.lock_run_dir`). ``warnings`` are
-    printed once the checks pass, ``notes`` too unless ``quiet``.
+    printed once the checks pass, ``notes`` too unless ``quiet``. ``evolved``: which generation of how many the
+    genomes come from (recorded in steady.json).
     """
     steady_bins(config, steady_steps)
     check_writable(out_dir)
@@ -321,7 +333,8 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
             print(line, file=sys.stderr, flush=True)
         try:
             return _run_locked(config, genomes, out_dir, num_tests=num_tests, steady_steps=steady_steps,
-                               num_chunks=num_chunks, seed=seed, quiet=quiet, source=source, command=command)
+                               num_chunks=num_chunks, seed=seed, quiet=quiet, source=source, command=command,
+                               evolved=evolved)
         except OSError as error:
             if write_errno(error) is None:
                 raise
@@ -331,7 +344,7 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
 
 
 def _run_locked(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, steady_steps: int,
-                num_chunks: int, seed: int, quiet: bool, source: str, command: str) -> dict:
+                num_chunks: int, seed: int, quiet: bool, source: str, command: str, evolved: dict | None = None) -> dict:
     """:func:`run` once the directory is checked and locked."""
     num_runs, num_best = genomes.shape[:2]
     keys = test_keys(seed, num_runs, num_best, num_tests).reshape(num_runs, num_best * num_tests)
@@ -363,6 +376,7 @@ def _run_locked(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests:
     summary = dict(condition=config.condition, source=source, num_runs=num_runs, num_best=num_best,
                    num_tests=num_tests, task_steps=config.task_steps, childhood_steps=config.childhood_steps,
                    num_bins=config.num_bins, steady_steps=steady_steps, seed=seed,
+                   **(evolved or dict(generation=None, generations_done=None, num_generations=None)),
                    **summarise(config, reaches, steady_steps),
                    seconds=round(seconds, 1), resumed_runs=resumed, backend=jax.default_backend(), command=command,
                    git_commit=git_commit(), config=config.to_dict())
@@ -429,6 +443,9 @@ def parser() -> argparse.ArgumentParser:
                    help="take the best genomes from a report's best_genomes.npz (the 10 best of each seed), for a run "
                         "whose final_population.npz was not kept; the run directory gives the config")
     cli.add_task_set(p, "the tasks to learn (default: the run's, or paper)")
+    p.add_argument("--allow-unfinished", action="store_true",
+                   help="test a run whose evolution has not reached its last generation (killed, or still running): "
+                        "its last evaluated generation, with a warning (steady.json records which)")
     p.add_argument("--best", type=int, default=10, help="best individuals of each run's last generation")
     p.add_argument("--tests", type=int, default=10, help="tests per individual")
     p.add_argument("--task-steps", type=int, default=1_000_000, help="cycles per task")
@@ -472,6 +489,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         use_host_cores(args.cpu_devices or None)  # before anything starts JAX (the task set's checks)
         cli.refuse_option_fields(args.set, OPTION_FIELDS)
         sets = parse_sets(args.set)
+        warnings, evolved = [], None
         if args.cond in FROM_SCRATCH:
             if args.run_dir:
                 raise UsageError(f"run_dir: {args.cond} is tested from scratch; give either a run directory or "
@@ -487,7 +505,16 @@ def main(argv: Sequence[str] | None = None) -> int:
             if args.best_genomes:
                 base, _, genomes = load_kept_best(args.run_dir, args.best_genomes, args.best)
             else:
-                base, _, genomes = load_run(args.run_dir, args.best)
+                found = read_run(args.run_dir)
+                base, genomes = found.config, best_genomes(found, args.best)
+                evolved = dict(generation=found.generation - 1, generations_done=found.generation,
+                               num_generations=found.config.num_generations)
+                why = unfinished(args.run_dir, found)
+                if why and not args.allow_unfinished:
+                    raise UsageError(f"run_dir: {why}: its evolution is unfinished (pass --allow-unfinished to test "
+                                     f"generation {found.generation - 1} anyway)")
+                if why:
+                    warnings.append(f"warning: {why}: testing generation {found.generation - 1} (steady.json records it)")
             if args.cond is not None and args.cond != base.condition:
                 raise UsageError(f"--cond: {args.run_dir} is a {base.condition} run, not {args.cond}")
             source = os.path.abspath(args.run_dir) + "".join(f", {s}" for s in args.set or [])
@@ -507,7 +534,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         steady_bins(config, args.steady_steps)
         summary = run(config, genomes, args.out, num_tests=args.tests, steady_steps=args.steady_steps,
                       num_chunks=args.chunks, seed=args.seed, quiet=args.quiet, source=source, command=command,
-                      warnings=cli.device_warnings(config, args.cpu_devices), notes=cli.ignored_notes(config, sets))
+                      warnings=[*warnings, *cli.device_warnings(config, args.cpu_devices)],
+                      notes=cli.ignored_notes(config, sets), evolved=evolved)
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

@@ -74,6 +74,7 @@ def test_command_line(tiny_run, tmp_path, capsys):
     assert reaches.shape == (len(seeds), 2, 2, 6, 4)
     test_config = config.replace(task_steps=400, num_bins=4)
     assert summary["steady_mean"] == pytest.approx(learning_test.summarise(test_config, reaches, 200)["steady_mean"])
+    assert (summary["generation"], summary["generations_done"], summary["num_generations"]) == (0, 1, 1)
     assert os.path.exists(os.path.join(out, "learning_curve.png"))
     rows = open(os.path.join(out, "curve.csv")).read().splitlines()
     assert len(rows) == 5 and rows[0].startswith("bin,end_step,mean")
@@ -82,6 +83,41 @@ def test_command_line(tiny_run, tmp_path, capsys):
     assert learning_test.main(argv) == 2  # the output already holds a test: refused, nothing touched
     assert "already holds a learning test" in capsys.readouterr().err
     assert before == {name: os.path.getmtime(os.path.join(out, name)) for name in os.listdir(out)}
+
+
+@pytest.mark.parametrize("how", ["killed", "running"])
+def test_a_half_evolved_run_is_refused_or_tested_with_a_warning_and_its_generation_recorded(tiny_run, tmp_path, capsys,
+                                                                                            how):
+    """A run killed at generation 1 of 3 (or one whose writer still runs) is not tested as if finished."""
+    import shutil
+
+    run = str(tmp_path / "run")
+    shutil.copytree(tiny_run, run)
+    if how == "killed":
+        with open(os.path.join(run, "config.json")) as f:
+            info = json.load(f)
+        info["config"]["num_generations"] = 3
+        with open(os.path.join(run, "config.json"), "w") as f:
+            json.dump(info, f)
+        why = f"{run} has 1 of its 3 generations evaluated"
+    else:
+        with open(os.path.join(run, ".lock"), "w") as f:  # this process: alive
+            json.dump(dict(pid=os.getpid(), host=socket.gethostname(), start=0), f)
+        why = f"{run} has 1 of its 1 generations evaluated and is being written by pid {os.getpid()} on " \
+              f"{socket.gethostname()}"
+    out = tmp_path / "test"
+    argv = [run, "--best", "1", "--tests", "1", "--task-steps", "200", "--bins", "2", "--steady-steps", "100",
+            "--chunks", "1", "--quiet", "--out", str(out)]
+    assert learning_test.main(argv) == 2
+    assert capsys.readouterr().err == (f"error: run_dir: {why}: its evolution is unfinished (pass --allow-unfinished "
+                                       f"to test generation 0 anyway)\n")
+    assert not out.exists()
+    assert learning_test.main([*argv, "--allow-unfinished"]) == 0
+    assert capsys.readouterr().err == f"warning: {why}: testing generation 0 (steady.json records it)\n"
+    with open(out / "steady.json") as f:
+        summary = json.load(f)
+    assert (summary["generation"], summary["generations_done"], summary["num_generations"]) == \
+        (0, 1, 3 if how == "killed" else 1)
 
 
 def test_an_interrupted_test_goes_on_from_its_first_unfinished_run(tiny_run, tmp_path, monkeypatch, capsys):
