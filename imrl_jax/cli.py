@@ -131,6 +131,50 @@ def check_cpu_devices(count: int) -> None:
                          f"of this machine's {cores})")
 
 
+def add_register(parser: argparse.ArgumentParser) -> None:
+    """The ``--register MODULE:ATTRIBUTE`` option: rows of the condition table of one's own (:func:`register`)."""
+    parser.add_argument("--register", action="append", metavar="MODULE:ATTRIBUTE",
+                        help="import MODULE (from the current directory or the path) and add its ATTRIBUTE, a "
+                             "conditions.Condition or a list of them, to the condition table first (repeatable); "
+                             "give it again to resume, render or test a run of such a row")
+
+
+def register(specs: Sequence[str] | None) -> list[str]:
+    """Add the rows ``MODULE:ATTRIBUTE`` names to the condition table; the specs (raises UsageError naming one).
+
+    A row already in the table as it is (its module registered it on import, or it was given twice) is kept."""
+    import importlib
+    import sys
+
+    from imrl_jax import conditions
+
+    if "" not in sys.path and os.getcwd() not in sys.path:  # as ``python -m`` does: modules of the current directory
+        sys.path.insert(0, os.getcwd())
+    for spec in specs or []:
+        module_name, sep, attribute = spec.partition(":")
+        if not sep or not module_name or not attribute:
+            raise UsageError(f"--register {spec}: expected MODULE:ATTRIBUTE, e.g. --register my_rows:ROWS")
+        try:
+            module = importlib.import_module(module_name)
+        except Exception as error:  # noqa: BLE001 - whatever the module raises, one line
+            raise UsageError(f"--register {spec}: cannot import {module_name} ({type(error).__name__}: "
+                             f"{str(error).splitlines()[0] if str(error) else ''})") from None
+        if not hasattr(module, attribute):
+            raise UsageError(f"--register {spec}: {module_name} has no attribute {attribute}")
+        rows = getattr(module, attribute)
+        rows = [rows] if isinstance(rows, conditions.Condition) else rows
+        if not isinstance(rows, (list, tuple)) or not all(isinstance(r, conditions.Condition) for r in rows):
+            raise UsageError(f"--register {spec}: {attribute} is not a conditions.Condition or a list of them")
+        for row in rows:
+            if conditions.CONDITIONS.get(row.name) == row:
+                continue
+            try:
+                conditions.register(row)
+            except ValueError as error:
+                raise UsageError(f"--register {spec}: {error}") from None
+    return list(specs or [])
+
+
 def add_task_set(parser: argparse.ArgumentParser, what: str, default: str | None = None) -> None:
     """The ``--task-set NAME|FILE`` option every command that runs tasks shares (:mod:`imrl_jax.tasks`)."""
     parser.add_argument("--task-set", default=default, metavar="NAME|FILE",

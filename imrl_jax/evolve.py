@@ -35,11 +35,11 @@ import numpy as np
 
 import imrl_jax
 from imrl_jax.checkpoint import Checkpointer, History, RunState, empty_history, git_commit
-from imrl_jax import cli
+from imrl_jax import cli, conditions
 from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
 from imrl_jax.devices import (make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
                               use_host_cores)
-from imrl_jax.config import CONDITIONS, EVOLVED_CONDITIONS, PRESETS, Config, make_config
+from imrl_jax.config import EVOLVED_CONDITIONS, PRESETS, Config, make_config
 from imrl_jax import search
 from imrl_jax.ga import GA, init_population, make_generation
 from imrl_jax.lifetime import live
@@ -269,12 +269,12 @@ def resume_command(out_dir: str) -> str:
 
 def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=None, resume: bool = False,
         checkpoint_every: int = 1, keep: int = 3, quiet: bool = False, warnings: Sequence[str] = (),
-        notes: Sequence[str] = ()) -> RunState:
+        notes: Sequence[str] = (), registered: Sequence[str] = ()) -> RunState:
     """Evolve ``config.condition`` for every seed into ``out_dir``; return the final state.
 
     ``strategy`` is the search (:mod:`imrl_jax.strategies`; default the paper's GA). The directory is
     locked for the whole run (:func:`imrl_jax.rundir.lock_run_dir`). ``warnings`` are printed once the
-    checks pass, ``notes`` too unless ``quiet``.
+    checks pass, ``notes`` too unless ``quiet``. ``registered``: the ``--register`` rows, recorded in config.json.
     """
     strategy = GA(config) if strategy is None else strategy
     if not config.spec.evolved:
@@ -308,6 +308,7 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=N
                 check_run_dir(out_dir, config, seeds, resume, describe(strategy))  # again, locked: another writer may have begun
                 if not resume:  # first, so that the directory is this run's from the start
                     info = {"config": config.to_dict(), "seeds": seeds, "search": describe(strategy),
+                            **({"register": list(registered)} if registered else {}),
                             "version": imrl_jax.__version__,
                             "git_commit": git_commit(), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
                             "devices": len(jax.devices()), "processes": jax.process_count(),
@@ -532,7 +533,9 @@ def parser() -> argparse.ArgumentParser:
                     "--generations extends the run).",
         formatter_class=HelpFormatter)
     p.add_argument("--cond", metavar="{" + ",".join(EVOLVED_CONDITIONS) + "}",
-                   help="condition to evolve (SLE is not evolved); required unless --resume")
+                   help="condition to evolve (SLE is not evolved), or a row added by --register; required unless "
+                        "--resume")
+    cli.add_register(p)
     p.add_argument("--seeds", type=int,
                    help=f"number of independent evolutions (default: 1, or the run's; at most {cli.MAX_SEEDS:,})")
     p.add_argument("--first-seed", type=int, help="seed of the first evolution; the others follow (default: 0)")
@@ -613,8 +616,11 @@ def main(argv=None) -> int:
     try:
         args = parser().parse_args(argv)
         check_sizes(args)
-        if args.cond is not None and args.cond not in CONDITIONS:
-            raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(EVOLVED_CONDITIONS)})")
+        registered = cli.register(args.register)
+        if args.cond is not None and args.cond not in conditions.CONDITIONS:  # the table as it is now
+            evolved = [name for name, row in conditions.CONDITIONS.items() if row.evolved]
+            raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(evolved)}, or add a row "
+                             f"with --register MODULE:ATTRIBUTE)")
         if args.resume and not (args.out or args.cond):
             raise UsageError("--resume: give the run to continue with --out RUN")
         if args.cond is None and not args.resume:
@@ -636,7 +642,7 @@ def main(argv=None) -> int:
         state = run(config, out_dir, seeds, strategy=strategy, resume=args.resume,
                     checkpoint_every=args.checkpoint_every,
                     keep=args.keep, quiet=args.quiet, warnings=cli.device_warnings(config, args.cpu_devices),
-                    notes=notes)
+                    notes=notes, registered=registered)
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

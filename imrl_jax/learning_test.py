@@ -151,8 +151,14 @@ def run_tests(keys: jax.Array, config: Config, params: LearningParams, genomes, 
 # ----------------------------------------------------------------------------- statistics
 
 PAIR_LEVEL = 0.2  # a task counts as solved in a test at this steady-state performance
-#: Conditions that are not evolved: tested from scratch (``--cond``), without a run directory.
+#: Conditions that are not evolved: tested from scratch (``--cond``), without a run directory (the table's at import;
+#: :func:`from_scratch` also has the rows registered since).
 FROM_SCRATCH = tuple(name for name, condition in TABLE.items() if not condition.evolved)
+
+
+def from_scratch() -> tuple[str, ...]:
+    """The conditions of the table as it is now that are not evolved (tested from scratch)."""
+    return tuple(name for name, condition in TABLE.items() if not condition.evolved)
 
 
 def performance_curve(config: Config, reaches: np.ndarray) -> np.ndarray:
@@ -433,6 +439,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--cond", metavar="{" + ",".join(CONDITIONS) + "}",
                    help=f"{', '.join(FROM_SCRATCH)}: test learning from scratch (no run directory); "
                         "another condition: check that run_dir is a run of it")
+    cli.add_register(p)
     p.add_argument("--runs", type=int, default=10, help="from scratch: groups of tests, like an evolution's seeds")
     p.add_argument("--preset", default="paper", choices=sorted(PRESETS),
                    help="from scratch: the learning rules' preset")
@@ -481,16 +488,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         args = parser().parse_args(argv)
         check_sizes(args)
-        if args.cond is not None and args.cond not in CONDITIONS:
-            raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(CONDITIONS)}; "
-                             f"only {', '.join(FROM_SCRATCH)} are tested without a run directory)")
+        cli.register(args.register)
+        if args.cond is not None and args.cond not in TABLE:  # the table as it is now
+            raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(TABLE)}, or add a row "
+                             f"with --register MODULE:ATTRIBUTE; only {', '.join(from_scratch())} are tested without "
+                             f"a run directory)")
         cli.check_cpu_devices(args.cpu_devices)
         cli.check_out(args.out)
         use_host_cores(args.cpu_devices or None)  # before anything starts JAX (the task set's checks)
         cli.refuse_option_fields(args.set, OPTION_FIELDS)
         sets = parse_sets(args.set)
         warnings, evolved = [], None
-        if args.cond in FROM_SCRATCH:
+        if args.cond in from_scratch():
             if args.run_dir:
                 raise UsageError(f"run_dir: {args.cond} is tested from scratch; give either a run directory or "
                                  f"--cond {args.cond}")

@@ -29,7 +29,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from imrl_jax.cli import HelpFormatter, Parser, UsageError, user_errors
+from imrl_jax.cli import HelpFormatter, Parser, UsageError, add_register, register, user_errors
 from imrl_jax.rundir import check_writable, load_run
 
 FORMATS = (".gif", ".mp4")
@@ -155,12 +155,14 @@ def parser() -> argparse.ArgumentParser:
                    help=f"one frame every this many steps (at most {MAX_FRAMES:,} frames in all)")
     p.add_argument("--fps", type=int, default=20, help=f"frames per second (at most {MAX_FPS})")
     p.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
+    add_register(p)
     return p
 
 
 def main(argv=None) -> int:
     try:
         args = parser().parse_args(argv)
+        register(args.register)
         summary = run(args.run_dir, args.task, args.out, args.steps, args.every, args.fps, args.overwrite)
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)

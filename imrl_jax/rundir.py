@@ -183,7 +183,14 @@ def read_config(run_dir: str) -> tuple[Config, list[int]]:
     saved = read_json(path, "")
     try:
         return Config.from_dict(saved["config"]), [int(s) for s in saved["seeds"]]
-    except (ValueError, KeyError, TypeError, ConfigError) as error:
+    except ConfigError as error:
+        if error.field == "condition":  # a row of one's own, not registered in this process
+            made_with = " ".join(f"--register {spec}" for spec in saved.get("register", [])) or \
+                "--register MODULE:ATTRIBUTE naming its row"
+            raise RunDirError(f"{path}: condition {saved['config']['condition']!r} is not a row of the condition table; "
+                              f"add it with {made_with}") from None
+        raise RunDirError(f"{path} is unreadable ({error})") from None
+    except (ValueError, KeyError, TypeError) as error:
         raise RunDirError(f"{path} is unreadable ({error})") from None
 
 

@@ -1,6 +1,8 @@
 """The condition table: genome sizes and layout, the fields each condition ignores, a new condition as one row."""
 
 import dataclasses
+import json
+import os
 
 import jax
 import jax.numpy as jnp
@@ -156,6 +158,84 @@ def evolved_selector_that_learns():
                                                   description="evolved actors and initial selector; it learns"))
     yield row
     del conditions.CONDITIONS[row.name]
+
+
+#: A module of one's own holding a row (EE-LS under another name: it compiles as fast).
+ROWS_MODULE = """
+import dataclasses
+
+from imrl_jax import conditions
+
+ROW = dataclasses.replace(conditions.get("EE-LS"), name="EE-LS-mine", description="EE-LS, registered from a module")
+"""
+
+
+def test_a_registered_row_works_with_every_command(tmp_path, monkeypatch, capsys):
+    """evolve, its resume, learning_test and render take a row of one's own with --register (each a fresh table)."""
+    import sys
+
+    from imrl_jax import evolve, learning_test, render
+
+    (tmp_path / "my_rows.py").write_text(ROWS_MODULE)
+    monkeypatch.chdir(tmp_path)
+
+    def forget():  # as a new process would start: the table without the row
+        conditions.CONDITIONS.pop("EE-LS-mine", None)
+        sys.modules.pop("my_rows", None)
+
+    run, test, gif = str(tmp_path / "run"), str(tmp_path / "test"), str(tmp_path / "best.gif")
+    evolution = ["--cond", "EE-LS-mine", "--preset", "small", "--population", "4", "--parents", "2", "--generations",
+                 "1", "--task-steps", "200", "--bins", "1", "--quiet", "--out", run]
+    try:
+        assert evolve.main(evolution) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("error: --cond: unknown condition 'EE-LS-mine' (choose from LE-LS, EE-LS") and \
+            err.endswith("or add a row with --register MODULE:ATTRIBUTE)\n") and not os.path.exists(run)
+        assert evolve.main([*evolution, "--register", "my_rows:ROW"]) == 0
+        with open(os.path.join(run, "config.json")) as f:
+            assert json.load(f)["register"] == ["my_rows:ROW"]
+        forget()
+        resume = ["--resume", "--out", run, "--generations", "2", "--quiet"]
+        assert evolve.main(resume) == 2
+        assert capsys.readouterr().err == (f"error: {run}/config.json: condition 'EE-LS-mine' is not a row of the "
+                                           f"condition table; add it with --register my_rows:ROW\n")
+        assert evolve.main([*resume, "--register", "my_rows:ROW"]) == 0
+        forget()
+        options = ["--best", "1", "--tests", "1", "--task-steps", "200", "--bins", "2", "--steady-steps", "100",
+                   "--chunks", "1", "--quiet", "--out", test]
+        assert learning_test.main([run, *options]) == 2 and not os.path.exists(test)
+        assert learning_test.main([run, *options, "--register", "my_rows:ROW"]) == 0
+        with open(os.path.join(test, "steady.json")) as f:
+            assert json.load(f)["condition"] == "EE-LS-mine"
+        forget()
+        assert render.main([run, "--task", "1", "--steps", "2", "--out", gif]) == 2 and not os.path.exists(gif)
+        assert render.main([run, "--task", "1", "--steps", "2", "--out", gif, "--register", "my_rows:ROW"]) == 0
+        assert os.path.getsize(gif) > 0
+    finally:
+        forget()
+
+
+@pytest.mark.parametrize("spec, message", [
+    ("my_rows", "--register my_rows: expected MODULE:ATTRIBUTE, e.g. --register my_rows:ROWS"),
+    ("no_such_module:ROW", "--register no_such_module:ROW: cannot import no_such_module (ModuleNotFoundError: No "
+                           "module named 'no_such_module')"),
+    ("my_rows:NOTHING", "--register my_rows:NOTHING: my_rows has no attribute NOTHING"),
+    ("my_rows:NAME", "--register my_rows:NAME: NAME is not a conditions.Condition or a list of them"),
+    ("my_rows:TAKEN", "--register my_rows:TAKEN: condition: 'EE-LS' is already a row of the table"),
+])
+def test_a_bad_register_is_one_line(tmp_path, monkeypatch, capsys, spec, message):
+    import sys
+
+    from imrl_jax import evolve
+
+    (tmp_path / "my_rows.py").write_text("import dataclasses\nfrom imrl_jax import conditions\nNAME = 'x'\n"
+                                         "TAKEN = dataclasses.replace(conditions.get('EE-ES'), name='EE-LS')\n")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delitem(sys.modules, "my_rows", raising=False)
+    out = tmp_path / "run"
+    assert evolve.main(["--register", spec, "--cond", "EE-LS", "--out", str(out)]) == 2
+    assert capsys.readouterr().err == f"error: {message}\n"
+    assert not out.exists() and conditions.CONDITIONS["EE-LS"].genome == ("actor",)
 
 
 @pytest.mark.usefixtures("x64")
