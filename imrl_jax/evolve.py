@@ -37,7 +37,7 @@ import imrl_jax
 from imrl_jax.checkpoint import Checkpointer, History, RunState, empty_history, git_commit
 from imrl_jax import cli, conditions
 from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
-from imrl_jax.devices import (make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
+from imrl_jax.devices import (check_memory, make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
                               use_host_cores)
 from imrl_jax.config import EVOLVED_CONDITIONS, PRESETS, Config, make_config
 from imrl_jax import search
@@ -290,6 +290,8 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=N
     check_writable(out_dir)
     check_unlocked(out_dir)  # a live writer is named before anything about what it is writing
     check_run_dir(out_dir, config, seeds, resume, describe(strategy))
+    check_memory(config, len(seeds) * config.population_size * config.lives_per_fitness // jax.process_count(),
+                 f"evolving {len(seeds)} seed(s) x {config.population_size} individuals")
     multihost = jax.process_count() > 1
     if multihost:  # every process checks before the leader writes
         from jax.experimental import multihost_utils

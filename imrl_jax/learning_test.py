@@ -47,7 +47,7 @@ import numpy as np
 from jax.sharding import NamedSharding, PartitionSpec
 
 from imrl_jax.checkpoint import git_commit
-from imrl_jax.devices import make_mesh, use_host_cores
+from imrl_jax.devices import check_memory, make_mesh, use_host_cores
 from imrl_jax.conditions import CONDITIONS as TABLE
 from imrl_jax.config import COMPUTE_FIELDS, CONDITIONS, PRESETS, Config, ConfigError, LearningParams, make_config
 from imrl_jax import cli
@@ -329,6 +329,10 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
     genomes come from (recorded in steady.json).
     """
     steady_bins(config, steady_steps)
+    num_runs, num_best = genomes.shape[:2]
+    kept = num_runs * num_best * num_tests * config.num_tasks * config.num_bins * (config.num_experts + 1) * 4 * 3
+    check_memory(config, num_best * num_tests * config.num_tasks,  # a run's tests at once; every run's curves kept
+                 f"testing {num_best} x {num_tests} test(s) of {config.num_tasks} tasks a run", host_bytes=kept)
     check_writable(out_dir)
     check_unlocked(out_dir)
     check_out_dir(out_dir)  # before the directory is made or locked: nothing is written into another's

@@ -13,6 +13,7 @@ import pytest
 from helpers import devices_seen, evolve_args, evolve_command, interruptible_command, read_population, snapshot
 
 from imrl_jax import evolve, tasks
+from imrl_jax.config import make_config
 
 
 def _tiny(seeds="2", task_steps="1000"):
@@ -257,6 +258,26 @@ def test_bad_values_exit_2_naming_the_field(tmp_path, capsys, args, message):
     err = capsys.readouterr().err.strip()
     assert message in err and err.startswith("error: ") and len(err.splitlines()) == 1
     assert not os.path.exists(out)
+
+
+def test_a_run_that_cannot_fit_in_memory_is_refused_before_anything_is_written(tmp_path, capsys, monkeypatch):
+    """A thousand experts took a 24 GB machine down: the memory a run needs is estimated before it starts."""
+    from imrl_jax import devices
+
+    monkeypatch.setattr(devices, "available_memory", lambda: 2**30)  # a machine with 1 GiB free
+    monkeypatch.setattr(devices, "accelerator_memory", lambda: None)
+    out = tmp_path / "run"
+    assert evolve.main(["--cond", "EE-LS", "--preset", "small", "--seeds", "100", "--population", "100",
+                        "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: memory: evolving 100 seed(s) x 100 individuals needs about 1.6 GiB (10,000 lives at "
+                          "once of 0.11 MiB each, 3 experts, ") and err.endswith(
+        "devices; an estimate) but this machine has 1.0 GiB available; use fewer seeds, a smaller population, fewer "
+        "bins or experts\n") and len(err.splitlines()) == 1
+    assert not out.exists()
+    config = make_config("small", condition="EE-LS")
+    assert devices.lane_bytes(config.replace(num_experts=6)) > devices.lane_bytes(config)  # grows with what a lane holds
+    assert devices.lane_bytes(config.replace(num_bins=100, task_steps=5000)) > devices.lane_bytes(config)
 
 
 @pytest.mark.parametrize("out", ["", " "])

@@ -192,6 +192,20 @@ def test_bad_input(tmp_path, capsys, argv, message):
     assert not out.exists()
 
 
+def test_a_test_that_cannot_fit_in_memory_is_refused(tmp_path, capsys, monkeypatch):
+    from imrl_jax import devices
+
+    monkeypatch.setattr(devices, "available_memory", lambda: 2**30)
+    monkeypatch.setattr(devices, "accelerator_memory", lambda: None)
+    out = tmp_path / "out"
+    assert learning_test.main(["--cond", "SLE", "--runs", "1", "--best", "100", "--tests", "100", "--task-steps", "200",
+                               "--bins", "2", "--steady-steps", "100", "--chunks", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: memory: testing 100 x 100 test(s) of 6 tasks a run needs about ") and \
+        "but this machine has 1.0 GiB available" in err and len(err.splitlines()) == 1
+    assert not out.exists()
+
+
 def test_an_empty_out_is_refused(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert learning_test.main(["--cond", "SLE", *TINY_SLE, "--out", ""]) == 2
