@@ -357,7 +357,13 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
             if restored is None:
                 if checkpointer.steps():
                     raise UsageError(f"--resume: no readable checkpoint in {checkpointer.directory}")
-                progress.note(f"no checkpoint in {checkpointer.directory} yet: starting from generation 0")
+                recorded = _generations_recorded(out_dir)
+                if recorded:  # its checkpoints were removed: said even with --quiet, the generations are redone
+                    progress.message(f"warning: {checkpointer.directory} holds no checkpoint, but {out_dir} records "
+                                     f"{recorded} generation(s) done: starting again from generation 0 (the same "
+                                     f"generations again, bitwise)")
+                else:
+                    progress.note(f"no checkpoint in {checkpointer.directory} yet: starting from generation 0")
             else:
                 state, saved_meta = restored
                 made_by = saved_meta.get("search", GA_RECORD)
@@ -415,6 +421,15 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
     except KeyboardInterrupt:
         raise RunInterrupted(out_dir, int(state.generation), checkpointed, config.num_generations) from None
     return state
+
+
+def _generations_recorded(out_dir: str) -> int:
+    """The generations a run's final_population.npz says are done (0 if it has none or it cannot be read)."""
+    try:
+        with np.load(os.path.join(out_dir, "final_population.npz")) as data:
+            return int(data["generation"])
+    except (OSError, ValueError, KeyError):
+        return 0
 
 
 def make_step(config: Config, strategy, sharding):
@@ -500,9 +515,9 @@ def build_config(args, saved: tuple[Config, list[int]] | None = None) -> tuple[C
         saved_config, seeds = saved
         if args.preset is None:
             make = lambda **tasks: saved_config.replace(**overrides, **tasks)  # noqa: E731
-        else:
-            make = lambda **tasks: make_config(args.preset, **{"num_generations": saved_config.num_generations,  # noqa: E731
-                                                               **overrides, **tasks})
+        else:  # the preset's values, on the run's condition and length (only --cond, --generations change those)
+            kept = {"condition": saved_config.condition, "num_generations": saved_config.num_generations}
+            make = lambda **tasks: make_config(args.preset, **{**kept, **overrides, **tasks})  # noqa: E731
         if args.first_seed is not None or args.seeds is not None:
             first = seeds[0] if args.first_seed is None else args.first_seed
             count = len(seeds) if args.seeds is None else args.seeds

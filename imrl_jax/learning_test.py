@@ -361,7 +361,8 @@ def _run_locked(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests:
     partial, stamp = os.path.join(out_dir, PARTIAL), fingerprint(config, genomes, num_tests, seed)
     done = finished_runs(partial, stamp, num_runs, warn=lambda text: print(text, file=sys.stderr))
     resumed = sorted(done)
-    progress = Progress(num_runs * num_chunks, done=len(done) * num_chunks, quiet=quiet, unit="chunk")
+    progress = Progress(num_runs * num_chunks, done=len(done) * num_chunks, quiet=quiet, unit="chunk",
+                        group=("run", num_chunks))
     progress.note(f"{config.condition} learning test: {num_runs} run(s) x {num_best} best x {num_tests} test(s) x "
                      f"{config.num_tasks} tasks = {num_runs * num_best * num_tests * config.num_tasks} lanes of "
                      f"{config.task_steps} cycles"
@@ -439,7 +440,8 @@ def parser() -> argparse.ArgumentParser:
                    description="The paper's learning tests (section 3, Fig. 3b and 3c): the best individuals of an "
                                "evolution, or SLE from scratch, learn each task anew.",
                    formatter_class=HelpFormatter)
-    p.add_argument("run_dir", nargs="?", help="an evolution's run directory (omit with --cond SLE)")
+    p.add_argument("run_dir", nargs="?",
+                   help=f"an evolution's run directory (omit with --cond {' or '.join(FROM_SCRATCH)})")
     p.add_argument("--cond", metavar="{" + ",".join(CONDITIONS) + "}",
                    help=f"{', '.join(FROM_SCRATCH)}: test learning from scratch (no run directory); "
                         "another condition: check that run_dir is a run of it")
@@ -514,7 +516,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             source = f"{args.cond} from scratch, preset {args.preset}" + "".join(f", {s}" for s in args.set or [])
         else:
             if not args.run_dir:
-                raise UsageError("run_dir: give an evolution's run directory, or --cond SLE")
+                raise UsageError(f"run_dir: give an evolution's run directory, or --cond "
+                                 f"{' or '.join(from_scratch())} to test learning from scratch")
             if args.best_genomes:
                 base, _, genomes = load_kept_best(args.run_dir, args.best_genomes, args.best)
             else:

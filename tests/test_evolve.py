@@ -373,6 +373,30 @@ def test_resume_needs_only_out_and_extends_only_with_generations(finished_run, t
     assert snapshot(out) == before
 
 
+def test_resume_with_a_preset_keeps_the_runs_condition_and_names_only_real_differences(finished_run, tmp_path,
+                                                                                         capsys):
+    """--resume --preset skills said the condition differed (the preset's LE-LS), which the user never typed."""
+    before = snapshot(finished_run)
+    assert evolve.main(["--resume", "--out", finished_run, "--preset", "skills"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: --resume: the config differs from the run's in {finished_run}: ")
+    assert "condition" not in err and "initial_speed_bias" not in err and "task_steps is 100000" in err
+    assert snapshot(finished_run) == before
+
+
+def test_resume_after_the_checkpoints_were_removed_says_so_even_when_quiet(finished_run, tmp_path, capsys):
+    import shutil
+
+    out = str(tmp_path / "run")
+    shutil.copytree(finished_run, out)
+    shutil.rmtree(os.path.join(out, "checkpoints"))
+    assert evolve.main(["--resume", "--out", out, "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert err == (f"warning: {os.path.join(out, 'checkpoints')} holds no checkpoint, but {out} records 6 generation(s) "
+                   f"done: starting again from generation 0 (the same generations again, bitwise)\n")
+    _assert_same_outputs(out, finished_run)
+
+
 def test_a_directory_holding_no_run_is_refused(tmp_path, capsys):
     """Its files could have the names of a run's outputs (history.csv): nothing is written there."""
     out = tmp_path / "mine"

@@ -206,6 +206,36 @@ def test_a_test_that_cannot_fit_in_memory_is_refused(tmp_path, capsys, monkeypat
     assert not out.exists()
 
 
+def test_the_progress_names_each_runs_chunks_within_it():
+    """With --chunks 10 the tenth chunk of a test's first run said "chunk 10 (10/20)", the eleventh "chunk 11"."""
+    import io
+
+    from imrl_jax.progress import Progress
+
+    progress = Progress(20, quiet=False, stream=io.StringIO(), unit="chunk", group=("run", 10))
+    assert progress.update(10, 0.0, 0.0, 1.0, scores="s").startswith("run 1 chunk 10/10 (10/20) | s")
+    assert progress.update(11, 0.0, 0.0, 1.0, scores="s").startswith("run 2 chunk 1/10 (11/20) | s")
+
+
+def test_a_text_file_as_best_genomes_is_one_line_naming_it(tmp_path, capsys):
+    """It said the file held "pickled (object) data"; it is not an .npz at all."""
+    run, kept = tmp_path / "run", tmp_path / "best_genomes.npz"
+    kept.write_text("not arrays\n")
+    run.mkdir()
+    (run / "config.json").write_text(json.dumps({"config": {"condition": "EE-LS"}, "seeds": [0]}))
+    out = tmp_path / "out"
+    assert learning_test.main([str(run), "--best-genomes", str(kept), "--out", str(out)]) == 2
+    assert capsys.readouterr().err == (f"error: --best-genomes: {kept} is unreadable (not an .npz file of "
+                                       f"arrays)\n")
+    assert not out.exists()
+
+
+def test_the_hint_without_a_run_directory_names_every_condition_tested_from_scratch(tmp_path, capsys):
+    assert learning_test.main(["--out", str(tmp_path / "out")]) == 2
+    assert capsys.readouterr().err == ("error: run_dir: give an evolution's run directory, or --cond SLE or EXT-LS to "
+                                       "test learning from scratch\n")
+
+
 def test_an_empty_out_is_refused(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert learning_test.main(["--cond", "SLE", *TINY_SLE, "--out", ""]) == 2
