@@ -1,7 +1,7 @@
 """``python -m imrl_jax.learning_test``: the paper's learning tests (section 3, Fig. 3b and 3c).
 
-    python -m imrl_jax.learning_test runs/EE-LS --out tests/EE-LS        # evolved individuals
-    python -m imrl_jax.learning_test --cond SLE --runs 10 --out tests/SLE  # SLE, from scratch
+    python -m imrl_jax.learning_test runs/EE-LS --out runs/EE-LS-test        # evolved individuals
+    python -m imrl_jax.learning_test --cond SLE --runs 10 --out runs/SLE-test  # SLE, from scratch
 
 From an evolution's run directory, the ``--best`` best individuals of each seed's last
 generation each live ``--tests`` fresh lives whose tasks last ``--task-steps`` cycles

@@ -373,8 +373,7 @@ def test_resume_needs_only_out_and_extends_only_with_generations(finished_run, t
     assert snapshot(out) == before
 
 
-def test_resume_with_a_preset_keeps_the_runs_condition_and_names_only_real_differences(finished_run, tmp_path,
-                                                                                         capsys):
+def test_resume_with_a_preset_is_refused_naming_only_real_differences_not_the_condition(finished_run, capsys):
     """--resume --preset skills said the condition differed (the preset's LE-LS), which the user never typed."""
     before = snapshot(finished_run)
     assert evolve.main(["--resume", "--out", finished_run, "--preset", "skills"]) == 2

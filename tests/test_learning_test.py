@@ -217,7 +217,7 @@ def test_the_progress_names_each_runs_chunks_within_it():
     assert progress.update(11, 0.0, 0.0, 1.0, scores="s").startswith("run 2 chunk 1/10 (11/20) | s")
 
 
-def test_a_text_file_as_best_genomes_is_one_line_naming_it(tmp_path, capsys):
+def test_a_text_file_as_best_genomes_is_refused_in_one_line_naming_it(tmp_path, capsys):
     """It said the file held "pickled (object) data"; it is not an .npz at all."""
     run, kept = tmp_path / "run", tmp_path / "best_genomes.npz"
     kept.write_text("not arrays\n")
@@ -230,7 +230,7 @@ def test_a_text_file_as_best_genomes_is_one_line_naming_it(tmp_path, capsys):
     assert not out.exists()
 
 
-def test_the_hint_without_a_run_directory_names_every_condition_tested_from_scratch(tmp_path, capsys):
+def test_no_run_directory_is_refused_with_a_hint_naming_every_condition_tested_from_scratch(tmp_path, capsys):
     assert learning_test.main(["--out", str(tmp_path / "out")]) == 2
     assert capsys.readouterr().err == ("error: run_dir: give an evolution's run directory, or --cond SLE or EXT-LS to "
                                        "test learning from scratch\n")
