@@ -46,7 +46,7 @@ from imrl_jax.lifetime import live
 from imrl_jax.networks import trait_names, traits
 from imrl_jax.progress import Progress
 from imrl_jax.rundir import (RunDirError, RunWriteError, check_unlocked, check_writable, entries, lock_run_dir,
-                             make_dir, not_empty, read_config, write_atomic, write_errno)
+                             make_dir, not_empty, read_config, read_json, write_atomic, write_errno)
 from imrl_jax.strategies import GA_NAME, GA_RECORD, describe, make_strategy, parse_settings
 
 __all__ = ["UsageError", "parse_sets", "write_atomic", "run", "main"]  # the first three re-exported
@@ -222,8 +222,7 @@ def _difference(name: str, config: Config, saved: Config) -> str:
 
 def read_search(out_dir: str) -> dict:
     """The search strategy a run records in its config.json (the paper's GA if it records none)."""
-    with open(os.path.join(out_dir, "config.json")) as f:
-        return json.load(f).get("search", GA_RECORD)
+    return read_json(os.path.join(out_dir, "config.json"), "").get("search", GA_RECORD)
 
 
 def _strategy_text(record: dict) -> str:
@@ -234,8 +233,7 @@ def _strategy_text(record: dict) -> str:
 def extend_config_json(out_dir: str, config: Config) -> None:
     """Record a grown ``num_generations`` in the run's config.json (with when it grew from what)."""
     path = os.path.join(out_dir, "config.json")
-    with open(path) as f:
-        info = json.load(f)
+    info = read_json(path, "")
     old = int(info["config"]["num_generations"])
     if old == config.num_generations:
         return

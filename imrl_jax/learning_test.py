@@ -55,9 +55,10 @@ from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
 from imrl_jax.lifetime import grow_up, lifetime_keys, run_phase, task_spec, task_start
 from imrl_jax.state import State
 from imrl_jax.progress import Progress
-from imrl_jax.rundir import (LOCK, Run, RunDirError, RunWriteError, best_genomes, check_unlocked, check_writable,
-                             entries, holder_alive, is_output, load_run as read_run, lock_run_dir, make_dir, not_empty,
-                             read_config, read_kept_best, read_lock, write_atomic, write_errno)
+from imrl_jax.rundir import (LOCK, Run, RunDirError, RunWriteError, best_genomes, check_npz, check_unlocked,
+                             check_writable, entries, holder_alive, is_output, load_run as read_run, lock_run_dir,
+                             make_dir, not_empty, read_config, read_kept_best, read_lock, read_text, write_atomic,
+                             write_errno)
 
 
 class TestState(NamedTuple):
@@ -271,17 +272,18 @@ def fingerprint(config: Config, genomes: np.ndarray, num_tests: int, seed: int) 
     return digest.hexdigest()[:16]
 
 
-def finished_runs(partial: str, stamp: str, num_runs: int, warn: Callable[[str], None] = print) -> dict:
-    """The runs kept in ``partial`` by an interrupted test of the same fingerprint: {run: (reaches, selections)}."""
+def finished_runs(partial: str, stamp: str, num_runs: int, warn: Callable[[str], None] = print,
+                  limit: int | None = None) -> dict:
+    """The runs kept in ``partial`` by an interrupted test of the same fingerprint: {run: (reaches, selections)}
+    (``limit``: the bytes a run's arrays take at most; a larger file is tested again)."""
     if not os.path.isdir(partial):
         return {}
     spec_path = os.path.join(partial, "spec.json")
     found = None
     if os.path.exists(spec_path):
         try:
-            with open(spec_path) as f:
-                found = json.load(f)["fingerprint"]
-        except (OSError, ValueError, KeyError, TypeError) as error:
+            found = json.loads(read_text(spec_path, ""))["fingerprint"]
+        except (RunDirError, ValueError, KeyError, TypeError, RecursionError) as error:
             raise UsageError(f"--out: {spec_path} cannot be read ({type(error).__name__}), so the runs kept beside it "
                              f"cannot be checked; remove {partial} to start the test over") from None
     if found != stamp:
@@ -292,9 +294,11 @@ def finished_runs(partial: str, stamp: str, num_runs: int, warn: Callable[[str],
         path = os.path.join(partial, f"run_{r:03d}.npz")
         if os.path.exists(path):
             try:
+                if limit is not None:
+                    check_npz(path, "", limit)
                 with np.load(path) as data:
                     done[r] = (data["reaches"], data["selections"])
-            except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as error:
+            except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as error:  # RunDirError: a ValueError
                 warn(f"warning: {path} cannot be read ({type(error).__name__}); run {r} is tested again")
     return done
 
@@ -359,7 +363,8 @@ def _run_locked(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests:
     num_runs, num_best = genomes.shape[:2]
     keys = test_keys(seed, num_runs, num_best, num_tests).reshape(num_runs, num_best * num_tests)
     partial, stamp = os.path.join(out_dir, PARTIAL), fingerprint(config, genomes, num_tests, seed)
-    done = finished_runs(partial, stamp, num_runs, warn=lambda text: print(text, file=sys.stderr))
+    per_run = num_best * num_tests * config.num_tasks * config.num_bins * (config.num_experts + 1) * 4 + 2**16
+    done = finished_runs(partial, stamp, num_runs, warn=lambda text: print(text, file=sys.stderr), limit=per_run)
     resumed = sorted(done)
     progress = Progress(num_runs * num_chunks, done=len(done) * num_chunks, quiet=quiet, unit="chunk",
                         group=("run", num_chunks))

@@ -236,6 +236,23 @@ def test_no_run_directory_is_refused_with_a_hint_naming_every_condition_tested_f
                                        "test learning from scratch\n")
 
 
+def test_kept_runs_and_their_spec_are_read_bounded(tmp_path):
+    """A kept run larger than a run's arrays can be is tested again (not decompressed); a spec.json that is not UTF-8
+    is refused in one line naming it."""
+    partial = tmp_path / "partial"
+    partial.mkdir()
+    (partial / "spec.json").write_text(json.dumps({"fingerprint": "f"}))
+    np.savez_compressed(partial / "run_000.npz", reaches=np.zeros((10, 6, 1000), np.int32),
+                        selections=np.zeros((10, 6, 1000, 3), np.int32))
+    warnings = []
+    assert learning_test.finished_runs(str(partial), "f", 1, warn=warnings.append, limit=10_000) == {}
+    assert warnings == [f"warning: {partial / 'run_000.npz'} cannot be read (RunDirError); run 0 is tested again"]
+    assert list(learning_test.finished_runs(str(partial), "f", 1, warn=warnings.append, limit=10**6)) == [0]
+    (partial / "spec.json").write_bytes(b"\xff\xfe")
+    with pytest.raises(learning_test.UsageError, match=r"spec.json cannot be read \(RunDirError\)"):
+        learning_test.finished_runs(str(partial), "f", 1)
+
+
 def test_an_empty_out_is_refused(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert learning_test.main(["--cond", "SLE", *TINY_SLE, "--out", ""]) == 2
