@@ -188,7 +188,8 @@ class Config:
     childhood_walls: str = "clamp"
     wall_respawn_steps: int = _bounded(20, 1, MAX_STEPS)  # with "respawn": steps on a wall before a new random pose
     childhood_selector_reward: str = "surprise"
-    progress_rate: float = _bounded(0.001, 0.0, 1.0, lo_open=True)  # with "progress": rate of each expert's running mean surprise
+    # with "progress": rate of each expert's running mean surprise
+    progress_rate: float = _bounded(0.001, 0.0, 1.0, lo_open=True)
     childhood_trace_lambda: float = _bounded(0.0, 0.0, 1.0, hi_open=True)
     childhood_eta_selector_actor: float = _bounded(0.01, 0.0, 10.0)
     childhood_eta_selector_critic: float = _bounded(0.01, 0.0, 10.0)
@@ -263,7 +264,7 @@ class Config:
         return self.sle_noise_steps or self.task_steps
 
     def steps_per_trip(self) -> tuple[int, ...]:
-        """ceil((distance - target radius) / max speed) for each task (48, 65, 30, ...); a trip takes a step at least."""
+        """ceil((distance - target radius) / max speed) for each task (48, 65, 30, ...), at least a step."""
         return tuple(
             max(1, math.ceil((t.distance - self.target_radius) / self.max_speed - 1e-9)) for t in self.tasks
         )
@@ -434,7 +435,8 @@ def _validate(c: Config) -> None:
         if bound is None:
             continue
         value = getattr(c, field.name)
-        if isinstance(field.default, int) and (not isinstance(value, int) or isinstance(value, bool) or value < bound.lo):
+        integer = isinstance(value, int) and not isinstance(value, bool)
+        if isinstance(field.default, int) and (not integer or value < bound.lo):
             fail(field.name, "must be a positive integer" if bound.lo == 1 else "must be a non-negative integer")
         values = value if isinstance(value, (tuple, list)) else (value,)
         if not all(isinstance(v, numbers.Real) and not isinstance(v, bool) and bound.holds(v) for v in values):

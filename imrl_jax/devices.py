@@ -116,7 +116,8 @@ def lane_bytes(config) -> int:
 
 def memory_needed(config, lanes: int, devices: int, host_bytes: int = 0) -> int:
     """A conservative estimate of the bytes ``lanes`` lives of ``config`` at once on ``devices`` devices take."""
-    return BASE_BYTES + EXPERT_BYTES * config.num_experts + DEVICE_BYTES * devices + lanes * lane_bytes(config) + host_bytes
+    return (BASE_BYTES + EXPERT_BYTES * config.num_experts + DEVICE_BYTES * devices + lanes * lane_bytes(config)
+            + host_bytes)
 
 
 def available_memory() -> int | None:
@@ -152,7 +153,8 @@ def check_memory(config, lanes: int, what: str, host_bytes: int = 0) -> None:
     devices = jax.device_count()
     accelerator = accelerator_memory()
     if accelerator is not None:  # the lanes live on the devices, each holding its share
-        needed, have, where = lanes * lane_bytes(config) // devices, accelerator, f"each {jax.devices()[0].platform} device"
+        needed, have = lanes * lane_bytes(config) // devices, accelerator
+        where = f"each {jax.devices()[0].platform} device"
         if needed <= have:
             needed, have, where = BASE_BYTES + host_bytes, available_memory(), "this machine"
     else:

@@ -17,13 +17,13 @@ carried between them (the same computation as one scan; memory does not grow wit
 length) so that progress can be shown. Each finished run is kept in ``--out/partial/``, so
 that the same command after an interruption goes on from the first unfinished run (with
 the same results as an uninterrupted test); ``partial/`` is removed once the test is done.
-A run whose evolution is unfinished (killed before its last generation, or still
-running) is refused unless ``--allow-unfinished``. ``--out`` must be new, empty or such an unfinished test, and one process writes it at a
-time (``.lock``). Writes to ``--out``:
-``curve.csv`` (performance per bin: mean over all tests and per run), ``steady.json``
-(performance over the last ``--steady-steps`` cycles: mean over runs, best run, per run,
-per task; the generation of the run tested; the command and git commit), ``curves.npz`` (every test's reaches per bin)
-and ``learning_curve.png``.
+A run whose evolution is unfinished (killed before its last generation, or still running) is
+refused unless ``--allow-unfinished``. ``--out`` must be new, empty or such an unfinished
+test, and one process writes it at a time (``.lock``). Writes to ``--out``: ``curve.csv``
+(performance per bin: mean over all tests and per run), ``steady.json`` (performance over
+the last ``--steady-steps`` cycles: mean over runs, best run, per run, per task; the
+generation of the run tested; the command and git commit), ``curves.npz`` (every test's
+reaches per bin) and ``learning_curve.png``.
 """
 
 from __future__ import annotations
@@ -358,7 +358,8 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
 
 
 def _run_locked(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, steady_steps: int,
-                num_chunks: int, seed: int, quiet: bool, source: str, command: str, evolved: dict | None = None) -> dict:
+                num_chunks: int, seed: int, quiet: bool, source: str, command: str,
+                evolved: dict | None = None) -> dict:
     """:func:`run` once the directory is checked and locked."""
     num_runs, num_best = genomes.shape[:2]
     keys = test_keys(seed, num_runs, num_best, num_tests).reshape(num_runs, num_best * num_tests)
@@ -535,7 +536,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                     raise UsageError(f"run_dir: {why}: its evolution is unfinished (pass --allow-unfinished to test "
                                      f"generation {found.generation - 1} anyway)")
                 if why:
-                    warnings.append(f"warning: {why}: testing generation {found.generation - 1} (steady.json records it)")
+                    warnings.append(f"warning: {why}: testing generation {found.generation - 1} (steady.json "
+                                    f"records it)")
             if args.cond is not None and args.cond != base.condition:
                 raise UsageError(f"--cond: {args.run_dir} is a {base.condition} run, not {args.cond}")
             source = os.path.abspath(args.run_dir) + "".join(f", {s}" for s in args.set or [])
@@ -546,8 +548,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                                      f"{tested.num_genes} asked)")
                 base = tested
         # Evolved genomes may be tested on other tasks (they encode none).
-        config = cli.apply_task_set(lambda **tasks: base.replace(task_steps=args.task_steps, num_bins=args.bins, **tasks),
-                                    args)
+        config = cli.apply_task_set(
+            lambda **tasks: base.replace(task_steps=args.task_steps, num_bins=args.bins, **tasks), args)
         if args.task_set is not None:
             source += f", task set {args.task_set}"
         if config.num_bins % args.chunks:

@@ -109,7 +109,8 @@ def check_npz(path: str, what: str, limit: int) -> None:
         reason = getattr(failure, "strerror", None) or "not an .npz file of arrays"
         raise RunDirError(f"{_named(what)}{path} is unreadable ({reason})") from None
     if size > limit:
-        raise RunDirError(f"{_named(what)}{path} holds {size:,} bytes of arrays, above the limit of {limit:,} (is it the right file?)")
+        raise RunDirError(f"{_named(what)}{path} holds {size:,} bytes of arrays, above the limit of {limit:,} (is it the "
+                          f"right file?)")
 
 
 def write_atomic(path: str, data: bytes) -> None:
