@@ -435,8 +435,10 @@ def record_stage(manifest: dict, manifest_path: str, stage: Stage, command: list
         json.dump(manifest, f, indent=2)
 
 
-def stage_command(stage: Stage, scale: dict, out: str, kernel: str) -> tuple[list[str], dict | None]:
-    """The command line of a stage and its environment (None: this one's)."""
+def stage_command(stage: Stage, scale: dict, out: str, kernel: str,
+                  report_paths: tuple[str, str] | None = None) -> tuple[list[str], dict | None]:
+    """The command line of a stage and its environment (None: this one's); ``report_paths``: where the report
+    writes its document and figures (None: the repository's docs/)."""
     spec = variant_spec(stage.variant) if stage.kind in ("evolve", "test") else None
     if stage.kind == "evolve":
         return evolve_command(scale, spec.preset, stage.condition, stage.out_dir, kernel, sets=spec.sets), None
@@ -446,7 +448,8 @@ def stage_command(stage: Stage, scale: dict, out: str, kernel: str) -> tuple[lis
     # The report is a module of the experiments package: the repository root goes on its path.
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     path = os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)
-    return [sys.executable, "-m", "experiments.report", out], {**os.environ, "PYTHONPATH": path}
+    where = ["--doc", report_paths[0], "--figures", report_paths[1]] if report_paths else []
+    return [sys.executable, "-m", "experiments.report", out, *where], {**os.environ, "PYTHONPATH": path}
 
 
 def run_stages(stages: list[Stage], scale: dict, manifest: dict, manifest_path: str, command_for, jobs: int = 1,
@@ -519,7 +522,8 @@ def parser() -> argparse.ArgumentParser:
     """The command line's options."""
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--scale", choices=sorted(SCALES), default="cpu")
-    p.add_argument("--out", help="results directory (default: experiments/results/SCALE)")
+    p.add_argument("--out", help="results directory (default: experiments/results/SCALE); given, the report goes in it "
+                                 "too (REPRODUCTION_SCALE.md, reproduction_SCALE/), not in docs/")
     p.add_argument("--variants", help="comma-separated, in the order to run: skills, paper, extension, faithful "
                    "or a row of docs/CLAIMS.md (default: skills,paper,faithful at the paper scale, paper,extension "
                    "at the cpu scale)")
@@ -558,8 +562,17 @@ def main(argv=None) -> int:
     stages = plan(scale, out, variants, report=not args.no_report)
     from experiments.executor import from_options
 
-    return run_stages(stages, scale, manifest, manifest_path, lambda stage: stage_command(stage, scale, out, args.kernel),
-                      **from_options(args, out))
+    where = out_report_paths(args.scale, out) if args.out else None  # a command given --out writes nowhere else
+    return run_stages(stages, scale, manifest, manifest_path,
+                      lambda stage: stage_command(stage, scale, out, args.kernel, where), **from_options(args, out))
+
+
+def out_report_paths(scale: str, out: str) -> tuple[str, str]:
+    """The report's document and figures folder inside ``out`` (their names in docs/, for a results directory of
+    one's own)."""
+    from experiments.document import report_paths
+
+    return tuple(os.path.join(out, os.path.basename(path)) for path in report_paths(scale))
 
 
 #: The studies of this module (python -m experiments finds them).

@@ -34,7 +34,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from imrl_jax.cli import HelpFormatter, Parser, UsageError, add_task_set, apply_task_set, parse_sets, user_errors
+from imrl_jax.cli import (HelpFormatter, Parser, UsageError, add_task_set, apply_task_set, check_out, parse_sets,
+                          user_errors)
 from imrl_jax.config import Config, ConfigError
 from imrl_jax.env import make_env
 from imrl_jax.progress import Progress
@@ -442,6 +443,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     command = "python -m imrl_jax.baselines " + " ".join(sys.argv[1:] if argv is None else argv)
     try:
         args = parser().parse_args(argv)
+        check_out(args.out)
         config = apply_task_set(Config(), args)
         try:
             hidden = _ints(args.hidden)

@@ -306,8 +306,12 @@ def main(argv=None) -> int:
         except OSError as error:
             print(f"error: --json: cannot create the folder of {args.json}: {error.strerror}", file=sys.stderr)
             return 2
-    if args.cpu_devices < 0:
-        print("error: --cpu-devices: must be 0 (one per core) or more", file=sys.stderr)
+    from imrl_jax.cli import UsageError, check_cpu_devices
+
+    try:
+        check_cpu_devices(args.cpu_devices)  # at most 4 per core: each device holds its own runtime
+    except UsageError as error:
+        print(f"error: {error}", file=sys.stderr)
         return 2
     use_host_cores(args.cpu_devices or None)
     result = run(counts["lanes"], args.steps, args.repeats, args.reference_steps, counts["lifetime_lanes"],

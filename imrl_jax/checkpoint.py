@@ -10,7 +10,9 @@ the newest cannot be read, and says so.
 
 from __future__ import annotations
 
+import atexit
 import contextlib
+import gc
 import glob
 import logging
 import os
@@ -110,20 +112,57 @@ def _quiet_absl():
         logger.setLevel(level)
 
 
-@contextlib.contextmanager
-def _quiet_closed_loops():
-    """tensorstore calls back into the event loop of a save that failed, which orbax has closed: not worth a traceback."""
-    hook = sys.unraisablehook
+def _closed_loop(error: BaseException | None) -> bool:
+    return isinstance(error, RuntimeError) and str(error) == "Event loop is closed"
 
-    def drop_closed_loop(unraisable):
-        if not (isinstance(unraisable.exc_value, RuntimeError) and str(unraisable.exc_value) == "Event loop is closed"):
+
+def _orbax_read(unraisable) -> bool:
+    """Whether an unraisable error is one of orbax's reads of a checkpoint that failed (a coroutine left unawaited)."""
+    trace = unraisable.exc_traceback
+    while trace is not None:
+        if f"{os.sep}orbax{os.sep}" in trace.tb_frame.f_code.co_filename:
+            return True
+        trace = trace.tb_next
+    return False
+
+
+def _silence_failed_reads() -> None:
+    """From now on, drop the errors of orbax's reads of a checkpoint that could not be restored (it was reported in one
+    line): their coroutines are left unawaited and printed as unraisable whenever they are collected, to the end."""
+    hook = sys.unraisablehook
+    if getattr(hook, "drops_failed_reads", False):
+        return
+
+    def drop_failed_reads(unraisable):
+        if not (_orbax_read(unraisable) or _closed_loop(unraisable.exc_value)):
             hook(unraisable)
 
-    sys.unraisablehook = drop_closed_loop
+    drop_failed_reads.drops_failed_reads = True
+    sys.unraisablehook = drop_failed_reads
+    # Those still referenced at exit would be collected as the interpreter shuts down, by its default hook: now.
+    atexit.register(gc.collect)
+
+
+@contextlib.contextmanager
+def _quiet_closed_loops(reads: bool = False):
+    """tensorstore calls back into the event loop of a save or restore that failed, which orbax has closed: not worth
+    a traceback. Such a callback's error is printed as unraisable, or (from tensorstore's own threads) through
+    sys.excepthook; with ``reads``, so are orbax's failed reads (the restore's caller reports the failure)."""
+    unraisable_hook, except_hook = sys.unraisablehook, sys.excepthook
+
+    def drop_unraisable(unraisable):
+        if not (_closed_loop(unraisable.exc_value) or (reads and _orbax_read(unraisable))):
+            unraisable_hook(unraisable)
+
+    def drop_excepthook(kind, error, trace):
+        if not _closed_loop(error):
+            except_hook(kind, error, trace)
+
+    sys.unraisablehook, sys.excepthook = drop_unraisable, drop_excepthook
     try:
         yield
     finally:
-        sys.unraisablehook = hook
+        sys.unraisablehook, sys.excepthook = unraisable_hook, except_hook
 
 
 def _ocp():
@@ -200,16 +239,24 @@ class Checkpointer:
         with NaN rows. An unreadable newer step is reported through ``warn`` and skipped.
         """
         ocp = _ocp()
+        failed = []
+        with _quiet_absl(), _quiet_closed_loops(reads=True):
+            found = self._restore_latest(ocp, template, lambda text: (failed.append(text), warn(text)))
+        if failed:  # after the block, which puts back the hook it found
+            _silence_failed_reads()
+        return found
+
+    def _restore_latest(self, ocp, template: RunState, warn) -> tuple[RunState, dict] | None:
+        """:meth:`restore_latest` with orbax's logs and its failed reads' tracebacks silenced."""
         for step in reversed(self.steps()):
             try:
-                with _quiet_absl():
-                    saved_meta = self.manager.restore(step, args=ocp.args.Composite(meta=ocp.args.JsonRestore())).meta
-                    rows = int(saved_meta.get("config", {}).get("num_generations", len(template.history.best)))
-                    shaped = template._replace(history=resize_history(template.history, rows),
-                                               traits=resize_rows(template.traits, rows))
-                    abstract = jax.tree.map(ocp.utils.to_shape_dtype_struct, _saved(shaped))
-                    restored = self.manager.restore(step, args=ocp.args.Composite(
-                        state=ocp.args.StandardRestore(abstract), meta=ocp.args.JsonRestore()))
+                saved_meta = self.manager.restore(step, args=ocp.args.Composite(meta=ocp.args.JsonRestore())).meta
+                rows = int(saved_meta.get("config", {}).get("num_generations", len(template.history.best)))
+                shaped = template._replace(history=resize_history(template.history, rows),
+                                           traits=resize_rows(template.traits, rows))
+                abstract = jax.tree.map(ocp.utils.to_shape_dtype_struct, _saved(shaped))
+                restored = self.manager.restore(step, args=ocp.args.Composite(
+                    state=ocp.args.StandardRestore(abstract), meta=ocp.args.JsonRestore()))
                 state = restored.state
                 history = state["history"]
                 history = History(**history) if isinstance(history, dict) else History(*history)

@@ -8,6 +8,8 @@ import difflib
 import os
 from typing import Mapping, Sequence
 
+from imrl_jax import config as config_bounds  # imports no JAX
+
 
 class UsageError(Exception):
     """Bad input: reported as one line, exit code 2, nothing written."""
@@ -101,13 +103,76 @@ def refuse_option_fields(items: Sequence[str] | None, options: Mapping[str, str]
 
 
 #: The largest sizes the commands accept, checked before anything is allocated (a typo such as
-#: --generations 2147483648 would otherwise start allocating gigabytes).
-MAX_GENERATIONS = 1_000_000
+#: --generations 2147483648 would otherwise start allocating gigabytes); the config's own are its fields' bounds.
+MAX_GENERATIONS = config_bounds.MAX_GENERATIONS
 MAX_SEEDS = 10_000  # seeds of an evolution, runs, best and tests of a learning test
-MAX_POPULATION = 100_000
-MAX_STEPS = 10**9  # per task and per childhood
-MAX_BINS = 100_000
+MAX_POPULATION = config_bounds.MAX_POPULATION
+MAX_STEPS = config_bounds.MAX_STEPS  # per task and per childhood
+MAX_BINS = config_bounds.MAX_BINS
 MAX_LANES = 1_000_000  # lives evaluated at once: seeds x population, best x tests
+#: CPU devices per core that --cpu-devices may ask for: each device holds its own runtime (100,000 took 19 GB).
+CPU_DEVICES_PER_CORE = 4
+
+
+def check_out(value: str | None, flag: str = "--out") -> None:
+    """Raise UsageError if an output path is given but empty (it would silently mean the current directory)."""
+    if value is not None and not value.strip():
+        raise UsageError(f"{flag}: empty path; give a directory")
+
+
+def check_cpu_devices(count: int) -> None:
+    """Raise UsageError unless ``count`` (0: one per core) is at most :data:`CPU_DEVICES_PER_CORE` devices a core."""
+    cores = os.cpu_count() or 1
+    if count < 0:
+        raise UsageError("--cpu-devices: must be 0 (one per core) or more")
+    limit = CPU_DEVICES_PER_CORE * cores
+    if count > limit:
+        raise UsageError(f"--cpu-devices: {count:,} is above the limit of {limit:,} ({CPU_DEVICES_PER_CORE} per core "
+                         f"of this machine's {cores})")
+
+
+def add_register(parser: argparse.ArgumentParser) -> None:
+    """The ``--register MODULE:ATTRIBUTE`` option: rows of the condition table of one's own (:func:`register`)."""
+    parser.add_argument("--register", action="append", metavar="MODULE:ATTRIBUTE",
+                        help="import MODULE (from the current directory or the path) and add its ATTRIBUTE, a "
+                             "conditions.Condition or a list of them, to the condition table first (repeatable); "
+                             "give it again to resume, render or test a run of such a row")
+
+
+def register(specs: Sequence[str] | None) -> list[str]:
+    """Add the rows ``MODULE:ATTRIBUTE`` names to the condition table; the specs (raises UsageError naming one).
+
+    A row already in the table as it is (its module registered it on import, or it was given twice) is kept."""
+    import importlib
+    import sys
+
+    from imrl_jax import conditions
+
+    if "" not in sys.path and os.getcwd() not in sys.path:  # as ``python -m`` does: modules of the current directory
+        sys.path.insert(0, os.getcwd())
+    for spec in specs or []:
+        module_name, sep, attribute = spec.partition(":")
+        if not sep or not module_name or not attribute:
+            raise UsageError(f"--register {spec}: expected MODULE:ATTRIBUTE, e.g. --register my_rows:ROWS")
+        try:
+            module = importlib.import_module(module_name)
+        except Exception as error:  # noqa: BLE001 - whatever the module raises, one line
+            raise UsageError(f"--register {spec}: cannot import {module_name} ({type(error).__name__}: "
+                             f"{str(error).splitlines()[0] if str(error) else ''})") from None
+        if not hasattr(module, attribute):
+            raise UsageError(f"--register {spec}: {module_name} has no attribute {attribute}")
+        rows = getattr(module, attribute)
+        rows = [rows] if isinstance(rows, conditions.Condition) else rows
+        if not isinstance(rows, (list, tuple)) or not all(isinstance(r, conditions.Condition) for r in rows):
+            raise UsageError(f"--register {spec}: {attribute} is not a conditions.Condition or a list of them")
+        for row in rows:
+            if conditions.CONDITIONS.get(row.name) == row:
+                continue
+            try:
+                conditions.register(row)
+            except ValueError as error:
+                raise UsageError(f"--register {spec}: {error}") from None
+    return list(specs or [])
 
 
 def add_task_set(parser: argparse.ArgumentParser, what: str, default: str | None = None) -> None:
@@ -118,12 +183,25 @@ def add_task_set(parser: argparse.ArgumentParser, what: str, default: str | None
 
 
 def apply_task_set(config, args):
-    """``config`` with the tasks of ``args.task_set`` (None: its own), checked on its geometry (raises ConfigError)."""
-    if args.task_set is None:
-        return config
-    from imrl_jax.tasks import load
+    """``config`` with the tasks of ``args.task_set`` (None: its own), checked on its geometry (raises ConfigError).
 
-    return config.replace(tasks=load(args.task_set, config))
+    ``config`` may be a function of config changes that makes it: the task set's tasks are then among them from the
+    start, so that the target radius is checked against these tasks (and not refused by the tasks they replace).
+    """
+    make = config.replace if hasattr(config, "replace") else config
+    if args.task_set is None:
+        return make()
+    from imrl_jax.config import ConfigError
+    from imrl_jax.tasks import check, read
+
+    tasks = read(args.task_set)
+    try:
+        made = make(tasks=tasks)
+    except ConfigError as error:
+        if error.field in ("tasks", "target_radius"):  # the set's tasks do not fit this config
+            raise ConfigError(f"--task-set: {args.task_set}: {error}", error.field) from None
+        raise
+    return made.replace(tasks=check(made, tasks, args.task_set))
 
 
 def check_at_most(flag: str, value: int | None, limit: int) -> None:

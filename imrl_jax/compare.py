@@ -121,8 +121,12 @@ def main(argv=None) -> int:
     if args.phase == "life" and args.steps % 10:
         print("error: --steps: must be a multiple of 10 for --phase life (10 bins)", file=sys.stderr)
         return 2
-    if args.cpu_devices < 0:
-        print("error: --cpu-devices: must be 0 (one per core) or more", file=sys.stderr)
+    from imrl_jax.cli import UsageError, check_cpu_devices
+
+    try:
+        check_cpu_devices(args.cpu_devices)  # at most 4 per core: each device holds its own runtime
+    except UsageError as error:
+        print(f"error: {error}", file=sys.stderr)
         return 2
     check = subprocess.run(["git", "-C", REPO, "rev-parse", "--verify", "--quiet", args.revision + "^{commit}"],
                            capture_output=True)

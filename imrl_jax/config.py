@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from typing import NamedTuple
 
 from imrl_jax import conditions
@@ -39,7 +40,46 @@ _S = 20.0 * math.sqrt(3.0)
 
 
 class ConfigError(ValueError):
-    """A configuration value is impossible; the message names the field."""
+    """A configuration value is impossible; the message names the field (also kept as ``field``)."""
+
+    def __init__(self, message: str, field: str = ""):
+        super().__init__(message)
+        self.field = field
+
+
+#: The largest sizes a config may hold: a typo (task_steps=2147483648) is refused before anything is allocated.
+MAX_STEPS = 10**9  # per task, per childhood, per trial
+MAX_BINS = 100_000
+MAX_POPULATION = 100_000
+MAX_GENERATIONS = 1_000_000
+#: Experts an individual may have: the paper has 3. Compiling a life grows with them (about 3 MB each on a CPU);
+#: a thousand took a 24 GB machine down.
+MAX_EXPERTS = 64
+#: Any length of the arena, the floor, the robot or its retina, in cm (the paper's arena is 400 cm wide).
+MAX_LENGTH = 10_000.0
+
+
+class Bounds(NamedTuple):
+    """The values a number (or each number of a tuple) of a config field may take: lo to hi, either end open."""
+
+    lo: float
+    hi: float
+    lo_open: bool = False
+    hi_open: bool = False
+
+    def holds(self, value) -> bool:
+        above = value > self.lo if self.lo_open else value >= self.lo
+        below = value < self.hi if self.hi_open else value <= self.hi
+        return bool(above and below)
+
+    def __str__(self) -> str:
+        text = lambda v: f"{v:_}" if isinstance(v, int) else f"{v:g}"  # noqa: E731
+        return f"{'(' if self.lo_open else '['}{text(self.lo)}, {text(self.hi)}{')' if self.hi_open else ']'}"
+
+
+def _bounded(default, lo, hi, *, lo_open: bool = False, hi_open: bool = False, **metadata):
+    """A field with its bounds beside it (``Config.bounds``), checked by validation."""
+    return dataclasses.field(default=default, metadata={"bounds": Bounds(lo, hi, lo_open, hi_open), **metadata})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -97,78 +137,84 @@ class Config:
 
     # --- condition and life (paper: 150,000 + 600,000 steps; split into 6 tasks fixed here)
     condition: str = "LE-LS"
-    num_experts: int = 3
-    childhood_steps: int = 150_000
-    task_steps: int = 100_000
-    trial_timeout: int = 200  # steps after a trial's start without reaching the target
-    num_bins: int = 100  # bins of the reward/selection curves of each phase
-    draw_block: int = 100  # steps whose random numbers are drawn in one call (sets the stream: a model value)
+    num_experts: int = _bounded(3, 1, MAX_EXPERTS)
+    childhood_steps: int = _bounded(150_000, 0, MAX_STEPS)
+    task_steps: int = _bounded(100_000, 1, MAX_STEPS)
+    trial_timeout: int = _bounded(200, 1, MAX_STEPS)  # steps after a trial's start without reaching the target
+    num_bins: int = _bounded(100, 1, MAX_BINS)  # bins of the reward/selection curves of each phase
+    # steps whose random numbers are drawn in one call (sets the stream: a model value); a block is held per lane
+    draw_block: int = _bounded(100, 1, 10_000)
     # --- how it is computed, not what (COMPUTE_FIELDS): a run resumes under other values of these.
-    scan_unroll: int = dataclasses.field(default=1, metadata={"compute": True})  # steps per loop iteration
+    # steps per loop iteration; more than a few dozen only lengthens compilation (100,000 exhausted memory)
+    scan_unroll: int = _bounded(1, 1, 64, compute=True)
     # "xla": each step is XLA operations; "pallas": each bin of steps is one GPU kernel
     # (kernel.py; same results up to rounding, interpreted off a GPU).
     step_kernel: str = dataclasses.field(default="xla", metadata={"compute": True})
 
     # --- arena and floor (fixed here)
-    arena_size: float = 400.0
-    edge_length: float = 40.0
-    tiling_origin: tuple[float, float] = (160.0, 200.0)  # a hexagon centre
-    line_half_width: float = 3.0  # a point is on an edge when within 3 cm of it
-    colour_tie_tolerance: float = 1e-3  # cm: distances this close count as an exact tie
+    arena_size: float = _bounded(400.0, 0.0, MAX_LENGTH, lo_open=True)
+    edge_length: float = _bounded(40.0, 0.0, MAX_LENGTH, lo_open=True)  # and at most arena_size
+    tiling_origin: tuple[float, float] = _bounded((160.0, 200.0), 0.0, MAX_LENGTH)  # a hexagon centre, in the arena
+    # a point is on an edge when within 3 cm of it; below edge_length / 2 (else lines would cover the hexagons)
+    line_half_width: float = _bounded(3.0, 0.0, MAX_LENGTH, lo_open=True)
+    colour_tie_tolerance: float = _bounded(1e-3, 0.0, 1.0)  # cm: distances this close count as an exact tie
 
     # --- robot (paper: 30 cm disc, turn in [-30, 30] deg, move in [0, 2] cm)
-    robot_radius: float = 15.0
-    max_turn_deg: float = 30.0
-    max_speed: float = 2.0
+    robot_radius: float = _bounded(15.0, 0.0, MAX_LENGTH, lo_open=True)  # and the robot fits in the arena
+    max_turn_deg: float = _bounded(30.0, 0.0, 180.0, lo_open=True)
+    # At most the target's diameter: reaching is checked once a step, and a longer step could jump over the target.
+    max_speed: float = _bounded(2.0, 0.0, MAX_LENGTH, lo_open=True)
 
     # --- retina (paper: 24 x 8 cm patch, 6 x 2 points, RGB receptors)
-    retina_lateral: tuple[float, ...] = (-10.0, -6.0, -2.0, 2.0, 6.0, 10.0)
-    retina_forward: tuple[float, ...] = (17.0, 21.0)
+    retina_lateral: tuple[float, ...] = _bounded((-10.0, -6.0, -2.0, 2.0, 6.0, 10.0), -MAX_LENGTH, MAX_LENGTH)
+    retina_forward: tuple[float, ...] = _bounded((17.0, 21.0), -MAX_LENGTH, MAX_LENGTH)
 
     # --- tasks (fixed here)
-    target_radius: float = 10.0
+    # Below every task's start-to-target distance: a task already reached at its start would score without moving.
+    target_radius: float = _bounded(10.0, 0.0, MAX_LENGTH, lo_open=True)
     tasks: tuple[Task, ...] = dataclasses.field(default_factory=paper_tasks)
 
     # --- learning (paper: gamma 0.99, eta 0.01, sigma 0.3; traces are an extension, off)
-    gamma: float = 0.99
-    trace_lambda: float = 0.0
-    eta_actor: float = 0.01
-    eta_evaluator: float = 0.01
-    eta_selector_actor: float = 0.01
-    eta_selector_critic: float = 0.01
-    noise_std: float = 0.3
+    gamma: float = _bounded(0.99, 0.0, 1.0)
+    trace_lambda: float = _bounded(0.0, 0.0, 1.0, hi_open=True)
+    eta_actor: float = _bounded(0.01, 0.0, 10.0)  # rates: the sweeps go to 1
+    eta_evaluator: float = _bounded(0.01, 0.0, 10.0)
+    eta_selector_actor: float = _bounded(0.01, 0.0, 10.0)
+    eta_selector_critic: float = _bounded(0.01, 0.0, 10.0)
+    noise_std: float = _bounded(0.3, 0.0, 10.0)  # actions are in [0, 1]: more is all noise
 
     # --- childhood options (docs/CHILDHOOD.md). The defaults are the paper's rules (and
     # MODEL.md's clamp); the childhood_* values apply in childhood in place of the adult ones.
     childhood_walls: str = "clamp"
-    wall_respawn_steps: int = 20  # with "respawn": steps on a wall before a new random pose
+    wall_respawn_steps: int = _bounded(20, 1, MAX_STEPS)  # with "respawn": steps on a wall before a new random pose
     childhood_selector_reward: str = "surprise"
-    progress_rate: float = 0.001  # with "progress": rate of each expert's running mean surprise
-    childhood_trace_lambda: float = 0.0
-    childhood_eta_selector_actor: float = 0.01
-    childhood_eta_selector_critic: float = 0.01
+    # with "progress": rate of each expert's running mean surprise
+    progress_rate: float = _bounded(0.001, 0.0, 1.0, lo_open=True)
+    childhood_trace_lambda: float = _bounded(0.0, 0.0, 1.0, hi_open=True)
+    childhood_eta_selector_actor: float = _bounded(0.01, 0.0, 10.0)
+    childhood_eta_selector_critic: float = _bounded(0.01, 0.0, 10.0)
     # Bias of the speed unit of every actor that is learned rather than evolved (LE-LS's
     # experts, SLE's expert). MODEL.md starts every learned weight at 0: half speed.
-    initial_speed_bias: float = 0.0
+    initial_speed_bias: float = _bounded(0.0, -100.0, 100.0)  # a sigmoid's: past +-100 it is saturated
     # SLE's action noise anneals linearly to 0 over this many steps of each task, then stays
     # 0 (0: over the whole task, MODEL.md). A learning test's tasks are longer than an adult
     # task: with a fixed horizon SLE's noise schedule does not stretch with the test.
-    sle_noise_steps: int = 0
+    sle_noise_steps: int = _bounded(0, 0, MAX_STEPS)
     # --- the selector's time-scale (the paper's Discussion; docs/TIMESCALE.md). The paper's selector chooses
     # every step (1). With N > 1 the chosen expert keeps control for N steps (or until the termination event)
     # and the selector learns once per choice, by semi-Markov TD, in childhood and in adulthood.
-    selector_period: int = 1
+    selector_period: int = _bounded(1, 1, MAX_STEPS)
     selector_termination: str = "period"
 
     # --- genetic algorithm (paper: 50 individuals, best 10 x 5 offspring, p = 0.1, U[-1, 1])
-    population_size: int = 50
-    num_generations: int = 100
-    num_parents: int = 10
-    mutation_prob: float = 0.1
-    mutation_scale: float = 1.0  # mutations are U[-scale, scale]
-    init_scale: float = 1.0  # generation-0 genes are U[-scale, scale]
-    num_elites: int = 0  # no elitism in the paper
-    lives_per_fitness: int = 1  # fitness as the mean of this many lives (the paper: 1)
+    population_size: int = _bounded(50, 1, MAX_POPULATION)
+    num_generations: int = _bounded(100, 1, MAX_GENERATIONS)
+    num_parents: int = _bounded(10, 1, MAX_POPULATION)
+    mutation_prob: float = _bounded(0.1, 0.0, 1.0)
+    mutation_scale: float = _bounded(1.0, 0.0, 100.0)  # mutations are U[-scale, scale]
+    init_scale: float = _bounded(1.0, 0.0, 100.0)  # generation-0 genes are U[-scale, scale]
+    num_elites: int = _bounded(0, 0, MAX_POPULATION)  # no elitism in the paper
+    lives_per_fitness: int = _bounded(1, 1, 1000)  # fitness as the mean of this many lives (the paper: 1)
 
     def __post_init__(self):
         _validate(self)
@@ -218,9 +264,9 @@ class Config:
         return self.sle_noise_steps or self.task_steps
 
     def steps_per_trip(self) -> tuple[int, ...]:
-        """ceil((distance - target radius) / max speed) for each task (48, 65, 30, ...)."""
+        """ceil((distance - target radius) / max speed) for each task (48, 65, 30, ...), at least a step."""
         return tuple(
-            math.ceil((t.distance - self.target_radius) / self.max_speed - 1e-9) for t in self.tasks
+            max(1, math.ceil((t.distance - self.target_radius) / self.max_speed - 1e-9)) for t in self.tasks
         )
 
     def theoretical_max(self) -> tuple[float, ...]:
@@ -343,9 +389,33 @@ def _non_finite_field(c: Config) -> str | None:
     return None
 
 
+def bounds() -> dict[str, Bounds]:
+    """Each bounded field's :class:`Bounds` (every number of the model has one; docs/MODEL.md "Bounds")."""
+    return {f.name: f.metadata["bounds"] for f in dataclasses.fields(Config) if "bounds" in f.metadata}
+
+
+#: The checks between fields (each named by the field refused), in the words docs/MODEL.md "Bounds" gives them.
+DERIVED_BOUNDS = {
+    "childhood_steps": "a multiple of num_bins; positive for a condition with a childhood",
+    "task_steps": "a multiple of num_bins",
+    "edge_length": "at most arena_size",
+    "tiling_origin": "in the arena: each coordinate at most arena_size",
+    "line_half_width": "below edge_length / 2",
+    "colour_tie_tolerance": "below line_half_width",
+    "robot_radius": "below arena_size / 2 (the robot fits in the arena)",
+    "max_speed": "at most 2 x target_radius (one step cannot jump over the target)",
+    "target_radius": "below every task's start-to-target distance",
+    "tasks": "at least one; every start and target on the floor, [0, arena_size] x [0, arena_size]",
+    "population_size": "a multiple of num_parents",
+    "num_parents": "at most population_size",
+    "num_elites": "at most num_parents",
+    "selector_period": "1 with step_kernel=pallas",
+}
+
+
 def _validate(c: Config) -> None:
     def fail(field: str, why: str):
-        raise ConfigError(f"{field}: {why} (got {getattr(c, field)!r})")
+        raise ConfigError(f"{field}: {why} (got {getattr(c, field)!r})", field)
 
     non_finite = _non_finite_field(c)
     if non_finite is not None:
@@ -360,19 +430,20 @@ def _validate(c: Config) -> None:
         fail("childhood_selector_reward", f"must be one of {', '.join(CHILDHOOD_SELECTOR_REWARDS)}")
     if c.selector_termination not in SELECTOR_TERMINATIONS:
         fail("selector_termination", f"must be one of {', '.join(SELECTOR_TERMINATIONS)}")
-    positive_ints = ("num_experts", "task_steps", "draw_block", "scan_unroll", "trial_timeout", "num_bins",
-                     "population_size", "num_generations", "num_parents", "wall_respawn_steps",
-                     "lives_per_fitness", "selector_period")
-    for name in positive_ints:
-        value = getattr(c, name)
-        if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-            fail(name, "must be a positive integer")
+    for field in dataclasses.fields(c):  # every number within the bounds declared beside its field
+        bound = field.metadata.get("bounds")
+        if bound is None:
+            continue
+        value = getattr(c, field.name)
+        integer = isinstance(value, int) and not isinstance(value, bool)
+        if isinstance(field.default, int) and (not integer or value < bound.lo):
+            fail(field.name, "must be a positive integer" if bound.lo == 1 else "must be a non-negative integer")
+        values = value if isinstance(value, (tuple, list)) else (value,)
+        if not all(isinstance(v, numbers.Real) and not isinstance(v, bool) and bound.holds(v) for v in values):
+            fail(field.name, f"must be in {bound}" + (" (each value)" if isinstance(value, (tuple, list)) else ""))
+    # Derived bounds (DERIVED_BOUNDS): between fields.
     if c.selector_options and c.step_kernel == "pallas":
         fail("selector_period", "the pallas kernel's selector chooses every step; use step_kernel=xla")
-    if not isinstance(c.sle_noise_steps, int) or isinstance(c.sle_noise_steps, bool) or c.sle_noise_steps < 0:
-        fail("sle_noise_steps", "must be a non-negative integer (0: the whole task)")
-    if not isinstance(c.childhood_steps, int) or c.childhood_steps < 0:
-        fail("childhood_steps", "must be a non-negative integer")
     if c.task_steps % c.num_bins:
         fail("task_steps", f"must be a multiple of num_bins={c.num_bins}")
     if c.spec.has_childhood and (c.childhood_steps == 0 or c.childhood_steps % c.num_bins):
@@ -381,35 +452,31 @@ def _validate(c: Config) -> None:
         fail("num_parents", f"cannot exceed population_size={c.population_size}")
     if c.population_size % c.num_parents:
         fail("population_size", f"must be a multiple of num_parents={c.num_parents}")
-    if not 0 <= c.num_elites <= c.num_parents:
+    if c.num_elites > c.num_parents:
         fail("num_elites", f"must be between 0 and num_parents={c.num_parents}")
-    if not 0.0 <= c.mutation_prob <= 1.0:
-        fail("mutation_prob", "must be in [0, 1]")
-    for name in ("mutation_scale", "init_scale", "noise_std"):
-        if getattr(c, name) < 0:
-            fail(name, "must be non-negative")
-    if not 0.0 <= c.gamma <= 1.0:
-        fail("gamma", "must be in [0, 1]")
-    for name in ("trace_lambda", "childhood_trace_lambda"):
-        if not 0.0 <= getattr(c, name) < 1.0:
-            fail(name, "must be in [0, 1)")
-    if not 0.0 < c.progress_rate <= 1.0:
-        fail("progress_rate", "must be in (0, 1]")
-    for name in ("eta_actor", "eta_evaluator", "eta_selector_actor", "eta_selector_critic",
-                 "childhood_eta_selector_actor", "childhood_eta_selector_critic"):
-        if getattr(c, name) < 0:
-            fail(name, "must be non-negative")
-    if not 0.0 < c.max_turn_deg <= 180.0:
-        fail("max_turn_deg", "must be in (0, 180]")
-    if c.colour_tie_tolerance < 0:
-        fail("colour_tie_tolerance", "must be non-negative")
-    for name in ("arena_size", "edge_length", "line_half_width", "robot_radius", "max_speed",
-                 "target_radius"):
-        if getattr(c, name) <= 0:
-            fail(name, "must be positive")
+    if c.edge_length > c.arena_size:
+        fail("edge_length", f"must be at most arena_size={c.arena_size:g}")
+    if len(c.tiling_origin) != 2 or max(c.tiling_origin) > c.arena_size:
+        fail("tiling_origin", f"must be a point (x, y) in the arena, [0, {c.arena_size:g}] x [0, {c.arena_size:g}]")
+    if c.line_half_width >= c.edge_length / 2:
+        fail("line_half_width", f"must be below edge_length / 2 = {c.edge_length / 2:g} (else lines cover the floor)")
+    if c.colour_tie_tolerance >= c.line_half_width:
+        fail("colour_tie_tolerance", f"must be below line_half_width={c.line_half_width:g}")
     if 2 * c.robot_radius >= c.arena_size:
         fail("robot_radius", "the robot must fit in the arena")
     if not c.tasks:
         fail("tasks", "needs at least one task")
+    for i, task in enumerate(c.tasks):
+        for name, (x, y) in (("start", task.start), ("target", task.target)):
+            if not (0.0 <= x <= c.arena_size and 0.0 <= y <= c.arena_size):
+                raise ConfigError(f"tasks: task {i + 1}: {name}: ({x:g}, {y:g}) is off the floor (0 to "
+                                  f"{c.arena_size:g} cm)", "tasks")
+    shortest = min(range(c.num_tasks), key=lambda i: c.tasks[i].distance)
+    if c.target_radius >= c.tasks[shortest].distance:
+        fail("target_radius", f"must be below every task's start-to-target distance (task {shortest + 1}: "
+                              f"{c.tasks[shortest].distance:.1f} cm)")
+    if c.max_speed > 2 * c.target_radius:
+        fail("max_speed", f"must be at most 2 x target_radius = {2 * c.target_radius:g} cm (a longer step could jump "
+                          f"over the target)")
     if not c.retina_lateral or not c.retina_forward:
         fail("retina_lateral", "the retina needs at least one point")

@@ -20,7 +20,7 @@ import time
 import jax
 import numpy as np
 
-from imrl_jax.cli import HelpFormatter, Parser, add_task_set, apply_task_set, user_errors
+from imrl_jax.cli import HelpFormatter, Parser, add_task_set, apply_task_set, check_out, user_errors
 from imrl_jax.config import CONDITIONS, PRESETS, Config, make_config
 from imrl_jax.rundir import check_outputs_dir, check_writable, write_atomic
 
@@ -108,6 +108,7 @@ def main(argv=None) -> int:
     parser.add_argument("--overwrite", action="store_true", help="replace the outputs of an earlier demo in --out")
     try:
         args = parser.parse_args(argv)
+        check_out(args.out)
         config = apply_task_set(make_config(args.preset, condition=args.condition), args)
         summary = run(config, args.out, args.seed, args.overwrite)
     except user_errors() as error:

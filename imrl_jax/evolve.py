@@ -35,18 +35,18 @@ import numpy as np
 
 import imrl_jax
 from imrl_jax.checkpoint import Checkpointer, History, RunState, empty_history, git_commit
-from imrl_jax import cli
+from imrl_jax import cli, conditions
 from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
-from imrl_jax.devices import (make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
+from imrl_jax.devices import (check_memory, make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
                               use_host_cores)
-from imrl_jax.config import CONDITIONS, EVOLVED_CONDITIONS, PRESETS, Config, make_config
+from imrl_jax.config import EVOLVED_CONDITIONS, PRESETS, Config, make_config
 from imrl_jax import search
 from imrl_jax.ga import GA, init_population, make_generation
 from imrl_jax.lifetime import live
 from imrl_jax.networks import trait_names, traits
 from imrl_jax.progress import Progress
 from imrl_jax.rundir import (RunDirError, RunWriteError, check_unlocked, check_writable, entries, lock_run_dir,
-                             make_dir, not_empty, read_config, write_atomic, write_errno)
+                             make_dir, not_empty, read_config, read_json, write_atomic, write_errno)
 from imrl_jax.strategies import GA_NAME, GA_RECORD, describe, make_strategy, parse_settings
 
 __all__ = ["UsageError", "parse_sets", "write_atomic", "run", "main"]  # the first three re-exported
@@ -222,8 +222,7 @@ def _difference(name: str, config: Config, saved: Config) -> str:
 
 def read_search(out_dir: str) -> dict:
     """The search strategy a run records in its config.json (the paper's GA if it records none)."""
-    with open(os.path.join(out_dir, "config.json")) as f:
-        return json.load(f).get("search", GA_RECORD)
+    return read_json(os.path.join(out_dir, "config.json"), "").get("search", GA_RECORD)
 
 
 def _strategy_text(record: dict) -> str:
@@ -234,8 +233,7 @@ def _strategy_text(record: dict) -> str:
 def extend_config_json(out_dir: str, config: Config) -> None:
     """Record a grown ``num_generations`` in the run's config.json (with when it grew from what)."""
     path = os.path.join(out_dir, "config.json")
-    with open(path) as f:
-        info = json.load(f)
+    info = read_json(path, "")
     old = int(info["config"]["num_generations"])
     if old == config.num_generations:
         return
@@ -269,12 +267,12 @@ def resume_command(out_dir: str) -> str:
 
 def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=None, resume: bool = False,
         checkpoint_every: int = 1, keep: int = 3, quiet: bool = False, warnings: Sequence[str] = (),
-        notes: Sequence[str] = ()) -> RunState:
+        notes: Sequence[str] = (), registered: Sequence[str] = ()) -> RunState:
     """Evolve ``config.condition`` for every seed into ``out_dir``; return the final state.
 
     ``strategy`` is the search (:mod:`imrl_jax.strategies`; default the paper's GA). The directory is
     locked for the whole run (:func:`imrl_jax.rundir.lock_run_dir`). ``warnings`` are printed once the
-    checks pass, ``notes`` too unless ``quiet``.
+    checks pass, ``notes`` too unless ``quiet``. ``registered``: the ``--register`` rows, recorded in config.json.
     """
     strategy = GA(config) if strategy is None else strategy
     if not config.spec.evolved:
@@ -290,6 +288,8 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=N
     check_writable(out_dir)
     check_unlocked(out_dir)  # a live writer is named before anything about what it is writing
     check_run_dir(out_dir, config, seeds, resume, describe(strategy))
+    check_memory(config, len(seeds) * config.population_size * config.lives_per_fitness // jax.process_count(),
+                 f"evolving {len(seeds)} seed(s) x {config.population_size} individuals")
     multihost = jax.process_count() > 1
     if multihost:  # every process checks before the leader writes
         from jax.experimental import multihost_utils
@@ -308,6 +308,7 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=N
                 check_run_dir(out_dir, config, seeds, resume, describe(strategy))  # again, locked: another writer may have begun
                 if not resume:  # first, so that the directory is this run's from the start
                     info = {"config": config.to_dict(), "seeds": seeds, "search": describe(strategy),
+                            **({"register": list(registered)} if registered else {}),
                             "version": imrl_jax.__version__,
                             "git_commit": git_commit(), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
                             "devices": len(jax.devices()), "processes": jax.process_count(),
@@ -354,7 +355,13 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
             if restored is None:
                 if checkpointer.steps():
                     raise UsageError(f"--resume: no readable checkpoint in {checkpointer.directory}")
-                progress.note(f"no checkpoint in {checkpointer.directory} yet: starting from generation 0")
+                recorded = _generations_recorded(out_dir)
+                if recorded:  # its checkpoints were removed: said even with --quiet, the generations are redone
+                    progress.message(f"warning: {checkpointer.directory} holds no checkpoint, but {out_dir} records "
+                                     f"{recorded} generation(s) done: starting again from generation 0 (the same "
+                                     f"generations again, bitwise)")
+                else:
+                    progress.note(f"no checkpoint in {checkpointer.directory} yet: starting from generation 0")
             else:
                 state, saved_meta = restored
                 made_by = saved_meta.get("search", GA_RECORD)
@@ -412,6 +419,15 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
     except KeyboardInterrupt:
         raise RunInterrupted(out_dir, int(state.generation), checkpointed, config.num_generations) from None
     return state
+
+
+def _generations_recorded(out_dir: str) -> int:
+    """The generations a run's final_population.npz says are done (0 if it has none or it cannot be read)."""
+    try:
+        with np.load(os.path.join(out_dir, "final_population.npz")) as data:
+            return int(data["generation"])
+    except (OSError, ValueError, KeyError):
+        return 0
 
 
 def make_step(config: Config, strategy, sharding):
@@ -490,21 +506,22 @@ def build_config(args, saved: tuple[Config, list[int]] | None = None) -> tuple[C
     overrides = {field: value for field, value in given.items() if value is not None}
     overrides.update(parse_sets(args.set))
     if saved is None:
-        config = make_config(args.preset or "paper", **overrides)
+        make = lambda **tasks: make_config(args.preset or "paper", **overrides, **tasks)  # noqa: E731
         first, count = args.first_seed or 0, args.seeds or 1
         seeds = list(range(first, first + count))
     else:
         saved_config, seeds = saved
         if args.preset is None:
-            config = saved_config.replace(**overrides)
-        else:
-            config = make_config(args.preset, **{"num_generations": saved_config.num_generations, **overrides})
+            make = lambda **tasks: saved_config.replace(**overrides, **tasks)  # noqa: E731
+        else:  # the preset's values, on the run's condition and length (only --cond, --generations change those)
+            kept = {"condition": saved_config.condition, "num_generations": saved_config.num_generations}
+            make = lambda **tasks: make_config(args.preset, **{**kept, **overrides, **tasks})  # noqa: E731
         if args.first_seed is not None or args.seeds is not None:
             first = seeds[0] if args.first_seed is None else args.first_seed
             count = len(seeds) if args.seeds is None else args.seeds
             seeds = list(range(first, first + count))
-    # The tasks are checked against the geometry of this config (its preset and --set): loaded once it is made.
-    return cli.apply_task_set(config, args), seeds
+    # The tasks are checked against the geometry of this config (its preset and --set), made with them.
+    return cli.apply_task_set(make, args), seeds
 
 
 def _dest(flag: str) -> str:
@@ -531,7 +548,9 @@ def parser() -> argparse.ArgumentParser:
                     "--generations extends the run).",
         formatter_class=HelpFormatter)
     p.add_argument("--cond", metavar="{" + ",".join(EVOLVED_CONDITIONS) + "}",
-                   help="condition to evolve (SLE is not evolved); required unless --resume")
+                   help="condition to evolve (SLE is not evolved), or a row added by --register; required unless "
+                        "--resume")
+    cli.add_register(p)
     p.add_argument("--seeds", type=int,
                    help=f"number of independent evolutions (default: 1, or the run's; at most {cli.MAX_SEEDS:,})")
     p.add_argument("--first-seed", type=int, help="seed of the first evolution; the others follow (default: 0)")
@@ -612,14 +631,17 @@ def main(argv=None) -> int:
     try:
         args = parser().parse_args(argv)
         check_sizes(args)
-        if args.cond is not None and args.cond not in CONDITIONS:
-            raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(EVOLVED_CONDITIONS)})")
+        registered = cli.register(args.register)
+        if args.cond is not None and args.cond not in conditions.CONDITIONS:  # the table as it is now
+            evolved = [name for name, row in conditions.CONDITIONS.items() if row.evolved]
+            raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(evolved)}, or add a row "
+                             f"with --register MODULE:ATTRIBUTE)")
         if args.resume and not (args.out or args.cond):
             raise UsageError("--resume: give the run to continue with --out RUN")
         if args.cond is None and not args.resume:
             raise UsageError("--cond: required (or --resume --out RUN to continue a run with its own config)")
-        if args.cpu_devices < 0:
-            raise UsageError("--cpu-devices: must be 0 (one per core) or more")
+        cli.check_cpu_devices(args.cpu_devices)
+        cli.check_out(args.out)
         # Before anything starts JAX (the task set's checks, a strategy's arrays): later, neither takes effect.
         use_host_cores(args.cpu_devices or None)
         init_distributed(args)
@@ -635,7 +657,7 @@ def main(argv=None) -> int:
         state = run(config, out_dir, seeds, strategy=strategy, resume=args.resume,
                     checkpoint_every=args.checkpoint_every,
                     keep=args.keep, quiet=args.quiet, warnings=cli.device_warnings(config, args.cpu_devices),
-                    notes=notes)
+                    notes=notes, registered=registered)
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

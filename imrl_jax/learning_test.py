@@ -1,7 +1,7 @@
 """``python -m imrl_jax.learning_test``: the paper's learning tests (section 3, Fig. 3b and 3c).
 
-    python -m imrl_jax.learning_test runs/EE-LS --out tests/EE-LS        # evolved individuals
-    python -m imrl_jax.learning_test --cond SLE --runs 10 --out tests/SLE  # SLE, from scratch
+    python -m imrl_jax.learning_test runs/EE-LS --out runs/EE-LS-test        # evolved individuals
+    python -m imrl_jax.learning_test --cond SLE --runs 10 --out runs/SLE-test  # SLE, from scratch
 
 From an evolution's run directory, the ``--best`` best individuals of each seed's last
 generation each live ``--tests`` fresh lives whose tasks last ``--task-steps`` cycles
@@ -17,12 +17,13 @@ carried between them (the same computation as one scan; memory does not grow wit
 length) so that progress can be shown. Each finished run is kept in ``--out/partial/``, so
 that the same command after an interruption goes on from the first unfinished run (with
 the same results as an uninterrupted test); ``partial/`` is removed once the test is done.
-``--out`` must be new, empty or such an unfinished test, and one process writes it at a
-time (``.lock``). Writes to ``--out``:
-``curve.csv`` (performance per bin: mean over all tests and per run), ``steady.json``
-(performance over the last ``--steady-steps`` cycles: mean over runs, best run, per run,
-per task; the command and git commit), ``curves.npz`` (every test's reaches per bin)
-and ``learning_curve.png``.
+A run whose evolution is unfinished (killed before its last generation, or still running) is
+refused unless ``--allow-unfinished``. ``--out`` must be new, empty or such an unfinished
+test, and one process writes it at a time (``.lock``). Writes to ``--out``: ``curve.csv``
+(performance per bin: mean over all tests and per run), ``steady.json`` (performance over
+the last ``--steady-steps`` cycles: mean over runs, best run, per run, per task; the
+generation of the run tested; the command and git commit), ``curves.npz`` (every test's
+reaches per bin) and ``learning_curve.png``.
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ import numpy as np
 from jax.sharding import NamedSharding, PartitionSpec
 
 from imrl_jax.checkpoint import git_commit
-from imrl_jax.devices import make_mesh, use_host_cores
+from imrl_jax.devices import check_memory, make_mesh, use_host_cores
 from imrl_jax.conditions import CONDITIONS as TABLE
 from imrl_jax.config import COMPUTE_FIELDS, CONDITIONS, PRESETS, Config, ConfigError, LearningParams, make_config
 from imrl_jax import cli
@@ -54,9 +55,10 @@ from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
 from imrl_jax.lifetime import grow_up, lifetime_keys, run_phase, task_spec, task_start
 from imrl_jax.state import State
 from imrl_jax.progress import Progress
-from imrl_jax.rundir import (RunDirError, RunWriteError, best_genomes, check_unlocked, check_writable, entries,
-                             is_output, load_run as read_run, lock_run_dir, make_dir, not_empty, read_config,
-                             read_kept_best, write_atomic, write_errno)
+from imrl_jax.rundir import (LOCK, Run, RunDirError, RunWriteError, best_genomes, check_npz, check_unlocked,
+                             check_writable, entries, holder_alive, is_output, load_run as read_run, lock_run_dir,
+                             make_dir, not_empty, read_config, read_kept_best, read_lock, read_text, write_atomic,
+                             write_errno)
 
 
 class TestState(NamedTuple):
@@ -150,8 +152,14 @@ def run_tests(keys: jax.Array, config: Config, params: LearningParams, genomes, 
 # ----------------------------------------------------------------------------- statistics
 
 PAIR_LEVEL = 0.2  # a task counts as solved in a test at this steady-state performance
-#: Conditions that are not evolved: tested from scratch (``--cond``), without a run directory.
+#: Conditions that are not evolved: tested from scratch (``--cond``), without a run directory (the table's at import;
+#: :func:`from_scratch` also has the rows registered since).
 FROM_SCRATCH = tuple(name for name, condition in TABLE.items() if not condition.evolved)
+
+
+def from_scratch() -> tuple[str, ...]:
+    """The conditions of the table as it is now that are not evolved (tested from scratch)."""
+    return tuple(name for name, condition in TABLE.items() if not condition.evolved)
 
 
 def performance_curve(config: Config, reaches: np.ndarray) -> np.ndarray:
@@ -215,6 +223,16 @@ def load_run(run_dir: str, num_best: int) -> tuple[Config, list[int], np.ndarray
     return found.config, found.seeds, best_genomes(found, num_best)
 
 
+def unfinished(run_dir: str, run: Run) -> str:
+    """Why ``run`` is not a finished evolution ("" if it is): generations left, or a live writer."""
+    holder = read_lock(os.path.join(run_dir, LOCK))
+    writing = holder is not None and holder_alive(holder) is not False
+    if run.generation >= run.config.num_generations and not writing:
+        return ""
+    return (f"{run_dir} has {run.generation} of its {run.config.num_generations} generations evaluated"
+            + (f" and is being written by pid {holder.pid} on {holder.host}" if writing else ""))
+
+
 def load_kept_best(run_dir: str, path: str, num_best: int) -> tuple[Config, list[int], np.ndarray]:
     """A run's config and the ``num_best`` best genomes of each seed kept in a report's ``best_genomes.npz``
     (for a run whose final population was not kept); its key is the run's ``VARIANT/evolve/CONDITION`` path."""
@@ -254,17 +272,18 @@ def fingerprint(config: Config, genomes: np.ndarray, num_tests: int, seed: int) 
     return digest.hexdigest()[:16]
 
 
-def finished_runs(partial: str, stamp: str, num_runs: int, warn: Callable[[str], None] = print) -> dict:
-    """The runs kept in ``partial`` by an interrupted test of the same fingerprint: {run: (reaches, selections)}."""
+def finished_runs(partial: str, stamp: str, num_runs: int, warn: Callable[[str], None] = print,
+                  limit: int | None = None) -> dict:
+    """The runs kept in ``partial`` by an interrupted test of the same fingerprint: {run: (reaches, selections)}
+    (``limit``: the bytes a run's arrays take at most; a larger file is tested again)."""
     if not os.path.isdir(partial):
         return {}
     spec_path = os.path.join(partial, "spec.json")
     found = None
     if os.path.exists(spec_path):
         try:
-            with open(spec_path) as f:
-                found = json.load(f)["fingerprint"]
-        except (OSError, ValueError, KeyError, TypeError) as error:
+            found = json.loads(read_text(spec_path, ""))["fingerprint"]
+        except (RunDirError, ValueError, KeyError, TypeError, RecursionError) as error:
             raise UsageError(f"--out: {spec_path} cannot be read ({type(error).__name__}), so the runs kept beside it "
                              f"cannot be checked; remove {partial} to start the test over") from None
     if found != stamp:
@@ -275,9 +294,11 @@ def finished_runs(partial: str, stamp: str, num_runs: int, warn: Callable[[str],
         path = os.path.join(partial, f"run_{r:03d}.npz")
         if os.path.exists(path):
             try:
+                if limit is not None:
+                    check_npz(path, "", limit)
                 with np.load(path) as data:
                     done[r] = (data["reaches"], data["selections"])
-            except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as error:
+            except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as error:  # RunDirError: a ValueError
                 warn(f"warning: {path} cannot be read ({type(error).__name__}); run {r} is tested again")
     return done
 
@@ -304,13 +325,18 @@ def check_out_dir(out_dir: str) -> None:
 
 def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, steady_steps: int, num_chunks: int,
         seed: int = 0, quiet: bool = False, source: str = "", command: str = "", warnings: Sequence[str] = (),
-        notes: Sequence[str] = ()) -> dict:
+        notes: Sequence[str] = (), evolved: dict | None = None) -> dict:
     """Run the tests of ``genomes`` (runs, best, genes) run by run, resuming from ``partial/``; write the outputs.
 
     ``out_dir`` is locked for the whole test (:func:`imrl_jax.rundir.lock_run_dir`). ``warnings`` are
-    printed once the checks pass, ``notes`` too unless ``quiet``.
+    printed once the checks pass, ``notes`` too unless ``quiet``. ``evolved``: which generation of how many the
+    genomes come from (recorded in steady.json).
     """
     steady_bins(config, steady_steps)
+    num_runs, num_best = genomes.shape[:2]
+    kept = num_runs * num_best * num_tests * config.num_tasks * config.num_bins * (config.num_experts + 1) * 4 * 3
+    check_memory(config, num_best * num_tests * config.num_tasks,  # a run's tests at once; every run's curves kept
+                 f"testing {num_best} x {num_tests} test(s) of {config.num_tasks} tasks a run", host_bytes=kept)
     check_writable(out_dir)
     check_unlocked(out_dir)
     check_out_dir(out_dir)  # before the directory is made or locked: nothing is written into another's
@@ -321,7 +347,8 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
             print(line, file=sys.stderr, flush=True)
         try:
             return _run_locked(config, genomes, out_dir, num_tests=num_tests, steady_steps=steady_steps,
-                               num_chunks=num_chunks, seed=seed, quiet=quiet, source=source, command=command)
+                               num_chunks=num_chunks, seed=seed, quiet=quiet, source=source, command=command,
+                               evolved=evolved)
         except OSError as error:
             if write_errno(error) is None:
                 raise
@@ -331,14 +358,17 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
 
 
 def _run_locked(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, steady_steps: int,
-                num_chunks: int, seed: int, quiet: bool, source: str, command: str) -> dict:
+                num_chunks: int, seed: int, quiet: bool, source: str, command: str,
+                evolved: dict | None = None) -> dict:
     """:func:`run` once the directory is checked and locked."""
     num_runs, num_best = genomes.shape[:2]
     keys = test_keys(seed, num_runs, num_best, num_tests).reshape(num_runs, num_best * num_tests)
     partial, stamp = os.path.join(out_dir, PARTIAL), fingerprint(config, genomes, num_tests, seed)
-    done = finished_runs(partial, stamp, num_runs, warn=lambda text: print(text, file=sys.stderr))
+    per_run = num_best * num_tests * config.num_tasks * config.num_bins * (config.num_experts + 1) * 4 + 2**16
+    done = finished_runs(partial, stamp, num_runs, warn=lambda text: print(text, file=sys.stderr), limit=per_run)
     resumed = sorted(done)
-    progress = Progress(num_runs * num_chunks, done=len(done) * num_chunks, quiet=quiet, unit="chunk")
+    progress = Progress(num_runs * num_chunks, done=len(done) * num_chunks, quiet=quiet, unit="chunk",
+                        group=("run", num_chunks))
     progress.note(f"{config.condition} learning test: {num_runs} run(s) x {num_best} best x {num_tests} test(s) x "
                      f"{config.num_tasks} tasks = {num_runs * num_best * num_tests * config.num_tasks} lanes of "
                      f"{config.task_steps} cycles"
@@ -363,6 +393,7 @@ def _run_locked(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests:
     summary = dict(condition=config.condition, source=source, num_runs=num_runs, num_best=num_best,
                    num_tests=num_tests, task_steps=config.task_steps, childhood_steps=config.childhood_steps,
                    num_bins=config.num_bins, steady_steps=steady_steps, seed=seed,
+                   **(evolved or dict(generation=None, generations_done=None, num_generations=None)),
                    **summarise(config, reaches, steady_steps),
                    seconds=round(seconds, 1), resumed_runs=resumed, backend=jax.default_backend(), command=command,
                    git_commit=git_commit(), config=config.to_dict())
@@ -415,10 +446,12 @@ def parser() -> argparse.ArgumentParser:
                    description="The paper's learning tests (section 3, Fig. 3b and 3c): the best individuals of an "
                                "evolution, or SLE from scratch, learn each task anew.",
                    formatter_class=HelpFormatter)
-    p.add_argument("run_dir", nargs="?", help="an evolution's run directory (omit with --cond SLE)")
+    p.add_argument("run_dir", nargs="?",
+                   help=f"an evolution's run directory (omit with --cond {' or '.join(FROM_SCRATCH)})")
     p.add_argument("--cond", metavar="{" + ",".join(CONDITIONS) + "}",
                    help=f"{', '.join(FROM_SCRATCH)}: test learning from scratch (no run directory); "
                         "another condition: check that run_dir is a run of it")
+    cli.add_register(p)
     p.add_argument("--runs", type=int, default=10, help="from scratch: groups of tests, like an evolution's seeds")
     p.add_argument("--preset", default="paper", choices=sorted(PRESETS),
                    help="from scratch: the learning rules' preset")
@@ -429,6 +462,9 @@ def parser() -> argparse.ArgumentParser:
                    help="take the best genomes from a report's best_genomes.npz (the 10 best of each seed), for a run "
                         "whose final_population.npz was not kept; the run directory gives the config")
     cli.add_task_set(p, "the tasks to learn (default: the run's, or paper)")
+    p.add_argument("--allow-unfinished", action="store_true",
+                   help="test a run whose evolution has not reached its last generation (killed, or still running): "
+                        "its last evaluated generation, with a warning (steady.json records which)")
     p.add_argument("--best", type=int, default=10, help="best individuals of each run's last generation")
     p.add_argument("--tests", type=int, default=10, help="tests per individual")
     p.add_argument("--task-steps", type=int, default=1_000_000, help="cycles per task")
@@ -464,15 +500,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         args = parser().parse_args(argv)
         check_sizes(args)
-        if args.cond is not None and args.cond not in CONDITIONS:
-            raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(CONDITIONS)}; "
-                             f"only {', '.join(FROM_SCRATCH)} are tested without a run directory)")
-        if args.cpu_devices < 0:
-            raise UsageError("--cpu-devices: must be 0 (one per core) or more")
+        cli.register(args.register)
+        if args.cond is not None and args.cond not in TABLE:  # the table as it is now
+            raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(TABLE)}, or add a row "
+                             f"with --register MODULE:ATTRIBUTE; only {', '.join(from_scratch())} are tested without "
+                             f"a run directory)")
+        cli.check_cpu_devices(args.cpu_devices)
+        cli.check_out(args.out)
         use_host_cores(args.cpu_devices or None)  # before anything starts JAX (the task set's checks)
         cli.refuse_option_fields(args.set, OPTION_FIELDS)
         sets = parse_sets(args.set)
-        if args.cond in FROM_SCRATCH:
+        warnings, evolved = [], None
+        if args.cond in from_scratch():
             if args.run_dir:
                 raise UsageError(f"run_dir: {args.cond} is tested from scratch; give either a run directory or "
                                  f"--cond {args.cond}")
@@ -483,11 +522,22 @@ def main(argv: Sequence[str] | None = None) -> int:
             source = f"{args.cond} from scratch, preset {args.preset}" + "".join(f", {s}" for s in args.set or [])
         else:
             if not args.run_dir:
-                raise UsageError("run_dir: give an evolution's run directory, or --cond SLE")
+                raise UsageError(f"run_dir: give an evolution's run directory, or --cond "
+                                 f"{' or '.join(from_scratch())} to test learning from scratch")
             if args.best_genomes:
                 base, _, genomes = load_kept_best(args.run_dir, args.best_genomes, args.best)
             else:
-                base, _, genomes = load_run(args.run_dir, args.best)
+                found = read_run(args.run_dir)
+                base, genomes = found.config, best_genomes(found, args.best)
+                evolved = dict(generation=found.generation - 1, generations_done=found.generation,
+                               num_generations=found.config.num_generations)
+                why = unfinished(args.run_dir, found)
+                if why and not args.allow_unfinished:
+                    raise UsageError(f"run_dir: {why}: its evolution is unfinished (pass --allow-unfinished to test "
+                                     f"generation {found.generation - 1} anyway)")
+                if why:
+                    warnings.append(f"warning: {why}: testing generation {found.generation - 1} (steady.json "
+                                    f"records it)")
             if args.cond is not None and args.cond != base.condition:
                 raise UsageError(f"--cond: {args.run_dir} is a {base.condition} run, not {args.cond}")
             source = os.path.abspath(args.run_dir) + "".join(f", {s}" for s in args.set or [])
@@ -498,7 +548,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                                      f"{tested.num_genes} asked)")
                 base = tested
         # Evolved genomes may be tested on other tasks (they encode none).
-        config = cli.apply_task_set(base.replace(task_steps=args.task_steps, num_bins=args.bins), args)
+        config = cli.apply_task_set(
+            lambda **tasks: base.replace(task_steps=args.task_steps, num_bins=args.bins, **tasks), args)
         if args.task_set is not None:
             source += f", task set {args.task_set}"
         if config.num_bins % args.chunks:
@@ -506,7 +557,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         steady_bins(config, args.steady_steps)
         summary = run(config, genomes, args.out, num_tests=args.tests, steady_steps=args.steady_steps,
                       num_chunks=args.chunks, seed=args.seed, quiet=args.quiet, source=source, command=command,
-                      warnings=cli.device_warnings(config, args.cpu_devices), notes=cli.ignored_notes(config, sets))
+                      warnings=[*warnings, *cli.device_warnings(config, args.cpu_devices)],
+                      notes=cli.ignored_notes(config, sets), evolved=evolved)
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

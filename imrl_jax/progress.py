@@ -15,13 +15,14 @@ class Progress:
     """Redraws one line on a terminal, prints one line per update otherwise; silent if quiet.
 
     ``done`` units were finished before (a resumed run) in ``elapsed`` seconds. Units are
-    named from ``first_index`` (evolve: generation 0 is the first). The first update of a
-    process includes compilation: it shows no ETA or throughput; later ones measure from it.
+    named from ``first_index`` (evolve: generation 0 is the first), or with ``group`` (name, size) counted
+    within groups (run 1 chunk 3/10). The first update of a process includes compilation: it shows no ETA or
+    throughput; later ones measure from it.
     """
 
     def __init__(self, total: int, done: int = 0, quiet: bool = False, stream=None, unit: str = "gen",
-                 elapsed: float = 0.0, first_index: int = 1):
-        self.total, self.unit, self.first_index = total, unit, first_index
+                 elapsed: float = 0.0, first_index: int = 1, group: tuple[str, int] | None = None):
+        self.total, self.unit, self.first_index, self.group = total, unit, first_index, group
         self.quiet = quiet
         self.stream = stream or sys.stderr
         self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
@@ -44,8 +45,13 @@ class Progress:
             eta = _clock((self.total - done) / rate) if rate > 0 else "?"
             timing = f"{_clock(self.elapsed())} elapsed, ETA {eta} | {lane_steps_per_s / 1e6:.2f} M lane-steps/s"
         scores = f"best {best:.4f} mean {mean:.4f}" if scores is None else scores
-        name = self.first_index + done - 1
-        line = f"{self.unit} {name} ({done}/{self.total}) | {scores} | {timing}"
+        if self.group is None:
+            line = f"{self.unit} {self.first_index + done - 1} ({done}/{self.total}) | {scores} | {timing}"
+        else:  # units counted within groups of ``size`` (a learning test's chunks within its runs)
+            group, size = self.group
+            index = done - 1
+            line = (f"{group} {index // size + self.first_index} {self.unit} {index % size + 1}/{size} "
+                    f"({done}/{self.total}) | {scores} | {timing}")
         if not self.quiet:
             if self.tty:
                 self.stream.write("\r\033[K" + line + ("\n" if done >= self.total else ""))

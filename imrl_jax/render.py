@@ -29,7 +29,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from imrl_jax.cli import HelpFormatter, UsageError, user_errors
+from imrl_jax.cli import HelpFormatter, Parser, UsageError, add_register, register, user_errors
 from imrl_jax.rundir import check_writable, load_run
 
 FORMATS = (".gif", ".mp4")
@@ -81,11 +81,28 @@ def check_output(out_path: str, overwrite: bool = False) -> str:
     return ext
 
 
+#: The most steps an animation follows, frames it draws (each is a matplotlib figure) and frames per second.
+MAX_STEPS = 100_000
+MAX_FRAMES = 5_000
+MAX_FPS = 100
+
+
+def check_sizes(steps: int, every: int, fps: int) -> None:
+    """Refuse sizes that would run for hours or overflow (raises UsageError naming the option and its limit)."""
+    if steps < 1 or every < 1 or fps < 1:
+        raise UsageError("--steps, --every and --fps must be at least 1")
+    for flag, value, limit in (("--steps", steps, MAX_STEPS), ("--fps", fps, MAX_FPS)):
+        if value > limit:
+            raise UsageError(f"{flag}: {value:,} is above the limit of {limit:,}")
+    frames = -(-steps // every)
+    if frames > MAX_FRAMES:
+        raise UsageError(f"--steps / --every: {frames:,} frames is above the limit of {MAX_FRAMES:,} (raise --every)")
+
+
 def run(run_dir: str, task: int, out_path: str, steps: int = 300, every: int = 2, fps: int = 20,
         overwrite: bool = False) -> dict:
     """Animate the best individual of ``run_dir`` on task ``task`` (1-based) into ``out_path``; return a summary."""
-    if steps < 1 or every < 1 or fps < 1:
-        raise UsageError("--steps, --every and --fps must be at least 1")
+    check_sizes(steps, every, fps)
     check_output(out_path, overwrite)
     best = best_individual(run_dir)
     config = best.config
@@ -127,22 +144,25 @@ def run(run_dir: str, task: int, out_path: str, steps: int = 300, every: int = 2
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m imrl_jax.render",
-                                description="Animate the best individual of an evolve run on one task.",
-                                formatter_class=HelpFormatter)
+    p = Parser(prog="python -m imrl_jax.render",
+               description="Animate the best individual of an evolve run on one task.",
+               formatter_class=HelpFormatter)
     p.add_argument("run_dir", metavar="RUN_DIR", help="run directory of python -m imrl_jax.evolve")
     p.add_argument("--task", type=int, required=True, help="task to show, 1-6")
     p.add_argument("--out", required=True, help="animation file, .gif (or .mp4 with ffmpeg on PATH)")
-    p.add_argument("--steps", type=int, default=300, help="steps of the task to show")
-    p.add_argument("--every", type=int, default=2, help="one frame every this many steps")
-    p.add_argument("--fps", type=int, default=20, help="frames per second")
+    p.add_argument("--steps", type=int, default=300, help=f"steps of the task to show (at most {MAX_STEPS:,})")
+    p.add_argument("--every", type=int, default=2,
+                   help=f"one frame every this many steps (at most {MAX_FRAMES:,} frames in all)")
+    p.add_argument("--fps", type=int, default=20, help=f"frames per second (at most {MAX_FPS})")
     p.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
+    add_register(p)
     return p
 
 
 def main(argv=None) -> int:
-    args = parser().parse_args(argv)
     try:
+        args = parser().parse_args(argv)
+        register(args.register)
         summary = run(args.run_dir, args.task, args.out, args.steps, args.every, args.fps, args.overwrite)
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)

@@ -11,6 +11,7 @@ import socket
 import sys
 import tempfile
 import time
+import zipfile
 from typing import Callable, Iterator, NamedTuple
 
 import numpy as np
@@ -51,6 +52,65 @@ class Run(NamedTuple):
     generation: int  # generations evaluated
     evaluated: np.ndarray  # (seeds, population, genes) the last evaluated populations
     fitness: np.ndarray  # (seeds, population) their fitness
+
+
+#: The largest JSON file a command reads (a run's config.json, a lock, a task set, a test's spec.json): 1 MiB.
+MAX_JSON_BYTES = 2**20
+#: The largest .npz of best genomes a report keeps that a command reads (its arrays uncompressed).
+MAX_KEPT_BEST_BYTES = 2**28
+
+
+def _named(what: str) -> str:
+    return f"{what}: " if what else ""
+
+
+def read_text(path: str, what: str, limit: int = MAX_JSON_BYTES, error: type[Exception] = None) -> str:
+    """The UTF-8 text of ``path``, at most ``limit`` bytes of it read (raises ``error``, default RunDirError, naming
+    ``what`` and the file: too large, not UTF-8, unreadable)."""
+    error = error or RunDirError
+    try:
+        with open(path, "rb") as f:
+            data = f.read(limit + 1)  # never more: a device or a huge file is refused, not read whole
+    except OSError as failure:
+        raise error(f"{_named(what)}cannot read {path} ({failure.strerror or failure})") from None
+    if len(data) > limit:
+        raise error(f"{_named(what)}{path} is larger than the limit of {limit:,} bytes (is it the right file?)")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as failure:
+        raise error(f"{_named(what)}{path} is not UTF-8 text (byte {failure.start:,})") from None
+
+
+def parse_json(text: str, what: str, path: str, error: type[Exception] = None):
+    """``text`` parsed as JSON (raises ``error``, default RunDirError, in one line naming ``what`` and the file)."""
+    error = error or RunDirError
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise error(f"{_named(what)}{path} is not JSON (nested too deeply)") from None
+    except ValueError as failure:  # a JSONDecodeError, or a number of more digits than int() takes
+        where = f"{failure.msg}, line {failure.lineno}" if isinstance(failure, json.JSONDecodeError) else \
+            str(failure).split(";")[0]
+        raise error(f"{_named(what)}{path} is not JSON ({where})") from None
+
+
+def read_json(path: str, what: str, limit: int = MAX_JSON_BYTES, error: type[Exception] = None):
+    """A JSON file read safely (:func:`read_text`, :func:`parse_json`)."""
+    return parse_json(read_text(path, what, limit, error), what, path, error)
+
+
+def check_npz(path: str, what: str, limit: int) -> None:
+    """Raise RunDirError naming ``what`` unless ``path`` is an .npz whose arrays take at most ``limit`` bytes
+    uncompressed (checked before any is read: a file of other data is refused, not unpickled or decompressed)."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            size = sum(info.file_size for info in archive.infolist())
+    except (OSError, zipfile.BadZipFile, ValueError) as failure:
+        reason = getattr(failure, "strerror", None) or "not an .npz file of arrays"
+        raise RunDirError(f"{_named(what)}{path} is unreadable ({reason})") from None
+    if size > limit:
+        raise RunDirError(f"{_named(what)}{path} holds {size:,} bytes of arrays, above the limit of {limit:,} (is it the "
+                          f"right file?)")
 
 
 def write_atomic(path: str, data: bytes) -> None:
@@ -121,11 +181,17 @@ def check_outputs_dir(path: str, outputs: tuple[str, ...], kind: str, overwrite:
 def read_config(run_dir: str) -> tuple[Config, list[int]]:
     """The config and seeds recorded in a run's ``config.json`` (raises RunDirError naming the file)."""
     path = os.path.join(run_dir, "config.json")
+    saved = read_json(path, "")
     try:
-        with open(path) as f:
-            saved = json.load(f)
         return Config.from_dict(saved["config"]), [int(s) for s in saved["seeds"]]
-    except (OSError, ValueError, KeyError, TypeError, ConfigError) as error:
+    except ConfigError as error:
+        if error.field == "condition":  # a row of one's own, not registered in this process
+            made_with = " ".join(f"--register {spec}" for spec in saved.get("register", [])) or \
+                "--register MODULE:ATTRIBUTE naming its row"
+            raise RunDirError(f"{path}: condition {saved['config']['condition']!r} is not a row of the condition table; "
+                              f"add it with {made_with}") from None
+        raise RunDirError(f"{path} is unreadable ({error})") from None
+    except (ValueError, KeyError, TypeError) as error:
         raise RunDirError(f"{path} is unreadable ({error})") from None
 
 
@@ -139,6 +205,8 @@ def load_run(run_dir: str) -> Run:
                              f"python -m imrl_jax.evolve?)")
     config, seeds = read_config(run_dir)
     path = os.path.join(run_dir, "final_population.npz")
+    lanes = len(seeds) * config.population_size
+    check_npz(path, "", 4 * lanes * (2 * config.num_genes + 1) + 8 * len(seeds) + 2**16)  # + headers
     try:
         with np.load(path) as data:
             generation, evaluated, fitness = int(data["generation"]), data["evaluated"], data["fitness"]
@@ -162,6 +230,7 @@ class KeptBest(NamedTuple):
 def read_kept_best(path: str, variant: str, condition: str) -> KeptBest:
     """The best genomes a report's ``best_genomes.npz`` keeps of its ``variant``'s ``condition`` run, under
     ``VARIANT__CONDITION__genomes`` (``__seeds``, ``__fitness``) (raises RunDirError naming the file)."""
+    check_npz(path, "--best-genomes", MAX_KEPT_BEST_BYTES)
     try:
         with np.load(path) as kept:
             arrays = {name: kept[name] for name in kept.files}
@@ -224,12 +293,12 @@ def read_lock(path: str, tries: int = 20) -> LockHolder | None:
     """The holder a lock file names; None if it is gone or unreadable (waits a little for one being written)."""
     for attempt in range(tries):
         try:
-            with open(path) as f:
-                info = json.load(f)
+            with open(path, "rb") as f:
+                info = json.loads(f.read(MAX_JSON_BYTES).decode("utf-8"))
             return LockHolder(int(info["pid"]), str(info["host"]), int(info.get("start", 0)))
         except FileNotFoundError:
             return None
-        except (OSError, ValueError, KeyError, TypeError):
+        except (OSError, ValueError, KeyError, TypeError, RecursionError):
             time.sleep(0.05)  # created but not yet written: its writer is between open() and write()
     return None
 

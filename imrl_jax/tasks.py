@@ -58,8 +58,12 @@ def from_json(text: str, source: str) -> tuple[Task, ...]:
     """The tasks of a task-set file's text (raises ConfigError naming the file, the task and the field)."""
     try:
         data = json.loads(text)
-    except ValueError as error:
-        raise _fail(source, None, "file", f"not JSON ({error.msg}, line {error.lineno})") from None
+    except RecursionError:
+        raise _fail(source, None, "file", "not JSON (nested too deeply)") from None
+    except ValueError as error:  # a JSONDecodeError, or a number of more digits than int() takes (no .msg)
+        where = f"{error.msg}, line {error.lineno}" if isinstance(error, json.JSONDecodeError) else \
+            str(error).split(";")[0]
+        raise _fail(source, None, "file", f"not JSON ({where})") from None
     if not isinstance(data, dict) or not isinstance(data.get("tasks"), list) or not data["tasks"]:
         raise _fail(source, None, "tasks", "expected an object with a non-empty list \"tasks\"")
     tasks = []
@@ -114,17 +118,23 @@ def check(config: Config, tasks, source: str = "task set") -> tuple[Task, ...]:
 def load(spec: str, config: Config | None = None) -> tuple[Task, ...]:
     """A task set by name (:data:`TASK_SETS`) or from a JSON file, checked (raises ConfigError naming what is wrong)."""
     config = Config() if config is None else config
+    return check(config, read(spec), spec)
+
+
+#: The largest task-set file read (a task is about 80 bytes: thousands of tasks fit).
+MAX_FILE_BYTES = 2**20
+
+
+def read(spec: str) -> tuple[Task, ...]:
+    """The tasks of a set by name or file (UTF-8 JSON, :data:`MAX_FILE_BYTES` at most), not yet checked on a floor."""
     if spec in TASK_SETS:
-        return check(config, TASK_SETS[spec](), spec)
+        return TASK_SETS[spec]()
     if not spec.endswith(".json") and not os.path.exists(spec):
         raise ConfigError(f"--task-set: unknown task set {spec!r} (choose from {', '.join(TASK_SETS)}, or give a "
                           f".json file)")
-    try:
-        with open(spec) as f:
-            text = f.read()
-    except OSError as error:
-        raise ConfigError(f"--task-set: cannot read {spec} ({error.strerror or error})") from None
-    return check(config, from_json(text, spec), spec)
+    from imrl_jax.rundir import read_text
+
+    return from_json(read_text(spec, "--task-set", MAX_FILE_BYTES, ConfigError), spec)
 
 
 def to_json(tasks, name: str) -> str:

@@ -13,6 +13,7 @@ from imrl_jax import bench
     (["--steps", "0"], "--steps"),
     (["--lifetime-task-steps", "15"], "--lifetime-task-steps"),
     (["--kernel", "xla,triton"], "--kernel"),
+    (["--cpu-devices", "100000"], "--cpu-devices: 100,000 is above the limit"),
 ])
 def test_bad_input_exits_2_naming_the_field(argv, field, capsys):
     assert bench.main(argv) == 2

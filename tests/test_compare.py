@@ -29,6 +29,7 @@ def test_export_of_an_unknown_revision_names_it(tmp_path):
     (["HEAD", "--pairs", "0"], "--pairs"),
     (["HEAD", "--lanes", "0"], "--lanes"),
     (["HEAD", "--phase", "life", "--steps", "15"], "--steps"),
+    (["HEAD", "--cpu-devices", "100000"], "--cpu-devices: 100,000 is above the limit"),
 ])
 def test_bad_input_exits_2_naming_the_field(argv, field, capsys):
     assert compare.main(argv) == 2

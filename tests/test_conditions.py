@@ -1,6 +1,8 @@
 """The condition table: genome sizes and layout, the fields each condition ignores, a new condition as one row."""
 
 import dataclasses
+import json
+import os
 
 import jax
 import jax.numpy as jnp
@@ -10,6 +12,7 @@ from helpers import reference_life
 from imrl_jax import conditions
 from imrl_jax import lifetime as L
 from imrl_jax import reference
+from imrl_jax import config as config_module
 from imrl_jax import state as S
 from imrl_jax.config import ConfigError, Task, make_config
 from imrl_jax.networks import decode, encode
@@ -51,6 +54,46 @@ def test_unknown_condition_names_the_field():
         make_config("paper", condition="XX")
     with pytest.raises(ValueError, match="unknown condition 'XX'"):
         conditions.get("XX")
+
+
+def test_every_number_of_the_config_is_bounded_and_a_value_past_a_bound_is_refused_naming_the_field():
+    config = make_config("paper")
+    bounded = config_module.bounds()
+    numbers = {f.name for f in dataclasses.fields(config)
+               if isinstance(getattr(config, f.name), (int, float, tuple)) and f.name != "tasks"}
+    assert numbers == set(bounded)
+    refused = 0
+    for name, bound in bounded.items():
+        value = getattr(config, name)
+        assert all(bound.holds(v) for v in (value if isinstance(value, tuple) else (value,))), name
+        step = 1 if isinstance(value, int) else 1.0
+        for past in (bound.lo if bound.lo_open else bound.lo - step, bound.hi if bound.hi_open else bound.hi + step):
+            wrong = tuple(past for _ in value) if isinstance(value, tuple) else past
+            with pytest.raises(ConfigError) as error:
+                config.replace(**{name: wrong})
+            assert str(error.value).startswith(f"{name}: must be ") and error.value.field == name, str(error.value)
+            refused += 1
+    assert refused == 2 * len(bounded) == 82
+
+
+def test_the_derived_bounds_refuse_a_model_that_means_nothing():
+    config = make_config("paper")
+    for changes, message in [
+        (dict(target_radius=69.3), "target_radius: must be below every task's start-to-target distance (task 6: 69.3"),
+        (dict(max_speed=20.5), "max_speed: must be at most 2 x target_radius = 20 cm"),
+        (dict(edge_length=401.0), "edge_length: must be at most arena_size=400"),
+        (dict(tiling_origin=(160.0, 401.0)), "tiling_origin: must be a point (x, y) in the arena"),
+        (dict(line_half_width=20.0), "line_half_width: must be below edge_length / 2 = 20"),
+        (dict(colour_tie_tolerance=0.5, line_half_width=0.5), "colour_tie_tolerance: must be below line_half_width"),
+        (dict(robot_radius=200.0), "robot_radius: the robot must fit in the arena"),
+        (dict(tasks=(Task((10.0, 10.0), 0.0, (500.0, 10.0)),)), "tasks: task 1: target: (500, 10) is off the floor"),
+    ]:
+        with pytest.raises(ConfigError) as error:
+            config.replace(**changes)
+        assert str(error.value).startswith(message), str(error.value)
+        assert str(error.value).split(":")[0] in config_module.DERIVED_BOUNDS
+    # A trip takes a step at least: the theoretical maximum is finite for every config the bounds let through.
+    assert config.replace(target_radius=69.28, max_speed=138.56).steps_per_trip() == (1,) * 6
 
 
 def _reference_life(config, genome, seed=0):
@@ -115,6 +158,84 @@ def evolved_selector_that_learns():
                                                   description="evolved actors and initial selector; it learns"))
     yield row
     del conditions.CONDITIONS[row.name]
+
+
+#: A module of one's own holding a row (EE-LS under another name: it compiles as fast).
+ROWS_MODULE = """
+import dataclasses
+
+from imrl_jax import conditions
+
+ROW = dataclasses.replace(conditions.get("EE-LS"), name="EE-LS-mine", description="EE-LS, registered from a module")
+"""
+
+
+def test_a_registered_row_works_with_every_command(tmp_path, monkeypatch, capsys):
+    """evolve, its resume, learning_test and render take a row of one's own with --register (each a fresh table)."""
+    import sys
+
+    from imrl_jax import evolve, learning_test, render
+
+    (tmp_path / "my_rows.py").write_text(ROWS_MODULE)
+    monkeypatch.chdir(tmp_path)
+
+    def forget():  # as a new process would start: the table without the row
+        conditions.CONDITIONS.pop("EE-LS-mine", None)
+        sys.modules.pop("my_rows", None)
+
+    run, test, gif = str(tmp_path / "run"), str(tmp_path / "test"), str(tmp_path / "best.gif")
+    evolution = ["--cond", "EE-LS-mine", "--preset", "small", "--population", "4", "--parents", "2", "--generations",
+                 "1", "--task-steps", "200", "--bins", "1", "--quiet", "--out", run]
+    try:
+        assert evolve.main(evolution) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("error: --cond: unknown condition 'EE-LS-mine' (choose from LE-LS, EE-LS") and \
+            err.endswith("or add a row with --register MODULE:ATTRIBUTE)\n") and not os.path.exists(run)
+        assert evolve.main([*evolution, "--register", "my_rows:ROW"]) == 0
+        with open(os.path.join(run, "config.json")) as f:
+            assert json.load(f)["register"] == ["my_rows:ROW"]
+        forget()
+        resume = ["--resume", "--out", run, "--generations", "2", "--quiet"]
+        assert evolve.main(resume) == 2
+        assert capsys.readouterr().err == (f"error: {run}/config.json: condition 'EE-LS-mine' is not a row of the "
+                                           f"condition table; add it with --register my_rows:ROW\n")
+        assert evolve.main([*resume, "--register", "my_rows:ROW"]) == 0
+        forget()
+        options = ["--best", "1", "--tests", "1", "--task-steps", "200", "--bins", "2", "--steady-steps", "100",
+                   "--chunks", "1", "--quiet", "--out", test]
+        assert learning_test.main([run, *options]) == 2 and not os.path.exists(test)
+        assert learning_test.main([run, *options, "--register", "my_rows:ROW"]) == 0
+        with open(os.path.join(test, "steady.json")) as f:
+            assert json.load(f)["condition"] == "EE-LS-mine"
+        forget()
+        assert render.main([run, "--task", "1", "--steps", "2", "--out", gif]) == 2 and not os.path.exists(gif)
+        assert render.main([run, "--task", "1", "--steps", "2", "--out", gif, "--register", "my_rows:ROW"]) == 0
+        assert os.path.getsize(gif) > 0
+    finally:
+        forget()
+
+
+@pytest.mark.parametrize("spec, message", [
+    ("my_rows", "--register my_rows: expected MODULE:ATTRIBUTE, e.g. --register my_rows:ROWS"),
+    ("no_such_module:ROW", "--register no_such_module:ROW: cannot import no_such_module (ModuleNotFoundError: No "
+                           "module named 'no_such_module')"),
+    ("my_rows:NOTHING", "--register my_rows:NOTHING: my_rows has no attribute NOTHING"),
+    ("my_rows:NAME", "--register my_rows:NAME: NAME is not a conditions.Condition or a list of them"),
+    ("my_rows:TAKEN", "--register my_rows:TAKEN: condition: 'EE-LS' is already a row of the table"),
+])
+def test_a_bad_register_is_one_line(tmp_path, monkeypatch, capsys, spec, message):
+    import sys
+
+    from imrl_jax import evolve
+
+    (tmp_path / "my_rows.py").write_text("import dataclasses\nfrom imrl_jax import conditions\nNAME = 'x'\n"
+                                         "TAKEN = dataclasses.replace(conditions.get('EE-ES'), name='EE-LS')\n")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delitem(sys.modules, "my_rows", raising=False)
+    out = tmp_path / "run"
+    assert evolve.main(["--register", spec, "--cond", "EE-LS", "--out", str(out)]) == 2
+    assert capsys.readouterr().err == f"error: {message}\n"
+    assert not out.exists() and conditions.CONDITIONS["EE-LS"].genome == ("actor",)
 
 
 @pytest.mark.usefixtures("x64")

@@ -40,6 +40,13 @@ def test_a_bad_value_is_one_line_exit_2(tmp_path, capsys, args, message):
     assert not out.exists()
 
 
+def test_an_empty_out_is_refused(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert demo.main(["--out", ""]) == 2
+    assert capsys.readouterr().err == "error: --out: empty path; give a directory\n"
+    assert os.listdir(tmp_path) == []
+
+
 def test_composition_trajectories_agree_with_its_reaches(tiny):
     config = tiny("EE-LS")
     paths = controllers.trajectories(config, 300)

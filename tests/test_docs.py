@@ -52,3 +52,30 @@ def test_the_floors_make_test_min_installs_are_the_declared_ones():
     assert {name: Version(v) for name, v in declared.items()} == {
         name: Version(v) for name, v in pinned.items() if name != "jaxlib"}
     assert pinned["jaxlib"] == pinned["jax"]
+
+
+def test_model_md_gives_every_bound_of_the_config():
+    """docs/MODEL.md's "Bounds of the settings" has a row per bounded field with its bounds and derived check."""
+    from imrl_jax.config import DERIVED_BOUNDS, bounds
+
+    with open(os.path.join(ROOT, "docs", "MODEL.md")) as f:
+        text = f.read()
+    for name, bound in bounds().items():
+        assert f"| `{name}` | {bound} | {DERIVED_BOUNDS.get(name, '')} |".replace("|  |", "| |") in text, name
+    for name in set(DERIVED_BOUNDS) - set(bounds()):
+        assert f"| `{name}` | | {DERIVED_BOUNDS[name]} |" in text, name
+
+
+def test_the_readmes_library_examples_run():
+    """Its python blocks, in order, in one namespace (at a shorter length): the environment example once passed the
+    learning values where the task goes, which failed deep inside (AttributeError ... 'target')."""
+    with open(os.path.join(ROOT, "README.md")) as f:
+        blocks = re.findall(r"^```python\n(.*?)^```", f.read(), re.S | re.M)
+    code = "\n".join(blocks)
+    assert "task_steps=10_000" in code and "(50, config.num_genes)" in code and "env.step(" in code
+    code = code.replace("task_steps=10_000", "task_steps=100, num_bins=1").replace("(50, config.num_genes)",
+                                                                                 "(2, config.num_genes)")
+    namespace = {}
+    exec(compile(code, "README.md", "exec"), namespace)  # noqa: S102 - the project's own README
+    assert namespace["result"].fitness.shape == (2,) and namespace["x"].shape == (36,)
+    assert not bool(namespace["events"].reached)

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 from helpers import devices_seen, evolve_args, evolve_command, interruptible_command, read_population, snapshot
 
-from imrl_jax import evolve
+from imrl_jax import evolve, tasks
+from imrl_jax.config import make_config
 
 
 def _tiny(seeds="2", task_steps="1000"):
@@ -119,6 +120,32 @@ def test_corrupt_checkpoint_falls_back_to_the_previous_one(finished_run, tmp_pat
     _assert_same_outputs(out, finished_run)
 
 
+@pytest.mark.parametrize("damage", ["array metadata", "largest data file"])
+def test_a_fall_back_says_one_line_and_no_traceback(finished_run, tmp_path, damage):
+    """orbax's reads of the damaged checkpoint fail in its threads and left unawaited: in a fresh process (as a user
+    runs it) their errors printed 5 to 15 tracebacks ("Event loop is closed") beside the one-line warning."""
+    import shutil
+
+    out = str(tmp_path / "corrupt")
+    shutil.copytree(finished_run, out)
+    state = os.path.join(out, "checkpoints", "6", "state")
+    if damage == "array metadata":
+        path = os.path.join(state, "array_metadatas", "process_0")
+    else:
+        data = [os.path.join(root, name) for root, _, names in os.walk(state) for name in names
+                if os.path.basename(root) == "d"]
+        path = max(data, key=os.path.getsize)
+    with open(path, "r+b") as f:
+        f.truncate(os.path.getsize(path) // 3)
+    done = subprocess.run(evolve_command(["--resume", "--out", out, "--quiet"]), capture_output=True, text=True,
+                          env={**os.environ, "JAX_PLATFORMS": "cpu"}, timeout=300)
+    assert done.returncode == 0, done.stderr
+    lines = done.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"warning: checkpoint {os.path.join(out, 'checkpoints', '6')} is "
+                                                   f"unreadable (") and lines[0].endswith("trying an older one"), lines
+    _assert_same_outputs(out, finished_run)
+
+
 @pytest.mark.slow  # 50 s; the default suite extends a finished run in tests/test_strategies.py (the same path)
 def test_finished_run_extended_is_bitwise_an_uninterrupted_longer_run(tmp_path, capsys):
     import json
@@ -208,6 +235,22 @@ def test_bad_arguments(tmp_path, capsys, args, message):
     (["--set", "trace_lamda=0.9"], "did you mean trace_lambda?"),
     (["--set", "bogus=1"], "fields: condition, num_experts"),
     (["--keep", "0"], "--keep: must be at least 1"),
+    # A target radius at or above a task's length scored negative fitness; a step of 1e30 cm divided by zero after
+    # config.json was written; an unroll of 100,000 and a thousand experts exhausted the machine's memory.
+    (["--set", "target_radius=150"], "target_radius: must be below every task's start-to-target distance (task 6: "
+                                     "69.3 cm) (got 150.0)"),
+    (["--set", "target_radius=500"], "target_radius: must be below every task's start-to-target distance"),
+    (["--set", "target_radius=1e30"], "target_radius: must be in (0, 10000] (got 1e+30)"),
+    (["--set", "max_speed=1e30"], "max_speed: must be in (0, 10000] (got 1e+30)"),
+    (["--set", "max_speed=25"], "max_speed: must be at most 2 x target_radius = 20 cm"),
+    (["--set", "scan_unroll=100000"], "scan_unroll: must be in [1, 64] (got 100000)"),
+    (["--set", "num_experts=1000"], "num_experts: must be in [1, 64] (got 1000)"),
+    (["--set", "line_half_width=25"], "line_half_width: must be below edge_length / 2 = 20"),
+    (["--set", "arena_size=20"], "edge_length: must be at most arena_size=20"),
+    (["--set", "draw_block=100000000"], "draw_block: must be in [1, 10_000]"),
+    (["--set", "eta_actor=1e30"], "eta_actor: must be in [0, 10]"),
+    (["--cpu-devices", "100000"], "--cpu-devices: 100,000 is above the limit of"),
+    (["--cpu-devices", "-1"], "--cpu-devices: must be 0 (one per core) or more"),
 ])
 def test_bad_values_exit_2_naming_the_field(tmp_path, capsys, args, message):
     out = str(tmp_path / "new")
@@ -215,6 +258,34 @@ def test_bad_values_exit_2_naming_the_field(tmp_path, capsys, args, message):
     err = capsys.readouterr().err.strip()
     assert message in err and err.startswith("error: ") and len(err.splitlines()) == 1
     assert not os.path.exists(out)
+
+
+def test_a_run_that_cannot_fit_in_memory_is_refused_before_anything_is_written(tmp_path, capsys, monkeypatch):
+    """A thousand experts took a 24 GB machine down: the memory a run needs is estimated before it starts."""
+    from imrl_jax import devices
+
+    monkeypatch.setattr(devices, "available_memory", lambda: 2**30)  # a machine with 1 GiB free
+    monkeypatch.setattr(devices, "accelerator_memory", lambda: None)
+    out = tmp_path / "run"
+    assert evolve.main(["--cond", "EE-LS", "--preset", "small", "--seeds", "100", "--population", "100",
+                        "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: memory: evolving 100 seed(s) x 100 individuals needs about 1.6 GiB (10,000 lives at "
+                          "once of 0.11 MiB each, 3 experts, ") and err.endswith(
+        "devices; an estimate) but this machine has 1.0 GiB available; use fewer seeds, a smaller population, fewer "
+        "bins or experts\n") and len(err.splitlines()) == 1
+    assert not out.exists()
+    config = make_config("small", condition="EE-LS")
+    assert devices.lane_bytes(config.replace(num_experts=6)) > devices.lane_bytes(config)  # grows with what a lane holds
+    assert devices.lane_bytes(config.replace(num_bins=100, task_steps=5000)) > devices.lane_bytes(config)
+
+
+@pytest.mark.parametrize("out", ["", " "])
+def test_an_empty_out_is_refused_not_taken_for_the_default(tmp_path, capsys, monkeypatch, out):
+    monkeypatch.chdir(tmp_path)
+    assert evolve.main(["--cond", "EE-LS", "--preset", "small", "--out", out]) == 2
+    assert capsys.readouterr().err == "error: --out: empty path; give a directory\n"
+    assert os.listdir(tmp_path) == []  # not runs/EE-LS
 
 
 def test_unwritable_out_exits_2_naming_it(tmp_path, capsys):
@@ -300,6 +371,29 @@ def test_resume_needs_only_out_and_extends_only_with_generations(finished_run, t
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and all(f"{field} is " in err for field in ("population_size", "num_bins", "gamma"))
     assert snapshot(out) == before
+
+
+def test_resume_with_a_preset_is_refused_naming_only_real_differences_not_the_condition(finished_run, capsys):
+    """--resume --preset skills said the condition differed (the preset's LE-LS), which the user never typed."""
+    before = snapshot(finished_run)
+    assert evolve.main(["--resume", "--out", finished_run, "--preset", "skills"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"error: --resume: the config differs from the run's in {finished_run}: ")
+    assert "condition" not in err and "initial_speed_bias" not in err and "task_steps is 100000" in err
+    assert snapshot(finished_run) == before
+
+
+def test_resume_after_the_checkpoints_were_removed_says_so_even_when_quiet(finished_run, tmp_path, capsys):
+    import shutil
+
+    out = str(tmp_path / "run")
+    shutil.copytree(finished_run, out)
+    shutil.rmtree(os.path.join(out, "checkpoints"))
+    assert evolve.main(["--resume", "--out", out, "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert err == (f"warning: {os.path.join(out, 'checkpoints')} holds no checkpoint, but {out} records 6 generation(s) "
+                   f"done: starting again from generation 0 (the same generations again, bitwise)\n")
+    _assert_same_outputs(out, finished_run)
 
 
 def test_a_directory_holding_no_run_is_refused(tmp_path, capsys):
@@ -416,14 +510,25 @@ def test_cpu_devices_are_set_up_before_the_task_set_starts_jax(tmp_path):
 
 
 def test_the_task_set_is_checked_against_the_geometry_the_command_line_sets(tmp_path, capsys, monkeypatch):
-    """Paper task 3's target lies 69.3 cm from its start: within a 70 cm target radius."""
+    """Paper tasks 3 and 6 have their targets 69.3 cm from their starts: within a 70 cm target radius. A set of
+    longer tasks takes that radius (it is checked against the tasks the run will have, not the ones they replace)."""
     monkeypatch.setattr(evolve, "run", lambda *a, **k: pytest.fail("the task set passed a check of another config"))
     out = tmp_path / "run"
     args = [*evolve_args(seeds=1), "--task-set", "paper", "--set", "target_radius=70", "--out", str(out)]
     assert evolve.main(args) == 2
-    assert capsys.readouterr().err == ("error: --task-set: paper task 3: target: lies within the target radius of the "
-                                       "start\n")
+    assert capsys.readouterr().err == ("error: --task-set: paper: target_radius: must be below every task's "
+                                       "start-to-target distance (task 6: 69.3 cm) (got 70.0)\n")
     assert not out.exists()
+    class Ran(Exception):
+        pass
+
+    def run(config, *args, **kwargs):
+        raise Ran(config)
+
+    monkeypatch.setattr(evolve, "run", run)
+    with pytest.raises(Ran) as ran:
+        evolve.main([*evolve_args(seeds=1), "--task-set", "novel", "--set", "target_radius=70", "--out", str(out)])
+    assert ran.value.args[0].target_radius == 70 and ran.value.args[0].tasks == tasks.novel_tasks()
 
 
 def test_a_checkpoint_that_records_no_strategy_is_taken_for_the_gas(tmp_path):

@@ -74,6 +74,7 @@ def test_command_line(tiny_run, tmp_path, capsys):
     assert reaches.shape == (len(seeds), 2, 2, 6, 4)
     test_config = config.replace(task_steps=400, num_bins=4)
     assert summary["steady_mean"] == pytest.approx(learning_test.summarise(test_config, reaches, 200)["steady_mean"])
+    assert (summary["generation"], summary["generations_done"], summary["num_generations"]) == (0, 1, 1)
     assert os.path.exists(os.path.join(out, "learning_curve.png"))
     rows = open(os.path.join(out, "curve.csv")).read().splitlines()
     assert len(rows) == 5 and rows[0].startswith("bin,end_step,mean")
@@ -82,6 +83,41 @@ def test_command_line(tiny_run, tmp_path, capsys):
     assert learning_test.main(argv) == 2  # the output already holds a test: refused, nothing touched
     assert "already holds a learning test" in capsys.readouterr().err
     assert before == {name: os.path.getmtime(os.path.join(out, name)) for name in os.listdir(out)}
+
+
+@pytest.mark.parametrize("how", ["killed", "running"])
+def test_a_half_evolved_run_is_refused_or_tested_with_a_warning_and_its_generation_recorded(tiny_run, tmp_path, capsys,
+                                                                                            how):
+    """A run killed at generation 1 of 3 (or one whose writer still runs) is not tested as if finished."""
+    import shutil
+
+    run = str(tmp_path / "run")
+    shutil.copytree(tiny_run, run)
+    if how == "killed":
+        with open(os.path.join(run, "config.json")) as f:
+            info = json.load(f)
+        info["config"]["num_generations"] = 3
+        with open(os.path.join(run, "config.json"), "w") as f:
+            json.dump(info, f)
+        why = f"{run} has 1 of its 3 generations evaluated"
+    else:
+        with open(os.path.join(run, ".lock"), "w") as f:  # this process: alive
+            json.dump(dict(pid=os.getpid(), host=socket.gethostname(), start=0), f)
+        why = f"{run} has 1 of its 1 generations evaluated and is being written by pid {os.getpid()} on " \
+              f"{socket.gethostname()}"
+    out = tmp_path / "test"
+    argv = [run, "--best", "1", "--tests", "1", "--task-steps", "200", "--bins", "2", "--steady-steps", "100",
+            "--chunks", "1", "--quiet", "--out", str(out)]
+    assert learning_test.main(argv) == 2
+    assert capsys.readouterr().err == (f"error: run_dir: {why}: its evolution is unfinished (pass --allow-unfinished "
+                                       f"to test generation 0 anyway)\n")
+    assert not out.exists()
+    assert learning_test.main([*argv, "--allow-unfinished"]) == 0
+    assert capsys.readouterr().err == f"warning: {why}: testing generation 0 (steady.json records it)\n"
+    with open(out / "steady.json") as f:
+        summary = json.load(f)
+    assert (summary["generation"], summary["generations_done"], summary["num_generations"]) == \
+        (0, 1, 3 if how == "killed" else 1)
 
 
 def test_an_interrupted_test_goes_on_from_its_first_unfinished_run(tiny_run, tmp_path, monkeypatch, capsys):
@@ -140,6 +176,10 @@ TINY_SLE = ["--runs", "1", "--best", "1", "--tests", "1", "--task-steps", "200",
     (["--cond", "SLE", "--task-steps", "1000", "--bins", "10", "--steady-steps", "150"], "steady_steps"),
     (["--cond", "XX"], "--cond"),
     (["--cond", "SLE", "--set", "trace_lambda=2"], "trace_lambda"),
+    # Refused before partial/ is made (a step of 1e30 cm divided by zero once the test had begun).
+    (["--cond", "SLE", "--set", "max_speed=1e30"], "max_speed: must be in (0, 10000] (got 1e+30)"),
+    (["--cond", "SLE", "--set", "target_radius=150"], "target_radius: must be below every task's start-to-target"),
+    (["--cond", "SLE", "--cpu-devices", "100000"], "--cpu-devices: 100,000 is above the limit"),
     (["--cond", "SLE", "--best-genomes", "best_genomes.npz", *TINY_SLE], "--best-genomes: only with a run directory"),
     ([], "run_dir"),
 ])
@@ -150,6 +190,74 @@ def test_bad_input(tmp_path, capsys, argv, message):
     err = capsys.readouterr().err.strip()
     assert message in err and len(err.splitlines()) == 1
     assert not out.exists()
+
+
+def test_a_test_that_cannot_fit_in_memory_is_refused(tmp_path, capsys, monkeypatch):
+    from imrl_jax import devices
+
+    monkeypatch.setattr(devices, "available_memory", lambda: 2**30)
+    monkeypatch.setattr(devices, "accelerator_memory", lambda: None)
+    out = tmp_path / "out"
+    assert learning_test.main(["--cond", "SLE", "--runs", "1", "--best", "100", "--tests", "100", "--task-steps", "200",
+                               "--bins", "2", "--steady-steps", "100", "--chunks", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: memory: testing 100 x 100 test(s) of 6 tasks a run needs about ") and \
+        "but this machine has 1.0 GiB available" in err and len(err.splitlines()) == 1
+    assert not out.exists()
+
+
+def test_the_progress_names_each_runs_chunks_within_it():
+    """With --chunks 10 the tenth chunk of a test's first run said "chunk 10 (10/20)", the eleventh "chunk 11"."""
+    import io
+
+    from imrl_jax.progress import Progress
+
+    progress = Progress(20, quiet=False, stream=io.StringIO(), unit="chunk", group=("run", 10))
+    assert progress.update(10, 0.0, 0.0, 1.0, scores="s").startswith("run 1 chunk 10/10 (10/20) | s")
+    assert progress.update(11, 0.0, 0.0, 1.0, scores="s").startswith("run 2 chunk 1/10 (11/20) | s")
+
+
+def test_a_text_file_as_best_genomes_is_refused_in_one_line_naming_it(tmp_path, capsys):
+    """It said the file held "pickled (object) data"; it is not an .npz at all."""
+    run, kept = tmp_path / "run", tmp_path / "best_genomes.npz"
+    kept.write_text("not arrays\n")
+    run.mkdir()
+    (run / "config.json").write_text(json.dumps({"config": {"condition": "EE-LS"}, "seeds": [0]}))
+    out = tmp_path / "out"
+    assert learning_test.main([str(run), "--best-genomes", str(kept), "--out", str(out)]) == 2
+    assert capsys.readouterr().err == (f"error: --best-genomes: {kept} is unreadable (not an .npz file of "
+                                       f"arrays)\n")
+    assert not out.exists()
+
+
+def test_no_run_directory_is_refused_with_a_hint_naming_every_condition_tested_from_scratch(tmp_path, capsys):
+    assert learning_test.main(["--out", str(tmp_path / "out")]) == 2
+    assert capsys.readouterr().err == ("error: run_dir: give an evolution's run directory, or --cond SLE or EXT-LS to "
+                                       "test learning from scratch\n")
+
+
+def test_kept_runs_and_their_spec_are_read_bounded(tmp_path):
+    """A kept run larger than a run's arrays can be is tested again (not decompressed); a spec.json that is not UTF-8
+    is refused in one line naming it."""
+    partial = tmp_path / "partial"
+    partial.mkdir()
+    (partial / "spec.json").write_text(json.dumps({"fingerprint": "f"}))
+    np.savez_compressed(partial / "run_000.npz", reaches=np.zeros((10, 6, 1000), np.int32),
+                        selections=np.zeros((10, 6, 1000, 3), np.int32))
+    warnings = []
+    assert learning_test.finished_runs(str(partial), "f", 1, warn=warnings.append, limit=10_000) == {}
+    assert warnings == [f"warning: {partial / 'run_000.npz'} cannot be read (RunDirError); run 0 is tested again"]
+    assert list(learning_test.finished_runs(str(partial), "f", 1, warn=warnings.append, limit=10**6)) == [0]
+    (partial / "spec.json").write_bytes(b"\xff\xfe")
+    with pytest.raises(learning_test.UsageError, match=r"spec.json cannot be read \(RunDirError\)"):
+        learning_test.finished_runs(str(partial), "f", 1)
+
+
+def test_an_empty_out_is_refused(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert learning_test.main(["--cond", "SLE", *TINY_SLE, "--out", ""]) == 2
+    assert capsys.readouterr().err == "error: --out: empty path; give a directory\n"
+    assert os.listdir(tmp_path) == []
 
 
 def test_pairs_both_ways_by_hand():

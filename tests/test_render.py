@@ -66,6 +66,21 @@ def test_bad_input(case, tiny_run, tmp_path, capsys, monkeypatch):
     assert sorted(os.listdir(tmp_path)) == before  # nothing written
 
 
+@pytest.mark.parametrize("options, message", [
+    (["--steps", "100000000000"], "--steps: 100,000,000,000 is above the limit of 100,000"),  # was an OverflowError
+    (["--steps", "200000000"], "--steps: 200,000,000 is above the limit of 100,000"),  # ran for minutes
+    (["--steps", "20000"], "--steps / --every: 10,000 frames is above the limit of 5,000 (raise --every)"),
+    (["--fps", "1000000"], "--fps: 1,000,000 is above the limit of 100"),
+    (["--every", "0"], "--steps, --every and --fps must be at least 1"),
+    (["--steps", "1e3"], "argument --steps: invalid int value: '1e3'"),  # argparse's errors are one line too
+])
+def test_absurd_sizes_are_refused_before_the_run_is_read(tmp_path, capsys, options, message):
+    out = tmp_path / "x.gif"
+    assert render.main([str(tmp_path / "no-run"), "--task", "1", "--out", str(out), *options]) == 2
+    assert capsys.readouterr().err == f"error: {message}\n"
+    assert os.listdir(tmp_path) == []
+
+
 def test_the_path_legend_names_only_expressed_experts():
     """LE-LS-N: an unexpressed expert never drives, so the legend leaves it out and keeps the others' numbers."""
     from imrl_jax.plotting import legend_experts

@@ -243,3 +243,26 @@ def test_a_report_run_by_the_pipeline_is_done_until_another_stage_runs(tmp_path)
     assert reproduce.stage_done(stages[1], {}) and reproduce.cost_left(stages[1], {}) == 0.0
     reproduce.run_stage(stages[0], 0, [sys.executable, "-c", "pass"], reproduce.Overall(stages, manifest), path)
     assert not reproduce.stage_done(stages[1], {})
+
+
+def test_given_out_the_report_is_written_there_and_not_into_docs(tmp_path, monkeypatch):
+    """--scale tiny --out DIR wrote docs/REPRODUCTION_TINY.md into the repository (cpu would overwrite the committed
+    docs/REPRODUCTION_CPU.md): a command given --out writes nowhere else."""
+    commands = {}
+
+    def run_stages(stages, scale, manifest, manifest_path, command_for):
+        commands.update({stage.kind: command_for(stage)[0] for stage in stages})
+        return 0
+
+    monkeypatch.setattr(reproduce, "run_stages", run_stages)
+    out = str(tmp_path / "r")
+    for scale in ("tiny", "cpu"):
+        assert reproduce.main(["--scale", scale, "--out", out]) == 0
+        report = commands["report"]
+        assert report[report.index("--doc") + 1] == os.path.join(out, f"REPRODUCTION_{scale.upper()}.md")
+        assert report[report.index("--figures") + 1] == os.path.join(out, f"reproduction_{scale}")
+        written = [arg for arg in sum(commands.values(), []) if os.path.isabs(arg) and arg.startswith(ROOT)]
+        assert [arg for arg in written if not arg.startswith(out) and arg != sys.executable] == []
+    monkeypatch.chdir(tmp_path)
+    assert reproduce.main(["--scale", "tiny"]) == 0  # its own results directory: the report in docs/, as committed
+    assert "--doc" not in commands["report"]

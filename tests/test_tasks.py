@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from helpers import evolve_args
 
-from imrl_jax import controllers, evolve, tasks
+from imrl_jax import controllers, evolve, learning_test, tasks
 from imrl_jax.config import Config, ConfigError, paper_tasks
 
 
@@ -49,10 +49,16 @@ def test_the_novel_tasks_are_solved_by_composing_and_not_by_one_colour_follower(
     ('{"tasks": [{"start": [200, 200], "heading_deg": 0, "target": [500, 200]}]}', "task 1: target: (500, 200) is off"),
     ('{"tasks": [{"start": [200, 200], "heading_deg": 0, "target": [360, 269.282]}, '
      '{"start": [200, 200], "heading_deg": 0, "target": [380, 200]}]}', "task 2: target: no zigzag route"),
+    # Files that gave tracebacks: not UTF-8, a number of more digits than int() takes, nested past the recursion
+    # limit; and one too large to read (a 2 GB file took 4.4 GB of memory before the JSON error).
+    (b"\xff\xfe{bad", "mine.json is not UTF-8 text (byte 0)"),
+    ('{"tasks": [' + "1" * 5000 + "]}", "file: not JSON (Exceeds the limit (4300 digits) for integer string conversion"),
+    ("[" * 100_000, "file: not JSON (nested too deeply)"),
+    (b"1" * (2**20 + 1), "mine.json is larger than the limit of 1,048,576 bytes"),
 ])
 def test_a_bad_task_set_file_exits_2_naming_the_task_and_field(tmp_path, capsys, text, message):
     path = tmp_path / "mine.json"
-    path.write_text(text)
+    path.write_bytes(text if isinstance(text, bytes) else text.encode())
     with pytest.raises(ConfigError) as error:
         tasks.load(str(path))
     assert str(error.value).startswith(f"--task-set: {path}") and message in str(error.value), str(error.value)
@@ -60,6 +66,9 @@ def test_a_bad_task_set_file_exits_2_naming_the_task_and_field(tmp_path, capsys,
     assert evolve.main([*evolve_args(seeds=1, generations=1), "--task-set", str(path), "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("error: --task-set: ") and "\n" not in err and not out.exists()
+    out = tmp_path / "test"
+    assert learning_test.main(["--cond", "SLE", "--task-set", str(path), "--out", str(out)]) == 2
+    assert message in capsys.readouterr().err and not out.exists()
 
 
 def test_evolve_records_its_task_set_and_a_resume_on_another_is_refused(tmp_path, capsys):
