@@ -413,6 +413,17 @@ DERIVED_BOUNDS = {
 }
 
 
+def _real(value) -> bool:
+    """Whether a setting's value is a real number: a Python or NumPy number, or a 0-d array of one (the NumPy
+    reference sets a genome's evolved learning values so)."""
+    if isinstance(value, bool):
+        return False
+    if isinstance(value, numbers.Real):
+        return True
+    kind = getattr(getattr(value, "dtype", None), "kind", "")
+    return getattr(value, "shape", None) == () and bool(kind) and kind in "fiu"
+
+
 def _validate(c: Config) -> None:
     def fail(field: str, why: str):
         raise ConfigError(f"{field}: {why} (got {getattr(c, field)!r})", field)
@@ -439,7 +450,7 @@ def _validate(c: Config) -> None:
         if isinstance(field.default, int) and (not integer or value < bound.lo):
             fail(field.name, "must be a positive integer" if bound.lo == 1 else "must be a non-negative integer")
         values = value if isinstance(value, (tuple, list)) else (value,)
-        if not all(isinstance(v, numbers.Real) and not isinstance(v, bool) and bound.holds(v) for v in values):
+        if not all(_real(v) and bound.holds(v) for v in values):
             fail(field.name, f"must be in {bound}" + (" (each value)" if isinstance(value, (tuple, list)) else ""))
     # Derived bounds (DERIVED_BOUNDS): between fields.
     if c.selector_options and c.step_kernel == "pallas":
