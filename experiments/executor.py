@@ -167,7 +167,8 @@ def run_fanned(stages, scale: dict, manifest_path: str, command_for, jobs: int, 
                 if finish:
                     finish(stage)
                 if code:
-                    log(f"error: stage {name} failed with exit code {code} (log: {os.path.join(logs, _file(name))})")
+                    path = os.path.join(logs, log_name(name) + ".log")
+                    log(f"error: stage {name} failed with exit code {code} (log: {path})")
                     failed[name] = code
                     continue
                 done.add(name)
@@ -186,7 +187,7 @@ def run_fanned(stages, scale: dict, manifest_path: str, command_for, jobs: int, 
                 if prepare:
                     prepare(stage)
                 command, env = command_for(stage)
-                job = executor.submit(command, env, os.path.join(logs, _file(stage.name)))
+                job = executor.submit(command, env, os.path.join(logs, log_name(stage.name) + ".log"))
                 running[stage.name] = (job, time.perf_counter(), command)
                 log(f"== {stage.name}: started on {executor.name} (job {job.id}): "
                     f"{' '.join(command[1:] if command[0] == sys.executable else command)}")
@@ -204,9 +205,9 @@ def run_fanned(stages, scale: dict, manifest_path: str, command_for, jobs: int, 
     return next((code for code in failed.values() if code), 0)
 
 
-def _file(name: str) -> str:
-    """A stage's log file name (its name, with what a file name cannot hold replaced)."""
-    return "".join(c if c.isalnum() or c in "-_." else "_" for c in name) + ".log"
+def log_name(name: str) -> str:
+    """A stage's name as a file name (what a file name cannot hold replaced): its log is NAME.log."""
+    return "".join(c if c.isalnum() or c in "-_." else "_" for c in name)
 
 
 EXECUTORS = ("local", "slurm", "submitit-local")

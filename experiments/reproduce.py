@@ -53,7 +53,6 @@ import argparse
 import json
 import os
 import shutil
-import re
 import subprocess
 import sys
 import time
@@ -185,7 +184,8 @@ DEFAULT_RATE = 1.2e6
 PUBLISHED = "resume_checkpoint"
 #: What a "measure" stage writes last, into its out_dir: its presence means the stage is done.
 MEASURED = "result.json"
-_PROGRESS = re.compile(r"\((\d+)/(\d+)\)")
+#: How often the runner reads a running stage's events.
+POLL_SECONDS = 0.5
 
 
 class Stage(NamedTuple):
@@ -386,31 +386,39 @@ class Overall:
 
 def run_stage(stage: Stage, index: int, command: list[str], overall: Overall, manifest_path: str,
               done_before: float = 0.0, env: dict | None = None) -> None:
-    """Run one stage, its progress lines shown after the whole pipeline's; record its command, time and cost."""
+    """Run one stage, its progress (read from its events, imrl_jax.events) shown after the whole pipeline's;
+    record its command, time and cost. Its other output passes straight through."""
+    from experiments.executor import log_name
+    from imrl_jax.events import ENV, Reader
+
     manifest = overall.manifest
     print(f"\n== [{index + 1}/{len(overall.stages)}] {stage.name}\n"
           f"$ {' '.join(command[1:] if command[0] == sys.executable else command)}\n"
           f"{overall.status(index, done_before)}", flush=True)
+    events = os.path.join(os.path.dirname(manifest_path), "logs", log_name(stage.name) + ".events")
+    if os.path.exists(events):
+        os.remove(events)  # this attempt's events alone
+    reader = Reader(events)
     start = time.perf_counter()
-    process = subprocess.Popen(command, env=env, stderr=subprocess.PIPE, text=True, bufsize=1)
-    first = None  # (fraction, time) at the first progress line: the stage's own rate is measured from there
+    process = subprocess.Popen(command, env={**(env or os.environ), ENV: events})
+    first = None  # (fraction, time) at the first progress event: the stage's own rate is measured from there
     try:
-        for text in process.stderr:
-            text = text.rstrip("\n")
-            match = _PROGRESS.search(text)
-            if match is None:
-                overall.end_line()
-                print(text, file=sys.stderr, flush=True)
-                continue
-            fraction = int(match.group(1)) / max(int(match.group(2)), 1)
-            now = time.perf_counter()
-            first = first or (fraction, now)
-            stage_rate = ((fraction - first[0]) * stage.cost / (now - first[1])
-                          if fraction > first[0] and now > first[1] else None)
-            overall.line(f"{text} || {overall.status(index, fraction, stage_rate)}")
-            if stage.kind == "evolve":
-                publish_checkpoint(stage.out_dir)
-        code = process.wait()
+        while True:
+            code = process.poll()
+            for event in reader.read():
+                if event.get("kind") != "progress":
+                    continue
+                fraction = event["done"] / max(event["total"], 1)
+                now = time.perf_counter()
+                first = first or (fraction, now)
+                stage_rate = ((fraction - first[0]) * stage.cost / (now - first[1])
+                              if fraction > first[0] and now > first[1] else None)
+                overall.line(f"{event['line']} || {overall.status(index, fraction, stage_rate)}")
+                if stage.kind == "evolve":
+                    publish_checkpoint(stage.out_dir)
+            if code is not None:
+                break
+            time.sleep(POLL_SECONDS)
     finally:
         if process.poll() is None:
             process.kill()

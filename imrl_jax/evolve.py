@@ -44,6 +44,7 @@ from imrl_jax import search
 from imrl_jax.ga import GA, init_population, make_generation
 from imrl_jax.lifetime import live
 from imrl_jax.networks import trait_names, traits
+from imrl_jax.events import check_log, log_for
 from imrl_jax.progress import Progress
 from imrl_jax.rundir import (RunDirError, RunWriteError, check_unlocked, check_writable, entries, lock_run_dir,
                              make_dir, not_empty, read_config, read_json, write_atomic, write_errno)
@@ -267,12 +268,13 @@ def resume_command(out_dir: str) -> str:
 
 def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=None, resume: bool = False,
         checkpoint_every: int = 1, keep: int = 3, quiet: bool = False, warnings: Sequence[str] = (),
-        notes: Sequence[str] = (), registered: Sequence[str] = ()) -> RunState:
+        notes: Sequence[str] = (), registered: Sequence[str] = (), log: str | None = None) -> RunState:
     """Evolve ``config.condition`` for every seed into ``out_dir``; return the final state.
 
     ``strategy`` is the search (:mod:`imrl_jax.strategies`; default the paper's GA). The directory is
     locked for the whole run (:func:`imrl_jax.rundir.lock_run_dir`). ``warnings`` are printed once the
     checks pass, ``notes`` too unless ``quiet``. ``registered``: the ``--register`` rows, recorded in config.json.
+    ``log="tensorboard"``: the progress is also written for TensorBoard under ``out_dir/tensorboard``.
     """
     strategy = GA(config) if strategy is None else strategy
     if not config.spec.evolved:
@@ -285,6 +287,10 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=N
         raise UsageError("--checkpoint-every: must be at least 1")
     if keep < 1:
         raise UsageError("--keep: must be at least 1 (a run keeps its latest checkpoint to resume from)")
+    try:
+        check_log(log)
+    except ValueError as error:
+        raise UsageError(str(error)) from None
     check_writable(out_dir)
     check_unlocked(out_dir)  # a live writer is named before anything about what it is writing
     check_run_dir(out_dir, config, seeds, resume, describe(strategy))
@@ -335,18 +341,19 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=N
         state = initial_state(config, seeds, sharding, strategy, mesh)
         checkpointer = stack.enter_context(contextlib.closing(
             Checkpointer(os.path.join(out_dir, "checkpoints"), keep=keep)))
+        events = stack.enter_context(contextlib.closing(log_for(log if leader else None, out_dir)))
         return _evolve(config, out_dir, seeds, state, sharding, mesh, checkpointer, strategy, resume=resume,
-                       checkpoint_every=checkpoint_every, quiet=quiet or not leader, leader=leader)
+                       checkpoint_every=checkpoint_every, quiet=quiet or not leader, leader=leader, events=events)
 
 
 def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sharding, mesh,
             checkpointer: Checkpointer, strategy, *, resume: bool, checkpoint_every: int, quiet: bool,
-            leader: bool) -> RunState:
+            leader: bool, events=None) -> RunState:
     """The generations of :func:`run` after its checks (resuming from the latest good checkpoint).
 
     Ctrl-C raises :class:`RunInterrupted`; a write the user can fix, :class:`RunWriteError`.
     """
-    progress = Progress(config.num_generations, quiet=quiet, first_index=0)  # --quiet: no notes
+    progress = Progress(config.num_generations, quiet=quiet, first_index=0, log=events)  # --quiet: no notes
     meta = {"config": config.to_dict(), "seeds": seeds, "search": describe(strategy)}
     checkpointed = 0
     try:
@@ -376,6 +383,7 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
                 if leader:
                     extend_config_json(out_dir, config)
                 progress = Progress(config.num_generations, done=int(state.generation), quiet=quiet, first_index=0,
+                                    log=events,
                                     elapsed=float(saved_meta.get("elapsed_seconds", 0.0)))
                 progress.note(f"resuming {out_dir} after generation {int(state.generation) - 1} "
                               f"({int(state.generation)} of {config.num_generations} done; checkpoint of commit "
@@ -583,6 +591,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--checkpoint-every", type=int, default=1, help="generations between checkpoints")
     p.add_argument("--keep", type=int, default=3, help="checkpoints kept (at least 1)")
     p.add_argument("--quiet", action="store_true", help="print only errors, warnings and the final summary (for logs)")
+    p.add_argument("--log", help="also write the progress for TensorBoard: --log tensorboard (under OUT/tensorboard; "
+                   "needs tensorboardX)")
     p.add_argument("--cpu-devices", type=int, default=0,
                    help="CPU devices to split the lanes over (0: one per core; ignored if XLA_FLAGS sets it)")
     p.add_argument("--coordinator", help="multi-host: coordinator address host:port (default: JAX_COORDINATOR_ADDRESS; none: one process)")
@@ -657,7 +667,7 @@ def main(argv=None) -> int:
         state = run(config, out_dir, seeds, strategy=strategy, resume=args.resume,
                     checkpoint_every=args.checkpoint_every,
                     keep=args.keep, quiet=args.quiet, warnings=cli.device_warnings(config, args.cpu_devices),
-                    notes=notes, registered=registered)
+                    notes=notes, registered=registered, log=args.log)
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

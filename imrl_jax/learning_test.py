@@ -54,6 +54,7 @@ from imrl_jax import cli
 from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
 from imrl_jax.lifetime import grow_up, lifetime_keys, run_phase, task_spec, task_start
 from imrl_jax.state import State
+from imrl_jax.events import check_log, log_for
 from imrl_jax.progress import Progress
 from imrl_jax.rundir import (LOCK, Run, RunDirError, RunWriteError, best_genomes, check_npz, check_unlocked,
                              check_writable, entries, holder_alive, is_output, load_run as read_run, lock_run_dir,
@@ -325,7 +326,7 @@ def check_out_dir(out_dir: str) -> None:
 
 def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, steady_steps: int, num_chunks: int,
         seed: int = 0, quiet: bool = False, source: str = "", command: str = "", warnings: Sequence[str] = (),
-        notes: Sequence[str] = (), evolved: dict | None = None) -> dict:
+        notes: Sequence[str] = (), evolved: dict | None = None, log: str | None = None) -> dict:
     """Run the tests of ``genomes`` (runs, best, genes) run by run, resuming from ``partial/``; write the outputs.
 
     ``out_dir`` is locked for the whole test (:func:`imrl_jax.rundir.lock_run_dir`). ``warnings`` are
@@ -337,6 +338,10 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
     kept = num_runs * num_best * num_tests * config.num_tasks * config.num_bins * (config.num_experts + 1) * 4 * 3
     check_memory(config, num_best * num_tests * config.num_tasks,  # a run's tests at once; every run's curves kept
                  f"testing {num_best} x {num_tests} test(s) of {config.num_tasks} tasks a run", host_bytes=kept)
+    try:
+        check_log(log)
+    except ValueError as error:
+        raise UsageError(str(error)) from None
     check_writable(out_dir)
     check_unlocked(out_dir)
     check_out_dir(out_dir)  # before the directory is made or locked: nothing is written into another's
@@ -368,7 +373,7 @@ def _run_locked(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests:
     done = finished_runs(partial, stamp, num_runs, warn=lambda text: print(text, file=sys.stderr), limit=per_run)
     resumed = sorted(done)
     progress = Progress(num_runs * num_chunks, done=len(done) * num_chunks, quiet=quiet, unit="chunk",
-                        group=("run", num_chunks))
+                        group=("run", num_chunks), log=log_for(log, out_dir))
     progress.note(f"{config.condition} learning test: {num_runs} run(s) x {num_best} best x {num_tests} test(s) x "
                      f"{config.num_tasks} tasks = {num_runs * num_best * num_tests * config.num_tasks} lanes of "
                      f"{config.task_steps} cycles"
@@ -475,6 +480,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True,
                    help="output directory: new, empty, or an unfinished test of the same command to go on with")
     p.add_argument("--quiet", action="store_true", help="no progress lines (for logs)")
+    p.add_argument("--log", help="also write the progress for TensorBoard: --log tensorboard (under OUT/tensorboard; "
+                   "needs tensorboardX)")
     p.add_argument("--cpu-devices", type=int, default=0, help="CPU devices (0: one per core)")
     return p
 
@@ -558,7 +565,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         summary = run(config, genomes, args.out, num_tests=args.tests, steady_steps=args.steady_steps,
                       num_chunks=args.chunks, seed=args.seed, quiet=args.quiet, source=source, command=command,
                       warnings=[*warnings, *cli.device_warnings(config, args.cpu_devices)],
-                      notes=cli.ignored_notes(config, sets), evolved=evolved)
+                      notes=cli.ignored_notes(config, sets), evolved=evolved, log=args.log)
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

@@ -77,22 +77,31 @@ def test_plan_costs_and_eta():
                                                "old": dict(seconds=9)}}) == 100
 
 
-def test_stage_progress_is_shown_with_the_whole_pipelines(tmp_path, capsys):
+def test_stage_progress_is_shown_with_the_whole_pipelines(tmp_path, capfd):
     scale = reproduce.SCALES["tiny"]
     stages = [reproduce.Stage("learning test paper SLE", "test", "paper", "SLE", str(tmp_path / "a"), 4000.0),
               reproduce.Stage("learning test paper EE-ES", "test", "paper", "EE-ES", str(tmp_path / "b"), 8000.0)]
     manifest = dict(sizes=scale, stages={"earlier": dict(cost=1000, seconds=10)})  # 100 lane-steps/s
     stream = io.StringIO()
     overall = reproduce.Overall(stages, manifest, stream=stream)
-    child = ("import sys\nfor i in range(1, 5): print(f'chunk {i} ({i}/4) | performance', file=sys.stderr)\n"
-             "print('a note', file=sys.stderr)")
+    # The stage reports through Progress; a line of its own that looks like progress is not taken for it.
+    child = ("import sys, time\nfrom imrl_jax.progress import Progress\np = Progress(4, unit='chunk')\n"
+             "print('not progress (3/4)', file=sys.stderr)\n"
+             "for i in range(1, 5):\n    p.update(i, 0.5, 0.25, 1e6, scores='performance')\n    time.sleep(0.2)\n"
+             "p.note('a note')")
     manifest_path = str(tmp_path / "manifest.json")
     reproduce.run_stage(stages[0], 0, [sys.executable, "-c", child], overall, manifest_path)
     lines = stream.getvalue().splitlines()
-    assert len(lines) == 4 and lines[0].startswith("chunk 1 (1/4) | performance || stage 1/2 | all stages: ")
-    assert "(measured)" in lines[0]
-    out, err = capsys.readouterr()
-    assert "== [1/2] learning test paper SLE" in out and "a note" in err  # other lines pass through
+    assert len(lines) == 4 and lines[0].startswith("chunk 1 (1/4) | performance | 0:00:00 elapsed, first chunk ")
+    assert " || stage 1/2 | all stages: " in lines[0] and "(measured)" in lines[0]
+    assert lines[3].startswith("chunk 4 (4/4) | performance | ") and "| 1.00 M lane-steps/s || stage 1/2" in lines[3]
+    out, err = capfd.readouterr()
+    assert "== [1/2] learning test paper SLE" in out
+    assert "not progress (3/4)" in err and "a note" in err and "chunk 1" not in err  # its progress is the runner's
+    events = [json.loads(line) for line in (tmp_path / "logs" / "learning_test_paper_SLE.events").read_text().splitlines()]
+    assert [(e["kind"], e.get("done")) for e in events] == [("progress", 1), ("progress", 2), ("progress", 3),
+                                                            ("progress", 4), ("note", None)]
+    assert events[0]["lane_steps_per_s"] is None and events[1]["lane_steps_per_s"] == 1e6  # the first compiles
     with open(manifest_path) as f:
         recorded = json.load(f)["stages"]["learning test paper SLE"]
     assert recorded["cost"] == 4000 and recorded["seconds"] >= 0
@@ -250,7 +259,7 @@ def test_given_out_the_report_is_written_there_and_not_into_docs(tmp_path, monke
     docs/REPRODUCTION_CPU.md): a command given --out writes nowhere else."""
     commands = {}
 
-    def run_stages(stages, scale, manifest, manifest_path, command_for):
+    def run_stages(stages, scale, manifest, manifest_path, command_for, **fan):
         commands.update({stage.kind: command_for(stage)[0] for stage in stages})
         return 0
 
