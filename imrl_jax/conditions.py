@@ -47,7 +47,7 @@ NETWORKS = ("reinforcer", "actor", "evaluator", "selector_actor", "selector_crit
 #: What else a genome may encode: one expression gene per expert (an evolved number of experts), the
 #: learning values (evolved learning parameters), and the childhood's length (one gene: learning and noise stop
 #: after round(u x childhood_steps) steps of it, u = clip((g + 1) / 2, 0, 1); childhood_steps is the maximum).
-GENOME_PARTS = NETWORKS + ("expressed", "parameters", "childhood_length")
+GENOME_PARTS = NETWORKS + ("expressed", "parameters", "childhood_length", "actor_turn")
 
 #: The learning values LE-LS-P evolves (the paper's future work (c)), one gene each, in this order. A gene g
 #: is first mapped onto u = clip((g + 1) / 2, 0, 1) (generation 0's U[-1, 1] onto [0, 1]), then by its map:
@@ -83,7 +83,8 @@ def network_shape(network: str, num_experts: int, num_weights: int) -> tuple[int
     return {"reinforcer": (num_experts, num_weights), "actor": (num_experts, 2, num_weights),
             "evaluator": (num_experts, num_weights), "selector_actor": (num_experts, num_weights),
             "selector_critic": (num_weights,), "expressed": (num_experts,),
-            "parameters": (len(EVOLVED_PARAMETERS),), "childhood_length": (1,)}[network]
+            "parameters": (len(EVOLVED_PARAMETERS),), "childhood_length": (1,),
+            "actor_turn": (num_experts, num_weights)}[network]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -199,6 +200,10 @@ CONDITIONS: dict[str, Condition] = {c.name: c for c in (
               "learn and explore for the first round(u x childhood_steps) steps of childhood only, u = clip((g + 1) / "
               "2, 0, 1) of the last gene", genome=("reinforcer", "parameters", "childhood_length"),
               adult=ADULT_LEARNING_SELECTOR, childhood=CHILDHOOD, style=dict(color="tab:orange", lw=1.6)),
+    # A size-matched control (MODEL.md "Size-matched controls"): EE-LS with actors of LE-LS's size, 111 genes.
+    Condition("EE-LS-T", "EE-LS evolving only each actor's orientation (turn) unit: 3 x 37 = 111 genes, LE-LS's "
+              "size; the speed unit's weights are 0 and its bias config.initial_speed_bias (a learned actor's start)",
+              genome=("actor_turn",), adult=ADULT_LEARNING_SELECTOR, style=dict(color="0.55", lw=1.8, ls=":")),
     # The paper's future work (b): the whole hierarchy trained on the task's reward only; no evolution, no
     # childhood, everything reset at each task as SLE is (MODEL.md "Future-work conditions").
     Condition("EXT-LS", "the hierarchy on extrinsic reward only: no evolution, no childhood; in each task, reset, "

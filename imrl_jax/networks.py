@@ -190,6 +190,8 @@ def decode(config: Config, genome: jnp.ndarray) -> Agent:
         size = math.prod(shape)
         networks[network] = genome[start:start + size].reshape(shape)
         start += size
+    if "actor_turn" in networks:  # the turn units only; the speed units keep zero_agent's start
+        networks["actor"] = agent.actor.at[:, 0].set(networks.pop("actor_turn"))
     if "expressed" in networks:  # expression genes: which experts exist (an evolved number of experts)
         networks["expressed"] = express(networks["expressed"])
     if "childhood_length" in networks:  # learning and noise stop after this many steps of childhood
@@ -208,5 +210,6 @@ def encode(config: Config, agent: Agent) -> jnp.ndarray:
     """Inverse of :func:`decode`: the genome of the evolved parts of an agent."""
     if "parameters" in config.spec.genome:
         raise ValueError("encode: evolved learning parameters are not encoded back into genes")
-    parts = [getattr(agent, network).reshape(-1) for network in config.spec.genome]
+    parts = [(agent.actor[:, 0] if network == "actor_turn" else getattr(agent, network)).reshape(-1)
+             for network in config.spec.genome]
     return jnp.concatenate(parts) if parts else jnp.zeros((0,), agent.actor.dtype)

@@ -217,6 +217,8 @@ def decode(config, genome):
         size = int(np.prod(shape))
         weights[network] = genome[start:start + size].reshape(shape).copy()
         start += size
+    if "actor_turn" in weights:  # the turn units only; the speed units stay at their start
+        weights["actor"][:, 0, :] = weights.pop("actor_turn")
     if "expressed" in weights:  # an expert is expressed when its gene is positive; the largest one always is
         genes = weights["expressed"]
         weights["expressed"] = ((genes > 0) | (genes == genes.max())).astype(np.float64)
