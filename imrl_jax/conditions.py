@@ -171,6 +171,15 @@ CONDITIONS: dict[str, Condition] = {c.name: c for c in (
     Condition("EE-LS-T", "EE-LS evolving only each actor's orientation (turn) unit: 3 x 37 = 111 genes, LE-LS's "
               "size; the speed unit's weights are 0 and its bias config.initial_speed_bias (a learned actor's start)",
               genome=("actor_turn",), adult=ADULT_LEARNING_SELECTOR, style=dict(color="0.55", lw=1.8, ls=":")),
+    # Size-matched controls with reinforcers of EE-LS's size, 222 genes: a second reinforcer unit per expert, or
+    # 111 neutral genes.
+    Condition("LE-LS-2R", "LE-LS with two reinforcer units per expert: 2 x 3 x 37 = 222 genes, EE-LS's size; an "
+              "expert's internal reward is the mean of its two units' rewards, (r1 + r2) / 2",
+              genome=("reinforcer", "second_reinforcer"), adult=ADULT_LEARNING_SELECTOR, childhood=CHILDHOOD,
+              style=dict(color="black", lw=1.8, ls=":")),
+    Condition("LE-LS-Z", "LE-LS with 3 x 37 = 111 neutral genes after its reinforcers (222 genes, EE-LS's size); "
+              "they decode into nothing", genome=("reinforcer", "neutral"), adult=ADULT_LEARNING_SELECTOR,
+              childhood=CHILDHOOD, style=dict(color="black", lw=1.2, ls="-.")),
     # The paper's future work (b): the whole hierarchy trained on the task's reward only; no evolution, no
     # childhood, everything reset at each task as SLE is (MODEL.md "Future-work conditions").
     Condition("EXT-LS", "the hierarchy on extrinsic reward only: no evolution, no childhood; in each task, reset, "

@@ -180,6 +180,10 @@ def _reference_turn(config, weights, genes):
     weights["actor"][:, 0, :] = genes
 
 
+def _reference_second_reinforcer(config, weights, genes):
+    weights["second_reinforcer"] = genes.copy()
+
+
 def _raw(name: str) -> Callable:
     """The reference's default decoding: the genes under the part's name (its reference_life takes them out)."""
 
@@ -221,5 +225,17 @@ for _part in (
     GenomePart("actor_turn", "evolved turn units", lambda k, n: (k, n),
                decode=lambda config, agent, genes: agent._replace(actor=agent.actor.at[:, 0].set(genes)),
                reference_decode=_reference_turn, encode=lambda agent: agent.actor[:, 0]),
+    # A second reinforcer unit per expert (LE-LS-2R): the expert's internal reward is the mean of its two units',
+    # r_k = (r1 + r2) / 2 (networks.internal_rewards). A new quantity of the agent: the kernel lacks it.
+    GenomePart("second_reinforcer", "second reinforcer units", lambda k, n: (k, n),
+               decode=lambda config, agent, genes: agent._replace(second_reinforcer=genes),
+               reference_decode=_reference_second_reinforcer, encode=lambda agent: agent.second_reinforcer,
+               start=lambda config, dtype: {"second_reinforcer": _jnp().zeros(
+                   (config.num_lane_experts, config.num_inputs + 1), dtype)},
+               kernel=False, field="second_reinforcer"),
+    # Neutral genes (LE-LS-Z): as many as the reinforcers' (K x 37), decoded into nothing; they lengthen the genome
+    # only.
+    GenomePart("neutral", "neutral genes", lambda k, n: (k, n), decode=lambda config, agent, genes: agent,
+               reference_decode=lambda config, weights, genes: None),
 ):
     register_part(_part)

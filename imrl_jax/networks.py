@@ -30,6 +30,8 @@ class Agent(NamedTuple):
     params: LearningParams | None = None
     # () steps of childhood it learns and explores for (an evolved childhood length); None: all of them.
     childhood_length: jnp.ndarray | None = None
+    # (K, n+1) a second reinforcer unit per expert (LE-LS-2R): r_k = (r1 + r2) / 2; None: one unit.
+    second_reinforcer: jnp.ndarray | None = None
 
 
 def with_bias(x: jnp.ndarray) -> jnp.ndarray:
@@ -45,6 +47,14 @@ def internal_reward(activation: jnp.ndarray) -> jnp.ndarray:
 def reinforce(w: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:
     """Internal reward in [-1, 1]: 2 sigmoid(w.x~) - 1."""
     return internal_reward(w @ xb)
+
+
+def internal_rewards(agent: Agent, xb: jnp.ndarray) -> jnp.ndarray:
+    """Every expert's internal reward r_k = 2 sigmoid(w_k.x~) - 1; with two units, their mean (r1 + r2) / 2."""
+    rewards = reinforce(agent.reinforcer, xb)
+    if agent.second_reinforcer is None:
+        return rewards
+    return 0.5 * (rewards + reinforce(agent.second_reinforcer, xb))
 
 
 def pick(values: jnp.ndarray, k) -> jnp.ndarray:

@@ -31,6 +31,8 @@ PHASES = {"childhood": CHILDHOOD, "adult-ls": ADULT_LEARNING_SELECTOR, "adult-es
           "sle": ADULT_SINGLE_EXPERT}
 
 WEIGHT_KEYS = ("reinforcer", "actor", "evaluator", "selector_actor", "selector_critic")
+#: What a life carries from phase to phase: the weights, and what genome parts add (expression, a second reinforcer).
+CARRIED = (*WEIGHT_KEYS, "expressed", "second_reinforcer")
 
 
 # --------------------------------------------------------------------------- floor
@@ -186,8 +188,7 @@ def _choose_expert(s, u):
 
 
 def _copy_weights(weights):
-    return {key: np.array(weights[key], dtype=np.float64, copy=True) for key in (*WEIGHT_KEYS, "expressed")
-            if key in weights}
+    return {key: np.array(weights[key], dtype=np.float64, copy=True) for key in CARRIED if key in weights}
 
 
 def zero_weights(config, num_experts):
@@ -338,6 +339,8 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
                     discount = gamma if phase.evaluation == "discounted" else 1.0
                 elif childhood:
                     reward = 2.0 * _sigmoid(w["reinforcer"][kp] @ xb) - 1.0
+                    if "second_reinforcer" in w:  # two units: the mean of their rewards
+                        reward = 0.5 * (reward + (2.0 * _sigmoid(w["second_reinforcer"][kp] @ xb) - 1.0))
                 else:
                     reward = 1.0 if prev_reached else 0.0
                 value_now = w["evaluator"][kp] @ xb

@@ -32,7 +32,7 @@ def test_genome_sizes_and_layout_follow_the_table():
     sizes = {name: make_config("paper", condition=name).num_genes for name in conditions.NAMES}
     assert sizes == {"LE-LS": 111, "EE-LS": 222, "EE-ES": 333, "SLE": 0, "EV-LS": 111, "EV-LS-diff": 111,
                      "LE-LS-P": 122, "LE-LS-PC": 123, "LE-LS-N": 114, "EXT-LS": 0,
-                     "EE-LS-T": 111}
+                     "EE-LS-T": 111, "LE-LS-2R": 222, "LE-LS-Z": 222}
     assert make_config("paper", condition="EXT-LS").num_lane_experts == 3
     evaluators = decode(make_config("paper", condition="EV-LS"), jnp.arange(111, dtype=jnp.float32))
     np.testing.assert_array_equal(evaluators.evaluator[2, :2], [74.0, 75.0])  # expert 2's evaluator: genes 74..
