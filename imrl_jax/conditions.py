@@ -7,13 +7,15 @@ evolved, and how plots draw it. Everything else in the engine (config validation
 the lifetime, the NumPy reference, evolution, learning tests, plots, the report) reads this
 table; a new condition is a new row (plus its learning rule, if it brings one).
 
-This module imports nothing of the package and no JAX, so the experiment scripts can read it.
+This module imports only the genome parts (``imrl_jax.genome``) and no JAX, so the experiment scripts can read it.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from typing import NamedTuple
+
+from imrl_jax.genome import EVOLVED_FIELDS, EVOLVED_PARAMETERS, PARTS, get_part  # noqa: F401 (the table's names)
 
 
 class Phase(NamedTuple):
@@ -44,29 +46,6 @@ ADULT_HIERARCHY = Phase(True, True, False, True, True)
 
 #: The networks of an agent (fields of ``networks.Agent``), in the order a genome lists them.
 NETWORKS = ("reinforcer", "actor", "evaluator", "selector_actor", "selector_critic")
-#: What else a genome may encode: one expression gene per expert (an evolved number of experts), the
-#: learning values (evolved learning parameters), and the childhood's length (one gene: learning and noise stop
-#: after round(u x childhood_steps) steps of it, u = clip((g + 1) / 2, 0, 1); childhood_steps is the maximum).
-GENOME_PARTS = NETWORKS + ("expressed", "parameters", "childhood_length")
-
-#: The learning values LE-LS-P evolves (the paper's future work (c)), one gene each, in this order. A gene g
-#: is first mapped onto u = clip((g + 1) / 2, 0, 1) (generation 0's U[-1, 1] onto [0, 1]), then by its map:
-#: "log" 10^(lo + u (hi - lo)) (rates), "1-log" 1 - 10^(lo + u (hi - lo)) (discount, trace decays: fine steps
-#: near 1), "linear" lo + u (hi - lo). The gene 0 gives u = 0.5: a rate of 0.01, the paper's.
-EVOLVED_PARAMETERS = (
-    ("gamma", "1-log", -3.0, -0.5),  # 0.684 .. 0.999 (the paper's 0.99 at u = 0.4)
-    ("trace_lambda", "1-log", -3.0, 0.0),  # 0 .. 0.999 (the paper's 0 at u = 1; skills' 0.98 at u = 0.43)
-    ("eta_actor", "log", -4.0, 0.0),  # 1e-4 .. 1
-    ("eta_evaluator", "log", -4.0, 0.0),
-    ("eta_selector_actor", "log", -4.0, 0.0),  # skills' adult 0.3 at u = 0.87
-    ("eta_selector_critic", "log", -4.0, 0.0),  # skills' adult 0.001 at u = 0.25
-    ("childhood_trace_lambda", "1-log", -3.0, 0.0),
-    ("childhood_eta_selector_actor", "log", -4.0, 0.0),
-    ("childhood_eta_selector_critic", "log", -4.0, 0.0),
-    ("noise_std", "linear", 0.0, 1.0),  # the paper's 0.3 at u = 0.3
-    ("initial_speed_bias", "linear", -2.0, 6.0),  # MODEL.md's 0 at u = 0.25, skills' 4 at u = 0.75
-)
-EVOLVED_FIELDS = tuple(name for name, *_ in EVOLVED_PARAMETERS)
 SELECTOR = ("selector_actor", "selector_critic")
 
 #: Config fields that only childhood reads.
@@ -79,11 +58,8 @@ GA_FIELDS = ("population_size", "num_generations", "num_parents", "mutation_prob
 
 
 def network_shape(network: str, num_experts: int, num_weights: int) -> tuple[int, ...]:
-    """The weight array of one network for ``num_experts`` experts reading ``num_weights`` inputs (bias included)."""
-    return {"reinforcer": (num_experts, num_weights), "actor": (num_experts, 2, num_weights),
-            "evaluator": (num_experts, num_weights), "selector_actor": (num_experts, num_weights),
-            "selector_critic": (num_weights,), "expressed": (num_experts,),
-            "parameters": (len(EVOLVED_PARAMETERS),), "childhood_length": (1,)}[network]
+    """The genes of one genome part for ``num_experts`` experts reading ``num_weights`` inputs (bias included)."""
+    return get_part(network).shape(num_experts, num_weights)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -92,7 +68,7 @@ class Condition:
 
     name: str
     description: str
-    genome: tuple[str, ...]  # the networks the genome encodes, in this order (the rest start at 0)
+    genome: tuple[str, ...]  # the genome parts (genome.PARTS) it encodes, in this order (the rest start at 0)
     adult: Phase  # the phase of every adult task
     childhood: Phase | None = None  # the phase of its childhood before the tasks (None: no childhood); the config's
     # childhood options (walls, the selector's reward) are applied to it
@@ -107,13 +83,7 @@ class Condition:
 
     def num_genes(self, num_experts: int, num_inputs: int) -> int:
         """Genome length: the sizes of the encoded networks (LE-LS 111, EE-LS 222, EE-ES 333, SLE 0)."""
-        total = 0
-        for network in self.genome:
-            size = 1
-            for n in network_shape(network, self.num_experts(num_experts), num_inputs + 1):
-                size *= n
-            total += size
-        return total
+        return sum(get_part(name).size(self.num_experts(num_experts), num_inputs + 1) for name in self.genome)
 
     @property
     def has_childhood(self) -> bool:
@@ -139,8 +109,6 @@ class Condition:
             ignored.update(("eta_actor", "eta_evaluator"))
         if not ((self.has_childhood and not self.childhood.evaluation) or self.adult.experts_learn):
             ignored.add("eta_evaluator")  # evolved evaluators are fixed
-        if not self.learned_actors:
-            ignored.add("initial_speed_bias")
         if not self.adult.selector_learns:
             ignored.update(("eta_selector_actor", "eta_selector_critic"))
         if not (self.adult.experts_learn or self.adult.selector_learns):
@@ -155,8 +123,8 @@ class Condition:
             ignored.update(GA_FIELDS)
         if self.single_expert:  # one expert: there is nothing to choose
             ignored.update(("num_experts", "selector_period", "selector_termination"))
-        if "parameters" in self.genome:  # the genome's values replace the config's
-            ignored.update(EVOLVED_FIELDS)
+        for name in self.genome:  # what its genes replace (evolved actors: the speed bias; evolved values: theirs)
+            ignored.update(get_part(name).ignores)
         return frozenset(ignored)
 
 
@@ -199,6 +167,19 @@ CONDITIONS: dict[str, Condition] = {c.name: c for c in (
               "learn and explore for the first round(u x childhood_steps) steps of childhood only, u = clip((g + 1) / "
               "2, 0, 1) of the last gene", genome=("reinforcer", "parameters", "childhood_length"),
               adult=ADULT_LEARNING_SELECTOR, childhood=CHILDHOOD, style=dict(color="tab:orange", lw=1.6)),
+    # A size-matched control (MODEL.md "Size-matched controls"): EE-LS with actors of LE-LS's size, 111 genes.
+    Condition("EE-LS-T", "EE-LS evolving only each actor's orientation (turn) unit: 3 x 37 = 111 genes, LE-LS's "
+              "size; the speed unit's weights are 0 and its bias config.initial_speed_bias (a learned actor's start)",
+              genome=("actor_turn",), adult=ADULT_LEARNING_SELECTOR, style=dict(color="0.55", lw=1.8, ls=":")),
+    # Size-matched controls with reinforcers of EE-LS's size, 222 genes: a second reinforcer unit per expert, or
+    # 111 neutral genes.
+    Condition("LE-LS-2R", "LE-LS with two reinforcer units per expert: 2 x 3 x 37 = 222 genes, EE-LS's size; an "
+              "expert's internal reward is the mean of its two units' rewards, (r1 + r2) / 2",
+              genome=("reinforcer", "second_reinforcer"), adult=ADULT_LEARNING_SELECTOR, childhood=CHILDHOOD,
+              style=dict(color="black", lw=1.8, ls=":")),
+    Condition("LE-LS-Z", "LE-LS with 3 x 37 = 111 neutral genes after its reinforcers (222 genes, EE-LS's size); "
+              "they decode into nothing", genome=("reinforcer", "neutral"), adult=ADULT_LEARNING_SELECTOR,
+              childhood=CHILDHOOD, style=dict(color="black", lw=1.2, ls="-.")),
     # The paper's future work (b): the whole hierarchy trained on the task's reward only; no evolution, no
     # childhood, everything reset at each task as SLE is (MODEL.md "Future-work conditions").
     Condition("EXT-LS", "the hierarchy on extrinsic reward only: no evolution, no childhood; in each task, reset, "
@@ -218,10 +199,10 @@ def register(condition: Condition) -> Condition:
     """Add a row to the table (a condition of your own, e.g. in a notebook); a name in use is a ValueError."""
     if condition.name in CONDITIONS:
         raise ValueError(f"condition: {condition.name!r} is already a row of the table")
-    unknown = [n for n in condition.genome if n not in GENOME_PARTS] + [n for n in condition.reset if n not in NETWORKS]
+    unknown = [n for n in condition.genome if n not in PARTS] + [n for n in condition.reset if n not in NETWORKS]
     if unknown:
         raise ValueError(f"condition {condition.name}: {unknown[0]!r} is not a network (choose from "
-                         f"{', '.join(GENOME_PARTS)})")
+                         f"{', '.join(PARTS)})")
     CONDITIONS[condition.name] = condition
     return condition
 

@@ -26,8 +26,9 @@ from imrl_jax import learning
 from imrl_jax.arena import advance, floor_colour_xy, on_wall, spawn_pose, trial_ends, turn
 from imrl_jax.config import Config, ConfigError, LearningParams
 from imrl_jax.learning import ascend, ascend_row, selector_features, td_error, unit_features
-from imrl_jax.networks import Agent, decode, explore, internal_reward, pick, select
+from imrl_jax.networks import Agent, explore, internal_reward, pick, select
 from imrl_jax.conditions import Phase
+from imrl_jax.genome import PARTS, GenomePart, get_part
 from imrl_jax.env import TaskSpec
 from imrl_jax.state import (Curves, Draws, Previous, State, Traces, bin_steps, childhood_phase, draw_block,
                             phase_params)
@@ -417,16 +418,23 @@ def check_supported(phase: Phase) -> None:
                               f"{getattr(phase, name)!r}; use step_kernel=xla")
 
 
-#: The agent's fields of genome parts the kernel does not implement, and what they are.
-UNSUPPORTED_PARTS = {"params": "evolved learning parameters", "childhood_length": "an evolved childhood length",
-                     "expressed": "an evolved number of experts (expression genes)"}
+def refusal(part: GenomePart) -> str:
+    """The one line refusing a genome part the kernel does not implement (``GenomePart.kernel`` False)."""
+    return f"step_kernel: the pallas kernel does not implement {part.what} (genome part {part.name!r}); use step_kernel=xla"
+
+
+def check_parts(genome: tuple[str, ...]) -> None:
+    """Refuse a genome with a part the kernel does not implement (ConfigError naming it)."""
+    for name in genome:
+        if not get_part(name).kernel:
+            raise ConfigError(refusal(get_part(name)))
 
 
 def check_agent(agent: Agent) -> None:
-    """Refuse an agent with a genome part the kernel does not implement (ConfigError naming it)."""
-    for field, what in UNSUPPORTED_PARTS.items():
-        if getattr(agent, field) is not None:
-            raise ConfigError(f"step_kernel: the pallas kernel does not implement {what}; use step_kernel=xla")
+    """Refuse an agent holding what only a part the kernel does not implement sets (ConfigError naming it)."""
+    for part in PARTS.values():
+        if not part.kernel and part.field is not None and getattr(agent, part.field) is not None:
+            raise ConfigError(refusal(part))
 
 
 def unsupported(config: Config) -> str | None:
@@ -435,7 +443,7 @@ def unsupported(config: Config) -> str | None:
         if config.spec.has_childhood:
             check_supported(childhood_phase(config))
         check_supported(config.spec.adult)
-        check_agent(decode(config, jnp.zeros((config.num_genes,))))
+        check_parts(config.spec.genome)
     except ConfigError as error:
         return str(error)
     return None
@@ -446,6 +454,7 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
               num_bins: int | None = None, interpret: bool | None = None) -> tuple[State, Curves]:
     """:func:`imrl_jax.lifetime.run_phase`, each bin one kernel call (``interpret``: default off a GPU)."""
     check_supported(phase)
+    check_parts(config.spec.genome)
     check_agent(state.agent)
     phase_steps = num_steps if phase_steps is None else phase_steps
     num_bins = config.num_bins if num_bins is None else num_bins

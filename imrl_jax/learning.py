@@ -11,7 +11,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from imrl_jax.networks import evaluate_both, reinforce
+from imrl_jax.networks import evaluate_both, internal_rewards
 
 
 def td_error(reward, value, next_value, gamma, terminal):
@@ -119,7 +119,7 @@ def learn_experts(phase, params, agent, traces, prev, xb, prev_xb, same):
     if phase.evaluation:  # the change of the innate evaluation alone
         reward, discount = 0.0, gamma if phase.evaluation == "discounted" else 1.0
     else:
-        reward = reinforce(agent.reinforcer, xb)[kp] if phase.intrinsic else prev.terminal.astype(xb.dtype)
+        reward = internal_rewards(agent, xb)[kp] if phase.intrinsic else prev.terminal.astype(xb.dtype)
         discount = gamma
     value_before, value_now = (agent.evaluator @ prev_xb)[kp], (agent.evaluator @ xb)[kp]
     surprise = td_error(reward, value_before, value_now, discount, prev.terminal)

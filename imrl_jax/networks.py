@@ -7,13 +7,13 @@ an :class:`Agent` pytree; :func:`decode` turns a genome into the weights a condi
 from __future__ import annotations
 
 import math
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 
-from imrl_jax.conditions import EVOLVED_FIELDS, EVOLVED_PARAMETERS, network_shape
 from imrl_jax.config import Config, LearningParams
+from imrl_jax.genome import express, get_part, parameter_values  # noqa: F401 (networks' names for them)
 
 
 class Agent(NamedTuple):
@@ -30,6 +30,8 @@ class Agent(NamedTuple):
     params: LearningParams | None = None
     # () steps of childhood it learns and explores for (an evolved childhood length); None: all of them.
     childhood_length: jnp.ndarray | None = None
+    # (K, n+1) a second reinforcer unit per expert (LE-LS-2R): r_k = (r1 + r2) / 2; None: one unit.
+    second_reinforcer: jnp.ndarray | None = None
 
 
 def with_bias(x: jnp.ndarray) -> jnp.ndarray:
@@ -47,28 +49,17 @@ def reinforce(w: jnp.ndarray, xb: jnp.ndarray) -> jnp.ndarray:
     return internal_reward(w @ xb)
 
 
+def internal_rewards(agent: Agent, xb: jnp.ndarray) -> jnp.ndarray:
+    """Every expert's internal reward r_k = 2 sigmoid(w_k.x~) - 1; with two units, their mean (r1 + r2) / 2."""
+    rewards = reinforce(agent.reinforcer, xb)
+    if agent.second_reinforcer is None:
+        return rewards
+    return 0.5 * (rewards + reinforce(agent.second_reinforcer, xb))
+
+
 def pick(values: jnp.ndarray, k) -> jnp.ndarray:
     """values[k] (k may be traced), as a masked sum: the GPU kernel's Triton has no gather."""
     return jnp.sum(jnp.where(jax.lax.broadcasted_iota(jnp.int32, values.shape, 0) == k, values, 0.0))
-
-
-def _unit(gene):
-    """Where a gene in [-1, 1] puts its value in the value's range: u in [0, 1] (clipped)."""
-    return jnp.clip((gene + 1.0) / 2.0, 0.0, 1.0)
-
-
-def parameter_values(genes) -> dict:
-    """The learning values that parameter genes encode (:data:`~imrl_jax.conditions.EVOLVED_PARAMETERS`' maps)."""
-    values = {}
-    for gene, (name, kind, lo, hi) in zip(genes, EVOLVED_PARAMETERS):
-        exponent = lo + _unit(gene) * (hi - lo)
-        values[name] = {"log": 10.0 ** exponent, "1-log": 1.0 - 10.0 ** exponent, "linear": exponent}[kind]
-    return values
-
-
-def express(genes: jnp.ndarray) -> jnp.ndarray:
-    """Which experts the expression genes express: those with a positive gene, and always the largest one's."""
-    return ((genes > 0) | (genes == genes.max())).astype(genes.dtype)
 
 
 def expressed_only(agent: Agent, selection: jnp.ndarray) -> jnp.ndarray:
@@ -120,57 +111,30 @@ def zero_agent(config: Config, dtype=jnp.float32) -> Agent:
     """An agent before evolution and learning: weights 0 (MODEL.md), except the actors' speed
     unit's bias, ``config.initial_speed_bias`` (0 by default; docs/CHILDHOOD.md)."""
     k, n = config.num_lane_experts, config.num_inputs + 1
-    return Agent(
+    agent = Agent(
         reinforcer=jnp.zeros((k, n), dtype),
         actor=jnp.zeros((k, 2, n), dtype).at[:, 1, -1].set(config.initial_speed_bias),
         evaluator=jnp.zeros((k, n), dtype),
         selector_actor=jnp.zeros((k, n), dtype),
         selector_critic=jnp.zeros((n,), dtype),
-        expressed=jnp.ones((k,), dtype) if "expressed" in config.spec.genome else None,
     )
-
-
-def _parameter_traits(config: Config, agent: Agent) -> list:
-    # The speed bias is no learning value: decode puts it into the actors' weights.
-    return [agent.actor[0, 1, -1] if name == "initial_speed_bias" else getattr(agent.params, name)
-            for name in EVOLVED_FIELDS]
-
-
-def _expression_names(config: Config) -> tuple[str, ...]:
-    return ("expressed_experts",) + tuple(f"share_{k}_experts" for k in range(1, config.num_experts + 1))
-
-
-def _expression_traits(config: Config, agent: Agent) -> list:
-    count = agent.expressed.sum()
-    return [count] + [(count == k).astype(count.dtype) for k in range(1, config.num_experts + 1)]
-
-
-class _Traits(NamedTuple):
-    """The evolved values one part of the genome carries besides weights."""
-
-    part: str  # the genome part (``Condition.genome``)
-    names: Callable[[Config], tuple[str, ...]]
-    values: Callable[[Config, Agent], list]  # one () value per name, from the decoded agent
-
-
-#: The genome parts whose values :func:`trait_names` and :func:`traits` report, in their order.
-_TRAITS = (
-    _Traits("parameters", lambda config: EVOLVED_FIELDS, _parameter_traits),
-    _Traits("childhood_length", lambda config: ("childhood_length",), lambda config, agent: [agent.childhood_length]),
-    _Traits("expressed", _expression_names, _expression_traits),
-)
+    for name in config.spec.genome:  # the fields a genome part adds (e.g. expression: all expressed)
+        part = get_part(name)
+        if part.start is not None:
+            agent = agent._replace(**part.start(config, dtype))
+    return agent
 
 
 def trait_names(config: Config) -> tuple[str, ...]:
     """The evolved values a condition's genomes carry besides weights (recorded per generation by ``evolve``)."""
-    return tuple(name for row in _TRAITS if row.part in config.spec.genome for name in row.names(config))
+    return tuple(name for part in config.spec.genome for name in get_part(part).trait_names(config))
 
 
 def traits(config: Config, genome: jnp.ndarray) -> jnp.ndarray:
     """The values of :func:`trait_names` for one genome (the learning values its genes decode to; how many experts it
     expresses, and 1 in the ``share_k_experts`` entry of that number): a population's mean of those is the share."""
     agent = decode(config, genome)
-    values = [value for row in _TRAITS if row.part in config.spec.genome for value in row.values(config, agent)]
+    values = [value for part in config.spec.genome for value in get_part(part).trait_values(config, agent)]
     return jnp.stack([jnp.asarray(v, genome.dtype) for v in values]) if values else jnp.zeros((0,), genome.dtype)
 
 
@@ -183,30 +147,22 @@ def decode(config: Config, genome: jnp.ndarray) -> Agent:
     if genome.shape != (config.num_genes,):
         raise ValueError(f"genome: expected shape ({config.num_genes},) for {config.condition}, "
                          f"got {genome.shape}")
-    agent = zero_agent(config, genome.dtype)
-    start, networks = 0, {}
-    for network in config.spec.genome:
-        shape = network_shape(network, config.num_lane_experts, config.num_inputs + 1)
+    agent, start = zero_agent(config, genome.dtype), 0
+    for name in config.spec.genome:  # each part puts its genes in place (genome.PARTS)
+        part = get_part(name)
+        shape = part.shape(config.num_lane_experts, config.num_inputs + 1)
         size = math.prod(shape)
-        networks[network] = genome[start:start + size].reshape(shape)
+        agent = part.decode(config, agent, genome[start:start + size].reshape(shape))
         start += size
-    if "expressed" in networks:  # expression genes: which experts exist (an evolved number of experts)
-        networks["expressed"] = express(networks["expressed"])
-    if "childhood_length" in networks:  # learning and noise stop after this many steps of childhood
-        networks["childhood_length"] = jnp.round(_unit(networks["childhood_length"][0]) * config.childhood_steps)
-    if "parameters" in networks:  # the individual's own learning values; the config's for the others
-        values = parameter_values(networks.pop("parameters"))
-        bias = values.pop("initial_speed_bias")
-        base = config.learning_params()
-        networks["params"] = LearningParams(*(jnp.asarray(values.get(f, getattr(base, f)), genome.dtype)
-                                              for f in LearningParams._fields))
-        networks["actor"] = agent.actor.at[:, 1, -1].set(bias)
-    return agent._replace(**networks)
+    return agent
 
 
 def encode(config: Config, agent: Agent) -> jnp.ndarray:
     """Inverse of :func:`decode`: the genome of the evolved parts of an agent."""
-    if "parameters" in config.spec.genome:
-        raise ValueError("encode: evolved learning parameters are not encoded back into genes")
-    parts = [getattr(agent, network).reshape(-1) for network in config.spec.genome]
+    parts = []
+    for name in config.spec.genome:
+        part = get_part(name)
+        if part.encode is None:
+            raise ValueError(f"encode: {part.what} are not encoded back into genes")
+        parts.append(part.encode(agent).reshape(-1))
     return jnp.concatenate(parts) if parts else jnp.zeros((0,), agent.actor.dtype)

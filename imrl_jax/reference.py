@@ -21,8 +21,8 @@ import math
 
 import numpy as np
 
-from imrl_jax.conditions import (ADULT_EVOLVED_SELECTOR, ADULT_LEARNING_SELECTOR, ADULT_SINGLE_EXPERT, CHILDHOOD,
-                                 EVOLVED_PARAMETERS, Phase, network_shape)
+from imrl_jax.conditions import ADULT_EVOLVED_SELECTOR, ADULT_LEARNING_SELECTOR, ADULT_SINGLE_EXPERT, CHILDHOOD, Phase
+from imrl_jax.genome import get_part
 
 NO_COLOUR, RED, GREEN, BLUE = -1, 0, 1, 2
 
@@ -31,6 +31,8 @@ PHASES = {"childhood": CHILDHOOD, "adult-ls": ADULT_LEARNING_SELECTOR, "adult-es
           "sle": ADULT_SINGLE_EXPERT}
 
 WEIGHT_KEYS = ("reinforcer", "actor", "evaluator", "selector_actor", "selector_critic")
+#: What a life carries from phase to phase: the weights, and what genome parts add (expression, a second reinforcer).
+CARRIED = (*WEIGHT_KEYS, "expressed", "second_reinforcer")
 
 
 # --------------------------------------------------------------------------- floor
@@ -186,8 +188,7 @@ def _choose_expert(s, u):
 
 
 def _copy_weights(weights):
-    return {key: np.array(weights[key], dtype=np.float64, copy=True) for key in (*WEIGHT_KEYS, "expressed")
-            if key in weights}
+    return {key: np.array(weights[key], dtype=np.float64, copy=True) for key in CARRIED if key in weights}
 
 
 def zero_weights(config, num_experts):
@@ -212,14 +213,12 @@ def decode(config, genome):
     if genome.size != config.num_genes:
         raise ValueError(f"genome: {config.condition} has {config.num_genes} genes, got {genome.size}")
     start = 0
-    for network in config.spec.genome:
-        shape = network_shape(network, config.num_lane_experts, config.num_inputs + 1)
+    for name in config.spec.genome:  # each part's NumPy twin puts its genes in place (genome.PARTS)
+        part = get_part(name)
+        shape = part.shape(config.num_lane_experts, config.num_inputs + 1)
         size = int(np.prod(shape))
-        weights[network] = genome[start:start + size].reshape(shape).copy()
+        part.reference_decode(config, weights, genome[start:start + size].reshape(shape))
         start += size
-    if "expressed" in weights:  # an expert is expressed when its gene is positive; the largest one always is
-        genes = weights["expressed"]
-        weights["expressed"] = ((genes > 0) | (genes == genes.max())).astype(np.float64)
     return weights
 
 
@@ -340,6 +339,8 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
                     discount = gamma if phase.evaluation == "discounted" else 1.0
                 elif childhood:
                     reward = 2.0 * _sigmoid(w["reinforcer"][kp] @ xb) - 1.0
+                    if "second_reinforcer" in w:  # two units: the mean of their rewards
+                        reward = 0.5 * (reward + (2.0 * _sigmoid(w["second_reinforcer"][kp] @ xb) - 1.0))
                 else:
                     reward = 1.0 if prev_reached else 0.0
                 value_now = w["evaluator"][kp] @ xb
@@ -472,21 +473,16 @@ def live(config, genome, start_pose, childhood_u, childhood_z, task_u, task_z, c
     """
     spec = config.spec
     grown = decode(config, genome)
-    if "parameters" in grown:  # evolved learning parameters: the genome's values replace the config's
-        values = {}
-        for gene, (name, kind, lo, hi) in zip(grown.pop("parameters"), EVOLVED_PARAMETERS):
-            exponent = lo + min(max((gene + 1.0) / 2.0, 0.0), 1.0) * (hi - lo)
-            values[name] = {"log": 10.0 ** exponent, "1-log": 1.0 - 10.0 ** exponent, "linear": exponent}[kind]
-        config = config.replace(**values)
-        grown["actor"][:, 1, -1] = values["initial_speed_bias"]
-    learning_steps = None
-    if "childhood_length" in grown:  # an evolved childhood length: learning and noise stop after it
-        learning_steps = round(min(max((float(grown.pop("childhood_length")[0]) + 1.0) / 2.0, 0.0), 1.0)
-                               * config.childhood_steps)
+    options = {}
+    for name in spec.genome:  # what a part does before the life (evolved values: the config; a childhood's length)
+        part = get_part(name)
+        if part.reference_life is not None:
+            config, more = part.reference_life(config, grown)
+            options.update(more)
     if spec.has_childhood:
         child = run_phase(config, spec.childhood, grown, start_pose, childhood_u, childhood_z,
                           task=None, phase_steps=config.childhood_steps, spawn=childhood_spawn,
-                          learning_steps=learning_steps)
+                          **options)
         grown = child["weights"]
 
     task_u = np.asarray(task_u, dtype=np.float64)

@@ -34,7 +34,8 @@ def test_genome_sizes_and_layout_follow_the_table():
     """111, 222, 333 and 0 genes (37 weights per network and expert); decode puts each network in its place."""
     sizes = {name: make_config("paper", condition=name).num_genes for name in conditions.NAMES}
     assert sizes == {"LE-LS": 111, "EE-LS": 222, "EE-ES": 333, "SLE": 0, "EV-LS": 111, "EV-LS-diff": 111,
-                     "LE-LS-P": 122, "LE-LS-PC": 123, "LE-LS-N": 114, "EXT-LS": 0}
+                     "LE-LS-P": 122, "LE-LS-PC": 123, "LE-LS-N": 114, "EXT-LS": 0,
+                     "EE-LS-T": 111, "LE-LS-2R": 222, "LE-LS-Z": 222}
     assert make_config("paper", condition="EXT-LS").num_lane_experts == 3
     evaluators = decode(make_config("paper", condition="EV-LS"), jnp.arange(111, dtype=jnp.float32))
     np.testing.assert_array_equal(evaluators.evaluator[2, :2], [74.0, 75.0])  # expert 2's evaluator: genes 74..
@@ -114,6 +115,8 @@ def _genome(config):
         actors = np.zeros((3, 2, n))
         actors[:, 1, -1] = (6.0, 0.0, 6.0)
         genome[:6 * n] = actors.reshape(-1)
+    if "actor_turn" in config.spec.genome:  # turn units 0: straight ahead at the fixed speed
+        genome[:3 * (config.num_inputs + 1)] = 0.0
     return genome
 
 
