@@ -217,7 +217,7 @@ class Ruggedness(NamedTuple):
 
 def correlation_length(rho1) -> jnp.ndarray:
     """-1 / ln rho(1): the steps over which fitness stays correlated (inf at rho(1) >= 1, 0 at rho(1) <= 0)."""
-    rho1 = jnp.asarray(rho1, jnp.float32)
+    rho1 = jnp.asarray(rho1, float)
     inside = -1.0 / jnp.log(jnp.clip(rho1, jnp.finfo(rho1.dtype).tiny, 1.0 - jnp.finfo(rho1.dtype).eps))
     return jnp.where(rho1 >= 1.0, jnp.inf, jnp.where(rho1 <= 0.0, 0.0, inside))  # NaN stays NaN
 
