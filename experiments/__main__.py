@@ -58,7 +58,8 @@ def run_studies(chosen, report: bool = False, options: tuple[str, ...] = ()) -> 
     what = "report" if report else "study"
     for study in chosen:
         if report and study.report_argv is None:
-            print(f"\n=== {study.name}: its report is a stage of its run", flush=True)
+            print(f"\n=== {study.name}: no report of its own (a stage of its run writes it, or none is written yet)",
+                  flush=True)
             continue
         print(f"\n=== {what} {study.name}", flush=True)
         try:
