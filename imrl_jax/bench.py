@@ -54,13 +54,18 @@ def _shard(array, lanes: int):
     return jax.device_put(array, NamedSharding(Mesh(np.asarray(devices), ("lanes",)), PartitionSpec("lanes")))
 
 
-def _time(fn, *args, repeats: int) -> tuple[float, float]:
-    """Median and shortest wall time of ``repeats`` calls (after one untimed call).
+def _time(fn, *args, repeats: int, once_over: float | None = None) -> tuple[float, float]:
+    """Median and shortest wall time of ``repeats`` calls (after one untimed call; or that call's time alone when
+    it took over ``once_over`` seconds, for a compiled program too long to run again).
 
     The shortest is what the machine can do when nothing else runs on it; on a shared
     machine the median can be far slower.
     """
+    start = time.perf_counter()
     jax.block_until_ready(fn(*args))
+    first = time.perf_counter() - start
+    if once_over is not None and first > once_over:
+        return first, first
     times = []
     for _ in range(repeats):
         start = time.perf_counter()

@@ -34,7 +34,6 @@ import dataclasses
 import json
 import os
 import platform
-import statistics
 import sys
 import time
 import traceback
@@ -200,20 +199,11 @@ def program_bytes(executable) -> int | None:
 
 
 def timed(executable, args, repeats: int) -> tuple[float, float]:
-    """Median and shortest seconds of ``repeats`` calls after a first one (the first alone when it took over 5 s)."""
-    import jax
+    """Median and shortest seconds of ``repeats`` calls after a first one (the first alone when it took over 5 s:
+    compiled ahead, it holds no compilation, and a long program is not run again)."""
+    from imrl_jax.bench import _time
 
-    start = time.perf_counter()
-    jax.block_until_ready(executable(*args))
-    first = time.perf_counter() - start
-    if first > 5.0:  # compiled ahead, so no compilation in it: a long program is not timed again
-        return first, first
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        jax.block_until_ready(executable(*args))
-        times.append(time.perf_counter() - start)
-    return statistics.median(times), min(times)
+    return _time(executable, *args, repeats=repeats, once_over=5.0)
 
 
 @contextlib.contextmanager
