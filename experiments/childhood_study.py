@@ -28,11 +28,12 @@ import time
 
 import numpy as np
 
+from imrl_jax.config import ADULT_SELECTOR
+
 #: The learning rules a childhood is tried with: the childhood values of LearningParams.
 RULES = {
     "paper": dict(childhood_trace_lambda=0.0, childhood_eta_selector_actor=0.01, childhood_eta_selector_critic=0.01),
-    "extension": dict(childhood_trace_lambda=0.98, childhood_eta_selector_actor=0.3,
-                      childhood_eta_selector_critic=0.001),
+    "extension": {f"childhood_{name}": value for name, value in ADULT_SELECTOR.items()},
     # The selector does not learn: every expert gets a third of the steps, at random.
     "uniform": dict(childhood_trace_lambda=0.0, childhood_eta_selector_actor=0.0, childhood_eta_selector_critic=0.0),
 }
@@ -247,7 +248,7 @@ def stage_plot(args) -> int:
 CEILING_RULES = {
     "paper": {},
     "td0-fast-selector": dict(eta_selector_actor=3.0, eta_selector_critic=0.01),
-    "extension": dict(trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001),
+    "extension": dict(ADULT_SELECTOR),
 }
 
 

@@ -39,6 +39,7 @@ from experiments.reproduce import (DEFAULT_VARIANTS, EVOLVED, SCALES, TESTED, St
                                    evolve_command, load_manifest, run_stages, test_command, test_cost, test_dir)
 from experiments.executor import add_options, from_options
 from experiments.study import Study
+from imrl_jax.config import ADULT_SELECTOR
 
 #: The screen's sizes: the paper's life lengths, fewer seeds and tests.
 SCREEN = dict(SCALES["paper"], seeds=5, best=5, tests=4)
@@ -61,6 +62,8 @@ class RuleSet(NamedTuple):
     sle_noise_steps: int | None = None  # SLE's noise horizon: None one task's length (100,000), 0 the whole test
 
 
+#: The adult selector's values as --set assignments (``config.ADULT_SELECTOR``, the presets' own).
+SELECTOR_SETS = tuple(f"{name}={value}" for name, value in ADULT_SELECTOR.items())
 RULE_SETS: tuple[RuleSet, ...] = (
     RuleSet("paper", "paper", (), "the learning rules as written (the finished paper-scale run)",
             ee_ls="paper", sle="paper", le_ls="paper"),
@@ -76,11 +79,10 @@ RULE_SETS: tuple[RuleSet, ...] = (
     RuleSet("skills-clamp", "skills", ("childhood_walls=clamp",),
             "skills with MODEL.md's walls in childhood (the robot slides along them, never put back)",
             ee_ls="skills", sle="skills"),
-    RuleSet("paper-selector", "paper", ("trace_lambda=0.98", "eta_selector_actor=0.3", "eta_selector_critic=0.001"),
+    RuleSet("paper-selector", "paper", SELECTOR_SETS,
             "the paper's rules with only the adult selector's unstated values of skills (traces, selector rates)",
             ee_ls="skills", sle="skills-bias0"),
-    RuleSet("paper-selector-sle-test", "paper", ("trace_lambda=0.98", "eta_selector_actor=0.3",
-                                                 "eta_selector_critic=0.001"),
+    RuleSet("paper-selector-sle-test", "paper", SELECTOR_SETS,
             "paper-selector with SLE's noise annealed over the whole 1,000,000-cycle test (every run shared)",
             ee_ls="skills", sle="skills-bias0-sle-test", le_ls="paper-selector", sle_noise_steps=0),
     RuleSet("faithful", "faithful", (), "paper-selector-sle-test at full scale: the `faithful` preset of the "

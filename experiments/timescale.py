@@ -40,6 +40,7 @@ from experiments.reproduce import (MEASURED, Stage, evolution_cost, evolve_comma
                                    test_command, test_cost)
 from experiments.executor import add_options, from_options
 from experiments.study import Study
+from imrl_jax.config import ADULT_SELECTOR
 
 OUT = os.path.join("experiments", "results", "timescale")
 #: The selector's options: name -> Config fields. "per-step" is the paper's selector.
@@ -55,7 +56,7 @@ OPTIONS = {
 #: Adult learning rules of the ceiling: the paper's one-step rules, and skills' adult selector (traces, rates).
 RULES = {
     "paper": {},
-    "skills": dict(trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001),
+    "skills": dict(ADULT_SELECTOR),
     # The selector does not learn: what choosing at random (s = 0.5 for every expert) is worth, per option.
     "random": dict(eta_selector_actor=0.0, eta_selector_critic=0.0),
 }

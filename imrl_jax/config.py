@@ -330,6 +330,11 @@ class Config:
 #: rounding for the GPU kernel), so a run may resume under other values of them.
 COMPUTE_FIELDS = tuple(f.name for f in dataclasses.fields(Config) if f.metadata.get("compute"))
 
+#: The adult selector's values that made it learn best in experiments/selector_sweep.py
+#: (experiments/results/selector_sweep): traces and selector rates, the paper silent on both. The
+#: ``extension``, ``skills`` and ``faithful`` presets use them, and the studies name them from here.
+ADULT_SELECTOR = dict(trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001)
+
 #: Named presets. ``paper`` is full scale; ``small`` keeps the structure at a length a
 #: laptop CPU evolves in minutes (reduced scale: label results made with it as such).
 PRESETS: dict[str, dict] = {
@@ -337,22 +342,19 @@ PRESETS: dict[str, dict] = {
     # Paper scale with MODEL.md's learning extensions at the values that made an adult
     # selector learn best in experiments/selector_sweep.py (experiments/results/selector_sweep).
     # Its values drive childhood too (as when the preset was chosen and its runs were made).
-    "extension": dict(trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001,
-                      childhood_trace_lambda=0.98, childhood_eta_selector_actor=0.3,
-                      childhood_eta_selector_critic=0.001),
+    "extension": dict(**ADULT_SELECTOR, **{f"childhood_{k}": v for k, v in ADULT_SELECTOR.items()}),
     # The paper's rules in childhood (skills are learned there: docs/CHILDHOOD.md), a robot
     # pinned on a wall in childhood put back at a random pose, learned experts that start
     # fast, the extension's selector in adulthood. The study's choice: experts follow one
     # colour each, and they compose.
     # Learned experts start near full speed (a retina-only reward never pays for speed).
-    "skills": dict(trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001, childhood_walls="respawn",
-                   initial_speed_bias=4.0),
+    "skills": dict(**ADULT_SELECTOR, childhood_walls="respawn", initial_speed_bias=4.0),
     # The paper's rules with only the adult selector's unstated values of ``skills`` (traces and
     # rates): the reading under which the most of the paper's claims hold (docs/CLAIMS.md, the
     # claims map's ``paper-selector-sle-test``). SLE's noise anneals over the whole test (the
     # default ``sle_noise_steps`` 0): the paper's "SLE can train its only expert during a very
     # long period of test".
-    "faithful": dict(trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001),
+    "faithful": dict(ADULT_SELECTOR),
     "small": dict(
         childhood_steps=15_000,
         task_steps=5_000,
