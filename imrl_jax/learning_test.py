@@ -353,7 +353,7 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
         try:
             return _run_locked(config, genomes, out_dir, num_tests=num_tests, steady_steps=steady_steps,
                                num_chunks=num_chunks, seed=seed, quiet=quiet, source=source, command=command,
-                               evolved=evolved)
+                               evolved=evolved, log=log)
         except OSError as error:
             if write_errno(error) is None:
                 raise
@@ -364,7 +364,7 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
 
 def _run_locked(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, steady_steps: int,
                 num_chunks: int, seed: int, quiet: bool, source: str, command: str,
-                evolved: dict | None = None) -> dict:
+                evolved: dict | None = None, log: str | None = None) -> dict:
     """:func:`run` once the directory is checked and locked."""
     num_runs, num_best = genomes.shape[:2]
     keys = test_keys(seed, num_runs, num_best, num_tests).reshape(num_runs, num_best * num_tests)

@@ -8,7 +8,7 @@ import jax
 import numpy as np
 import pytest
 
-from imrl_jax import learning_test
+from imrl_jax import conditions, learning_test
 from imrl_jax.ga import init_population
 from imrl_jax.lifetime import live
 
@@ -285,7 +285,7 @@ def test_help(capsys):
         learning_test.main(["--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert "``" not in text and "(default: None)" not in text
-    assert "--cond {LE-LS,EE-LS,EE-ES,SLE,EV-LS,EV-LS-diff,LE-LS-N,LE-LS-P,LE-LS-PC,EXT-LS}" in text
+    assert "--cond {" + ",".join(conditions.NAMES) + "}" in text and "EXT-LS" in conditions.NAMES
     assert "--quiet no progress lines" in text
 
 
