@@ -62,9 +62,18 @@ def run_studies(chosen, report: bool = False, options: tuple[str, ...] = ()) -> 
                   flush=True)
             continue
         print(f"\n=== {what} {study.name}", flush=True)
+        process = subprocess.Popen(study.command(report, options), env=environment())
         try:
-            code = subprocess.run(study.command(report, options), env=environment()).returncode
-        except KeyboardInterrupt:  # the study has stopped at the same signal and kept what it finished
+            code = process.wait()
+        except KeyboardInterrupt:
+            # The study got the same signal (one process group): it stops its stages and keeps what they finished,
+            # however long that takes (subprocess.run would kill it a quarter of a second later). A second Ctrl-C
+            # does not wait.
+            try:
+                process.wait()
+            except KeyboardInterrupt:
+                process.kill()
+                process.wait()
             print(f"\ninterrupted in {what} {study.name}: run the same command again to go on", file=sys.stderr)
             return 130
         if code:

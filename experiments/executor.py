@@ -88,8 +88,23 @@ class Local:
         return LocalJob(command, env, log_path)
 
 
+def job_environment(env: dict | None) -> dict:
+    """A job's environment: ``env`` (or this one) without the events file of a runner that would not read it
+    (a job's progress lines go to its log)."""
+    from imrl_jax.events import ENV, READER
+
+    return {k: v for k, v in (os.environ if env is None else env).items() if k not in (ENV, READER)}
+
+
+def run_command(command: list[str], env: dict | None, log_path: str) -> int:
+    """A stage's command in a cluster job: its output appended to ``log_path`` as it comes; its exit code."""
+    os.makedirs(os.path.dirname(log_path), exist_ok=True)
+    with open(log_path, "a") as log:
+        return subprocess.call(command, env=env, stdout=log, stderr=subprocess.STDOUT)
+
+
 class SubmititJob:
-    """A stage as a submitit job."""
+    """A stage as a submitit job (running :func:`run_command`)."""
 
     def __init__(self, job):
         self.job, self.id = job, str(job.job_id)
@@ -98,11 +113,9 @@ class SubmititJob:
         if not self.job.done():
             return None
         try:
-            self.job.result()
-        except Exception as error:  # noqa: BLE001 - submitit raises the job's failure; its code is what counts
-            code = getattr(getattr(error, "__cause__", None), "returncode", None)
-            return int(code) if code else 1
-        return 0
+            return int(self.job.result())
+        except Exception:  # noqa: BLE001 - the job itself failed (cancelled, preempted, timed out): no exit code
+            return 1
 
     def stop(self) -> None:
         self.job.cancel(check=False)
@@ -122,8 +135,7 @@ class Submitit:
             self.executor.update_parameters(**parameters)
 
     def submit(self, command: list[str], env: dict | None, log_path: str) -> SubmititJob:
-        function = self.submitit.helpers.CommandFunction(command, env=env, verbose=False)
-        return SubmititJob(self.executor.submit(function))
+        return SubmititJob(self.executor.submit(run_command, command, env, log_path))
 
 
 def make_executor(name: str, folder: str, **parameters):
@@ -148,7 +160,13 @@ def run_fanned(stages, scale: dict, manifest_path: str, command_for, jobs: int, 
     """
     waits = needs(stages)
     by_name = {s.name: s for s in stages}
-    done = {s.name for s in stages if stage_done(s, scale)}
+    unknown = [(s, n) for s in stages for n in waits[s.name] if n not in by_name]
+    if unknown:
+        log(f"error: stage {unknown[0][0].name} needs {unknown[0][1]!r}, which is not a stage of this study")
+        return 2
+    # A measure or report is done or due by what ran before it (a report is due again after they ran): it is
+    # judged when it could start, as the sequential runner judges it.
+    done = {s.name for s in stages if s.kind not in BARRIERS and stage_done(s, scale)}
     for s in stages:
         if s.name in done:
             log(f"== {s.name}: done ({s.out_dir})")
@@ -180,14 +198,20 @@ def run_fanned(stages, scale: dict, manifest_path: str, command_for, jobs: int, 
                     pending.remove(stage)
                     failed[stage.name] = 0
                     log(f"== {stage.name}: not started (it needs a failed stage)")
-            for stage in [s for s in pending if all(n in done for n in waits[s.name] if n in by_name)]:
+            for stage in [s for s in pending if all(n in done for n in waits[s.name])]:
+                if stage.kind in BARRIERS and stage_done(stage, scale):
+                    pending.remove(stage)
+                    done.add(stage.name)
+                    log(f"== {stage.name}: done ({stage.out_dir})")
+                    continue
                 if len(running) >= jobs:
                     break
                 pending.remove(stage)
                 if prepare:
                     prepare(stage)
                 command, env = command_for(stage)
-                job = executor.submit(command, env, os.path.join(logs, log_name(stage.name) + ".log"))
+                job = executor.submit(command, job_environment(env),
+                                      os.path.join(logs, log_name(stage.name) + ".log"))
                 running[stage.name] = (job, time.perf_counter(), command)
                 log(f"== {stage.name}: started on {executor.name} (job {job.id}): "
                     f"{' '.join(command[1:] if command[0] == sys.executable else command)}")
@@ -202,6 +226,10 @@ def run_fanned(stages, scale: dict, manifest_path: str, command_for, jobs: int, 
             job.stop()
         log("\ninterrupted: run the same command again to go on from here")
         return 130
+    except BaseException:  # the runner itself broke: its jobs do not run on unwatched
+        for job, *_ in running.values():
+            job.stop()
+        raise
     return next((code for code in failed.values() if code), 0)
 
 

@@ -37,7 +37,7 @@ def all_stages(out: str = OUT) -> tuple[list[Stage], dict]:
         stages.append(Stage(f"evolve {name}", "evolve", name, condition, os.path.join(folder, "evolve"),
                             evolution_cost(SCREEN, condition)))
         stages.append(Stage(f"learning test {name}", "test", name, condition, os.path.join(folder, "test"),
-                            test_cost(SCREEN, condition)))
+                            test_cost(SCREEN, condition), needs=(f"evolve {name}",)))  # its own, not the other preset's
     return stages, SCREEN
 
 

@@ -389,7 +389,7 @@ def run_stage(stage: Stage, index: int, command: list[str], overall: Overall, ma
     """Run one stage, its progress (read from its events, imrl_jax.events) shown after the whole pipeline's;
     record its command, time and cost. Its other output passes straight through."""
     from experiments.executor import log_name
-    from imrl_jax.events import ENV, Reader
+    from imrl_jax.events import ENV, READER, Reader
 
     manifest = overall.manifest
     print(f"\n== [{index + 1}/{len(overall.stages)}] {stage.name}\n"
@@ -400,7 +400,7 @@ def run_stage(stage: Stage, index: int, command: list[str], overall: Overall, ma
         os.remove(events)  # this attempt's events alone
     reader = Reader(events)
     start = time.perf_counter()
-    process = subprocess.Popen(command, env={**(env or os.environ), ENV: events})
+    process = subprocess.Popen(command, env={**(env or os.environ), ENV: events, READER: "1"})
     first = None  # (fraction, time) at the first progress event: the stage's own rate is measured from there
     try:
         while True:

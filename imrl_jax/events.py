@@ -4,8 +4,9 @@ Every long command reports through :class:`imrl_jax.progress.Progress`, which wr
 as an event to the sinks of an :class:`EventLog`:
 
 * a JSON-lines file named by the environment variable ``IMRL_EVENTS`` (the study runner sets it
-  for each stage and reads the stage's progress from it, :class:`Reader`; the command then leaves
-  its progress lines to the runner, which shows them beside the whole study's);
+  for each stage, with ``IMRL_EVENTS_READER=1``, and reads the stage's progress from it,
+  :class:`Reader`; the command then leaves its progress lines to the runner, which shows them
+  beside the whole study's; set by hand without the reader mark, the lines are printed too);
 * TensorBoard (``--log tensorboard`` of evolve and learning_test: scalars under ``OUT/tensorboard``,
   through tensorboardX, an optional dependency imported when asked for).
 
@@ -23,6 +24,8 @@ import time
 
 #: The environment variable naming the JSON-lines file a command appends its events to.
 ENV = "IMRL_EVENTS"
+#: Set (to 1) by a runner that reads those events and shows the progress lines itself.
+READER = "IMRL_EVENTS_READER"
 #: Scalars of a progress event that TensorBoard draws, with their tags.
 SCALARS = (("best", "fitness/best"), ("mean", "fitness/mean"), ("lane_steps_per_s", "speed/lane_steps_per_s"))
 
@@ -74,7 +77,7 @@ class EventLog:
     @property
     def read_by_runner(self) -> bool:
         """Whether a study runner reads these events (and shows the progress lines itself)."""
-        return any(isinstance(s, JsonLines) for s in self.sinks) and bool(os.environ.get(ENV))
+        return any(isinstance(s, JsonLines) for s in self.sinks) and os.environ.get(READER) == "1"
 
     def emit(self, kind: str, **fields) -> dict:
         """Write one event to every sink; return it."""

@@ -93,6 +93,10 @@ class Check:
         """Seconds left of the budget."""
         return self.deadline - time.monotonic()
 
+    def share_left(self, share: float) -> float:
+        """The budget's remaining seconds at which a step that may use ``share`` of the budget from now must stop."""
+        return self.remaining() - share * self.results["budget_s"]
+
     def fits(self, seconds: float) -> bool:
         """Whether work expected to take ``seconds`` (at the real sizes) fits in what is left."""
         return self.remaining() > seconds * self.sizes.scale and self.remaining() > 0
@@ -148,8 +152,20 @@ class Check:
         """Rewrite the JSON and the text table (atomically: a stop leaves the last whole ones)."""
         from imrl_jax.rundir import write_atomic
 
-        write_atomic(os.path.join(self.out_dir, FILES[0]), json.dumps(self.results, indent=1, default=float).encode())
+        text = json.dumps(finite(self.results), indent=1, default=float, allow_nan=False)
+        write_atomic(os.path.join(self.out_dir, FILES[0]), text.encode())
         write_atomic(os.path.join(self.out_dir, FILES[1]), ("\n".join(self.lines) + "\n").encode())
+
+
+def finite(value):
+    """``value`` with every float that is not finite as None (strict JSON has no NaN or infinity)."""
+    if isinstance(value, dict):
+        return {k: finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [finite(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if np.isfinite(value) else None
+    return value
 
 
 def describe(row: dict) -> str:
@@ -322,7 +338,7 @@ def lives(check: Check) -> dict:
     from imrl_jax.config import Config, LearningParams
 
     rows, programs = [], {}
-    stop = check.remaining() - (1 - LIVES_SHARE) * check.results["budget_s"]
+    stop = check.share_left(LIVES_SHARE)
     for name, preset, config, reason in life_cases(check.sizes):
         row = {"condition": name, "preset": preset, "kernels": list(KERNELS if reason is None else ("xla",))}
         if reason:
@@ -685,6 +701,12 @@ def main(argv=None) -> int:
         return fail(f"--out: {os.path.join(args.out, existing[0])} exists (choose a new folder)")
     if os.path.exists(args.out) and not os.path.isdir(args.out):
         return fail(f"--out: {args.out} is not a folder")
+    from imrl_jax.rundir import RunDirError, check_writable
+
+    try:
+        check_writable(args.out)
+    except RunDirError as error:
+        return fail(str(error))
     if not args.dry:
         import jax
 

@@ -25,31 +25,22 @@ from typing import Iterable
 from imrl_jax.config import COMPUTE_FIELDS, Config
 
 #: The search a run records when it records none: the paper's GA (``strategies.GA_RECORD``).
-GA_SEARCH = (("strategy", "ga"), ("settings", ()))
+GA_SEARCH = {"strategy": "ga", "settings": {}}
 #: Hex digits of a key (64 bits: no two of a project's runs meet by chance).
 KEY_LENGTH = 16
 #: Fields that are no part of a run's identity whatever the condition (see the module's docstring).
 PROGRESS_FIELDS = ("num_generations",)
 
 
+def canonical(value) -> str:
+    """``value`` (JSON-like) as canonical JSON: sorted keys, no spaces, every number a float (so 12 and 12.0,
+    one value, are one text)."""
+    plain = json.loads(json.dumps(value), parse_int=float)
+    return json.dumps(plain, sort_keys=True, separators=(",", ":"))
+
+
 class DuplicateRunError(ValueError):
     """Two run directories hold the same run (the same key)."""
-
-
-def _frozen(value):
-    """A JSON-like value as nested tuples (hashable), dicts as sorted (key, value) pairs."""
-    if isinstance(value, dict):
-        return tuple(sorted((k, _frozen(v)) for k, v in value.items()))
-    if isinstance(value, (list, tuple)):
-        return tuple(_frozen(v) for v in value)
-    return value
-
-
-def _thawed(value):
-    """Inverse of :func:`_frozen` for the search record: pairs back to a dict."""
-    if isinstance(value, tuple) and all(isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], str) for v in value):
-        return {k: _thawed(v) for k, v in value}
-    return value
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,12 +49,12 @@ class RunSpec:
 
     config: Config
     seeds: tuple[int, ...]
-    search: tuple = GA_SEARCH  # the config.json ``search`` record, frozen
+    search: str = canonical(GA_SEARCH)  # the config.json ``search`` record, as canonical JSON
 
     @classmethod
     def make(cls, config: Config, seeds: Iterable[int], search: dict | None = None) -> "RunSpec":
         """A spec from a config, seeds and a config.json-style search record (None: the paper's GA)."""
-        return cls(config, tuple(int(s) for s in seeds), GA_SEARCH if search is None else _frozen(search))
+        return cls(config, tuple(int(s) for s in seeds), canonical(GA_SEARCH if search is None else search))
 
     @classmethod
     def from_run_dir(cls, run_dir: str) -> "RunSpec":
@@ -83,12 +74,11 @@ class RunSpec:
         """What the key is made of: the model's fields, the seeds and the search, as plain JSON values."""
         skip = set(COMPUTE_FIELDS) | set(PROGRESS_FIELDS) | self.config.spec.ignored_fields()
         model = {k: v for k, v in self.config.to_dict().items() if k not in skip}
-        return {"model": model, "seeds": list(self.seeds), "search": _thawed(self.search)}
+        return {"model": model, "seeds": list(self.seeds), "search": json.loads(self.search)}
 
     def key(self) -> str:
-        """The run's content key: a hash of :meth:`identity` in canonical JSON."""
-        text = json.dumps(self.identity(), sort_keys=True, separators=(",", ":"))
-        return hashlib.sha256(text.encode()).hexdigest()[:KEY_LENGTH]
+        """The run's content key: a hash of :meth:`identity` in canonical JSON (:func:`canonical`)."""
+        return hashlib.sha256(canonical(self.identity()).encode()).hexdigest()[:KEY_LENGTH]
 
 
 def run_dirs(root: str) -> list[str]:

@@ -43,6 +43,10 @@ def test_progress_writes_its_events_and_leaves_its_lines_to_a_runner_that_reads_
     assert [line[:11] for line in printed] == ["gen 0 (1/3)", "gen 1 (2/3)", "gen 2 (3/3)", "a note"]  # printed too
     monkeypatch.setenv(events.ENV, str(path))
     stream = io.StringIO()
+    Progress(2, stream=stream).update(1, 0.0, 0.0, 1.0)  # the file set by hand: the line is printed as ever
+    assert stream.getvalue().startswith("gen 1 (1/2)")
+    monkeypatch.setenv(events.READER, "1")
+    stream = io.StringIO()
     progress = Progress(2, stream=stream)  # its log from the environment, as a stage's is
     progress.update(1, 0.0, 0.0, 1.0)
     progress.note("kept")

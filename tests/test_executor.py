@@ -187,3 +187,48 @@ def test_fan_out_options(tmp_path, capsys):
     assert fan["jobs"] == 3 and isinstance(fan["executor"], X.Local)
     assert X.options_argv(p.parse_args(["--jobs", "3", "--executor", "local"])) == ["--jobs", "3"]
     assert not os.listdir(tmp_path)
+
+
+def test_a_submitit_job_gives_its_commands_exit_code_and_logs_as_it_runs(tmp_path):
+    pytest.importorskip("submitit")
+    executor = X.make_executor("submitit-local", str(tmp_path / "jobs"))
+    log = tmp_path / "logs" / "stage.log"
+    job = executor.submit([sys.executable, "-c", "print('half way', flush=True); import sys; sys.exit(5)"], None,
+                          str(log))
+    deadline = time.time() + 60
+    while job.poll() is None and time.time() < deadline:
+        time.sleep(0.2)
+    assert job.poll() == 5 and log.read_text() == "half way\n"
+
+
+def test_a_report_is_judged_when_it_could_start(tmp_path):
+    """A report done before is due again once a stage it follows has run (as in the sequential runner)."""
+    stages = [Stage("evolve a", "evolve", "v", "LE-LS", str(tmp_path / "a"), 1.0),
+              Stage("report", "report", "", "", str(tmp_path), 1.0)]
+    finished = {"report"}  # the report was done; the evolution was not
+    ran = []
+
+    def command_for(stage):
+        ran.append(stage.name)
+        return [sys.executable, "-c", "pass"], None
+
+    def record(stage, command, seconds):
+        finished.add(stage.name)
+        if stage.name != "report":
+            finished.discard("report")  # a stage it follows ran again: it is due
+
+    code = X.run_fanned(stages, {}, str(tmp_path / "manifest.json"), command_for, 2, X.Local(),
+                        lambda s, scale: s.name in finished, record, poll_s=0.05, log=lambda line: None)
+    assert code == 0 and ran == ["evolve a", "report"]
+    ran.clear()
+    assert X.run_fanned(stages, {}, str(tmp_path / "manifest.json"), command_for, 2, X.Local(),
+                        lambda s, scale: s.name in finished, record, poll_s=0.05, log=lambda line: None) == 0
+    assert ran == []  # both done now
+
+
+def test_a_need_that_is_no_stage_is_refused(tmp_path):
+    stages = [Stage("test", "test", "v", "LE-LS", str(tmp_path), 1.0, needs=("evolve typo",))]
+    lines = []
+    assert X.run_fanned(stages, {}, str(tmp_path / "m.json"), None, 1, X.Local(), lambda s, scale: False, None,
+                        log=lines.append) == 2
+    assert lines == ["error: stage test needs 'evolve typo', which is not a stage of this study"]

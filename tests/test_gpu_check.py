@@ -87,6 +87,12 @@ def test_what_does_not_fit_the_budget_is_skipped_and_said(tmp_path):
     assert {p.name for p in tmp_path.iterdir()} == {"gpu_check.json", "gpu_check.txt"}  # no figure: nothing timed
 
 
+def test_a_step_with_a_share_of_the_budget_stops_when_it_has_used_it(tmp_path, monkeypatch):
+    check = G.Check(str(tmp_path), 100.0, G.Sizes(), log=lambda line: None)
+    monkeypatch.setattr(check, "remaining", lambda: 90.0)
+    assert check.share_left(G.LIVES_SHARE) == pytest.approx(60.0)  # 30 of the budget's 100 s from now
+
+
 def test_life_cases_one_per_model_and_the_kernels_first():
     """A preset that gives the same lives as one before it (Config.model_differences) is not checked again."""
     cases = G.life_cases(G.Sizes(conditions=("EE-ES", "EV-LS", "LE-LS")))
@@ -120,6 +126,20 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, ar
     err = capsys.readouterr().err
     assert err.startswith(f"error: {message}") and err.count("\n") == 1
     assert not out.exists()
+
+
+def test_an_out_that_cannot_be_written_is_one_line(tmp_path, capsys):
+    (tmp_path / "file").write_text("")
+    assert G.main(["--out", str(tmp_path / "file" / "check"), "--dry"]) == 2
+    assert capsys.readouterr().err == f"error: --out: cannot write to {tmp_path / 'file' / 'check'} ({tmp_path / 'file'} is not a directory)\n"
+
+
+def test_the_json_is_strict(tmp_path):
+    check = G.Check(str(tmp_path), 10.0, G.DRY, log=lambda line: None)
+    check.results["steps"].append({"step": "x", "rho": float("nan"), "rows": [{"v": np.float32("inf")}]})
+    check.write()
+    assert json.loads((tmp_path / "gpu_check.json").read_text())["steps"][0] == {"step": "x", "rho": None,
+                                                                                  "rows": [{"v": None}]}
 
 
 def test_an_earlier_check_is_not_overwritten(tmp_path, capsys):

@@ -49,6 +49,8 @@ def test_what_is_and_is_not_part_of_a_run():
     # The model, the seeds and the search are.
     assert RunSpec.make(config.replace(target_radius=12.0), [0, 1]).key() != key
     assert RunSpec.make(config, [0, 2]).key() != key
+    assert RunSpec.make(config.replace(target_radius=12), [0, 1]).key() == RunSpec.make(
+        config.replace(target_radius=12.0), [0, 1]).key()  # one value, whether written 12 or 12.0
     snes = RunSpec.make(config, [0, 1], {"strategy": "snes", "settings": {}})
     assert snes.key() != key
     assert RunSpec.make(config, [0, 1], {"strategy": "snes", "settings": {"sigma_init": 0.3}}).key() != snes.key()

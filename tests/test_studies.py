@@ -31,6 +31,15 @@ def test_each_study_plans_and_lists_its_stages(name, capsys):
     assert [line.strip().rsplit(": ", 1)[0] for line in lines[1:]] == [s.name for s in stages]
 
 
+def test_the_goals_tests_wait_for_their_own_evolution():
+    from experiments import executor
+
+    stages, _ = S.studies()["goals"].stages()
+    waits = executor.needs(stages)
+    assert waits["learning test EE-LS-T-faithful"] == ("evolve EE-LS-T-faithful",)
+    assert waits["evolve LE-LS-2R"] == ()
+
+
 def test_list_all_counts_what_is_left(capsys):
     assert cli.main(["list"]) == 0
     lines = capsys.readouterr().out.splitlines()
@@ -58,18 +67,36 @@ def test_a_new_study_is_its_module_alone(tmp_path, monkeypatch):
         S.studies()
 
 
-def _fake_run(ran, fail=None):
-    def run(command, env):
+class _Process:
+    """A stand-in for a study's process: its exit code, or a Ctrl-C while it is waited for (the first wait)."""
+
+    def __init__(self, code: int, interrupt: bool = False):
+        self.code, self.interrupt, self.waits, self.killed = code, interrupt, 0, False
+
+    def wait(self):
+        self.waits += 1
+        if self.interrupt and self.waits == 1:
+            raise KeyboardInterrupt
+        return self.code
+
+    def kill(self):
+        self.killed = True
+
+
+def _fake_run(ran, fail=None, interrupt=False, processes=None):
+    def popen(command, env):
         ran.append(" ".join(command[2:]))
         assert env["PYTHONPATH"].split(":")[0] == cli.environment()["PYTHONPATH"].split(":")[0]
-        return subprocess.CompletedProcess(command, 3 if command[2] == fail else 0)
+        process = _Process(3 if command[2] == fail else 0, interrupt)
+        (processes if processes is not None else []).append(process)
+        return process
 
-    return run
+    return popen
 
 
 def test_studies_run_in_order_and_a_failure_stops_the_rest(monkeypatch, capsys):
     ran = []
-    monkeypatch.setattr(cli.subprocess, "run", _fake_run(ran, fail="experiments.reproduce"))
+    monkeypatch.setattr(cli.subprocess, "Popen", _fake_run(ran, fail="experiments.reproduce"))
     assert cli.main(["run", "all"]) == 3
     assert ran == ["experiments.timescale", "experiments.novel_tasks", "experiments.claims_study --only screen",
                    "experiments.reproduce --scale paper"]
@@ -82,7 +109,7 @@ def test_studies_run_in_order_and_a_failure_stops_the_rest(monkeypatch, capsys):
 
 def test_report_writes_each_studys_tables(monkeypatch):
     ran = []
-    monkeypatch.setattr(cli.subprocess, "run", _fake_run(ran))
+    monkeypatch.setattr(cli.subprocess, "Popen", _fake_run(ran))
     assert cli.main(["report"]) == 0
     assert ran == ["experiments.timescale --report", "experiments.novel_tasks --report",
                    "experiments.claims_study --table", "experiments.report experiments/results/paper",
@@ -90,12 +117,12 @@ def test_report_writes_each_studys_tables(monkeypatch):
                    "experiments.future_work --report", "experiments.report experiments/results/cpu"]  # goals: none yet
 
 
-def test_ctrl_c_stops_with_one_line(monkeypatch, capsys):
-    def interrupted(command, env):
-        raise KeyboardInterrupt
-
-    monkeypatch.setattr(cli.subprocess, "run", interrupted)
+def test_ctrl_c_waits_for_the_study_to_stop_and_stops_with_one_line(monkeypatch, capsys):
+    """The study got the same Ctrl-C: it is waited for (it keeps what its stages finished), not killed."""
+    ran, processes = [], []
+    monkeypatch.setattr(cli.subprocess, "Popen", _fake_run(ran, interrupt=True, processes=processes))
     assert cli.main(["run"]) == 130
+    assert ran == ["experiments.timescale"] and processes[0].waits == 2 and not processes[0].killed
     assert capsys.readouterr().err.strip() == "interrupted in study timescale: run the same command again to go on"
 
 
