@@ -56,6 +56,9 @@ class Sizes:
     """How much each step does (the real check's, or ``--dry``'s tiny ones)."""
 
     life_steps: tuple[int, int, int] = (1200, 300, 3)  # childhood steps, task steps, bins of the checked lives
+    # A 40 cm target in the checked lives: with random genomes a 10 cm one is seldom reached in 300 steps, and a
+    # reach (its reset and what is learned from it) is what a window must hold to check it.
+    life_target_radius: float = 40.0
     presets: tuple[str, ...] = ("paper", "extension", "faithful", "skills")
     conditions: tuple[str, ...] | None = None  # None: every row of the condition table
     float32_steps: int = 2000
@@ -275,7 +278,8 @@ def life_cases(sizes: Sizes):
     for name in sizes.conditions or conditions.NAMES:
         seen = []
         for preset in sizes.presets:
-            config = make_config(preset, condition=name, childhood_steps=childhood, task_steps=task, num_bins=bins)
+            config = make_config(preset, condition=name, childhood_steps=childhood, task_steps=task, num_bins=bins,
+                                 target_radius=sizes.life_target_radius)
             if any(not config.model_differences(other) for other in seen):
                 continue  # the same lives as a preset before it
             seen.append(config)
