@@ -105,12 +105,13 @@ def index(root: str) -> dict[str, str]:
 
 def locate(root: str, spec: RunSpec, known: dict[str, str] | None = None) -> tuple[str, bool]:
     """Where ``spec``'s run lies under ``root``, and whether it exists: the directory that holds it, or
-    ``root/runs/KEY`` for a new one. ``known``: an :func:`index` of ``root`` already read."""
+    ``root/runs/KEY/evolve`` for a new one (its learning tests go beside, in ``test``). ``known``: an
+    :func:`index` of ``root`` already read."""
     key = spec.key()
     known = index(root) if known is None else known
     if key in known:
         return os.path.join(root, known[key]), True
-    return os.path.join(root, "runs", key), False
+    return os.path.join(root, "runs", key, "evolve"), False
 
 
 def main(argv=None) -> int:

@@ -68,7 +68,7 @@ def test_locate_finds_a_run_wherever_it_lies_and_places_a_new_one_by_its_key(tmp
     spec = RunSpec.from_run_dir(str(tmp_path / "some" / "study" / "run"))
     assert runspec.locate(str(tmp_path), spec) == (str(tmp_path / "some" / "study" / "run"), True)
     other = RunSpec.make(spec.config, [*spec.seeds, 99], spec.identity()["search"])
-    assert runspec.locate(str(tmp_path), other) == (str(tmp_path / "runs" / other.key()), False)
+    assert runspec.locate(str(tmp_path), other) == (str(tmp_path / "runs" / other.key() / "evolve"), False)
 
 
 def test_two_directories_of_one_run_are_refused_naming_both(tmp_path, capsys):

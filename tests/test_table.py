@@ -1,0 +1,42 @@
+"""A study as a table over shared runs (experiments.table): rows find their runs by key, wherever they lie."""
+
+import os
+
+from helpers import ROOT
+
+from experiments.claims_study import SCREEN
+from experiments.reproduce import stage_done
+from experiments.table import Row, Table, evolution_spec, learning_test_dir
+from imrl_jax import runspec
+
+RESULTS = os.path.join(ROOT, "experiments", "results")
+
+
+def test_a_row_is_exactly_what_its_command_computes():
+    """The goals study's EE-LS-T row has the key of the run its command made (config.json as written)."""
+    committed = runspec.RunSpec.from_run_dir(os.path.join(RESULTS, "goals", "EE-LS-T", "evolve"))
+    assert evolution_spec(Row("x", "EE-LS-T", "skills"), SCREEN).key() == committed.key()
+    assert evolution_spec(Row("x", "EE-LS-T", "faithful"), SCREEN).key() != committed.key()
+
+
+def test_a_run_another_study_made_is_found_and_shared(tmp_path):
+    """A new study asking for EV-LS under skills at the future-work study's sizes gets that study's finished run."""
+    table = Table("mine", "docs/MINE.md", 99, rows=(Row("ev", "EV-LS", "skills"), Row("ev-again", "EV-LS", "skills"),
+                                                    Row("new", "EV-LS", "skills", ("gamma=0.95",), test=False)),
+                  scale=SCREEN, out=str(tmp_path), results=RESULTS)
+    stages, _ = table.all_stages()
+    shared = os.path.join(RESULTS, "future_work", "EV-LS", "evolve")
+    assert [(s.name, s.out_dir, s.needs) for s in stages] == [
+        ("evolve ev", shared, None),
+        ("learning test ev", os.path.join(RESULTS, "future_work", "EV-LS", "test"), ("evolve ev",)),
+        ("learning test ev-again", os.path.join(RESULTS, "future_work", "EV-LS", "test"), ("evolve ev",)),
+        ("evolve new", os.path.join(RESULTS, "runs", evolution_spec(table.rows[2], SCREEN).key(), "evolve"), None)]
+    assert stage_done(stages[0], SCREEN) and stage_done(stages[1], SCREEN) and not stage_done(stages[3], SCREEN)
+    command = table.stage_command(stages[3])[0]
+    assert command[command.index("--set") + 1] == "gamma=0.95" and command[command.index("--out") + 1] == stages[3].out_dir
+
+
+def test_a_learning_test_sits_beside_its_evolution():
+    assert learning_test_dir(os.path.join("r", "runs", "k", "evolve")) == os.path.join("r", "runs", "k", "test")
+    paper = os.path.join("r", "paper", "skills")
+    assert learning_test_dir(os.path.join(paper, "evolve", "LE-LS")) == os.path.join(paper, "test", "LE-LS")
