@@ -114,7 +114,8 @@ def test_report_writes_each_studys_tables(monkeypatch):
     assert ran == ["experiments.timescale --report", "experiments.novel_tasks --report",
                    "experiments.claims_study --table", "experiments.report experiments/results/paper",
                    "experiments.claims_study --only experts --table", "experiments.search --report",
-                   "experiments.future_work --report", "experiments.report experiments/results/cpu"]  # goals: none yet
+                   "experiments.future_work --report", "experiments.report experiments/results/cpu",
+                   "experiments.goals --report"]
 
 
 def test_ctrl_c_waits_for_the_study_to_stop_and_stops_with_one_line(monkeypatch, capsys):

@@ -40,3 +40,18 @@ def test_a_learning_test_sits_beside_its_evolution():
     assert learning_test_dir(os.path.join("r", "runs", "k", "evolve")) == os.path.join("r", "runs", "k", "test")
     paper = os.path.join("r", "paper", "skills")
     assert learning_test_dir(os.path.join(paper, "evolve", "LE-LS")) == os.path.join(paper, "test", "LE-LS")
+
+
+def test_the_report_reads_what_has_finished(tmp_path):
+    """The committed EE-LS-T run measured by the claims' rules; a row not started says so; the figure is drawn."""
+    document = tmp_path / "DOC.md"
+    document.write_text("before\n<!-- t table: python -m experiments report t -->\nold\n<!-- end of t table -->\nafter\n")
+    table = Table("t", str(document), 99, rows=(Row("EE-LS-T", "EE-LS-T", "skills"),
+                                               Row("later", "EE-LS-T", "skills", ("gamma=0.95",))),
+                  scale=SCREEN, out=str(tmp_path / "out"), results=RESULTS)
+    assert table.main(["--report"]) == 0
+    text = document.read_text()
+    assert text.startswith("before\n<!-- t table") and text.endswith("<!-- end of t table -->\nafter\n")
+    assert "| EE-LS-T | EE-LS-T | skills | 5 | 100 of 100 | 0.535 +- 0.028 | 35 | 0.583 +- 0.050 (5 runs) |" in text
+    assert "| later | EE-LS-T | skills | - | 0 of 100 | not started | - | - |" in text and "old" not in text
+    assert (tmp_path / "out" / "t.png").stat().st_size > 10_000
