@@ -147,15 +147,18 @@ def _set_options(sets) -> list[str]:
 
 
 def evolve_command(scale: dict, variant: str, condition: str, out_dir: str, kernel: str = "xla",
-                   sets: tuple[str, ...] = ()) -> list[str]:
-    """The evolve command of a stage: ``variant`` is the preset, ``sets`` more FIELD=VALUE overrides."""
+                   sets: tuple[str, ...] = (), sweep: tuple[str, ...] = ()) -> list[str]:
+    """The evolve command of a stage: ``variant`` is the preset, ``sets`` more FIELD=VALUE overrides, ``sweep``
+    FIELD=V1,V2 values taken in step (``--sweep ... --zip``: a sweep's points in one program)."""
     command = [sys.executable, "-m", "imrl_jax.evolve", "--cond", condition, "--preset", variant, *_set_options(sets),
                "--seeds", str(scale["seeds"]), "--generations", str(scale["generations"]),
                "--childhood-steps", str(scale["childhood_steps"]), "--task-steps", str(scale["task_steps"]),
                "--bins", str(scale["bins"]), "--out", out_dir, *_kernel_options(kernel)]
     if "population" in scale:
         command += ["--population", str(scale["population"]), "--parents", str(scale["parents"])]
-    started = os.path.exists(os.path.join(out_dir, "config.json"))
+    if sweep:
+        command += [option for values in sweep for option in ("--sweep", values)] + ["--zip"]
+    started = any(os.path.exists(os.path.join(out_dir, name)) for name in ("config.json", "sweep.json"))
     return command + (["--resume"] if started else [])
 
 
@@ -242,8 +245,20 @@ def plan(scale: dict, out: str, variants, report: bool = True) -> list[Stage]:
     return stages
 
 
+def sweep_points(run_dir: str) -> list[str] | None:
+    """The point directories of a sweep (``evolve --sweep``: its sweep.json names them), or None if not a sweep."""
+    path = os.path.join(run_dir, "sweep.json")
+    if not os.path.isfile(path):
+        return None
+    with open(path) as f:
+        return [os.path.join(run_dir, point["key"]) for point in json.load(f)["points"]]
+
+
 def generations_done(run_dir: str) -> int:
-    """Generations an evolution has finished, from its history.csv (0 if none)."""
+    """Generations an evolution has finished, from its history.csv (0 if none; a sweep: its least advanced point)."""
+    points = sweep_points(run_dir)
+    if points is not None:
+        return min(generations_done(point) for point in points)
     path = os.path.join(run_dir, "history.csv")
     if not os.path.isfile(path):
         return 0
@@ -326,7 +341,12 @@ def _checkpoint_steps(folder: str) -> list[int]:
 
 
 def publish_checkpoint(run_dir: str) -> int | None:
-    """Copy the newest checkpoint of ``run_dir`` into ``run_dir/resume_checkpoint`` (which is committed)."""
+    """Copy the newest checkpoint of ``run_dir`` into ``run_dir/resume_checkpoint`` (which is committed); a sweep's
+    of each point (returning the least advanced)."""
+    points = sweep_points(run_dir)
+    if points is not None:
+        published = [publish_checkpoint(point) for point in points]
+        return None if None in published else min(published)
     steps = _checkpoint_steps(os.path.join(run_dir, "checkpoints"))
     published = os.path.join(run_dir, PUBLISHED)
     if not steps or _checkpoint_steps(published) == steps[-1:]:
@@ -340,7 +360,12 @@ def publish_checkpoint(run_dir: str) -> int | None:
 
 
 def restore_published(run_dir: str) -> int | None:
-    """In a fresh clone (no checkpoints/), put the published checkpoint back where ``evolve --resume`` reads it."""
+    """In a fresh clone (no checkpoints/), put the published checkpoint back where ``evolve --resume`` reads it (a
+    sweep: each point's; returning the least advanced restored)."""
+    points = sweep_points(run_dir)
+    if points is not None:
+        restored = [r for r in (restore_published(point) for point in points) if r is not None]
+        return min(restored) if restored else None
     checkpoints = os.path.join(run_dir, "checkpoints")
     steps = _checkpoint_steps(os.path.join(run_dir, PUBLISHED))
     if _checkpoint_steps(checkpoints) or not steps:

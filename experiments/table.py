@@ -10,7 +10,11 @@ learning test sits beside its evolution (the last ``evolve`` of the path replace
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 import os
+import sys
+from typing import NamedTuple
 
 import numpy as np
 
@@ -44,6 +48,35 @@ def evolution_spec(row: Row, scale: dict) -> runspec.RunSpec:
     return runspec.RunSpec.make(config, seeds)
 
 
+class Sweep(NamedTuple):
+    """Rows whose runs are made in one program: the first row's command with ``--sweep FIELD=V1,V2 --zip``."""
+
+    rows: tuple[Row, ...]
+    values: tuple[str, ...]  # FIELD=V1,V2,... in the rows' order (empty for a sweep already begun)
+
+
+def static_signature(spec: runspec.RunSpec) -> str:
+    """What runs made in one program must share: every field but the dynamic ones, the seeds and the search."""
+    from imrl_jax.sweeps import DYNAMIC_FIELDS
+
+    model = {k: v for k, v in spec.config.to_dict().items() if k not in DYNAMIC_FIELDS}
+    return runspec.canonical({"model": model, "seeds": list(spec.seeds), "search": spec.search})
+
+
+def varying_fields(specs: list[runspec.RunSpec]) -> list[str]:
+    """The dynamic fields whose values differ between the specs."""
+    from imrl_jax.sweeps import DYNAMIC_FIELDS
+
+    return [f for f in DYNAMIC_FIELDS if f != "eta" and len({getattr(s.config, f) for s in specs}) > 1]
+
+
+def point_key(base: runspec.RunSpec, spec: runspec.RunSpec, fields: list[str]) -> str:
+    """The key of the sweep point of ``base`` with ``spec``'s values of ``fields`` (``spec``'s own key if the two
+    differ only there)."""
+    changed = base.config.replace(**{f: getattr(spec.config, f) for f in fields})
+    return runspec.RunSpec.make(changed, spec.seeds, json.loads(spec.search)).key()
+
+
 def learning_test_dir(evolved: str) -> str:
     """A learning test's folder beside its evolution's: the last ``evolve`` of the path replaced by ``test``."""
     parts = os.path.normpath(evolved).split(os.sep)
@@ -64,16 +97,63 @@ class Table:
     results: str = RESULTS
 
     def evolutions(self) -> dict[str, str]:
-        """Each row's evolution folder: the run its key finds under ``results``, or ``results/runs/KEY/evolve``."""
+        """Each row's evolution folder: the run its key finds under ``results``, or where it will be made (a point of
+        a sweep, :meth:`sweeps`, or ``results/runs/KEY/evolve``)."""
+        return self.plan()[0]
+
+    def sweeps(self) -> dict[str, Sweep]:
+        """The sweeps the rows' new runs are grouped into, by their folder (see :meth:`plan`)."""
+        return self.plan()[1]
+
+    def plan(self) -> tuple[dict[str, str], dict[str, "Sweep"]]:
+        """Each row's evolution folder, and the sweeps that make several rows' runs in one program.
+
+        Runs not made yet that differ only in dynamic values (:data:`imrl_jax.sweeps.DYNAMIC_FIELDS`) are one
+        sweep (``evolve --sweep``) in ``results/sweeps/HASH/evolve``, HASH of its runs' keys, each run a point
+        ``.../evolve/KEY``; a sweep begun is found by its points and goes on as one.
+        """
         known = runspec.index(self.results) if os.path.isdir(self.results) else {}
-        return {row.name: runspec.locate(self.results, evolution_spec(row, self.scale), known)[0]
-                for row in self.rows}
+        specs = {row.name: evolution_spec(row, self.scale) for row in self.rows}
+        dirs, begun, groups = {}, {}, {}
+        for row in self.rows:
+            dirs[row.name], found = runspec.locate(self.results, specs[row.name], known)
+            root = os.path.dirname(dirs[row.name])
+            if found and os.path.isfile(os.path.join(root, "sweep.json")):
+                begun.setdefault(root, []).append(row)
+            elif not found and json.loads(specs[row.name].search) == runspec.GA_SEARCH:
+                groups.setdefault(static_signature(specs[row.name]), {}).setdefault(specs[row.name].key(), row)
+        sweeps = {root: Sweep(tuple(rows), ()) for root, rows in begun.items() if len(rows) > 1}
+        for members in groups.values():
+            rows = list(members.values())
+            fields = varying_fields([specs[r.name] for r in rows])
+            if len(rows) < 2 or any(point_key(specs[rows[0].name], specs[r.name], fields) != specs[r.name].key()
+                                    for r in rows):
+                continue
+            root = os.path.join(self.results, "sweeps",
+                                hashlib.sha256(",".join(sorted(members)).encode()).hexdigest()[:runspec.KEY_LENGTH],
+                                "evolve")
+            sweeps[root] = Sweep(tuple(rows), tuple(
+                f"{f}={','.join(repr(float(getattr(specs[r.name].config, f))) for r in rows)}" for f in fields))
+            for row in self.rows:
+                if specs[row.name].key() in members:
+                    dirs[row.name] = os.path.join(root, specs[row.name].key())
+        return {row.name: dirs[row.name] for row in self.rows}, sweeps
 
     def all_stages(self) -> tuple[list[Stage], dict]:
-        """Every stage, in order (each evolution, then its test), and the scale; a run two rows share is one stage."""
+        """Every stage, in order (each evolution, then its test), and the scale; a run two rows share is one stage,
+        and so is a sweep of several rows' runs."""
         stages, evolving = [], {}
-        for row, evolved in zip(self.rows, self.evolutions().values()):
-            if evolved not in evolving:
+        evolutions, sweeps = self.plan()
+        for row, evolved in zip(self.rows, evolutions.values()):
+            root = os.path.dirname(evolved)
+            if root in sweeps:
+                if root not in evolving:
+                    members = sweeps[root].rows
+                    evolving[root] = f"evolve {'+'.join(r.name for r in members)} (one sweep)"
+                    stages.append(Stage(evolving[root], "evolve", row.name, row.condition, root,
+                                        sum(evolution_cost(self.scale, r.condition) for r in members)))
+                evolving[evolved] = evolving[root]
+            elif evolved not in evolving:
                 evolving[evolved] = f"evolve {row.name}"
                 stages.append(Stage(evolving[evolved], "evolve", row.name, row.condition, evolved,
                                     evolution_cost(self.scale, row.condition)))
@@ -87,7 +167,12 @@ class Table:
         """A stage's command line: the row's evolution, or the learning test of the run it found."""
         row = next(r for r in self.rows if r.name == stage.variant)
         if stage.kind == "evolve":
-            return evolve_command(self.scale, row.preset, row.condition, stage.out_dir, sets=row.sets), None
+            sweep = self.sweeps().get(stage.out_dir)
+            if sweep is not None and os.path.isfile(os.path.join(stage.out_dir, "sweep.json")):  # goes on as it began
+                return [sys.executable, "-m", "imrl_jax.evolve", "--resume", "--out", stage.out_dir, "--generations",
+                        str(self.scale["generations"])], None
+            return evolve_command(self.scale, row.preset, row.condition, stage.out_dir, sets=row.sets,
+                                  sweep=sweep.values if sweep else ()), None
         evolved = self.evolutions()[row.name]
         return test_command(self.scale, row.preset, row.condition, evolved, stage.out_dir, sets=row.sets), None
 

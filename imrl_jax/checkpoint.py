@@ -231,8 +231,9 @@ class Checkpointer:
                     shutil.rmtree(leftover, ignore_errors=True)
                 raise
 
-    def restore_latest(self, template: RunState, warn=print) -> tuple[RunState, dict] | None:
-        """The newest readable checkpoint (state shaped like ``template``), or None if none is.
+    def restore_latest(self, template: RunState, warn=print, at_most: int | None = None) -> tuple[RunState, dict] | None:
+        """The newest readable checkpoint (state shaped like ``template``; of a generation up to ``at_most`` if
+        given), or None if none is.
 
         The saved history may be shorter than the template's (a finished run extended to more
         generations): it is read at its own length, from the checkpoint's config, and padded
@@ -241,14 +242,14 @@ class Checkpointer:
         ocp = _ocp()
         failed = []
         with _quiet_absl(), _quiet_closed_loops(reads=True):
-            found = self._restore_latest(ocp, template, lambda text: (failed.append(text), warn(text)))
+            found = self._restore_latest(ocp, template, lambda text: (failed.append(text), warn(text)), at_most)
         if failed:  # after the block, which puts back the hook it found
             _silence_failed_reads()
         return found
 
-    def _restore_latest(self, ocp, template: RunState, warn) -> tuple[RunState, dict] | None:
+    def _restore_latest(self, ocp, template: RunState, warn, at_most: int | None) -> tuple[RunState, dict] | None:
         """:meth:`restore_latest` with orbax's logs and its failed reads' tracebacks silenced."""
-        for step in reversed(self.steps()):
+        for step in reversed([s for s in self.steps() if at_most is None or s <= at_most]):
             try:
                 saved_meta = self.manager.restore(step, args=ocp.args.Composite(meta=ocp.args.JsonRestore())).meta
                 rows = int(saved_meta.get("config", {}).get("num_generations", len(template.history.best)))

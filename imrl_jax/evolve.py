@@ -35,7 +35,7 @@ import numpy as np
 
 import imrl_jax
 from imrl_jax.checkpoint import Checkpointer, History, RunState, empty_history, git_commit
-from imrl_jax import cli, conditions
+from imrl_jax import cli, conditions, evolve_sweep
 from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
 from imrl_jax.devices import (check_memory, make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
                               use_host_cores)
@@ -584,7 +584,14 @@ def parser() -> argparse.ArgumentParser:
                         "evosax (the evosax extra): sep_cma_es, cma_es, snes, xnes, open_es, pgpe; docs/SEARCH.md")
     p.add_argument("--strategy-set", action="append", metavar="FIELD=VALUE",
                    help="set a parameter of an evosax strategy, e.g. --strategy-set std_init=0.3 (repeatable)")
-    p.add_argument("--out", help="run directory: new, empty, or the run to resume (default: runs/COND)")
+    p.add_argument("--sweep", action="append", metavar="FIELD=V1,V2",
+                   help="evolve at every value of a dynamic field (learning rates, discount, trace, noise, "
+                        "mutation; eta sets every rate) in one program, each point a run in OUT/KEY (repeatable: "
+                        "the product of the values; docs/STUDIES.md \"Sweeps\")")
+    p.add_argument("--zip", action="store_true", help="with several --sweep: their values taken in step, not "
+                                                      "every combination")
+    p.add_argument("--out", help="run directory: new, empty, or the run to resume (default: runs/COND, "
+                                 "runs/COND-sweep for a sweep)")
     p.add_argument("--resume", action="store_true",
                    help="continue the run in --out from its latest checkpoint (a finished run is extended by a "
                         "larger --generations)")
@@ -636,6 +643,29 @@ def init_distributed(args) -> None:
         raise UsageError(f"jax.distributed.initialize({coordinator!r}, {num}, {pid}) failed: {reason}") from None
 
 
+def _main_sweep(args, out_dir: str) -> int:
+    """``main`` for a sweep (``--sweep``, or ``--resume`` of a sweep's directory)."""
+    if args.strategy not in (None, GA_NAME) or args.strategy_set:
+        raise UsageError("--strategy: a sweep evolves with the paper's GA (its mutation values may be swept)")
+    saved = None
+    if args.resume:
+        if not evolve_sweep.is_sweep(out_dir):
+            raise UsageError(f"--resume: {out_dir} holds no sweep to resume (no {evolve_sweep.SWEEP_FILE})")
+        base, seeds, settings = evolve_sweep.read_sweep(out_dir)
+        saved = (base, seeds)
+    config, seeds = build_config(args, saved)
+    if args.sweep:
+        settings = evolve_sweep.parse(args.sweep, args.zip)
+    for line in cli.device_warnings(config, args.cpu_devices) + cli.ignored_notes(config, parse_sets(args.set)):
+        print(line, file=sys.stderr, flush=True)
+    states = evolve_sweep.run(config, out_dir, seeds, settings, resume=args.resume,
+                              checkpoint_every=args.checkpoint_every, keep=args.keep, quiet=args.quiet, log=args.log)
+    done = min(int(s.generation) for s in states.values())
+    print(f"{config.condition}: sweep of {len(states)} point(s) x {len(seeds)} seed(s), generations 0-{done - 1} "
+          f"done; per point in {os.path.join(out_dir, 'sweep.csv')}, each point's run in {out_dir}/KEY")
+    return 0
+
+
 def main(argv=None) -> int:
     out_dir = None
     try:
@@ -655,7 +685,11 @@ def main(argv=None) -> int:
         # Before anything starts JAX (the task set's checks, a strategy's arrays): later, neither takes effect.
         use_host_cores(args.cpu_devices or None)
         init_distributed(args)
-        out_dir = args.out or os.path.join("runs", args.cond)
+        out_dir = args.out or os.path.join("runs", args.cond + ("-sweep" if args.sweep else ""))
+        if args.sweep or (args.resume and evolve_sweep.is_sweep(out_dir)):
+            return _main_sweep(args, out_dir)
+        if args.zip:
+            raise UsageError("--zip: only with --sweep")
         saved = None
         if args.resume:
             if not os.path.exists(os.path.join(out_dir, "config.json")):

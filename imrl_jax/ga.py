@@ -113,11 +113,15 @@ class GA:
 
 
 def evolve_step(key: jax.Array, config: Config, params: LearningParams, population: jnp.ndarray,
-                generation) -> tuple[jnp.ndarray, GenerationStats]:
-    """One generation of one seed: live every individual, select the best, reproduce."""
+                generation, ga_params: GAParams | None = None) -> tuple[jnp.ndarray, GenerationStats]:
+    """One generation of one seed: live every individual, select the best, reproduce.
+
+    ``ga_params``: the mutation's values (traced in a sweep); None compiles in the config's.
+    """
     strategy = GA(config)
+    ga_params = strategy.default_params() if ga_params is None else ga_params
     state, result = search.generation(key, strategy, lambda k, g: live(k, config, params, g),
-                                      GAState(population), strategy.default_params(), generation,
+                                      GAState(population), ga_params, generation,
                                       config.lives_per_fitness)
     return state.population, GenerationStats(result.fitness, result.lives.performance.mean(1), result.info)
 

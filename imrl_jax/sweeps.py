@@ -77,8 +77,8 @@ class EvolutionCurves(NamedTuple):
 DYNAMIC_FIELDS = LearningParams._fields + GAParams._fields + ("eta",)
 
 
-def point(config: Config, **values) -> SweepPoint:
-    """The sweep point of ``config`` with some dynamic values changed (``eta`` sets every rate)."""
+def changed(config: Config, **values) -> Config:
+    """``config`` with some dynamic values changed (``eta`` sets every rate; a static field is a ValueError)."""
     unknown = set(values) - set(DYNAMIC_FIELDS)
     if unknown:
         raise ValueError(f"not a dynamic field: {sorted(unknown)[0]} (choose from {', '.join(DYNAMIC_FIELDS)}; "
@@ -87,9 +87,14 @@ def point(config: Config, **values) -> SweepPoint:
     if "eta" in values:
         eta = values.pop("eta")
         values = {**{f: eta for f in ETA_FIELDS}, **values}
-    changed = config.replace(**values)  # validates every value
-    params = changed.learning_params()
-    ga = GAParams(changed.mutation_prob, changed.mutation_scale)
+    return config.replace(**values)  # validates every value
+
+
+def point(config: Config, **values) -> SweepPoint:
+    """The sweep point of ``config`` with some dynamic values changed (``eta`` sets every rate)."""
+    changed_config = changed(config, **values)
+    params = changed_config.learning_params()
+    ga = GAParams(changed_config.mutation_prob, changed_config.mutation_scale)
     return SweepPoint(jax.tree.map(lambda v: jnp.asarray(v, jnp.float32), params),
                       jax.tree.map(lambda v: jnp.asarray(v, jnp.float32), ga))
 

@@ -55,3 +55,40 @@ def test_the_report_reads_what_has_finished(tmp_path):
     assert "| EE-LS-T | EE-LS-T | skills | 5 | 100 of 100 | 0.535 +- 0.028 | 35 | 0.583 +- 0.050 (5 runs) |" in text
     assert "| later | EE-LS-T | skills | - | 0 of 100 | not started | - | - |" in text and "old" not in text
     assert (tmp_path / "out" / "t.png").stat().st_size > 10_000
+
+
+def test_new_runs_that_differ_only_in_dynamic_values_are_one_sweep(tmp_path):
+    """Three EE-LS rows (a discount and a mutation size apart) are one sweep stage, each row's run a point found by
+    the key of the row's own command; the LE-LS row is its own stage; once begun, the sweep goes on as one."""
+    import json
+
+    from experiments.reproduce import SCALES, generations_done
+
+    scale = dict(SCALES["tiny"], task_steps=1000)
+    rows = (Row("a", "EE-LS", "skills", ("target_radius=40",), test=False),
+            Row("b", "EE-LS", "skills", ("target_radius=40", "gamma=0.95"), test=False),
+            Row("c", "EE-LS", "skills", ("target_radius=40", "mutation_scale=0.5"), test=False),
+            Row("a-again", "EE-LS", "skills", ("target_radius=40",), test=False),
+            Row("d", "LE-LS", "skills", test=False))
+    results = str(tmp_path / "results")
+    table = Table("mine", "docs/MINE.md", 99, rows=rows, scale=scale, out=str(tmp_path / "out"), results=results)
+    stages, _ = table.all_stages()
+    keys = {row.name: evolution_spec(row, scale).key() for row in rows}
+    sweep_root = os.path.dirname(table.evolutions()["a"])
+    assert [(s.name, s.out_dir) for s in stages] == [
+        ("evolve a+b+c (one sweep)", sweep_root),
+        ("evolve d", os.path.join(results, "runs", keys["d"], "evolve"))]
+    assert table.evolutions() == {**{n: os.path.join(sweep_root, keys[n]) for n in "abc"},
+                                  "a-again": os.path.join(sweep_root, keys["a"]),
+                                  "d": os.path.join(results, "runs", keys["d"], "evolve")}
+    command = table.stage_command(stages[0])[0]
+    assert command[command.index("--zip") - 4:command.index("--zip")] == [
+        "--sweep", "gamma=0.99,0.95,0.99", "--sweep", "mutation_scale=1.0,1.0,0.5"]
+    assert table.main([]) == 0
+    assert {n: generations_done(d) for n, d in table.evolutions().items()} == dict.fromkeys("abc", 2) | {
+        "a-again": 2, "d": 2}
+    assert runspec.index(results) == {keys[n]: os.path.relpath(table.evolutions()[n], results) for n in "abcd"}
+    assert table.stage_command(table.all_stages()[0][0])[0][3:] == ["--resume", "--out", sweep_root,
+                                                                      "--generations", "2"]
+    with open(os.path.join(sweep_root, "sweep.json")) as f:
+        assert [p["key"] for p in json.load(f)["points"]] == [keys[n] for n in "abc"]

@@ -1,0 +1,379 @@
+"""``python -m imrl_jax.evolve --sweep FIELD=V1,V2``: evolutions at several settings as one program.
+
+    python -m imrl_jax.evolve --cond LE-LS --seeds 10 --sweep trace_lambda=0,0.9,0.98 \\
+        --sweep eta_selector_actor=0.01,0.3 --out runs/lambda
+
+A sweep evolves one condition at every point of a grid of **dynamic** values (the learning rules'
+rates, discount, trace decay and noise, and the GA's mutation: ``sweeps.DYNAMIC_FIELDS``; MODEL.md
+"Learning" and "Genetic algorithm") for the same seeds. Points x seeds are one batch axis of one
+compiled generation, each entry with its own values, so the sweep costs one compilation, and on a
+GPU about the time of one run until the device is full. A static field (one that changes shapes
+or loop lengths) needs a program per value and is refused.
+
+Each point is a run of its own: ``OUT/KEY`` (KEY its content key, :mod:`imrl_jax.runspec`) holds
+the files a single run writes (``config.json``, ``history.csv``, ``fitness.png``,
+``final_population.npz``, ``checkpoints/``), so a study finds it by its key and
+``evolve --resume --out OUT/KEY`` continues one point alone. ``OUT`` holds ``sweep.json`` (the base
+config, the seeds and the points), ``sweep.csv`` (each point's settings, key and fitness) and
+``sweep.png``. ``evolve --resume --out OUT`` continues the whole sweep (``--generations N`` extends
+it); what a point equals is in docs/NUMERICS.md ("A point of a sweep").
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import dataclasses
+import io
+import itertools
+import json
+import os
+import time
+from typing import NamedTuple, Sequence
+
+import jax
+import numpy as np
+
+import imrl_jax
+from imrl_jax import sweeps
+from imrl_jax.checkpoint import Checkpointer, RunState, git_commit
+from imrl_jax.cli import UsageError
+from imrl_jax.config import Config, ConfigError
+from imrl_jax.devices import check_memory, make_mesh, population_sharding, replicated, to_global, to_host
+from imrl_jax.events import check_log, log_for
+from imrl_jax.ga import GAParams, evolve_step
+from imrl_jax.networks import trait_names, traits
+from imrl_jax.progress import Progress
+from imrl_jax.rundir import (RunDirError, check_unlocked, check_writable, entries, lock_run_dir, make_dir, not_empty,
+                             read_json, write_atomic)
+from imrl_jax.runspec import RunSpec
+from imrl_jax.search import over_seeds
+from imrl_jax.strategies import GA_RECORD
+
+#: The sweep's own files in its directory (each point is a run directory beside them).
+SWEEP_FILE = "sweep.json"
+#: At most this many points (each is a run directory and a checkpoint per generation).
+MAX_POINTS = 1000
+
+
+class Point(NamedTuple):
+    """One point of a sweep: the values it sets, its config and its run's key (its directory's name)."""
+
+    settings: dict
+    config: Config
+    key: str
+
+
+def parse(items: Sequence[str], zipped: bool = False) -> list[dict]:
+    """The points of ``--sweep FIELD=V1,V2,...`` options: their product, or with ``zipped`` their values in step.
+
+    Raises UsageError naming the option and the field (unknown, static, repeated, unreadable value).
+    """
+    values: dict[str, list[float]] = {}
+    for item in items:
+        field, sep, text = item.partition("=")
+        field = field.strip()
+        if not sep or not text.strip():
+            raise UsageError(f"--sweep: expected FIELD=V1,V2,... (got {item!r})")
+        if field not in sweeps.DYNAMIC_FIELDS:
+            if field in {f.name for f in dataclasses.fields(Config)}:
+                raise UsageError(f"--sweep: {field} is static (it changes the program's shapes or loop lengths): "
+                                 f"evolve once per value; sweepable: {', '.join(sweeps.DYNAMIC_FIELDS)}")
+            raise UsageError(f"--sweep: unknown field {field!r} (sweepable: {', '.join(sweeps.DYNAMIC_FIELDS)})")
+        if field in values:
+            raise UsageError(f"--sweep: {field} is given twice (give its values once, comma-separated)")
+        try:
+            values[field] = [float(v) for v in text.split(",")]
+        except ValueError:
+            raise UsageError(f"--sweep: {field}: expected numbers separated by commas (got {text!r})") from None
+    if not values:
+        raise UsageError("--sweep: give at least one FIELD=V1,V2,...")
+    names = list(values)
+    if zipped:
+        counts = {len(v) for v in values.values()}
+        if len(counts) > 1:
+            raise UsageError(f"--zip: every --sweep needs as many values ({', '.join(f'{n}: {len(values[n])}' for n in names)})")
+        combos = list(zip(*values.values()))
+    else:
+        combos = list(itertools.product(*values.values()))
+    if len(combos) > MAX_POINTS:
+        raise UsageError(f"--sweep: {len(combos):,} points; at most {MAX_POINTS:,}")
+    return [dict(zip(names, combo)) for combo in combos]
+
+
+def make_points(config: Config, seeds: Sequence[int], settings: Sequence[dict]) -> list[Point]:
+    """The points of a sweep from its base config (raises UsageError naming the field, or two points that are one run)."""
+    points, seen = [], {}
+    for values in settings:
+        try:
+            changed = sweeps.changed(config, **values)
+        except ConfigError as error:
+            raise UsageError(f"--sweep: {error}") from None
+        key = RunSpec.make(changed, seeds, GA_RECORD).key()
+        if key in seen:
+            same = [f for f in values if f in changed.spec.ignored_fields()]
+            why = f" ({', '.join(same)}: not read by {config.condition})" if same else ""
+            raise UsageError(f"--sweep: {label(values)} and {label(seen[key])} are the same run{why}")
+        seen[key] = values
+        points.append(Point(dict(values), changed, key))
+    return points
+
+
+def label(values: dict) -> str:
+    """A point's settings in words: ``trace_lambda=0.9, eta=0.3``."""
+    return ", ".join(f"{k}={v:g}" for k, v in values.items())
+
+
+def record(config: Config, seeds: Sequence[int], points: Sequence[Point]) -> dict:
+    """What sweep.json holds: the base config, the seeds and every point (settings and key)."""
+    return {"config": config.to_dict(), "seeds": list(seeds),
+            "points": [{"settings": p.settings, "key": p.key} for p in points]}
+
+
+def read_sweep(out_dir: str) -> tuple[Config, list[int], list[dict]]:
+    """The base config, seeds and points' settings a sweep directory records (raises RunDirError naming the file)."""
+    path = os.path.join(out_dir, SWEEP_FILE)
+    saved = read_json(path, "")
+    try:
+        return (Config.from_dict(saved["config"]), [int(s) for s in saved["seeds"]],
+                [dict(p["settings"]) for p in saved["points"]])
+    except (ConfigError, ValueError, KeyError, TypeError) as error:
+        raise RunDirError(f"{path} is unreadable ({error})") from None
+
+
+def is_sweep(out_dir: str) -> bool:
+    """Whether ``out_dir`` holds a sweep (its sweep.json)."""
+    return os.path.isfile(os.path.join(out_dir, SWEEP_FILE))
+
+
+def check_sweep_dir(out_dir: str, config: Config, seeds: Sequence[int], points: Sequence[Point], resume: bool) -> None:
+    """Refuse anything but a new or empty directory, or (resuming) this sweep (raises UsageError or RunDirError)."""
+    from imrl_jax.evolve import check_run_dir
+
+    if os.path.exists(out_dir) and not os.path.isdir(out_dir):
+        raise UsageError(f"--out: {out_dir} is not a directory")
+    exists = is_sweep(out_dir)
+    if exists and not resume:
+        raise UsageError(f"{out_dir} already holds a sweep ({SWEEP_FILE}); pass --resume to continue it or choose "
+                         f"another --out")
+    if resume and not exists:
+        raise UsageError(f"--resume: {out_dir} holds no sweep to resume (no {SWEEP_FILE})")
+    if not exists and entries(out_dir):
+        raise not_empty(out_dir, "sweep", entries(out_dir), missing=SWEEP_FILE)
+    if exists:
+        _, saved_seeds, saved_settings = read_sweep(out_dir)
+        if saved_seeds != list(seeds):
+            raise UsageError(f"--resume: seeds {list(seeds)} differ from the sweep's {saved_seeds}")
+        if saved_settings != [p.settings for p in points]:
+            raise UsageError(f"--sweep: the points differ from the sweep's in {out_dir} (resume it without --sweep)")
+    for p in points:
+        point_dir = os.path.join(out_dir, p.key)
+        check_run_dir(point_dir, p.config, seeds, resume and os.path.isfile(os.path.join(point_dir, "config.json")))
+
+
+def make_sweep_step(config: Config, sharding):
+    """The jitted generation ``step(keys, params, ga_params, populations, index)`` of every entry (point x seed),
+    each with its own learning and mutation values (leading axis B on keys, params, ga_params and populations)."""
+    return over_seeds(lambda k, p, ga, pop, i: evolve_step(k, config, p, pop, i, ga), (0, 0, 0, 0, None), sharding)
+
+
+def batched_values(points: Sequence[Point], num_seeds: int):
+    """Each entry's LearningParams and GAParams (B = points x seeds, points outer), as float32 arrays."""
+    def stacked(values):
+        return jax.tree.map(lambda *xs: np.repeat(np.asarray(xs, np.float32), num_seeds), *values)
+
+    params = stacked([p.config.learning_params() for p in points])
+    ga = stacked([GAParams(p.config.mutation_prob, p.config.mutation_scale) for p in points])
+    return params, ga
+
+
+def run(config: Config, out_dir: str, seeds: Sequence[int], settings: Sequence[dict], *, resume: bool = False,
+        checkpoint_every: int = 1, keep: int = 3, quiet: bool = False, log: str | None = None) -> dict[str, RunState]:
+    """Evolve ``config`` at every point of ``settings`` for every seed into ``out_dir``; return each point's final
+    state by key (each point's directory is ``out_dir/KEY``)."""
+    from imrl_jax.evolve import extend_config_json, initial_state
+
+    if not config.spec.evolved:
+        raise UsageError(f"--cond: {config.condition} is not evolved (it learns each task from scratch)")
+    seeds = [int(s) for s in seeds]
+    if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
+        raise UsageError("--seeds: need at least one seed, all distinct and non-negative")
+    if checkpoint_every < 1:
+        raise UsageError("--checkpoint-every: must be at least 1")
+    if keep < 1:
+        raise UsageError("--keep: must be at least 1 (a run keeps its latest checkpoint to resume from)")
+    if jax.process_count() > 1:
+        raise UsageError("--sweep: a sweep runs in one process (its points are its batch); start it without "
+                         "--coordinator")
+    try:
+        check_log(log)
+    except ValueError as error:
+        raise UsageError(str(error)) from None
+    points = make_points(config, seeds, settings)
+    check_writable(out_dir)
+    check_unlocked(out_dir)
+    for p in points:
+        check_unlocked(os.path.join(out_dir, p.key))
+    check_sweep_dir(out_dir, config, seeds, points, resume)
+    lanes = len(points) * len(seeds) * config.population_size * config.lives_per_fitness
+    check_memory(config, lanes, f"a sweep of {len(points)} point(s) x {len(seeds)} seed(s) x "
+                                f"{config.population_size} individuals")
+    mesh = make_mesh()
+    sharding = population_sharding(mesh, len(points) * len(seeds), config.population_size)
+    with contextlib.ExitStack() as stack:
+        try:
+            make_dir(out_dir)
+            stack.enter_context(lock_run_dir(out_dir))
+            check_sweep_dir(out_dir, config, seeds, points, resume)  # again, locked
+            info = {**record(config, seeds, points), "version": imrl_jax.__version__, "git_commit": git_commit(),
+                    "created": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+            if resume:
+                saved = read_json(os.path.join(out_dir, SWEEP_FILE), "")
+                info = {**saved, "config": config.to_dict()}  # a grown num_generations
+            write_atomic(os.path.join(out_dir, SWEEP_FILE), json.dumps(info, indent=2).encode())
+            for p in points:
+                point_dir = os.path.join(out_dir, p.key)
+                make_dir(point_dir)
+                stack.enter_context(lock_run_dir(point_dir))
+                if not os.path.isfile(os.path.join(point_dir, "config.json")):
+                    info = {"config": p.config.to_dict(), "seeds": seeds, "search": GA_RECORD,
+                            "sweep": {"root": "..", "settings": p.settings}, "version": imrl_jax.__version__,
+                            "git_commit": git_commit(), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+                    write_atomic(os.path.join(point_dir, "config.json"), json.dumps(info, indent=2).encode())
+                elif resume:
+                    extend_config_json(point_dir, p.config)
+        except OSError as error:
+            raise RunDirError(f"--out: cannot write {error.filename or out_dir} ({error.strerror})") from None
+        one = population_sharding(mesh, len(seeds), config.population_size)
+        states = [initial_state(p.config, seeds, one) for p in points]
+        checkpointers = [stack.enter_context(contextlib.closing(Checkpointer(os.path.join(out_dir, p.key,
+                                                                                          "checkpoints"), keep=keep)))
+                         for p in points]
+        events = stack.enter_context(contextlib.closing(log_for(log, out_dir)))
+        return _evolve(config, out_dir, seeds, points, states, checkpointers, sharding, mesh, resume=resume,
+                       checkpoint_every=checkpoint_every, quiet=quiet, events=events)
+
+
+def restore(points: Sequence[Point], states: list[RunState], checkpointers: Sequence[Checkpointer],
+            progress: Progress) -> tuple[list[RunState], int, float]:
+    """Every point at the newest generation all of them have a readable checkpoint of (0: none), and the
+    seconds the sweep had run; a point checkpointed further (resumed alone) starts again from there, said."""
+    template = list(states)
+    found = [c.restore_latest(s, warn=lambda text: progress.message(f"warning: {text}"))
+             for c, s in zip(checkpointers, template)]
+    while True:
+        if any(f is None for f in found):
+            return template, 0, 0.0
+        common = min(int(f[0].generation) for f in found)
+        if all(int(f[0].generation) == common for f in found):
+            break
+        for i, f in enumerate(found):
+            if int(f[0].generation) > common:
+                progress.message(f"warning: point {points[i].key} ({label(points[i].settings)}) was checkpointed "
+                                 f"after generation {int(f[0].generation) - 1}; the sweep goes on from generation "
+                                 f"{common} for every point")
+                found[i] = checkpointers[i].restore_latest(template[i], warn=progress.message, at_most=common)
+    return [f[0] for f in found], common, min(float(f[1].get("elapsed_seconds", 0.0)) for f in found)
+
+
+def _evolve(config: Config, out_dir: str, seeds: list[int], points: Sequence[Point], states: list[RunState],
+            checkpointers: Sequence[Checkpointer], sharding, mesh, *, resume: bool, checkpoint_every: int,
+            quiet: bool, events) -> dict[str, RunState]:
+    """The generations of :func:`run` after its checks (resuming from the newest generation every point has)."""
+    from imrl_jax.evolve import RunInterrupted, evolution_keys, record, record_traits, write_outputs
+
+    num_seeds = len(seeds)
+    progress = Progress(config.num_generations, quiet=quiet, first_index=0, log=events)
+    first, elapsed = 0, 0.0
+    if resume:
+        states, first, elapsed = restore(points, states, checkpointers, progress)
+        if first:
+            progress = Progress(config.num_generations, done=first, quiet=quiet, first_index=0, log=events,
+                                elapsed=elapsed)
+            progress.note(f"resuming the sweep in {out_dir} after generation {first - 1} ({first} of "
+                          f"{config.num_generations} done, {len(points)} points)")
+        else:
+            progress.note(f"no checkpoint common to the sweep's {len(points)} points yet: starting from generation 0")
+    progress.note(f"sweep of {len(points)} point(s) x {num_seeds} seed(s) of {config.condition} in one program: "
+                  + "; ".join(f"{p.key} {label(p.settings)}" for p in points))
+    step = make_sweep_step(config, sharding)
+    key_data = np.concatenate([s.key_data for s in states])
+    keys = to_global(evolution_keys(key_data), replicated(mesh))
+    params, ga = batched_values(points, num_seeds)
+    params, ga = (jax.tree.map(lambda x: to_global(x, replicated(mesh)), tree) for tree in (params, ga))
+    populations = to_global(np.concatenate([to_host(s.populations) for s in states]), sharding)
+    lane_steps = len(points) * num_seeds * config.population_size * config.lives_per_fitness * config.lifetime_steps
+    names = trait_names(config)
+    trait_values = jax.jit(jax.vmap(jax.vmap(lambda genome: traits(config, genome)))) if names else None
+    done = first
+    try:
+        for g in range(first, config.num_generations):
+            start = time.perf_counter()
+            evaluated = populations
+            populations, stats = step(keys, params, ga, evaluated, g)
+            fitness, performance = to_host(stats.fitness), to_host(stats.performance)
+            evaluated_host, next_host = to_host(evaluated), to_host(populations)
+            values = to_host(trait_values(evaluated)) if names else None
+            seconds = time.perf_counter() - start
+            for i, (p, state) in enumerate(zip(points, states)):
+                part = slice(i * num_seeds, (i + 1) * num_seeds)
+                recorded = record_traits(state.traits, g, fitness[part], values[part]) if names else state.traits
+                states[i] = RunState(np.asarray(g + 1, np.int32), next_host[part], evaluated_host[part],
+                                     fitness[part], state.key_data,
+                                     record(state.history, g, fitness[part], performance[part]), state.search,
+                                     recorded)
+            done = g + 1
+            means = fitness.max(1).reshape(len(points), num_seeds).mean(1)
+            best_point = int(np.argmax(means))
+            progress.update(done, float(means.max()), float(fitness.mean()), lane_steps / seconds,
+                            scores=f"best fitness, mean over seeds: best point {label(points[best_point].settings)} "
+                                   f"{means[best_point]:.4f}, worst {means.min():.4f}")
+            if done % checkpoint_every == 0 or done == config.num_generations:
+                for p, state, checkpointer in zip(points, states, checkpointers):
+                    meta = {"config": p.config.to_dict(), "seeds": seeds, "search": GA_RECORD,
+                            "elapsed_seconds": round(progress.elapsed(), 3)}
+                    checkpointer.save(state, meta)
+                    write_outputs(os.path.join(out_dir, p.key), p.config, seeds, state)
+                write_summary(out_dir, config, points, states)
+        if first == config.num_generations:
+            progress.note(f"{out_dir} is finished ({first} of {first} generations): its outputs are rewritten; "
+                          f"--generations N (more than {first}) extends it")
+            for p, state in zip(points, states):
+                write_outputs(os.path.join(out_dir, p.key), p.config, seeds, state)
+            write_summary(out_dir, config, points, states)
+    except KeyboardInterrupt:
+        raise RunInterrupted(out_dir, done, min(c.steps()[-1] if c.steps() else 0 for c in checkpointers),
+                             config.num_generations) from None
+    return {p.key: s for p, s in zip(points, states)}
+
+
+def summary_csv(points: Sequence[Point], states: Sequence[RunState], last: int = 5) -> str:
+    """One row per point: its settings, key, generations done and the recorded best fitness of the last ``last``
+    generations (the best of each generation's noisy lives, mean over those generations, then mean and std over seeds)."""
+    fields = list(dict.fromkeys(f for p in points for f in p.settings))
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(fields + ["key", "generations", f"best_last{last}_mean", f"best_last{last}_std"])
+    for p, state in zip(points, states):
+        done = int(state.generation)
+        per_seed = np.asarray(state.history.best[max(done - last, 0):done]).mean(0) if done else np.full(1, np.nan)
+        writer.writerow([f"{p.settings.get(f, float('nan')):g}" for f in fields]
+                        + [p.key, done, f"{per_seed.mean():.6f}", f"{per_seed.std():.6f}"])
+    return out.getvalue()
+
+
+def write_summary(out_dir: str, config: Config, points: Sequence[Point], states: Sequence[RunState]) -> None:
+    """Rewrite sweep.csv and sweep.png (every point's best fitness per generation, mean and std over seeds)."""
+    from imrl_jax.plotting import plot_fitness, save
+
+    write_atomic(os.path.join(out_dir, "sweep.csv"), summary_csv(points, states).encode())
+    done = int(states[0].generation)
+    if done:
+        curves = {label(p.settings): np.asarray(s.history.best[:done]).T for p, s in zip(points, states)}
+        save(plot_fitness(curves, title=f"{config.condition}: best fitness per generation at each point, "
+                                        f"mean and std over {states[0].key_data.shape[0]} seed(s)",
+                          ylabel="best fitness of the population"),
+             os.path.join(out_dir, "sweep.png"))
+
+
+__all__ = ["Point", "parse", "make_points", "read_sweep", "is_sweep", "run", "summary_csv"]

@@ -1,0 +1,140 @@
+"""``evolve --sweep``: a sweep's points are runs of their own, equal to single runs, resumable and extensible."""
+
+import csv
+import json
+import os
+import shutil
+import signal
+import subprocess
+import time
+
+import numpy as np
+import pytest
+from helpers import assert_same_outputs, evolve_args, evolve_command, outputs
+
+from imrl_jax import evolve, evolve_sweep
+from imrl_jax.runspec import RunSpec
+
+#: EE-LS at a tiny scale; a 40 cm target makes reaches common, so fitness is not all 0.
+BASE = evolve_args(seeds=2, population=6, parents=2, task_steps=1000, bins=2) + ["--set", "target_radius=40"]
+SWEEP = ["--sweep", "eta_selector_actor=0.01,0.3", "--sweep", "mutation_scale=0.5,1"]
+POINTS = [dict(eta_selector_actor=a, mutation_scale=m) for a in (0.01, 0.3) for m in (0.5, 1.0)]
+
+
+def _point_dirs(root):
+    with open(os.path.join(root, "sweep.json")) as f:
+        return {json.dumps(p["settings"], sort_keys=True): os.path.join(root, p["key"]) for p in json.load(f)["points"]}
+
+
+@pytest.fixture(scope="module")
+def finished_sweep(tmp_path_factory):
+    """An uninterrupted sweep of 4 points x 2 seeds x 4 generations."""
+    out = str(tmp_path_factory.mktemp("sweeps") / "full")
+    assert evolve.main([*BASE, *SWEEP, "--generations", "4", "--out", out]) == 0
+    return out
+
+
+def test_each_point_is_a_run_of_its_own_named_by_its_key(finished_sweep):
+    dirs = _point_dirs(finished_sweep)
+    assert [json.loads(k) for k in dirs] == [json.loads(json.dumps(p, sort_keys=True)) for p in POINTS]
+    for settings, point_dir in dirs.items():
+        spec = RunSpec.from_run_dir(point_dir)
+        assert os.path.basename(point_dir) == spec.key()
+        for field, value in json.loads(settings).items():
+            assert getattr(spec.config, field) == value
+        assert {"config.json", "history.csv", "fitness.png", "final_population.npz", "checkpoints"} <= set(
+            os.listdir(point_dir))
+    with open(os.path.join(finished_sweep, "sweep.csv")) as f:
+        rows = list(csv.DictReader(f))
+    assert [r["key"] for r in rows] == [os.path.basename(d) for d in dirs.values()]
+    for row in rows:  # the recorded best of the last generations (at most 5: all 4 here), mean over seeds
+        best = np.loadtxt(os.path.join(finished_sweep, row["key"], "history.csv"), delimiter=",", skiprows=1,
+                          usecols=2).reshape(4, 2)
+        assert float(row["best_last5_mean"]) == pytest.approx(best.mean(0).mean(), abs=1e-6)
+        assert int(row["generations"]) == 4
+    assert len({r["best_last5_mean"] for r in rows}) > 1  # the points differ
+
+
+def test_a_point_equals_the_single_run_of_its_settings_bitwise(finished_sweep, tmp_path):
+    single = str(tmp_path / "single")
+    assert evolve.main([*BASE, "--generations", "4", "--set", "eta_selector_actor=0.3", "--set", "mutation_scale=0.5",
+                        "--out", single]) == 0
+    point = _point_dirs(finished_sweep)[json.dumps(dict(eta_selector_actor=0.3, mutation_scale=0.5), sort_keys=True)]
+    assert_same_outputs(outputs(point), outputs(single))
+    assert RunSpec.from_run_dir(single).key() == os.path.basename(point)
+
+
+def test_killed_resumed_and_extended_sweep_equals_the_uninterrupted_one(finished_sweep, tmp_path):
+    """Killed after generation 1, resumed to 3, one point extended alone to 4, then the sweep to 4: bitwise."""
+    out = str(tmp_path / "killed")
+    process = subprocess.Popen(evolve_command([*BASE, *SWEEP, "--generations", "3", "--out", out]),
+                               env={**os.environ, "JAX_PLATFORMS": "cpu"}, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 200
+    try:
+        while time.time() < deadline and process.poll() is None:
+            if os.path.isfile(os.path.join(out, "sweep.csv")):  # written after every point's checkpoint
+                break
+            time.sleep(0.02)
+        assert process.poll() is None, "the sweep finished before it could be killed"
+        process.send_signal(signal.SIGKILL)
+    finally:
+        process.kill()
+        process.communicate()
+    dirs = _point_dirs(out)
+    assert evolve.main(["--resume", "--out", out, "--quiet"]) == 0
+    for point_dir in dirs.values():
+        assert int(np.load(os.path.join(point_dir, "final_population.npz"))["generation"]) == 3
+    alone = list(dirs.values())[1]
+    assert evolve.main(["--resume", "--out", alone, "--generations", "4", "--quiet"]) == 0
+    assert evolve.main(["--resume", "--out", out, "--generations", "4", "--quiet"]) == 0
+    want = _point_dirs(finished_sweep)
+    for settings, point_dir in dirs.items():
+        got, expected = outputs(point_dir), outputs(want[settings])
+        assert_same_outputs(got, expected)
+        assert got["config.json"]["config"]["num_generations"] == 4
+    with open(os.path.join(out, "sweep.json")) as f:
+        assert json.load(f)["config"]["num_generations"] == 4
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--sweep", "population_size=4,6"], "--sweep: population_size is static (it changes the program's shapes or "
+                                         "loop lengths): evolve once per value; sweepable: "),
+    (["--sweep", "task_steps=100,200"], "--sweep: task_steps is static"),
+    (["--sweep", "gama=0.9,0.99"], "--sweep: unknown field 'gama' (sweepable: "),
+    (["--sweep", "gamma=0.9,x"], "--sweep: gamma: expected numbers separated by commas (got '0.9,x')"),
+    (["--sweep", "gamma"], "--sweep: expected FIELD=V1,V2,... (got 'gamma')"),
+    (["--sweep", "gamma=0.9", "--sweep", "gamma=0.8"], "--sweep: gamma is given twice"),
+    (["--sweep", "gamma=0.9,0.8", "--sweep", "trace_lambda=0.1", "--zip"],
+     "--zip: every --sweep needs as many values (gamma: 2, trace_lambda: 1)"),
+    (["--sweep", "eta=0.1,-1"], "--sweep: eta_actor: must be in [0, 10] (got -1.0)"),
+    (["--sweep", "childhood_trace_lambda=0.1,0.2"],
+     "--sweep: childhood_trace_lambda=0.2 and childhood_trace_lambda=0.1 are the same run (childhood_trace_lambda: not "
+     "read by EE-LS)"),
+    (["--sweep", "gamma=0.9", "--strategy", "snes"], "--strategy: a sweep evolves with the paper's GA"),
+    (["--zip"], "--zip: only with --sweep"),
+])
+def test_bad_sweeps_exit_2_in_one_line_and_write_nothing(tmp_path, capsys, args, message):
+    out = tmp_path / "sweep"
+    assert evolve.main([*BASE, *args, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"error: {message}") and "\n" not in err, err
+    assert not out.exists()
+
+
+def test_a_finished_sweep_is_refused_without_resume_and_its_points_must_match(finished_sweep, tmp_path, capsys):
+    copy = str(tmp_path / "copy")
+    shutil.copytree(finished_sweep, copy)
+    before = sorted(os.listdir(copy))
+    assert evolve.main([*BASE, *SWEEP, "--generations", "4", "--out", copy]) == 2
+    assert "already holds a sweep (sweep.json); pass --resume" in capsys.readouterr().err
+    assert evolve.main(["--resume", "--out", copy, "--sweep", "gamma=0.9,0.99"]) == 2
+    assert "--sweep: the points differ from the sweep's" in capsys.readouterr().err
+    assert sorted(os.listdir(copy)) == before
+
+
+def test_parse_takes_the_product_or_the_values_in_step():
+    assert evolve_sweep.parse(["gamma=0.9,0.99", "eta=0.1,0.3"]) == [
+        dict(gamma=0.9, eta=0.1), dict(gamma=0.9, eta=0.3), dict(gamma=0.99, eta=0.1), dict(gamma=0.99, eta=0.3)]
+    assert evolve_sweep.parse(["gamma=0.9,0.99", "eta=0.1,0.3"], zipped=True) == [
+        dict(gamma=0.9, eta=0.1), dict(gamma=0.99, eta=0.3)]
