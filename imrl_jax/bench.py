@@ -261,6 +261,56 @@ def run(lane_counts, steps: int, repeats: int, reference_steps: int, lifetime_la
     return result
 
 
+def sweep_benchmark(num_points: int, num_seeds: int = 2, task_steps: int = 500, pairs: int = 5, log=print) -> dict:
+    """A generation of a k-point sweep (``evolve --sweep``, one program) against k generations of a single run.
+
+    LE-LS under the paper's preset at ``task_steps`` per task (childhood 1.5 x), ``num_seeds`` seeds of 50; the two
+    programs' timed generations alternate (``pairs`` of each, after compilation), so both see the same machine.
+    Returns the medians and ``ratio``: the sweep's generation over k single ones (at most 1: the sweep costs no more).
+    """
+    from imrl_jax import evolve, evolve_sweep
+    from imrl_jax.ga import GA
+    from imrl_jax.devices import make_mesh, population_sharding, replicated, to_global
+
+    config = make_config("paper", condition="LE-LS", task_steps=task_steps, childhood_steps=task_steps * 3 // 2,
+                         num_bins=1)
+    seeds = list(range(num_seeds))
+    mesh = make_mesh()
+    single_sharding = population_sharding(mesh, num_seeds, config.population_size)
+    single = evolve.make_step(config, GA(config), single_sharding)
+    state = evolve.initial_state(config, seeds, single_sharding)
+    keys = to_global(evolve.evolution_keys(state.key_data), replicated(mesh))
+    single_args = (keys, config.learning_params(), state.populations, (), 0)
+    settings = [dict(trace_lambda=v) for v in np.linspace(0.0, 0.98, num_points)]
+    points = evolve_sweep.make_points(config, seeds, settings)
+    sweep_sharding = population_sharding(mesh, num_points * num_seeds, config.population_size)
+    sweep = evolve_sweep.make_sweep_step(config, sweep_sharding)
+    params, ga = evolve_sweep.batched_values(points, num_seeds)
+    sweep_args = (to_global(evolve.evolution_keys(np.tile(state.key_data, (num_points, 1))), replicated(mesh)),
+                  params, ga, to_global(np.tile(np.asarray(state.populations), (num_points, 1, 1)), sweep_sharding), 0)
+    timed = {"single": [], "sweep": []}
+    for name, fn, args in (("single", single, single_args), ("sweep", sweep, sweep_args)):
+        start = time.perf_counter()
+        jax.block_until_ready(fn(*args))
+        timed[f"{name}_compile_s"] = time.perf_counter() - start
+    for i in range(pairs):
+        order = (("single", single, single_args), ("sweep", sweep, sweep_args))
+        for name, fn, args in (order if i % 2 == 0 else order[::-1]):
+            start = time.perf_counter()
+            jax.block_until_ready(fn(*args))
+            timed[name].append(time.perf_counter() - start)
+    single_s, sweep_s = statistics.median(timed["single"]), statistics.median(timed["sweep"])
+    result = dict(points=num_points, seeds=num_seeds, population=config.population_size, task_steps=task_steps,
+                  single_generation_s=single_s, sweep_generation_s=sweep_s, ratio=sweep_s / (num_points * single_s),
+                  single_compile_s=timed["single_compile_s"], sweep_compile_s=timed["sweep_compile_s"],
+                  devices=len(jax.devices()), platform=jax.default_backend())
+    log(f"LE-LS generation of {num_seeds} seed(s) x {config.population_size}, {task_steps} steps per task: single run "
+        f"{single_s:.2f} s (median of {pairs}); sweep of {num_points} points {sweep_s:.2f} s; the sweep over "
+        f"{num_points} single generations: {result['ratio']:.2f} (compile {timed['single_compile_s']:.1f} s and "
+        f"{timed['sweep_compile_s']:.1f} s)")
+    return result
+
+
 def main(argv=None) -> int:
     from imrl_jax.cli import HelpFormatter
 
@@ -275,8 +325,14 @@ def main(argv=None) -> int:
     parser.add_argument("--lifetime-task-steps", type=int, default=2000, help="steps per task of the whole life")
     parser.add_argument("--cpu-devices", type=int, default=0, help="CPU devices (0: one per core)")
     parser.add_argument("--kernel", default="xla", help="comma-separated step kernels: xla, pallas (GPU)")
+    parser.add_argument("--sweep-points", type=int, default=0,
+                        help="instead: a generation of a sweep of this many points (evolve --sweep) against as many "
+                             "generations of a single run, alternating (--repeats pairs, --lifetime-task-steps)")
     parser.add_argument("--json", help="also write the results to this JSON file")
     args = parser.parse_args(argv)
+    if args.sweep_points < 0 or args.sweep_points > 1000:
+        print("error: --sweep-points: must be in 0..1000", file=sys.stderr)
+        return 2
     from imrl_jax.config import STEP_KERNELS
 
     kernels = args.kernel.split(",")
@@ -319,8 +375,11 @@ def main(argv=None) -> int:
         print(f"error: {error}", file=sys.stderr)
         return 2
     use_host_cores(args.cpu_devices or None)
-    result = run(counts["lanes"], args.steps, args.repeats, args.reference_steps, counts["lifetime_lanes"],
-                 args.lifetime_task_steps, kernels=kernels)
+    if args.sweep_points:
+        result = sweep_benchmark(args.sweep_points, task_steps=args.lifetime_task_steps, pairs=args.repeats)
+    else:
+        result = run(counts["lanes"], args.steps, args.repeats, args.reference_steps, counts["lifetime_lanes"],
+                     args.lifetime_task_steps, kernels=kernels)
     if args.json:
         from imrl_jax.rundir import write_atomic
 

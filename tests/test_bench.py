@@ -14,6 +14,7 @@ from imrl_jax import bench
     (["--lifetime-task-steps", "15"], "--lifetime-task-steps"),
     (["--kernel", "xla,triton"], "--kernel"),
     (["--cpu-devices", "100000"], "--cpu-devices: 100,000 is above the limit"),
+    (["--sweep-points", "-1"], "--sweep-points: must be in 0..1000"),
 ])
 def test_bad_input_exits_2_naming_the_field(argv, field, capsys):
     assert bench.main(argv) == 2
@@ -39,3 +40,10 @@ def test_help_shows_defaults(capsys):
         bench.main(["--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert "(default: 1,50,300,3000)" in text and "(default: 1000)" in text and "(default: None)" not in text
+
+
+@pytest.mark.slow
+def test_the_sweep_benchmark_times_both_programs_on_the_same_generation():
+    result = bench.sweep_benchmark(2, num_seeds=1, task_steps=20, pairs=1, log=lambda text: None)
+    assert result["points"] == 2 and result["single_generation_s"] > 0 and result["sweep_generation_s"] > 0
+    assert result["ratio"] == pytest.approx(result["sweep_generation_s"] / (2 * result["single_generation_s"]))
