@@ -48,6 +48,18 @@ def evolution_spec(row: Row, scale: dict) -> runspec.RunSpec:
     return runspec.RunSpec.make(config, seeds)
 
 
+@dataclasses.dataclass(frozen=True)
+class Measure:
+    """A measure of a run: ``python -m MODULE RUN --out OUT ARGS`` (RUN a row's evolution, or a committed run's
+    folder), done when OUT holds result.json; its out is ``TABLE_OUT/measures/NAME``."""
+
+    name: str
+    run: str  # a row's name, or a run directory
+    args: tuple[str, ...] = ()
+    module: str = "imrl_jax.landscape_run"
+    cost: float = 0.0  # lane-steps, estimated
+
+
 class Sweep(NamedTuple):
     """Rows whose runs are made in one program: the first row's command with ``--sweep FIELD=V1,V2 --zip``."""
 
@@ -95,6 +107,7 @@ class Table:
     scale: dict = dataclasses.field(hash=False)
     out: str  # its manifest and logs (its runs lie wherever their keys find them under ``results``)
     results: str = RESULTS
+    measures: tuple[Measure, ...] = ()
 
     def evolutions(self) -> dict[str, str]:
         """Each row's evolution folder: the run its key finds under ``results``, or where it will be made (a point of
@@ -161,10 +174,19 @@ class Table:
                 stages.append(Stage(f"learning test {row.name}", "test", row.name, row.condition,
                                     learning_test_dir(evolved), test_cost(self.scale, row.condition),
                                     needs=(evolving[evolved],)))
+        for measure in self.measures:
+            row = next((r for r in self.rows if r.name == measure.run), None)
+            stages.append(Stage(f"measure {measure.name}", "measure", measure.name, row.condition if row else "",
+                                os.path.join(self.out, "measures", measure.name), measure.cost,
+                                needs=(evolving[evolutions[row.name]],) if row else ()))
         return stages, self.scale
 
     def stage_command(self, stage: Stage) -> tuple[list[str], None]:
         """A stage's command line: the row's evolution, or the learning test of the run it found."""
+        if stage.kind == "measure":
+            measure = next(m for m in self.measures if m.name == stage.variant)
+            run = self.evolutions().get(measure.run, measure.run)
+            return [sys.executable, "-m", measure.module, run, "--out", stage.out_dir, *measure.args], None
         row = next(r for r in self.rows if r.name == stage.variant)
         if stage.kind == "evolve":
             sweep = self.sweeps().get(stage.out_dir)

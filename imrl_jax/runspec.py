@@ -85,7 +85,9 @@ def run_dirs(root: str) -> list[str]:
     """Every evolution's directory under ``root`` (one holding a ``config.json``), sorted, relative to ``root``."""
     found = []
     for folder, subfolders, files in os.walk(root):
-        subfolders[:] = sorted(d for d in subfolders if d not in ("checkpoints", "resume_checkpoint", "partial"))
+        # A landscape measure's replay of a few generations of one seed (imrl_jax.landscape_run) is a means, not a run.
+        subfolders[:] = sorted(d for d in subfolders if d not in ("checkpoints", "resume_checkpoint", "partial")
+                               and not d.startswith("landscape_replay"))
         if "config.json" in files:
             found.append(os.path.relpath(folder, root))
     return sorted(found)

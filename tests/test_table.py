@@ -6,7 +6,7 @@ from helpers import ROOT
 
 from experiments.claims_study import SCREEN
 from experiments.reproduce import stage_done
-from experiments.table import Row, Table, evolution_spec, learning_test_dir
+from experiments.table import Measure, Row, Table, evolution_spec, learning_test_dir
 from imrl_jax import runspec
 
 RESULTS = os.path.join(ROOT, "experiments", "results")
@@ -71,13 +71,17 @@ def test_new_runs_that_differ_only_in_dynamic_values_are_one_sweep(tmp_path):
             Row("a-again", "EE-LS", "skills", ("target_radius=40",), test=False),
             Row("d", "LE-LS", "skills", test=False))
     results = str(tmp_path / "results")
-    table = Table("mine", "docs/MINE.md", 99, rows=rows, scale=scale, out=str(tmp_path / "out"), results=results)
+    measure = Measure("landscape-b", "b", ("--generations", "0,last", "--parents", "2", "--walks", "1", "--mutants",
+                                           "2", "--walk-length", "2", "--random", "2", "--lives", "2", "--chunk", "6"))
+    table = Table("mine", "docs/MINE.md", 99, rows=rows, scale=scale, out=str(tmp_path / "out"), results=results,
+                  measures=(measure,))
     stages, _ = table.all_stages()
     keys = {row.name: evolution_spec(row, scale).key() for row in rows}
     sweep_root = os.path.dirname(table.evolutions()["a"])
-    assert [(s.name, s.out_dir) for s in stages] == [
-        ("evolve a+b+c (one sweep)", sweep_root),
-        ("evolve d", os.path.join(results, "runs", keys["d"], "evolve"))]
+    assert [(s.name, s.out_dir, s.needs) for s in stages] == [
+        ("evolve a+b+c (one sweep)", sweep_root, None),
+        ("evolve d", os.path.join(results, "runs", keys["d"], "evolve"), None),
+        ("measure landscape-b", str(tmp_path / "out" / "measures" / "landscape-b"), ("evolve a+b+c (one sweep)",))]
     assert table.evolutions() == {**{n: os.path.join(sweep_root, keys[n]) for n in "abc"},
                                   "a-again": os.path.join(sweep_root, keys["a"]),
                                   "d": os.path.join(results, "runs", keys["d"], "evolve")}
@@ -92,3 +96,8 @@ def test_new_runs_that_differ_only_in_dynamic_values_are_one_sweep(tmp_path):
                                                                       "--generations", "2"]
     with open(os.path.join(sweep_root, "sweep.json")) as f:
         assert [p["key"] for p in json.load(f)["points"]] == [keys[n] for n in "abc"]
+    with open(tmp_path / "out" / "measures" / "landscape-b" / "result.json") as f:  # the measure of b's point
+        measured = json.load(f)
+    assert measured["run"] == table.evolutions()["b"] and measured["condition"] == "EE-LS"
+    assert sorted(measured["pieces"]) == ["generation 0, learning", "generation 1, learning",
+                                          "random genomes, learning"]
