@@ -285,8 +285,8 @@ def stage_done(stage: Stage, scale: dict) -> bool:
     itself, ``python -m experiments.report RESULTS_DIR`` writes it again)."""
     if stage.kind == "evolve":
         return generations_done(stage.out_dir) >= scale["generations"]
-    if stage.kind == "test":
-        return os.path.exists(os.path.join(stage.out_dir, "steady.json"))
+    if stage.kind == "test":  # a sweep's test (of every point) writes sweep_tests.json when all are done
+        return any(os.path.exists(os.path.join(stage.out_dir, name)) for name in ("steady.json", "sweep_tests.json"))
     if stage.kind == "measure":
         return os.path.exists(os.path.join(stage.out_dir, MEASURED))
     if stage.kind == "baseline":  # python -m imrl_jax.baselines writes its summary last

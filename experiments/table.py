@@ -170,7 +170,14 @@ class Table:
                 evolving[evolved] = f"evolve {row.name}"
                 stages.append(Stage(evolving[evolved], "evolve", row.name, row.condition, evolved,
                                     evolution_cost(self.scale, row.condition)))
-            if row.test:
+            if root in sweeps and all(r.test for r in sweeps[root].rows):  # its points tested in one program too
+                if f"test {root}" not in evolving:
+                    members = sweeps[root].rows
+                    evolving[f"test {root}"] = f"learning test {'+'.join(r.name for r in members)} (one sweep)"
+                    stages.append(Stage(evolving[f"test {root}"], "test", row.name, row.condition,
+                                        learning_test_dir(root), sum(test_cost(self.scale, r.condition)
+                                                                     for r in members), needs=(evolving[root],)))
+            elif row.test:
                 stages.append(Stage(f"learning test {row.name}", "test", row.name, row.condition,
                                     learning_test_dir(evolved), test_cost(self.scale, row.condition),
                                     needs=(evolving[evolved],)))
@@ -196,6 +203,10 @@ class Table:
             return evolve_command(self.scale, row.preset, row.condition, stage.out_dir, sets=row.sets,
                                   sweep=sweep.values if sweep else ()), None
         evolved = self.evolutions()[row.name]
+        if os.path.dirname(evolved) in self.sweeps():  # a sweep's points, tested as one
+            evolved = os.path.dirname(evolved)
+            if os.path.normpath(stage.out_dir) != os.path.normpath(learning_test_dir(evolved)):
+                evolved = self.evolutions()[row.name]  # a row of the sweep tested alone
         return test_command(self.scale, row.preset, row.condition, evolved, stage.out_dir, sets=row.sets), None
 
     def measure(self) -> list[dict]:

@@ -58,8 +58,8 @@ from imrl_jax.events import check_log, log_for
 from imrl_jax.progress import Progress
 from imrl_jax.rundir import (LOCK, Run, RunDirError, RunWriteError, best_genomes, check_npz, check_unlocked,
                              check_writable, entries, holder_alive, is_output, load_run as read_run, lock_run_dir,
-                             make_dir, not_empty, read_config, read_kept_best, read_lock, read_text, write_atomic,
-                             write_errno)
+                             make_dir, not_empty, read_config, read_json, read_kept_best, read_lock, read_text,
+                             write_atomic, write_errno)
 
 
 class TestState(NamedTuple):
@@ -108,9 +108,20 @@ def advance(config: Config, params: LearningParams, test: TestState, num_chunks:
     return test._replace(states=states), curves
 
 
-@functools.lru_cache(maxsize=8)  # tests of the same config in one process (a notebook, a sweep) compile once
 def make_learning_test(config: Config, num_chunks: int):
-    """Jitted ``begin(keys, params, genomes)`` and ``advance(params, t, tests)`` over a batch of tests."""
+    """Jitted ``begin(keys, params, genomes)`` and ``advance(params, t, tests)`` over a batch of tests.
+
+    Tests of configs that differ only in dynamic values (``sweeps.DYNAMIC_FIELDS``: they are ``params``) share
+    one program, so the points of a sweep compile once.
+    """
+    from imrl_jax.sweeps import static_part
+
+    return _make_learning_test(static_part(config), num_chunks)
+
+
+@functools.lru_cache(maxsize=8)  # tests of the same program in one process (a notebook, a sweep) compile once
+def _make_learning_test(config: Config, num_chunks: int):
+    """:func:`make_learning_test` for a config whose dynamic values are the defaults."""
     if config.num_bins % num_chunks:
         raise ConfigError(f"num_bins: {config.num_bins} bins cannot be split into {num_chunks} chunks")
     begin_all = jax.jit(jax.vmap(lambda k, p, g: begin(k, config, p, g), (0, None, 0)))
@@ -412,6 +423,9 @@ def _run_locked(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests:
     return summary
 
 
+#: What the test of a sweep writes beside its points' tests once all are done.
+SWEEP_TESTS = "sweep_tests.json"
+
 PAPER_TEST = dict(task_steps=1_000_000, shape=(10, 10, 10))  # the paper's tests: 1,000,000 cycles, 10 x 10 x 10
 
 
@@ -527,55 +541,108 @@ def main(argv: Sequence[str] | None = None) -> int:
             base = make_config(args.preset, **{**sets, "condition": args.cond})
             genomes = np.zeros((args.runs, args.best, base.num_genes), np.float32)
             source = f"{args.cond} from scratch, preset {args.preset}" + "".join(f", {s}" for s in args.set or [])
+            summaries = [(args.out, _test(args, base, genomes, source, evolved, warnings, sets, command, args.out))]
         else:
             if not args.run_dir:
                 raise UsageError(f"run_dir: give an evolution's run directory, or --cond "
                                  f"{' or '.join(from_scratch())} to test learning from scratch")
-            if args.best_genomes:
-                base, _, genomes = load_kept_best(args.run_dir, args.best_genomes, args.best)
-            else:
-                found = read_run(args.run_dir)
-                base, genomes = found.config, best_genomes(found, args.best)
-                evolved = dict(generation=found.generation - 1, generations_done=found.generation,
-                               num_generations=found.config.num_generations)
-                why = unfinished(args.run_dir, found)
-                if why and not args.allow_unfinished:
-                    raise UsageError(f"run_dir: {why}: its evolution is unfinished (pass --allow-unfinished to test "
-                                     f"generation {found.generation - 1} anyway)")
-                if why:
-                    warnings.append(f"warning: {why}: testing generation {found.generation - 1} (steady.json "
-                                    f"records it)")
-            if args.cond is not None and args.cond != base.condition:
-                raise UsageError(f"--cond: {args.run_dir} is a {base.condition} run, not {args.cond}")
-            source = os.path.abspath(args.run_dir) + "".join(f", {s}" for s in args.set or [])
-            if sets:  # the evolved genomes tested under other values (their evolution's config otherwise)
-                tested = base.replace(**sets)
-                if tested.num_genes != base.num_genes:
-                    raise UsageError(f"--set: {', '.join(sets)} changes the genome ({base.num_genes} genes evolved, "
-                                     f"{tested.num_genes} asked)")
-                base = tested
-        # Evolved genomes may be tested on other tasks (they encode none).
-        config = cli.apply_task_set(
-            lambda **tasks: base.replace(task_steps=args.task_steps, num_bins=args.bins, **tasks), args)
-        if args.task_set is not None:
-            source += f", task set {args.task_set}"
-        if config.num_bins % args.chunks:
-            raise UsageError(f"--chunks: {args.bins} bins cannot be split into {args.chunks} chunks")
-        steady_bins(config, args.steady_steps)
-        summary = run(config, genomes, args.out, num_tests=args.tests, steady_steps=args.steady_steps,
-                      num_chunks=args.chunks, seed=args.seed, quiet=args.quiet, source=source, command=command,
-                      warnings=[*warnings, *cli.device_warnings(config, args.cpu_devices)],
-                      notes=cli.ignored_notes(config, sets), evolved=evolved, log=args.log)
+            points = sweep_points(args.run_dir)
+            if points is not None and args.best_genomes:
+                raise UsageError(f"--best-genomes: {args.run_dir} is a sweep: its points' populations are kept")
+            summaries = []
+            for run_dir, out_dir in ([(args.run_dir, args.out)] if points is None else
+                                     [(point, os.path.join(args.out, os.path.basename(point))) for point in points]):
+                if points is not None and os.path.isfile(os.path.join(out_dir, "steady.json")):
+                    summaries.append((out_dir, None))  # a point tested before: the sweep's test goes on after it
+                    continue
+                base, genomes, source, evolved, warnings = _evolved(args, run_dir, sets)
+                summaries.append((out_dir, _test(args, base, genomes, source, evolved, warnings, sets, command,
+                                                 out_dir)))
+            if points is not None:
+                sweep_summary(args.run_dir, args.out)
     except user_errors() as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
     except RunWriteError as error:
         print(f"error: {error}", file=sys.stderr)
         return 1
-    print(f"{summary['condition']}: steady state (last {args.steady_steps} cycles) {summary['steady_mean']:.4f} mean "
-          f"over {summary['num_runs']} run(s), best run {summary['steady_best_run']:.4f}; whole test "
-          f"{summary['whole_test_mean']:.4f}; outputs in {args.out}")
+    for out_dir, summary in summaries:
+        if summary is None:
+            print(f"{out_dir}: tested before (steady.json)")
+            continue
+        print(f"{summary['condition']}: steady state (last {args.steady_steps} cycles) {summary['steady_mean']:.4f} "
+              f"mean over {summary['num_runs']} run(s), best run {summary['steady_best_run']:.4f}; whole test "
+              f"{summary['whole_test_mean']:.4f}; outputs in {out_dir}")
     return 0
+
+
+def sweep_points(run_dir: str) -> list[str] | None:
+    """A sweep's point directories (``evolve --sweep``, in its order), or None if ``run_dir`` is not a sweep."""
+    from imrl_jax.evolve_sweep import is_sweep, make_points, read_sweep
+
+    if not is_sweep(run_dir):
+        return None
+    return [os.path.join(run_dir, point.key) for point in make_points(*read_sweep(run_dir))]
+
+
+def sweep_summary(run_dir: str, out_dir: str) -> dict:
+    """Each point's settings and steady state, once every point of the sweep in ``run_dir`` is tested in ``out_dir``
+    (written to ``out_dir/sweep_tests.json``: a sweep's test is done when it is there)."""
+    from imrl_jax.evolve_sweep import make_points, read_sweep
+
+    points = {}
+    for point in make_points(*read_sweep(run_dir)):
+        steady = read_json(os.path.join(out_dir, point.key, "steady.json"), "")
+        points[point.key] = dict(settings=point.settings, steady_mean=steady["steady_mean"],
+                                 steady_sd=steady["steady_sd"], whole_test_mean=steady["whole_test_mean"])
+    summary = dict(sweep=os.path.abspath(run_dir), points=points)
+    write_atomic(os.path.join(out_dir, SWEEP_TESTS), json.dumps(summary, indent=2).encode())
+    return summary
+
+
+def _evolved(args, run_dir: str, sets: dict) -> tuple[Config, np.ndarray, str, dict | None, list[str]]:
+    """An evolved run's config (with ``--set``), its best genomes, the source's words, its generation, warnings."""
+    warnings, evolved = [], None
+    if args.best_genomes:
+        base, _, genomes = load_kept_best(run_dir, args.best_genomes, args.best)
+    else:
+        found = read_run(run_dir)
+        base, genomes = found.config, best_genomes(found, args.best)
+        evolved = dict(generation=found.generation - 1, generations_done=found.generation,
+                       num_generations=found.config.num_generations)
+        why = unfinished(run_dir, found)
+        if why and not args.allow_unfinished:
+            raise UsageError(f"run_dir: {why}: its evolution is unfinished (pass --allow-unfinished to test "
+                             f"generation {found.generation - 1} anyway)")
+        if why:
+            warnings.append(f"warning: {why}: testing generation {found.generation - 1} (steady.json records it)")
+    if args.cond is not None and args.cond != base.condition:
+        raise UsageError(f"--cond: {run_dir} is a {base.condition} run, not {args.cond}")
+    source = os.path.abspath(run_dir) + "".join(f", {s}" for s in args.set or [])
+    if sets:  # the evolved genomes tested under other values (their evolution's config otherwise)
+        tested = base.replace(**sets)
+        if tested.num_genes != base.num_genes:
+            raise UsageError(f"--set: {', '.join(sets)} changes the genome ({base.num_genes} genes evolved, "
+                             f"{tested.num_genes} asked)")
+        base = tested
+    return base, genomes, source, evolved, warnings
+
+
+def _test(args, base: Config, genomes: np.ndarray, source: str, evolved: dict | None, warnings: list[str],
+          sets: dict, command: str, out_dir: str) -> dict:
+    """The learning test of ``genomes`` under ``base`` at the command line's lengths, into ``out_dir``."""
+    # Evolved genomes may be tested on other tasks (they encode none).
+    config = cli.apply_task_set(
+        lambda **tasks: base.replace(task_steps=args.task_steps, num_bins=args.bins, **tasks), args)
+    if args.task_set is not None:
+        source += f", task set {args.task_set}"
+    if config.num_bins % args.chunks:
+        raise UsageError(f"--chunks: {args.bins} bins cannot be split into {args.chunks} chunks")
+    steady_bins(config, args.steady_steps)
+    return run(config, genomes, out_dir, num_tests=args.tests, steady_steps=args.steady_steps,
+               num_chunks=args.chunks, seed=args.seed, quiet=args.quiet, source=source, command=command,
+               warnings=[*warnings, *cli.device_warnings(config, args.cpu_devices)],
+               notes=cli.ignored_notes(config, sets), evolved=evolved, log=args.log)
 
 
 if __name__ == "__main__":

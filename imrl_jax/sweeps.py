@@ -90,6 +90,13 @@ def changed(config: Config, **values) -> Config:
     return config.replace(**values)  # validates every value
 
 
+def static_part(config: Config) -> Config:
+    """``config`` with every dynamic value at its default: what the compiled program of a life is made of (the
+    dynamic values are its arguments), so configs of one ``static_part`` share one program."""
+    defaults = {f.name: f.default for f in dataclasses.fields(Config) if f.name in DYNAMIC_FIELDS}
+    return config.replace(**defaults)
+
+
 def point(config: Config, **values) -> SweepPoint:
     """The sweep point of ``config`` with some dynamic values changed (``eta`` sets every rate)."""
     changed_config = changed(config, **values)

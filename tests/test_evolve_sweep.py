@@ -138,3 +138,27 @@ def test_parse_takes_the_product_or_the_values_in_step():
         dict(gamma=0.9, eta=0.1), dict(gamma=0.9, eta=0.3), dict(gamma=0.99, eta=0.1), dict(gamma=0.99, eta=0.3)]
     assert evolve_sweep.parse(["gamma=0.9,0.99", "eta=0.1,0.3"], zipped=True) == [
         dict(gamma=0.9, eta=0.1), dict(gamma=0.99, eta=0.3)]
+
+
+def test_a_sweeps_learning_test_tests_every_point_as_its_own_test_would(finished_sweep, tmp_path, capsys):
+    """``learning_test SWEEP`` tests each point into OUT/KEY (one program for all), each bitwise the point's own."""
+    from imrl_jax import learning_test
+
+    lengths = ["--best", "2", "--tests", "1", "--task-steps", "400", "--bins", "2", "--steady-steps", "200",
+               "--chunks", "1", "--quiet"]
+    out = tmp_path / "tests"
+    assert learning_test.main([finished_sweep, "--out", str(out), *lengths]) == 0
+    dirs = _point_dirs(finished_sweep)
+    with open(out / "sweep_tests.json") as f:
+        summary = json.load(f)["points"]
+    assert list(summary) == [os.path.basename(d) for d in dirs.values()]
+    point = list(dirs.values())[2]
+    alone = tmp_path / "alone"
+    assert learning_test.main([point, "--out", str(alone), *lengths]) == 0
+    with np.load(out / os.path.basename(point) / "curves.npz") as a, np.load(alone / "curves.npz") as b:
+        assert a["reaches"].tobytes() == b["reaches"].tobytes() and a["reaches"].sum() > 0
+    assert summary[os.path.basename(point)]["steady_mean"] == json.loads((alone / "steady.json").read_text())[
+        "steady_mean"]
+    capsys.readouterr()
+    assert learning_test.main([finished_sweep, "--out", str(out), *lengths]) == 0  # done: each point said so
+    assert capsys.readouterr().out.count("tested before (steady.json)") == 4

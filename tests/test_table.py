@@ -58,16 +58,17 @@ def test_the_report_reads_what_has_finished(tmp_path):
 
 
 def test_new_runs_that_differ_only_in_dynamic_values_are_one_sweep(tmp_path):
-    """Three EE-LS rows (a discount and a mutation size apart) are one sweep stage, each row's run a point found by
-    the key of the row's own command; the LE-LS row is its own stage; once begun, the sweep goes on as one."""
+    """Three EE-LS rows (a discount and a mutation size apart) are one sweep stage and one test stage, each row's
+    run a point found by the key of the row's own command; the LE-LS row is its own stage; once begun, the sweep
+    goes on as one; a measure of a row waits for the sweep that makes its run."""
     import json
 
     from experiments.reproduce import SCALES, generations_done
 
     scale = dict(SCALES["tiny"], task_steps=1000)
-    rows = (Row("a", "EE-LS", "skills", ("target_radius=40",), test=False),
-            Row("b", "EE-LS", "skills", ("target_radius=40", "gamma=0.95"), test=False),
-            Row("c", "EE-LS", "skills", ("target_radius=40", "mutation_scale=0.5"), test=False),
+    rows = (Row("a", "EE-LS", "skills", ("target_radius=40",)),
+            Row("b", "EE-LS", "skills", ("target_radius=40", "gamma=0.95")),
+            Row("c", "EE-LS", "skills", ("target_radius=40", "mutation_scale=0.5")),
             Row("a-again", "EE-LS", "skills", ("target_radius=40",), test=False),
             Row("d", "LE-LS", "skills", test=False))
     results = str(tmp_path / "results")
@@ -80,6 +81,7 @@ def test_new_runs_that_differ_only_in_dynamic_values_are_one_sweep(tmp_path):
     sweep_root = os.path.dirname(table.evolutions()["a"])
     assert [(s.name, s.out_dir, s.needs) for s in stages] == [
         ("evolve a+b+c (one sweep)", sweep_root, None),
+        ("learning test a+b+c (one sweep)", learning_test_dir(sweep_root), ("evolve a+b+c (one sweep)",)),
         ("evolve d", os.path.join(results, "runs", keys["d"], "evolve"), None),
         ("measure landscape-b", str(tmp_path / "out" / "measures" / "landscape-b"), ("evolve a+b+c (one sweep)",))]
     assert table.evolutions() == {**{n: os.path.join(sweep_root, keys[n]) for n in "abc"},
@@ -96,6 +98,9 @@ def test_new_runs_that_differ_only_in_dynamic_values_are_one_sweep(tmp_path):
                                                                       "--generations", "2"]
     with open(os.path.join(sweep_root, "sweep.json")) as f:
         assert [p["key"] for p in json.load(f)["points"]] == [keys[n] for n in "abc"]
+    with open(os.path.join(learning_test_dir(sweep_root), "sweep_tests.json")) as f:  # every point tested
+        assert list(json.load(f)["points"]) == [keys[n] for n in "abc"]
+    assert stage_done(table.all_stages()[0][1], scale)
     with open(tmp_path / "out" / "measures" / "landscape-b" / "result.json") as f:  # the measure of b's point
         measured = json.load(f)
     assert measured["run"] == table.evolutions()["b"] and measured["condition"] == "EE-LS"
