@@ -12,8 +12,12 @@ measures (``python -m imrl_jax.landscape_run``) of seed 0 of each condition unde
 generations 0, 10 and the last, with learning cut too (H3), and the fitness of random genomes (H4).
 """
 
+import dataclasses
+import json
 import os
 import sys
+
+import numpy as np
 
 from experiments.claims_study import SCREEN
 from experiments.table import Measure, Row, Table
@@ -48,6 +52,136 @@ TABLE = Table("goals", "docs/GOALS.md", 9, out=os.path.join(RESULTS, "goals"), s
     landscape("LE-LS-2R", "LE-LS-2R", LIFE["LE-LS"], "0.1"),
     landscape("EV-LS", os.path.join(RESULTS, "future_work", "EV-LS", "evolve"), LIFE["LE-LS"], "0.1"),
 ))
+#: The conditions in the order the landscape tables and figures show them: behaviours, then goals.
+ORDER = ("EE-ES", "EE-LS", "EE-LS-T", "LE-LS", "LE-LS-2R", "EV-LS")
+#: What each condition evolves, with its genes.
+KINDS = {"EE-ES": "behaviours + selector, 333", "EE-LS": "behaviours, 222", "EE-LS-T": "behaviours (turn), 111",
+         "LE-LS": "goals, 111", "LE-LS-2R": "goals (2 units), 222", "EV-LS": "evaluators, 111"}
+
+
+def read_landscapes(out: str = TABLE.out) -> dict[str, dict]:
+    """Each condition's landscape measures as far as they have come (landscape.json, result.json once done)."""
+    found = {}
+    for name in ORDER:
+        folder = os.path.join(out, "measures", f"landscape-{name}")
+        for file in ("result.json", "landscape.json"):
+            path = os.path.join(folder, file)
+            if os.path.isfile(path):
+                with open(path) as f:
+                    found[name] = dict(json.load(f), done=file == "result.json")
+                break
+    return found
+
+
+def landscape_tables(found: dict[str, dict]) -> str:
+    """H4's table (random genomes) and H3's (mutations and ruggedness around each generation's parents)."""
+    lines = ["**Random genomes** (H4): 50 genomes of generation 0's draw, 4 fresh lives each; fitness = the mean of a "
+             "genome's lives.", "",
+             "| condition | evolves, genes | learning | mean | sd | median | best | share at 0 |",
+             "|---|---|---|---|---|---|---|---|"]
+    for name, m in found.items():
+        for piece, r in m["pieces"].items():
+            if piece.startswith("random genomes"):
+                q = r["quantiles"]
+                lines.append(f"| {name} | {KINDS[name]} | {piece.split(', ')[1]} | {r['mean']:.4f} | {r['std']:.4f} | "
+                             f"{q[2]:.4f} | {q[4]:.4f} | {r['share_zero']:.0%} |")
+    lines += ["", "**Mutations around the parents** (H3): each generation's 10 parents (the GA's), 9 mutants each "
+              "under the paper's operator, 4 fresh lives per genome; an effect is neutral within 2 standard errors; "
+              "rho(1): the fitness autocorrelation one mutation apart along 5 random walks of 9 steps, corrected "
+              "for the lives' noise (NaN: no variance).", "",
+              "| condition | generation | learning | parents' fitness | neutral | deleterious | beneficial | "
+              "mutational variance | rho(1) |", "|---|---|---|---|---|---|---|---|---|"]
+    for name, m in found.items():
+        for piece, r in m["pieces"].items():
+            if piece.startswith("generation"):
+                rho = r["rho_noise_corrected"][0]
+                lines.append(f"| {name} | {r['generation']} | {r['learning']} | {r['parent_mean']:.4f} | "
+                             f"{r['share_neutral']:.0%} | {r['share_deleterious']:.0%} | {r['share_beneficial']:.0%} | "
+                             f"{r['mutational_variance']:.2e} | {'NaN' if rho is None else f'{rho:.2f}'} |")
+    running = [name for name, m in found.items() if not m["done"]]
+    missing = [name for name in ORDER if name not in found]
+    if running or missing:
+        lines += ["", "Still to measure: " + ", ".join([*(f"{n} (running)" for n in running), *missing]) + "."]
+    return "\n".join(lines)
+
+
+def landscape_figure(found: dict[str, dict], path: str) -> str:
+    """H4: random genomes' fitness per condition; H3: the shares of mutation effects and rho(1) per generation,
+    with learning (solid) and cut (hatched, dashed)."""
+    from imrl_jax.plotting import CONDITION_STYLES, new_figure, save, style_axis
+
+    fig = new_figure(11.0, 3.6)
+    ax_random, ax_effects, ax_rho = fig.subplots(1, 3, gridspec_kw=dict(width_ratios=[1.0, 1.6, 1.0]))
+    names = list(found)
+    for i, name in enumerate(names):
+        colour = CONDITION_STYLES.get(name, {}).get("color", "0.4")
+        for j, learning in enumerate(("learning", "cut")):
+            piece = next((r for p, r in found[name]["pieces"].items() if p.startswith("random") and learning in p), None)
+            if piece is None:
+                continue
+            x = i + (0.18 if j else -0.18)
+            ax_random.scatter(np.full(len(piece["fitness"]), x) + np.linspace(-0.06, 0.06, len(piece["fitness"])),
+                              piece["fitness"], s=5, color=colour, alpha=0.35 if j else 0.8)
+            ax_random.plot([x - 0.12, x + 0.12], [piece["mean"]] * 2, color="k", lw=1.2, ls="--" if j else "-")
+    ax_random.set_xticks(range(len(names)), names, rotation=30, fontsize=7)
+    style_axis(ax_random, "H4: random genomes (solid: learning, faded: cut)", "", "fitness (mean of 4 lives)")
+    bars, labels = [], []
+    for name in names:
+        for piece in found[name]["pieces"].values():
+            if "generation" in piece:
+                bars.append(piece)
+                labels.append(f"{name} g{piece['generation']}{'' if piece['learning'] == 'learning' else ' cut'}")
+    x = np.arange(len(bars))
+    bottom = np.zeros(len(bars))
+    for share, colour in (("share_deleterious", "#c0392b"), ("share_neutral", "#bbbbbb"),
+                          ("share_beneficial", "#27ae60")):
+        values = np.array([b[share] for b in bars])
+        ax_effects.bar(x, values, bottom=bottom, color=colour, width=0.8, label=share.split("_")[1],
+                       hatch=None)
+        bottom += values
+    for k, b in enumerate(bars):
+        if b["learning"] != "learning":
+            ax_effects.bar(k, 1.0, width=0.8, fill=False, hatch="//", edgecolor="0.3", lw=0)
+    ax_effects.set_xticks(x, labels, rotation=90, fontsize=5.5)
+    ax_effects.set_ylim(0, 1)
+    ax_effects.legend(fontsize=6, loc="upper right")
+    style_axis(ax_effects, "H3: mutation effects around the parents (hatched: learning cut)", "",
+               "share of mutants", grid=False)
+    for name in names:
+        style = CONDITION_STYLES.get(name, {})
+        for learning, ls_ in (("learning", "-"), ("cut", "--")):
+            points = sorted((b["generation"], b["rho_noise_corrected"][0]) for b in found[name]["pieces"].values()
+                            if "generation" in b and (b["learning"] == "learning") == (learning == "learning")
+                            and b["rho_noise_corrected"][0] is not None)
+            if points:
+                g, rho = zip(*points)
+                ax_rho.plot([min(i, 2) for i in (0 if x == 0 else 1 if x == 10 else 2 for x in g)], rho, marker="o", ms=3, ls=ls_, color=style.get("color", "0.4"),
+                            label=name if learning == "learning" else None)
+    ax_rho.set_xticks(range(3), ["0", "10", "last"])
+    ax_rho.axhline(0, color="0.6", lw=0.6)
+    ax_rho.legend(fontsize=6)
+    style_axis(ax_rho, "H3: rho(1), noise-corrected (dashed: cut)", "generation", "autocorrelation at one mutation")
+    fig.tight_layout()
+    return save(fig, path)
+
+
+class GoalsTable(Table):
+    """The goals study's table, whose report also writes the landscape measures' tables and figure."""
+
+    def report(self) -> int:
+        from experiments.claims_study import write_table
+
+        code = super().report()
+        found = read_landscapes(self.out)
+        if found:
+            drawn = landscape_figure(found, os.path.join(self.out, "landscape.png"))
+            write_table(self.document, landscape_tables(found), "<!-- goals landscape: python -m experiments "
+                        "report goals -->", "<!-- end of goals landscape -->")
+            print(f"landscape measures of {len(found)} condition(s); wrote {drawn}")
+        return code
+
+
+TABLE = GoalsTable(**{f.name: getattr(TABLE, f.name) for f in dataclasses.fields(TABLE)})
 all_stages, main = TABLE.all_stages, TABLE.main
 #: The studies of this module (python -m experiments finds them).
 STUDIES = (TABLE.study(__name__.rsplit(".", 1)[-1]),)
