@@ -155,7 +155,7 @@ def landscape_figure(found: dict[str, dict], path: str) -> str:
                             and b["rho_noise_corrected"][0] is not None)
             if points:
                 g, rho = zip(*points)
-                ax_rho.plot([min(i, 2) for i in (0 if x == 0 else 1 if x == 10 else 2 for x in g)], rho, marker="o", ms=3, ls=ls_, color=style.get("color", "0.4"),
+                ax_rho.plot([0 if x == 0 else 1 if x == 10 else 2 for x in g], rho, marker="o", ms=3, ls=ls_, color=style.get("color", "0.4"),
                             label=name if learning == "learning" else None)
     ax_rho.set_xticks(range(3), ["0", "10", "last"])
     ax_rho.axhline(0, color="0.6", lw=0.6)
