@@ -277,20 +277,7 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=N
     ``log="tensorboard"``: the progress is also written for TensorBoard under ``out_dir/tensorboard``.
     """
     strategy = GA(config) if strategy is None else strategy
-    if not config.spec.evolved:
-        raise UsageError(f"--cond: {config.condition} is not evolved (it learns each task from scratch); "
-                         f"test it with: python -m imrl_jax.learning_test --cond {config.condition} --out DIR")
-    seeds = [int(s) for s in seeds]
-    if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
-        raise UsageError("--seeds: need at least one seed, all distinct and non-negative")
-    if checkpoint_every < 1:
-        raise UsageError("--checkpoint-every: must be at least 1")
-    if keep < 1:
-        raise UsageError("--keep: must be at least 1 (a run keeps its latest checkpoint to resume from)")
-    try:
-        check_log(log)
-    except ValueError as error:
-        raise UsageError(str(error)) from None
+    seeds = check_run_options(config, seeds, checkpoint_every, keep, log)
     check_writable(out_dir)
     check_unlocked(out_dir)  # a live writer is named before anything about what it is writing
     check_run_dir(out_dir, config, seeds, resume, describe(strategy))
@@ -344,6 +331,26 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=N
         events = stack.enter_context(contextlib.closing(log_for(log if leader else None, out_dir)))
         return _evolve(config, out_dir, seeds, state, sharding, mesh, checkpointer, strategy, resume=resume,
                        checkpoint_every=checkpoint_every, quiet=quiet or not leader, leader=leader, events=events)
+
+
+def check_run_options(config: Config, seeds: Sequence[int], checkpoint_every: int, keep: int,
+                      log: str | None) -> list[int]:
+    """The seeds as a list, once the options of a run are good (raises UsageError naming the option)."""
+    if not config.spec.evolved:
+        raise UsageError(f"--cond: {config.condition} is not evolved (it learns each task from scratch); "
+                         f"test it with: python -m imrl_jax.learning_test --cond {config.condition} --out DIR")
+    seeds = [int(s) for s in seeds]
+    if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
+        raise UsageError("--seeds: need at least one seed, all distinct and non-negative")
+    if checkpoint_every < 1:
+        raise UsageError("--checkpoint-every: must be at least 1")
+    if keep < 1:
+        raise UsageError("--keep: must be at least 1 (a run keeps its latest checkpoint to resume from)")
+    try:
+        check_log(log)
+    except ValueError as error:
+        raise UsageError(str(error)) from None
+    return seeds
 
 
 def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sharding, mesh,

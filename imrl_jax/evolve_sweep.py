@@ -40,7 +40,7 @@ from imrl_jax.checkpoint import Checkpointer, RunState, git_commit
 from imrl_jax.cli import UsageError
 from imrl_jax.config import Config, ConfigError
 from imrl_jax.devices import check_memory, make_mesh, population_sharding, replicated, to_global, to_host
-from imrl_jax.events import check_log, log_for
+from imrl_jax.events import log_for
 from imrl_jax.ga import GAParams, evolve_step
 from imrl_jax.networks import trait_names, traits
 from imrl_jax.progress import Progress
@@ -191,24 +191,12 @@ def run(config: Config, out_dir: str, seeds: Sequence[int], settings: Sequence[d
         checkpoint_every: int = 1, keep: int = 3, quiet: bool = False, log: str | None = None) -> dict[str, RunState]:
     """Evolve ``config`` at every point of ``settings`` for every seed into ``out_dir``; return each point's final
     state by key (each point's directory is ``out_dir/KEY``)."""
-    from imrl_jax.evolve import extend_config_json, initial_state
+    from imrl_jax.evolve import check_run_options, extend_config_json, initial_state
 
-    if not config.spec.evolved:
-        raise UsageError(f"--cond: {config.condition} is not evolved (it learns each task from scratch)")
-    seeds = [int(s) for s in seeds]
-    if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
-        raise UsageError("--seeds: need at least one seed, all distinct and non-negative")
-    if checkpoint_every < 1:
-        raise UsageError("--checkpoint-every: must be at least 1")
-    if keep < 1:
-        raise UsageError("--keep: must be at least 1 (a run keeps its latest checkpoint to resume from)")
+    seeds = check_run_options(config, seeds, checkpoint_every, keep, log)
     if jax.process_count() > 1:
         raise UsageError("--sweep: a sweep runs in one process (its points are its batch); start it without "
                          "--coordinator")
-    try:
-        check_log(log)
-    except ValueError as error:
-        raise UsageError(str(error)) from None
     points = make_points(config, seeds, settings)
     check_writable(out_dir)
     check_unlocked(out_dir)
