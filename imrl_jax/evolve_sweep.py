@@ -46,6 +46,8 @@ from imrl_jax.networks import trait_names, traits
 from imrl_jax.progress import Progress
 from imrl_jax.rundir import (RunDirError, check_unlocked, check_writable, entries, lock_run_dir, make_dir, not_empty,
                              read_json, write_atomic)
+from imrl_jax.run_state import (RunInterrupted, check_run_dir, check_run_options, evolution_keys, extend_config_json,
+                                 initial_state, record, record_traits, write_outputs)
 from imrl_jax.runspec import RunSpec
 from imrl_jax.search import over_seeds
 from imrl_jax.strategies import GA_RECORD
@@ -124,7 +126,7 @@ def label(values: dict) -> str:
     return ", ".join(f"{k}={v:g}" for k, v in values.items())
 
 
-def record(config: Config, seeds: Sequence[int], points: Sequence[Point]) -> dict:
+def sweep_record(config: Config, seeds: Sequence[int], points: Sequence[Point]) -> dict:
     """What sweep.json holds: the base config, the seeds and every point (settings and key)."""
     return {"config": config.to_dict(), "seeds": list(seeds),
             "points": [{"settings": p.settings, "key": p.key} for p in points]}
@@ -148,8 +150,6 @@ def is_sweep(out_dir: str) -> bool:
 
 def check_sweep_dir(out_dir: str, config: Config, seeds: Sequence[int], points: Sequence[Point], resume: bool) -> None:
     """Refuse anything but a new or empty directory, or (resuming) this sweep (raises UsageError or RunDirError)."""
-    from imrl_jax.evolve import check_run_dir
-
     if os.path.exists(out_dir) and not os.path.isdir(out_dir):
         raise UsageError(f"--out: {out_dir} is not a directory")
     exists = is_sweep(out_dir)
@@ -191,8 +191,6 @@ def run(config: Config, out_dir: str, seeds: Sequence[int], settings: Sequence[d
         checkpoint_every: int = 1, keep: int = 3, quiet: bool = False, log: str | None = None) -> dict[str, RunState]:
     """Evolve ``config`` at every point of ``settings`` for every seed into ``out_dir``; return each point's final
     state by key (each point's directory is ``out_dir/KEY``)."""
-    from imrl_jax.evolve import check_run_options, extend_config_json, initial_state
-
     seeds = check_run_options(config, seeds, checkpoint_every, keep, log)
     if jax.process_count() > 1:
         raise UsageError("--sweep: a sweep runs in one process (its points are its batch); start it without "
@@ -213,7 +211,7 @@ def run(config: Config, out_dir: str, seeds: Sequence[int], settings: Sequence[d
             make_dir(out_dir)
             stack.enter_context(lock_run_dir(out_dir))
             check_sweep_dir(out_dir, config, seeds, points, resume)  # again, locked
-            info = {**record(config, seeds, points), "version": imrl_jax.__version__, "git_commit": git_commit(),
+            info = {**sweep_record(config, seeds, points), "version": imrl_jax.__version__, "git_commit": git_commit(),
                     "created": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
             if resume:
                 saved = read_json(os.path.join(out_dir, SWEEP_FILE), "")
@@ -268,8 +266,6 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], points: Sequence[Poi
             checkpointers: Sequence[Checkpointer], sharding, mesh, *, resume: bool, checkpoint_every: int,
             quiet: bool, events) -> dict[str, RunState]:
     """The generations of :func:`run` after its checks (resuming from the newest generation every point has)."""
-    from imrl_jax.evolve import RunInterrupted, evolution_keys, record, record_traits, write_outputs
-
     num_seeds = len(seeds)
     progress = Progress(config.num_generations, quiet=quiet, first_index=0, log=events)
     first, elapsed = 0, 0.0

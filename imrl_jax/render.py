@@ -58,7 +58,7 @@ def life_key(config, seed: int, generation: int, index: int, life: int = 0):
     ``generation`` of an evolve run: the key the GA lived it with."""
     import jax
 
-    from imrl_jax.evolve import evolution_keys, seed_keys
+    from imrl_jax.run_state import evolution_keys, seed_keys
     from imrl_jax.search import generation_keys, life_keys
 
     key = evolution_keys(np.asarray(jax.random.key_data(seed_keys([seed]))))[0]

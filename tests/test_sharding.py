@@ -32,7 +32,7 @@ KEEPS_SHARDING = """
 import jax, numpy as np
 from imrl_jax.config import make_config
 from imrl_jax.devices import make_mesh, population_sharding, replicated, to_global
-from imrl_jax.evolve import evolution_keys, initial_state
+from imrl_jax.run_state import evolution_keys, initial_state
 from imrl_jax.ga import make_generation
 config = make_config("small", condition="EE-ES", task_steps=20, num_bins=1, population_size=4, num_parents=2)
 mesh = make_mesh()
