@@ -15,7 +15,7 @@ numbers), and the check goes on to the next. The steps, most important first:
 2. ``life``: whole LE-LS lives (PERFORMANCE.md's headline) at 3,000, 30,000 and 300,000 adult
    lanes, both kernels: lane-steps per second, compile time, memory;
 3. ``generation``: one paper-scale LE-LS generation of 10 seeds (both kernels) and of 100;
-4. ``sweep``: one paper-scale generation of a batched sweep (6 points x 10 seeds, one program);
+4. ``sweep``: one paper-scale generation of ``evolve --sweep``'s program (6 points x 10 seeds), against the single run's;
 5. ``phases``: every phase of ``imrl_jax.bench``, both kernels, at the same lane counts.
 
 Within a time budget (``--budget-min``, default 8), checked before each piece of work: what
@@ -518,30 +518,46 @@ def fastest_kernel(check: Check) -> str:
 
 
 def sweep(check: Check) -> dict:
-    """One generation of a batched sweep (every point and seed in one program), with the fastest kernel."""
-    import jax
-    import jax.numpy as jnp
+    """One generation of ``evolve --sweep``'s program (every point and seed in one batch), with the fastest kernel,
+    against the generation of as many seeds of a single run timed before it (the ratio: at most the points)."""
+    import itertools
 
-    from imrl_jax import sweeps
+    import jax
+
+    from imrl_jax import evolve_sweep
     from imrl_jax.config import make_config
+    from imrl_jax.devices import make_mesh, population_sharding, replicated, to_global
+    from imrl_jax.run_state import evolution_keys, initial_state
 
     kernel = fastest_kernel(check)
     check.stage = "api"
     config = make_config("paper", condition=check.sizes.generation_condition, step_kernel=kernel,
                          **dict(check.sizes.generation_sizes))
-    grid = sweeps.grid(config, **dict(check.sizes.sweep))
-    seeds = jnp.arange(check.sizes.sweep_seeds)
-    executable, compile_s = compile_program(check, sweeps.make_evolution_sweep(config, 1), seeds, grid.points)
+    names, values = zip(*check.sizes.sweep)
+    settings = [dict(zip(names, combo)) for combo in itertools.product(*values)]
+    seeds = list(range(check.sizes.sweep_seeds))
+    points = evolve_sweep.make_points(config, seeds, settings)
+    mesh = make_mesh()
+    sharding = population_sharding(mesh, len(points) * len(seeds), config.population_size)
+    state = initial_state(config, seeds, population_sharding(mesh, len(seeds), config.population_size))
+    keys = to_global(evolution_keys(np.tile(state.key_data, (len(points), 1))), replicated(mesh))
+    params, ga = evolve_sweep.batched_values(points, len(seeds))
+    populations = to_global(np.tile(np.asarray(state.populations), (len(points), 1, 1)), sharding)
+    step = evolve_sweep.make_sweep_step(config, sharding)
+    executable, compile_s = compile_program(check, step, keys, params, ga, populations, 0)
     start = time.perf_counter()
-    curves = jax.block_until_ready(executable(seeds, grid.points))
+    _, stats = jax.block_until_ready(executable(keys, params, ga, populations, 0))
     seconds = time.perf_counter() - start
-    individuals = len(grid) * check.sizes.sweep_seeds * config.population_size
-    check.say(f"  sweep ({kernel}) {len(grid)} points x {check.sizes.sweep_seeds} seeds: {seconds:.2f} s a generation "
-              f"(compile {compile_s:.1f} s)")
-    return {"kernel": kernel, "points": len(grid), "seeds": check.sizes.sweep_seeds, "individuals": individuals,
-            "compile_s": compile_s, "seconds": seconds,
+    individuals = len(points) * len(seeds) * config.population_size
+    single = [r for s in check.results["steps"] if s["step"] == "generation" and s["status"] == "ok" for r in s["rows"]
+              if r.get("status") == "ok" and r["kernel"] == kernel and r["seeds"] == len(seeds)]
+    ratio = seconds / (len(points) * single[0]["seconds"]) if single else None
+    check.say(f"  sweep ({kernel}) {len(points)} points x {len(seeds)} seeds: {seconds:.2f} s a generation "
+              f"(compile {compile_s:.1f} s)" + (f"; over {len(points)} single generations: {ratio:.2f}" if ratio else ""))
+    return {"kernel": kernel, "points": len(points), "seeds": len(seeds), "individuals": individuals,
+            "compile_s": compile_s, "seconds": seconds, "over_single_generations": ratio,
             "lane_steps_per_s": individuals * config.lifetime_steps / seconds,
-            "best_fitness": np.asarray(curves.best)[..., 0].tolist()}
+            "best_fitness": np.asarray(stats.fitness).max(-1).reshape(len(points), len(seeds)).tolist()}
 
 
 def phases(check: Check) -> dict:
