@@ -35,7 +35,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from imrl_jax.cli import (HelpFormatter, Parser, UsageError, add_task_set, apply_task_set, check_out, parse_sets,
-                          user_errors)
+                          exit_codes)
 from imrl_jax.config import Config, ConfigError
 from imrl_jax.env import make_env
 from imrl_jax.progress import Progress
@@ -439,33 +439,30 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
+@exit_codes
 def main(argv: Sequence[str] | None = None) -> int:
     command = "python -m imrl_jax.baselines " + " ".join(sys.argv[1:] if argv is None else argv)
+    args = parser().parse_args(argv)
+    check_out(args.out)
+    config = apply_task_set(Config(), args)
     try:
-        args = parser().parse_args(argv)
-        check_out(args.out)
-        config = apply_task_set(Config(), args)
-        try:
-            hidden = _ints(args.hidden)
-            tasks = tuple(range(1, config.num_tasks + 1)) if args.tasks is None else _ints(args.tasks)
-        except ValueError:
-            raise UsageError(f"--tasks/--hidden: expected comma-separated integers (got {args.tasks!r}, "
-                             f"{args.hidden!r})") from None
-        settings = Baseline(**{**parse_sets(args.set, Baseline), "agent": args.agent, "steps": args.steps,
-                               "seeds": args.seeds, "first_seed": args.first_seed, "tasks": tasks,
-                               "num_evals": args.evals, "eval_steps": args.eval_steps, "hidden": hidden})
-        from imrl_jax.rundir import check_outputs_dir, check_writable
+        hidden = _ints(args.hidden)
+        tasks = tuple(range(1, config.num_tasks + 1)) if args.tasks is None else _ints(args.tasks)
+    except ValueError:
+        raise UsageError(f"--tasks/--hidden: expected comma-separated integers (got {args.tasks!r}, "
+                         f"{args.hidden!r})") from None
+    settings = Baseline(**{**parse_sets(args.set, Baseline), "agent": args.agent, "steps": args.steps,
+                           "seeds": args.seeds, "first_seed": args.first_seed, "tasks": tasks,
+                           "num_evals": args.evals, "eval_steps": args.eval_steps, "hidden": hidden})
+    from imrl_jax.rundir import check_outputs_dir, check_writable
 
-        check_writable(args.out)
-        check_outputs_dir(args.out, OUTPUTS, "baseline run", args.overwrite)
-        try:
-            from imrl_jax import brax_env  # noqa: F401
-        except ImportError as error:
-            raise UsageError(str(error)) from None
-        summary = run(settings, args.out, config=config, quiet=args.quiet, command=command)
-    except user_errors() as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+    check_writable(args.out)
+    check_outputs_dir(args.out, OUTPUTS, "baseline run", args.overwrite)
+    try:
+        from imrl_jax import brax_env  # noqa: F401
+    except ImportError as error:
+        raise UsageError(str(error)) from None
+    summary = run(settings, args.out, config=config, quiet=args.quiet, command=command)
     print(f"{summary['agent'].upper()}, {summary['steps']:,} cycles per task: performance "
           f"{summary['performance_mean']:.4f} (mean over tasks and seeds; sd over seeds "
           f"{summary['performance_sd_over_seeds']:.4f}); outputs in {args.out}")

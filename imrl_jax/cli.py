@@ -5,8 +5,10 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import difflib
+import functools
 import os
-from typing import Mapping, Sequence
+import sys
+from typing import Callable, Mapping, Sequence
 
 from imrl_jax import config as config_bounds  # imports no JAX
 
@@ -21,6 +23,25 @@ def user_errors() -> tuple[type[Exception], ...]:
     from imrl_jax.rundir import RunDirError
 
     return UsageError, ConfigError, RunDirError
+
+
+def exit_codes(main: Callable[..., int]) -> Callable[..., int]:
+    """A command's ``main``, whose bad input (:func:`user_errors`) is one line and exit code 2, and a write the user
+    can fix (``RunWriteError``: a full disk) one line and exit code 1; nothing else is caught."""
+    @functools.wraps(main)
+    def reported(*args, **kwargs) -> int:
+        from imrl_jax.rundir import RunWriteError
+
+        try:
+            return main(*args, **kwargs)
+        except user_errors() as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 2
+        except RunWriteError as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 1
+
+    return reported
 
 
 class Parser(argparse.ArgumentParser):

@@ -20,7 +20,7 @@ import time
 import jax
 import numpy as np
 
-from imrl_jax.cli import HelpFormatter, Parser, add_task_set, apply_task_set, check_out, user_errors
+from imrl_jax.cli import HelpFormatter, Parser, add_task_set, apply_task_set, check_out, exit_codes
 from imrl_jax.config import CONDITIONS, PRESETS, Config, make_config
 from imrl_jax.rundir import check_outputs_dir, check_writable, write_atomic
 
@@ -97,6 +97,7 @@ def run(config: Config, out_dir: str, seed: int = 0, overwrite: bool = False) ->
     return summary
 
 
+@exit_codes
 def main(argv=None) -> int:
     parser = Parser(prog="python -m imrl_jax.demo", description=__doc__.split("\n")[0], formatter_class=HelpFormatter)
     parser.add_argument("--out", default="out/demo", help="output directory")
@@ -106,14 +107,10 @@ def main(argv=None) -> int:
                         help="config preset (small: reduced scale, about a minute on a CPU)")
     add_task_set(parser, "the tasks", default="paper")
     parser.add_argument("--overwrite", action="store_true", help="replace the outputs of an earlier demo in --out")
-    try:
-        args = parser.parse_args(argv)
-        check_out(args.out)
-        config = apply_task_set(make_config(args.preset, condition=args.condition), args)
-        summary = run(config, args.out, args.seed, args.overwrite)
-    except user_errors() as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+    args = parser.parse_args(argv)
+    check_out(args.out)
+    config = apply_task_set(make_config(args.preset, condition=args.condition), args)
+    summary = run(config, args.out, args.seed, args.overwrite)
     print(f"{config.condition} individual (seed {args.seed}), reduced scale: childhood "
           f"{summary['childhood_steps']:,} steps, {config.task_steps:,} steps per task")
     for i, (p, r) in enumerate(zip(summary["performance"], summary["reaches"])):

@@ -33,7 +33,7 @@ import numpy as np
 import imrl_jax
 from imrl_jax.checkpoint import Checkpointer, RunState, git_commit
 from imrl_jax import cli, conditions, evolve_sweep
-from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
+from imrl_jax.cli import HelpFormatter, UsageError, exit_codes, parse_sets, user_errors
 from imrl_jax.devices import (check_memory, make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
                               use_host_cores)
 from imrl_jax.config import EVOLVED_CONDITIONS, PRESETS, Config, make_config
@@ -43,7 +43,7 @@ from imrl_jax.lifetime import live
 from imrl_jax.networks import trait_names, traits
 from imrl_jax.events import log_for
 from imrl_jax.progress import Progress
-from imrl_jax.rundir import (RunDirError, RunWriteError, check_unlocked, check_writable, lock_run_dir, make_dir,
+from imrl_jax.rundir import (RunDirError, check_unlocked, check_writable, lock_run_dir, make_dir,
                              read_config, write_atomic, write_errno)
 from imrl_jax.run_state import (RunInterrupted, check_run_dir, check_run_options, evolution_keys,  # noqa: F401
                                  extend_config_json, history_csv, initial_state, read_search, record, record_traits,
@@ -442,6 +442,7 @@ def _main_sweep(args, out_dir: str) -> int:
     return 0
 
 
+@exit_codes
 def main(argv=None) -> int:
     out_dir = None
     try:
@@ -478,12 +479,6 @@ def main(argv=None) -> int:
                     checkpoint_every=args.checkpoint_every,
                     keep=args.keep, quiet=args.quiet, warnings=cli.device_warnings(config, args.cpu_devices),
                     notes=notes, registered=registered, log=args.log)
-    except user_errors() as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    except RunWriteError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 1
     except KeyboardInterrupt as stop:
         if isinstance(stop, RunInterrupted):
             where = (f"in generation {stop.done} ({stop.done} of {stop.total} done, {stop.checkpointed} checkpointed)"

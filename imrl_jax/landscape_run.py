@@ -31,7 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from imrl_jax import landscape as ls
-from imrl_jax.cli import HelpFormatter, UsageError, user_errors
+from imrl_jax.cli import HelpFormatter, Parser, UsageError, exit_codes
 from imrl_jax.config import Config
 from imrl_jax.ga import init_population
 from imrl_jax.rundir import (RunDirError, best_genomes as best_of, check_writable, load_run, make_dir, read_config,
@@ -202,7 +202,7 @@ def run(run_dir: str, out_dir: str, *, generations: str = "0,10,last", seed: int
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m imrl_jax.landscape_run", description=__doc__.split("\n")[0],
+    p = Parser(prog="python -m imrl_jax.landscape_run", description=__doc__.split("\n")[0],
                                 formatter_class=HelpFormatter)
     p.add_argument("run", help="an evolution's run directory")
     p.add_argument("--out", required=True, help="the measures' folder (goes on from what it holds)")
@@ -222,22 +222,19 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
+@exit_codes
 def main(argv=None) -> int:
+    args = parser().parse_args(argv)
     try:
-        args = parser().parse_args(argv)
-        try:
-            cuts = tuple(float(c) for c in args.cut.split(",") if c.strip())
-        except ValueError:
-            raise UsageError(f"--cut: expected fractions separated by commas (got {args.cut!r})") from None
-        if not os.path.isfile(os.path.join(args.run, "config.json")):
-            raise RunDirError(f"{args.run}: no config.json (give an evolution's run directory)")
-        run(args.run, args.out, generations=args.generations, seed=args.seed, lives=args.lives,
-            num_parents=args.parents, num_mutants=args.mutants, num_walks=args.walks, walk_length=args.walk_length,
-            num_random=args.random, cuts=cuts, key=args.key, chunk=args.chunk, best_genomes=args.best_genomes,
-            log=lambda text: print(text, file=sys.stderr, flush=True))
-    except user_errors() as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+        cuts = tuple(float(c) for c in args.cut.split(",") if c.strip())
+    except ValueError:
+        raise UsageError(f"--cut: expected fractions separated by commas (got {args.cut!r})") from None
+    if not os.path.isfile(os.path.join(args.run, "config.json")):
+        raise RunDirError(f"{args.run}: no config.json (give an evolution's run directory)")
+    run(args.run, args.out, generations=args.generations, seed=args.seed, lives=args.lives,
+        num_parents=args.parents, num_mutants=args.mutants, num_walks=args.walks, walk_length=args.walk_length,
+        num_random=args.random, cuts=cuts, key=args.key, chunk=args.chunk, best_genomes=args.best_genomes,
+        log=lambda text: print(text, file=sys.stderr, flush=True))
     return 0
 
 

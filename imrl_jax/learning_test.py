@@ -51,7 +51,7 @@ from imrl_jax.devices import check_memory, make_mesh, use_host_cores
 from imrl_jax.conditions import CONDITIONS as TABLE
 from imrl_jax.config import COMPUTE_FIELDS, CONDITIONS, PRESETS, Config, ConfigError, LearningParams, make_config
 from imrl_jax import cli
-from imrl_jax.cli import HelpFormatter, UsageError, parse_sets, user_errors
+from imrl_jax.cli import HelpFormatter, UsageError, exit_codes, parse_sets
 from imrl_jax.lifetime import grow_up, lifetime_keys, run_phase, task_spec, task_start
 from imrl_jax.state import State
 from imrl_jax.events import check_log, log_for
@@ -516,56 +516,50 @@ def check_sizes(args) -> None:
     cli.check_at_most("--best x --tests", args.best * args.tests, cli.MAX_LANES)
 
 
+@exit_codes
 def main(argv: Sequence[str] | None = None) -> int:
     command = "python -m imrl_jax.learning_test " + " ".join(sys.argv[1:] if argv is None else argv)
-    try:
-        args = parser().parse_args(argv)
-        check_sizes(args)
-        cli.register(args.register)
-        if args.cond is not None and args.cond not in TABLE:  # the table as it is now
-            raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(TABLE)}, or add a row "
-                             f"with --register MODULE:ATTRIBUTE; only {', '.join(from_scratch())} are tested without "
-                             f"a run directory)")
-        cli.check_cpu_devices(args.cpu_devices)
-        cli.check_out(args.out)
-        use_host_cores(args.cpu_devices or None)  # before anything starts JAX (the task set's checks)
-        cli.refuse_option_fields(args.set, OPTION_FIELDS)
-        sets = parse_sets(args.set)
-        warnings, evolved = [], None
-        if args.cond in from_scratch():
-            if args.run_dir:
-                raise UsageError(f"run_dir: {args.cond} is tested from scratch; give either a run directory or "
-                                 f"--cond {args.cond}")
-            if args.best_genomes:
-                raise UsageError("--best-genomes: only with a run directory")
-            base = make_config(args.preset, **{**sets, "condition": args.cond})
-            genomes = np.zeros((args.runs, args.best, base.num_genes), np.float32)
-            source = f"{args.cond} from scratch, preset {args.preset}" + "".join(f", {s}" for s in args.set or [])
-            summaries = [(args.out, _test(args, base, genomes, source, evolved, warnings, sets, command, args.out))]
-        else:
-            if not args.run_dir:
-                raise UsageError(f"run_dir: give an evolution's run directory, or --cond "
-                                 f"{' or '.join(from_scratch())} to test learning from scratch")
-            points = sweep_points(args.run_dir)
-            if points is not None and args.best_genomes:
-                raise UsageError(f"--best-genomes: {args.run_dir} is a sweep: its points' populations are kept")
-            summaries = []
-            for run_dir, out_dir in ([(args.run_dir, args.out)] if points is None else
-                                     [(point, os.path.join(args.out, os.path.basename(point))) for point in points]):
-                if points is not None and os.path.isfile(os.path.join(out_dir, "steady.json")):
-                    summaries.append((out_dir, None))  # a point tested before: the sweep's test goes on after it
-                    continue
-                base, genomes, source, evolved, warnings = _evolved(args, run_dir, sets)
-                summaries.append((out_dir, _test(args, base, genomes, source, evolved, warnings, sets, command,
-                                                 out_dir)))
-            if points is not None:
-                sweep_summary(args.run_dir, args.out)
-    except user_errors() as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    except RunWriteError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 1
+    args = parser().parse_args(argv)
+    check_sizes(args)
+    cli.register(args.register)
+    if args.cond is not None and args.cond not in TABLE:  # the table as it is now
+        raise UsageError(f"--cond: unknown condition {args.cond!r} (choose from {', '.join(TABLE)}, or add a row "
+                         f"with --register MODULE:ATTRIBUTE; only {', '.join(from_scratch())} are tested without "
+                         f"a run directory)")
+    cli.check_cpu_devices(args.cpu_devices)
+    cli.check_out(args.out)
+    use_host_cores(args.cpu_devices or None)  # before anything starts JAX (the task set's checks)
+    cli.refuse_option_fields(args.set, OPTION_FIELDS)
+    sets = parse_sets(args.set)
+    warnings, evolved = [], None
+    if args.cond in from_scratch():
+        if args.run_dir:
+            raise UsageError(f"run_dir: {args.cond} is tested from scratch; give either a run directory or "
+                             f"--cond {args.cond}")
+        if args.best_genomes:
+            raise UsageError("--best-genomes: only with a run directory")
+        base = make_config(args.preset, **{**sets, "condition": args.cond})
+        genomes = np.zeros((args.runs, args.best, base.num_genes), np.float32)
+        source = f"{args.cond} from scratch, preset {args.preset}" + "".join(f", {s}" for s in args.set or [])
+        summaries = [(args.out, _test(args, base, genomes, source, evolved, warnings, sets, command, args.out))]
+    else:
+        if not args.run_dir:
+            raise UsageError(f"run_dir: give an evolution's run directory, or --cond "
+                             f"{' or '.join(from_scratch())} to test learning from scratch")
+        points = sweep_points(args.run_dir)
+        if points is not None and args.best_genomes:
+            raise UsageError(f"--best-genomes: {args.run_dir} is a sweep: its points' populations are kept")
+        summaries = []
+        for run_dir, out_dir in ([(args.run_dir, args.out)] if points is None else
+                                 [(point, os.path.join(args.out, os.path.basename(point))) for point in points]):
+            if points is not None and os.path.isfile(os.path.join(out_dir, "steady.json")):
+                summaries.append((out_dir, None))  # a point tested before: the sweep's test goes on after it
+                continue
+            base, genomes, source, evolved, warnings = _evolved(args, run_dir, sets)
+            summaries.append((out_dir, _test(args, base, genomes, source, evolved, warnings, sets, command,
+                                             out_dir)))
+        if points is not None:
+            sweep_summary(args.run_dir, args.out)
     for out_dir, summary in summaries:
         if summary is None:
             print(f"{out_dir}: tested before (steady.json)")

@@ -29,7 +29,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from imrl_jax.cli import HelpFormatter, Parser, UsageError, add_register, register, user_errors
+from imrl_jax.cli import HelpFormatter, Parser, UsageError, add_register, exit_codes, register
 from imrl_jax.rundir import check_writable, load_run
 
 FORMATS = (".gif", ".mp4")
@@ -159,14 +159,11 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
+@exit_codes
 def main(argv=None) -> int:
-    try:
-        args = parser().parse_args(argv)
-        register(args.register)
-        summary = run(args.run_dir, args.task, args.out, args.steps, args.every, args.fps, args.overwrite)
-    except user_errors() as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+    args = parser().parse_args(argv)
+    register(args.register)
+    summary = run(args.run_dir, args.task, args.out, args.steps, args.every, args.fps, args.overwrite)
     print(f"wrote {summary['out']}: {summary['frames']} frames of task {summary['task']} "
           f"(best individual: seed {summary['seed']}, generation {summary['generation']}, fitness "
           f"{summary['fitness']:.3f}, relived {summary['relived_fitness']:.3f}; "
