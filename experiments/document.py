@@ -10,17 +10,9 @@ import numpy as np
 from experiments.claims import (CLAIMS, LAST_GENERATIONS, PAPER, PLATEAU_FRACTION, RULES, SEEN,
                                 _fmt, specialisation_score)
 from experiments.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEPS, FRESH_LIVES, PATH_STEPS
-from experiments.reproduce import DEFAULT_VARIANTS, SCALES, owner, shared, sharers
+from experiments.reproduce import DEFAULT_VARIANTS, SCALES, owner, report_paths, shared, sharers  # noqa: F401
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-
-def report_paths(scale: str) -> tuple[str, str]:
-    """The report and figures folder of a scale: the paper scale's is docs/REPRODUCTION.md, others are labelled."""
-    if scale == "paper":
-        return os.path.join(ROOT, "docs", "REPRODUCTION.md"), os.path.join(ROOT, "docs", "reproduction")
-    return (os.path.join(ROOT, "docs", f"REPRODUCTION_{scale.upper()}.md"),
-            os.path.join(ROOT, "docs", f"reproduction_{scale}"))
 
 
 def other_scale_section(doc_dir: str, scale: str) -> list[str]:

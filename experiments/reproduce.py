@@ -16,7 +16,7 @@ three evolved conditions, then the learning tests of LE-LS, EE-LS, EE-ES and SLE
 learns nothing, so its evolution and its test are the same under every variant: each is run
 once, under ``paper``, where the first variant needs it). So the first variant's Fig. 3 is
 whole before the second's evolutions start. A row of the claims map (docs/CLAIMS.md,
-``experiments.claims_study.RULE_SETS``) is a variant too: ``--variants skills,paper,ROW`` runs it
+``experiments.rule_sets.RULE_SETS``) is a variant too: ``--variants skills,paper,ROW`` runs it
 at the scale's sizes with its preset and overrides (SLE's noise schedule included), its EE-LS
 shared with the preset's whose EE-LS it shares in the map. Then
 ``python -m experiments.report`` writes the report and its figures (docs/REPRODUCTION.md at the
@@ -59,7 +59,10 @@ import time
 from typing import NamedTuple
 
 from imrl_jax import conditions  # the condition table (no JAX)
+from experiments.rule_sets import BY_NAME
 from experiments.study import Study
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 SCALES = {
     "paper": dict(seeds=10, generations=100, childhood_steps=150_000, task_steps=100_000, bins=100,
@@ -100,8 +103,6 @@ def variant_spec(name: str) -> Variant:
     Raises ValueError for an unknown name."""
     if name in VARIANTS:
         return PRESET_VARIANTS.get(name, Variant(name))
-    from experiments.claims_study import BY_NAME  # the map's rows (it imports this module: lazily)
-
     rule = BY_NAME.get(name)
     if rule is None:
         raise ValueError(f"unknown variant {name!r} (choose from {', '.join(VARIANTS)} or a row of docs/CLAIMS.md: "
@@ -600,11 +601,17 @@ def main(argv=None) -> int:
                       lambda stage: stage_command(stage, scale, out, args.kernel, where), **from_options(args, out))
 
 
+def report_paths(scale: str) -> tuple[str, str]:
+    """The report and figures folder of a scale: the paper scale's is docs/REPRODUCTION.md, others are labelled."""
+    if scale == "paper":
+        return os.path.join(ROOT, "docs", "REPRODUCTION.md"), os.path.join(ROOT, "docs", "reproduction")
+    return (os.path.join(ROOT, "docs", f"REPRODUCTION_{scale.upper()}.md"),
+            os.path.join(ROOT, "docs", f"reproduction_{scale}"))
+
+
 def out_report_paths(scale: str, out: str) -> tuple[str, str]:
     """The report's document and figures folder inside ``out`` (their names in docs/, for a results directory of
     one's own)."""
-    from experiments.document import report_paths
-
     return tuple(os.path.join(out, os.path.basename(path)) for path in report_paths(scale))
 
 
