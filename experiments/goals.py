@@ -44,13 +44,15 @@ TABLE = Table("goals", "docs/GOALS.md", 9, out=os.path.join(RESULTS, "goals"), s
     Row("EE-LS-T-faithful", "EE-LS-T", "faithful"),
     Row("LE-LS-2R-faithful", "LE-LS-2R", "faithful"),
 ), measures=(  # under skills (EE-ES learns nothing: its paper run is its only one); H3's cuts: LE-LS-like
-    # childhoods to a tenth, EE-LS-like adult selectors to nothing (imrl_jax.landscape.learning_cut)
+    # childhoods to a third (LE-LS's to a tenth too: no genome scores then), EE-LS-like adult selectors to nothing
+    # (imrl_jax.landscape.learning_cut)
     landscape("EE-ES", os.path.join(RESULTS, "paper", "paper", "evolve", "EE-ES"), LIFE["EE-LS"], None, *KEPT),
     landscape("EE-LS-T", "EE-LS-T", LIFE["EE-LS"], "0"),
     landscape("EE-LS", os.path.join(RESULTS, "paper", "skills", "evolve", "EE-LS"), LIFE["EE-LS"], "0", *KEPT),
-    landscape("LE-LS", os.path.join(RESULTS, "paper", "skills", "evolve", "LE-LS"), LIFE["LE-LS"], "0.1", *KEPT),
-    landscape("LE-LS-2R", "LE-LS-2R", LIFE["LE-LS"], "0.1"),
-    landscape("EV-LS", os.path.join(RESULTS, "future_work", "EV-LS", "evolve"), LIFE["LE-LS"], "0.1"),
+    landscape("LE-LS", os.path.join(RESULTS, "paper", "skills", "evolve", "LE-LS"), LIFE["LE-LS"], "0.1,0.33",
+              *KEPT),
+    landscape("LE-LS-2R", "LE-LS-2R", LIFE["LE-LS"], "0.33"),
+    landscape("EV-LS", os.path.join(RESULTS, "future_work", "EV-LS", "evolve"), LIFE["LE-LS"], "0.33"),
 ))
 #: The conditions in the order the landscape tables and figures show them: behaviours, then goals.
 ORDER = ("EE-ES", "EE-LS", "EE-LS-T", "LE-LS", "LE-LS-2R", "EV-LS")

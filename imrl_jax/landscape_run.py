@@ -152,8 +152,9 @@ def run(run_dir: str, out_dir: str, *, generations: str = "0,10,last", seed: int
     check_writable(out_dir)
     make_dir(out_dir)
     progress_path = os.path.join(out_dir, PROGRESS)
+    # The pieces are named by generation and cut: more of either adds pieces to the same measures.
     identity = dict(seed=seed, lives=lives, parents=num_parents, mutants=num_mutants,
-                    walks=num_walks, walk_length=walk_length, random=num_random, cuts=list(cuts), key=key, chunk=chunk)
+                    walks=num_walks, walk_length=walk_length, random=num_random, key=key, chunk=chunk)
     done = read_json(progress_path, "") if os.path.isfile(progress_path) else {}
     if done and done.get("identity") != identity:
         raise UsageError(f"--out: {out_dir} holds measures of other settings ({progress_path}); choose another --out")
