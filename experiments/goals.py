@@ -75,6 +75,11 @@ def read_landscapes(out: str = TABLE.out) -> dict[str, dict]:
     return found
 
 
+def relative(piece: dict) -> str:
+    """A mutation's mean effect as a share of its parents' fitness (a measure the lives' noise does not bias)."""
+    return "-" if not piece["parent_mean"] else f"{piece['effect_mean'] / piece['parent_mean']:+.1%}"
+
+
 def landscape_tables(found: dict[str, dict]) -> str:
     """H4's table (random genomes) and H3's (mutations and ruggedness around each generation's parents)."""
     lines = ["**Random genomes** (H4): 50 genomes of generation 0's draw, 4 fresh lives each; fitness = the mean of a "
@@ -88,17 +93,19 @@ def landscape_tables(found: dict[str, dict]) -> str:
                 lines.append(f"| {name} | {KINDS[name]} | {piece.split(', ')[1]} | {r['mean']:.4f} | {r['std']:.4f} | "
                              f"{q[2]:.4f} | {q[4]:.4f} | {r['share_zero']:.0%} |")
     lines += ["", "**Mutations around the parents** (H3): each generation's 10 parents (the GA's), 9 mutants each "
-              "under the paper's operator, 4 fresh lives per genome; an effect is neutral within 2 standard errors; "
+              "under the paper's operator, 4 fresh lives per genome; mean effect: of fitness(mutant) - fitness(parent), "
+              "relative: over the parents' fitness; "
+              "an effect is neutral within 2 standard errors of its lives' noise (noisier lives call more neutral); "
               "rho(1): the fitness autocorrelation one mutation apart along 5 random walks of 9 steps, corrected "
               "for the lives' noise (NaN: no variance).", "",
-              "| condition | generation | learning | parents' fitness | neutral | deleterious | beneficial | "
-              "mutational variance | rho(1) |", "|---|---|---|---|---|---|---|---|---|"]
+              "| condition | generation | learning | parents' fitness | mean effect | relative | neutral | "
+              "deleterious | beneficial | mutational variance | rho(1) |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for name, m in found.items():
         for piece, r in m["pieces"].items():
             if piece.startswith("generation"):
                 rho = r["rho_noise_corrected"][0]
                 lines.append(f"| {name} | {r['generation']} | {r['learning']} | {r['parent_mean']:.4f} | "
-                             f"{r['share_neutral']:.0%} | {r['share_deleterious']:.0%} | {r['share_beneficial']:.0%} | "
+                             f"{r['effect_mean']:+.4f} | {relative(r)} | {r['share_neutral']:.0%} | {r['share_deleterious']:.0%} | {r['share_beneficial']:.0%} | "
                              f"{r['mutational_variance']:.2e} | {'NaN' if rho is None else f'{rho:.2f}'} |")
     running = [name for name, m in found.items() if not m["done"]]
     missing = [name for name in ORDER if name not in found]
