@@ -114,62 +114,59 @@ def landscape_tables(found: dict[str, dict]) -> str:
     return "\n".join(lines)
 
 
-def landscape_figure(found: dict[str, dict], path: str) -> str:
-    """H4: random genomes' fitness per condition; H3: the shares of mutation effects and rho(1) per generation,
-    with learning (solid) and cut (hatched, dashed)."""
-    from imrl_jax.plotting import CONDITION_STYLES, new_figure, save, style_axis
+#: The figure's colours: behaviours warm, goals and evaluators cool.
+COLOURS = {"EE-ES": "#8c2d04", "EE-LS": "#e6550d", "EE-LS-T": "#fdae6b", "LE-LS": "#08519c", "LE-LS-2R": "#6baed6",
+           "EV-LS": "#31a354"}
+#: Where a generation sits on the figure's x axis.
+POSITIONS = {0: 0, 10: 1}
 
-    fig = new_figure(11.0, 3.6)
-    ax_random, ax_effects, ax_rho = fig.subplots(1, 3, gridspec_kw=dict(width_ratios=[1.0, 1.6, 1.0]))
+
+def landscape_figure(found: dict[str, dict], path: str) -> str:
+    """H4: random genomes' fitness per condition; H3: a mutation's mean effect relative to its parents, the share
+    of deleterious mutations and rho(1) at generations 0, 10 and the last, with learning (solid) and cut (dashed:
+    the cut the condition's row names; dotted: a second, smaller one)."""
+    from imrl_jax.plotting import new_figure, save, style_axis
+
+    fig = new_figure(13.0, 3.5)
+    ax_random, ax_effect, ax_bad, ax_rho = fig.subplots(1, 4, gridspec_kw=dict(width_ratios=[1.3, 1, 1, 1]))
     names = list(found)
     for i, name in enumerate(names):
-        colour = CONDITION_STYLES.get(name, {}).get("color", "0.4")
-        for j, learning in enumerate(("learning", "cut")):
-            piece = next((r for p, r in found[name]["pieces"].items() if p.startswith("random") and learning in p), None)
-            if piece is None:
-                continue
-            x = i + (0.18 if j else -0.18)
-            ax_random.scatter(np.full(len(piece["fitness"]), x) + np.linspace(-0.06, 0.06, len(piece["fitness"])),
-                              piece["fitness"], s=5, color=colour, alpha=0.35 if j else 0.8)
-            ax_random.plot([x - 0.12, x + 0.12], [piece["mean"]] * 2, color="k", lw=1.2, ls="--" if j else "-")
+        randoms = [(p.split(", ")[1], r) for p, r in found[name]["pieces"].items() if p.startswith("random")]
+        for j, (learning, r) in enumerate(randoms):
+            x = i + (j - (len(randoms) - 1) / 2) * 0.6 / len(randoms)  # side by side within the condition's slot
+            f = np.asarray(r["fitness"])
+            ax_random.scatter(x + np.linspace(-0.06, 0.06, len(f)), f, s=3, color=COLOURS.get(name, "0.4"),
+                              alpha=0.9 if learning == "learning" else 0.3)
+            ax_random.plot([x - 0.09, x + 0.09], [r["mean"]] * 2, color="k", lw=1.2,
+                           ls="-" if learning == "learning" else "--")
     ax_random.set_xticks(range(len(names)), names, rotation=30, fontsize=7)
-    style_axis(ax_random, "H4: random genomes (solid: learning, faded: cut)", "", "fitness (mean of 4 lives)")
-    bars, labels = [], []
-    for name in names:
-        for piece in found[name]["pieces"].values():
-            if "generation" in piece:
-                bars.append(piece)
-                labels.append(f"{name} g{piece['generation']}{'' if piece['learning'] == 'learning' else ' cut'}")
-    x = np.arange(len(bars))
-    bottom = np.zeros(len(bars))
-    for share, colour in (("share_deleterious", "#c0392b"), ("share_neutral", "#bbbbbb"),
-                          ("share_beneficial", "#27ae60")):
-        values = np.array([b[share] for b in bars])
-        ax_effects.bar(x, values, bottom=bottom, color=colour, width=0.8, label=share.split("_")[1],
-                       hatch=None)
-        bottom += values
-    for k, b in enumerate(bars):
-        if b["learning"] != "learning":
-            ax_effects.bar(k, 1.0, width=0.8, fill=False, hatch="//", edgecolor="0.3", lw=0)
-    ax_effects.set_xticks(x, labels, rotation=90, fontsize=5.5)
-    ax_effects.set_ylim(0, 1)
-    ax_effects.legend(fontsize=6, loc="upper right")
-    style_axis(ax_effects, "H3: mutation effects around the parents (hatched: learning cut)", "",
-               "share of mutants", grid=False)
-    for name in names:
-        style = CONDITION_STYLES.get(name, {})
-        for learning, ls_ in (("learning", "-"), ("cut", "--")):
-            points = sorted((b["generation"], b["rho_noise_corrected"][0]) for b in found[name]["pieces"].values()
-                            if "generation" in b and (b["learning"] == "learning") == (learning == "learning")
-                            and b["rho_noise_corrected"][0] is not None)
-            if points:
-                g, rho = zip(*points)
-                ax_rho.plot([0 if x == 0 else 1 if x == 10 else 2 for x in g], rho, marker="o", ms=3, ls=ls_, color=style.get("color", "0.4"),
+    style_axis(ax_random, "H4: random genomes (faded: learning cut)", "", "fitness (mean of 4 lives)")
+    limit = 0.25  # a relative effect beyond is drawn at the edge, as a triangle (a parent of almost no fitness)
+    panels = ((ax_effect, lambda b: b["effect_mean"] / b["parent_mean"] if b["parent_mean"] else None,
+               "a mutation's mean effect", "over its parents' fitness"),
+              (ax_bad, lambda b: b["share_deleterious"], "deleterious mutations", "share of mutants"),
+              (ax_rho, lambda b: b["rho_noise_corrected"][0], "rho(1), noise-corrected", "autocorrelation"))
+    for ax, value, title, ylabel in panels:
+        for name in names:
+            cuts = sorted({b["learning"] for b in found[name]["pieces"].values() if "generation" in b} - {"learning"},
+                          key=lambda c: -float(c.split()[1]))
+            for learning, ls_ in [("learning", "-"), *zip(cuts, ("--", ":"))]:
+                points = sorted((POSITIONS.get(b["generation"], 2), value(b)) for b in found[name]["pieces"].values()
+                                if b.get("learning") == learning and value(b) is not None)
+                if points:
+                    x, y = zip(*points)
+                    if ax is ax_effect:
+                        y = np.clip(y, -limit, limit)
+                        beyond = np.abs(y) >= limit
+                        ax.scatter(np.asarray(x)[beyond], y[beyond], marker="^", s=30, color=COLOURS.get(name, "0.4"))
+                    ax.plot(x, y, marker="o", ms=3, ls=ls_, color=COLOURS.get(name, "0.4"),
                             label=name if learning == "learning" else None)
-    ax_rho.set_xticks(range(3), ["0", "10", "last"])
-    ax_rho.axhline(0, color="0.6", lw=0.6)
-    ax_rho.legend(fontsize=6)
-    style_axis(ax_rho, "H3: rho(1), noise-corrected (dashed: cut)", "generation", "autocorrelation at one mutation")
+        ax.set_xticks(range(3), ["0", "10", "last"])
+        ax.axhline(0, color="0.6", lw=0.6)
+        style_axis(ax, f"H3: {title}", "generation", ylabel)
+    ax_rho.legend(fontsize=6, loc="lower left")
+    fig.suptitle("Landscapes around each condition's generations, seed 0 (solid: with learning; dashed, dotted: "
+                 "learning cut)", fontsize=9)
     fig.tight_layout()
     return save(fig, path)
 
