@@ -104,6 +104,8 @@ def test_killed_resumed_and_extended_sweep_equals_the_uninterrupted_one(finished
     (["--sweep", "gama=0.9,0.99"], "--sweep: unknown field 'gama' (sweepable: "),
     (["--sweep", "gamma=0.9,x"], "--sweep: gamma: expected numbers separated by commas (got '0.9,x')"),
     (["--sweep", "gamma"], "--sweep: expected FIELD=V1,V2,... (got 'gamma')"),
+    (["--sweep", "gamma="], "--sweep: expected FIELD=V1,V2,... (got 'gamma=')"),
+    (["--sweep", "gamma=0.9,,0.99"], "--sweep: gamma: expected numbers separated by commas (got '0.9,,0.99')"),
     (["--sweep", "gamma=0.9", "--sweep", "gamma=0.8"], "--sweep: gamma is given twice"),
     (["--sweep", "gamma=0.9,0.8", "--sweep", "trace_lambda=0.1", "--zip"],
      "--zip: every --sweep needs as many values (gamma: 2, trace_lambda: 1)"),
