@@ -97,7 +97,8 @@ def landscape_tables(found: dict[str, dict]) -> str:
               "relative: over the parents' fitness; "
               "an effect is neutral within 2 standard errors of its lives' noise (noisier lives call more neutral); "
               "rho(1): the fitness autocorrelation one mutation apart along 5 random walks of 9 steps, corrected "
-              "for the lives' noise (NaN: no variance).", "",
+              "for the lives' noise (NaN: no variance; with 5 short walks an uncertain estimate, past 1 where the walks "
+              "vary little).", "",
               "| condition | generation | learning | parents' fitness | mean effect | relative | neutral | "
               "deleterious | beneficial | mutational variance | rho(1) |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for name, m in found.items():
@@ -145,7 +146,8 @@ def landscape_figure(found: dict[str, dict], path: str) -> str:
     panels = ((ax_effect, lambda b: b["effect_mean"] / b["parent_mean"] if b["parent_mean"] else None,
                "a mutation's mean effect", "over its parents' fitness"),
               (ax_bad, lambda b: b["share_deleterious"], "deleterious mutations", "share of mutants"),
-              (ax_rho, lambda b: b["rho_noise_corrected"][0], "rho(1), noise-corrected", "autocorrelation"))
+              # As observed: the correction for the lives' noise overshoots 1 where the walks' variance is small.
+              (ax_rho, lambda b: b["rho"][0], "rho(1), lives' noise included", "autocorrelation"))
     for ax, value, title, ylabel in panels:
         for name in names:
             cuts = sorted({b["learning"] for b in found[name]["pieces"].values() if "generation" in b} - {"learning"},
@@ -164,10 +166,11 @@ def landscape_figure(found: dict[str, dict], path: str) -> str:
         ax.set_xticks(range(3), ["0", "10", "last"])
         ax.axhline(0, color="0.6", lw=0.6)
         style_axis(ax, f"H3: {title}", "generation", ylabel)
-    ax_rho.legend(fontsize=6, loc="lower left")
+    handles, labels = ax_rho.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=7, frameon=False)
     fig.suptitle("Landscapes around each condition's generations, seed 0 (solid: with learning; dashed, dotted: "
                  "learning cut)", fontsize=9)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.06, 1, 1))
     return save(fig, path)
 
 
