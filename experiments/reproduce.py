@@ -341,14 +341,18 @@ def _checkpoint_steps(folder: str) -> list[int]:
     return sorted(int(d) for d in os.listdir(folder) if d.isdigit()) if os.path.isdir(folder) else []
 
 
-def publish_checkpoint(run_dir: str) -> int | None:
-    """Copy the newest checkpoint of ``run_dir`` into ``run_dir/resume_checkpoint`` (which is committed); a sweep's
-    of each point (returning the least advanced)."""
+def publish_checkpoint(run_dir: str, at_most: int | None = None) -> int | None:
+    """Copy the newest checkpoint of ``run_dir`` (up to generation ``at_most``) into ``run_dir/resume_checkpoint``
+    (which is committed); a sweep's of each point at the newest generation all of them have, so that a clone goes
+    on with every point together."""
     points = sweep_points(run_dir)
     if points is not None:
-        published = [publish_checkpoint(point) for point in points]
+        newest = [(_checkpoint_steps(os.path.join(point, "checkpoints")) or [None])[-1] for point in points]
+        if None in newest:
+            return None
+        published = [publish_checkpoint(point, min(newest)) for point in points]
         return None if None in published else min(published)
-    steps = _checkpoint_steps(os.path.join(run_dir, "checkpoints"))
+    steps = [s for s in _checkpoint_steps(os.path.join(run_dir, "checkpoints")) if at_most is None or s <= at_most]
     published = os.path.join(run_dir, PUBLISHED)
     if not steps or _checkpoint_steps(published) == steps[-1:]:
         return steps[-1] if steps else None

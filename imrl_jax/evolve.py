@@ -419,7 +419,7 @@ def init_distributed(args) -> None:
         raise UsageError(f"jax.distributed.initialize({coordinator!r}, {num}, {pid}) failed: {reason}") from None
 
 
-def _main_sweep(args, out_dir: str) -> int:
+def _main_sweep(args, out_dir: str, registered: Sequence[str] = ()) -> int:
     """``main`` for a sweep (``--sweep``, or ``--resume`` of a sweep's directory)."""
     if args.strategy not in (None, GA_NAME) or args.strategy_set:
         raise UsageError("--strategy: a sweep evolves with the paper's GA (its mutation values may be swept)")
@@ -435,7 +435,8 @@ def _main_sweep(args, out_dir: str) -> int:
     for line in cli.device_warnings(config, args.cpu_devices) + cli.ignored_notes(config, parse_sets(args.set)):
         print(line, file=sys.stderr, flush=True)
     states = evolve_sweep.run(config, out_dir, seeds, settings, resume=args.resume,
-                              checkpoint_every=args.checkpoint_every, keep=args.keep, quiet=args.quiet, log=args.log)
+                              checkpoint_every=args.checkpoint_every, keep=args.keep, quiet=args.quiet, log=args.log,
+                              registered=registered)
     done = min(int(s.generation) for s in states.values())
     print(f"{config.condition}: sweep of {len(states)} point(s) x {len(seeds)} seed(s), generations 0-{done - 1} "
           f"done; per point in {os.path.join(out_dir, 'sweep.csv')}, each point's run in {out_dir}/KEY")
@@ -464,7 +465,7 @@ def main(argv=None) -> int:
         init_distributed(args)
         out_dir = args.out or os.path.join("runs", args.cond + ("-sweep" if args.sweep else ""))
         if args.sweep or (args.resume and evolve_sweep.is_sweep(out_dir)):
-            return _main_sweep(args, out_dir)
+            return _main_sweep(args, out_dir, registered)
         if args.zip:
             raise UsageError("--zip: only with --sweep")
         saved = None
@@ -485,7 +486,8 @@ def main(argv=None) -> int:
                      if stop.done < stop.total else "after the last generation")
         else:
             where = "before the first generation"
-        started = out_dir is not None and os.path.exists(os.path.join(out_dir, "config.json"))
+        started = out_dir is not None and any(os.path.exists(os.path.join(out_dir, name))
+                                              for name in ("config.json", evolve_sweep.SWEEP_FILE))
         print(f"interrupted {where}; " + (f"resume with: {resume_command(out_dir)}" if started else
                                           "nothing to resume"), file=sys.stderr)
         return 130

@@ -45,9 +45,9 @@ from imrl_jax.ga import GAParams, evolve_step
 from imrl_jax.networks import trait_names, traits
 from imrl_jax.progress import Progress
 from imrl_jax.rundir import (RunDirError, check_unlocked, check_writable, entries, lock_run_dir, make_dir, not_empty,
-                             read_json, write_atomic)
+                             read_json, write_atomic, write_errno)
 from imrl_jax.run_state import (RunInterrupted, check_run_dir, check_run_options, evolution_keys, extend_config_json,
-                                 initial_state, record, record_traits, write_outputs)
+                                 initial_state, record, record_traits, write_failed, write_outputs)
 from imrl_jax.runspec import RunSpec
 from imrl_jax.search import over_seeds
 from imrl_jax.strategies import GA_RECORD
@@ -161,11 +161,20 @@ def check_sweep_dir(out_dir: str, config: Config, seeds: Sequence[int], points: 
     if not exists and entries(out_dir):
         raise not_empty(out_dir, "sweep", entries(out_dir), missing=SWEEP_FILE)
     if exists:
-        _, saved_seeds, saved_settings = read_sweep(out_dir)
+        saved_config, saved_seeds, saved_settings = read_sweep(out_dir)
         if saved_seeds != list(seeds):
             raise UsageError(f"--resume: seeds {list(seeds)} differ from the sweep's {saved_seeds}")
         if saved_settings != [p.settings for p in points]:
             raise UsageError(f"--sweep: the points differ from the sweep's in {out_dir} (resume it without --sweep)")
+        differing = [name for name in saved_config.model_differences(config)
+                     if not (name == "num_generations" and config.num_generations >= saved_config.num_generations)]
+        if differing:
+            raise UsageError(f"--resume: the config differs from the sweep's in {out_dir}: {', '.join(differing)} "
+                             f"(a sweep goes on with its own; only --generations may grow)")
+        saved_keys = [p["key"] for p in read_json(os.path.join(out_dir, SWEEP_FILE), "")["points"]]
+        if saved_keys != [p.key for p in points]:
+            raise RunDirError(f"{os.path.join(out_dir, SWEEP_FILE)}: its points' keys are not those its config and "
+                              f"settings give (made by another version?)")
     for p in points:
         point_dir = os.path.join(out_dir, p.key)
         check_run_dir(point_dir, p.config, seeds, resume and os.path.isfile(os.path.join(point_dir, "config.json")))
@@ -188,10 +197,14 @@ def batched_values(points: Sequence[Point], num_seeds: int):
 
 
 def run(config: Config, out_dir: str, seeds: Sequence[int], settings: Sequence[dict], *, resume: bool = False,
-        checkpoint_every: int = 1, keep: int = 3, quiet: bool = False, log: str | None = None) -> dict[str, RunState]:
+        checkpoint_every: int = 1, keep: int = 3, quiet: bool = False, log: str | None = None,
+        registered: Sequence[str] = ()) -> dict[str, RunState]:
     """Evolve ``config`` at every point of ``settings`` for every seed into ``out_dir``; return each point's final
     state by key (each point's directory is ``out_dir/KEY``)."""
     seeds = check_run_options(config, seeds, checkpoint_every, keep, log)
+    if keep < 2:
+        raise UsageError("--keep: a sweep keeps at least 2 checkpoints a point (killed while saving, its points can be "
+                         "a generation apart: each needs the one before to go on together)")
     if jax.process_count() > 1:
         raise UsageError("--sweep: a sweep runs in one process (its points are its batch); start it without "
                          "--coordinator")
@@ -201,6 +214,8 @@ def run(config: Config, out_dir: str, seeds: Sequence[int], settings: Sequence[d
     for p in points:
         check_unlocked(os.path.join(out_dir, p.key))
     check_sweep_dir(out_dir, config, seeds, points, resume)
+    if resume:
+        check_resumable(out_dir, points)
     lanes = len(points) * len(seeds) * config.population_size * config.lives_per_fitness
     check_memory(config, lanes, f"a sweep of {len(points)} point(s) x {len(seeds)} seed(s) x "
                                 f"{config.population_size} individuals")
@@ -223,7 +238,8 @@ def run(config: Config, out_dir: str, seeds: Sequence[int], settings: Sequence[d
                 stack.enter_context(lock_run_dir(point_dir))
                 if not os.path.isfile(os.path.join(point_dir, "config.json")):
                     info = {"config": p.config.to_dict(), "seeds": seeds, "search": GA_RECORD,
-                            "sweep": {"root": "..", "settings": p.settings}, "version": imrl_jax.__version__,
+                            "sweep": {"root": "..", "settings": p.settings},
+                            **({"register": list(registered)} if registered else {}), "version": imrl_jax.__version__,
                             "git_commit": git_commit(), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
                     write_atomic(os.path.join(point_dir, "config.json"), json.dumps(info, indent=2).encode())
                 elif resume:
@@ -240,16 +256,42 @@ def run(config: Config, out_dir: str, seeds: Sequence[int], settings: Sequence[d
                        checkpoint_every=checkpoint_every, quiet=quiet, events=events)
 
 
+def checkpoint_steps(point_dir: str) -> list[int]:
+    """The generations a point's checkpoints/ holds, oldest first (read from the folder's names)."""
+    folder = os.path.join(point_dir, "checkpoints")
+    return sorted(int(d) for d in os.listdir(folder) if d.isdigit()) if os.path.isdir(folder) else []
+
+
+def no_checkpoint(point: Point, steps: list[int], common: int | None = None) -> UsageError:
+    """Why a sweep cannot go on as one: a point has nothing to go on from where the others are."""
+    return UsageError(f"--resume: point {point.key} ({label(point.settings)}) has no readable checkpoint"
+                      + (f" at or before generation {common}" if common is not None else "")
+                      + f" (its checkpoints: {', '.join(map(str, steps)) or 'none'}), so the sweep cannot go on as "
+                        f"one; resume the points alone (evolve --resume --out {os.path.join('OUT', 'KEY')})")
+
+
+def check_resumable(out_dir: str, points: Sequence[Point]) -> None:
+    """Before anything is written: refuse a sweep some of whose points have checkpoints and some none."""
+    steps = [checkpoint_steps(os.path.join(out_dir, p.key)) for p in points]
+    if any(steps) and not all(steps):
+        i = steps.index([])
+        raise no_checkpoint(points[i], [])
+
+
 def restore(points: Sequence[Point], states: list[RunState], checkpointers: Sequence[Checkpointer],
             progress: Progress) -> tuple[list[RunState], int, float]:
     """Every point at the newest generation all of them have a readable checkpoint of (0: none), and the
     seconds the sweep had run; a point checkpointed further (resumed alone) starts again from there, said."""
     template = list(states)
+    if not any(c.steps() for c in checkpointers):
+        return template, 0, 0.0
     found = [c.restore_latest(s, warn=lambda text: progress.message(f"warning: {text}"))
              for c, s in zip(checkpointers, template)]
+    common = None
     while True:
-        if any(f is None for f in found):
-            return template, 0, 0.0
+        missing = [i for i, f in enumerate(found) if f is None]
+        if missing:  # some point has none to go on from: starting every point again would throw the others' away
+            raise no_checkpoint(points[missing[0]], checkpointers[missing[0]].steps(), common)
         common = min(int(f[0].generation) for f in found)
         if all(int(f[0].generation) == common for f in found):
             break
@@ -316,9 +358,19 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], points: Sequence[Poi
                 for p, state, checkpointer in zip(points, states, checkpointers):
                     meta = {"config": p.config.to_dict(), "seeds": seeds, "search": GA_RECORD,
                             "elapsed_seconds": round(progress.elapsed(), 3)}
-                    checkpointer.save(state, meta)
-                    write_outputs(os.path.join(out_dir, p.key), p.config, seeds, state)
-                write_summary(out_dir, config, points, states)
+                    try:
+                        checkpointer.save(state, meta)
+                        write_outputs(os.path.join(out_dir, p.key), p.config, seeds, state)
+                    except Exception as error:  # noqa: BLE001 - orbax wraps the OS error in its own
+                        if write_errno(error) is None:
+                            raise
+                        raise write_failed(error, os.path.join(out_dir, p.key), out_dir, done, done - 1) from None
+                try:
+                    write_summary(out_dir, config, points, states)
+                except OSError as error:
+                    if write_errno(error) is None:
+                        raise
+                    raise write_failed(error, out_dir, out_dir, done, done) from None
         if first == config.num_generations:
             progress.note(f"{out_dir} is finished ({first} of {first} generations): its outputs are rewritten; "
                           f"--generations N (more than {first}) extends it")

@@ -94,11 +94,9 @@ def parents_at(run_dir: str, config: Config, seeds: list[int], seed: int, genera
             if run.generation == config.num_generations:
                 return best_of(run, num_parents)[index], {"source": "final_population.npz"}
     replay = os.path.join(out_dir, REPLAY)
-    resume = os.path.isfile(os.path.join(replay, "config.json"))
-    if resume:
-        done = int(np.load(os.path.join(replay, "final_population.npz"))["generation"])
-        if done > generation + 1:  # replayed further for a later generation: replay this one apart
-            replay, resume = os.path.join(out_dir, f"{REPLAY}-{generation}"), False
+    if generations_done(replay) > generation + 1:  # replayed further for a later generation: replay this one apart
+        replay = os.path.join(out_dir, f"{REPLAY}-{generation}")
+    resume = os.path.isfile(os.path.join(replay, "config.json"))  # a replay killed goes on from its checkpoint
     evolve.run(config.replace(num_generations=generation + 1), replay, [seed], resume=resume, quiet=True)
     run = load_run(replay)
     recorded = np.loadtxt(os.path.join(run_dir, "history.csv"), delimiter=",", skiprows=1, usecols=(0, 1, 2),
@@ -107,6 +105,15 @@ def parents_at(run_dir: str, config: Config, seeds: list[int], seed: int, genera
     matches = bool(len(row)) and f"{float(run.fitness.max()):.6f}" == f"{float(row[0, 2]):.6f}"
     order = np.argsort(-run.fitness[0], kind="stable")[:num_parents]
     return run.evaluated[0, order], {"source": f"replayed in {replay}", "replay_matches_run": matches}
+
+
+def generations_done(run_dir: str) -> int:
+    """The generations a replay has evaluated (0 before its first is written)."""
+    try:
+        with np.load(os.path.join(run_dir, "final_population.npz")) as data:
+            return int(data["generation"])
+    except (OSError, KeyError, ValueError):
+        return 0
 
 
 def summary(effects: ls.MutationEffects, rugged: ls.Ruggedness) -> dict:
@@ -130,6 +137,13 @@ def run(run_dir: str, out_dir: str, *, generations: str = "0,10,last", seed: int
         log=print) -> dict:
     """Measure the landscape around ``run_dir``'s seed's generations into ``out_dir``; return what result.json holds."""
     config, seeds = read_config(run_dir)
+    from imrl_jax.run_state import read_search
+    from imrl_jax.runspec import RunSpec
+    from imrl_jax.strategies import GA_RECORD
+
+    if read_search(run_dir) != GA_RECORD:  # generation 0 and the replays are the GA's
+        raise UsageError(f"run: {run_dir} was evolved with {read_search(run_dir)['strategy']}; the landscape measures "
+                         f"take their parents and mutations from the paper's GA")
     seed = seeds[0] if seed is None else seed
     if seed not in seeds:
         raise UsageError(f"--seed: {seed} is not a seed of {run_dir} ({', '.join(map(str, seeds))})")
@@ -153,7 +167,8 @@ def run(run_dir: str, out_dir: str, *, generations: str = "0,10,last", seed: int
     make_dir(out_dir)
     progress_path = os.path.join(out_dir, PROGRESS)
     # The pieces are named by generation and cut: more of either adds pieces to the same measures.
-    identity = dict(seed=seed, lives=lives, parents=num_parents, mutants=num_mutants,
+    identity = dict(run_key=RunSpec.from_run_dir(run_dir).key(),
+                    best_genomes=None if best_genomes is None else os.path.basename(best_genomes), seed=seed, lives=lives, parents=num_parents, mutants=num_mutants,
                     walks=num_walks, walk_length=walk_length, random=num_random, key=key, chunk=chunk)
     done = read_json(progress_path, "") if os.path.isfile(progress_path) else {}
     if done and done.get("identity") != identity:

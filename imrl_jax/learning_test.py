@@ -553,6 +553,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         for run_dir, out_dir in ([(args.run_dir, args.out)] if points is None else
                                  [(point, os.path.join(args.out, os.path.basename(point))) for point in points]):
             if points is not None and os.path.isfile(os.path.join(out_dir, "steady.json")):
+                check_tested_before(args, run_dir, out_dir)
                 summaries.append((out_dir, None))  # a point tested before: the sweep's test goes on after it
                 continue
             base, genomes, source, evolved, warnings = _evolved(args, run_dir, sets)
@@ -577,6 +578,16 @@ def sweep_points(run_dir: str) -> list[str] | None:
     if not is_sweep(run_dir):
         return None
     return [os.path.join(run_dir, point.key) for point in make_points(*read_sweep(run_dir))]
+
+
+def check_tested_before(args, run_dir: str, out_dir: str) -> None:
+    """Refuse a point's earlier test (in a sweep's test) made with other settings or of another generation."""
+    steady = read_json(os.path.join(out_dir, "steady.json"), "")
+    asked = dict(num_best=args.best, num_tests=args.tests, task_steps=args.task_steps, steady_steps=args.steady_steps,
+                 seed=args.seed, generations_done=read_run(run_dir).generation)
+    differ = [f"{name} {steady.get(name)} (asked {value})" for name, value in asked.items() if steady.get(name) != value]
+    if differ:
+        raise UsageError(f"--out: {out_dir} holds a test of other settings: {', '.join(differ)}; choose another --out")
 
 
 def sweep_summary(run_dir: str, out_dir: str) -> dict:

@@ -20,6 +20,7 @@ import jax.numpy as jnp
 from imrl_jax.arena import Pose, task_arrays
 from imrl_jax.conditions import Phase
 from imrl_jax.config import Config, LearningParams
+from imrl_jax.genome import EVOLVED_FIELDS
 from imrl_jax.env import EnvState, TaskSpec, childhood_task, make_env, random_pose, task_spec
 from imrl_jax.learning import learn_experts, learn_selector, learn_selector_over_option, pick_row, take_row
 from imrl_jax.networks import Agent, act, decode, explore, expressed_only, select, with_bias, zero_agent
@@ -198,12 +199,22 @@ def adult_agent(config: Config, agent: Agent) -> Agent:
     return agent._replace(**{network: getattr(fresh, network) for network in reset})
 
 
+def with_params(agent, params: LearningParams):
+    """An agent whose genome carries learning values (LE-LS-P) takes the rest of them from ``params``, not from the
+    config it was decoded with: a life's dynamic values are its arguments (a sweep's points, a learning test)."""
+    if agent.params is None:
+        return agent
+    evolved = {f: getattr(agent.params, f) for f in EVOLVED_FIELDS if f in LearningParams._fields}
+    return agent._replace(params=jax.tree.map(lambda p, a: jnp.asarray(p, a.dtype), params, agent.params)._replace(
+        **evolved))
+
+
 def grow_up(keys: LifetimeKeys, config: Config, params: LearningParams, genome: jnp.ndarray):
     """The experts adulthood starts from: the decoded genome after its childhood (conditions that have one).
 
     Returns the agent and the childhood's selections per bin (zeros without childhood).
     """
-    agent = decode(config, genome)
+    agent = with_params(decode(config, genome), params)
     dtype = agent.actor.dtype
     childhood_selections = jnp.zeros((config.num_bins, agent.selector_actor.shape[0]), jnp.int32)
     if config.spec.has_childhood:

@@ -164,3 +164,26 @@ def test_a_sweeps_learning_test_tests_every_point_as_its_own_test_would(finished
     capsys.readouterr()
     assert learning_test.main([finished_sweep, "--out", str(out), *lengths]) == 0  # done: each point said so
     assert capsys.readouterr().out.count("tested before (steady.json)") == 4
+    assert learning_test.main([finished_sweep, "--out", str(out), *lengths, "--tests", "2"]) == 2  # not mixed in
+    assert "holds a test of other settings: num_tests 1 (asked 2)" in capsys.readouterr().err
+
+
+def test_a_sweep_that_cannot_go_on_together_or_differs_is_refused_and_nothing_changes(finished_sweep, tmp_path,
+                                                                                        capsys):
+    """A point without a checkpoint (the others have theirs: starting again would throw them away), another base
+    config, and one checkpoint a point (points killed a generation apart could not go on) are each refused."""
+    copy = str(tmp_path / "copy")
+    shutil.copytree(finished_sweep, copy)
+    point = list(_point_dirs(copy).values())[1]
+    shutil.rmtree(os.path.join(point, "checkpoints"))
+    before = {os.path.join(d, f): os.path.getmtime(os.path.join(d, f)) for d, _, fs in os.walk(copy) for f in fs}
+    assert evolve.main(["--resume", "--out", copy, "--generations", "5", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert f"--resume: point {os.path.basename(point)} (eta_selector_actor=0.01, mutation_scale=1) has no readable " \
+           f"checkpoint (its checkpoints: none)" in err and err.count("\n") == 1
+    assert evolve.main(["--resume", "--out", finished_sweep, "--set", "gamma=0.5", "--quiet"]) == 2
+    assert "--resume: the config differs from the sweep's in" in capsys.readouterr().err
+    assert evolve.main([*BASE, *SWEEP, "--keep", "1", "--out", str(tmp_path / "new")]) == 2
+    assert capsys.readouterr().err.startswith("error: --keep: a sweep keeps at least 2 checkpoints a point")
+    after = {os.path.join(d, f): os.path.getmtime(os.path.join(d, f)) for d, _, fs in os.walk(copy) for f in fs}
+    assert after == before and not (tmp_path / "new").exists()

@@ -105,3 +105,25 @@ def test_colour_shares_and_probe(tiny):
     assert probe.k.shape == (3, 2, 20)
     assert all((probe.k[e] == e).all() for e in range(3))
     np.testing.assert_allclose(probe.seen_pos[:, :, 1:], probe.pos[:, :, :-1])
+
+
+def test_a_life_reads_its_dynamic_values_from_its_params_not_its_config():
+    """What lets a sweep's points and learning tests share one program: an LE-LS-P life lived with the config of
+    other dynamic values equals the life of its own config (the genome's learning values included)."""
+    import jax
+
+    from helpers import random_genomes, tiny_config
+
+    from imrl_jax.lifetime import live
+
+    own = tiny_config("LE-LS-P", childhood_selector_reward="progress", progress_rate=0.2, noise_std=0.1)
+    other = sweeps.static_part(own)
+    assert (other.progress_rate, other.noise_std) != (own.progress_rate, own.noise_std)
+    genome = jax.numpy.asarray(random_genomes(own, 1)[0])
+    key = jax.random.key(3)
+    a = jax.jit(lambda k, p, g: live(k, own, p, g))(key, own.learning_params(), genome)
+    b = jax.jit(lambda k, p, g: live(k, other, p, g))(key, own.learning_params(), genome)
+    for name in ("fitness", "reward_curve", "childhood_selections"):
+        assert np.array_equal(np.asarray(getattr(a, name)), np.asarray(getattr(b, name))), name
+    c = jax.jit(lambda k, p, g: live(k, other, p, g))(key, other.learning_params(), genome)
+    assert not np.array_equal(np.asarray(a.childhood_selections), np.asarray(c.childhood_selections))
