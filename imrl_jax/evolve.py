@@ -45,9 +45,10 @@ from imrl_jax.events import log_for
 from imrl_jax.progress import Progress
 from imrl_jax.rundir import (RunDirError, check_unlocked, check_writable, lock_run_dir, make_dir,
                              read_config, write_atomic, write_errno)
+# history_csv, initial_state, seed_keys, evolution_keys and record_traits: evolve's names for them (notebooks use them).
 from imrl_jax.run_state import (RunInterrupted, check_run_dir, check_run_options, evolution_keys,  # noqa: F401
-                                 extend_config_json, history_csv, initial_state, read_search, record, record_traits,
-                                 resume_command, seed_keys, write_failed, write_outputs)
+                                 extend_config_json, generations_recorded, history_csv, initial_state, read_search,
+                                 record, record_traits, resume_command, seed_keys, write_failed, write_outputs)
 from imrl_jax.strategies import GA_NAME, GA_RECORD, describe, make_strategy, parse_settings
 
 __all__ = ["UsageError", "parse_sets", "write_atomic", "run", "main"]  # the first three re-exported
@@ -138,7 +139,7 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
             if restored is None:
                 if checkpointer.steps():
                     raise UsageError(f"--resume: no readable checkpoint in {checkpointer.directory}")
-                recorded = _generations_recorded(out_dir)
+                recorded = generations_recorded(out_dir)
                 if recorded:  # its checkpoints were removed: said even with --quiet, the generations are redone
                     progress.message(f"warning: {checkpointer.directory} holds no checkpoint, but {out_dir} records "
                                      f"{recorded} generation(s) done: starting again from generation 0 (the same "
@@ -203,15 +204,6 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
     except KeyboardInterrupt:
         raise RunInterrupted(out_dir, int(state.generation), checkpointed, config.num_generations) from None
     return state
-
-
-def _generations_recorded(out_dir: str) -> int:
-    """The generations a run's final_population.npz says are done (0 if it has none or it cannot be read)."""
-    try:
-        with np.load(os.path.join(out_dir, "final_population.npz")) as data:
-            return int(data["generation"])
-    except (OSError, ValueError, KeyError):
-        return 0
 
 
 def make_step(config: Config, strategy, sharding):

@@ -34,6 +34,7 @@ from imrl_jax import landscape as ls
 from imrl_jax.cli import HelpFormatter, Parser, UsageError, exit_codes
 from imrl_jax.config import Config
 from imrl_jax.ga import init_population
+from imrl_jax.run_state import generations_recorded
 from imrl_jax.rundir import (RunDirError, best_genomes as best_of, check_writable, load_run, make_dir, read_config,
                              read_json, write_atomic)
 
@@ -94,7 +95,7 @@ def parents_at(run_dir: str, config: Config, seeds: list[int], seed: int, genera
             if run.generation == config.num_generations:
                 return best_of(run, num_parents)[index], {"source": "final_population.npz"}
     replay = os.path.join(out_dir, REPLAY)
-    if generations_done(replay) > generation + 1:  # replayed further for a later generation: replay this one apart
+    if generations_recorded(replay) > generation + 1:  # replayed further for a later generation: replay this one apart
         replay = os.path.join(out_dir, f"{REPLAY}-{generation}")
     resume = os.path.isfile(os.path.join(replay, "config.json"))  # a replay killed goes on from its checkpoint
     evolve.run(config.replace(num_generations=generation + 1), replay, [seed], resume=resume, quiet=True)
@@ -105,15 +106,6 @@ def parents_at(run_dir: str, config: Config, seeds: list[int], seed: int, genera
     matches = bool(len(row)) and f"{float(run.fitness.max()):.6f}" == f"{float(row[0, 2]):.6f}"
     order = np.argsort(-run.fitness[0], kind="stable")[:num_parents]
     return run.evaluated[0, order], {"source": f"replayed in {replay}", "replay_matches_run": matches}
-
-
-def generations_done(run_dir: str) -> int:
-    """The generations a replay has evaluated (0 before its first is written)."""
-    try:
-        with np.load(os.path.join(run_dir, "final_population.npz")) as data:
-            return int(data["generation"])
-    except (OSError, KeyError, ValueError):
-        return 0
 
 
 def summary(effects: ls.MutationEffects, rugged: ls.Ruggedness) -> dict:

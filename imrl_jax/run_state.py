@@ -262,3 +262,12 @@ def check_run_options(config: Config, seeds: Sequence[int], checkpoint_every: in
     except ValueError as error:
         raise UsageError(str(error)) from None
     return seeds
+
+
+def generations_recorded(out_dir: str) -> int:
+    """The generations a run's final_population.npz says are done (0 if it has none or it cannot be read)."""
+    try:
+        with np.load(os.path.join(out_dir, "final_population.npz")) as data:
+            return int(data["generation"])
+    except (OSError, ValueError, KeyError):
+        return 0
