@@ -35,6 +35,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from imrl_jax import conditions
 from experiments.reproduce import (DEFAULT_VARIANTS, EVOLVED, SCALES, TESTED, Stage, evolution_cost, evolution_dir,
                                    evolve_command, load_manifest, run_stages, test_command, test_cost, test_dir)
 from experiments.executor import add_options, from_options
@@ -261,7 +262,7 @@ def measure_runs(name: str, runs: RowRuns, reproduction_summary: dict, sle_whole
     for condition, shared in shared_runs.items():
         run = data["evolutions"].get((name, condition))
         if shared is not None:
-            if condition != "EE-ES":
+            if conditions.get(condition).learns:  # EE-ES learns nothing: no learned experts to probe
                 probes[name, condition] = shared.colours
             per_seed = (shared.best_life or {}).get("fresh_mean_per_seed")
         else:
@@ -297,7 +298,7 @@ def config_of(rule: RuleSet, condition: str, num_experts: int | None = None):
     overrides = parse_sets(list(rule.sets))
     if num_experts is not None:
         overrides["num_experts"] = num_experts
-    if condition == "SLE":
+    if not conditions.get(condition).evolved:  # SLE: its noise's horizon is the rule set's
         noise = SCREEN["task_steps"] if rule.sle_noise_steps is None else rule.sle_noise_steps
         overrides["sle_noise_steps"] = noise
     return make_config(rule.preset, condition=condition, **overrides)
@@ -307,7 +308,7 @@ def sizes(rule: RuleSet, condition: str) -> str:
     """Seeds x generations of an evolution, or runs x best x tests of a learning test, of a rule set's row."""
     owner = {"LE-LS": rule.le_ls or rule.name, "EE-LS": rule.ee_ls, "EE-ES": "paper", "SLE": rule.sle}[condition]
     scale = FULL if is_reproduction(owner) else SCREEN
-    if condition == "SLE":
+    if not conditions.get(condition).evolved:  # tested from scratch: runs x best x tests
         return f"{scale['seeds']}x{scale['best']}x{scale['tests']}"
     return f"{scale['seeds']}x{scale['generations']}"
 

@@ -315,7 +315,7 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = S
                      evolved=False, evolution=None, test=_test(sle_whole), reference=True, preset="skills"))
     rows += [reference("faithful", c) for c in FAITHFUL_REPRODUCED]
     for row in rows:
-        row["about"] += _noise(row["test"]) if row["condition"] == "SLE" else ""
+        row["about"] += "" if conditions.get(row["condition"]).evolved else _noise(row["test"])
     for run in RUNS:
         evolved = conditions.get(run.condition).evolved
         evolution, test = run_dirs(run, out, claims)
@@ -545,7 +545,7 @@ def figure(measured: dict, path: str) -> str:
     style_axis(curves, "(a) best fitness, mean +-1 sd over seeds", "generation",
                "best fitness (best of a generation's noisy lives)")
     tested = [r for r in measured["rows"] if r["test"] is not None]
-    learned = [r for r in tested if r["condition"] != "EE-ES"]  # as the paper's Fig. 3b: EE-ES learns nothing
+    learned = [r for r in tested if conditions.get(r["condition"]).learns]  # as the paper's Fig. 3b
     for row in learned:
         learning.plot(np.asarray(row["test"]["curve_steps"]) / 1e6, row["test"]["curve_mean"], label=row["name"],
                       **_style(row))

@@ -34,9 +34,10 @@ from typing import NamedTuple
 
 from experiments.claims_study import REPRODUCTION, SCREEN
 from experiments.reproduce import (SCALES, Stage, evolution_cost, evolve_command, load_manifest, run_stages,
-                                   test_command, test_cost)
+                                   owner, test_command, test_cost)
 from experiments.executor import add_options, from_options
 from experiments.study import Study
+from imrl_jax import conditions
 from imrl_jax.config import paper_tasks
 from imrl_jax.tasks import to_json
 
@@ -133,7 +134,7 @@ def stage_command(stage: Stage, out: str = OUT) -> tuple[list[str], None]:
             return evolve_command(SCREEN, variant.preset, stage.condition, stage.out_dir) + task_set, None
         evolved = os.path.join(out, "held_out", stage.condition, "evolve")
         return test_command(SCREEN, variant.preset, stage.condition, evolved, stage.out_dir) + task_set, None
-    if stage.condition == "SLE":
+    if not conditions.get(stage.condition).evolved:
         return test_command(SCREEN, variant.preset, "SLE", "", stage.out_dir) + ["--task-set", NOVEL], None
     run_dir = os.path.join(REPRODUCTION, variant.preset, "evolve", stage.condition)
     return test_command(FINISHED_TEST, variant.preset, stage.condition, run_dir, stage.out_dir) + [
@@ -160,9 +161,9 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
     from experiments.claims import advantage, claim_unseen, final_best
     from experiments.loading import read_evolution, read_json, read_test
 
-    seen_tests = {(v, c): read_test(os.path.join(reproduction, v if c != "EE-ES" else "paper", "test", c))
+    seen_tests = {(v, c): read_test(os.path.join(reproduction, owner(v, c), "test", c))
                   for v in ("skills", "paper") for c in (*LEARNING, "EE-ES")}
-    novel_tests = {(v, c): read_test(os.path.join(out, "novel", v if c != "EE-ES" else "paper", c))
+    novel_tests = {(v, c): read_test(os.path.join(out, "novel", owner(v, c), c))
                    for v in ("skills", "paper") for c in (*LEARNING, "EE-ES")}
     held = {(c, which): read_test(os.path.join(out, "held_out", c, f"test_{which}"))
             for c in HELD_OUT_CONDITIONS for which in HELD_OUT}
@@ -292,7 +293,7 @@ def figure(measured: dict, path: str) -> str | None:
     axes = grid[0]
     for ax, variant in zip(axes, ("skills", "paper")):
         series = {c: (t["steps"], t["mean"], t["sd"], c) for (v, c), t in measured["curves"].items()
-                  if v == variant or c == "EE-ES"}
+                  if v == variant or not conditions.get(c).learns}
         if series:
             _draw_curves(ax, series, f"novel set, {variant}: learning tests", "cycles of the task",
                          "performance per bin")
