@@ -20,6 +20,8 @@ import subprocess
 import sys
 import time
 
+from imrl_jax import conditions
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 #: (directory, arguments of python -m imrl_jax.baselines)
@@ -35,7 +37,7 @@ def default_tests() -> str:
     """The paper scale's results where its learning tests exist, else the cpu scale's."""
     paper = os.path.join(ROOT, "experiments", "results", "paper")
     if any(os.path.isfile(os.path.join(paper, v, "test", c, "steady.json"))
-           for v in ("skills", "paper", "extension") for c in ("LE-LS", "EE-LS", "EE-ES", "SLE")):
+           for v in ("skills", "paper", "extension") for c in conditions.PAPER):
         return paper
     return os.path.join(ROOT, "experiments", "results", "cpu")
 

@@ -452,7 +452,7 @@ def fresh_table(measured: dict, names) -> str:
         if name not in measured:
             continue
         cells = []
-        for condition in ("LE-LS", "EE-LS", "EE-ES"):
+        for condition in EVOLVED:
             f = measured[name].get("fresh", {}).get(condition)
             cells.append("-" if f is None else f"{f['recorded']:.3f} / {f['fresh']:.3f} (sd {f['fresh_sd_over_seeds']:.3f}, "
                                                f"{f['seeds']} seeds)")

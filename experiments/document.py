@@ -10,7 +10,8 @@ import numpy as np
 from experiments.claims import (CLAIMS, LAST_GENERATIONS, PAPER, PLATEAU_FRACTION, RULES, SEEN,
                                 _fmt, specialisation_score)
 from experiments.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEPS, FRESH_LIVES, PATH_STEPS
-from experiments.reproduce import DEFAULT_VARIANTS, SCALES, owner, report_paths, shared, sharers  # noqa: F401
+from experiments.reproduce import (DEFAULT_VARIANTS, LEARNING_EVOLVED, SCALES, owner, report_paths,  # noqa: F401
+                                   shared, sharers)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -175,7 +176,7 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
             f"- Variants: {', '.join(data['variants'])} ({about}). "
             f"EE-ES learns nothing, so its one evolution serves every variant"
             + "".join(f"; {v}'s {c} is the {owner(v, c)} run (the same rules for it)" for v in data["variants"]
-                      for c in ("LE-LS", "EE-LS") if owner(v, c) != v) + "."]
+                      for c in LEARNING_EVOLVED if owner(v, c) != v) + "."]
     missing = missing_stages(results, manifest)
     if missing:
         out += ["", f"**Unfinished run: {len(missing)} stage(s) not done yet** ({', '.join(missing)}). What they "

@@ -46,7 +46,7 @@ from experiments.document import (ROOT, pipeline_command, report_paths, scale_la
 from experiments.figures import fig3, fig_baselines, fig_fitness, fig_learning, fig_paths, fig_steady
 from experiments.loading import load, read_baselines, read_json, update_best_genomes
 from experiments.relive import DRAWN_STEPS, FRESH_LIVES, PATH_STEPS, fresh_fitness, probe_best, relive_best
-from experiments.reproduce import EVOLVED, TESTED, owner, shared, sharers, variant_spec
+from experiments.reproduce import EVOLVED, LEARNING_EVOLVED, TESTED, owner, shared, sharers, variant_spec
 
 
 def _jsonable(value):
@@ -128,7 +128,7 @@ def run(results: str, doc: str, figures: str, behaviour: bool = True, baselines_
                      f"steps driven after each task's learning period, coloured by the expert in control")
             written["paths"][variant, condition] = save(fig_paths(life, title), os.path.join(figures, name))
         for (variant, condition), entry in best.items():
-            if entry["config"] is not None and condition in ("LE-LS", "EE-LS"):
+            if entry["config"] is not None and condition in LEARNING_EVOLVED:
                 print(f"probing the experts of the {entry['genomes'].shape[1]} best {condition} individuals of "
                       f"every seed ({variant})", flush=True)
                 probes[variant, condition] = probe_best(entry["config"], entry)
@@ -201,7 +201,7 @@ def share_probes(probes: dict, variants) -> dict:
     """The probes of every variant: one that shares a condition's runs (faithful's EE-LS) shares their probes."""
     out = dict(probes)
     for variant in variants:
-        for condition in ("LE-LS", "EE-LS"):
+        for condition in LEARNING_EVOLVED:
             if (owner(variant, condition), condition) in probes:
                 out.setdefault((variant, condition), probes[owner(variant, condition), condition])
     return out

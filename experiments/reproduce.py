@@ -80,6 +80,8 @@ DEFAULT_VARIANTS = {"paper": ("skills", "paper", "faithful"), "cpu": ("paper", "
 #: The paper's conditions (rows of imrl_jax.conditions): those evolved, and those learning-tested.
 EVOLVED = conditions.PAPER_EVOLVED
 TESTED = conditions.PAPER
+#: The evolved conditions whose experts learn (LE-LS, EE-LS): probed for claim 7, shared between variants.
+LEARNING_EVOLVED = tuple(c for c in EVOLVED if conditions.get(c).learns)
 
 
 class Variant(NamedTuple):
