@@ -20,6 +20,7 @@ import subprocess
 import sys
 import time
 
+from experiments.study import RESULTS
 from imrl_jax import conditions
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -35,11 +36,11 @@ STAGES = (
 
 def default_tests() -> str:
     """The paper scale's results where its learning tests exist, else the cpu scale's."""
-    paper = os.path.join(ROOT, "experiments", "results", "paper")
+    paper = os.path.join(ROOT, RESULTS, "paper")
     if any(os.path.isfile(os.path.join(paper, v, "test", c, "steady.json"))
            for v in ("skills", "paper", "extension") for c in conditions.PAPER):
         return paper
-    return os.path.join(ROOT, "experiments", "results", "cpu")
+    return os.path.join(ROOT, RESULTS, "cpu")
 
 
 def draw(out: str, tests_dir: str) -> str:
@@ -58,7 +59,7 @@ def draw(out: str, tests_dir: str) -> str:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--out", default=os.path.join(ROOT, "experiments", "results", "baselines"),
+    p.add_argument("--out", default=os.path.join(ROOT, RESULTS, "baselines"),
                    help="where the baselines are written")
     p.add_argument("--tests", default=None, help="a results directory of experiments/reproduce.py to compare with "
                                                  "(default: paper scale if it has learning tests, else cpu scale)")

@@ -22,9 +22,10 @@ import sys
 
 import numpy as np
 
+from experiments.study import RESULTS
 from experiments.reproduce import MEASURED
 
-OUT = os.path.join("experiments", "results", "claims", "circles")
+OUT = os.path.join(RESULTS, "claims", "circles")
 #: The action grid: turn in [0, 1] (0.5 straight; 0 and 1 the 30 deg turns; steps of 0.06 deg), speed up to full.
 TURNS = np.linspace(0.0, 1.0, 1001)
 SPEEDS = np.linspace(0.5, 1.0, 6)

@@ -39,15 +39,15 @@ from imrl_jax import conditions
 from experiments.reproduce import (DEFAULT_VARIANTS, EVOLVED, SCALES, TESTED, Stage, evolution_cost, evolution_dir,
                                    evolve_command, load_manifest, run_stages, test_command, test_cost, test_dir)
 from experiments.executor import add_options, from_options
-from experiments.study import Study
+from experiments.study import RESULTS, Study
 from experiments.rule_sets import BY_NAME, RULE_SETS, RuleSet  # noqa: F401 - the map's rows
 
 #: The screen's sizes: the paper's life lengths, fewer seeds and tests.
 SCREEN = dict(SCALES["paper"], seeds=5, best=5, tests=4)
 FULL = SCALES["paper"]
 #: Where the paper-scale reproduction lives (the ``paper``, ``skills`` and ``faithful`` rows, shared runs).
-REPRODUCTION = os.path.join("experiments", "results", "paper")
-OUT = os.path.join("experiments", "results", "claims")
+REPRODUCTION = os.path.join(RESULTS, "paper")
+OUT = os.path.join(RESULTS, "claims")
 
 
 #: The order the screen runs its stages in: the cheap SLE tests first, then the evolutions that matter most.

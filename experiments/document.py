@@ -7,6 +7,7 @@ import os
 
 import numpy as np
 
+from experiments.study import RESULTS
 from experiments.claims import (CLAIMS, LAST_GENERATIONS, PAPER, PLATEAU_FRACTION, RULES, SEEN,
                                 _fmt, specialisation_score)
 from experiments.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEPS, FRESH_LIVES, PATH_STEPS
@@ -104,7 +105,7 @@ def pipeline_command(results: str, manifest: dict | None) -> str:
         return "python experiments/reproduce.py (scale unknown)"
     scale = manifest.get("scale", "?")
     command = f"python experiments/reproduce.py --scale {scale}"
-    default = os.path.join(ROOT, "experiments", "results", scale)
+    default = os.path.join(ROOT, RESULTS, scale)
     if os.path.abspath(results) != os.path.abspath(default):
         command += f" --out {results}"
     if "variants" in manifest and list(manifest["variants"]) != list(DEFAULT_VARIANTS.get(scale, ())):

@@ -35,10 +35,10 @@ from experiments.claims_study import REPRODUCTION, SCREEN
 from experiments.reproduce import (Stage, evolution_cost, evolution_dir, evolve_command, load_manifest, run_stages,
                                    test_command, test_cost, test_dir)
 from experiments.executor import add_options, from_options
-from experiments.study import Study
+from experiments.study import RESULTS, Study
 from imrl_jax import conditions
 
-OUT = os.path.join("experiments", "results", "future_work")
+OUT = os.path.join(RESULTS, "future_work")
 
 
 class Run(NamedTuple):
@@ -76,7 +76,7 @@ RUNS: tuple[Run, ...] = (
 )
 BY_NAME = {run.name: run for run in RUNS}
 #: The claims study's results, where rows with ``claims_experts`` find their runs.
-CLAIMS_OUT = os.path.join("experiments", "results", "claims")
+CLAIMS_OUT = os.path.join(RESULTS, "claims")
 
 
 def run_dirs(run: Run, out: str = OUT, claims: str = CLAIMS_OUT) -> tuple[str, str]:
@@ -123,7 +123,7 @@ REPRODUCED = ("LE-LS", "EE-LS", "EE-ES", "SLE")
 FAITHFUL_REPRODUCED = ("LE-LS", "SLE")
 #: SLE with its noise annealed over the whole test (the claims study's ``skills-sle-test``): EXT-LS-whole's
 #: reference, as the reproduction's SLE (noise over 100,000 cycles) is EXT-LS's.
-SLE_WHOLE = os.path.join("experiments", "results", "claims", "skills-sle-test", "test", "SLE")
+SLE_WHOLE = os.path.join(RESULTS, "claims", "skills-sle-test", "test", "SLE")
 #: The reproduction's evolutions drawn beside the study's (the paper's Fig. 3a).
 DRAWN_BESIDE = ("LE-LS", "EE-LS")
 #: (c)'s rows: their evolved learning values beside the presets'.

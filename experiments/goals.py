@@ -19,10 +19,10 @@ import sys
 
 import numpy as np
 
+from experiments.study import RESULTS
 from experiments.claims_study import SCREEN
 from experiments.table import Measure, Row, Table
 
-RESULTS = os.path.join("experiments", "results")
 #: The paper's runs whose last population was not kept: their best 10 of each seed are (the reproduction's report).
 KEPT = ("--best-genomes", os.path.join(RESULTS, "paper", "best_genomes.npz"))
 #: A life of each condition, in steps (childhood 150,000 + 6 x 100,000), for the measures' costs.

@@ -36,15 +36,15 @@ from experiments.claims_study import REPRODUCTION, SCREEN
 from experiments.reproduce import (SCALES, Stage, evolution_cost, evolve_command, load_manifest, run_stages,
                                    owner, test_command, test_cost)
 from experiments.executor import add_options, from_options
-from experiments.study import Study
+from experiments.study import RESULTS, Study
 from imrl_jax import conditions
 from imrl_jax.config import paper_tasks
 from imrl_jax.tasks import to_json
 
-OUT = os.path.join("experiments", "results", "novel_tasks")
+OUT = os.path.join(RESULTS, "novel_tasks")
 BEST_GENOMES = os.path.join(REPRODUCTION, "best_genomes.npz")
 #: brax's baselines on the paper's six (docs/BASELINES.md), beside the same on the novel set.
-BASELINES = os.path.join("experiments", "results", "baselines")
+BASELINES = os.path.join(RESULTS, "baselines")
 #: The finished runs tested on the novel set: (variant, condition).
 FINISHED = (("skills", "LE-LS"), ("skills", "EE-LS"), ("paper", "LE-LS"), ("paper", "EE-LS"), ("paper", "EE-ES"))
 #: The paper's tasks (1-based) the held-out evolutions see, and those they never meet.

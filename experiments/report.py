@@ -40,6 +40,7 @@ import sys
 
 import numpy as np
 
+from experiments.study import RESULTS
 from experiments.claims import CLAIMS, PAPER, RULES, SEEN, measure
 from experiments.document import (ROOT, pipeline_command, report_paths, scale_label, specialisation_rows,
                                   write_document)
@@ -62,7 +63,7 @@ def _jsonable(value):
 
 
 #: Where experiments/baselines.py writes the brax baselines (the report shows them when present).
-BASELINES = os.path.join(ROOT, "experiments", "results", "baselines")
+BASELINES = os.path.join(ROOT, RESULTS, "baselines")
 
 
 def run(results: str, doc: str, figures: str, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:

@@ -60,7 +60,7 @@ from typing import NamedTuple
 
 from imrl_jax import conditions  # the condition table (no JAX)
 from experiments.rule_sets import BY_NAME
-from experiments.study import Study
+from experiments.study import RESULTS, Study
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -578,7 +578,7 @@ def parser() -> argparse.ArgumentParser:
 
 def _chosen(args) -> tuple[dict, str, list[str]]:
     """A parsed command line's scale, results directory and variants."""
-    out = args.out or os.path.join("experiments", "results", args.scale)
+    out = args.out or os.path.join(RESULTS, args.scale)
     return SCALES[args.scale], out, args.variants.split(",") if args.variants else list(DEFAULT_VARIANTS[args.scale])
 
 

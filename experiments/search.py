@@ -31,10 +31,10 @@ from experiments.claims_study import REPRODUCTION, SCREEN
 from experiments.reproduce import (Stage, evolution_cost, evolution_dir, evolve_command, load_manifest, run_stages,
                                    test_command, test_cost, test_dir)
 from experiments.executor import add_options, from_options
-from experiments.study import Study
+from experiments.study import RESULTS, Study
 from imrl_jax.strategies import GA_NAME
 
-OUT = os.path.join("experiments", "results", "search")
+OUT = os.path.join(RESULTS, "search")
 PRESET = "skills"
 CONDITIONS = ("EE-LS", "EE-ES", "LE-LS")
 

@@ -14,6 +14,9 @@ import os
 import pkgutil
 import sys
 
+#: Where every study's results lie (relative to the repository's root, where the commands run).
+RESULTS = os.path.join("experiments", "results")
+
 
 @dataclasses.dataclass(frozen=True)
 class Study:

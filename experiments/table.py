@@ -21,11 +21,9 @@ import numpy as np
 from experiments.executor import add_options, from_options
 from experiments.reproduce import (Stage, evolution_cost, evolve_command, load_manifest, run_stages, test_command,
                                    test_cost)
-from experiments.study import Study
+from experiments.study import RESULTS, Study
 from imrl_jax import runspec
 
-#: Where every study's runs are looked for by key.
-RESULTS = os.path.join("experiments", "results")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -39,10 +39,10 @@ from experiments.claims_study import REPRODUCTION, SCREEN
 from experiments.reproduce import (MEASURED, Stage, evolution_cost, evolve_command, load_manifest, run_stages,
                                    test_command, test_cost)
 from experiments.executor import add_options, from_options
-from experiments.study import Study
+from experiments.study import RESULTS, Study
 from imrl_jax.config import ADULT_SELECTOR
 
-OUT = os.path.join("experiments", "results", "timescale")
+OUT = os.path.join(RESULTS, "timescale")
 #: The selector's options: name -> Config fields. "per-step" is the paper's selector.
 OPTIONS = {
     "per-step": dict(selector_period=1),
