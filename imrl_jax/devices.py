@@ -164,3 +164,40 @@ def check_memory(config, lanes: int, what: str, host_bytes: int = 0) -> None:
                          f"{lane_bytes(config) / 2**20:.2f} MiB each, {config.num_experts} experts, {devices} devices; "
                          f"an estimate) but {where} has {have / 2**30:.1f} GiB available; use fewer seeds, a smaller "
                          f"population, fewer bins or experts")
+
+
+def init_distributed(coordinator: str | None, num_processes: int | None, process_id: int | None) -> None:
+    """Start jax.distributed when a coordinator is given by flag or environment.
+
+    Must run before anything starts a JAX backend (``jax.devices()``, any computation).
+    On CPU the processes' collectives (the sharded generation, ``process_allgather``,
+    barriers) go over gloo/TCP. Raises UsageError on bad flags or a failed start.
+    """
+    from imrl_jax.cli import UsageError
+
+    coordinator = coordinator or os.environ.get("JAX_COORDINATOR_ADDRESS")
+    if not coordinator:
+        return
+    num = num_processes if num_processes is not None else os.environ.get("JAX_NUM_PROCESSES")
+    pid = process_id if process_id is not None else os.environ.get("JAX_PROCESS_ID")
+    if num is None or pid is None:
+        raise UsageError("--coordinator needs --num-processes and --process-id (or JAX_NUM_PROCESSES, JAX_PROCESS_ID)")
+    try:
+        num, pid = int(num), int(pid)
+    except ValueError:
+        raise UsageError(f"--num-processes/--process-id: expected integers, got {num!r} and {pid!r}") from None
+    if num < 1 or not 0 <= pid < num:
+        raise UsageError(f"--process-id: must be in 0..{num - 1} (--num-processes {num}), got {pid}")
+    from jax._src import xla_bridge  # no public test for "backend started" that does not start it
+
+    if xla_bridge.backends_are_initialized():
+        raise UsageError("--coordinator: a JAX backend is already running in this process; "
+                         "jax.distributed must start first (call main() in a fresh process)")
+    # Not jax.default_backend() here: it would start the backend before jax.distributed.
+    # The flag only matters to the CPU backend (gloo is also JAX 0.10's default there).
+    jax.config.update("jax_cpu_collectives_implementation", "gloo")
+    try:
+        jax.distributed.initialize(coordinator, num, pid)
+    except (RuntimeError, ValueError) as error:
+        reason = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+        raise UsageError(f"jax.distributed.initialize({coordinator!r}, {num}, {pid}) failed: {reason}") from None

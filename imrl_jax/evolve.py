@@ -34,7 +34,7 @@ import imrl_jax
 from imrl_jax.checkpoint import Checkpointer, RunState, git_commit
 from imrl_jax import cli, conditions, evolve_sweep
 from imrl_jax.cli import HelpFormatter, UsageError, exit_codes, parse_sets, user_errors
-from imrl_jax.devices import (check_memory, make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
+from imrl_jax.devices import (check_memory, init_distributed, make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
                               use_host_cores)
 from imrl_jax.config import EVOLVED_CONDITIONS, PRESETS, Config, make_config
 from imrl_jax import search
@@ -376,65 +376,6 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
-def init_distributed(args) -> None:
-    """Start jax.distributed when a coordinator is given by flag or environment.
-
-    Must run before anything starts a JAX backend (``jax.devices()``, any computation).
-    On CPU the processes' collectives (the sharded generation, ``process_allgather``,
-    barriers) go over gloo/TCP. Raises UsageError on bad flags or a failed start.
-    """
-    coordinator = args.coordinator or os.environ.get("JAX_COORDINATOR_ADDRESS")
-    if not coordinator:
-        return
-    num = args.num_processes if args.num_processes is not None else os.environ.get("JAX_NUM_PROCESSES")
-    pid = args.process_id if args.process_id is not None else os.environ.get("JAX_PROCESS_ID")
-    if num is None or pid is None:
-        raise UsageError("--coordinator needs --num-processes and --process-id (or JAX_NUM_PROCESSES, JAX_PROCESS_ID)")
-    try:
-        num, pid = int(num), int(pid)
-    except ValueError:
-        raise UsageError(f"--num-processes/--process-id: expected integers, got {num!r} and {pid!r}") from None
-    if num < 1 or not 0 <= pid < num:
-        raise UsageError(f"--process-id: must be in 0..{num - 1} (--num-processes {num}), got {pid}")
-    from jax._src import xla_bridge  # no public test for "backend started" that does not start it
-
-    if xla_bridge.backends_are_initialized():
-        raise UsageError("--coordinator: a JAX backend is already running in this process; "
-                         "jax.distributed must start first (call main() in a fresh process)")
-    # Not jax.default_backend() here: it would start the backend before jax.distributed.
-    # The flag only matters to the CPU backend (gloo is also JAX 0.10's default there).
-    jax.config.update("jax_cpu_collectives_implementation", "gloo")
-    try:
-        jax.distributed.initialize(coordinator, num, pid)
-    except (RuntimeError, ValueError) as error:
-        reason = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
-        raise UsageError(f"jax.distributed.initialize({coordinator!r}, {num}, {pid}) failed: {reason}") from None
-
-
-def _main_sweep(args, out_dir: str, registered: Sequence[str] = ()) -> int:
-    """``main`` for a sweep (``--sweep``, or ``--resume`` of a sweep's directory)."""
-    if args.strategy not in (None, GA_NAME) or args.strategy_set:
-        raise UsageError("--strategy: a sweep evolves with the paper's GA (its mutation values may be swept)")
-    saved = None
-    if args.resume:
-        if not evolve_sweep.is_sweep(out_dir):
-            raise UsageError(f"--resume: {out_dir} holds no sweep to resume (no {evolve_sweep.SWEEP_FILE})")
-        base, seeds, settings = evolve_sweep.read_sweep(out_dir)
-        saved = (base, seeds)
-    config, seeds = build_config(args, saved)
-    if args.sweep:
-        settings = evolve_sweep.parse(args.sweep, args.zip)
-    for line in cli.device_warnings(config, args.cpu_devices) + cli.ignored_notes(config, parse_sets(args.set)):
-        print(line, file=sys.stderr, flush=True)
-    states = evolve_sweep.run(config, out_dir, seeds, settings, resume=args.resume,
-                              checkpoint_every=args.checkpoint_every, keep=args.keep, quiet=args.quiet, log=args.log,
-                              registered=registered)
-    done = min(int(s.generation) for s in states.values())
-    print(f"{config.condition}: sweep of {len(states)} point(s) x {len(seeds)} seed(s), generations 0-{done - 1} "
-          f"done; per point in {os.path.join(out_dir, 'sweep.csv')}, each point's run in {out_dir}/KEY")
-    return 0
-
-
 @exit_codes
 def main(argv=None) -> int:
     out_dir = None
@@ -454,10 +395,10 @@ def main(argv=None) -> int:
         cli.check_out(args.out)
         # Before anything starts JAX (the task set's checks, a strategy's arrays): later, neither takes effect.
         use_host_cores(args.cpu_devices or None)
-        init_distributed(args)
+        init_distributed(args.coordinator, args.num_processes, args.process_id)
         out_dir = args.out or os.path.join("runs", args.cond + ("-sweep" if args.sweep else ""))
         if args.sweep or (args.resume and evolve_sweep.is_sweep(out_dir)):
-            return _main_sweep(args, out_dir, registered)
+            return evolve_sweep.main(args, out_dir, registered, build_config)
         if args.zip:
             raise UsageError("--zip: only with --sweep")
         saved = None

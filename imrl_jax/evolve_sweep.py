@@ -28,6 +28,7 @@ import io
 import itertools
 import json
 import os
+import sys
 import time
 from typing import NamedTuple, Sequence
 
@@ -37,7 +38,7 @@ import numpy as np
 import imrl_jax
 from imrl_jax import sweeps
 from imrl_jax.checkpoint import Checkpointer, RunState, git_commit
-from imrl_jax.cli import UsageError
+from imrl_jax.cli import UsageError, device_warnings, ignored_notes, parse_sets
 from imrl_jax.config import Config, ConfigError
 from imrl_jax.devices import check_memory, make_mesh, population_sharding, replicated, to_global, to_host
 from imrl_jax.events import log_for
@@ -50,7 +51,7 @@ from imrl_jax.run_state import (RunInterrupted, check_run_dir, check_run_options
                                  initial_state, record, record_traits, write_failed, write_outputs)
 from imrl_jax.runspec import RunSpec
 from imrl_jax.search import over_seeds
-from imrl_jax.strategies import GA_RECORD
+from imrl_jax.strategies import GA_NAME, GA_RECORD
 
 #: The sweep's own files in its directory (each point is a run directory beside them).
 SWEEP_FILE = "sweep.json"
@@ -412,4 +413,29 @@ def write_summary(out_dir: str, config: Config, points: Sequence[Point], states:
              os.path.join(out_dir, "sweep.png"))
 
 
-__all__ = ["Point", "parse", "make_points", "read_sweep", "is_sweep", "run", "summary_csv"]
+def main(args, out_dir: str, registered: Sequence[str], build_config) -> int:
+    """The evolve command for a sweep (``--sweep``, or ``--resume`` of a sweep's directory); ``build_config``: the
+    command's, from its parsed arguments."""
+    if args.strategy not in (None, GA_NAME) or args.strategy_set:
+        raise UsageError("--strategy: a sweep evolves with the paper's GA (its mutation values may be swept)")
+    saved = None
+    if args.resume:
+        if not is_sweep(out_dir):
+            raise UsageError(f"--resume: {out_dir} holds no sweep to resume (no {SWEEP_FILE})")
+        base, seeds, settings = read_sweep(out_dir)
+        saved = (base, seeds)
+    config, seeds = build_config(args, saved)
+    if args.sweep:
+        settings = parse(args.sweep, args.zip)
+    for line in device_warnings(config, args.cpu_devices) + ignored_notes(config, parse_sets(args.set)):
+        print(line, file=sys.stderr, flush=True)
+    states = run(config, out_dir, seeds, settings, resume=args.resume,
+                              checkpoint_every=args.checkpoint_every, keep=args.keep, quiet=args.quiet, log=args.log,
+                              registered=registered)
+    done = min(int(s.generation) for s in states.values())
+    print(f"{config.condition}: sweep of {len(states)} point(s) x {len(seeds)} seed(s), generations 0-{done - 1} "
+          f"done; per point in {os.path.join(out_dir, 'sweep.csv')}, each point's run in {out_dir}/KEY")
+    return 0
+
+
+__all__ = ["Point", "parse", "make_points", "read_sweep", "is_sweep", "run", "summary_csv", "main"]

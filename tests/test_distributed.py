@@ -44,7 +44,11 @@ def _args(*argv):
 def test_init_distributed_rejects_bad_flags(monkeypatch):
     import jax
 
-    from imrl_jax.evolve import UsageError, init_distributed
+    from imrl_jax.cli import UsageError
+    from imrl_jax.devices import init_distributed as start
+
+    def init_distributed(args):  # the evolve command's call
+        return start(args.coordinator, args.num_processes, args.process_id)
 
     for name in ("JAX_COORDINATOR_ADDRESS", "JAX_NUM_PROCESSES", "JAX_PROCESS_ID"):
         monkeypatch.delenv(name, raising=False)
