@@ -77,7 +77,9 @@ def held_out_variant(which: str) -> str:
 
 
 #: Every stage variant of the study: the novel set under each finished run's preset, the held-out sets under skills.
-VARIANTS = {**{preset: Variant(preset, NOVEL) for preset in ("skills", "paper")},
+#: The presets whose runs meet the novel tasks (their paper-scale reproduction runs exist).
+PRESETS = ("skills", "paper")
+VARIANTS = {**{preset: Variant(preset, NOVEL) for preset in PRESETS},
             **{held_out_variant(which): Variant("skills", which) for which in HELD_OUT}}
 #: Tests of the finished runs: all 10 seeds, 5 of the 10 best kept, 4 tests each; of SLE, 5 runs x 5 x 4.
 FINISHED_TEST = dict(SCALES["paper"], seeds=10, best=5, tests=4)
@@ -103,7 +105,7 @@ def plan(out: str = OUT) -> list[Stage]:
                     runs=FINISHED_TEST["seeds"])
               for variant, condition in FINISHED]
     stages += [Stage(f"novel {variant} SLE", "test", variant, "SLE", os.path.join(out, "novel", variant, "SLE"),
-                     test_cost(SCREEN, "SLE")) for variant in ("skills", "paper")]
+                     test_cost(SCREEN, "SLE")) for variant in PRESETS]
     # brax's PPO and ES from scratch on the novel set, at the learning test's length (docs/BASELINES.md's budgets)
     stages += [Stage(f"novel baseline {agent}", "baseline", NOVEL, agent.upper(), os.path.join(out, "novel", "baselines",
                                                                                               f"{agent}_1M"),
@@ -162,13 +164,13 @@ def measure(out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
     from experiments.loading import read_evolution, read_json, read_test
 
     seen_tests = {(v, c): read_test(os.path.join(reproduction, owner(v, c), "test", c))
-                  for v in ("skills", "paper") for c in (*LEARNING, "EE-ES")}
+                  for v in PRESETS for c in (*LEARNING, "EE-ES")}
     novel_tests = {(v, c): read_test(os.path.join(out, "novel", owner(v, c), c))
-                   for v in ("skills", "paper") for c in (*LEARNING, "EE-ES")}
+                   for v in PRESETS for c in (*LEARNING, "EE-ES")}
     held = {(c, which): read_test(os.path.join(out, "held_out", c, f"test_{which}"))
             for c in HELD_OUT_CONDITIONS for which in HELD_OUT}
     rows, seen, unseen = [], {}, {}
-    for variant in ("skills", "paper"):
+    for variant in PRESETS:
         for condition in LEARNING:
             name = f"{variant} {condition}"
             for kind, tests, target in (("paper's six (seen)", seen_tests, seen), ("novel (unseen)", novel_tests, unseen)):
@@ -291,7 +293,7 @@ def figure(measured: dict, path: str) -> str | None:
     fig = new_figure(13.0, 7.4)
     grid = fig.subplots(2, 3, gridspec_kw=dict(width_ratios=[1.0, 1.0, 1.2]))
     axes = grid[0]
-    for ax, variant in zip(axes, ("skills", "paper")):
+    for ax, variant in zip(axes, PRESETS):
         series = {c: (t["steps"], t["mean"], t["sd"], c) for (v, c), t in measured["curves"].items()
                   if v == variant or not conditions.get(c).learns}
         if series:
