@@ -59,6 +59,7 @@ import time
 from typing import NamedTuple
 
 from imrl_jax import conditions  # the condition table (no JAX)
+from imrl_jax.rundir import recorded_points, saved_steps
 from experiments.rule_sets import BY_NAME
 from experiments.study import RESULTS, Study
 
@@ -249,12 +250,9 @@ def plan(scale: dict, out: str, variants, report: bool = True) -> list[Stage]:
 
 
 def sweep_points(run_dir: str) -> list[str] | None:
-    """The point directories of a sweep (``evolve --sweep``: its sweep.json names them), or None if not a sweep."""
-    path = os.path.join(run_dir, "sweep.json")
-    if not os.path.isfile(path):
-        return None
-    with open(path) as f:
-        return [os.path.join(run_dir, point["key"]) for point in json.load(f)["points"]]
+    """The point directories of a sweep (``evolve --sweep``), or None if ``run_dir`` is not a sweep."""
+    points = recorded_points(run_dir)
+    return None if points is None else [os.path.join(run_dir, key) for key, _ in points]
 
 
 def generations_done(run_dir: str) -> int:
@@ -339,24 +337,20 @@ def clock(seconds: float) -> str:
     return f"{seconds // 3600:d}:{seconds // 60 % 60:02d}:{seconds % 60:02d}"
 
 
-def _checkpoint_steps(folder: str) -> list[int]:
-    return sorted(int(d) for d in os.listdir(folder) if d.isdigit()) if os.path.isdir(folder) else []
-
-
 def publish_checkpoint(run_dir: str, at_most: int | None = None) -> int | None:
     """Copy the newest checkpoint of ``run_dir`` (up to generation ``at_most``) into ``run_dir/resume_checkpoint``
     (which is committed); a sweep's of each point at the newest generation all of them have, so that a clone goes
     on with every point together."""
     points = sweep_points(run_dir)
     if points is not None:
-        newest = [(_checkpoint_steps(os.path.join(point, "checkpoints")) or [None])[-1] for point in points]
+        newest = [(saved_steps(os.path.join(point, "checkpoints")) or [None])[-1] for point in points]
         if None in newest:
             return None
         published = [publish_checkpoint(point, min(newest)) for point in points]
         return None if None in published else min(published)
-    steps = [s for s in _checkpoint_steps(os.path.join(run_dir, "checkpoints")) if at_most is None or s <= at_most]
+    steps = [s for s in saved_steps(os.path.join(run_dir, "checkpoints")) if at_most is None or s <= at_most]
     published = os.path.join(run_dir, PUBLISHED)
-    if not steps or _checkpoint_steps(published) == steps[-1:]:
+    if not steps or saved_steps(published) == steps[-1:]:
         return steps[-1] if steps else None
     tmp = published + ".tmp"
     shutil.rmtree(tmp, ignore_errors=True)
@@ -374,8 +368,8 @@ def restore_published(run_dir: str) -> int | None:
         restored = [r for r in (restore_published(point) for point in points) if r is not None]
         return min(restored) if restored else None
     checkpoints = os.path.join(run_dir, "checkpoints")
-    steps = _checkpoint_steps(os.path.join(run_dir, PUBLISHED))
-    if _checkpoint_steps(checkpoints) or not steps:
+    steps = saved_steps(os.path.join(run_dir, PUBLISHED))
+    if saved_steps(checkpoints) or not steps:
         return None
     shutil.copytree(os.path.join(run_dir, PUBLISHED, str(steps[-1])), os.path.join(checkpoints, str(steps[-1])))
     return steps[-1]

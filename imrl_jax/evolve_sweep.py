@@ -46,15 +46,14 @@ from imrl_jax.ga import GAParams, evolve_step
 from imrl_jax.networks import trait_names, traits
 from imrl_jax.progress import Progress
 from imrl_jax.rundir import (RunDirError, check_unlocked, check_writable, entries, lock_run_dir, make_dir, not_empty,
-                             read_json, write_atomic, write_errno)
+                             read_json, recorded_points, saved_steps, write_atomic, write_errno)
+from imrl_jax.rundir import SWEEP_FILE, is_sweep  # noqa: F401 - the sweep's names for them
 from imrl_jax.run_state import (RunInterrupted, check_run_dir, check_run_options, evolution_keys, extend_config_json,
                                  initial_state, record, record_traits, write_failed, write_outputs)
 from imrl_jax.runspec import RunSpec
 from imrl_jax.search import over_seeds
 from imrl_jax.strategies import GA_NAME, GA_RECORD
 
-#: The sweep's own files in its directory (each point is a run directory beside them).
-SWEEP_FILE = "sweep.json"
 #: At most this many points (each is a run directory and a checkpoint per generation).
 MAX_POINTS = 1000
 
@@ -144,11 +143,6 @@ def read_sweep(out_dir: str) -> tuple[Config, list[int], list[dict]]:
         raise RunDirError(f"{path} is unreadable ({error})") from None
 
 
-def is_sweep(out_dir: str) -> bool:
-    """Whether ``out_dir`` holds a sweep (its sweep.json)."""
-    return os.path.isfile(os.path.join(out_dir, SWEEP_FILE))
-
-
 def check_sweep_dir(out_dir: str, config: Config, seeds: Sequence[int], points: Sequence[Point], resume: bool) -> None:
     """Refuse anything but a new or empty directory, or (resuming) this sweep (raises UsageError or RunDirError)."""
     if os.path.exists(out_dir) and not os.path.isdir(out_dir):
@@ -172,7 +166,7 @@ def check_sweep_dir(out_dir: str, config: Config, seeds: Sequence[int], points: 
         if differing:
             raise UsageError(f"--resume: the config differs from the sweep's in {out_dir}: {', '.join(differing)} "
                              f"(a sweep goes on with its own; only --generations may grow)")
-        saved_keys = [p["key"] for p in read_json(os.path.join(out_dir, SWEEP_FILE), "")["points"]]
+        saved_keys = [key for key, _ in recorded_points(out_dir)]
         if saved_keys != [p.key for p in points]:
             raise RunDirError(f"{os.path.join(out_dir, SWEEP_FILE)}: its points' keys are not those its config and "
                               f"settings give (made by another version?)")
@@ -257,12 +251,6 @@ def run(config: Config, out_dir: str, seeds: Sequence[int], settings: Sequence[d
                        checkpoint_every=checkpoint_every, quiet=quiet, events=events)
 
 
-def checkpoint_steps(point_dir: str) -> list[int]:
-    """The generations a point's checkpoints/ holds, oldest first (read from the folder's names)."""
-    folder = os.path.join(point_dir, "checkpoints")
-    return sorted(int(d) for d in os.listdir(folder) if d.isdigit()) if os.path.isdir(folder) else []
-
-
 def no_checkpoint(point: Point, steps: list[int], common: int | None = None) -> UsageError:
     """Why a sweep cannot go on as one: a point has nothing to go on from where the others are."""
     return UsageError(f"--resume: point {point.key} ({label(point.settings)}) has no readable checkpoint"
@@ -273,7 +261,7 @@ def no_checkpoint(point: Point, steps: list[int], common: int | None = None) -> 
 
 def check_resumable(out_dir: str, points: Sequence[Point]) -> None:
     """Before anything is written: refuse a sweep some of whose points have checkpoints and some none."""
-    steps = [checkpoint_steps(os.path.join(out_dir, p.key)) for p in points]
+    steps = [saved_steps(os.path.join(out_dir, p.key, "checkpoints")) for p in points]
     if any(steps) and not all(steps):
         i = steps.index([])
         raise no_checkpoint(points[i], [])
@@ -438,4 +426,4 @@ def main(args, out_dir: str, registered: Sequence[str], build_config) -> int:
     return 0
 
 
-__all__ = ["Point", "parse", "make_points", "read_sweep", "is_sweep", "run", "summary_csv", "main"]
+__all__ = ["Point", "parse", "make_points", "read_sweep", "is_sweep", "recorded_points", "run", "summary_csv", "main"]

@@ -59,6 +59,7 @@ from imrl_jax.progress import Progress
 from imrl_jax.rundir import (LOCK, Run, RunDirError, RunWriteError, best_genomes, check_npz, check_unlocked,
                              check_writable, entries, holder_alive, is_output, load_run as read_run, lock_run_dir,
                              make_dir, not_empty, read_config, read_json, read_kept_best, read_lock, read_text,
+                             recorded_points,
                              write_atomic, write_errno)
 
 
@@ -573,11 +574,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def sweep_points(run_dir: str) -> list[str] | None:
     """A sweep's point directories (``evolve --sweep``, in its order), or None if ``run_dir`` is not a sweep."""
-    from imrl_jax.evolve_sweep import is_sweep, make_points, read_sweep
-
-    if not is_sweep(run_dir):
-        return None
-    return [os.path.join(run_dir, point.key) for point in make_points(*read_sweep(run_dir))]
+    points = recorded_points(run_dir)
+    return None if points is None else [os.path.join(run_dir, key) for key, _ in points]
 
 
 def check_tested_before(args, run_dir: str, out_dir: str) -> None:
@@ -593,13 +591,11 @@ def check_tested_before(args, run_dir: str, out_dir: str) -> None:
 def sweep_summary(run_dir: str, out_dir: str) -> dict:
     """Each point's settings and steady state, once every point of the sweep in ``run_dir`` is tested in ``out_dir``
     (written to ``out_dir/sweep_tests.json``: a sweep's test is done when it is there)."""
-    from imrl_jax.evolve_sweep import make_points, read_sweep
-
     points = {}
-    for point in make_points(*read_sweep(run_dir)):
-        steady = read_json(os.path.join(out_dir, point.key, "steady.json"), "")
-        points[point.key] = dict(settings=point.settings, steady_mean=steady["steady_mean"],
-                                 steady_sd=steady["steady_sd"], whole_test_mean=steady["whole_test_mean"])
+    for key, settings in recorded_points(run_dir):
+        steady = read_json(os.path.join(out_dir, key, "steady.json"), "")
+        points[key] = dict(settings=settings, steady_mean=steady["steady_mean"], steady_sd=steady["steady_sd"],
+                           whole_test_mean=steady["whole_test_mean"])
     summary = dict(sweep=os.path.abspath(run_dir), points=points)
     write_atomic(os.path.join(out_dir, SWEEP_TESTS), json.dumps(summary, indent=2).encode())
     return summary

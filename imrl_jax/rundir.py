@@ -386,6 +386,32 @@ def lock_run_dir(path: str, say: Callable[[str], None] | None = None) -> Iterato
                 os.remove(lock)
 
 
+#: A sweep's own record in its directory (``evolve --sweep``; each point is a run directory beside it).
+SWEEP_FILE = "sweep.json"
+
+
+def is_sweep(out_dir: str) -> bool:
+    """Whether ``out_dir`` holds a sweep (its sweep.json)."""
+    return os.path.isfile(os.path.join(out_dir, SWEEP_FILE))
+
+
+def recorded_points(out_dir: str) -> list[tuple[str, dict]] | None:
+    """Each point's key and settings as the sweep in ``out_dir`` records them (its directory is ``out_dir/KEY``),
+    or None if ``out_dir`` holds no sweep (raises RunDirError naming an unreadable sweep.json)."""
+    if not is_sweep(out_dir):
+        return None
+    path = os.path.join(out_dir, SWEEP_FILE)
+    try:
+        return [(str(p["key"]), dict(p["settings"])) for p in read_json(path, "")["points"]]
+    except (KeyError, TypeError, ValueError) as error:
+        raise RunDirError(f"{path} is unreadable ({error})") from None
+
+
+def saved_steps(directory: str) -> list[int]:
+    """The generations a checkpoints folder holds, oldest first, read from its folders' names (no orbax)."""
+    return sorted(int(d) for d in os.listdir(directory) if d.isdigit()) if os.path.isdir(directory) else []
+
+
 def entries(path: str) -> list[str]:
     """What a directory holds besides its lock (nothing if it does not exist)."""
     if not os.path.isdir(path):
