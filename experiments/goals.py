@@ -12,7 +12,6 @@ measures (``python -m imrl_jax.landscape_run``) of seed 0 of each condition unde
 generations 0, 10 and the last, with learning cut too (H3), and the fitness of random genomes (H4).
 """
 
-import dataclasses
 import json
 import os
 import sys
@@ -23,6 +22,8 @@ from experiments.study import RESULTS
 from experiments.claims_study import SCREEN
 from experiments.table import Measure, Row, Table
 
+#: The study's manifest, logs and measures (its runs lie wherever their keys find them).
+OUT = os.path.join(RESULTS, "goals")
 #: The paper's runs whose last population was not kept: their best 10 of each seed are (the reproduction's report).
 KEPT = ("--best-genomes", os.path.join(RESULTS, "paper", "best_genomes.npz"))
 #: A life of each condition, in steps (childhood 150,000 + 6 x 100,000), for the measures' costs.
@@ -38,22 +39,6 @@ def landscape(name: str, run: str, life: int, cut: str | None = None, *extra: st
     return Measure(f"landscape-{name}", run, args, cost=float(life * (LIVES + (CUT_LIVES if cut else 0))))
 
 
-TABLE = Table("goals", "docs/GOALS.md", 9, out=os.path.join(RESULTS, "goals"), scale=SCREEN, rows=(
-    Row("EE-LS-T", "EE-LS-T", "skills"),  # behaviours at goals' size
-    Row("LE-LS-2R", "LE-LS-2R", "skills"),  # goals at behaviours' size
-    Row("EE-LS-T-faithful", "EE-LS-T", "faithful"),
-    Row("LE-LS-2R-faithful", "LE-LS-2R", "faithful"),
-), measures=(  # under skills (EE-ES learns nothing: its paper run is its only one); H3's cuts: LE-LS-like
-    # childhoods to a third (LE-LS's to a tenth too: no genome scores then), EE-LS-like adult selectors to nothing
-    # (imrl_jax.landscape.learning_cut)
-    landscape("EE-ES", os.path.join(RESULTS, "paper", "paper", "evolve", "EE-ES"), LIFE["EE-LS"], None, *KEPT),
-    landscape("EE-LS-T", "EE-LS-T", LIFE["EE-LS"], "0"),
-    landscape("EE-LS", os.path.join(RESULTS, "paper", "skills", "evolve", "EE-LS"), LIFE["EE-LS"], "0", *KEPT),
-    landscape("LE-LS", os.path.join(RESULTS, "paper", "skills", "evolve", "LE-LS"), LIFE["LE-LS"], "0.1,0.33",
-              *KEPT),
-    landscape("LE-LS-2R", "LE-LS-2R", LIFE["LE-LS"], "0.33"),
-    landscape("EV-LS", os.path.join(RESULTS, "future_work", "EV-LS", "evolve"), LIFE["LE-LS"], "0.33"),
-))
 #: The conditions in the order the landscape tables and figures show them: behaviours, then goals.
 ORDER = ("EE-ES", "EE-LS", "EE-LS-T", "LE-LS", "LE-LS-2R", "EV-LS")
 #: What each condition evolves, with its genes.
@@ -61,8 +46,9 @@ KINDS = {"EE-ES": "behaviours + selector, 333", "EE-LS": "behaviours, 222", "EE-
          "LE-LS": "goals, 111", "LE-LS-2R": "goals (2 units), 222", "EV-LS": "evaluators, 111"}
 
 
-def read_landscapes(out: str = TABLE.out) -> dict[str, dict]:
+def read_landscapes(out: str | None = None) -> dict[str, dict]:
     """Each condition's landscape measures as far as they have come (landscape.json, result.json once done)."""
+    out = OUT if out is None else out
     found = {}
     for name in ORDER:
         folder = os.path.join(out, "measures", f"landscape-{name}")
@@ -190,7 +176,22 @@ class GoalsTable(Table):
         return code
 
 
-TABLE = GoalsTable(**{f.name: getattr(TABLE, f.name) for f in dataclasses.fields(TABLE)})
+TABLE = GoalsTable("goals", "docs/GOALS.md", 9, out=OUT, scale=SCREEN, rows=(
+    Row("EE-LS-T", "EE-LS-T", "skills"),  # behaviours at goals' size
+    Row("LE-LS-2R", "LE-LS-2R", "skills"),  # goals at behaviours' size
+    Row("EE-LS-T-faithful", "EE-LS-T", "faithful"),
+    Row("LE-LS-2R-faithful", "LE-LS-2R", "faithful"),
+), measures=(  # under skills (EE-ES learns nothing: its paper run is its only one); H3's cuts: LE-LS-like
+    # childhoods to a third (LE-LS's to a tenth too: no genome scores then), EE-LS-like adult selectors to nothing
+    # (imrl_jax.landscape.learning_cut)
+    landscape("EE-ES", os.path.join(RESULTS, "paper", "paper", "evolve", "EE-ES"), LIFE["EE-LS"], None, *KEPT),
+    landscape("EE-LS-T", "EE-LS-T", LIFE["EE-LS"], "0"),
+    landscape("EE-LS", os.path.join(RESULTS, "paper", "skills", "evolve", "EE-LS"), LIFE["EE-LS"], "0", *KEPT),
+    landscape("LE-LS", os.path.join(RESULTS, "paper", "skills", "evolve", "LE-LS"), LIFE["LE-LS"], "0.1,0.33",
+              *KEPT),
+    landscape("LE-LS-2R", "LE-LS-2R", LIFE["LE-LS"], "0.33"),
+    landscape("EV-LS", os.path.join(RESULTS, "future_work", "EV-LS", "evolve"), LIFE["LE-LS"], "0.33"),
+))
 all_stages, main = TABLE.all_stages, TABLE.main
 #: The studies of this module (python -m experiments finds them).
 STUDIES = (TABLE.study(__name__.rsplit(".", 1)[-1]),)
