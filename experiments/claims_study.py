@@ -36,17 +36,12 @@ from typing import NamedTuple
 import numpy as np
 
 from imrl_jax import conditions
-from experiments.reproduce import (DEFAULT_VARIANTS, EVOLVED, SCALES, TESTED, Stage, evolution_cost, evolution_dir,
+from experiments.reproduce import (DEFAULT_VARIANTS, EVOLVED, TESTED, Stage, evolution_cost, evolution_dir,
                                    evolve_command, load_manifest, run_stages, test_command, test_cost, test_dir)
 from experiments.executor import add_options, from_options
-from experiments.study import RESULTS, Study
+from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN, Study, write_table
 from experiments.rule_sets import BY_NAME, RULE_SETS, RuleSet  # noqa: F401 - the map's rows
 
-#: The screen's sizes: the paper's life lengths, fewer seeds and tests.
-SCREEN = dict(SCALES["paper"], seeds=5, best=5, tests=4)
-FULL = SCALES["paper"]
-#: Where the paper-scale reproduction lives (the ``paper``, ``skills`` and ``faithful`` rows, shared runs).
-REPRODUCTION = os.path.join(RESULTS, "paper")
 OUT = os.path.join(RESULTS, "claims")
 
 
@@ -307,7 +302,7 @@ def config_of(rule: RuleSet, condition: str, num_experts: int | None = None):
 def sizes(rule: RuleSet, condition: str) -> str:
     """Seeds x generations of an evolution, or runs x best x tests of a learning test, of a rule set's row."""
     owner = {"LE-LS": rule.le_ls or rule.name, "EE-LS": rule.ee_ls, "EE-ES": "paper", "SLE": rule.sle}[condition]
-    scale = FULL if is_reproduction(owner) else SCREEN
+    scale = SCALES["paper"] if is_reproduction(owner) else SCREEN
     if not conditions.get(condition).evolved:  # tested from scratch: runs x best x tests
         return f"{scale['seeds']}x{scale['best']}x{scale['tests']}"
     return f"{scale['seeds']}x{scale['generations']}"
@@ -458,15 +453,6 @@ def fresh_table(measured: dict, names) -> str:
                                                f"{f['seeds']} seeds)")
         lines.append(f"| `{name}` | " + " | ".join(cells) + " |")
     return "\n".join(lines)
-
-
-def write_table(path: str, text: str, start_marker: str = TABLE_START, end_marker: str = TABLE_END) -> None:
-    """Put the table between its markers in ``path`` (the rest of the document is kept)."""
-    with open(path) as f:
-        document = f.read()
-    start, end = document.index(start_marker), document.index(end_marker)
-    with open(path, "w") as f:
-        f.write(document[:start + len(start_marker)] + "\n" + text + "\n" + document[end:])
 
 
 #: Where claim 8's table goes in docs/CLAIMS.md.
@@ -745,9 +731,9 @@ def write_claims(out: str, names) -> int:
     numbers = {name: {**{str(k): v for k, v in m["claims"].items()}, "fresh": m.get("fresh", {})}
                for name, m in measured.items()}
     with open(os.path.join(out, "claims.json"), "w") as f:
-        json.dump(dict(sizes=dict(screen=SCREEN, full=FULL), rule_sets={r.name: r._asdict() for r in RULE_SETS},
+        json.dump(dict(sizes=dict(screen=SCREEN, full=SCALES["paper"]), rule_sets={r.name: r._asdict() for r in RULE_SETS},
                        claims=numbers), f, indent=2, default=str)
-    write_table(os.path.join("docs", "CLAIMS.md"), table(measured, names))
+    write_table(os.path.join("docs", "CLAIMS.md"), table(measured, names), TABLE_START, TABLE_END)
     write_table(os.path.join("docs", "CLAIMS.md"), fresh_table(measured, names), FRESH_START, FRESH_END)
     figure(measured, names)
     points = speed_dial(numbers)

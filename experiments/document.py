@@ -7,11 +7,11 @@ import os
 
 import numpy as np
 
-from experiments.study import RESULTS
+from experiments.study import RESULTS, SCALES
 from experiments.claims import (CLAIMS, LAST_GENERATIONS, PAPER, PLATEAU_FRACTION, RULES, SEEN,
                                 _fmt, specialisation_score)
 from experiments.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEPS, FRESH_LIVES, PATH_STEPS
-from experiments.reproduce import (DEFAULT_VARIANTS, LEARNING_EVOLVED, SCALES, owner, report_paths,  # noqa: F401
+from experiments.reproduce import (DEFAULT_VARIANTS, LEARNING_EVOLVED, owner, report_paths,  # noqa: F401
                                    shared, sharers)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

@@ -31,7 +31,7 @@ from typing import NamedTuple
 # NUM_BEST: the junction probe drives claim 7's number of each seed's fittest genomes, so that a run shared with
 # the claims study (LE-LS-6) keeps one probe.json
 from experiments.claims import NUM_BEST
-from experiments.claims_study import REPRODUCTION, SCREEN
+from experiments.study import REPRODUCTION, SCREEN
 from experiments.reproduce import (Stage, evolution_cost, evolution_dir, evolve_command, load_manifest, run_stages,
                                    test_command, test_cost, test_dir)
 from experiments.executor import add_options, from_options
@@ -585,7 +585,7 @@ def report(out: str = OUT, document: str = DOCUMENT, reproduction: str = REPRODU
     """Measure, write report.json and future_work.png under ``out``, and the tables into ``document``."""
     import json
 
-    from experiments.claims_study import write_table
+    from experiments.study import write_table
 
     measured = measure(out, reproduction, sle_whole, claims, summary)
     os.makedirs(out, exist_ok=True)

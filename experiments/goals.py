@@ -19,7 +19,7 @@ import sys
 import numpy as np
 
 from experiments.study import RESULTS
-from experiments.claims_study import SCREEN
+from experiments.study import SCREEN
 from experiments.table import Measure, Row, Table
 
 #: The study's manifest, logs and measures (its runs lie wherever their keys find them).
@@ -164,7 +164,7 @@ class GoalsTable(Table):
     """The goals study's table, whose report also writes the landscape measures' tables and figure."""
 
     def report(self) -> int:
-        from experiments.claims_study import write_table
+        from experiments.study import write_table
 
         code = super().report()
         found = read_landscapes(self.out)

@@ -32,11 +32,11 @@ import sys
 from typing import NamedTuple
 
 
-from experiments.claims_study import REPRODUCTION, SCREEN
-from experiments.reproduce import (SCALES, Stage, evolution_cost, evolve_command, load_manifest, run_stages,
+from experiments.study import REPRODUCTION, SCREEN
+from experiments.reproduce import (Stage, evolution_cost, evolve_command, load_manifest, run_stages,
                                    owner, test_command, test_cost)
 from experiments.executor import add_options, from_options
-from experiments.study import RESULTS, Study
+from experiments.study import RESULTS, SCALES, Study
 from imrl_jax import conditions
 from imrl_jax.config import paper_tasks
 from imrl_jax.tasks import to_json
@@ -346,7 +346,7 @@ def report(out: str = OUT, document: str = os.path.join("docs", "NOVEL_TASKS.md"
     """Measure, write advantage.json and the figure under ``out``, and the table into ``document``."""
     import json
 
-    from experiments.claims_study import write_table
+    from experiments.study import write_table
 
     measured = measure(out)
     measured["probes"] = probe_held_out(out)

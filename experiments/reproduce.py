@@ -61,19 +61,10 @@ from typing import NamedTuple
 from imrl_jax import conditions  # the condition table (no JAX)
 from imrl_jax.rundir import recorded_points, saved_steps
 from experiments.rule_sets import BY_NAME
-from experiments.study import RESULTS, Study
+from experiments.study import RESULTS, SCALES, Study
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
-SCALES = {
-    "paper": dict(seeds=10, generations=100, childhood_steps=150_000, task_steps=100_000, bins=100,
-                  best=10, tests=10, test_steps=1_000_000, test_bins=100, steady_steps=100_000),
-    "cpu": dict(seeds=5, generations=40, childhood_steps=30_000, task_steps=20_000, bins=20,
-                best=10, tests=2, test_steps=200_000, test_bins=100, steady_steps=20_000),
-    # A smoke test of the pipeline itself (seconds of compute; results mean nothing).
-    "tiny": dict(seeds=2, generations=2, childhood_steps=400, task_steps=400, bins=2,
-                 best=2, tests=1, test_steps=800, test_bins=4, steady_steps=200, population=6, parents=2),
-}
 VARIANTS = ("skills", "paper", "extension", "faithful")
 #: The variants a scale runs unless ``--variants`` says otherwise.
 DEFAULT_VARIANTS = {"paper": ("skills", "paper", "faithful"), "cpu": ("paper", "extension"),

@@ -27,7 +27,7 @@ import os
 import sys
 from typing import NamedTuple
 
-from experiments.claims_study import REPRODUCTION, SCREEN
+from experiments.study import REPRODUCTION, SCREEN
 from experiments.reproduce import (Stage, evolution_cost, evolution_dir, evolve_command, load_manifest, run_stages,
                                    test_command, test_cost, test_dir)
 from experiments.executor import add_options, from_options
@@ -295,7 +295,7 @@ def report(out: str = OUT, document: str = os.path.join("docs", "SEARCH.md"), re
     """Measure, write report.json and search.png under ``out``, and the tables into ``document``."""
     import json
 
-    from experiments.claims_study import write_table
+    from experiments.study import write_table
 
     measured = measure(out, reproduction, ga_summary)
     os.makedirs(out, exist_ok=True)

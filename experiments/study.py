@@ -16,6 +16,30 @@ import sys
 
 #: Where every study's results lie (relative to the repository's root, where the commands run).
 RESULTS = os.path.join("experiments", "results")
+#: The paper's runs (the reproduction's), which other studies compare with and reuse.
+REPRODUCTION = os.path.join(RESULTS, "paper")
+
+#: The sizes of a study's runs: the paper's, one core's (a CPU reproduction) and a smoke test of the pipeline.
+SCALES = {
+    "paper": dict(seeds=10, generations=100, childhood_steps=150_000, task_steps=100_000, bins=100,
+                  best=10, tests=10, test_steps=1_000_000, test_bins=100, steady_steps=100_000),
+    "cpu": dict(seeds=5, generations=40, childhood_steps=30_000, task_steps=20_000, bins=20,
+                best=10, tests=2, test_steps=200_000, test_bins=100, steady_steps=20_000),
+    # A smoke test of the pipeline itself (seconds of compute; results mean nothing).
+    "tiny": dict(seeds=2, generations=2, childhood_steps=400, task_steps=400, bins=2,
+                 best=2, tests=1, test_steps=800, test_bins=4, steady_steps=200, population=6, parents=2),
+}
+#: A screen: the paper's lengths with 5 seeds, whose 5 best are learning-tested 4 times each.
+SCREEN = dict(SCALES["paper"], seeds=5, best=5, tests=4)
+
+
+def write_table(path: str, text: str, start_marker: str, end_marker: str) -> None:
+    """Put ``text`` between its markers in the document ``path`` (the rest of the document is kept)."""
+    with open(path) as f:
+        document = f.read()
+    start, end = document.index(start_marker), document.index(end_marker)
+    with open(path, "w") as f:
+        f.write(document[:start + len(start_marker)] + "\n" + text + "\n" + document[end:])
 
 
 @dataclasses.dataclass(frozen=True)

@@ -264,7 +264,7 @@ class Table:
 
     def report(self) -> int:
         """Measure what has finished; write the table into the document (between its markers) and the figure."""
-        from experiments.claims_study import write_table
+        from experiments.study import write_table
 
         measured = self.measure()
         os.makedirs(self.out, exist_ok=True)

@@ -35,7 +35,7 @@ import time
 
 import numpy as np
 
-from experiments.claims_study import REPRODUCTION, SCREEN
+from experiments.study import REPRODUCTION, SCREEN
 from experiments.reproduce import (MEASURED, Stage, evolution_cost, evolve_command, load_manifest, run_stages,
                                    test_command, test_cost)
 from experiments.executor import add_options, from_options
@@ -535,7 +535,7 @@ def report(out: str = OUT, document: str = os.path.join("docs", "TIMESCALE.md"),
            reproduction: str = REPRODUCTION, summary: dict | None = None) -> int:
     """Measure what has finished; write evolutions.json and evolutions.png under ``out`` and the tables into
     ``document``."""
-    from experiments.claims_study import write_table
+    from experiments.study import write_table
 
     if not evolution_groups(out):
         print(f"error: {out}: the measurements have not run, so no evolution is planned yet", file=sys.stderr)

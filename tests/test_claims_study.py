@@ -95,7 +95,8 @@ def test_the_table_goes_between_its_markers(tmp_path):
     path = tmp_path / "CLAIMS.md"
     path.write_text(f"# Title\n\n{study.TABLE_START}\nstale row\n{study.TABLE_END}\n\nafter\n")
     row = {k: dict(verdict="holds" if k < 4 else "n/a", measured=f"m{k}; more") for k in range(1, 8)}
-    study.write_table(str(path), study.table({"paper": dict(claims=row)}, ["paper", "skills-bias0"]))
+    study.write_table(str(path), study.table({"paper": dict(claims=row)}, ["paper", "skills-bias0"]), study.TABLE_START,
+                      study.TABLE_END)
     text = path.read_text()
     assert "stale row" not in text and text.endswith("after\n") and text.startswith("# Title")
     lines = text.split("\n")

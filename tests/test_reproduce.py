@@ -11,6 +11,7 @@ import pytest
 from helpers import ROOT, evolve_args, outputs
 
 from experiments import reproduce
+from experiments.study import SCALES
 from imrl_jax import evolve
 
 
@@ -46,7 +47,7 @@ def test_partial_runs_counts_the_runs_an_interrupted_test_kept(tmp_path):
 
 
 def test_plan_costs_and_eta():
-    scale = reproduce.SCALES["tiny"]
+    scale = SCALES["tiny"]
     stages = reproduce.plan(scale, "out", ("paper", "extension"))
     # a variant's Fig. 3 is whole (its evolutions, then its tests) before the next variant starts
     assert [s.kind for s in stages] == ["evolve"] * 3 + ["test"] * 4 + ["evolve"] * 2 + ["test"] * 3 + ["report"]
@@ -78,7 +79,7 @@ def test_plan_costs_and_eta():
 
 
 def test_stage_progress_is_shown_with_the_whole_pipelines(tmp_path, capfd):
-    scale = reproduce.SCALES["tiny"]
+    scale = SCALES["tiny"]
     stages = [reproduce.Stage("learning test paper SLE", "test", "paper", "SLE", str(tmp_path / "a"), 4000.0),
               reproduce.Stage("learning test paper EE-ES", "test", "paper", "EE-ES", str(tmp_path / "b"), 8000.0)]
     manifest = dict(sizes=scale, stages={"earlier": dict(cost=1000, seconds=10)})  # 100 lane-steps/s
@@ -179,7 +180,7 @@ def test_a_resumed_test_stage_counts_its_own_runs(tmp_path, capsys):
     for i in range(9):
         (out / "partial" / f"run_{i:03d}.npz").write_bytes(b"")
     stage = reproduce.Stage("a test of 10 runs", "test", "paper", "EE-ES", str(out), 1000.0, runs=10)
-    scale = dict(reproduce.SCALES["tiny"], seeds=5)
+    scale = dict(SCALES["tiny"], seeds=5)
     manifest, path = {"stages": {}, "sizes": scale}, str(tmp_path / "manifest.json")
     code = reproduce.run_stages([stage], scale, manifest, path,
                                 lambda s: ([sys.executable, "-c", "pass"], None))
@@ -192,7 +193,7 @@ def test_a_resumed_test_stage_counts_its_own_runs(tmp_path, capsys):
 
 def test_a_claims_map_row_is_a_variant_with_its_overrides_and_shares():
     """paper-selector-sle-test at full scale: its own LE-LS and SLE, skills' EE-LS, paper's EE-ES."""
-    scale = reproduce.SCALES["paper"]
+    scale = SCALES["paper"]
     stages = reproduce.plan(scale, "out", ("skills", "paper-selector-sle-test"), report=False)
     row = [s for s in stages if s.variant == "paper-selector-sle-test"]
     assert [s.name for s in row] == ["evolve paper-selector-sle-test LE-LS", "learning test paper-selector-sle-test LE-LS",
@@ -215,7 +216,7 @@ def test_a_claims_map_row_is_a_variant_with_its_overrides_and_shares():
 
 def test_the_faithful_preset_is_the_claims_maps_closest_row_at_full_scale():
     """make reproduce's third variant: its own LE-LS and SLE (noise over the whole test), skills' EE-LS."""
-    scale = reproduce.SCALES["paper"]
+    scale = SCALES["paper"]
     stages = reproduce.plan(scale, "out", reproduce.DEFAULT_VARIANTS["paper"], report=False)
     row = [s for s in stages if s.variant == "faithful"]
     assert [s.name for s in row] == ["evolve faithful LE-LS", "learning test faithful LE-LS",

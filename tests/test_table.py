@@ -4,7 +4,7 @@ import os
 
 from helpers import ROOT
 
-from experiments.claims_study import SCREEN
+from experiments.study import SCREEN
 from experiments.reproduce import stage_done
 from experiments.table import Measure, Row, Table, evolution_spec, learning_test_dir
 from imrl_jax import runspec
@@ -63,7 +63,8 @@ def test_new_runs_that_differ_only_in_dynamic_values_are_one_sweep(tmp_path):
     goes on as one; a measure of a row waits for the sweep that makes its run."""
     import json
 
-    from experiments.reproduce import SCALES, generations_done
+    from experiments.reproduce import generations_done
+    from experiments.study import SCALES
 
     scale = dict(SCALES["tiny"], task_steps=1000)
     rows = (Row("a", "EE-LS", "skills", ("target_radius=40",)),
