@@ -1,10 +1,12 @@
 """A study as a table over shared runs: each row names what its evolution computes, and the run is found by its key.
 
-A row is a condition under a preset and ``--set`` overrides (docs/STUDIES.md). Its evolution's
-spec is exactly what the evolve command builds from its command line (``evolve.build_config``), so
-its key (``imrl_jax.runspec``) finds the run wherever a study already made it under the results
-folder, and a new one goes to ``results/runs/KEY/evolve``: nothing is shared by hand. A row's
-learning test sits beside its evolution (the last ``evolve`` of the path replaced by ``test``).
+A row is a condition under a preset, ``--set`` overrides and more evolve options (a search strategy)
+at the table's sizes or its own (docs/STUDIES.md). Its evolution's spec is exactly what the evolve
+command builds from its command line (``evolve.build_config``), so its key (``imrl_jax.runspec``)
+finds the run wherever a study already made it under the results folder, and a new one goes to
+``results/runs/KEY/evolve``: nothing is shared by hand. A row's learning test sits beside its
+evolution (the last ``evolve`` of the path replaced by ``test``); a condition that is not evolved
+(SLE, EXT-LS) is only learning-tested from scratch, in ``TABLE_OUT/ROW/test``.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from experiments.executor import add_options, from_options
 from experiments.reproduce import (Stage, evolution_cost, evolve_command, load_manifest, run_stages, test_command,
                                    test_cost)
 from experiments.study import RESULTS, Study
-from imrl_jax import runspec
+from imrl_jax import conditions, runspec
 
 
 
@@ -35,15 +37,29 @@ class Row:
     preset: str
     sets: tuple[str, ...] = ()
     test: bool = True
+    options: tuple[str, ...] = ()  # more options of its evolve command (``("--strategy", "snes")``)
+    scale: dict | None = dataclasses.field(default=None, hash=False)  # its own sizes (None: the table's)
+
+    @property
+    def evolved(self) -> bool:
+        """Whether its condition is evolved (else it is only learning-tested from scratch)."""
+        return conditions.get(self.condition).evolved
+
+
+def evolution_command(row: Row, scale: dict, out_dir: str, sweep: tuple[str, ...] = ()) -> list[str]:
+    """The row's evolve command into ``out_dir``."""
+    command = evolve_command(scale, row.preset, row.condition, out_dir, sets=row.sets, sweep=sweep)
+    return command[:-1] + list(row.options) + ["--resume"] if command[-1] == "--resume" else command + list(row.options)
 
 
 def evolution_spec(row: Row, scale: dict) -> runspec.RunSpec:
-    """What the row's evolve command computes: the config and seeds it builds from its own command line."""
+    """What the row's evolve command computes: the config, seeds and search it builds from its own command line."""
     from imrl_jax import evolve
+    from imrl_jax.strategies import describe
 
-    command = evolve_command(scale, row.preset, row.condition, os.devnull, sets=row.sets)
-    config, seeds = evolve.build_config(evolve.parser().parse_args(command[3:]))
-    return runspec.RunSpec.make(config, seeds)
+    args = evolve.parser().parse_args(evolution_command(row, scale, os.devnull)[3:])
+    config, seeds = evolve.build_config(args)
+    return runspec.RunSpec.make(config, seeds, describe(evolve.build_strategy(args, config)))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -107,10 +123,19 @@ class Table:
     results: str = RESULTS
     measures: tuple[Measure, ...] = ()
 
-    def evolutions(self) -> dict[str, str]:
+    def scale_of(self, row: Row) -> dict:
+        """The row's sizes: its own, or the table's."""
+        return self.scale if row.scale is None else row.scale
+
+    def evolutions(self) -> dict[str, str | None]:
         """Each row's evolution folder: the run its key finds under ``results``, or where it will be made (a point of
-        a sweep, :meth:`sweeps`, or ``results/runs/KEY/evolve``)."""
+        a sweep, :meth:`sweeps`, or ``results/runs/KEY/evolve``); None for a row whose condition is not evolved."""
         return self.plan()[0]
+
+    def tests(self) -> dict[str, str]:
+        """Each row's learning-test folder: beside its evolution, or ``OUT/ROW/test`` for a row not evolved."""
+        return {name: os.path.join(self.out, name, "test") if evolved is None else learning_test_dir(evolved)
+                for name, evolved in self.evolutions().items()}
 
     def sweeps(self) -> dict[str, Sweep]:
         """The sweeps the rows' new runs are grouped into, by their folder (see :meth:`plan`)."""
@@ -124,9 +149,9 @@ class Table:
         ``.../evolve/KEY``; a sweep begun is found by its points and goes on as one.
         """
         known = runspec.index(self.results) if os.path.isdir(self.results) else {}
-        specs = {row.name: evolution_spec(row, self.scale) for row in self.rows}
-        dirs, begun, groups = {}, {}, {}
-        for row in self.rows:
+        specs = {row.name: evolution_spec(row, self.scale_of(row)) for row in self.rows if row.evolved}
+        dirs, begun, groups = {row.name: None for row in self.rows}, {}, {}
+        for row in (r for r in self.rows if r.evolved):
             dirs[row.name], found = runspec.locate(self.results, specs[row.name], known)
             root = os.path.dirname(dirs[row.name])
             if found and os.path.isfile(os.path.join(root, "sweep.json")):
@@ -146,7 +171,7 @@ class Table:
             sweeps[root] = Sweep(tuple(rows), tuple(
                 f"{f}={','.join(repr(float(getattr(specs[r.name].config, f))) for r in rows)}" for f in fields))
             for row in self.rows:
-                if specs[row.name].key() in members:
+                if row.evolved and specs[row.name].key() in members:
                     dirs[row.name] = os.path.join(root, specs[row.name].key())
         return {row.name: dirs[row.name] for row in self.rows}, sweeps
 
@@ -156,56 +181,66 @@ class Table:
         stages, evolving = [], {}
         evolutions, sweeps = self.plan()
         for row, evolved in zip(self.rows, evolutions.values()):
+            scale = self.scale_of(row)
+            if evolved is None:  # tested from scratch: nothing to wait for
+                stages.append(Stage(f"learning test {row.name}", "test", row.name, row.condition,
+                                    os.path.join(self.out, row.name, "test"), test_cost(scale, row.condition), needs=()))
+                continue
             root = os.path.dirname(evolved)
             if root in sweeps:
                 if root not in evolving:
                     members = sweeps[root].rows
                     evolving[root] = f"evolve {'+'.join(r.name for r in members)} (one sweep)"
                     stages.append(Stage(evolving[root], "evolve", row.name, row.condition, root,
-                                        sum(evolution_cost(self.scale, r.condition) for r in members)))
+                                        sum(evolution_cost(scale, r.condition) for r in members)))
                 evolving[evolved] = evolving[root]
             elif evolved not in evolving:
                 evolving[evolved] = f"evolve {row.name}"
                 stages.append(Stage(evolving[evolved], "evolve", row.name, row.condition, evolved,
-                                    evolution_cost(self.scale, row.condition)))
+                                    evolution_cost(scale, row.condition)))
             if root in sweeps and all(r.test for r in sweeps[root].rows):  # its points tested in one program too
                 if f"test {root}" not in evolving:
                     members = sweeps[root].rows
                     evolving[f"test {root}"] = f"learning test {'+'.join(r.name for r in members)} (one sweep)"
                     stages.append(Stage(evolving[f"test {root}"], "test", row.name, row.condition,
-                                        learning_test_dir(root), sum(test_cost(self.scale, r.condition)
+                                        learning_test_dir(root), sum(test_cost(scale, r.condition)
                                                                      for r in members), needs=(evolving[root],)))
             elif row.test:
                 stages.append(Stage(f"learning test {row.name}", "test", row.name, row.condition,
-                                    learning_test_dir(evolved), test_cost(self.scale, row.condition),
+                                    learning_test_dir(evolved), test_cost(scale, row.condition),
                                     needs=(evolving[evolved],)))
         for measure in self.measures:
             row = next((r for r in self.rows if r.name == measure.run), None)
             stages.append(Stage(f"measure {measure.name}", "measure", measure.name, row.condition if row else "",
                                 os.path.join(self.out, "measures", measure.name), measure.cost,
-                                needs=(evolving[evolutions[row.name]],) if row else ()))
+                                needs=(evolving[evolutions[row.name]],) if row and row.evolved else ()))
         return stages, self.scale
 
     def stage_command(self, stage: Stage) -> tuple[list[str], None]:
-        """A stage's command line: the row's evolution, or the learning test of the run it found."""
+        """A stage's command line: a measure, the row's evolution, or the learning test of the run it found."""
         if stage.kind == "measure":
             measure = next(m for m in self.measures if m.name == stage.variant)
-            run = self.evolutions().get(measure.run, measure.run)
+            run = self.evolutions().get(measure.run) or measure.run
             return [sys.executable, "-m", measure.module, run, "--out", stage.out_dir, *measure.args], None
         row = next(r for r in self.rows if r.name == stage.variant)
+        scale = self.scale_of(row)
         if stage.kind == "evolve":
             sweep = self.sweeps().get(stage.out_dir)
             if sweep is not None and os.path.isfile(os.path.join(stage.out_dir, "sweep.json")):  # goes on as it began
                 return [sys.executable, "-m", "imrl_jax.evolve", "--resume", "--out", stage.out_dir, "--generations",
-                        str(self.scale["generations"])], None
-            return evolve_command(self.scale, row.preset, row.condition, stage.out_dir, sets=row.sets,
-                                  sweep=sweep.values if sweep else ()), None
+                        str(scale["generations"])], None
+            return evolution_command(row, scale, stage.out_dir, sweep.values if sweep else ()), None
         evolved = self.evolutions()[row.name]
+        if evolved is None:  # SLE's noise is the test's own (it anneals over the whole test at sle_noise_steps=0)
+            noise = [s for s in row.sets if s.startswith("sle_noise_steps=")]
+            return test_command(scale, row.preset, row.condition, "", stage.out_dir,
+                                sets=tuple(s for s in row.sets if s not in noise),
+                                sle_noise_steps=int(noise[0].split("=")[1]) if noise else None), None
         if os.path.dirname(evolved) in self.sweeps():  # a sweep's points, tested as one
             evolved = os.path.dirname(evolved)
             if os.path.normpath(stage.out_dir) != os.path.normpath(learning_test_dir(evolved)):
                 evolved = self.evolutions()[row.name]  # a row of the sweep tested alone
-        return test_command(self.scale, row.preset, row.condition, evolved, stage.out_dir, sets=row.sets), None
+        return test_command(scale, row.preset, row.condition, evolved, stage.out_dir, sets=row.sets), None
 
     def measure(self) -> list[dict]:
         """Each row's evolution (final best fitness, its spread and plateau, once finished) and learning test."""
@@ -213,13 +248,14 @@ class Table:
         from experiments.loading import read_evolution, read_test
 
         measured = []
-        for row, evolved in zip(self.rows, self.evolutions().values()):
-            run, test = read_evolution(evolved), read_test(learning_test_dir(evolved))
-            entry = dict(row=row.name, condition=row.condition, preset=row.preset, dir=evolved, generations=0)
+        for row, evolved, tested in zip(self.rows, self.evolutions().values(), self.tests().values()):
+            run, test = (None if evolved is None else read_evolution(evolved)), read_test(tested)
+            entry = dict(row=row.name, condition=row.condition, preset=row.preset, dir=evolved, generations=0,
+                         target=self.scale_of(row)["generations"])
             if run is not None:
                 best = run["best"][~np.isnan(run["best"]).any(1)]  # the generations every seed has finished
                 entry.update(generations=len(best), seeds=int(best.shape[1]), best=best)
-                if len(best) >= self.scale["generations"]:
+                if len(best) >= self.scale_of(row)["generations"]:
                     final = final_best(best)
                     entry.update(final_mean=float(final.mean()), final_sd=float(final.std()),
                                  plateau=plateau_generation(best.mean(1)))
@@ -239,7 +275,7 @@ class Table:
             steady = (f"{m['steady_mean']:.3f} +- {m['steady_sd']:.3f} ({m['test_runs']} runs)" if "steady_mean" in m
                       else "-")
             lines.append(f"| {m['row']} | {m['condition']} | {m['preset']} | {m.get('seeds', '-')} | "
-                         f"{m['generations']} of {self.scale['generations']} | {final} | {m.get('plateau', '-')} | "
+                         f"{m['generations']} of {m['target']} | {final} | {m.get('plateau', '-')} | "
                          f"{steady} |")
         return "\n".join(lines)
 

@@ -107,3 +107,29 @@ def test_new_runs_that_differ_only_in_dynamic_values_are_one_sweep(tmp_path):
     assert measured["run"] == table.evolutions()["b"] and measured["condition"] == "EE-LS"
     assert sorted(measured["pieces"]) == ["generation 0, learning", "generation 1, learning",
                                           "random genomes, learning"]
+
+
+def test_rows_of_a_search_strategy_of_their_own_sizes_and_not_evolved_find_their_committed_runs():
+    """The search study's SNES run (its strategy in the key), the reproduction's LE-LS at the paper's sizes, and
+    the future-work study's EXT-LS, tested from scratch in the table's own folder with its noise setting."""
+    from experiments.study import SCALES
+
+    table = Table("mine", "docs/MINE.md", 99, scale=SCREEN, out=os.path.join(RESULTS, "future_work"), results=RESULTS,
+                  rows=(Row("snes", "EE-LS", "skills", options=("--strategy", "snes")),
+                        Row("ga", "EE-LS", "skills", scale=SCALES["paper"]),
+                        Row("EXT-LS-whole", "EXT-LS", "skills", ("sle_noise_steps=0",))))
+    assert table.evolutions() == {"snes": os.path.join(RESULTS, "search", "snes", "EE-LS", "evolve"),
+                                  "ga": os.path.join(RESULTS, "paper", "skills", "evolve", "EE-LS"),
+                                  "EXT-LS-whole": None}
+    assert table.tests()["EXT-LS-whole"] == os.path.join(RESULTS, "future_work", "EXT-LS-whole", "test")
+    stages, _ = table.all_stages()
+    assert [s.name for s in stages] == ["evolve snes", "learning test snes", "evolve ga", "learning test ga",
+                                        "learning test EXT-LS-whole"]
+    assert all(stage_done(s, SCREEN) for s in stages) and stages[-1].needs == ()
+    command = table.stage_command(stages[-1])[0]
+    assert command[command.index("--cond") + 1] == "EXT-LS" and "sle_noise_steps=0" in command
+    assert command[command.index("--runs") + 1] == "5" and "sle_noise_steps=100000" not in command
+    snes = table.stage_command(stages[0])[0]
+    assert snes[snes.index("--strategy") + 1] == "snes" and snes[-1] == "--resume"
+    measured = {m["row"]: m for m in table.measure()}
+    assert measured["ga"]["seeds"] == 10 and measured["ga"]["target"] == 100 and "steady_mean" in measured["EXT-LS-whole"]
