@@ -64,14 +64,15 @@ def evolution_spec(row: Row, scale: dict) -> runspec.RunSpec:
 
 @dataclasses.dataclass(frozen=True)
 class Measure:
-    """A measure of a run: ``python -m MODULE RUN --out OUT ARGS`` (RUN a row's evolution, or a committed run's
-    folder), done when OUT holds result.json; its out is ``TABLE_OUT/measures/NAME``."""
+    """A measure: ``python -m MODULE RUN --out OUT ARGS`` (RUN a row's evolution, a committed run's folder, or
+    none: ``run=""``), done when OUT holds result.json; OUT is ``out``, or ``TABLE_OUT/measures/NAME``."""
 
     name: str
-    run: str  # a row's name, or a run directory
+    run: str  # a row's name, a run directory, or "" (the measure reads no run)
     args: tuple[str, ...] = ()
     module: str = "imrl_jax.landscape_run"
     cost: float = 0.0  # lane-steps, estimated
+    out: str | None = None  # its folder (None: the table's measures/NAME)
 
 
 class Sweep(NamedTuple):
@@ -212,7 +213,7 @@ class Table:
         for measure in self.measures:
             row = next((r for r in self.rows if r.name == measure.run), None)
             stages.append(Stage(f"measure {measure.name}", "measure", measure.name, row.condition if row else "",
-                                os.path.join(self.out, "measures", measure.name), measure.cost,
+                                measure.out or os.path.join(self.out, "measures", measure.name), measure.cost,
                                 needs=(evolving[evolutions[row.name]],) if row and row.evolved else ()))
         return stages, self.scale
 
@@ -221,7 +222,8 @@ class Table:
         if stage.kind == "measure":
             measure = next(m for m in self.measures if m.name == stage.variant)
             run = self.evolutions().get(measure.run) or measure.run
-            return [sys.executable, "-m", measure.module, run, "--out", stage.out_dir, *measure.args], None
+            return [sys.executable, "-m", measure.module, *([run] if run else []), "--out", stage.out_dir,
+                    *measure.args], None
         row = next(r for r in self.rows if r.name == stage.variant)
         scale = self.scale_of(row)
         if stage.kind == "evolve":

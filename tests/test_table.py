@@ -133,3 +133,16 @@ def test_rows_of_a_search_strategy_of_their_own_sizes_and_not_evolved_find_their
     assert snes[snes.index("--strategy") + 1] == "snes" and snes[-1] == "--resume"
     measured = {m["row"]: m for m in table.measure()}
     assert measured["ga"]["seeds"] == 10 and measured["ga"]["target"] == 100 and "steady_mean" in measured["EXT-LS-whole"]
+
+
+def test_a_measure_of_no_run_goes_where_it_is_told(tmp_path):
+    """A measure that reads no run (a sweep of fixed controllers) has no run argument and its own folder."""
+    table = Table("t", "docs/T.md", 99, rows=(), scale=SCREEN, out=str(tmp_path), results=str(tmp_path),
+                  measures=(Measure("hand", "", ("hand", "--seeds", "2"), module="experiments.childhood_study",
+                                    out=str(tmp_path / "childhood")),
+                            Measure("other", "", module="m")))
+    stages, _ = table.all_stages()
+    assert [(s.name, s.out_dir, s.needs) for s in stages] == [
+        ("measure hand", str(tmp_path / "childhood"), ()), ("measure other", str(tmp_path / "measures" / "other"), ())]
+    assert table.stage_command(stages[0])[0][1:] == ["-m", "experiments.childhood_study", "--out",
+                                                     str(tmp_path / "childhood"), "hand", "--seeds", "2"]
