@@ -296,7 +296,8 @@ class Table:
         ax.set_ylim(bottom=0)
         style_axis(ax, f"{self.name}: best fitness per generation", "generation",
                    "best fitness (best of a generation's lives)")
-        ax.legend(fontsize=7)
+        if ax.lines:
+            ax.legend(fontsize=7)
         fig.tight_layout()
         return save(fig, path)
 

@@ -1,0 +1,96 @@
+"""Every study that is a table, planned, listed and reported on results made by hand (experiments.table).
+
+Each study module that declares ``TABLE`` is run here against a results folder of its own: first
+empty (every stage to run, a report that says so), then with an evolution and a learning test written
+by hand for every row (every stage done, the report's table showing exactly the numbers written).
+"""
+
+import dataclasses
+import importlib
+import json
+import os
+import shutil
+
+import pytest
+from helpers import ROOT
+
+from experiments import study as S
+from experiments.reproduce import stage_done
+from experiments.table import Table, evolution_spec
+
+
+def table_studies() -> dict[str, Table]:
+    """Every study whose module declares a ``TABLE``, by its name."""
+    found = {}
+    for name, entry in S.studies().items():
+        table = getattr(importlib.import_module(f"experiments.{entry.module}"), "TABLE", None)
+        if isinstance(table, Table) and table.name == name:
+            found[name] = table
+    return found
+
+
+TABLES = table_studies()
+
+
+def relocated(table: Table, tmp_path) -> Table:
+    """The table writing into ``tmp_path``: its results, its own folder and a copy of its document."""
+    document = tmp_path / os.path.basename(table.document)
+    shutil.copy(os.path.join(ROOT, table.document), document)
+    results = tmp_path / "results"
+    return dataclasses.replace(table, results=str(results), out=str(results / table.name), document=str(document))
+
+
+def write_evolution(folder: str, spec, generations: int, best: float) -> None:
+    """An evolution's config.json and history.csv: every seed's best ``best`` in every generation."""
+    os.makedirs(folder, exist_ok=True)
+    with open(os.path.join(folder, "config.json"), "w") as f:
+        json.dump(dict(config=spec.config.to_dict(), seeds=list(spec.seeds), search=json.loads(spec.search)), f)
+    with open(os.path.join(folder, "history.csv"), "w") as f:
+        f.write("generation,seed,best,mean,std\n")
+        f.writelines(f"{g},{s},{best},{best / 2},0.0\n" for g in range(generations) for s in spec.seeds)
+
+
+def write_test(folder: str, steady: float, num_runs: int) -> None:
+    """A finished learning test: its steady state ``steady`` in every run, and a two-bin curve."""
+    os.makedirs(folder, exist_ok=True)
+    with open(os.path.join(folder, "steady.json"), "w") as f:
+        json.dump(dict(steady_mean=steady, steady_sd=0.0, steady_per_run=[steady] * num_runs, pairs_both_ways=0.0), f)
+    with open(os.path.join(folder, "curve.csv"), "w") as f:
+        f.write(f"bin,end_step,mean,sd_over_runs\n0,10,{steady / 2},0.0\n1,20,{steady},0.0\n")
+
+
+@pytest.mark.skipif(not TABLES, reason="no study is a table")
+@pytest.mark.parametrize("name", sorted(TABLES))
+def test_a_table_study_plans_lists_and_reports_what_was_made_by_hand(name, tmp_path, capsys):
+    table = relocated(TABLES[name], tmp_path)
+    stages, scale = table.all_stages()
+    row_stages = [s for s in stages if s.kind != "measure"]
+    assert row_stages and not any(stage_done(s, scale) for s in row_stages)
+    for stage in stages:
+        command = table.stage_command(stage)[0]
+        assert command[command.index("--out") + 1] == stage.out_dir
+    assert table.main(["--report"]) == 0
+    assert "not started" in open(table.document).read().split(f"<!-- {table.name} table:")[1]
+
+    made = {}
+    for i, row in enumerate(table.rows):
+        made[row.name] = round(0.1 + 0.01 * i, 3), round(0.5 + 0.01 * i, 3)
+        sizes = table.scale_of(row)
+        evolved = table.evolutions()[row.name]
+        if evolved is not None:
+            write_evolution(evolved, evolution_spec(row, sizes), sizes["generations"], made[row.name][0])
+        if row.test or evolved is None:
+            write_test(table.tests()[row.name], made[row.name][1], sizes["seeds"])
+    stages, scale = table.all_stages()
+    assert all(stage_done(s, scale) for s in stages if s.kind != "measure")
+    capsys.readouterr()
+    assert table.main(["--report"]) == 0
+    text = open(table.document).read()
+    text = text[text.index(f"<!-- {table.name} table:"):text.index(f"<!-- end of {table.name} table -->")]
+    for row in table.rows:
+        evolved_cell = f" {made[row.name][0]:.3f} +- 0.000 | 0 |" if row.evolved else ""
+        steady_cell = f" {made[row.name][1]:.3f} +- 0.000 ({table.scale_of(row)['seeds']} runs) |"
+        assert f"| {row.name} |" in text
+        line = next(line for line in text.splitlines() if line.startswith(f"| {row.name} |"))
+        assert evolved_cell in line and (steady_cell in line if row.test or not row.evolved else True), line
+    assert os.path.getsize(os.path.join(table.out, f"{table.name}.png")) > 10_000
