@@ -52,6 +52,28 @@ def evolution_command(row: Row, scale: dict, out_dir: str, sweep: tuple[str, ...
     return command[:-1] + list(row.options) + ["--resume"] if command[-1] == "--resume" else command + list(row.options)
 
 
+def scratch_test_command(row: Row, scale: dict, out_dir: str) -> list[str]:
+    """The learning test from scratch of a row not evolved (its options the test's; SLE's noise the test's own: it
+    anneals over the whole test at ``sle_noise_steps=0``)."""
+    noise = [s for s in row.sets if s.startswith("sle_noise_steps=")]
+    return test_command(scale, row.preset, row.condition, "", out_dir, sets=tuple(s for s in row.sets if s not in noise),
+                        sle_noise_steps=int(noise[0].split("=")[1]) if noise else None) + list(row.options)
+
+
+def scratch_test_key(row: Row, scale: dict) -> str:
+    """The key of a row's learning test from scratch (``runspec.test_key``): the config and sizes its command
+    builds, as the learning test builds them."""
+    from imrl_jax import cli, learning_test
+    from imrl_jax.config import make_config
+
+    args = learning_test.parser().parse_args(scratch_test_command(row, scale, os.devnull)[3:])
+    base = make_config(args.preset, **{**cli.parse_sets(args.set), "condition": args.cond})
+    config = cli.apply_task_set(lambda **tasks: base.replace(task_steps=args.task_steps, num_bins=args.bins, **tasks),
+                                args)
+    return runspec.test_key(config, dict(num_runs=args.runs, num_best=args.best, num_tests=args.tests,
+                                         steady_steps=args.steady_steps, seed=args.seed))
+
+
 def evolution_spec(row: Row, scale: dict) -> runspec.RunSpec:
     """What the row's evolve command computes: the config, seeds and search it builds from its own command line."""
     from imrl_jax import evolve
@@ -134,9 +156,18 @@ class Table:
         return self.plan()[0]
 
     def tests(self) -> dict[str, str]:
-        """Each row's learning-test folder: beside its evolution, or ``OUT/ROW/test`` for a row not evolved."""
-        return {name: os.path.join(self.out, name, "test") if evolved is None else learning_test_dir(evolved)
-                for name, evolved in self.evolutions().items()}
+        """Each row's learning-test folder: beside its evolution; for a row not evolved, the test from scratch its
+        key finds under ``results`` (``runspec.test_index``), or ``OUT/ROW/test`` for a new one."""
+        known = runspec.test_index(self.results) if os.path.isdir(self.results) else {}
+        folders = {}
+        for row, evolved in zip(self.rows, self.evolutions().values()):
+            if evolved is not None:
+                folders[row.name] = learning_test_dir(evolved)
+                continue
+            key = scratch_test_key(row, self.scale_of(row))
+            folders[row.name] = (os.path.join(self.results, known[key]) if key in known else
+                                 os.path.join(self.out, row.name, "test"))
+        return folders
 
     def sweeps(self) -> dict[str, Sweep]:
         """The sweeps the rows' new runs are grouped into, by their folder (see :meth:`plan`)."""
@@ -179,13 +210,15 @@ class Table:
     def all_stages(self) -> tuple[list[Stage], dict]:
         """Every stage, in order (each evolution, then its test), and the scale; a run two rows share is one stage,
         and so is a sweep of several rows' runs."""
-        stages, evolving = [], {}
+        stages, evolving, testing = [], {}, set()
         evolutions, sweeps = self.plan()
-        for row, evolved in zip(self.rows, evolutions.values()):
+        for row, evolved, tested in zip(self.rows, evolutions.values(), self.tests().values()):
             scale = self.scale_of(row)
             if evolved is None:  # tested from scratch: nothing to wait for
-                stages.append(Stage(f"learning test {row.name}", "test", row.name, row.condition,
-                                    os.path.join(self.out, row.name, "test"), test_cost(scale, row.condition), needs=()))
+                if tested not in testing:
+                    testing.add(tested)
+                    stages.append(Stage(f"learning test {row.name}", "test", row.name, row.condition, tested,
+                                        test_cost(scale, row.condition), needs=()))
                 continue
             root = os.path.dirname(evolved)
             if root in sweeps:
@@ -206,10 +239,10 @@ class Table:
                     stages.append(Stage(evolving[f"test {root}"], "test", row.name, row.condition,
                                         learning_test_dir(root), sum(test_cost(scale, r.condition)
                                                                      for r in members), needs=(evolving[root],)))
-            elif row.test:
-                stages.append(Stage(f"learning test {row.name}", "test", row.name, row.condition,
-                                    learning_test_dir(evolved), test_cost(scale, row.condition),
-                                    needs=(evolving[evolved],)))
+            elif row.test and tested not in testing:  # a test two rows share is one stage
+                testing.add(tested)
+                stages.append(Stage(f"learning test {row.name}", "test", row.name, row.condition, tested,
+                                    test_cost(scale, row.condition), needs=(evolving[evolved],)))
         for measure in self.measures:
             row = next((r for r in self.rows if r.name == measure.run), None)
             stages.append(Stage(f"measure {measure.name}", "measure", measure.name, row.condition if row else "",
@@ -233,11 +266,8 @@ class Table:
                         str(scale["generations"])], None
             return evolution_command(row, scale, stage.out_dir, sweep.values if sweep else ()), None
         evolved = self.evolutions()[row.name]
-        if evolved is None:  # SLE's noise is the test's own (it anneals over the whole test at sle_noise_steps=0)
-            noise = [s for s in row.sets if s.startswith("sle_noise_steps=")]
-            return test_command(scale, row.preset, row.condition, "", stage.out_dir,
-                                sets=tuple(s for s in row.sets if s not in noise),
-                                sle_noise_steps=int(noise[0].split("=")[1]) if noise else None), None
+        if evolved is None:
+            return scratch_test_command(row, scale, stage.out_dir), None
         if os.path.dirname(evolved) in self.sweeps():  # a sweep's points, tested as one
             evolved = os.path.dirname(evolved)
             if os.path.normpath(stage.out_dir) != os.path.normpath(learning_test_dir(evolved)):

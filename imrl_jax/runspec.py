@@ -116,6 +116,42 @@ def locate(root: str, spec: RunSpec, known: dict[str, str] | None = None) -> tup
     return os.path.join(root, "runs", key, "evolve"), False
 
 
+#: What a learning test from scratch is besides its config: its sizes and its keys' seed (steady.json's names).
+TEST_SIZES = ("num_runs", "num_best", "num_tests", "steady_steps", "seed")
+
+
+def test_key(config: Config, sizes: dict) -> str:
+    """The content key of a learning test from scratch (a condition that is not evolved): its model, as a run's,
+    and its sizes (:data:`TEST_SIZES`)."""
+    skip = set(COMPUTE_FIELDS) | set(PROGRESS_FIELDS) | config.spec.ignored_fields()
+    model = {k: v for k, v in config.to_dict().items() if k not in skip}
+    identity = {"model": model, "sizes": {name: sizes[name] for name in TEST_SIZES}}
+    return hashlib.sha256(canonical(identity).encode()).hexdigest()[:KEY_LENGTH]
+
+
+def test_index(root: str) -> dict[str, str]:
+    """``{key: directory relative to root}`` of every finished learning test from scratch under ``root`` (a
+    ``steady.json`` of a condition that is not evolved); two directories of one test are an error."""
+    from imrl_jax import conditions
+
+    keys: dict[str, str] = {}
+    for folder, subfolders, files in os.walk(root):
+        subfolders[:] = sorted(d for d in subfolders if d not in ("checkpoints", "resume_checkpoint", "partial"))
+        if "steady.json" not in files:
+            continue
+        with open(os.path.join(folder, "steady.json")) as f:
+            steady = json.load(f)
+        condition = conditions.CONDITIONS.get((steady.get("config") or {}).get("condition"))
+        if condition is None or condition.evolved:  # a test of evolved genomes is found beside its run
+            continue
+        key = test_key(Config.from_dict(steady["config"]), steady)
+        if key in keys:
+            raise DuplicateRunError(f"{folder} and {os.path.join(root, keys[key])} hold the same learning test (key "
+                                    f"{key})")
+        keys[key] = os.path.relpath(folder, root)
+    return keys
+
+
 def main(argv=None) -> int:
     """``python -m imrl_jax.runspec ROOT [--record PATH]``: every run under ROOT with its key."""
     import argparse

@@ -82,3 +82,20 @@ def test_two_directories_of_one_run_are_refused_naming_both(tmp_path, capsys):
     assert err.startswith("error: ") and err.count("\n") == 1 and "hold the same run" in err
     assert runspec.main([str(tmp_path / "missing")]) == 2
     assert capsys.readouterr().err == f"error: {tmp_path / 'missing'}: not a folder\n"
+
+
+def test_tests_from_scratch_are_indexed_by_what_they_compute(tmp_path):
+    """Each committed SLE or EXT-LS test has a key of its own; a copy elsewhere is the same test, refused as a run
+    is; a test of evolved genomes is not indexed (its run is)."""
+    import shutil
+
+    results = os.path.join(ROOT, "experiments", "results")
+    known = runspec.test_index(results)
+    assert known[next(k for k, v in known.items() if v == os.path.join("claims", "skills-bias0", "test", "SLE"))]
+    assert len(set(known.values())) == len(known) >= 18
+    assert not any("goals" in folder for folder in known.values())  # EE-LS-T's tests are of evolved genomes
+    for name in ("a", "b"):
+        shutil.copytree(os.path.join(RESULTS, "claims", "skills-bias0", "test", "SLE"), tmp_path / name,
+                        ignore=shutil.ignore_patterns("*.npz", "*.png"))
+    with pytest.raises(runspec.DuplicateRunError, match="same learning test"):
+        runspec.test_index(str(tmp_path))

@@ -20,7 +20,8 @@ def test_a_row_is_exactly_what_its_command_computes():
 
 
 def test_a_run_another_study_made_is_found_and_shared(tmp_path):
-    """A new study asking for EV-LS under skills at the future-work study's sizes gets that study's finished run."""
+    """A new study asking for EV-LS under skills at the future-work study's sizes gets that study's finished run
+    (and its test: one stage for the two rows that ask for it)."""
     table = Table("mine", "docs/MINE.md", 99, rows=(Row("ev", "EV-LS", "skills"), Row("ev-again", "EV-LS", "skills"),
                                                     Row("new", "EV-LS", "skills", ("gamma=0.95",), test=False)),
                   scale=SCREEN, out=str(tmp_path), results=RESULTS)
@@ -29,11 +30,10 @@ def test_a_run_another_study_made_is_found_and_shared(tmp_path):
     assert [(s.name, s.out_dir, s.needs) for s in stages] == [
         ("evolve ev", shared, None),
         ("learning test ev", os.path.join(RESULTS, "future_work", "EV-LS", "test"), ("evolve ev",)),
-        ("learning test ev-again", os.path.join(RESULTS, "future_work", "EV-LS", "test"), ("evolve ev",)),
         ("evolve new", os.path.join(RESULTS, "runs", evolution_spec(table.rows[2], SCREEN).key(), "evolve"), None)]
-    assert stage_done(stages[0], SCREEN) and stage_done(stages[1], SCREEN) and not stage_done(stages[3], SCREEN)
-    command = table.stage_command(stages[3])[0]
-    assert command[command.index("--set") + 1] == "gamma=0.95" and command[command.index("--out") + 1] == stages[3].out_dir
+    assert stage_done(stages[0], SCREEN) and stage_done(stages[1], SCREEN) and not stage_done(stages[2], SCREEN)
+    command = table.stage_command(stages[2])[0]
+    assert command[command.index("--set") + 1] == "gamma=0.95" and command[command.index("--out") + 1] == stages[2].out_dir
 
 
 def test_a_learning_test_sits_beside_its_evolution():
@@ -111,22 +111,30 @@ def test_new_runs_that_differ_only_in_dynamic_values_are_one_sweep(tmp_path):
 
 def test_rows_of_a_search_strategy_of_their_own_sizes_and_not_evolved_find_their_committed_runs():
     """The search study's SNES run (its strategy in the key), the reproduction's LE-LS at the paper's sizes, and
-    the future-work study's EXT-LS, tested from scratch in the table's own folder with its noise setting."""
+    tests from scratch found by their keys: the future-work study's EXT-LS with its noise setting, and the claims
+    map's SLE test of skills-bias0 for paper-selector's rules (SLE reads neither the childhood nor the preset's
+    selector values, which differ)."""
+    from experiments.rule_sets import SELECTOR_SETS
     from experiments.study import SCALES
 
     table = Table("mine", "docs/MINE.md", 99, scale=SCREEN, out=os.path.join(RESULTS, "future_work"), results=RESULTS,
                   rows=(Row("snes", "EE-LS", "skills", options=("--strategy", "snes")),
                         Row("ga", "EE-LS", "skills", scale=SCALES["paper"]),
-                        Row("EXT-LS-whole", "EXT-LS", "skills", ("sle_noise_steps=0",))))
+                        Row("EXT-LS-whole", "EXT-LS", "skills", ("sle_noise_steps=0",)),
+                        Row("sle", "SLE", "paper", SELECTOR_SETS), Row("sle-new", "SLE", "paper", ("gamma=0.95",))))
     assert table.evolutions() == {"snes": os.path.join(RESULTS, "search", "snes", "EE-LS", "evolve"),
                                   "ga": os.path.join(RESULTS, "paper", "skills", "evolve", "EE-LS"),
-                                  "EXT-LS-whole": None}
-    assert table.tests()["EXT-LS-whole"] == os.path.join(RESULTS, "future_work", "EXT-LS-whole", "test")
+                                  "EXT-LS-whole": None, "sle": None, "sle-new": None}
+    tests = table.tests()
+    assert tests["EXT-LS-whole"] == os.path.join(RESULTS, "future_work", "EXT-LS-whole", "test")
+    assert tests["sle"] == os.path.join(RESULTS, "claims", "skills-bias0", "test", "SLE")
+    assert tests["sle-new"] == os.path.join(RESULTS, "future_work", "sle-new", "test")
     stages, _ = table.all_stages()
     assert [s.name for s in stages] == ["evolve snes", "learning test snes", "evolve ga", "learning test ga",
-                                        "learning test EXT-LS-whole"]
-    assert all(stage_done(s, SCREEN) for s in stages) and stages[-1].needs == ()
-    command = table.stage_command(stages[-1])[0]
+                                        "learning test EXT-LS-whole", "learning test sle", "learning test sle-new"]
+    assert all(stage_done(s, SCREEN) for s in stages[:-1]) and not stage_done(stages[-1], SCREEN)
+    assert stages[4].needs == ()
+    command = table.stage_command(stages[4])[0]
     assert command[command.index("--cond") + 1] == "EXT-LS" and "sle_noise_steps=0" in command
     assert command[command.index("--runs") + 1] == "5" and "sle_noise_steps=100000" not in command
     snes = table.stage_command(stages[0])[0]
