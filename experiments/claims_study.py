@@ -1,92 +1,61 @@
-"""Which reading of the paper reproduces its Fig. 3: the seven claims under every candidate rule set.
+"""Which reading of the paper reproduces its Fig. 3: the seven claims under every candidate rule set (docs/CLAIMS.md).
 
-    python -m experiments.claims_study                  # run (or go on with) the screen, then the table
-    python -m experiments.claims_study --only skills-bias0,paper-selector
-    python -m experiments.claims_study --table          # docs/CLAIMS.md's table from what has run
-    python -m experiments.claims_study --table --only experts   # claim 8's tables and figure alone
+    python -m experiments run claims-screen       # run (or go on with) the screen's runs
+    python -m experiments run claims-experts      # claim 8's: more experts
+    python -m experiments report claims-screen    # docs/CLAIMS.md's tables and figures (and claim 8's)
 
-A rule set is a row of :data:`RULE_SETS`: a preset of ``imrl_jax.config`` and ``--set``
-overrides of values the paper does not state. Every run is at the paper's life lengths
-(150,000 + 6 x 100,000 steps; learning tests of 1,000,000 cycles per task). The screen is
-5 seeds x 100 generations, learning tests of 5 best x 4 tests (:data:`SCREEN`); the finished
-paper-scale runs (``paper`` and ``skills``, 10 x 100, 10 x 10 x 10) are read where they are.
-
-What is shared, and why (each rule set lists where its other conditions come from):
-
-- EE-ES learns nothing and has no childhood: one run for all (the paper scale's, under ``paper``).
-- EE-LS has no childhood and evolves its actors: it depends only on the adult selector's values
-  (trace decay, selector rates, discount). Rule sets with ``skills``' adult selector share
-  ``skills``' EE-LS; those with the paper's share ``paper``'s.
-- SLE has no childhood and no selector: it depends on the adult learning values, the learned
-  actors' initial speed bias and its noise schedule; rule sets equal in those share one SLE test.
-
-So most rule sets need only an LE-LS evolution and its learning test. The stages run through
-the reproduction's resumable stage runner (:func:`experiments.reproduce.run_stages`): run the
-same command again after an interruption; the newest checkpoint of an unfinished evolution is
-committed in its ``resume_checkpoint/``.
+A rule set (``experiments.rule_sets``) is a preset of ``imrl_jax.config`` and ``--set`` overrides
+of values the paper does not state; its runs are the rows of a table (:func:`rule_rows`): each of
+the paper's conditions at the paper's life lengths (150,000 + 6 x 100,000 steps; learning tests of
+1,000,000 cycles per task), at the screen's sizes (5 seeds x 100 generations, 5 best x 4 tests:
+``SCREEN``) or, for the conditions of ``RuleSet.full``, the paper's (the reproduction's runs). Each
+run is found by what it computes (``imrl_jax.runspec``), so rule sets whose lives are the same share
+it: EE-ES's one run, EE-LS's under ``skills``' or ``paper``'s adult selector, SLE's tests of equal
+adult values, bias and noise schedule. Claim 8's table adds 4 and 6 experts to two rule sets.
 """
 
 from __future__ import annotations
 
-import argparse
+import dataclasses
+import json
 import os
 import sys
 from typing import NamedTuple
 
 import numpy as np
 
-from imrl_jax import conditions
-from experiments.reproduce import (DEFAULT_VARIANTS, EVOLVED, TESTED, Stage, evolution_cost, evolution_dir,
-                                   evolve_command, load_manifest, run_stages, test_command, test_cost, test_dir)
-from experiments.executor import add_options, from_options
+from experiments.reproduce import EVOLVED, TESTED
+from experiments.rule_sets import BY_NAME, RULE_SETS, RuleSet
 from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN, Study, write_table
-from experiments.rule_sets import BY_NAME, RULE_SETS, RuleSet  # noqa: F401 - the map's rows
+from experiments.table import Measure, Row, Table
+from imrl_jax import conditions
 
 OUT = os.path.join(RESULTS, "claims")
 
 
-#: The order the screen runs its stages in: the cheap SLE tests first, then the evolutions that matter most.
+#: The order the screen runs its rule sets in: the cheap SLE tests first, then the evolutions that matter most
+#: (the reproduction's rule sets, whose runs the reproduction made, last).
 SCREEN_ORDER = ("skills-sle-test", "paper-sle-test", "skills-bias0", "skills-bias0-sle-test", "paper-selector",
                 "paper-selector-sle-test", "skills-bias2",
                 "skills-clamp", "skills-bias1", "extension",  # bias 1: where between 0 and 2 claim 3 turns
-                "skills-bias2-sle-test", "skills-clamp-sle-test", "skills-bias1-sle-test", "extension-sle-test")
+                "skills-bias2-sle-test", "skills-clamp-sle-test", "skills-bias1-sle-test", "extension-sle-test",
+                "paper", "skills", "faithful")
 
 
-def is_reproduction(name: str) -> bool:
-    """The rule sets whose runs are the paper-scale reproduction's (``make reproduce``'s variants)."""
-    return name in DEFAULT_VARIANTS["paper"]
-
-
-def run_dir(rule: RuleSet, condition: str, out: str = OUT, reproduction: str = REPRODUCTION) -> str:
-    """Where a rule set's evolution of ``condition`` lives (its own or the one it shares)."""
-    owner = {"LE-LS": rule.le_ls or rule.name, "EE-LS": rule.ee_ls, "EE-ES": "paper"}[condition]
-    if is_reproduction(owner):
-        return evolution_dir(reproduction, owner, condition)
-    return os.path.join(out, owner, "evolve", condition)
-
-
-def learning_dir(rule: RuleSet, condition: str, out: str = OUT, reproduction: str = REPRODUCTION) -> str:
-    """Where a rule set's learning test of ``condition`` lives (its own or the one it shares)."""
-    owner = {"LE-LS": rule.le_ls or rule.name, "EE-LS": rule.ee_ls, "EE-ES": "paper", "SLE": rule.sle}[condition]
-    if is_reproduction(owner):
-        return test_dir(reproduction, owner, condition)
-    return os.path.join(out, owner, "test", condition)
-
-
-def plan(names, scale: dict = SCREEN, out: str = OUT) -> list[Stage]:
-    """The stages the rule sets ``names`` need that no other run provides, in order."""
-    stages = []
-    for name in names:
-        rule = BY_NAME[name]
-        if not rule.le_ls:
-            stages.append(Stage(f"evolve {name} LE-LS", "evolve", name, "LE-LS", run_dir(rule, "LE-LS", out),
-                                evolution_cost(scale, "LE-LS")))
-            stages.append(Stage(f"learning test {name} LE-LS", "test", name, "LE-LS", learning_dir(rule, "LE-LS", out),
-                                test_cost(scale, "LE-LS")))
-        if rule.sle == name and not is_reproduction(name):
-            stages.append(Stage(f"learning test {name} SLE", "test", name, "SLE", learning_dir(rule, "SLE", out),
-                                test_cost(scale, "SLE")))
-    return stages
+def rule_rows(rule: RuleSet, num_experts: int | None = None) -> tuple[Row, ...]:
+    """A rule set's runs as rows (``RULE CONDITION``): each of the paper's conditions under its preset and overrides
+    (SLE's with its noise horizon), at the paper's sizes for ``rule.full``, else the screen's; with
+    ``num_experts``, claim 8's LE-LS and EE-LS (``RULE CONDITION K experts``, at the screen's sizes)."""
+    if num_experts is not None:
+        return tuple(Row(f"{rule.name} {c} {num_experts} experts", c, rule.preset,
+                         (*rule.sets, f"num_experts={num_experts}"), scale=SCREEN) for c in EXPERT_CONDITIONS)
+    rows = []
+    for condition in TESTED:
+        evolved = conditions.get(condition).evolved
+        noise = () if evolved or rule.sle_noise_steps is None else (f"sle_noise_steps={rule.sle_noise_steps}",)
+        rows.append(Row(f"{rule.name} {condition}", condition, rule.preset, (*rule.sets, *noise),
+                        scale=SCALES["paper"] if condition in rule.full else SCREEN))
+    return tuple(rows)
 
 
 #: Claim 8 (the paper: "the quality of results did not change in tests with a higher number of experts"):
@@ -98,95 +67,10 @@ EXPERT_RULE_SETS = ("skills", "paper-selector")
 EXPERT_CONDITIONS = ("LE-LS", "EE-LS")
 
 
-#: The name ``--only`` (and the screen's default order, last) gives claim 8's runs.
-EXPERTS = "experts"
-
-
-def experts_variant(rule: str, num_experts: int) -> str:
-    """The stage variant of a claim-8 run: the rule set and the number of experts."""
-    return f"{rule}+experts{num_experts}"
-
-
-class ExpertsRun(NamedTuple):
-    """What a claim-8 stage runs: a rule set with more experts."""
-
-    rule: RuleSet
-    num_experts: int
-
-
-#: Claim 8's stage variants (:func:`experts_variant`), each to the run it is.
-EXPERTS_RUNS = {experts_variant(rule.name, k): ExpertsRun(rule, k) for rule in RULE_SETS for k in EXPERT_COUNTS}
-
-
-def experts_owner(rule: RuleSet, condition: str) -> str:
-    """The rule set whose claim-8 run of ``condition`` this one's is (shared as its 3-expert run is)."""
-    return {"LE-LS": rule.le_ls or rule.name, "EE-LS": rule.ee_ls}[condition]
-
-
-def experts_dir(rule: str, condition: str, num_experts: int, kind: str = "evolve", out: str = OUT) -> str:
-    """Where a claim-8 evolution (``kind`` "evolve") or its learning test ("test") lives."""
-    return os.path.join(out, rule, f"experts{num_experts}", kind, condition)
-
-
-def plan_experts(rules=EXPERT_RULE_SETS, scale: dict = SCREEN, out: str = OUT) -> list[Stage]:
-    """Claim 8's stages: each rule set's LE-LS and EE-LS with 4 and 6 experts, evolved then tested, each run once
-    (a rule set that shares a condition's run with another, as with 3 experts, shares it here too)."""
-    stages, planned = [], set()
-    for name in rules:
-        for k in EXPERT_COUNTS:
-            for condition in EXPERT_CONDITIONS:
-                owner = experts_owner(BY_NAME[name], condition)
-                if (owner, condition, k) in planned:
-                    continue
-                planned.add((owner, condition, k))
-                variant = experts_variant(owner, k)
-                stages.append(Stage(f"evolve {owner} {condition} {k} experts", "evolve", variant, condition,
-                                    experts_dir(owner, condition, k, "evolve", out), evolution_cost(scale, condition)))
-                stages.append(Stage(f"learning test {owner} {condition} {k} experts", "test", variant, condition,
-                                    experts_dir(owner, condition, k, "test", out), test_cost(scale, condition)))
-    return stages
-
-
-#: Claim 4 and the arena: what a circular path can score on the six tasks (experiments/circular_paths.py).
-CIRCLES = "circles"
-
-
-def plan_circles(out: str = OUT) -> list[Stage]:
-    """The measure stage of claim 4's circular path: one constant action from each task's start, a grid of them."""
-    from experiments import circular_paths
-
-    cost = len(circular_paths.actions()) * 6 * circular_paths.TASK_STEPS
-    return [Stage("circles: one constant action per task (claim 4's circular path)", "measure", CIRCLES, "EE-ES",
-                  os.path.join(out, CIRCLES), cost)]
-
-
-def stage_command(stage: Stage, scale: dict, out: str = OUT) -> tuple[list[str], None]:
-    """A stage's command line: the package's evolve or learning_test with the rule set's preset and overrides."""
-    if stage.kind == "measure":  # the circular paths
-        return [sys.executable, "-m", "experiments.circular_paths", "--out", stage.out_dir], None
-    experts = EXPERTS_RUNS.get(stage.variant)
-    if experts is not None:  # claim 8: the rule set with more experts
-        rule = experts.rule
-        if stage.kind == "evolve":
-            return evolve_command(scale, rule.preset, stage.condition, stage.out_dir,
-                                  sets=(*rule.sets, f"num_experts={experts.num_experts}")), None
-        evolved = experts_dir(rule.name, stage.condition, experts.num_experts, "evolve", out)
-        return test_command(scale, rule.preset, stage.condition, evolved, stage.out_dir), None
-    rule = BY_NAME[stage.variant]
-    if stage.kind == "evolve":
-        return evolve_command(scale, rule.preset, stage.condition, stage.out_dir, sets=rule.sets), None
-    return test_command(scale, rule.preset, stage.condition, run_dir(rule, "LE-LS", out), stage.out_dir,
-                        sets=rule.sets, sle_noise_steps=rule.sle_noise_steps), None
-
-
-def finished(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION) -> bool:
-    """Whether every run of a rule set's row has finished (its own and the ones it shares)."""
-    from experiments.loading import read_evolution, read_test
-
-    runs = [read_evolution(run_dir(rule, c, out, reproduction)) for c in EVOLVED]
-    tests = [read_test(learning_dir(rule, c, out, reproduction)) for c in TESTED]
-    return all(r is not None and len(r["best"]) >= SCREEN["generations"] for r in runs) and all(
-        t is not None for t in tests)
+def reproduction_variant(folder: str, reproduction: str = REPRODUCTION) -> str | None:
+    """The reproduction's variant whose run (or test) ``folder`` is (``REPRODUCTION/VARIANT/...``), or None."""
+    relative = os.path.relpath(folder, reproduction)
+    return None if relative.startswith(os.pardir) else relative.split(os.sep)[0]
 
 
 class RowRuns(NamedTuple):
@@ -198,12 +82,33 @@ class RowRuns(NamedTuple):
     reproduction: dict  # condition -> the reproduction's variant whose run it is (absent: the row's own run)
 
 
+class ClaimsTable(Table):
+    """A table of the claims map's runs, read back by rule set."""
+
+    def runs_of(self, rule: RuleSet, num_experts: int | None = None) -> RowRuns:
+        """A rule set's runs, wherever their keys found them (its own and the ones it shares)."""
+        rows = rule_rows(rule, num_experts)
+        evolutions, tests = self.evolutions(), self.tests()
+        reproduction = os.path.join(self.results, os.path.relpath(REPRODUCTION, RESULTS))
+        found = {row.condition: evolutions[row.name] for row in rows if row.evolved}
+        return RowRuns(found, {row.condition: tests[row.name] for row in rows},
+                       {c: v for c, folder in found.items() if (v := reproduction_variant(folder, reproduction))})
+
+    def finished(self, rule: RuleSet) -> bool:
+        """Whether every run of a rule set's row has finished (its own and the ones it shares)."""
+        from experiments.loading import read_evolution, read_test
+
+        runs = self.runs_of(rule)
+        evolved = [read_evolution(folder) for folder in runs.evolutions.values()]
+        return all(r is not None and len(r["best"]) >= SCREEN["generations"] for r in evolved) and all(
+            read_test(folder) is not None for folder in runs.tests.values())
+
+
 def rule_runs(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION) -> RowRuns:
-    """A rule set's runs: its own and the ones it shares (:func:`run_dir`, :func:`learning_dir`)."""
-    owners = {"LE-LS": rule.le_ls or rule.name, "EE-LS": rule.ee_ls, "EE-ES": "paper"}
-    return RowRuns({c: run_dir(rule, c, out, reproduction) for c in EVOLVED},
-                   {c: learning_dir(rule, c, out, reproduction) for c in TESTED},
-                   {c: owner for c, owner in owners.items() if is_reproduction(owner)})
+    """A rule set's runs, found by key under the results folder that holds ``reproduction``."""
+    table = ClaimsTable("rule", "", 0, rows=rule_rows(rule), scale=SCREEN, out=out,
+                        results=os.path.dirname(os.path.normpath(reproduction)))
+    return table.runs_of(rule)
 
 
 def load_runs(name: str, runs: RowRuns) -> dict:
@@ -233,7 +138,7 @@ class SharedProbes(NamedTuple):
 def shared_numbers(reproduction_summary: dict, owner: str | None, condition: str) -> SharedProbes | None:
     """The reproduction report's probes of the run of ``condition`` under variant ``owner`` (None: not the
     reproduction's run)."""
-    if owner is None or not is_reproduction(owner):
+    if owner is None:
         return None
     key = f"{owner}/{condition}"
     return SharedProbes(reproduction_summary.get("colours_followed", {}).get(key),
@@ -301,18 +206,17 @@ def config_of(rule: RuleSet, condition: str, num_experts: int | None = None):
 
 def sizes(rule: RuleSet, condition: str) -> str:
     """Seeds x generations of an evolution, or runs x best x tests of a learning test, of a rule set's row."""
-    owner = {"LE-LS": rule.le_ls or rule.name, "EE-LS": rule.ee_ls, "EE-ES": "paper", "SLE": rule.sle}[condition]
-    scale = SCALES["paper"] if is_reproduction(owner) else SCREEN
+    scale = SCALES["paper"] if condition in rule.full else SCREEN
     if not conditions.get(condition).evolved:  # tested from scratch: runs x best x tests
         return f"{scale['seeds']}x{scale['best']}x{scale['tests']}"
     return f"{scale['seeds']}x{scale['generations']}"
 
 
 #: Where the table goes in docs/CLAIMS.md (the text around it is written by hand).
-TABLE_START, TABLE_END = "<!-- claims table: python -m experiments.claims_study --table -->", "<!-- end of table -->"
+TABLE_START, TABLE_END = "<!-- claims table: python -m experiments report claims-screen -->", "<!-- end of table -->"
 
 
-def table(measured: dict, names) -> str:
+def table_markdown(measured: dict, names) -> str:
     """The claims map as markdown: rule sets as rows, the seven claims as columns (verdict, then the numbers)."""
     short = {"holds": "**holds**", "partly": "partly", "does not hold": "no", "n/a": "n/a"}
     lines = ["| rule set | runs (LE-LS, SLE) | " + " | ".join(f"claim {k}" for k in range(1, 8)) + " |",
@@ -436,7 +340,7 @@ def dial_figure(points: list[DialPoint], path: str = DIAL_FIGURE) -> str:
 
 
 #: Where the fresh-life table goes in docs/CLAIMS.md.
-FRESH_START = "<!-- fresh-life table: python -m experiments.claims_study --table -->"
+FRESH_START = "<!-- fresh-life table: python -m experiments report claims-screen -->"
 FRESH_END = "<!-- end of fresh-life table -->"
 
 
@@ -456,25 +360,33 @@ def fresh_table(measured: dict, names) -> str:
 
 
 #: Where claim 8's table goes in docs/CLAIMS.md.
-EXPERTS_START = "<!-- claim 8 table: python -m experiments.claims_study --table -->"
+EXPERTS_START = "<!-- claim 8 table: python -m experiments report claims-experts -->"
 EXPERTS_END = "<!-- end of claim 8 table -->"
 
 
-def measure_experts(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION,
-                    summary: dict | None = None) -> dict:
-    """Claim 8 for a rule set: its finished 4- and 6-expert runs against its own 3-expert ones, and what each
-    run's best individuals do (:func:`experts_probe`; ``summary``: the reproduction report's, for its runs)."""
+def experts_runs(table: ClaimsTable) -> dict[tuple[str, str, int], tuple[str, str, str]]:
+    """Claim 8's runs and their 3-expert ones: (rule set, condition, experts) -> (evolution, learning test, owner: the
+    first rule set of :data:`EXPERT_RULE_SETS` whose run it is, as a shared run is named)."""
+    rows = {(name, row.condition, k): row for name in EXPERT_RULE_SETS for k in (3, *EXPERT_COUNTS)
+            for row in rule_rows(BY_NAME[name], None if k == 3 else k) if row.condition in EXPERT_CONDITIONS}
+    table = dataclasses.replace(table, rows=tuple(dict.fromkeys((*table.rows, *rows.values()))))
+    evolutions, tests, owners = table.evolutions(), table.tests(), {}
+    for (name, _, _), row in rows.items():
+        owners.setdefault(evolutions[row.name], name)
+    return {at: (evolutions[row.name], tests[row.name], owners[evolutions[row.name]]) for at, row in rows.items()}
+
+
+def measure_experts(rule: RuleSet, found: dict, summary: dict | None = None, reproduction: str = REPRODUCTION) -> dict:
+    """Claim 8 for a rule set: its finished 4- and 6-expert runs against its own 3-expert ones (``found``:
+    :func:`experts_runs`), and what each run's best individuals do (:func:`experts_probe`; ``summary``: the
+    reproduction report's, for its runs)."""
     from experiments.claims import claim_experts, final_best
     from experiments.loading import read_evolution, read_test
 
     final, steady, sizes_, runs = {}, {}, {}, []
     for condition in EXPERT_CONDITIONS:
         for k in (3, *EXPERT_COUNTS):
-            owner = experts_owner(rule, condition)
-            evolved = run_dir(rule, condition, out, reproduction) if k == 3 else experts_dir(owner, condition, k,
-                                                                                          "evolve", out)
-            tested = learning_dir(rule, condition, out, reproduction) if k == 3 else experts_dir(owner, condition, k,
-                                                                                              "test", out)
+            evolved, tested, owner = found[rule.name, condition, k]
             run, test = read_evolution(evolved), read_test(tested)
             done = run is not None and run["config"] and len(run["best"]) >= run["config"]["num_generations"]
             if done:
@@ -483,9 +395,10 @@ def measure_experts(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCT
             if test is not None:
                 steady[condition, k] = test["steady"]["steady_per_run"]
             if done:
-                shared = summary if k == 3 and is_reproduction(owner) else None
+                variant = reproduction_variant(evolved, reproduction)
                 runs.append(dict(rule=owner, condition=condition, num_experts=k, size=sizes_[f"{condition} {k}"],
-                                 **experts_probe(evolved, run["config"], shared, owner, condition)))
+                                 **experts_probe(evolved, run["config"], summary if variant else None, variant or "",
+                                                 condition)))
     claim = claim_experts(final, steady)
     expected = [(m, c, k) for m in ("final", "steady") for c in EXPERT_CONDITIONS for k in (3, *EXPERT_COUNTS)]
     have = {"final": final, "steady": steady}
@@ -567,7 +480,7 @@ def experts_runs_table(measured: dict) -> str:
 
 
 #: Where claim 8's runs table goes in docs/CLAIMS.md.
-EXPERTS_RUNS_START = "<!-- claim 8 runs: python -m experiments.claims_study --table --only experts -->"
+EXPERTS_RUNS_START = "<!-- claim 8 runs: python -m experiments report claims-experts -->"
 EXPERTS_RUNS_END = "<!-- end of claim 8 runs -->"
 
 
@@ -595,7 +508,8 @@ def experts_figure(measured: dict, path: str = EXPERTS_FIGURE) -> str:
             for condition in EXPERT_CONDITIONS:
                 points = sorted((p["num_experts"], p["mean"], p["sd"]) for p in claim.get("levels", [])
                                 if p["measure"] == measure and p["condition"] == condition)
-                shared = (experts_owner(BY_NAME[name], condition), condition, measure)
+                owner = next((r["rule"] for r in claim.get("runs", []) if r["condition"] == condition), name)
+                shared = (owner, condition, measure)
                 if not points or shared in drawn:
                     continue  # a shared run (paper-selector's EE-LS is skills') is drawn once
                 drawn.add(shared)
@@ -616,139 +530,101 @@ def experts_figure(measured: dict, path: str = EXPERTS_FIGURE) -> str:
     return save_figure(fig, path)
 
 
-def write_experts(out: str) -> dict:
-    """Claim 8 of every rule set that runs it: claim8.json, docs/CLAIMS.md's tables and the figure (a run's fresh
-    lives and probe are computed once, about a minute, then kept beside it)."""
-    import json
+def reproduction_summary(document: str) -> dict | None:
+    """The reproduction report's summary beside ``document`` (reproduction/summary.json), or None."""
+    path = os.path.join(os.path.dirname(document), "reproduction", "summary.json")
+    if not os.path.isfile(path):
+        return None
+    with open(path) as f:
+        return json.load(f)
 
-    summary_path = os.path.join("docs", "reproduction", "summary.json")
-    summary = None
-    if os.path.isfile(summary_path):
-        with open(summary_path) as f:
-            summary = json.load(f)
-    claim8 = {name: measure_experts(BY_NAME[name], out, summary=summary) for name in EXPERT_RULE_SETS}
-    os.makedirs(out, exist_ok=True)
-    with open(os.path.join(out, "claim8.json"), "w") as f:
+
+def write_experts(table: ClaimsTable) -> dict:
+    """Claim 8 of every rule set that runs it: claim8.json, the document's tables and the figure (a run's fresh
+    lives and probe are computed once, about a minute, then kept beside it)."""
+    summary, found = reproduction_summary(table.document), experts_runs(table)
+    reproduction = os.path.join(table.results, os.path.relpath(REPRODUCTION, RESULTS))
+    claim8 = {name: measure_experts(BY_NAME[name], found, summary, reproduction) for name in EXPERT_RULE_SETS}
+    os.makedirs(table.out, exist_ok=True)
+    with open(os.path.join(table.out, "claim8.json"), "w") as f:
         json.dump(claim8, f, indent=2, default=str)
-    write_table(os.path.join("docs", "CLAIMS.md"), experts_table(claim8), EXPERTS_START, EXPERTS_END)
-    write_table(os.path.join("docs", "CLAIMS.md"), experts_runs_table(claim8), EXPERTS_RUNS_START, EXPERTS_RUNS_END)
+    write_table(table.document, experts_table(claim8), EXPERTS_START, EXPERTS_END)
+    write_table(table.document, experts_runs_table(claim8), EXPERTS_RUNS_START, EXPERTS_RUNS_END)
     if any(claim["levels"] for claim in claim8.values()):
-        experts_figure(claim8)
+        experts_figure(claim8, os.path.join(os.path.dirname(table.document), "claims", "experts.png"))
     return claim8
 
 
-#: The name ``--only`` gives the whole screen: the circular paths, then every rule set in SCREEN_ORDER.
-SCREEN_NAME = "screen"
-
-
-def parse_names(text: str | None) -> list[str]:
-    """The rule sets named on the command line, ``screen`` for SCREEN_ORDER (default: the screen's order, then
-    claim 8's); unknown names are an error."""
-    chosen = text.split(",") if text else [SCREEN_NAME, EXPERTS]
-    names = [n for name in chosen for n in (SCREEN_ORDER if name == SCREEN_NAME else (name,))]
-    unknown = [n for n in names if n not in BY_NAME and n != EXPERTS]
-    if unknown:
-        raise ValueError(f"--only: unknown rule set {unknown[0]!r} (choose from "
-                         f"{', '.join([*BY_NAME, SCREEN_NAME, EXPERTS])})")
-    return names
-
-
-def selected_stages(only: str | None, out: str = OUT) -> list[Stage]:
-    """The stages ``--only`` chooses: the circular paths (seconds) with the screen, the rule sets', claim 8's last."""
-    names = parse_names(only)
-    stages = plan_circles(out) if SCREEN_NAME in (only or SCREEN_NAME).split(",") else []
-    stages += plan([n for n in names if n != EXPERTS], SCREEN, out)
-    return stages + (plan_experts(EXPERT_RULE_SETS, SCREEN, out) if EXPERTS in names else [])
-
-
-def all_stages(out: str = OUT) -> tuple[list[Stage], dict]:
-    """Every stage the command runs by default (each rule set, then claim 8's), and their scale."""
-    return selected_stages(None, out), SCREEN
-
-
-def parser() -> argparse.ArgumentParser:
-    """The command line's options."""
-    p = argparse.ArgumentParser(prog="python -m experiments.claims_study", description=__doc__.split("\n\n")[0])
-    p.add_argument("--only", help=f"comma-separated rule sets to run, in order, '{SCREEN_NAME}' for the whole screen "
-                                  f"and '{EXPERTS}' for claim 8's runs (default: {SCREEN_NAME},{EXPERTS})")
-    p.add_argument("--out", default=OUT, help=f"results directory (default: {OUT})")
-    p.add_argument("--list", action="store_true", help="print the stages and their commands, run nothing")
-    p.add_argument("--table", action="store_true", help="write the claims of every finished rule set into "
-                   "docs/CLAIMS.md and experiments/results/claims/claims.json (runs nothing; with --only "
-                   f"{EXPERTS}, claim 8's table and figure alone)")
-    add_options(p)
-    return p
-
-
-def stages_for(argv) -> tuple[list[Stage], dict]:
-    """The stages the command line ``argv`` runs, and their scale (for ``python -m experiments list``)."""
-    args = parser().parse_args(argv)
-    return selected_stages(args.only, args.out), SCREEN
-
-
-def main(argv=None) -> int:
-    """The command line: run (or go on with) the chosen rule sets' stages, or write the claims table."""
-    args = parser().parse_args(argv)
-    try:
-        names = parse_names(args.only)
-    except ValueError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    if args.table:
-        if args.only == EXPERTS:  # claim 8 alone: seconds, once each run's fresh lives and probe are kept
-            for name, claim in write_experts(args.out).items():
-                print(f"claim 8, {name}: {claim['verdict']}{' so far' if claim['missing'] else ''}")
-            return 0
-        if args.only:  # the table has every rule set: a subset would drop the others' rows from docs/CLAIMS.md
-            print(f"error: --table: measures every finished rule set; leave out --only (or --only {EXPERTS} for "
-                  f"claim 8 alone)", file=sys.stderr)
-            return 2
-        return write_claims(args.out, [rule.name for rule in RULE_SETS])
-    stages = selected_stages(args.only, args.out)
-    if args.list:
-        for stage in stages:
-            command = stage_command(stage, SCREEN, args.out)[0]
-            print(f"{stage.name}: {' '.join(command[1:])}")
-        return 0
-    manifest, manifest_path = load_manifest(args.out, study="claims", sizes=SCREEN, rule_sets=names)
-    return run_stages(stages, SCREEN, manifest, manifest_path, lambda stage: stage_command(stage, SCREEN, args.out),
-                      **from_options(args, args.out))
-
-
-def write_claims(out: str, names) -> int:
-    """Measure every finished rule set of ``names``; write claims.json and docs/CLAIMS.md's table."""
-    import json
-
-    with open(os.path.join("docs", "reproduction", "summary.json")) as f:
-        summary = json.load(f)
-    measured = {}
+def write_claims(table: ClaimsTable) -> int:
+    """Measure every finished rule set; write claims.json, the document's tables and figures, and claim 8's."""
+    summary, measured = reproduction_summary(table.document) or {}, {}
+    reproduction = os.path.join(table.results, os.path.relpath(REPRODUCTION, RESULTS))
+    names = [rule.name for rule in RULE_SETS]
     for name in names:
         rule = BY_NAME[name]
-        if finished(rule, out):
+        if table.finished(rule):
             print(f"measuring {name}", flush=True)
-            measured[name] = measure_rule(rule, summary, out)
-    os.makedirs(out, exist_ok=True)
+            measured[name] = measure_runs(name, table.runs_of(rule), summary, sle_whole_test=rule.sle_noise_steps == 0)
+    os.makedirs(table.out, exist_ok=True)
     numbers = {name: {**{str(k): v for k, v in m["claims"].items()}, "fresh": m.get("fresh", {})}
                for name, m in measured.items()}
-    with open(os.path.join(out, "claims.json"), "w") as f:
+    with open(os.path.join(table.out, "claims.json"), "w") as f:
         json.dump(dict(sizes=dict(screen=SCREEN, full=SCALES["paper"]), rule_sets={r.name: r._asdict() for r in RULE_SETS},
                        claims=numbers), f, indent=2, default=str)
-    write_table(os.path.join("docs", "CLAIMS.md"), table(measured, names), TABLE_START, TABLE_END)
-    write_table(os.path.join("docs", "CLAIMS.md"), fresh_table(measured, names), FRESH_START, FRESH_END)
-    figure(measured, names)
+    write_table(table.document, table_markdown(measured, names), TABLE_START, TABLE_END)
+    write_table(table.document, fresh_table(measured, names), FRESH_START, FRESH_END)
+    figures = os.path.join(os.path.dirname(table.document), "claims")
+    figure(measured, names, os.path.join(figures, "claims_map.png"))
     points = speed_dial(numbers)
     if len(points) > 1:
-        dial_figure(points)
-    write_experts(out)
-    print(f"wrote docs/CLAIMS.md's table and {os.path.join(out, 'claims.json')}: {len(measured)} of {len(names)} "
-          f"rule sets finished")
+        dial_figure(points, os.path.join(figures, "speed_dial.png"))
+    write_experts(dataclasses.replace(EXPERTS_TABLE, results=table.results, out=table.out, document=table.document))
+    print(f"wrote {table.document}'s tables and {os.path.join(table.out, 'claims.json')}: {len(measured)} of "
+          f"{len(names)} rule sets finished ({reproduction})")
     return 0
 
 
+class ScreenTable(ClaimsTable):
+    """The claims map: every rule set's runs; its report, the map's tables and figures (and claim 8's)."""
+
+    def report(self) -> int:
+        return write_claims(self)
+
+
+class ExpertsTable(ClaimsTable):
+    """Claim 8's runs: skills and paper-selector with 4 and 6 experts; its report, claim 8's tables and figure."""
+
+    def report(self) -> int:
+        for name, claim in write_experts(self).items():
+            print(f"claim 8, {name}: {claim['verdict']}{' so far' if claim['missing'] else ''}")
+        return 0
+
+
+#: Claim 4 and the arena: what a circular path can score on the six tasks (experiments/circular_paths.py).
+CIRCLES = Measure("circles", "", module="experiments.circular_paths", out=os.path.join(OUT, "circles"),
+                  cost=1001 * 6 * 6 * 20_000.0)  # its grid: 1,001 turns x 6 speeds, 6 tasks of 20,000 steps
+SCREEN_TABLE = ScreenTable("claims-screen", "docs/CLAIMS.md", 3, scale=SCREEN, out=OUT, measures=(CIRCLES,),
+                           rows=tuple(row for name in SCREEN_ORDER for row in rule_rows(BY_NAME[name])))
+EXPERTS_TABLE = ExpertsTable("claims-experts", "docs/CLAIMS.md", 5, scale=SCREEN, out=OUT, rows=tuple(
+    row for name in EXPERT_RULE_SETS for k in EXPERT_COUNTS for row in rule_rows(BY_NAME[name], k)))
+#: The module's tables by the name its command line takes first (``screen`` when none is given).
+TABLES = {"screen": SCREEN_TABLE, "experts": EXPERTS_TABLE}
+
+
+def stages_for(argv) -> tuple[list, dict]:
+    """The stages of the table ``argv`` names, and their scale (for ``python -m experiments list``)."""
+    return TABLES[argv[0]].all_stages()
+
+
+def main(argv=None) -> int:
+    """``python -m experiments.claims_study [screen|experts] [--report] [runner options]``."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    return (TABLES[argv.pop(0)] if argv and argv[0] in TABLES else SCREEN_TABLE).main(argv)
+
+
 #: The studies of this module (python -m experiments finds them).
-STUDIES = (Study("claims-screen", "claims_study", "docs/CLAIMS.md", 3, ("--only", SCREEN_NAME), ("--table",)),
-           Study("claims-experts", "claims_study", "docs/CLAIMS.md", 5, ("--only", EXPERTS),
-                 ("--only", EXPERTS, "--table")))
+STUDIES = tuple(Study(table.name, "claims_study", table.document, table.order, (name,), (name, "--report"))
+                for name, table in TABLES.items())
 
 
 if __name__ == "__main__":

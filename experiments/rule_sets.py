@@ -1,4 +1,4 @@
-"""The claims map's rule sets (docs/CLAIMS.md): learning rules as a preset plus overrides, and what each shares.
+"""The claims map's rule sets (docs/CLAIMS.md): learning rules as a preset plus overrides, and their runs' sizes.
 
 A leaf of the studies: the reproduction takes a rule set as a variant, the claims map and the time-scale
 study measure them; each imports this table, and it imports none of them.
@@ -11,16 +11,24 @@ from typing import NamedTuple
 from imrl_jax.config import ADULT_SELECTOR
 
 
+#: The conditions whose runs a rule set takes at the paper's sizes by default: the reproduction's. EE-LS depends
+#: only on the adult selector's values and EE-ES on nothing learned, so each is one of the reproduction's runs.
+SHARED_FULL = ("EE-LS", "EE-ES")
+#: Every condition at the paper's sizes: the reproduction's own rule sets.
+ALL_FULL = ("LE-LS", "EE-LS", "EE-ES", "SLE")
+
+
 class RuleSet(NamedTuple):
-    """One row of the claims map: learning rules as a preset plus overrides, and what it shares."""
+    """One row of the claims map: learning rules as a preset plus overrides, and which of its runs are at the
+    paper's sizes (the others at the screen's); a run is found by what it computes, so rule sets whose lives are
+    the same share it."""
 
     name: str
     preset: str
     sets: tuple[str, ...]
     about: str
-    ee_ls: str  # the rule set whose EE-LS run (and test) this one's is
-    sle: str  # the rule set whose SLE test this one's is (itself: its own test)
-    le_ls: str = ""  # the rule set whose LE-LS run this one's is ("": its own)
+    ee_ls: str  # the reproduction's variant whose EE-LS run is this one's (the reproduction shares it so)
+    full: tuple[str, ...] = SHARED_FULL  # the conditions run at the paper's sizes
     sle_noise_steps: int | None = None  # SLE's noise horizon: None one task's length (100,000), 0 the whole test
 
 
@@ -28,49 +36,47 @@ class RuleSet(NamedTuple):
 SELECTOR_SETS = tuple(f"{name}={value}" for name, value in ADULT_SELECTOR.items())
 RULE_SETS: tuple[RuleSet, ...] = (
     RuleSet("paper", "paper", (), "the learning rules as written (the finished paper-scale run)",
-            ee_ls="paper", sle="paper", le_ls="paper"),
+            ee_ls="paper", full=ALL_FULL),
     RuleSet("skills", "skills", (), "docs/CHILDHOOD.md's choice (the finished paper-scale run)",
-            ee_ls="skills", sle="skills", le_ls="skills"),
+            ee_ls="skills", full=ALL_FULL),
     RuleSet("skills-bias0", "skills", ("initial_speed_bias=0.0",),
             "skills whose learned experts start at half speed, as MODEL.md's zero weights (the paper's "
-            "\"sub-optimal basic skills\")", ee_ls="skills", sle="skills-bias0"),
+            "\"sub-optimal basic skills\")", ee_ls="skills"),
     RuleSet("skills-bias1", "skills", ("initial_speed_bias=1.0",), "skills, learned experts start at 73 % speed",
-            ee_ls="skills", sle="skills-bias1"),
+            ee_ls="skills"),
     RuleSet("skills-bias2", "skills", ("initial_speed_bias=2.0",), "skills, learned experts start at 88 % speed",
-            ee_ls="skills", sle="skills-bias2"),
+            ee_ls="skills"),
+    # SLE reads neither the walls nor the childhood: its test is skills' own, at the paper's sizes.
     RuleSet("skills-clamp", "skills", ("childhood_walls=clamp",),
             "skills with MODEL.md's walls in childhood (the robot slides along them, never put back)",
-            ee_ls="skills", sle="skills"),
+            ee_ls="skills", full=(*SHARED_FULL, "SLE")),
     RuleSet("paper-selector", "paper", SELECTOR_SETS,
             "the paper's rules with only the adult selector's unstated values of skills (traces, selector rates)",
-            ee_ls="skills", sle="skills-bias0"),
+            ee_ls="skills"),
     RuleSet("paper-selector-sle-test", "paper", SELECTOR_SETS,
             "paper-selector with SLE's noise annealed over the whole 1,000,000-cycle test (every run shared)",
-            ee_ls="skills", sle="skills-bias0-sle-test", le_ls="paper-selector", sle_noise_steps=0),
+            ee_ls="skills", sle_noise_steps=0),
     RuleSet("faithful", "faithful", (), "paper-selector-sle-test at full scale: the `faithful` preset of the "
-            "reproduction (`make reproduce`)", ee_ls="skills", sle="faithful", le_ls="faithful", sle_noise_steps=0),
-    RuleSet("extension", "extension", (), "MODEL.md's learning extensions, in childhood too", ee_ls="skills",
-            sle="skills-bias0"),
+            "reproduction (`make reproduce`)", ee_ls="skills", full=ALL_FULL, sle_noise_steps=0),
+    RuleSet("extension", "extension", (), "MODEL.md's learning extensions, in childhood too", ee_ls="skills"),
     RuleSet("skills-sle-test", "skills", (), "skills, SLE's noise annealed over the whole 1,000,000-cycle test",
-            ee_ls="skills", sle="skills-sle-test", le_ls="skills", sle_noise_steps=0),
+            ee_ls="skills", full=("LE-LS", *SHARED_FULL), sle_noise_steps=0),
     RuleSet("skills-bias0-sle-test", "skills", ("initial_speed_bias=0.0",),
             "skills-bias0 with SLE's noise annealed over the whole 1,000,000-cycle test", ee_ls="skills",
-            sle="skills-bias0-sle-test", le_ls="skills-bias0", sle_noise_steps=0),
+            sle_noise_steps=0),
     RuleSet("paper-sle-test", "paper", (), "paper, SLE's noise annealed over the whole 1,000,000-cycle test",
-            ee_ls="paper", sle="paper-sle-test", le_ls="paper", sle_noise_steps=0),
+            ee_ls="paper", full=("LE-LS", *SHARED_FULL), sle_noise_steps=0),
     # Every other row under the second SLE reading too: claims 5 and 6 depend on it. Each shares its
     # LE-LS with its row; SLE reads neither the walls nor the childhood, so most share an SLE test too.
     RuleSet("skills-bias1-sle-test", "skills", ("initial_speed_bias=1.0",),
-            "skills-bias1 with SLE's noise annealed over the whole test", ee_ls="skills",
-            sle="skills-bias1-sle-test", le_ls="skills-bias1", sle_noise_steps=0),
+            "skills-bias1 with SLE's noise annealed over the whole test", ee_ls="skills", sle_noise_steps=0),
     RuleSet("skills-bias2-sle-test", "skills", ("initial_speed_bias=2.0",),
-            "skills-bias2 with SLE's noise annealed over the whole test", ee_ls="skills",
-            sle="skills-bias2-sle-test", le_ls="skills-bias2", sle_noise_steps=0),
+            "skills-bias2 with SLE's noise annealed over the whole test", ee_ls="skills", sle_noise_steps=0),
     RuleSet("skills-clamp-sle-test", "skills", ("childhood_walls=clamp",),
             "skills-clamp with SLE's noise annealed over the whole test (every run shared)", ee_ls="skills",
-            sle="skills-sle-test", le_ls="skills-clamp", sle_noise_steps=0),
+            sle_noise_steps=0),
     RuleSet("extension-sle-test", "extension", (),
             "extension with SLE's noise annealed over the whole test (every run shared)", ee_ls="skills",
-            sle="skills-bias0-sle-test", le_ls="extension", sle_noise_steps=0),
+            sle_noise_steps=0),
 )
 BY_NAME = {rule.name: rule for rule in RULE_SETS}

@@ -1,72 +1,98 @@
-"""The claims study's plan: what each rule set runs, what it shares (and that sharing is sound), its table."""
+"""The claims study's tables: what each rule set runs, what it shares (and that sharing is sound), its report."""
+
+import dataclasses
+import os
+import sys
 
 import numpy as np
 import pytest
 
 from experiments import claims, claims_study as study
+from experiments import study as S
+from experiments.reproduce import stage_done
+from experiments.study import SCALES, SCREEN
+from experiments.table import evolution_spec, scratch_test_key
 
 
-@pytest.mark.parametrize("rule", study.RULE_SETS, ids=lambda r: r.name)
-def test_a_shared_run_differs_only_in_fields_its_condition_ignores(rule):
-    """A row may use another row's run only where that condition's lives would be bitwise the same."""
-    owners = {"EE-LS": rule.ee_ls, "EE-ES": "paper", "SLE": rule.sle, "LE-LS": rule.le_ls or rule.name}
-    for condition, owner in owners.items():
-        own, shared = study.config_of(rule, condition), study.config_of(study.BY_NAME[owner], condition)
-        assert own.model_differences(shared) == [], (condition, owner)
+#: Where the map was measured: each rule set's run of each condition, by the owner whose folder holds it (a rule
+#: set of the reproduction: ``paper/OWNER``; else ``claims/OWNER``).
+MEASURED_ON = {
+    "paper": ("paper/paper", "paper/paper", "paper/paper", "paper/paper"),
+    "skills": ("paper/skills", "paper/skills", "paper/paper", "paper/skills"),
+    "skills-clamp": ("claims/skills-clamp", "paper/skills", "paper/paper", "paper/skills"),
+    "paper-selector": ("claims/paper-selector", "paper/skills", "paper/paper", "claims/skills-bias0"),
+    "paper-selector-sle-test": ("claims/paper-selector", "paper/skills", "paper/paper", "claims/skills-bias0-sle-test"),
+    "faithful": ("paper/faithful", "paper/skills", "paper/paper", "paper/faithful"),
+    "skills-sle-test": ("paper/skills", "paper/skills", "paper/paper", "claims/skills-sle-test"),
+    "skills-clamp-sle-test": ("claims/skills-clamp", "paper/skills", "paper/paper", "claims/skills-sle-test"),
+    "extension-sle-test": ("claims/extension", "paper/skills", "paper/paper", "claims/skills-bias0-sle-test"),
+    "skills-bias1": ("claims/skills-bias1", "paper/skills", "paper/paper", "claims/skills-bias1"),
+}
+
+
+def owner_of(folder: str) -> str:
+    """``paper/OWNER`` or ``claims/OWNER`` of a run's or test's folder under the results."""
+    return "/".join(os.path.relpath(folder, study.RESULTS).split(os.sep)[:2])
+
+
+@pytest.mark.parametrize("name", MEASURED_ON)
+def test_each_rule_set_finds_by_key_the_runs_the_map_was_measured_on(name):
+    """The keys share a run between rule sets exactly where the map did (LE-LS, EE-LS, EE-ES, SLE)."""
+    runs = study.rule_runs(study.BY_NAME[name])
+    expected = dict(zip(("LE-LS", "EE-LS", "EE-ES", "SLE"), MEASURED_ON[name]))
+    assert {c: owner_of(folder) for c, folder in runs.tests.items()} == expected
+    assert {c: owner_of(folder) for c, folder in runs.evolutions.items()} == {c: expected[c] for c in runs.evolutions}
+    assert runs.reproduction == {c: o.split("/")[1] for c, o in expected.items() if o.startswith("paper/") and c != "SLE"}
 
 
 def test_the_sharing_would_catch_a_wrong_share():
-    """skills' EE-LS cannot stand for paper's (the adult selector differs), nor skills' SLE for bias 0's."""
-    skills, paper = study.BY_NAME["skills"], study.BY_NAME["paper"]
-    assert study.config_of(paper, "EE-LS").model_differences(study.config_of(skills, "EE-LS")) == [
-        "trace_lambda", "eta_selector_actor", "eta_selector_critic"]
-    bias0 = study.BY_NAME["skills-bias0"]
-    assert study.config_of(bias0, "SLE").model_differences(study.config_of(skills, "SLE")) == ["initial_speed_bias"]
+    """skills' EE-LS cannot stand for paper's (the adult selector differs), nor skills' SLE for bias 0's: their
+    keys differ."""
+    skills, paper, bias0 = (study.rule_rows(study.BY_NAME[n]) for n in ("skills", "paper", "skills-bias0"))
+    assert study.config_of(study.BY_NAME["paper"], "EE-LS").model_differences(
+        study.config_of(study.BY_NAME["skills"], "EE-LS")) == ["trace_lambda", "eta_selector_actor", "eta_selector_critic"]
+    assert evolution_spec(paper[1], SCALES["paper"]).key() != evolution_spec(skills[1], SCALES["paper"]).key()
+    assert scratch_test_key(bias0[3], SCREEN) != scratch_test_key(skills[3], SCREEN)
+    assert study.config_of(study.BY_NAME["skills-bias0"], "SLE").model_differences(
+        study.config_of(study.BY_NAME["skills"], "SLE")) == ["initial_speed_bias"]
 
 
-def test_plan_runs_only_what_no_other_run_provides():
-    stages = study.plan(["skills", "skills-sle-test", "skills-clamp", "skills-bias0"])
-    assert [s.name for s in stages] == ["learning test skills-sle-test SLE", "evolve skills-clamp LE-LS",
-                                        "learning test skills-clamp LE-LS", "evolve skills-bias0 LE-LS",
-                                        "learning test skills-bias0 LE-LS", "learning test skills-bias0 SLE"]
-    evolve = study.stage_command(stages[1], study.SCREEN)[0]
+def test_the_screen_runs_only_what_no_other_run_provides():
+    """Every committed run is found (nothing left to run), each run or test once; a new rule set's stages have the
+    right overrides and sizes."""
+    stages, scale = study.SCREEN_TABLE.all_stages()
+    assert all(stage_done(s, scale) for s in stages) and len({s.out_dir for s in stages}) == len(stages)
+    assert [s.name for s in stages][:3] == ["evolve skills-sle-test LE-LS", "learning test skills-sle-test LE-LS",
+                                            "evolve skills-sle-test EE-LS"]
+    new = dataclasses.replace(study.SCREEN_TABLE, rows=study.rule_rows(study.RuleSet(
+        "mine", "skills", ("childhood_walls=clamp", "initial_speed_bias=3.0"), "", "skills", sle_noise_steps=0)))
+    stages = {s.name: s for s in new.all_stages()[0]}
+    evolve = new.stage_command(stages["evolve mine LE-LS"])[0]
     assert evolve[evolve.index("--preset") + 1] == "skills" and "childhood_walls=clamp" in evolve
     assert evolve[evolve.index("--seeds") + 1] == "5" and evolve[evolve.index("--task-steps") + 1] == "100000"
-    sle = study.stage_command(stages[0], study.SCREEN)[0]
+    sle = new.stage_command(stages["learning test mine SLE"])[0]
     assert "sle_noise_steps=0" in sle and sle[sle.index("--runs") + 1] == "5"
-    assert "sle_noise_steps=100000" in study.stage_command(stages[-1], study.SCREEN)[0]
-    test = study.stage_command(stages[2], study.SCREEN)[0]
+    test = new.stage_command(stages["learning test mine LE-LS"])[0]
     assert test[test.index("--best") + 1] == "5" and test[test.index("--tests") + 1] == "4"
-    assert study.run_dir(study.BY_NAME["skills-clamp"], "EE-LS").endswith("paper/skills/evolve/EE-LS")
+    assert not stage_done(stages["evolve mine LE-LS"], SCREEN)
+    assert stages["evolve mine EE-LS"].out_dir.endswith(os.path.join("paper", "skills", "evolve", "EE-LS"))
 
 
 def test_the_faithful_row_is_the_reproductions_and_the_screens_closest_row_at_full_scale():
-    """Its runs are make reproduce's (none planned here); its lives are paper-selector-sle-test's."""
+    """Its lives are paper-selector-sle-test's, at the paper's sizes."""
     faithful, screened = study.BY_NAME["faithful"], study.BY_NAME["paper-selector-sle-test"]
-    assert study.plan(["faithful"]) == []
-    assert study.run_dir(faithful, "LE-LS").endswith("paper/faithful/evolve/LE-LS")
-    assert study.learning_dir(faithful, "SLE").endswith("paper/faithful/test/SLE")
-    assert study.run_dir(faithful, "EE-LS").endswith("paper/skills/evolve/EE-LS")
     for condition in ("LE-LS", "SLE"):
         assert study.config_of(faithful, condition).model_differences(study.config_of(screened, condition)) == []
 
 
-def test_unknown_rule_set_is_refused(capsys):
-    assert study.main(["--only", "skills,skils"]) == 2
-    err = capsys.readouterr().err.strip()
-    assert "unknown rule set 'skils'" in err and "\n" not in err
-    assert err.endswith(", extension-sle-test, screen, experts)")  # the screen and claim 8's runs are choices too
-
-
-def test_the_screen_and_claim_8_are_chosen_apart():
-    """``run all`` runs the screen, then the reproduction, then claim 8: each a --only of its own."""
-    assert study.parse_names("screen") == list(study.SCREEN_ORDER)
-    assert study.parse_names(None) == [*study.SCREEN_ORDER, study.EXPERTS]
-    screen, experts = study.selected_stages("screen", "out"), study.selected_stages("experts", "out")
-    assert screen[0].kind == "measure" and not any("+experts" in s.variant for s in screen)
-    assert experts and all("+experts" in s.variant for s in experts)
-    assert [s.name for s in study.selected_stages(None, "out")] == [s.name for s in screen + experts]
-    assert study.stages_for(["--only", "experts", "--out", "out"])[0] == experts
+def test_the_screen_and_claim_8_are_two_studies_of_one_module():
+    """``run all`` runs the screen, then the reproduction, then claim 8; ``--report`` writes each one's report."""
+    found = S.studies()
+    assert found["claims-screen"].command() == [sys.executable, "-m", "experiments.claims_study", "screen"]
+    assert found["claims-experts"].command(report=True)[-2:] == ["experts", "--report"]
+    experts, _ = found["claims-experts"].stages()
+    assert [s.name for s in experts][:2] == ["evolve skills LE-LS 4 experts", "learning test skills LE-LS 4 experts"]
+    assert not any("experts" in s.name for s in found["claims-screen"].stages()[0])
 
 
 def test_shared_runs_read_the_reproduction_reports_probes():
@@ -95,7 +121,7 @@ def test_the_table_goes_between_its_markers(tmp_path):
     path = tmp_path / "CLAIMS.md"
     path.write_text(f"# Title\n\n{study.TABLE_START}\nstale row\n{study.TABLE_END}\n\nafter\n")
     row = {k: dict(verdict="holds" if k < 4 else "n/a", measured=f"m{k}; more") for k in range(1, 8)}
-    study.write_table(str(path), study.table({"paper": dict(claims=row)}, ["paper", "skills-bias0"]), study.TABLE_START,
+    study.write_table(str(path), study.table_markdown({"paper": dict(claims=row)}, ["paper", "skills-bias0"]), study.TABLE_START,
                       study.TABLE_END)
     text = path.read_text()
     assert "stale row" not in text and text.endswith("after\n") and text.startswith("# Title")
@@ -120,26 +146,20 @@ def test_claim_experts_on_hand_made_numbers():
     assert claim_experts({("EE-LS", 4): same})["verdict"] == NOT_AVAILABLE  # no 3-expert run to compare with
 
 
-def test_claim_8_stages_evolve_more_experts_and_test_their_own_runs():
-    stages = study.plan_experts(("skills",))
-    assert len(stages) == 8 and stages[0].name == "evolve skills LE-LS 4 experts"
-    evolve = study.stage_command(stages[0], study.SCREEN)[0]
-    assert "num_experts=4" in evolve and evolve[evolve.index("--preset") + 1] == "skills"
-    test = study.stage_command(stages[3], study.SCREEN)[0]  # EE-LS, 4 experts
-    assert test[test.index("-m") + 2] == study.experts_dir("skills", "EE-LS", 4)
-    assert stages[2].cost == 5 * 50 * 100 * 6 * 100_000  # EE-LS: no childhood
-    assert study.parse_names(None)[-1] == "experts" and study.parse_names("experts") == ["experts"]
-
-
 def test_claim_8_runs_are_shared_as_the_three_expert_runs_are():
-    """paper-selector evolves its own LE-LS with more experts; its EE-LS is skills' (and the share is sound)."""
-    stages = study.plan_experts(("skills", "paper-selector"))
+    """Claim 8's stages evolve more experts and test their own runs; paper-selector evolves its own LE-LS with more
+    experts, its EE-LS is skills' (found by key: the share is sound)."""
+    stages, scale = study.EXPERTS_TABLE.all_stages()
     assert [s.name for s in stages[8:]] == [
         "evolve paper-selector LE-LS 4 experts", "learning test paper-selector LE-LS 4 experts",
         "evolve paper-selector LE-LS 6 experts", "learning test paper-selector LE-LS 6 experts"]
-    evolve = study.stage_command(stages[8], study.SCREEN)[0]
+    assert all(stage_done(s, scale) for s in stages) and stages[2].cost == 5 * 50 * 100 * 6 * 100_000  # no childhood
+    evolve = study.EXPERTS_TABLE.stage_command(stages[8])[0]
     assert evolve[evolve.index("--preset") + 1] == "paper" and "num_experts=4" in evolve and "trace_lambda=0.98" in evolve
-    assert [s.name for s in study.plan_experts(("paper-selector",))][2] == "evolve skills EE-LS 4 experts"
+    found = study.experts_runs(study.EXPERTS_TABLE)
+    assert found["paper-selector", "EE-LS", 4] == found["skills", "EE-LS", 4][:2] + ("skills",)
+    assert found["paper-selector", "LE-LS", 4][2] == "paper-selector" and found["paper-selector", "EE-LS", 3][2] == "skills"
+    assert found["skills", "EE-LS", 6][1].endswith(os.path.join("claims", "skills", "experts6", "test", "EE-LS"))
     selector, skills = study.BY_NAME["paper-selector"], study.BY_NAME["skills"]
     for k in study.EXPERT_COUNTS:
         own, shared = study.config_of(selector, "EE-LS", k), study.config_of(skills, "EE-LS", k)
@@ -169,22 +189,6 @@ def test_speed_dial_reads_claim_3_fresh_lives_and_claim_6_levels_per_bias():
     assert points[1].le_ls_fresh == pytest.approx(0.73)
 
 
-def test_table_with_only_is_refused_so_no_row_is_dropped(capsys):
-    assert study.main(["--table", "--only", "skills"]) == 2
-    assert capsys.readouterr().err.strip() == ("error: --table: measures every finished rule set; leave out --only (or "
-                                              "--only experts for claim 8 alone)")
-
-
-def test_list_prints_every_stage_and_runs_nothing(tmp_path, capsys):
-    out = str(tmp_path / "claims")
-    assert study.main(["--list", "--only", "skills-clamp,experts", "--out", out]) == 0
-    lines = capsys.readouterr().out.splitlines()
-    stages = study.plan(["skills-clamp"], study.SCREEN, out) + study.plan_experts(study.EXPERT_RULE_SETS, study.SCREEN,
-                                                                                  out)
-    assert [line.split(": ", 1)[0] for line in lines] == [s.name for s in stages]
-    assert "--set childhood_walls=clamp" in lines[0] and not (tmp_path / "claims").exists()
-
-
 def _hand_made_run(folder, best_per_generation, steady_per_run):
     """An evolution (history.csv, config.json) with ``best_per_generation`` (generations, seeds) and its test."""
     import json
@@ -201,18 +205,16 @@ def _hand_made_run(folder, best_per_generation, steady_per_run):
     return str(evolve), str(test)
 
 
-def test_claim_8_alone_measures_hand_made_runs_and_says_so_far_while_one_is_missing(tmp_path, monkeypatch):
-    """``--table --only experts``: each 3-expert run against its 4- and 6-expert runs, with the sizes and the levels."""
+def test_claim_8_alone_measures_hand_made_runs_and_says_so_far_while_one_is_missing(tmp_path):
+    """Claim 8's report: each 3-expert run against its 4- and 6-expert runs, with the sizes and the levels."""
     runs = {}
     for condition, k, level in (("LE-LS", 3, 0.8), ("LE-LS", 4, 0.72), ("LE-LS", 6, 0.4), ("EE-LS", 3, 0.5),
                                 ("EE-LS", 4, 0.45)):  # EE-LS with 6 experts has not run
         runs[condition, k] = _hand_made_run(tmp_path / f"{condition}{k}", [[0.1, 0.1]] * 5 + [[level - 0.01, level + 0.01]] * 5,
                                             [level, level, level + 0.02])
-    monkeypatch.setattr(study, "run_dir", lambda rule, c, out, reproduction: runs[c, 3][0])
-    monkeypatch.setattr(study, "learning_dir", lambda rule, c, out, reproduction: runs[c, 3][1])
-    monkeypatch.setattr(study, "experts_dir", lambda rule, c, k, kind, out: (runs[c, k] if (c, k) in runs else
-                                                                            ("/nonexistent", "/nonexistent"))[kind == "test"])
-    claim = study.measure_experts(study.BY_NAME["skills"], str(tmp_path))
+    found = {("skills", c, k): (*runs.get((c, k), ("/nonexistent", "/nonexistent")), "skills")
+             for c in study.EXPERT_CONDITIONS for k in (3, *study.EXPERT_COUNTS)}
+    claim = study.measure_experts(study.BY_NAME["skills"], found)
     assert claim["sizes"] == {"LE-LS 3": "2x10", "LE-LS 4": "2x10", "LE-LS 6": "2x10", "EE-LS 3": "2x10", "EE-LS 4": "2x10"}
     assert claim["missing"] == ["EE-LS final 6", "EE-LS steady 6"]
     # hand-made runs have no population to live or probe again
@@ -239,9 +241,10 @@ def test_claim_8_alone_writes_its_table_json_and_figure_and_keeps_the_rest(tmp_p
     hand = dict(verdict=claims.HOLDS, measured="m", numbers={}, sizes={"LE-LS 4": "5x100"}, missing=[], runs=[],
                 levels=[dict(rule="skills", condition="LE-LS", measure=m, num_experts=k, mean=0.8, sd=0.01, count=5)
                         for m in ("final", "steady") for k in (3, 4, 6)])
-    monkeypatch.setattr(study, "measure_experts", lambda rule, out, summary: dict(hand))
-    monkeypatch.chdir(tmp_path)
-    assert study.main(["--table", "--only", "experts", "--out", "claims"]) == 0
+    monkeypatch.setattr(study, "measure_experts", lambda rule, found, summary, reproduction: dict(hand))
+    table = dataclasses.replace(study.EXPERTS_TABLE, document=str(tmp_path / "docs" / "CLAIMS.md"),
+                                out=str(tmp_path / "claims"), results=str(tmp_path / "results"))
+    assert table.main(["--report"]) == 0
     assert capsys.readouterr().out.splitlines() == ["claim 8, skills: holds", "claim 8, paper-selector: holds"]
     text = (tmp_path / "docs" / "CLAIMS.md").read_text()
     assert text.startswith(f"keep\n{study.TABLE_START}\nthe map\n") and "| `paper-selector` | LE-LS 4: 5x100 | holds: m |" in text

@@ -1,6 +1,5 @@
 """``python -m experiments``: every study found by itself, listed, run and reported in order."""
 
-import subprocess
 import sys
 
 import pytest
@@ -15,7 +14,7 @@ ORDER = ["timescale", "novel-tasks", "claims-screen", "reproduction", "claims-ex
 def test_every_study_is_found_in_order():
     found = S.studies()
     assert list(found) == ORDER
-    assert found["claims-experts"].command() == [sys.executable, "-m", "experiments.claims_study", "--only", "experts"]
+    assert found["claims-experts"].command() == [sys.executable, "-m", "experiments.claims_study", "experts"]
     assert found["reproduction"].command(report=True) == [sys.executable, "-m", "experiments.report",
                                                            "experiments/results/paper"]
 
@@ -98,7 +97,7 @@ def test_studies_run_in_order_and_a_failure_stops_the_rest(monkeypatch, capsys):
     ran = []
     monkeypatch.setattr(cli.subprocess, "Popen", _fake_run(ran, fail="experiments.reproduce"))
     assert cli.main(["run", "all"]) == 3
-    assert ran == ["experiments.timescale", "experiments.novel_tasks", "experiments.claims_study --only screen",
+    assert ran == ["experiments.timescale", "experiments.novel_tasks", "experiments.claims_study screen",
                    "experiments.reproduce --scale paper"]
     assert "study reproduction stopped with exit code 3" in capsys.readouterr().err
     ran.clear()
@@ -112,8 +111,8 @@ def test_report_writes_each_studys_tables(monkeypatch):
     monkeypatch.setattr(cli.subprocess, "Popen", _fake_run(ran))
     assert cli.main(["report"]) == 0
     assert ran == ["experiments.timescale --report", "experiments.novel_tasks --report",
-                   "experiments.claims_study --table", "experiments.report experiments/results/paper",
-                   "experiments.claims_study --only experts --table", "experiments.search --report",
+                   "experiments.claims_study screen --report", "experiments.report experiments/results/paper",
+                   "experiments.claims_study experts --report", "experiments.search --report",
                    "experiments.future_work --report", "experiments.report experiments/results/cpu",
                    "experiments.goals --report"]
 
