@@ -1,131 +1,65 @@
 """The paper's future work as conditions (docs/FUTURE_WORK.md): evolutions and learning tests of the new rows.
 
-    python -m experiments.future_work               # run (or go on with) every stage, in order
-    python -m experiments.future_work --only EV-LS,EXT-LS
-    python -m experiments.future_work --list        # the stages and their commands, nothing run
-    python -m experiments.future_work --report      # the tables and figure of whatever has finished
+    python -m experiments run future-work       # run (or go on with) every stage, in order
+    python -m experiments list future-work      # the stages, done or to run
+    python -m experiments report future-work    # the tables and figures of whatever has finished
 
-Each row of :data:`RUNS` is a condition of the table (``imrl_jax.conditions``) under a preset
-and ``--set`` overrides, evolved (5 seeds x 100 generations at the paper's life lengths, then
-a learning test of its 5 best x 4 tests) or, for a condition that is not evolved, tested from
-scratch (5 runs x 5 x 4). The paper's four conditions under the same rules come from the
-finished paper-scale reproduction (``experiments/results/paper``). The stages run through
-the reproduction's resumable stage runner (:func:`experiments.reproduce.run_stages`): run the
-same command again after an interruption.
-
-``--report`` (:func:`report`) measures every finished row beside the reproduction's: final best
-fitness, its spread and plateau, and the learning tests' steady state; (c)'s evolved learning
-values beside the presets'; (d)'s number of expressed experts and its fitness against 6 and 3
-experts. It writes report.json and future_work.png under ``--out`` and the tables into
-docs/FUTURE_WORK.md, from whatever has finished.
+Each row is a condition of the table (``imrl_jax.conditions``) under a preset and ``--set`` overrides,
+evolved at the paper's lengths (5 seeds x 100 generations, then its 5 best x 4 learning tests) or, not
+evolved, tested from scratch (5 runs x 5 x 4), beside the reproduction's paper runs (10 seeds); each
+run is found by its key wherever a study made it (the claims study's claim-8 runs: LE-LS-6). The report
+measures every finished row (final best fitness, its spread and plateau, fresh lives, steady state),
+(c)'s evolved learning values, (d)'s expressed experts, judges the paper's four questions
+(``claims.FUTURE``) and draws a figure per question.
 """
 
 from __future__ import annotations
 
-import argparse
 import csv
+import json
 import os
 import sys
 from typing import NamedTuple
 
+import numpy as np
+
 # NUM_BEST: the junction probe drives claim 7's number of each seed's fittest genomes, so that a run shared with
 # the claims study (LE-LS-6) keeps one probe.json
 from experiments.claims import NUM_BEST
-from experiments.study import REPRODUCTION, SCREEN
-from experiments.reproduce import (Stage, evolution_cost, evolution_dir, evolve_command, load_manifest, run_stages,
-                                   test_command, test_cost, test_dir)
-from experiments.executor import add_options, from_options
-from experiments.study import RESULTS, Study
+from experiments.reproduce import test_dir
+from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN
+from experiments.table import Row, Table
 from imrl_jax import conditions
 
 OUT = os.path.join(RESULTS, "future_work")
-
-
-class Run(NamedTuple):
-    """One row of the study: a condition under a preset and overrides."""
-
-    name: str
-    condition: str
-    preset: str
-    sets: tuple[str, ...]
-    about: str
-    # > 0: the claims study's claim-8 run with this many experts under this preset is this row's run, the same
-    # lives: the row reads it there and runs nothing of its own
-    claims_experts: int = 0
-    claims_rule: str = ""  # the claims study's rule set of that run ("": the preset's name)
-
-
-RUNS: tuple[Run, ...] = (
-    Run("EV-LS", "EV-LS", "skills", (), "(a) evolved evaluators, gamma V(x_t) - V(x_{t-1})"),
-    Run("EV-LS-diff", "EV-LS-diff", "skills", (), "(a) evolved evaluators, V(x_t) - V(x_{t-1})"),
-    Run("EXT-LS", "EXT-LS", "skills", (), "(b) the hierarchy on the task's reward only, SLE's noise over 100,000 cycles"),
-    Run("EXT-LS-whole", "EXT-LS", "skills", ("sle_noise_steps=0",), "(b), the noise over the whole test"),
-    Run("LE-LS-P", "LE-LS-P", "skills", (), "(c) evolved learning parameters"),
-    Run("LE-LS-PC", "LE-LS-PC", "skills", (), "(c) evolved learning parameters and childhood length"),
-    Run("LE-LS-N6", "LE-LS-N", "skills", ("num_experts=6",), "(d) up to 6 experts, each expressed by a gene"),
-    Run("LE-LS-6", "LE-LS", "skills", ("num_experts=6",), "(d)'s comparison: 6 experts, all expressed (the claims "
-        "study's claim-8 run)", claims_experts=6),
-    # The same questions under the claims map's chosen rule set (docs/CLAIMS.md, "The decision"): run after skills'.
-    Run("EV-LS-faithful", "EV-LS", "faithful", (), "(a) under `faithful`"),
-    Run("EXT-LS-faithful", "EXT-LS", "faithful", ("sle_noise_steps=0",),
-        "(b) under `faithful`, the noise over the whole test (its SLE's reading)"),
-    Run("LE-LS-P-faithful", "LE-LS-P", "faithful", (), "(c) under `faithful`"),
-    Run("LE-LS-N6-faithful", "LE-LS-N", "faithful", ("num_experts=6",), "(d) under `faithful`"),
-    Run("LE-LS-6-faithful", "LE-LS", "faithful", ("num_experts=6",), "(d)'s comparison under `faithful` (the claims "
-        "study's claim-8 run of paper-selector, the same lives)", claims_experts=6, claims_rule="paper-selector"),
-)
-BY_NAME = {run.name: run for run in RUNS}
-#: The claims study's results, where rows with ``claims_experts`` find their runs.
-CLAIMS_OUT = os.path.join(RESULTS, "claims")
-
-
-def run_dirs(run: Run, out: str = OUT, claims: str = CLAIMS_OUT) -> tuple[str, str]:
-    """A row's evolution and learning-test folders: its own, or the claims study's identical claim-8 run."""
-    if run.claims_experts:
-        from experiments.claims_study import experts_dir
-
-        return tuple(experts_dir(run.claims_rule or run.preset, run.condition, run.claims_experts, kind, claims)
-                     for kind in ("evolve", "test"))
-    return os.path.join(out, run.name, "evolve"), os.path.join(out, run.name, "test")
-
-
-def plan(names, scale: dict = SCREEN, out: str = OUT) -> list[Stage]:
-    """The stages of the rows ``names``, in order: each evolution then its learning test."""
-    stages = []
-    for name in names:
-        run = BY_NAME[name]
-        if run.claims_experts:
-            continue  # the claims study runs it
-        if conditions.get(run.condition).evolved:
-            stages.append(Stage(f"evolve {name}", "evolve", name, run.condition,
-                                os.path.join(out, name, "evolve"), evolution_cost(scale, run.condition)))
-        stages.append(Stage(f"learning test {name}", "test", name, run.condition, os.path.join(out, name, "test"),
-                            test_cost(scale, run.condition)))
-    return stages
-
-
-def stage_command(stage: Stage, scale: dict = SCREEN, out: str = OUT) -> tuple[list[str], None]:
-    """A stage's command line: the package's evolve or learning_test with the row's preset and overrides."""
-    run = BY_NAME[stage.variant]
-    if stage.kind == "evolve":
-        return evolve_command(scale, run.preset, run.condition, stage.out_dir, sets=run.sets), None
-    evolved_dir = os.path.join(out, run.name, "evolve")
-    noise = [s for s in run.sets if s.startswith("sle_noise_steps=")]
-    sets = tuple(s for s in run.sets if s not in noise)
-    return test_command(scale, run.preset, run.condition, evolved_dir, stage.out_dir, sets=sets,
-                        sle_noise_steps=int(noise[0].split("=")[1]) if noise else None), None
-
-
-#: The paper's four conditions under ``skills``, from the finished reproduction (EE-ES's runs are shared, under
-#: ``paper``: :func:`experiments.reproduce.evolution_dir` finds them).
-REPRODUCED = ("LE-LS", "EE-LS", "EE-ES", "SLE")
-#: The reproduction's runs of the ``faithful`` variant that are its own (its EE-LS is skills', EE-ES paper's).
-FAITHFUL_REPRODUCED = ("LE-LS", "SLE")
-#: SLE with its noise annealed over the whole test (the claims study's ``skills-sle-test``): EXT-LS-whole's
-#: reference, as the reproduction's SLE (noise over 100,000 cycles) is EXT-LS's.
-SLE_WHOLE = os.path.join(RESULTS, "claims", "skills-sle-test", "test", "SLE")
-#: The reproduction's evolutions drawn beside the study's (the paper's Fig. 3a).
-DRAWN_BESIDE = ("LE-LS", "EE-LS")
+DOCUMENT = os.path.join("docs", "FUTURE_WORK.md")
+#: The reproduction's report, whose fresh lives of its runs' best genomes the reference rows show.
+SUMMARY = os.path.join("docs", "reproduction", "summary.json")
+#: SLE's tests beside the study's, read where the reproduction and the claims study (``skills-sle-test``: the noise
+#: over the whole test, EXT-LS-whole's reference) made them: a test from scratch has no key to be found by.
+SLE_TESTS = {Row("skills SLE", "SLE", "skills"): test_dir(REPRODUCTION, "skills", "SLE"),
+             Row("skills SLE-whole", "SLE", "skills"): os.path.join(RESULTS, "claims", "skills-sle-test", "test",
+                                                                     "SLE"),
+             Row("faithful SLE", "SLE", "faithful"): test_dir(REPRODUCTION, "faithful", "SLE")}
+#: Every row the report shows, in order, with what it is: the reproduction's first, then the study's.
+ABOUT = {"skills LE-LS": "the reproduction's LE-LS", "skills EE-LS": "the reproduction's EE-LS",
+         "skills EE-ES": "the reproduction's EE-ES", "skills SLE": "the reproduction's SLE",
+         "skills SLE-whole": "the claims study's SLE (skills-sle-test)", "faithful LE-LS": "the reproduction's LE-LS",
+         "faithful SLE": "the reproduction's SLE",
+         "EV-LS": "(a) evolved evaluators, gamma V(x_t) - V(x_{t-1})",
+         "EV-LS-diff": "(a) evolved evaluators, V(x_t) - V(x_{t-1})",
+         "EXT-LS": "(b) the hierarchy on the task's reward only, SLE's noise over 100,000 cycles",
+         "EXT-LS-whole": "(b), the noise over the whole test", "LE-LS-P": "(c) evolved learning parameters",
+         "LE-LS-PC": "(c) evolved learning parameters and childhood length",
+         "LE-LS-N6": "(d) up to 6 experts, each expressed by a gene",
+         "LE-LS-6": "(d)'s comparison: 6 experts, all expressed (the claims study's claim-8 run)",
+         "EV-LS-faithful": "(a) under `faithful`",
+         "EXT-LS-faithful": "(b) under `faithful`, the noise over the whole test (its SLE's reading)",
+         "LE-LS-P-faithful": "(c) under `faithful`", "LE-LS-N6-faithful": "(d) under `faithful`",
+         "LE-LS-6-faithful": "(d)'s comparison under `faithful` (the claims study's claim-8 run of paper-selector, "
+                             "the same lives)"}
+#: The reproduction's rows (their fresh lives come from its report; the probe is not theirs to show).
+REFERENCES = ("skills LE-LS", "skills EE-LS", "skills EE-ES", "faithful LE-LS", *(r.name for r in SLE_TESTS))
 #: (c)'s rows: their evolved learning values beside the presets'.
 PARAMETER_ROWS = ("LE-LS-P", "LE-LS-PC", "LE-LS-P-faithful")
 #: The presets whose values (c)'s table shows beside the evolved ones.
@@ -159,11 +93,8 @@ JUDGED: tuple[Judged, ...] = (
 #: The generations of (d)'s table of expressed experts (the last one is added).
 GENERATIONS_SHOWN = (0, 10, 25, 50)
 NOT_RUN = "not run yet"
-#: The reproduction's report, whose fresh lives of its runs' best genomes the reference rows show.
-SUMMARY = os.path.join("docs", "reproduction", "summary.json")
-DOCUMENT = os.path.join("docs", "FUTURE_WORK.md")
 #: Where the report's tables go in docs/FUTURE_WORK.md.
-TABLE_START = "<!-- future-work tables: python -m experiments.future_work --report -->"
+TABLE_START = "<!-- future-work tables: python -m experiments report future-work -->"
 TABLE_END = "<!-- end of future-work tables -->"
 #: Line styles of the rows that share their condition with another drawn row (the rest take their condition's).
 STYLES = {"LE-LS-6": dict(color="0.3", lw=1.2, ls="-."), "EXT-LS-whole": dict(color="tab:purple", lw=1.0, ls=":"),
@@ -174,9 +105,7 @@ STYLES = {"LE-LS-6": dict(color="0.3", lw=1.2, ls="-."), "EXT-LS-whole": dict(co
 def read_traits(run_dir: str) -> dict | None:
     """An evolution's evolved values from its history.csv: names and (generations, seeds, values, 2) (population
     mean, the best's), or None without any."""
-    import numpy as np
-
-    path = os.path.join(run_dir, "history.csv")
+    path = os.path.join(run_dir or "", "history.csv")
     if not os.path.isfile(path):
         return None
     with open(path) as f:
@@ -193,13 +122,13 @@ def read_traits(run_dir: str) -> dict | None:
     return dict(names=names, values=values)
 
 
-def _evolution(run_dir: str, fresh=None) -> dict | None:
+def _evolution(run_dir: str | None, fresh) -> dict | None:
     """A row's evolution as the report shows it: its size and, once finished, its final best, spread and plateau,
     and ``fresh(run)``: the fresh lives of each seed's best genome (None: not measured)."""
     from experiments.claims import final_best, plateau_generation
     from experiments.loading import read_evolution
 
-    run = read_evolution(run_dir)
+    run = None if run_dir is None else read_evolution(run_dir)
     if run is None:
         return None
     best, planned = run["best"], (run["config"] or {}).get("num_generations")
@@ -211,7 +140,7 @@ def _evolution(run_dir: str, fresh=None) -> dict | None:
         entry.update(final_best=float(final.mean()), final_best_sd=float(final.std()),
                      final_best_per_seed=final.tolist(), plateau_generation=plateau_generation(best.mean(1)),
                      best_per_generation_mean=best.mean(1).tolist(), best_per_generation_sd=best.std(1).tolist())
-        lives = fresh(run) if fresh is not None else None
+        lives = fresh(run)
         if lives is not None:
             entry.update(fresh=lives["mean"], fresh_sd=lives["sd_over_seeds"])
     return entry
@@ -219,8 +148,6 @@ def _evolution(run_dir: str, fresh=None) -> dict | None:
 
 def _test(out_dir: str) -> dict | None:
     """A finished learning test's steady state per run, its mean and sd (ddof 0, as steady.json's) and best run."""
-    import numpy as np
-
     from experiments.loading import read_test
 
     test = read_test(out_dir)
@@ -233,9 +160,9 @@ def _test(out_dir: str) -> dict | None:
                 curve_steps=[int(v) for v in test["steps"]], curve_mean=[float(v) for v in test["mean"]])
 
 
-def _last_values(run_dir: str, evolution: dict | None) -> dict | None:
+def _last_values(evolution: dict | None) -> dict | None:
     """A finished evolution's evolved values in its last generation, mean over seeds: {name: dict(mean, best)}."""
-    traits = read_traits(run_dir) if evolution and evolution["finished"] else None
+    traits = read_traits(evolution["dir"]) if (evolution or {}).get("finished") else None
     if traits is None:
         return None
     values = traits["values"][-1]  # (seeds, values, 2)
@@ -244,10 +171,10 @@ def _last_values(run_dir: str, evolution: dict | None) -> dict | None:
             for t, n in enumerate(traits["names"])}
 
 
-def _expressed(run_dir: str, evolution: dict | None) -> list[dict] | None:
+def _expressed(evolution: dict | None) -> list[dict] | None:
     """(d): per shown generation, the expressed experts (population mean, the best's) and the population's share
     expressing each number, mean over seeds."""
-    traits = read_traits(run_dir) if evolution and evolution["finished"] else None
+    traits = read_traits(evolution["dir"]) if (evolution or {}).get("finished") else None
     if traits is None or "expressed_experts" not in traits["names"]:
         return None
     names, values = traits["names"], traits["values"].mean(1)  # (generations, values, 2)
@@ -275,77 +202,56 @@ def colour_sets(followed: list[list[int]] | None) -> dict | None:
     following = [sum(c >= 0 for c in experts) for experts in followed]
     distinct = colours_followed(followed)
     return dict(genomes=len(followed), sets=dict(sorted(sets.items(), key=lambda kv: (-kv[1], kv[0]))),
-                experts_following=float(sum(following) / len(following)),
-                colours=float(sum(distinct) / len(distinct)))
+                experts_following=float(sum(following) / len(following)), colours=float(sum(distinct) / len(distinct)))
 
 
 def _noise(test: dict | None) -> str:
     """How a finished SLE test annealed its noise, in words ("" before it has finished or without its config)."""
     steps = (test or {}).get("sle_noise_steps")
-    if steps is None:
-        return ""
-    return ", noise over the whole test" if not steps else f", noise over {steps:,} cycles"
+    return "" if steps is None else ", noise over the whole test" if not steps else f", noise over {steps:,} cycles"
 
 
-def measure(out: str = OUT, reproduction: str = REPRODUCTION, sle_whole: str = SLE_WHOLE,
-            claims: str = CLAIMS_OUT, summary: str = SUMMARY) -> dict:
-    """Every row's evolution and learning test, (c)'s evolved learning values and (d)'s experts, from what finished."""
-    import numpy as np
-
-    from experiments.claims import _standard_error
+def measure(rows: dict[str, Row], evolutions: dict, tests: dict, summary: dict) -> dict:
+    """Every row of :data:`ABOUT` (its evolution and test folders, None where it has none), (c)'s evolved learning
+    values and (d)'s experts, from what finished; ``summary``: the reproduction's report (its rows' fresh lives)."""
+    from experiments.claims import _difference
+    from experiments.relive import reproduction_fresh, run_fresh, run_probe
+    from experiments.reproduce import owner
     from imrl_jax import networks
     from imrl_jax.config import make_config
 
-    from experiments.loading import read_json
-    from experiments.relive import reproduction_fresh, run_fresh, run_probe
-    from experiments.reproduce import owner
-
-    report = read_json(summary) or {}
-    shared = lambda v, c: lambda run: reproduction_fresh(report, owner(v, c), c)  # noqa: E731
-
-    def reference(variant: str, c: str) -> dict:
-        evolved = conditions.get(c).evolved
-        return dict(name=f"{variant} {c}", condition=c, about=f"the reproduction's {c}", evolved=evolved,
-                    evolution=_evolution(evolution_dir(reproduction, variant, c), shared(variant, c))
-                    if evolved else None, test=_test(test_dir(reproduction, variant, c)), reference=True,
-                    preset=variant)
-
-    rows = [reference("skills", c) for c in REPRODUCED]
-    rows.append(dict(name="skills SLE-whole", condition="SLE", about="the claims study's SLE (skills-sle-test)",
-                     evolved=False, evolution=None, test=_test(sle_whole), reference=True, preset="skills"))
-    rows += [reference("faithful", c) for c in FAITHFUL_REPRODUCED]
-    for row in rows:
-        row["about"] += "" if conditions.get(row["condition"]).evolved else _noise(row["test"])
-    for run in RUNS:
-        evolved = conditions.get(run.condition).evolved
-        evolution, test = run_dirs(run, out, claims)
-        entry = _evolution(evolution, lambda r, d=evolution: run_fresh(d, r["config"])) if evolved else None
-        # what the experts do (claim 7's junction probe), kept beside the run as its fresh lives are
-        probe = run_probe(evolution, num_best=NUM_BEST) if (entry or {}).get("finished") else None
-        rows.append(dict(name=run.name, condition=run.condition, about=run.about, evolved=evolved, evolution=entry,
-                         test=_test(test), reference=False, preset=run.preset,
-                         colours=colour_sets(probe["followed"] if probe else None)))
-    by_name = {row["name"]: row for row in rows}
+    measured_rows = []
+    for name, about in ABOUT.items():
+        row, reference = rows[name], name in REFERENCES
+        evolved = conditions.get(row.condition).evolved
+        fresh = ((lambda run, r=row: reproduction_fresh(summary, owner(r.preset, r.condition), r.condition))
+                 if reference else lambda run: run_fresh(run["dir"], run["config"]))
+        evolution = _evolution(evolutions.get(name), fresh) if evolved else None
+        entry = dict(name=name, condition=row.condition, about=about, evolved=evolved, evolution=evolution,
+                     test=_test(tests[name]), reference=reference, preset=row.preset)
+        entry["about"] += "" if evolved or not reference else _noise(entry["test"])
+        if not reference:  # what the experts do (claim 7's junction probe), kept beside the run as its fresh lives
+            probe = run_probe(evolution["dir"], num_best=NUM_BEST) if (evolution or {}).get("finished") else None
+            entry["colours"] = colour_sets(probe["followed"] if probe else None)
+        measured_rows.append(entry)
+    by_name = {row["name"]: row for row in measured_rows}
     # (c): the values of the genes LE-LS-PC carries (LE-LS-P's and the childhood's length), beside the presets'
     names = networks.trait_names(make_config("skills", condition="LE-LS-PC"))
     hand = {preset: {n: float(config.childhood_steps if n == "childhood_length" else getattr(config, n)) for n in names}
             for preset, config in ((p, make_config(p)) for p in HAND_PRESETS)}
-    evolved_values = {name: _last_values(os.path.join(out, name, "evolve"), by_name[name]["evolution"])
-                      for name in PARAMETER_ROWS}
+    evolved_values = {name: _last_values(by_name[name]["evolution"]) for name in PARAMETER_ROWS}
     # (d): the expressed experts over generations, and the final best against 6 experts all expressed and 3
     final = lambda name: (by_name[name]["evolution"] or {}).get("final_best_per_seed")  # noqa: E731
     experts = []
     for row, others in EXPERTS_ROWS:
-        mine, compared = final(row), []
-        for other in others:
-            theirs = final(other)
-            if mine and theirs:
-                a, b = np.asarray(mine), np.asarray(theirs)
-                compared.append(dict(name=other, final_best=float(b.mean()), seeds=len(b),
-                                     difference=float(a.mean() - b.mean()), standard_error=_standard_error(a, b)))
+        compared = []
+        for other in (o for o in others if final(row) and final(o)):
+            difference, se = _difference(final(row), final(other))
+            compared.append(dict(name=other, final_best=float(np.mean(final(other))), seeds=len(final(other)),
+                                 difference=difference, standard_error=se))
         experts.append(dict(row=row, against=list(others), compared=compared,
-                            generations=_expressed(os.path.join(out, row, "evolve"), by_name[row]["evolution"])))
-    measured = dict(rows=rows, learning_values=dict(names=list(names), hand=hand, evolved=evolved_values),
+                            generations=_expressed(by_name[row]["evolution"])))
+    measured = dict(rows=measured_rows, learning_values=dict(names=list(names), hand=hand, evolved=evolved_values),
                     experts=experts)
     measured["verdicts"] = judge(measured)
     return measured
@@ -511,6 +417,8 @@ def _experts_lines(experts: dict, rows: list[dict]) -> list[str]:
     return lines
 
 
+
+
 def _style(row: dict) -> dict:
     """A row's line style: its own, else its condition's; dashed under ``faithful`` (the same condition twice)."""
     from imrl_jax.plotting import CONDITION_STYLES
@@ -519,121 +427,155 @@ def _style(row: dict) -> dict:
     return dict(style, ls="--") if row.get("preset") == "faithful" and row["name"] not in STYLES else style
 
 
-def figure(measured: dict, path: str) -> str:
-    """Fig. 3's three panels: (a) best fitness per generation of every finished evolution (the study's and the
-    reproduction's LE-LS and EE-LS), (b) the mean learning curve and (c) the steady state of every finished
-    learning test (EE-ES's in (c) only, as in the paper); written to ``path``."""
-    import numpy as np
-    from matplotlib.ticker import MaxNLocator
-
+def _fitness(ax, rows: list[dict], measured: dict) -> bool:
+    """Best fitness per generation of the rows' finished evolutions, mean +-1 sd over seeds (the paper's Fig. 3a)."""
     from experiments.figures import _band
+
+    drawn, banded = [r for r in rows if (r["evolution"] or {}).get("finished")], set()
+    for row in drawn:
+        e, style = row["evolution"], _style(row)
+        mean, sd = np.asarray(e["best_per_generation_mean"]), np.asarray(e["best_per_generation_sd"])
+        ax.plot(np.arange(len(mean)), mean, label=f"{row['name']} ({e['seeds']} seeds)", **style)
+        _band(ax, np.arange(len(mean)), mean, sd, style, banded)
+    ax.set(title="best fitness, mean +-1 sd over seeds", xlabel="generation",
+           ylabel="best fitness (best of a generation's noisy lives)")
+    return bool(drawn)
+
+
+def _learning(ax, rows: list[dict], measured: dict) -> bool:
+    """The rows' learning tests' mean curves (the paper's Fig. 3b)."""
+    drawn = [r for r in rows if r["test"] is not None]
+    for row in drawn:
+        ax.plot(np.asarray(row["test"]["curve_steps"]) / 1e6, row["test"]["curve_mean"], label=row["name"],
+                **_style(row))
+    ax.set(title="learning tests, mean over runs", xlabel="million cycles of the task", ylabel="performance per bin")
+    if drawn:  # between the curves, where it hides none of their rises
+        ax.legend(fontsize=6.5, loc="center", bbox_to_anchor=(0.35, 0.6))
+    return bool(drawn)
+
+
+def _steady(ax, rows: list[dict], measured: dict) -> bool:
+    """The rows' learning tests' steady states: mean over runs (+-1 sd) and best run (the paper's Fig. 3c)."""
+    drawn = [r for r in rows if r["test"] is not None]
+    x = np.arange(len(drawn))
+    ax.bar(x - 0.19, [r["test"]["steady_mean"] for r in drawn], 0.38, yerr=[r["test"]["steady_sd"] for r in drawn],
+           color="0.35", capsize=3, label="mean over runs (+-1 sd)")
+    ax.bar(x + 0.19, [r["test"]["steady_best_run"] for r in drawn], 0.38, color="0.75", label="best run")
+    ax.set_xticks(x, [r["name"] for r in drawn], rotation=30, ha="right", fontsize=7)
+    ax.set(title="steady state of the learning tests", ylabel="steady-state performance")
+    ax.grid(False, axis="x")
+    return bool(drawn)
+
+
+def _values(ax, rows: list[dict], measured: dict) -> bool:
+    """(c): each seed's best's evolved learning values (dots; their mean, a bar) in their genes' ranges, beside the
+    values `skills` and the paper set by hand."""
+    from experiments.claims import map_position
+    from imrl_jax.conditions import EVOLVED_FIELDS
+
+    values = measured["learning_values"]
+    names = [n for n in values["names"] if n in EVOLVED_FIELDS]
+    for preset, marker in (("skills", "s"), ("paper", "x")):
+        ax.scatter(range(len(names)), [map_position(n, values["hand"][preset][n]) for n in names], marker=marker,
+                   s=40, color="k" if preset == "skills" else "0.5", zorder=5, label=f"{preset} (by hand)")
+    drawn = [r for r in rows if values["evolved"].get(r["name"])]
+    for i, row in enumerate(drawn):
+        evolved, colour = values["evolved"][row["name"]], _style(row)["color"]
+        face = "none" if row["preset"] == "faithful" else colour  # hollow under faithful
+        for j, name in enumerate(names):
+            u = [map_position(name, v) for v in evolved[name]["best_per_seed"]]
+            x = j + (i - (len(drawn) - 1) / 2) * 0.22
+            ax.scatter([x] * len(u), u, s=12, facecolors=face, edgecolors=colour, label=None if j else row["name"])
+            ax.plot([x - 0.09, x + 0.09], [np.mean(u)] * 2, color=colour, lw=2)
+    ax.set_xticks(range(len(names)), names, rotation=30, ha="right", fontsize=7)
+    ax.set(title="the best's evolved values, each seed's, in its gene's range", ylim=(-0.05, 1.05),
+           ylabel="position in the gene's range (MODEL.md's maps)")
+    return bool(drawn)
+
+
+def _experts(ax, rows: list[dict], measured: dict) -> bool:
+    """(d): the experts expressed per generation, mean over seeds: the population's and the best's (dotted)."""
+    drawn = []
+    for row in rows:
+        traits = read_traits((row["evolution"] or {}).get("dir"))
+        if traits is not None and "expressed_experts" in traits["names"]:
+            expressed = traits["values"][:, :, traits["names"].index("expressed_experts")].mean(1)
+            ax.plot(expressed[:, 0], **_style(row), label=f"{row['name']}: population mean")
+            ax.plot(expressed[:, 1], color=_style(row)["color"], lw=0.8, ls=":", label=f"{row['name']}: the best's")
+            drawn.append(row)
+    ax.axhline(3, color="0.5", lw=0.8, ls="--", label="the paper's 3")
+    ax.set(title="experts expressed, mean over seeds", xlabel="generation", ylabel="experts expressed", ylim=(0, 6.2))
+    return bool(drawn)
+
+
+#: Each question's figure, its panels drawn from the rows of its verdicts.
+PANELS = {"a": (_fitness, _steady), "b": (_learning, _steady), "c": (_values,), "d": (_experts, _fitness)}
+
+
+def figure(measured: dict, question: str, path: str) -> str:
+    """The figure of one of the paper's questions (:data:`PANELS`), written to ``path``."""
+    import textwrap
+
+    from experiments.claims import FUTURE
     from imrl_jax.plotting import new_figure, save, style_axis
 
-    fig = new_figure(17.0, 6.0)
-    curves, learning, bars = fig.subplots(1, 3, gridspec_kw=dict(width_ratios=[1.0, 1.0, 1.1]))
-    drawn = [r for r in measured["rows"] if (r["evolution"] or {}).get("finished")
-             and (not r.get("reference") or r["condition"] in DRAWN_BESIDE)]
-    banded = set()
-    # figures._draw_curves styles by condition: LE-LS-6 shares LE-LS's, so the rows are drawn here with _style
-    for row in drawn:
-        e = row["evolution"]
-        mean, sd = np.asarray(e["best_per_generation_mean"]), np.asarray(e["best_per_generation_sd"])
-        style = _style(row)
-        curves.plot(np.arange(len(mean)), mean, label=f"{row['name']} ({e['seeds']} seeds)", **style)
-        _band(curves, np.arange(len(mean)), mean, sd, style, banded)
-    curves.xaxis.set_major_locator(MaxNLocator(integer=True))
-    style_axis(curves, "(a) best fitness, mean +-1 sd over seeds", "generation",
-               "best fitness (best of a generation's noisy lives)")
-    tested = [r for r in measured["rows"] if r["test"] is not None]
-    learned = [r for r in tested if conditions.get(r["condition"]).learns]  # as the paper's Fig. 3b
-    for row in learned:
-        learning.plot(np.asarray(row["test"]["curve_steps"]) / 1e6, row["test"]["curve_mean"], label=row["name"],
-                      **_style(row))
-    style_axis(learning, "(b) learning tests, mean over runs", "million cycles of the task", "performance per bin")
-    x = np.arange(len(tested))
-    bars.bar(x - 0.19, [r["test"]["steady_mean"] for r in tested], 0.38, yerr=[r["test"]["steady_sd"] for r in tested],
-             color="0.35", capsize=3, label="mean over runs (+-1 sd)")
-    bars.bar(x + 0.19, [r["test"]["steady_best_run"] for r in tested], 0.38, color="0.75", label="best run")
-    bars.set_xticks(x, [r["name"] for r in tested], rotation=30, ha="right", fontsize=7)
-    style_axis(bars, "(c) steady state of the learning tests", "", "steady-state performance")
-    bars.grid(False, axis="x")
-    for ax, rows in ((curves, drawn), (learning, learned), (bars, tested)):
-        if not rows:  # an unfinished study: say so rather than leave a blank panel
-            ax.set_ylim(0, 1)
+    names = {n for j in JUDGED if j.question == question for n in j.rows}
+    rows = [r for r in measured["rows"] if r["name"] in names]
+    fig = new_figure(6.4 * len(PANELS[question]), 4.6)
+    for ax, panel in zip(fig.subplots(1, len(PANELS[question]), squeeze=False)[0], PANELS[question]):
+        drawn = panel(ax, rows, measured)
+        style_axis(ax, ax.get_title(), ax.get_xlabel(), ax.get_ylabel())
+        ax.set_ylim(bottom=0) if panel is not _values else None
+        if drawn and ax.get_legend() is None:
+            ax.legend(fontsize=6.5)
+        elif not drawn:  # an unfinished study: say so rather than leave a blank panel
             ax.text(0.5, 0.5, NOT_RUN, transform=ax.transAxes, ha="center", va="center", color="0.4")
-            continue
-        # room above the highest bar or curve for the legend and the note
-        top = (max(np.asarray(r["evolution"]["best_per_generation_mean"]).max() for r in drawn) if ax is curves else
-               max(max(r["test"]["curve_mean"]) for r in learned) if ax is learning else
-               max(r["test"]["steady_best_run"] for r in tested))
-        if ax is bars:
-            ax.set_ylim(0, 1.3 * max(top, 1e-9))
-            ax.legend(fontsize=6, loc="upper left", ncol=2)
-        else:  # many rows: the legend below the panel, where it hides no curve
-            ax.set_ylim(0, 1.08 * max(top, 1e-9))
-            ax.legend(fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3)
-        if all(r.get("reference") for r in rows):  # only the references: the study's rows are to come
-            ax.text(0.98, 0.97, f"the study's rows: {NOT_RUN}", transform=ax.transAxes, ha="right", va="top",
-                    color="0.4", fontsize=8)
-    fig.suptitle("The paper's future work beside the reproduction's runs (dashed: under faithful)", fontsize=10)
+    fig.suptitle(textwrap.fill(f"({question}) {FUTURE[question]} (dashed or hollow: under faithful)",
+                               int(14 * fig.get_figwidth())), fontsize=9)
     fig.tight_layout()
     return save(fig, path)
 
 
-def report(out: str = OUT, document: str = DOCUMENT, reproduction: str = REPRODUCTION, sle_whole: str = SLE_WHOLE,
-           claims: str = CLAIMS_OUT, summary: str = SUMMARY) -> int:
-    """Measure, write report.json and future_work.png under ``out``, and the tables into ``document``."""
-    import json
+class FutureWorkTable(Table):
+    """The future-work study's table, whose report is its own: its rows beside SLE's tests, (c)'s values, (d)'s
+    experts, the verdicts and a figure per question."""
 
-    from experiments.study import write_table
+    def report(self) -> int:
+        from experiments.loading import read_json
+        from experiments.study import write_table
 
-    measured = measure(out, reproduction, sle_whole, claims, summary)
-    os.makedirs(out, exist_ok=True)
-    with open(os.path.join(out, "report.json"), "w") as f:
-        json.dump(measured, f, indent=2)
-    drawn = figure(measured, os.path.join(out, "future_work.png"))
-    write_table(document, table(measured), TABLE_START, TABLE_END)
-    done = [r["name"] for r in measured["rows"] if (r["evolution"] or {}).get("finished") or r["test"]]
-    print(f"{len(done)} of {len(measured['rows'])} rows have finished stages ({', '.join(done) or 'none'}); wrote "
-          f"{os.path.join(out, 'report.json')}, {drawn} and the tables of {document}")
-    return 0
-
-
-def all_stages(out: str = OUT) -> tuple[list[Stage], dict]:
-    """Every stage the command runs by default (every row), and their scale."""
-    return plan(list(BY_NAME), SCREEN, out), SCREEN
-
-
-def main(argv=None) -> int:
-    """The command line: list the stages, run (or go on with) them, or write the report of what has finished."""
-    p = argparse.ArgumentParser(prog="python -m experiments.future_work", description=__doc__.split("\n\n")[0])
-    p.add_argument("--only", help=f"comma-separated rows, in order (default: all: {', '.join(BY_NAME)})")
-    p.add_argument("--out", default=OUT, help=f"results directory (default: {OUT})")
-    p.add_argument("--list", action="store_true", help="print the stages and their commands, run nothing")
-    p.add_argument("--report", action="store_true", help="measure every finished row, draw the figure and write "
-                   "docs/FUTURE_WORK.md's tables (runs nothing)")
-    add_options(p)
-    args = p.parse_args(argv)
-    if args.report:
-        return report(args.out)
-    names = args.only.split(",") if args.only else list(BY_NAME)
-    unknown = [n for n in names if n not in BY_NAME]
-    if unknown:
-        print(f"error: --only: unknown row {unknown[0]!r} (choose from {', '.join(BY_NAME)})", file=sys.stderr)
-        return 2
-    stages = plan(names, SCREEN, args.out)
-    if args.list:
-        for stage in stages:
-            print(f"{stage.name}: {' '.join(stage_command(stage, SCREEN, args.out)[0][1:])}")
+        rows = {row.name: row for row in (*self.rows, *SLE_TESTS)}
+        tests = {**self.tests(), **{row.name: folder for row, folder in SLE_TESTS.items()}}
+        measured = measure(rows, self.evolutions(), tests, read_json(SUMMARY) or {})
+        os.makedirs(self.out, exist_ok=True)
+        with open(os.path.join(self.out, "report.json"), "w") as f:
+            json.dump(measured, f, indent=2)
+        drawn = [figure(measured, q, os.path.join(self.out, f"question_{q}.png")) for q in PANELS]
+        write_table(self.document, table(measured), TABLE_START, TABLE_END)
+        done = [r["name"] for r in measured["rows"] if (r["evolution"] or {}).get("finished") or r["test"]]
+        print(f"{len(done)} of {len(measured['rows'])} rows have finished stages ({', '.join(done) or 'none'}); wrote "
+              f"{os.path.join(self.out, 'report.json')}, {', '.join(drawn)} and the tables of {self.document}")
         return 0
-    manifest, manifest_path = load_manifest(args.out, study="future_work", sizes=SCREEN, rows=names)
-    return run_stages(stages, SCREEN, manifest, manifest_path, lambda stage: stage_command(stage, SCREEN, args.out),
-                      **from_options(args, args.out))
 
 
+PAPER = SCALES["paper"]
+TABLE = FutureWorkTable("future-work", DOCUMENT, 7, scale=SCREEN, out=OUT, rows=(
+    # the reproduction's runs at the paper's sizes (its EE-ES is paper's: the same lives), read beside the study's
+    Row("skills LE-LS", "LE-LS", "skills", scale=PAPER), Row("skills EE-LS", "EE-LS", "skills", scale=PAPER),
+    Row("skills EE-ES", "EE-ES", "skills", scale=PAPER), Row("faithful LE-LS", "LE-LS", "faithful", scale=PAPER),
+    Row("EV-LS", "EV-LS", "skills"), Row("EV-LS-diff", "EV-LS-diff", "skills"), Row("EXT-LS", "EXT-LS", "skills"),
+    Row("EXT-LS-whole", "EXT-LS", "skills", ("sle_noise_steps=0",)),
+    Row("LE-LS-P", "LE-LS-P", "skills"), Row("LE-LS-PC", "LE-LS-PC", "skills"),
+    Row("LE-LS-N6", "LE-LS-N", "skills", ("num_experts=6",)),
+    Row("LE-LS-6", "LE-LS", "skills", ("num_experts=6",)),  # the claims study's claim-8 run: found by its key
+    # The same questions under the claims map's chosen rule set (docs/CLAIMS.md, "The decision"): run after skills'.
+    Row("EV-LS-faithful", "EV-LS", "faithful"), Row("EXT-LS-faithful", "EXT-LS", "faithful", ("sle_noise_steps=0",)),
+    Row("LE-LS-P-faithful", "LE-LS-P", "faithful"), Row("LE-LS-N6-faithful", "LE-LS-N", "faithful", ("num_experts=6",)),
+    Row("LE-LS-6-faithful", "LE-LS", "faithful", ("num_experts=6",)),  # claim 8's paper-selector run: the same lives
+))
+all_stages, main = TABLE.all_stages, TABLE.main
 #: The studies of this module (python -m experiments finds them).
-STUDIES = (Study("future-work", "future_work", "docs/FUTURE_WORK.md", 7),)
-
+STUDIES = (TABLE.study(__name__.rsplit(".", 1)[-1]),)
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -1,72 +1,89 @@
-"""The future-work study's plan (each new row evolved or tested from scratch), and the evolved values evolve records."""
+"""The future-work study's table (each row's run found by its key, or tested from scratch), its measures and
+verdicts on hand-made runs, its report of the committed runs, and the evolved values evolve records."""
 
+import dataclasses
 import json
 import math
 import os
 
 import pytest
+from helpers import ROOT
 
 from experiments import future_work as study
+from experiments.reproduce import stage_done
+from experiments.study import SCALES
 from imrl_jax.conditions import EVOLVED_FIELDS
 
 
-def test_plan_evolves_the_evolved_rows_and_tests_the_others_from_scratch():
-    stages = study.plan(["EV-LS", "EXT-LS-whole", "LE-LS-N6"])
-    assert [s.name for s in stages] == ["evolve EV-LS", "learning test EV-LS", "learning test EXT-LS-whole",
-                                        "evolve LE-LS-N6", "learning test LE-LS-N6"]
-    evolve = study.stage_command(stages[3])[0]
+def _stages(*names):
+    """The study's stages of the rows ``names``, by name."""
+    stages, _ = study.TABLE.all_stages()
+    return {s.name: s for s in stages if s.variant in names}
+
+
+def test_every_committed_run_is_found_by_its_key(monkeypatch):
+    """Nothing to run: each row finds its committed evolution and learning test, the reproduction's at its sizes."""
+    monkeypatch.chdir(ROOT)
+    stages, scale = study.all_stages()
+    assert len(stages) == 31 and [s.name for s in stages if not stage_done(s, scale)] == []
+    evolutions = study.TABLE.evolutions()
+    assert evolutions["EV-LS"] == os.path.join(study.OUT, "EV-LS", "evolve") and evolutions["EXT-LS"] is None
+    assert evolutions["skills EE-ES"] == os.path.join("experiments", "results", "paper", "paper", "evolve", "EE-ES")
+    assert study.TABLE.tests()["EXT-LS-whole"] == os.path.join(study.OUT, "EXT-LS-whole", "test")
+    assert set(study.ABOUT) == {r.name for r in (*study.TABLE.rows, *study.SLE_TESTS)}
+
+
+def test_the_table_evolves_the_evolved_rows_and_tests_the_others_from_scratch():
+    stages = _stages("EV-LS", "EXT-LS-whole", "LE-LS-N6")
+    assert list(stages) == ["evolve EV-LS", "learning test EV-LS", "learning test EXT-LS-whole",
+                            "evolve LE-LS-N6", "learning test LE-LS-N6"]
+    evolve = study.TABLE.stage_command(stages["evolve LE-LS-N6"])[0]
     assert evolve[evolve.index("--cond") + 1] == "LE-LS-N" and "num_experts=6" in evolve
-    scratch = study.stage_command(stages[2])[0]
+    scratch = study.TABLE.stage_command(stages["learning test EXT-LS-whole"])[0]
     assert scratch[scratch.index("--cond") + 1] == "EXT-LS" and "sle_noise_steps=0" in scratch
-    assert "sle_noise_steps=100000" not in scratch
-    test = study.stage_command(stages[1])[0]
+    assert "sle_noise_steps=100000" not in scratch and scratch[scratch.index("--runs") + 1] == "5"
+    test = study.TABLE.stage_command(stages["learning test EV-LS"])[0]
     assert test[test.index("-m") + 2].endswith("EV-LS/evolve")  # the learning test reads its own evolution
     # EV-LS lives a childhood, EXT-LS does not: costs in lane-steps at the paper's lengths.
-    assert stages[0].cost == 5 * 50 * 100 * (150_000 + 6 * 100_000)
-    assert stages[2].cost == 5 * 5 * 4 * 6 * 1_000_000
+    assert stages["evolve EV-LS"].cost == 5 * 50 * 100 * (150_000 + 6 * 100_000)
+    assert stages["learning test EXT-LS-whole"].cost == 5 * 5 * 4 * 6 * 1_000_000
+    reproduction = study.TABLE.stage_command(_stages("skills LE-LS")["evolve skills LE-LS"])[0]
+    assert reproduction[reproduction.index("--seeds") + 1] == str(SCALES["paper"]["seeds"]) == "10"
 
 
-def test_the_fixed_six_experts_row_is_the_claims_studys_run_not_run_twice():
+def test_the_fixed_six_experts_rows_are_the_claims_studys_runs_found_by_key():
     from experiments import claims_study
-
-    assert study.plan(["LE-LS-6"]) == []
-    run = study.BY_NAME["LE-LS-6"]
-    evolved, tested = study.run_dirs(run)
-    claim8 = {s.out_dir: s for s in claims_study.plan_experts()}
-    assert set(claim8) >= {evolved, tested}
-    ours = study.evolve_command(study.SCREEN, run.preset, run.condition, "OUT", sets=run.sets)
-    theirs = claims_study.stage_command(claim8[evolved], claims_study.SCREEN)[0]
-    theirs = theirs[:-1] if theirs[-1] == "--resume" else theirs  # a started run resumes; ours writes to OUT
-    assert ours == theirs[:theirs.index("--out") + 1] + ["OUT"] + theirs[theirs.index("--out") + 2:]
-    assert study.run_dirs(study.BY_NAME["LE-LS-N6"]) == (os.path.join(study.OUT, "LE-LS-N6", "evolve"),
-                                                         os.path.join(study.OUT, "LE-LS-N6", "test"))
-    # under faithful: the claims study's paper-selector run of 6 experts, whose lives are the same
     from imrl_jax.cli import parse_sets
     from imrl_jax.config import make_config
 
-    faithful = study.BY_NAME["LE-LS-6-faithful"]
-    assert study.plan(["LE-LS-6-faithful"]) == []
-    evolved, tested = study.run_dirs(faithful)
-    assert set(claim8) >= {evolved, tested} and "paper-selector" in evolved
+    evolutions, tests = study.TABLE.evolutions(), study.TABLE.tests()
+    claim8 = {s.out_dir for s in claims_study.plan_experts()}
+    for name, rule in (("LE-LS-6", "skills"), ("LE-LS-6-faithful", "paper-selector")):
+        found = claims_study.experts_dir(rule, "LE-LS", 6, "evolve", claims_study.OUT)
+        assert evolutions[name] == found and claim8 >= {found, tests[name]}
+    assert evolutions["LE-LS-N6"] == os.path.join(study.OUT, "LE-LS-N6", "evolve")
+    # under faithful: the claims study's paper-selector run of 6 experts, whose lives are the same
+    faithful = next(r for r in study.TABLE.rows if r.name == "LE-LS-6-faithful")
     screened = claims_study.config_of(claims_study.BY_NAME["paper-selector"], "LE-LS", num_experts=6)
     ours = make_config(faithful.preset, condition="LE-LS", **parse_sets(list(faithful.sets)))
     assert ours.model_differences(screened) == []
 
 
 def test_the_faithful_rows_run_under_the_faithful_preset():
-    stages = study.plan(["EV-LS-faithful", "EXT-LS-faithful"])
-    assert [s.name for s in stages] == ["evolve EV-LS-faithful", "learning test EV-LS-faithful",
-                                        "learning test EXT-LS-faithful"]
-    evolve = study.stage_command(stages[0])[0]
+    stages = _stages("EV-LS-faithful", "EXT-LS-faithful")
+    assert list(stages) == ["evolve EV-LS-faithful", "learning test EV-LS-faithful", "learning test EXT-LS-faithful"]
+    evolve = study.TABLE.stage_command(stages["evolve EV-LS-faithful"])[0]
     assert evolve[evolve.index("--preset") + 1] == "faithful" and evolve[evolve.index("--cond") + 1] == "EV-LS"
-    scratch = study.stage_command(stages[2])[0]
+    scratch = study.TABLE.stage_command(stages["learning test EXT-LS-faithful"])[0]
     assert scratch[scratch.index("--preset") + 1] == "faithful" and "sle_noise_steps=0" in scratch
-    assert [r.name for r in study.RUNS].index("EV-LS-faithful") > [r.name for r in study.RUNS].index("LE-LS-6")
+    names = [r.name for r in study.TABLE.rows]
+    assert names.index("EV-LS-faithful") > names.index("LE-LS-6")
 
 
-def test_unknown_row_is_refused(capsys):
-    assert study.main(["--only", "EV-LS,XX"]) == 2
-    assert "unknown row 'XX'" in capsys.readouterr().err
+def test_an_unknown_option_is_refused(capsys):
+    with pytest.raises(SystemExit) as stop:
+        study.main(["--only", "EV-LS"])
+    assert stop.value.code == 2 and "unrecognized arguments: --only" in capsys.readouterr().err
 
 
 def test_traits_of_a_hand_made_genome():
@@ -163,8 +180,6 @@ def test_record_traits_and_their_history_columns_by_hand():
 def _fake_evolution(folder, best, planned, traits=None):
     """A history.csv as evolve writes it: ``best[seed][generation]``; ``traits[name] = (mean, best's)``, each
     [seed][generation]; and the config.json with the planned number of generations."""
-    import json
-
     folder.mkdir(parents=True)
     names = list(traits or {})
     lines = ["generation,seed,best,mean,std" + "".join(f",mean_{n},best_{n}" for n in names)]
@@ -178,8 +193,6 @@ def _fake_evolution(folder, best, planned, traits=None):
 
 def _fake_test(folder, per_run, sle_noise_steps=None):
     """A finished learning test as the report reads it: steady.json and curve.csv."""
-    import json
-
     folder.mkdir(parents=True)
     steady = dict(steady_per_run=list(per_run), pairs_both_ways=0.5)
     if sle_noise_steps is not None:
@@ -188,46 +201,51 @@ def _fake_test(folder, per_run, sle_noise_steps=None):
     (folder / "curve.csv").write_text("bin,end_step,mean,sd_over_runs\n0,1000,0.1,0.01\n1,2000,0.3,0.01\n")
 
 
+#: Every row the report shows, by name, as the table and SLE's tests describe it.
+ROWS = {r.name: r for r in (*study.TABLE.rows, *study.SLE_TESTS)}
+
+
 def _fake_study(tmp_path):
-    """The reproduction's LE-LS, EE-LS and tests, and the study's LE-LS-6, LE-LS-N6, LE-LS-P, a running EV-LS, EXT-LS."""
-    reproduction, out = tmp_path / "paper", tmp_path / "future_work"
-    _fake_evolution(reproduction / "skills" / "evolve" / "LE-LS", [[0.2, 0.4, 0.6, 0.6, 0.6], [0.4, 0.6, 0.8, 0.8, 0.8]], 5)
-    _fake_evolution(reproduction / "skills" / "evolve" / "EE-LS", [[0.5] * 5, [0.7] * 5], 5)
-    _fake_test(reproduction / "skills" / "test" / "LE-LS", [0.8, 0.9])
-    _fake_test(reproduction / "skills" / "test" / "SLE", [0.3, 0.5], sle_noise_steps=100_000)
-    _fake_test(reproduction / "paper" / "test" / "EE-ES", [0.4, 0.4, 0.4])  # EE-ES's runs are shared, under paper
-    _fake_test(reproduction / "faithful" / "test" / "SLE", [0.2, 0.2], sle_noise_steps=0)
-    # LE-LS-6 is the claims study's claim-8 run
-    _fake_evolution(tmp_path / "claims" / "skills" / "experts6" / "evolve" / "LE-LS", [[0.5] * 5, [0.6] * 5], 5)
+    """The reproduction's LE-LS, EE-LS and tests, and the study's LE-LS-6, LE-LS-N6, LE-LS-P, a running EV-LS, EXT-LS,
+    each row's folders ``ROW/evolve`` and ``ROW/test``; and the reproduction report's summary."""
+    row = lambda name, kind: tmp_path / name / kind  # noqa: E731
+    _fake_evolution(row("skills LE-LS", "evolve"), [[0.2, 0.4, 0.6, 0.6, 0.6], [0.4, 0.6, 0.8, 0.8, 0.8]], 5)
+    _fake_evolution(row("skills EE-LS", "evolve"), [[0.5] * 5, [0.7] * 5], 5)
+    _fake_test(row("skills LE-LS", "test"), [0.8, 0.9])
+    _fake_test(row("skills SLE", "test"), [0.3, 0.5], sle_noise_steps=100_000)
+    _fake_test(row("skills EE-ES", "test"), [0.4, 0.4, 0.4])
+    _fake_test(row("faithful SLE", "test"), [0.2, 0.2], sle_noise_steps=0)
+    _fake_evolution(row("LE-LS-6", "evolve"), [[0.5] * 5, [0.6] * 5], 5)
     share = lambda k: ([{3: [0, 0.5, 1, 1, 1], 6: [1, 0.5, 0, 0, 0]}.get(k, [0] * 5)] * 2, [[0] * 5] * 2)  # noqa: E731
-    _fake_evolution(out / "LE-LS-N6" / "evolve", [[0.7] * 5, [0.8] * 5], 5, dict(
+    _fake_evolution(row("LE-LS-N6", "evolve"), [[0.7] * 5, [0.8] * 5], 5, dict(
         expressed_experts=([[6, 5, 4, 4, 3], [6, 5, 4, 4, 5]], [[6, 4, 4, 3, 3], [6, 5, 4, 3, 3]]),
         **{f"share_{k}_experts": share(k) for k in range(1, 7)}))
-    _fake_evolution(out / "LE-LS-P" / "evolve", [[0.6] * 5] * 2, 5, dict(  # the last generation's values count
+    _fake_evolution(row("LE-LS-P", "evolve"), [[0.6] * 5] * 2, 5, dict(  # the last generation's values count
         gamma=([[0.5] * 4 + [0.95], [0.5] * 4 + [0.97]], [[0.5] * 4 + [0.98], [0.5] * 4 + [0.99]]),
         eta_actor=([[0.5] * 4 + [0.02], [0.5] * 4 + [0.04]], [[0.5] * 4 + [0.01], [0.5] * 4 + [0.03]])))
-    _fake_evolution(out / "EV-LS" / "evolve", [[0.1, 0.2]], 100)  # still running
-    _fake_test(out / "EXT-LS" / "test", [0.6, 0.7, 0.8])
-    summary = tmp_path / "summary.json"  # the reproduction report's fresh lives of skills' LE-LS best genomes
-    summary.write_text(json.dumps(dict(best_individuals={"skills/LE-LS": dict(fresh_mean_per_seed=[0.5, 0.6])})))
-    return str(out), str(reproduction), str(tmp_path / "claims_sle"), str(tmp_path / "claims"), str(summary)
+    _fake_evolution(row("EV-LS", "evolve"), [[0.1, 0.2]], 100)  # still running
+    _fake_test(row("EXT-LS", "test"), [0.6, 0.7, 0.8])
+    summary = dict(best_individuals={"skills/LE-LS": dict(fresh_mean_per_seed=[0.5, 0.6])})  # its fresh lives
+    return (ROWS, {n: str(row(n, "evolve")) if r.evolved else None for n, r in ROWS.items()},
+            {n: str(row(n, "test")) for n in ROWS}, summary)
 
 
 def test_measure_reads_every_finished_row_and_the_reproductions(tmp_path):
     """Hand-made runs: final best, its sd and plateau; steady states; (c)'s last values; (d)'s experts and fitness."""
-    out, reproduction, sle_whole, claims, summary = _fake_study(tmp_path)
-    measured = study.measure(out, reproduction, sle_whole, claims, summary)
+    measured = study.measure(*_fake_study(tmp_path))
     rows = {r["name"]: r for r in measured["rows"]}
     assert list(rows) == ["skills LE-LS", "skills EE-LS", "skills EE-ES", "skills SLE", "skills SLE-whole",
-                          "faithful LE-LS", "faithful SLE", *study.BY_NAME]
+                          "faithful LE-LS", "faithful SLE", *(r.name for r in study.TABLE.rows[4:])]
     assert rows["faithful LE-LS"]["evolution"] is None and rows["faithful SLE"]["test"]["runs"] == 2
     le_ls = rows["skills LE-LS"]["evolution"]  # seeds' means of 5 generations: 2.4 / 5 and 3.4 / 5
     assert le_ls["final_best"] == pytest.approx(0.58) and le_ls["final_best_sd"] == pytest.approx(0.1)
     assert le_ls["plateau_generation"] == 2  # the mean curve 0.3, 0.5, 0.7: 0.7 >= 0.9 x 0.58 first at generation 2
+    assert (le_ls["fresh"], le_ls["fresh_sd"]) == pytest.approx((0.55, 0.005 ** 0.5))  # the summary's, ddof 1
     assert rows["skills EE-ES"]["evolution"] is None and rows["skills EE-ES"]["test"]["runs"] == 3
     assert rows["EV-LS"]["evolution"]["finished"] is False and "final_best" not in rows["EV-LS"]["evolution"]
     assert rows["EXT-LS"]["test"]["steady_mean"] == pytest.approx(0.7)
     assert rows["EXT-LS"]["test"]["steady_sd"] == pytest.approx((0.02 / 3) ** 0.5)  # ddof 0
+    assert rows["EXT-LS"]["about"] == study.ABOUT["EXT-LS"]  # only the references say how their SLE's noise went
     evolved = measured["learning_values"]["evolved"]
     assert evolved["LE-LS-PC"] is None and set(evolved["LE-LS-P"]) == {"gamma", "eta_actor"}
     gamma = evolved["LE-LS-P"]["gamma"]
@@ -242,7 +260,7 @@ def test_measure_reads_every_finished_row_and_the_reproductions(tmp_path):
     assert (first["generation"], first["mean"], first["shares"][6]) == (0, 6.0, 1.0)
     assert (last["generation"], last["mean"], last["best"], last["shares"][3]) == (4, 4.0, 3.0, 1.0)
     assert measured["experts"][1]["generations"] is None and measured["experts"][1]["compared"] == []
-    assert rows["LE-LS-N6"]["colours"] is None  # no final population to probe
+    assert rows["LE-LS-N6"]["colours"] is None and "colours" not in rows["skills LE-LS"]  # no population to probe
     against_6, against_3 = measured["experts"][0]["compared"]
     assert against_6["name"] == "LE-LS-6" and against_6["difference"] == pytest.approx(0.2)
     assert against_6["standard_error"] == pytest.approx(0.005 ** 0.5)  # sqrt(0.005 / 2 + 0.005 / 2)
@@ -275,9 +293,9 @@ def test_table_shows_finished_running_and_not_run_rows(tmp_path):
                  "0.400 +- 0.100 | 2 |",
                  "| skills SLE-whole | SLE | the claims study's SLE (skills-sle-test) | not evolved | - | - | - | - | "
                  "not run yet | - |",
-                 f"| EV-LS | EV-LS | {study.BY_NAME['EV-LS'].about} | 1 x 2 of 100 | running | - | - | - | not run yet "
+                 f"| EV-LS | EV-LS | {study.ABOUT['EV-LS']} | 1 x 2 of 100 | running | - | - | - | not run yet "
                  "| - |",
-                 f"| EXT-LS | EXT-LS | {study.BY_NAME['EXT-LS'].about} | not evolved | - | - | - | - | 0.700 +- 0.082 | 3 |",
+                 f"| EXT-LS | EXT-LS | {study.ABOUT['EXT-LS']} | not evolved | - | - | - | - | 0.700 +- 0.082 | 3 |",
                  "| gamma | 0.99 | 0.99 | 0.99 | 0.96 | 0.985 | not run yet | not run yet | not run yet | not run yet |",
                  "| eta_actor | 0.01 | 0.01 | 0.01 | 0.03 | 0.02 | not run yet | not run yet | not run yet | not run yet |",
                  "| trace_lambda | 0.98 | 0 | 0.98 | - | - | not run yet | not run yet | not run yet | not run yet |",
@@ -291,28 +309,35 @@ def test_table_shows_finished_running_and_not_run_rows(tmp_path):
                  "| against LE-LS-6 | 0.750 | 0.550 | 2 | +0.200 | 0.071 |",
                  "| against skills LE-LS | 0.750 | 0.580 | 2 | +0.170 | 0.112 |"):
         assert line in text.splitlines(), line
-    empty = study.table(study.measure(*(str(tmp_path / "none"),) * 5))
+    empty = study.table(study.measure(ROWS, dict.fromkeys(ROWS), dict.fromkeys(ROWS, str(tmp_path / "no")), {}))
     assert "LE-LS-N6: not run yet." in empty.splitlines() and "| 2 x 5 |" not in empty
     assert "LE-LS-N6-faithful: not run yet." in empty.splitlines()
 
 
-def test_report_writes_the_json_the_figure_and_the_tables(tmp_path, capsys):
-    import json
-
-    out, reproduction, sle_whole, claims, summary = _fake_study(tmp_path)
+def test_the_report_of_the_committed_runs_is_the_documents(tmp_path, monkeypatch, capsys):
+    """The report of the committed runs writes the committed tables and report.json, and a figure per question;
+    with nothing finished, every panel says so."""
+    monkeypatch.chdir(ROOT)
+    out = tmp_path / "out"
+    out.mkdir()
+    for name in ("EXT-LS", "EXT-LS-whole", "EXT-LS-faithful"):  # the tests from scratch, in the table's folder
+        os.symlink(os.path.abspath(os.path.join(study.OUT, name)), out / name)
     document = tmp_path / "FUTURE_WORK.md"
     document.write_text(f"intro\n{study.TABLE_START}\nold\n{study.TABLE_END}\nend\n")
-    assert study.report(out, str(document), reproduction, sle_whole, claims, summary) == 0
-    text = document.read_text()
-    assert text.startswith(f"intro\n{study.TABLE_START}\n| row |") and text.endswith(f"{study.TABLE_END}\nend\n")
-    assert "\nold\n" not in text and "| against LE-LS-6 | 0.750 |" in text
-    with open(os.path.join(out, "report.json")) as f:
-        saved = json.load(f)
-    assert saved["rows"][0]["evolution"]["final_best_per_seed"] == pytest.approx([0.48, 0.68])
-    assert os.path.getsize(os.path.join(out, "future_work.png")) > 10_000
-    assert "9 of 20 rows have finished stages" in capsys.readouterr().out
-    # nothing finished: both panels say so
-    assert os.path.getsize(study.figure(study.measure(*(str(tmp_path / "none"),) * 5), str(tmp_path / "empty.png")))
+    assert dataclasses.replace(study.TABLE, document=str(document), out=str(out)).report() == 0
+    with open(study.DOCUMENT) as f:
+        committed = f.read()
+    tables = committed[committed.index(study.TABLE_START):committed.index(study.TABLE_END)]
+    assert document.read_text() == f"intro\n{tables}{study.TABLE_END}\nend\n"
+    assert "| EV-LS | EV-LS | (a) evolved evaluators, gamma V(x_t) - V(x_{t-1}) | 5 x 100 | 0.766 |" in tables
+    with open(out / "report.json") as f, open(os.path.join(study.OUT, "report.json")) as g:
+        written, saved = json.load(f), json.load(g)
+    assert written["verdicts"] == saved["verdicts"] and written["learning_values"] == saved["learning_values"]
+    assert [r["evolution"] for r in written["rows"]] == [r["evolution"] for r in saved["rows"]]
+    assert all(os.path.getsize(out / f"question_{q}.png") > 10_000 for q in "abcd")
+    assert "20 of 20 rows have finished stages" in capsys.readouterr().out
+    nothing = study.measure(ROWS, dict.fromkeys(ROWS), dict.fromkeys(ROWS, str(tmp_path / "no")), {})
+    assert all(os.path.getsize(study.figure(nothing, q, str(tmp_path / f"{q}.png"))) > 5_000 for q in "abcd")
 
 
 def test_criteria_are_easier_when_much_faster_and_higher():
