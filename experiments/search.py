@@ -81,26 +81,16 @@ def steady(test: dict) -> dict:
                 test_runs=len(per_run), steady_per_run=per_run)
 
 
-def _number(value, digits: int = 3) -> str:
-    """A number of the tables, or "-" when not measured."""
-    return "-" if value is None else f"{value:.{digits}f}" if isinstance(value, float) else str(value)
-
-
 def table(measured: dict) -> str:
-    """The report's markdown: a row per strategy and condition, then the claims' verdicts per strategy."""
+    """The report's markdown beyond the rows' table: each row's fresh lives and experts, then the claims' verdicts
+    per strategy."""
     from experiments.claims import CLAIMS
 
-    lines = ["| strategy | condition | seeds | generations | final best fitness | sd over seeds | fresh lives (sd over "
-             "seeds) | plateau generation | colours followed (share with 3) | test runs | steady state | sd over runs |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| strategy | condition | fresh lives (sd over seeds) | colours followed (share with 3) |", "|---|---|---|---|"]
     for r in measured["rows"]:
         fresh = "-" if r.get("fresh_mean") is None else f"{r['fresh_mean']:.3f} ({r['fresh_sd']:.3f})"
         colours = "-" if r.get("colours_mean") is None else f"{r['colours_mean']:.2f} ({r['specialised_share']:.2f})"
-        lines.append(f"| {r['strategy']} | {r['condition']} | {r.get('seeds', '-')} | {r['generations']}"
-                     f"{'' if r['finished'] else ' of ' + str(measured['generations'])} | "
-                     f"{_number(r.get('final_best_mean'))} | {_number(r.get('final_best_sd'))} | {fresh} | "
-                     f"{_number(r.get('plateau_generation'))} | {colours} | {r.get('test_runs', '-')} | "
-                     f"{_number(r.get('steady_mean'))} | {_number(r.get('steady_sd'))} |")
+        lines.append(f"| {r['strategy']} | {r['condition']} | {fresh} | {colours} |")
     sle = measured["sle"]
     lines += ["", "SLE evolves nothing: every strategy's claim 6 uses the reproduction's `skills` test of it"
               + (f" (steady state {sle['steady_mean']:.3f} +- {sle['steady_sd']:.3f} over {sle['test_runs']} runs)."
@@ -123,27 +113,26 @@ def table(measured: dict) -> str:
     return "\n".join(lines)
 
 
-def figure(measured: dict, path: str) -> str:
+def figure(curves: dict, path: str) -> str:
     """Fig. 3a-style curves: best fitness per generation (mean over seeds +- sd), a panel per condition, a line per
-    strategy."""
+    strategy; ``curves``: {(strategy, condition): (best per generation and seed, finished)}."""
     from matplotlib.ticker import MaxNLocator
 
     from experiments.figures import _band, _fitness_series
     from imrl_jax.plotting import new_figure, save, style_axis
 
     fig = new_figure(13.0, 3.8)
-    finished = {(r["strategy"], r["condition"]): r["finished"] for r in measured["rows"]}
     axes = fig.subplots(1, len(CONDITIONS), sharey=True)  # one y-axis: the conditions' levels compare across panels
     for i, (ax, condition) in enumerate(zip(axes, CONDITIONS)):
         title = f"{condition} under {PRESET}, by search strategy"
-        series = _fitness_series({s: best for (s, c), best in measured["curves"].items() if c == condition})
+        series = _fitness_series({s: best for (s, c), (best, _) in curves.items() if c == condition})
         style_axis(ax, title, "generation", "" if i else "best fitness (best of a generation's lives)")
         if not series:  # an unfinished stage: say so rather than leave a blank panel
             ax.text(0.5, 0.5, "not run yet", transform=ax.transAxes, ha="center", va="center", color="0.4")
             continue
         banded = set()
         for strategy, (x, mean, sd, label) in series.items():
-            label += "" if finished[strategy, condition] else ", running"
+            label += "" if curves[strategy, condition][1] else ", running"
             ax.plot(x, mean, label=label, **STRATEGY_STYLES[strategy])
             _band(ax, x, mean, sd, STRATEGY_STYLES[strategy], banded)
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
@@ -202,7 +191,7 @@ class SearchTable(Table):
         from experiments.relive import colours_followed, reproduction_fresh, run_fresh, run_path, run_probe
 
         summary = read_json(ga_summary) or {}
-        rows, curves, paths = [], {}, {}
+        rows, paths = [], {}
         for row, m, tested in zip(self.rows, self.measure(), self.tests().values()):
             strategy, condition = strategy_of(row), row.condition
             if not m["generations"] and "steady_mean" not in m:
@@ -210,7 +199,6 @@ class SearchTable(Table):
             entry = dict(strategy=strategy, condition=condition, generations=m["generations"],
                          finished="final_mean" in m)
             if m["generations"]:
-                curves[strategy, condition] = m["best"]
                 entry["seeds"] = m["seeds"]
             learns = conditions.get(condition).learns
             if entry["finished"]:  # a running evolution is drawn but not measured: its last generations are to come
@@ -238,26 +226,28 @@ class SearchTable(Table):
             rows.append(entry)
         sle = None if read_test(SLE_TEST) is None else steady(read_test(SLE_TEST))
         claims = judge(COMPARED, rows, sle["steady_per_run"] if sle else None, paths)
-        return dict(rows=rows, curves=curves, claims=claims, sle=sle, paths=paths, generations=self.scale["generations"])
+        return dict(rows=rows, claims=claims, sle=sle, paths=paths)
+
+    def figure(self, measured: list[dict], path: str) -> str:
+        """The rows' curves, a panel per condition and a line per strategy."""
+        return figure({(strategy_of(row), row.condition): (m["best"], "final_mean" in m)
+                       for row, m in zip(self.rows, measured) if m["generations"]}, path)
 
     def report(self) -> int:
-        """Measure; write report.json, the figures and the tables into the document."""
+        """The rows' table and curves; then report.json, the claims' figure and the study's tables."""
         from experiments.study import write_table
 
+        code = super().report()
         measured = self.measure_search()
-        os.makedirs(self.out, exist_ok=True)
         with open(os.path.join(self.out, "report.json"), "w") as f:
             json.dump(dict(rows=measured["rows"], sle=measured["sle"],
                            claims={s: {str(n): c for n, c in claims.items()}
                                    for s, claims in measured["claims"].items()}), f, indent=2)
-        drawn = [figure(measured, os.path.join(self.out, "search.png")),
-                 claims_figure(measured, os.path.join(self.out, "claims.png"))]
+        drawn = claims_figure(measured, os.path.join(self.out, "claims.png"))
         write_table(self.document, table(measured), "<!-- search tables: python -m experiments report search -->",
                     "<!-- end of search tables -->")
-        print(f"{len(measured['rows'])} rows read ({sum(r['finished'] for r in measured['rows'])} finished "
-              f"evolutions); wrote {os.path.join(self.out, 'report.json')}, {', '.join(drawn)} and the tables of "
-              f"{self.document}")
-        return 0
+        print(f"wrote {os.path.join(self.out, 'report.json')}, {drawn} and the claims of {self.document}")
+        return code
 
 
 TABLE = SearchTable("search", "docs/SEARCH.md", 6, out=OUT, scale=SCREEN, rows=(
