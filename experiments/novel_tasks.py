@@ -1,8 +1,8 @@
 """Tasks never met in evolution (docs/NOVEL_TASKS.md): the generalisation tests, as stages of the shared runner.
 
-    python -m experiments.novel_tasks --list      # the stages and their commands, nothing run
-    python -m experiments.novel_tasks             # run (or go on with) every stage, in order
-    python -m experiments.novel_tasks --report    # the advantage table, figure and verdict of what has finished
+    python -m experiments list novel-tasks      # the stages, done or to run
+    python -m experiments run novel-tasks       # run (or go on with) every stage, in order
+    python -m experiments report novel-tasks    # the advantage table, figure and verdict of what has finished
 
 Three groups, all at the paper's test length (1,000,000 cycles per task):
 
