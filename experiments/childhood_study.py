@@ -1,24 +1,27 @@
 """Why childhood does not teach skills, and what does (docs/CHILDHOOD.md).
 
-Stages (each writes into ``--out``, default ``experiments/results/childhood``):
+    python -m experiments run childhood       # run (or go on with) every stage, in order
+    python -m experiments list childhood      # the stages, done or to run
+    python -m experiments report childhood    # the evolutions' table, evolve.png and hand.png
 
-* ``hand``: childhood alone with hand-made colour reinforcers (reinforcer k pays for colour
-  k under the retina's centre, :func:`imrl_jax.behaviour.colour_reinforcers`) over the
-  factors: childhood length, how walls act, the selector's reward, the learning rules.
-  Each childhood is measured by the junction probes of :func:`imrl_jax.behaviour.specialisation`,
-  the experts' shares of control over its last quarter and the time on walls.
-  Writes ``hand.csv``, ``hand.json`` and ``hand.png``.
-* ``evolved``: the same probes on evolved best genomes (``--genomes`` npz files of
-  ``best_genomes.npz`` form, or run directories), after a fresh childhood for LE-LS.
-  Writes ``evolved.csv``.
+Its evolutions (3 seeds x 30 generations at the paper's life lengths) are rows, found by their key in
+``results/childhood/evolve``. Its measures (``python -m experiments.childhood_study [RUN...] --out OUT
+STAGE``) each write OUT/NAME.csv, NAME the folder's, then OUT/result.json, which names the CSV:
 
-    python experiments/childhood_study.py hand
-    python experiments/childhood_study.py hand --lengths 30000 --seeds 2      # a quick look
+* ``hand``: childhood alone with hand-made colour reinforcers (:func:`imrl_jax.behaviour.colour_reinforcers`)
+  over its length, the walls, the selector's reward and the learning rules;
+* ``ceiling``: ideal colour followers composed by a learning selector, per adult rule set and task length;
+* ``speed``: hand-made colour reinforcers with experts that start fast;
+* ``evolved``: the junction probes (:func:`imrl_jax.behaviour.specialisation`) of runs' best, LE-LS's after
+  a fresh childhood; ``random``: random LE-LS genomes' fitness and probes; ``heritability``: runs' best relived.
+
+The measures made before the study was on the runner wrote their CSVs into ``results/childhood``; the
+result.json of each of their folders (``measures/NAME``), written once from the committed files,
+names that CSV (``"recorded"`` says so).
 """
 
 from __future__ import annotations
 
-import argparse
 import csv
 import itertools
 import json
@@ -28,7 +31,13 @@ import time
 
 import numpy as np
 
+from experiments.study import REPRODUCTION, RESULTS, SCALES
+from experiments.table import Measure, Row, Table
+from imrl_jax.cli import HelpFormatter, Parser, UsageError, exit_codes
 from imrl_jax.config import ADULT_SELECTOR
+
+#: The study's results: its evolutions (evolve/NAME), its measures' folders (measures/NAME) and figures.
+OUT = os.path.join(RESULTS, "childhood")
 
 #: The learning rules a childhood is tried with: the childhood values of LearningParams.
 RULES = {
@@ -36,6 +45,12 @@ RULES = {
     "extension": {f"childhood_{name}": value for name, value in ADULT_SELECTOR.items()},
     # The selector does not learn: every expert gets a third of the steps, at random.
     "uniform": dict(childhood_trace_lambda=0.0, childhood_eta_selector_actor=0.0, childhood_eta_selector_critic=0.0),
+}
+#: Adult learning rules whose composition ceiling the study measures (LearningParams values).
+CEILING_RULES = {
+    "paper": {},
+    "td0-fast-selector": dict(eta_selector_actor=3.0, eta_selector_critic=0.01),
+    "extension": dict(ADULT_SELECTOR),
 }
 
 
@@ -61,56 +76,65 @@ def measure(config, agent, records=None) -> dict:
     return row
 
 
+def write_csv(path: str, rows: list[dict]) -> None:
+    """Rows as CSV (floats with 4 decimals)."""
+    with open(path, "w", newline="") as f:
+        fields = list(dict.fromkeys(name for row in rows for name in row))  # rows may lack some (EE: no childhood)
+        writer = csv.DictWriter(f, fieldnames=fields, restval="", lineterminator="\n")
+        writer.writeheader()
+        writer.writerows({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
+
+
+def finish(out: str, rows: list[dict], **summary) -> int:
+    """A measure's rows into OUT/NAME.csv, then its result.json (what makes it done) naming the CSV."""
+    from imrl_jax.checkpoint import git_commit
+
+    name = os.path.basename(os.path.normpath(out)) + ".csv"
+    os.makedirs(out, exist_ok=True)
+    write_csv(os.path.join(out, name), rows)
+    with open(os.path.join(out, "result.json"), "w") as f:
+        json.dump(dict(csv=name, command="python -m experiments.childhood_study " + " ".join(sys.argv[1:]),
+                       git_commit=git_commit(), **summary), f, indent=2)
+    return 0
+
+
+def read_rows(folder: str) -> list[dict]:
+    """A finished measure's rows (the CSV its result.json names), numbers as floats ("" where a row has none)."""
+    with open(os.path.join(folder, "result.json")) as f:
+        path = os.path.join(folder, json.load(f)["csv"])
+    with open(path) as f:
+        return [{k: v if k in ("walls", "reward", "rules", "run", "preset") or v == "" else float(v)
+                 for k, v in r.items()}
+                for r in csv.DictReader(f)]
+
+
 def stage_hand(args) -> int:
     """Childhood alone with hand-made colour reinforcers, over the factors."""
-    from imrl_jax import behaviour
     import jax
 
-    from imrl_jax import sweeps
-    from imrl_jax.behaviour import colour_reinforcers
-    from imrl_jax.checkpoint import git_commit
+    from imrl_jax import behaviour, sweeps
     from imrl_jax.config import make_config
 
-    lengths = [int(v) for v in args.lengths.split(",")]
-    walls = args.walls.split(",")
-    rewards = args.rewards.split(",")
-    rules = args.rules.split(",")
-    rows = []
-    start = time.perf_counter()
-    combos = list(itertools.product(lengths, walls, rewards))
-    for i, (length, wall, reward) in enumerate(combos):
+    rows, start = [], time.perf_counter()
+    for length, wall, reward in itertools.product([int(v) for v in args.lengths.split(",")], args.walls.split(","),
+                                                  args.rewards.split(",")):
         config = make_config("paper", condition="LE-LS", childhood_steps=length, childhood_walls=wall,
                              childhood_selector_reward=reward, wall_respawn_steps=args.respawn_steps,
                              initial_speed_bias=args.speed_bias)
-        genome = jax.numpy.asarray(colour_reinforcers(config))
-        lanes = [(rule, seed) for rule in rules for seed in range(args.seeds)]
+        genome = jax.numpy.asarray(behaviour.colour_reinforcers(config))
+        lanes = [(rule, seed) for rule in args.rules.split(",") for seed in range(args.seeds)]
         points = sweeps.from_settings(config, [RULES[rule] for rule, _ in lanes]).points.params
         keys = jax.vmap(lambda s: jax.random.fold_in(jax.random.key(args.key), s))(
             jax.numpy.asarray([seed for _, seed in lanes]))
-        tick = time.perf_counter()
         agents, (selections, on_wall, respawns) = behaviour.make_childhoods(config)(keys, points, genome)
         agents, selections, on_wall, respawns = jax.device_get((agents, selections, on_wall, respawns))
         for j, (rule, seed) in enumerate(lanes):
-            agent = jax.tree.map(lambda x: x[j], agents)
             row = dict(length=length, walls=wall, reward=reward, rules=rule, seed=seed)
-            row.update(measure(config, agent, (selections[j], on_wall[j], respawns[j])))
+            row.update(measure(config, jax.tree.map(lambda x: x[j], agents), (selections[j], on_wall[j], respawns[j])))
             rows.append(row)
-        done = time.perf_counter() - start
-        print(f"[{i + 1}/{len(combos)}] childhood {length:,} walls={wall} reward={reward}: {len(lanes)} lanes in "
-              f"{time.perf_counter() - tick:.0f} s; own-colour takes "
-              + ", ".join(f"{rule} {np.mean([r['own_takes'] for r in rows[-len(lanes):] if r['rules'] == rule]):.2f}"
-                          for rule in rules)
-              + f"; ETA {done / (i + 1) * (len(combos) - i - 1):.0f} s", flush=True)
-
-    os.makedirs(args.out, exist_ok=True)
-    write_csv(os.path.join(args.out, args.name + ".csv"), rows)
-    summary = dict(command="python experiments/childhood_study.py " + " ".join(sys.argv[1:]), git_commit=git_commit(),
-                   seconds=round(time.perf_counter() - start, 1), seeds=args.seeds,
-                   settings=summarise(rows, ("length", "walls", "reward", "rules")))
-    with open(os.path.join(args.out, args.name + ".json"), "w") as f:
-        json.dump(summary, f, indent=2)
-    plot_hand(rows, os.path.join(args.out, args.name + ".png"))
-    return 0
+        print(f"childhood {length:,} walls={wall} reward={reward}: {time.perf_counter() - start:.0f} s", flush=True)
+    return finish(args.out, rows, seconds=round(time.perf_counter() - start, 1), seeds=args.seeds,
+                  settings=summarise(rows, ("length", "walls", "reward", "rules")))
 
 
 def summarise(rows, keys) -> list[dict]:
@@ -129,22 +153,167 @@ def summarise(rows, keys) -> list[dict]:
     return out
 
 
-def write_csv(path: str, rows: list[dict]) -> None:
-    """Rows as CSV (floats with 4 decimals)."""
-    with open(path, "w", newline="") as f:
-        fields = list(dict.fromkeys(name for row in rows for name in row))  # rows may lack some (EE: no childhood)
-        writer = csv.DictWriter(f, fieldnames=fields, restval="", lineterminator="\n")
-        writer.writeheader()
-        writer.writerows({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
+def stage_ceiling(args) -> int:
+    """Ideal colour followers composed by a learning selector, per adult rule set and task length."""
+    import jax
+
+    from imrl_jax.config import make_config
+    from imrl_jax.controllers import composition_ceiling
+
+    rows = []
+    for task_steps in [int(v) for v in args.task_steps.split(",")]:
+        for name, rules in CEILING_RULES.items():
+            config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **rules)
+            result = composition_ceiling(jax.random.key(args.key), config, args.lives)
+            fitness = np.asarray(result.fitness)
+            performance = np.asarray(result.performance).mean(0)
+            rows.append(dict(rules=name, task_steps=task_steps, lives=args.lives, fitness=float(fitness.mean()),
+                             fitness_sd=float(fitness.std()),
+                             **{f"task_{t + 1}": float(v) for t, v in enumerate(performance)}))
+            print(f"{name:>18} {task_steps:>7,} steps: ideal followers {fitness.mean():.3f}", flush=True)
+    return finish(args.out, rows, rules=CEILING_RULES)
 
 
-def plot_hand(rows, path: str) -> None:
+def best_of_run(run_dir: str, num_best: int):
+    """A run's config, seeds, and per seed the ``num_best`` best genomes of its last evaluated generation and their fitness."""
+    from imrl_jax.rundir import best_genomes, load_run, read_config, read_kept_best
+
+    if not os.path.isfile(os.path.join(run_dir, "final_population.npz")):
+        # A reproduction's run directory keeps its best genomes in best_genomes.npz, three levels up
+        # (RESULTS/VARIANT/evolve/COND), under VARIANT__COND__*.
+        config, _ = read_config(run_dir)
+        run_dir = os.path.normpath(run_dir)
+        variant_dir = os.path.dirname(os.path.dirname(run_dir))
+        kept = read_kept_best(os.path.join(os.path.dirname(variant_dir), "best_genomes.npz"),
+                              os.path.basename(variant_dir), os.path.basename(run_dir))
+        return config, np.asarray(kept.seeds), kept.genomes[:, :num_best], kept.fitness[:, :num_best]
+    run = load_run(run_dir)
+    return run.config, np.asarray(run.seeds), best_genomes(run, num_best), -np.sort(-run.fitness, axis=1)[:, :num_best]
+
+
+def stage_evolved(args) -> int:
+    """Probes of the best evolved individuals of run directories."""
+    import jax
+
+    from imrl_jax import behaviour
+
+    rows = []
+    for run_dir in args.runs:
+        config, seeds, genomes, fitness = best_of_run(run_dir, args.best)
+        flat = genomes.reshape(-1, genomes.shape[-1])
+        agents, records = behaviour.grown_agents(config, flat, args.key)
+        for i in range(len(flat)):
+            s, rank = divmod(i, args.best)
+            row = dict(run=os.path.basename(run_dir.rstrip("/")), seed=int(seeds[s]), rank=rank + 1,
+                       fitness=float(fitness[s, rank]))
+            row.update(measure(config, jax.tree.map(lambda x: x[i], agents),
+                               None if records is None else tuple(x[i] for x in records)))
+            rows.append(row)
+        print(f"{run_dir}: individuals with 0-3 colours followed "
+              f"{np.bincount([r['num_colours'] for r in rows[-len(flat):]], minlength=4).tolist()}", flush=True)
+    return finish(args.out, rows)
+
+
+def stage_random(args) -> int:
+    """Random genomes (generation 0) under a preset: one life's fitness each and the probes of their experts."""
+    import jax
+
+    from imrl_jax import behaviour
+    from imrl_jax.config import make_config
+    from imrl_jax.lifetime import make_evaluate
+
+    config = make_config(args.preset, condition="LE-LS")
+    genomes = jax.random.uniform(jax.random.key(args.key), (args.individuals, config.num_genes), minval=-1.0,
+                                 maxval=1.0)
+    fitness = np.asarray(make_evaluate(config)(jax.random.key(args.key + 1), config.learning_params(),
+                                               genomes).fitness)
+    agents, records = behaviour.grown_agents(config, genomes, args.key + 2)
+    rows = [dict(preset=args.preset, individual=i, fitness=float(fitness[i]),
+                 **measure(config, jax.tree.map(lambda x: x[i], agents), tuple(x[i] for x in records)))
+            for i in range(args.individuals)]
+    return finish(args.out, rows)
+
+
+def stage_heritability(args) -> int:
+    """The best individuals of a run relived with fresh keys: how much of their fitness was luck."""
+    import jax
+
+    from imrl_jax.lifetime import make_evaluate
+
+    rows = []
+    for run_dir in args.runs:
+        config, seeds, genomes, fitness = best_of_run(run_dir, args.best)
+        config = config.replace(lives_per_fitness=1)
+        flat = np.repeat(genomes.reshape(-1, genomes.shape[-1]), args.lives, axis=0)
+        result = make_evaluate(config)(jax.random.key(args.key), config.learning_params(), flat)
+        relived = np.asarray(result.fitness).reshape(len(seeds), args.best, args.lives)
+        for s in range(len(seeds)):
+            for rank in range(args.best):
+                rows.append(dict(run=os.path.basename(run_dir.rstrip("/")), seed=int(seeds[s]), rank=rank + 1,
+                                 fitness=float(fitness[s, rank]), relived_mean=float(relived[s, rank].mean()),
+                                 relived_sd=float(relived[s, rank].std(ddof=1)),
+                                 **{f"life_{j + 1}": float(v) for j, v in enumerate(relived[s, rank])}))
+    return finish(args.out, rows)
+
+
+def stage_speed(args) -> int:
+    """Hand-made colour reinforcers with experts that start fast: does the speed the childhood
+    keeps decide what learned colour followers are worth in the tasks?"""
+    import jax
+    import jax.numpy as jnp
+
+    from imrl_jax.arena import task_arrays
+    from imrl_jax.behaviour import colour_reinforcers, specialisation
+    from imrl_jax.config import make_config
+    from imrl_jax.lifetime import childhood_task, lifetime_keys, random_pose, run_phase, task_spec, task_start
+    from imrl_jax.networks import decode
+    from imrl_jax.state import childhood_phase, for_phase, init_state
+
+    config = make_config(args.preset, condition="LE-LS")
+    params = config.learning_params()
+    genome = jnp.asarray(colour_reinforcers(config))
+    _, _, best = task_arrays(config)
+
+    def life(key, bias):
+        keys = lifetime_keys(key, config.num_tasks)
+        agent = decode(config, genome)
+        agent = agent._replace(actor=agent.actor.at[:, 1, -1].set(bias))  # the speed unit's bias
+        phase = childhood_phase(config)
+        state = for_phase(config, phase, init_state(config, agent, random_pose(keys.pose, config)))
+        state, _ = run_phase(keys.childhood, config, phase, params, childhood_task(config), state,
+                             config.childhood_steps)
+        grown = state.agent
+
+        def task(task_key, index):
+            _, curves = run_phase(task_key, config, config.spec.adult, params, task_spec(config, index),
+                                  task_start(config, grown, index), config.task_steps)
+            return curves.reaches.sum()
+
+        reaches = jax.vmap(task)(keys.tasks, jnp.arange(config.num_tasks))
+        return grown, reaches / best
+
+    biases = [float(b) for b in args.biases.split(",")]
+    lanes = [(b, i) for b in biases for i in range(args.lives)]
+    keys = jax.random.split(jax.random.key(args.key), len(lanes))
+    grown, performance = jax.jit(jax.vmap(life))(keys, jnp.asarray([b for b, _ in lanes]))
+    performance = np.asarray(performance)
+    rows = []
+    for j, (bias, i) in enumerate(lanes):
+        spec = specialisation(config, jax.tree.map(lambda x: x[j], grown))
+        rows.append(dict(speed_bias=bias, life=i, fitness=float(performance[j].mean()),
+                         own_takes=float(np.diag(spec.takes).mean()), num_colours=spec.num_colours,
+                         speed=float(spec.speed.mean()),
+                         **{f"task_{t + 1}": float(v) for t, v in enumerate(performance[j])}))
+    return finish(args.out, rows, preset=args.preset)
+
+
+def plot_hand(rows, path: str) -> str:
     """Own colour taken, largest control share and time on walls of every setting (mean bars, seed dots)."""
     from imrl_jax.plotting import new_figure, save
 
     order = lambda values, first: sorted(set(values), key=lambda v: (v not in first, first.index(v) if v in first  # noqa: E731
                                                                      else 0, v))
-    lengths = sorted({r["length"] for r in rows})
+    lengths = sorted({int(r["length"]) for r in rows})
     walls = order([r["walls"] for r in rows], ["clamp", "respawn"])
     rewards = order([r["reward"] for r in rows], ["surprise", "progress"])
     rules = order([r["rules"] for r in rows], list(RULES))
@@ -180,380 +349,169 @@ def plot_hand(rows, path: str) -> None:
     axes[-1].legend(title="childhood rules", fontsize=7, title_fontsize=7, loc="lower right")
     fig.suptitle("Childhood alone with hand-made colour reinforcers: length, walls, selector reward, rules "
                  f"({len({r['seed'] for r in rows})} seeds; dots: seeds; red: the study's targets)", fontsize=9)
-    save(fig, path)
+    return save(fig, path)
 
 
-def read_best(run_dir: str) -> np.ndarray:
-    """Best fitness (seeds, generations) from a run's history.csv."""
+#: The evolutions at the paper's life lengths: 3 seeds x 30 generations (150,000 + 6 x 100,000 steps).
+EVOLVED = dict(SCALES["paper"], seeds=3, generations=30)
+#: Each row's line of the evolutions' table: what it is, its probes' measure and a note on its tasks.
+LABELS = {
+    "LE-LS-skills": ("LE-LS, `skills`", "evolved_skills", ""),
+    "LE-LS-skills-no-speed-bias": ("LE-LS, `skills` without the speed bias", "evolved_no_speed_bias", ""),
+    "LE-LS-extension": ("LE-LS, `extension`", "evolved_extension", ""),
+    "EE-LS-extension": ("EE-LS, `extension` (= `skills`: EE has no childhood)", "evolved_ee_ls",
+                        ": one task of a pair near 0"),
+    "LE-LS-skills-2lives": ("LE-LS, `skills`, fitness the mean of 2 lives, 15 generations (equal compute)",
+                            "evolved_skills_2lives", ""),
+    "LE-LS-extension-speed-bias": ("LE-LS, `extension` + `initial_speed_bias=4`", "evolved_extension_speed_bias",
+                                   ": seed 2 solves task 1 at 0.00"),
+    "LE-LS-skills-clamp": ("LE-LS, `skills` with `childhood_walls=clamp`", "evolved_skills_clamp", ""),
+}
+
+
+def last_generation(run_dir: str) -> tuple[np.ndarray, np.ndarray]:
+    """Each seed's best fitness of its run's last generation, and that individual's performance on each task."""
     with open(os.path.join(run_dir, "history.csv")) as f:
         rows = list(csv.DictReader(f))
-    seeds = sorted({int(r["seed"]) for r in rows})
-    generations = max(int(r["generation"]) for r in rows) + 1
-    best = np.full((len(seeds), generations), np.nan)
-    for r in rows:
-        best[seeds.index(int(r["seed"])), int(r["generation"])] = float(r["best"])
-    return best
+    last = [r for r in rows if int(r["generation"]) == max(int(r["generation"]) for r in rows)]
+    return (np.array([float(r["best"]) for r in last]),
+            np.array([[float(v) for k, v in r.items() if k.startswith("best_task")] for r in last]))
 
 
-def plot_evolutions(out: str, path: str) -> None:
-    """Best fitness per generation of the study's evolutions, with the ceilings they climb towards.
+class ChildhoodTable(Table):
+    """The study's table: its evolutions' final best, tasks and probes, evolve.png and the hand-made childhoods."""
 
-    The x axis is compute: a run scoring the mean of N lives is drawn at N x its generation.
-    """
-    from imrl_jax.config import Config
-    from imrl_jax.plotting import new_figure, save, style_axis
+    def report(self) -> int:
+        from experiments.loading import read_evolution
+        from experiments.study import write_table
+        from imrl_jax import conditions
+        from imrl_jax.plotting import new_figure, save, style_axis
 
-    fig = new_figure(8.8, 3.8)
-    ax = fig.add_subplot()
-    for i, name in enumerate(name for name in EVOLUTIONS
-                             if os.path.isfile(os.path.join(out, "evolve", name, "history.csv"))):
-        with open(os.path.join(out, "evolve", name, "config.json")) as f:
-            lives = Config.from_dict(json.load(f)["config"]).lives_per_fitness
-        best = read_best(os.path.join(out, "evolve", name))
-        x = lives * np.arange(best.shape[1])
-        mean, sd = np.nanmean(best, 0), np.nanstd(best, 0)
-        style = dict(color=f"C{i}", ls="--" if name.startswith("EE") else "-", marker="o", ms=2.5, lw=1.4)
-        ax.plot(x, mean, label=f"{name} ({best.shape[0]} seeds)", **style)
-        ax.fill_between(x, mean - sd, mean + sd, color=f"C{i}", alpha=0.12, lw=0)
-    references = []
-    with open(os.path.join(out, "ceiling.csv")) as f:
-        references += [(float(r["fitness"]), "ideal colour followers, extension's selector")
-                       for r in csv.DictReader(f) if r["rules"] == "extension" and r["task_steps"] == "100000"]
-    with open(os.path.join(out, "speed.csv")) as f:
-        fast = [float(r["fitness"]) for r in csv.DictReader(f) if float(r["speed_bias"]) == 4.0]
-    references.append((float(np.mean(fast)), "hand-made colour reinforcers under skills"))
-    for (value, label), style in zip(references, ("--", ":")):
-        ax.axhline(value, color="0.35", lw=1.0, ls=style, label=f"{label}: {value:.2f}")
-    ax.set_ylim(0, 1)
-    style_axis(ax, "paper life lengths: best fitness (mean over seeds, +-1 sd)",
-               "generation (x lives per fitness: equal compute)", "best fitness")
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
-    fig.tight_layout()
-    save(fig, path)
-
-
-def stage_plot(args) -> int:
-    """Redraw hand.png from hand.csv and evolve.png from the runs' histories."""
-    with open(os.path.join(args.out, "hand.csv")) as f:
-        rows = [{k: (float(v) if k not in ("walls", "reward", "rules") else v) for k, v in r.items()}
-                for r in csv.DictReader(f)]
-    for r in rows:
-        r["length"] = int(r["length"])
-    plot_hand(rows, os.path.join(args.out, "hand.png"))
-    plot_evolutions(args.out, os.path.join(args.out, "evolve.png"))
-    return 0
-
-
-#: Adult learning rules whose composition ceiling the study measures (LearningParams values).
-CEILING_RULES = {
-    "paper": {},
-    "td0-fast-selector": dict(eta_selector_actor=3.0, eta_selector_critic=0.01),
-    "extension": dict(ADULT_SELECTOR),
-}
+        folders = {s.variant: s.out_dir for s in self.all_stages()[0] if s.kind == "measure"}
+        lines = ["| run | final best (per seed) | every task of the best | 10 best x 3 seeds: individuals with "
+                 "0 / 1 / 2 / 3 colours followed |", "|---|---|---|---|"]
+        fig = new_figure(8.8, 3.8)
+        ax = fig.add_subplot()
+        for i, (row, run_dir) in enumerate(self.evolutions().items()):
+            run = read_evolution(run_dir)
+            lives = run["config"].get("lives_per_fitness", 1)
+            x, mean, sd = lives * np.arange(len(run["best"])), np.nanmean(run["best"], 1), np.nanstd(run["best"], 1)
+            dashed = not conditions.get(run["config"]["condition"]).learned_actors  # evolved experts
+            ax.plot(x, mean, label=f"{row} ({len(run['seeds'])} seeds)", color=f"C{i}", ls="--" if dashed else "-",
+                    marker="o", ms=2.5, lw=1.4)
+            ax.fill_between(x, mean - sd, mean + sd, color=f"C{i}", alpha=0.12, lw=0)
+            label, probes, note = LABELS[row]
+            best, tasks = last_generation(run_dir)
+            colours = np.bincount([int(r["num_colours"]) for r in read_rows(folders[probes])], minlength=4)
+            lines.append(f"| {label} | {best.mean():.3f} ({', '.join(f'{b:.3f}' for b in best)}) | "
+                         f"{tasks.min():.2f}-{tasks.max():.2f}{note} | {' / '.join(str(c) for c in colours)} |")
+        ceiling, speed = read_rows(folders["ceiling"]), read_rows(folders["speed"])
+        references = [(r["fitness"], "ideal colour followers, extension's selector") for r in ceiling
+                      if r["rules"] == "extension" and r["task_steps"] == 100_000]
+        references.append((float(np.mean([r["fitness"] for r in speed if r["speed_bias"] == 4.0])),
+                           "hand-made colour reinforcers under skills"))
+        for (value, label), style in zip(references, ("--", ":")):
+            ax.axhline(value, color="0.35", lw=1.0, ls=style, label=f"{label}: {value:.2f}")
+        ax.set_ylim(0, 1)
+        style_axis(ax, "paper life lengths: best fitness (mean over seeds, +-1 sd)",
+                   "generation (x lives per fitness: equal compute)", "best fitness")
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+        fig.tight_layout()
+        drawn = [save(fig, os.path.join(self.out, "evolve.png"))]
+        drawn += [plot_hand(read_rows(folders[name]), os.path.join(self.out, f"{name}.png"))
+                  for name in ("hand", "hand_fast")]
+        write_table(self.document, "\n".join(lines), f"<!-- {self.name} table: python -m experiments report "
+                    f"{self.name} -->", f"<!-- end of {self.name} table -->")
+        print(f"{len(lines) - 2} evolutions; wrote {', '.join(drawn)} and the table of {self.document}")
+        return 0
 
 
-def stage_ceiling(args) -> int:
-    """Ideal colour followers composed by a learning selector, per adult rule set and task length."""
-    import jax
-
-    from imrl_jax.checkpoint import git_commit
-    from imrl_jax.config import make_config
-    from imrl_jax.controllers import composition_ceiling
-
-    rows = []
-    for task_steps in [int(v) for v in args.task_steps.split(",")]:
-        for name, rules in CEILING_RULES.items():
-            config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **rules)
-            tick = time.perf_counter()
-            result = composition_ceiling(jax.random.key(args.key), config, args.lives)
-            fitness = np.asarray(result.fitness)
-            performance = np.asarray(result.performance).mean(0)
-            rows.append(dict(rules=name, task_steps=task_steps, lives=args.lives, fitness=float(fitness.mean()),
-                             fitness_sd=float(fitness.std()),
-                             **{f"task_{t + 1}": float(v) for t, v in enumerate(performance)}))
-            print(f"{name:>18} {task_steps:>7,} steps: ideal followers {fitness.mean():.3f} "
-                  f"(sd {fitness.std():.3f}, {time.perf_counter() - tick:.0f} s)", flush=True)
-    os.makedirs(args.out, exist_ok=True)
-    write_csv(os.path.join(args.out, "ceiling.csv"), rows)
-    with open(os.path.join(args.out, "ceiling.json"), "w") as f:
-        json.dump(dict(command="python experiments/childhood_study.py " + " ".join(sys.argv[1:]),
-                       git_commit=git_commit(), rules=CEILING_RULES, rows=rows), f, indent=2)
-    return 0
-
-
-def best_of_run(run_dir: str, num_best: int):
-    """A run's config, seeds, and per seed the ``num_best`` best genomes of its last evaluated generation and their fitness."""
-    from imrl_jax.rundir import best_genomes, load_run, read_config, read_kept_best
-
-    if not os.path.isfile(os.path.join(run_dir, "final_population.npz")):
-        # A reproduction's run directory keeps its best genomes in best_genomes.npz, three levels up
-        # (RESULTS/VARIANT/evolve/COND), under VARIANT__COND__*.
-        config, _ = read_config(run_dir)
-        run_dir = os.path.normpath(run_dir)
-        variant_dir = os.path.dirname(os.path.dirname(run_dir))
-        kept = read_kept_best(os.path.join(os.path.dirname(variant_dir), "best_genomes.npz"),
-                              os.path.basename(variant_dir), os.path.basename(run_dir))
-        return config, np.asarray(kept.seeds), kept.genomes[:, :num_best], kept.fitness[:, :num_best]
-    run = load_run(run_dir)
-    return run.config, np.asarray(run.seeds), best_genomes(run, num_best), -np.sort(-run.fitness, axis=1)[:, :num_best]
+#: Runs of other studies whose best the study probes: the cpu reproduction's and the paper-scale skills LE-LS.
+CPU = [os.path.join(RESULTS, "cpu", variant, "evolve", condition)
+       for condition in ("LE-LS", "EE-LS") for variant in ("paper", "extension")]
+#: The measures' module: this one.
+MODULE = "experiments.childhood_study"
+TABLE = ChildhoodTable("childhood", "docs/CHILDHOOD.md", 10, out=OUT, scale=EVOLVED, rows=(
+    Row("LE-LS-skills", "LE-LS", "skills", test=False),
+    Row("LE-LS-skills-no-speed-bias", "LE-LS", "skills", ("initial_speed_bias=0",), test=False),
+    Row("LE-LS-extension", "LE-LS", "extension", test=False),
+    Row("EE-LS-extension", "EE-LS", "extension", test=False),
+    Row("LE-LS-skills-2lives", "LE-LS", "skills", ("lives_per_fitness=2",), test=False,
+        scale=dict(EVOLVED, generations=15)),
+    Row("LE-LS-extension-speed-bias", "LE-LS", "extension", ("initial_speed_bias=4",), test=False),
+    Row("LE-LS-skills-clamp", "LE-LS", "skills", ("childhood_walls=clamp",), test=False),
+), measures=(
+    Measure("ceiling", "", ("ceiling",), module=MODULE),
+    Measure("hand", "", ("hand",), module=MODULE),
+    Measure("hand_fast", "", ("hand", "--lengths", "150000", "--walls", "respawn,clamp", "--rewards", "surprise",
+                              "--rules", "paper", "--speed-bias", "4"), module=MODULE),
+    Measure("speed", "", ("speed", "--biases", "0,1,2,3,4,6", "--lives", "6"), module=MODULE),
+    Measure("evolved_cpu", "", ("evolved", *CPU), module=MODULE),
+    *(Measure(probes, row, ("evolved",), module=MODULE) for row, (_, probes, _) in LABELS.items()),
+    Measure("random_skills", "", ("random",), module=MODULE),
+    Measure("heritability", "", ("heritability", *(os.path.join(OUT, "evolve", row) for row in (
+        "LE-LS-skills", "LE-LS-extension", "LE-LS-skills-no-speed-bias", "LE-LS-skills-2lives"))), module=MODULE),
+    Measure("evolved_paper_scale", "", ("evolved", os.path.join(REPRODUCTION, "skills", "evolve", "LE-LS")),
+            module=MODULE),
+))
+all_stages = TABLE.all_stages
+#: The studies of this module (python -m experiments finds them).
+STUDIES = (TABLE.study("childhood_study"),)
 
 
-def stage_evolved(args) -> int:
-    """Probes of the best evolved individuals of run directories."""
-    from imrl_jax import behaviour
-    import jax
-
-    rows = []
-    for run_dir in args.runs:
-        config, seeds, genomes, fitness = best_of_run(run_dir, args.best)
-        flat = genomes.reshape(-1, genomes.shape[-1])
-        tick = time.perf_counter()
-        agents, records = behaviour.grown_agents(config, flat, args.key)
-        for i in range(len(flat)):
-            s, rank = divmod(i, args.best)
-            agent = jax.tree.map(lambda x: x[i], agents)
-            row = dict(run=os.path.basename(run_dir.rstrip("/")), seed=int(seeds[s]), rank=rank + 1,
-                       fitness=float(fitness[s, rank]))
-            row.update(measure(config, agent, None if records is None else tuple(x[i] for x in records)))
-            rows.append(row)
-        summary = [r["num_colours"] for r in rows[-len(flat):]]
-        print(f"{run_dir}: {len(flat)} individuals in {time.perf_counter() - tick:.0f} s; distinct colours followed "
-              f"{np.bincount(summary, minlength=4).tolist()} (individuals with 0, 1, 2, 3)", flush=True)
-    os.makedirs(args.out, exist_ok=True)
-    write_csv(os.path.join(args.out, args.name + ".csv"), rows)
-    return 0
-
-
-def stage_random(args) -> int:
-    """Random genomes (generation 0) under a preset: one life's fitness each and the probes of their experts."""
-    from imrl_jax import behaviour
-    import jax
-
-    from imrl_jax.config import make_config
-    from imrl_jax.lifetime import make_evaluate
-
-    config = make_config(args.preset, condition="LE-LS")
-    genomes = jax.random.uniform(jax.random.key(args.key), (args.individuals, config.num_genes), minval=-1.0,
-                                 maxval=1.0)
-    tick = time.perf_counter()
-    fitness = np.asarray(make_evaluate(config)(jax.random.key(args.key + 1), config.learning_params(),
-                                               genomes).fitness)
-    agents, records = behaviour.grown_agents(config, genomes, args.key + 2)
-    rows = []
-    for i in range(args.individuals):
-        row = dict(preset=args.preset, individual=i, fitness=float(fitness[i]))
-        row.update(measure(config, jax.tree.map(lambda x: x[i], agents), tuple(x[i] for x in records)))
-        rows.append(row)
-    colours = np.bincount([r["num_colours"] for r in rows], minlength=4).tolist()
-    print(f"{args.individuals} random LE-LS genomes under {args.preset} in {time.perf_counter() - tick:.0f} s: "
-          f"fitness {fitness.mean():.3f} (max {fitness.max():.3f}); individuals with 0-3 colours followed {colours}",
-          flush=True)
-    os.makedirs(args.out, exist_ok=True)
-    write_csv(os.path.join(args.out, f"random_{args.preset}.csv"), rows)
-    return 0
-
-
-def stage_heritability(args) -> int:
-    """The best individuals of a run relived with fresh keys: how much of their fitness was luck."""
-    import jax
-
-    from imrl_jax.lifetime import make_evaluate
-
-    rows = []
-    for run_dir in args.runs:
-        config, seeds, genomes, fitness = best_of_run(run_dir, args.best)
-        config = config.replace(lives_per_fitness=1)
-        flat = np.repeat(genomes.reshape(-1, genomes.shape[-1]), args.lives, axis=0)
-        tick = time.perf_counter()
-        result = make_evaluate(config)(jax.random.key(args.key), config.learning_params(), flat)
-        relived = np.asarray(result.fitness).reshape(len(seeds), args.best, args.lives)
-        for s in range(len(seeds)):
-            for rank in range(args.best):
-                rows.append(dict(run=os.path.basename(run_dir.rstrip("/")), seed=int(seeds[s]), rank=rank + 1,
-                                 fitness=float(fitness[s, rank]), relived_mean=float(relived[s, rank].mean()),
-                                 relived_sd=float(relived[s, rank].std(ddof=1)),
-                                 **{f"life_{j + 1}": float(v) for j, v in enumerate(relived[s, rank])}))
-        group = rows[-len(seeds) * args.best:]
-        original = np.array([r["fitness"] for r in group])
-        mean = np.array([r["relived_mean"] for r in group])
-        print(f"{run_dir}: {len(group)} x {args.lives} lives in {time.perf_counter() - tick:.0f} s: fitness "
-              f"{original.mean():.3f} -> relived {mean.mean():.3f}; sd of one genome's lives "
-              f"{np.mean([r['relived_sd'] for r in group]):.3f}; corr {np.corrcoef(original, mean)[0, 1]:.2f}",
-              flush=True)
-    os.makedirs(args.out, exist_ok=True)
-    write_csv(os.path.join(args.out, "heritability.csv"), rows)
-    return 0
-
-
-def stage_speed(args) -> int:
-    """Hand-made colour reinforcers with experts that start fast: does the speed the childhood
-    keeps decide what learned colour followers are worth in the tasks?"""
-    import jax
-    import jax.numpy as jnp
-
-    from imrl_jax.behaviour import colour_reinforcers, specialisation
-    from imrl_jax.checkpoint import git_commit
-    from imrl_jax.config import make_config
-    from imrl_jax.lifetime import childhood_task, lifetime_keys, random_pose, run_phase, task_spec, task_start
-    from imrl_jax.state import childhood_phase, for_phase, init_state
-    from imrl_jax.arena import task_arrays
-    from imrl_jax.networks import decode
-
-    config = make_config(args.preset, condition="LE-LS")
-    params = config.learning_params()
-    genome = jnp.asarray(colour_reinforcers(config))
-    _, _, best = task_arrays(config)
-
-    def life(key, bias):
-        keys = lifetime_keys(key, config.num_tasks)
-        agent = decode(config, genome)
-        agent = agent._replace(actor=agent.actor.at[:, 1, -1].set(bias))  # the speed unit's bias
-        phase = childhood_phase(config)
-        state = for_phase(config, phase, init_state(config, agent, random_pose(keys.pose, config)))
-        state, _ = run_phase(keys.childhood, config, phase, params, childhood_task(config), state,
-                             config.childhood_steps)
-        grown = state.agent
-
-        def task(task_key, index):
-            _, curves = run_phase(task_key, config, config.spec.adult, params, task_spec(config, index),
-                                  task_start(config, grown, index), config.task_steps)
-            return curves.reaches.sum()
-
-        reaches = jax.vmap(task)(keys.tasks, jnp.arange(config.num_tasks))
-        return grown, reaches / best
-
-    biases = [float(b) for b in args.biases.split(",")]
-    lanes = [(b, i) for b in biases for i in range(args.lives)]
-    keys = jax.random.split(jax.random.key(args.key), len(lanes))
-    tick = time.perf_counter()
-    grown, performance = jax.jit(jax.vmap(life))(keys, jnp.asarray([b for b, _ in lanes]))
-    performance = np.asarray(performance)
-    rows = []
-    for j, (bias, i) in enumerate(lanes):
-        spec = specialisation(config, jax.tree.map(lambda x: x[j], grown))
-        rows.append(dict(speed_bias=bias, life=i, fitness=float(performance[j].mean()),
-                         own_takes=float(np.diag(spec.takes).mean()), num_colours=spec.num_colours,
-                         speed=float(spec.speed.mean()),
-                         **{f"task_{t + 1}": float(v) for t, v in enumerate(performance[j])}))
-    for bias in biases:
-        group = [r for r in rows if r["speed_bias"] == bias]
-        print(f"speed bias {bias:g}: fitness {np.mean([r['fitness'] for r in group]):.3f}, own colour taken "
-              f"{np.mean([r['own_takes'] for r in group]):.2f}, {np.mean([r['speed'] for r in group]):.2f} cm/step",
-              flush=True)
-    print(f"{len(lanes)} lives in {time.perf_counter() - tick:.0f} s")
-    os.makedirs(args.out, exist_ok=True)
-    write_csv(os.path.join(args.out, "speed.csv"), rows)
-    with open(os.path.join(args.out, "speed.json"), "w") as f:
-        json.dump(dict(command="python experiments/childhood_study.py " + " ".join(sys.argv[1:]),
-                       git_commit=git_commit(), preset=args.preset), f, indent=2)
-    return 0
-
-
-#: The paper-length evolutions of the study (3 seeds x 30 generations; 150,000 + 6 x 100,000 steps).
-EVOLUTIONS = {
-    "LE-LS-skills": ["--cond", "LE-LS", "--preset", "skills"],
-    "LE-LS-skills-no-speed-bias": ["--cond", "LE-LS", "--preset", "skills", "--set", "initial_speed_bias=0"],
-    "LE-LS-extension": ["--cond", "LE-LS", "--preset", "extension"],
-    "EE-LS-extension": ["--cond", "EE-LS", "--preset", "extension"],
-    "LE-LS-skills-2lives": ["--cond", "LE-LS", "--preset", "skills", "--set", "lives_per_fitness=2",
-                            "--generations", "15"],
-    "LE-LS-extension-speed-bias": ["--cond", "LE-LS", "--preset", "extension", "--set", "initial_speed_bias=4"],
-    "LE-LS-skills-clamp": ["--cond", "LE-LS", "--preset", "skills", "--set", "childhood_walls=clamp"],
-    "LE-LS-paper": ["--cond", "LE-LS", "--preset", "paper"],
-}
-
-
-def stage_evolve(args) -> int:
-    """Run (or continue) the study's evolutions one after the other, each resumable."""
-    import subprocess
-
-    names = args.runs.split(",") if args.runs else list(EVOLUTIONS)
-    for name in names:
-        out = os.path.join(args.out, "evolve", name)
-        command = [sys.executable, "-m", "imrl_jax.evolve", *EVOLUTIONS[name], "--seeds", str(args.seeds)]
-        if "--generations" not in EVOLUTIONS[name]:
-            command += ["--generations", str(args.generations)]
-        command += ["--out", out, "--keep", "1"]
-        if os.path.isdir(os.path.join(out, "checkpoints")):
-            command.append("--resume")
-        print(f"== {name}: {' '.join(command[1:])}", flush=True)
-        code = subprocess.call(command)
-        if code:
-            return code
-    return 0
+#: Each stage, and its own key and lives where they differ (the keys the committed measures were made with).
+STAGES = {"hand": stage_hand, "ceiling": stage_ceiling, "speed": stage_speed, "evolved": stage_evolved,
+          "random": stage_random, "heritability": stage_heritability}
+KEYS = dict(hand=0, ceiling=0, evolved=1, heritability=2, speed=3, random=4)
+LIVES = dict(ceiling=8, heritability=4, speed=4)
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    sub = p.add_subparsers(dest="stage", required=True)
-    hand = sub.add_parser("hand", help="childhood with hand-made colour reinforcers over the factors")
-    hand.add_argument("--out", default="experiments/results/childhood")
-    hand.add_argument("--lengths", default="30000,150000,600000", help="childhood lengths (steps)")
-    hand.add_argument("--walls", default="clamp,respawn")
-    hand.add_argument("--rewards", default="surprise,progress")
-    hand.add_argument("--rules", default="paper,extension,uniform", help=f"of {', '.join(RULES)}")
-    hand.add_argument("--respawn-steps", type=int, default=20)
-    hand.add_argument("--speed-bias", type=float, default=0.0, help="initial bias of the actors' speed unit")
-    hand.add_argument("--name", default="hand", help="the name of the outputs (NAME.csv, .json, .png)")
-    hand.add_argument("--seeds", type=int, default=4)
-    hand.add_argument("--key", type=int, default=0)
-    evolve = sub.add_parser("evolve", help="the study's paper-length evolutions (resumable)")
-    evolve.add_argument("--out", default="experiments/results/childhood")
-    evolve.add_argument("--runs", default="", help=f"comma-separated, of {', '.join(EVOLUTIONS)} (default: all)")
-    evolve.add_argument("--seeds", type=int, default=3)
-    evolve.add_argument("--generations", type=int, default=30)
-    ceiling = sub.add_parser("ceiling", help="ideal colour followers composed, per adult rule set and task length")
-    ceiling.add_argument("--out", default="experiments/results/childhood")
-    ceiling.add_argument("--task-steps", default="20000,100000")
-    ceiling.add_argument("--lives", type=int, default=8)
-    ceiling.add_argument("--key", type=int, default=0)
-    evolved = sub.add_parser("evolved", help="probes of the best individuals of evolutions")
-    evolved.add_argument("runs", nargs="+", help="run directories")
-    evolved.add_argument("--out", default="experiments/results/childhood")
-    evolved.add_argument("--name", default="evolved", help="the CSV's name")
-    evolved.add_argument("--best", type=int, default=10)
-    evolved.add_argument("--key", type=int, default=1)
-    heritability = sub.add_parser("heritability", help="the best individuals relived with fresh keys")
-    heritability.add_argument("runs", nargs="+", help="run directories")
-    heritability.add_argument("--out", default="experiments/results/childhood")
-    heritability.add_argument("--best", type=int, default=10)
-    heritability.add_argument("--lives", type=int, default=4)
-    heritability.add_argument("--key", type=int, default=2)
-    speed = sub.add_parser("speed", help="hand-made colour reinforcers with experts that start fast")
-    speed.add_argument("--out", default="experiments/results/childhood")
-    speed.add_argument("--preset", default="skills")
-    speed.add_argument("--biases", default="0,2,4", help="initial bias of the actors' speed unit (0: the paper's)")
-    speed.add_argument("--lives", type=int, default=4)
-    speed.add_argument("--key", type=int, default=3)
-    random = sub.add_parser("random", help="random LE-LS genomes (generation 0): fitness and probes")
-    random.add_argument("--out", default="experiments/results/childhood")
-    random.add_argument("--preset", default="skills")
-    random.add_argument("--individuals", type=int, default=30)
-    random.add_argument("--key", type=int, default=4)
-    plot = sub.add_parser("plot", help="redraw the figures from the CSVs")
-    plot.add_argument("--out", default="experiments/results/childhood")
-    args = p.parse_args(argv)
+    """The study's command line (``python -m experiments run|report childhood``), or a measure's, given ``--out``."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    return measure_main(argv) if any(a.startswith("--out") for a in argv) else TABLE.main(argv)
+
+
+@exit_codes
+def measure_main(argv) -> int:
+    """A measure's command line: ``[RUN...] --out OUT STAGE [options]``."""
+    p = Parser(prog="python -m experiments.childhood_study", description=__doc__.split("\n\n")[0],
+               formatter_class=HelpFormatter)
+    p.add_argument("words", nargs="+", metavar="RUN|STAGE", help=f"the runs it reads, and one of {', '.join(STAGES)}")
+    p.add_argument("--out", required=True, help="the measure's folder (its CSV is named after it)")
+    p.add_argument("--lengths", default="30000,150000,600000", help="hand: childhood lengths (steps)")
+    p.add_argument("--walls", default="clamp,respawn", help="hand: how walls act")
+    p.add_argument("--rewards", default="surprise,progress", help="hand: the childhood selector's rewards")
+    p.add_argument("--rules", default="paper,extension,uniform", help=f"hand: of {', '.join(RULES)}")
+    p.add_argument("--respawn-steps", type=int, default=20, help="hand: steps on a wall before a respawn")
+    p.add_argument("--speed-bias", type=float, default=0.0, help="hand: initial bias of the actors' speed unit")
+    p.add_argument("--seeds", type=int, default=4, help="hand: seeds of each setting")
+    p.add_argument("--task-steps", default="20000,100000", help="ceiling: steps per task")
+    p.add_argument("--biases", default="0,2,4", help="speed: initial biases of the speed unit (0: the paper's)")
+    p.add_argument("--preset", default="skills", help="speed, random: the preset")
+    p.add_argument("--best", type=int, default=10, help="evolved, heritability: best genomes of each seed")
+    p.add_argument("--individuals", type=int, default=30, help="random: genomes")
+    p.add_argument("--lives", type=int, help="ceiling 8, heritability 4, speed 4: lives of each")
+    p.add_argument("--key", type=int, help=f"the random key (default: {KEYS})")
+    args = p.parse_intermixed_args(argv)
+    stages = [w for w in args.words if w in STAGES]
+    if len(stages) != 1:
+        raise UsageError(f"stage: name one of {', '.join(STAGES)} (got {' '.join(args.words)})")
+    args.stage, args.runs = stages[0], [w for w in args.words if w not in STAGES]
+    args.key = KEYS[args.stage] if args.key is None else args.key
+    args.lives = LIVES.get(args.stage) if args.lives is None else args.lives
+    unknown = [r for r in args.rules.split(",") if r not in RULES]
+    if unknown:
+        raise UsageError(f"--rules: unknown rules {unknown[0]!r} (choose from {', '.join(RULES)})")
+    for run in args.runs:
+        if not os.path.isfile(os.path.join(run, "config.json")):
+            raise UsageError(f"runs: not a run directory (no config.json): {run}")
+    if bool(args.runs) != (args.stage in ("evolved", "heritability")):
+        raise UsageError(f"runs: {args.stage} reads {'no run' if args.runs else 'run directories'}")
     from imrl_jax.devices import use_host_cores
 
-    from imrl_jax.cli import user_errors
-
-    unknown = [r for r in getattr(args, "rules", "").split(",") if r and r not in RULES]
-    runs = getattr(args, "runs", None)
-    if unknown:
-        p.error(f"--rules: unknown rules {unknown[0]!r} (choose from {', '.join(RULES)})")
-    if isinstance(runs, str) and runs and any(r not in EVOLUTIONS for r in runs.split(",")):
-        p.error(f"--runs: choose from {', '.join(EVOLUTIONS)}")
-    for run in runs if isinstance(runs, list) else []:
-        if not os.path.isfile(os.path.join(run, "config.json")):
-            p.error(f"runs: not a run directory (no config.json): {run}")
     use_host_cores(1)
-    stages = {"hand": stage_hand, "evolve": stage_evolve, "ceiling": stage_ceiling, "evolved": stage_evolved,
-              "heritability": stage_heritability, "plot": stage_plot, "speed": stage_speed, "random": stage_random}
-    try:
-        return stages[args.stage](args)
-    except user_errors() as error:  # e.g. --walls bounce, an unreadable run directory
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+    return STAGES[args.stage](args)
 
 
 if __name__ == "__main__":

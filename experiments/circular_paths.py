@@ -2,19 +2,15 @@
 
     python -m experiments.circular_paths --out experiments/results/claims/circles
 
-The paper (section 4) explains EE-ES's good fitness by "a stereotyped behavior such that the robot
-follows a circular path at maximum speed which includes most of the target positions". Whether
-such a path exists depends on where the targets lie, which the paper draws (Fig. 1) but does not
-give in numbers; MODEL.md fixed the six tasks in pairs that look alike and turn the other way. This
-measures the simplest circular path: a robot that ignores its retina and repeats one action (turn,
-speed) from each task's start, trial after trial (``controllers.constant_performance``), for every
-action of a grid. It is a measure stage of the claims study (``experiments.claims_study``), done
-when ``result.json`` is written.
+The paper explains EE-ES's fitness by "a stereotyped behavior such that the robot follows a circular
+path at maximum speed which includes most of the target positions". This measures the simplest one:
+a robot that ignores its retina and repeats one action (turn, speed) from each task's start, trial
+after trial (``controllers.constant_performance``), for every action of a grid. A measure stage of
+the claims study, done when ``result.json`` is written.
 """
 
 from __future__ import annotations
 
-import argparse
 import csv
 import json
 import os
@@ -22,8 +18,9 @@ import sys
 
 import numpy as np
 
-from experiments.study import RESULTS
 from experiments.reproduce import MEASURED
+from experiments.study import RESULTS
+from imrl_jax.cli import HelpFormatter, Parser, UsageError, exit_codes
 
 OUT = os.path.join(RESULTS, "claims", "circles")
 #: The action grid: turn in [0, 1] (0.5 straight; 0 and 1 the 30 deg turns; steps of 0.06 deg), speed up to full.
@@ -106,19 +103,19 @@ def measure(out_dir: str = OUT, task_steps: int = TASK_STEPS) -> dict:
     return summary
 
 
+@exit_codes
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m experiments.circular_paths", description=__doc__.split("\n\n")[0])
-    p.add_argument("--out", default=OUT, help=f"results directory (default: {OUT})")
-    p.add_argument("--task-steps", type=int, default=TASK_STEPS, help="steps per task (default: %(default)s)")
+    """The measure's command line: the grid at ``--task-steps`` steps per task into ``--out``."""
+    p = Parser(prog="python -m experiments.circular_paths", description=__doc__.split("\n\n")[0],
+               formatter_class=HelpFormatter)
+    p.add_argument("--out", default=OUT, help="results directory")
+    p.add_argument("--task-steps", type=int, default=TASK_STEPS, help="steps per task")
     args = p.parse_args(argv)
     if args.task_steps <= 0:
-        print("error: --task-steps: must be positive", file=sys.stderr)
-        return 2
+        raise UsageError("--task-steps: must be positive")
     summary = measure(args.out, args.task_steps)
-    one = summary["one_action"]
-    print(f"one action for all six tasks: {one['performance']:.3f} (turn {one['turn']:.3f}, speed {one['speed']:.2f}); "
-          f"one per pair: {summary['one_action_per_pair']:.3f}; each task's best: "
-          + ", ".join(f"{t['performance']:.3f}" for t in summary["per_task"]) + f"; wrote {args.out}")
+    print(f"one action for all six tasks: {summary['one_action']['performance']:.3f}; one per pair: "
+          f"{summary['one_action_per_pair']:.3f}; wrote {args.out}")
     return 0
 
 

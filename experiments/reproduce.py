@@ -197,6 +197,7 @@ class Stage(NamedTuple):
     cost: float
     runs: int = 0  # a test stage's runs when they are not the scale's seeds (0: the scale's)
     needs: tuple[str, ...] | None = None  # the stages it waits for when fanned out (None: experiments.executor.needs)
+    generations: int = 0  # an evolve stage's generations when they are not the scale's (0: the scale's)
 
 
 def life_steps(scale: dict, condition: str, task_steps: int, *, num_tasks: int = 6) -> int:
@@ -276,7 +277,7 @@ def stage_done(stage: Stage, scale: dict) -> bool:
     now, each as recorded then (a stage run since, or run again, makes it due; after a change to the report
     itself, ``python -m experiments.report RESULTS_DIR`` writes it again)."""
     if stage.kind == "evolve":
-        return generations_done(stage.out_dir) >= scale["generations"]
+        return generations_done(stage.out_dir) >= (stage.generations or scale["generations"])
     if stage.kind == "test":  # a sweep's test (of every point) writes sweep_tests.json when all are done
         return any(os.path.exists(os.path.join(stage.out_dir, name)) for name in ("steady.json", "sweep_tests.json"))
     if stage.kind == "measure":
@@ -297,7 +298,7 @@ def stage_done(stage: Stage, scale: dict) -> bool:
 def fraction_done(stage: Stage, scale: dict) -> float:
     """How much of an unfinished stage its files already hold: an evolution's generations, a test's finished runs."""
     if stage.kind == "evolve":
-        return min(1.0, generations_done(stage.out_dir) / scale["generations"])
+        return min(1.0, generations_done(stage.out_dir) / (stage.generations or scale["generations"]))
     if stage.kind == "test":
         return min(1.0, partial_runs(stage.out_dir) / (stage.runs or scale["seeds"]))
     return 0.0

@@ -226,12 +226,13 @@ class Table:
                     members = sweeps[root].rows
                     evolving[root] = f"evolve {'+'.join(r.name for r in members)} (one sweep)"
                     stages.append(Stage(evolving[root], "evolve", row.name, row.condition, root,
-                                        sum(evolution_cost(scale, r.condition) for r in members)))
+                                        sum(evolution_cost(scale, r.condition) for r in members),
+                                        generations=scale["generations"]))
                 evolving[evolved] = evolving[root]
             elif evolved not in evolving:
                 evolving[evolved] = f"evolve {row.name}"
                 stages.append(Stage(evolving[evolved], "evolve", row.name, row.condition, evolved,
-                                    evolution_cost(scale, row.condition)))
+                                    evolution_cost(scale, row.condition), generations=scale["generations"]))
             if root in sweeps and all(r.test for r in sweeps[root].rows):  # its points tested in one program too
                 if f"test {root}" not in evolving:
                     members = sweeps[root].rows

@@ -1,23 +1,80 @@
-"""The childhood study's command refuses bad input in one line, exit 2, writing nothing."""
+"""The childhood study as a table: its committed evolutions and measures are found, its report regenerates
+docs/CHILDHOOD.md's evolutions table, and its measures' command refuses bad input in one line, exit 2."""
+
+import dataclasses
+import os
 
 import pytest
+from helpers import ROOT
 
-from experiments import childhood_study
+from experiments import childhood_study as study
+from experiments.reproduce import stage_done
+
+
+@pytest.fixture
+def in_root(monkeypatch):
+    monkeypatch.chdir(ROOT)  # the table's folders are relative to the repository's root
+
+
+def test_every_committed_run_and_measure_is_found(in_root):
+    """0 stages left: the seven evolutions by their key where the study made them, each measure by its result.json."""
+    stages, scale = study.TABLE.all_stages()
+    assert [s for s in stages if not stage_done(s, scale)] == []
+    evolutions = {s.variant: s.out_dir for s in stages if s.kind == "evolve"}
+    assert evolutions == {name: os.path.join(study.OUT, "evolve", name) for name in study.LABELS}
+    assert [s.generations for s in stages if s.kind == "evolve"] == [30, 30, 30, 30, 15, 30, 30]
+    measures = {s.variant: s for s in stages if s.kind == "measure"}
+    assert len(measures) == 15 and measures["evolved_skills"].needs == ("evolve LE-LS-skills",)
+    command = study.TABLE.stage_command(measures["evolved_skills"])[0]
+    assert command[1:] == ["-m", study.MODULE, evolutions["LE-LS-skills"], "--out",
+                           os.path.join(study.OUT, "measures", "evolved_skills"), "evolved"]
+    command = study.TABLE.stage_command(measures["evolved_cpu"])[0]
+    assert [os.path.relpath(r, study.RESULTS) for r in command[-4:]] == [
+        os.path.join("cpu", v, "evolve", c) for v, c in (("paper", "LE-LS"), ("extension", "LE-LS"),
+                                                         ("paper", "EE-LS"), ("extension", "EE-LS"))]
+    rows = study.read_rows(measures["evolved_cpu"].out_dir)  # the committed CSV its result.json names
+    assert len(rows) == 200 and rows[0]["run"] == "LE-LS" and rows[0]["fitness"] == pytest.approx(0.2068)
+
+
+def test_the_report_regenerates_the_evolutions_table(in_root, tmp_path):
+    """Section 5's numbers from the committed histories and probes; the figures from the committed CSVs."""
+    document = tmp_path / "CHILDHOOD.md"
+    document.write_text("<!-- childhood table: python -m experiments report childhood -->\nold\n"
+                        "<!-- end of childhood table -->\n")
+    os.symlink(os.path.abspath(os.path.join(study.OUT, "measures")), tmp_path / "measures")
+    table = dataclasses.replace(study.TABLE, document=str(document), out=str(tmp_path))
+    assert table.report() == 0
+    text = document.read_text()
+    assert "| LE-LS, `skills` | 0.771 (0.785, 0.748, 0.780) | 0.54-0.89 | 0 / 0 / 28 / 2 |" in text
+    assert "| LE-LS, `extension` | 0.418 (0.414, 0.415, 0.424) | 0.34-0.48 | 0 / 2 / 18 / 10 |" in text
+    assert ("| LE-LS, `skills`, fitness the mean of 2 lives, 15 generations (equal compute) | 0.753 (0.745, 0.771, "
+            "0.742) | 0.63-0.86 | 0 / 2 / 25 / 3 |") in text
+    assert ("| LE-LS, `extension` + `initial_speed_bias=4` | 0.705 (0.710, 0.792, 0.611) | 0.00-0.90: seed 2 solves "
+            "task 1 at 0.00 | 5 / 14 / 11 / 0 |") in text
+    assert text.count("\n| ") == 8 and "old" not in text
+    for name in ("evolve", "hand", "hand_fast"):
+        assert (tmp_path / f"{name}.png").stat().st_size > 20_000
+
+
+def test_a_measure_writes_its_csv_then_its_result(tmp_path):
+    out = tmp_path / "measures" / "probe"
+    assert study.finish(str(out), [dict(run="a", seed=0, fitness=0.25), dict(run="b", seed=1, fitness=1 / 3)]) == 0
+    assert (out / "probe.csv").read_text() == "run,seed,fitness\na,0,0.2500\nb,1,0.3333\n"
+    assert study.read_rows(str(out)) == [dict(run="a", seed=0.0, fitness=0.25), dict(run="b", seed=1.0, fitness=0.3333)]
 
 
 @pytest.mark.parametrize("argv, field", [
     (["hand", "--rules", "bogus"], "--rules"),
     (["hand", "--walls", "bounce", "--lengths", "300", "--seeds", "1"], "childhood_walls"),
-    (["evolve", "--runs", "nope"], "--runs"),
+    (["bogus"], "stage"),
+    (["hand", "evolved"], "stage"),
     (["evolved", "/nonexistent/run"], "not a run directory"),
+    (["evolved"], "runs"),
 ])
 def test_bad_input_exits_2_naming_it(tmp_path, capsys, monkeypatch, argv, field):
     monkeypatch.setattr("imrl_jax.devices.use_host_cores", lambda count=None: None)  # leave the suite's devices
     out = tmp_path / "study"
-    try:
-        code = childhood_study.main(argv + ["--out", str(out)])
-    except SystemExit as exit_:  # argparse's error
-        code = exit_.code
+    code = study.main(argv + ["--out", str(out)])
     err = capsys.readouterr().err.strip().splitlines()
-    assert code == 2 and field in err[-1]
+    assert code == 2 and field in err[-1] and len(err) == 1
     assert not out.exists()

@@ -58,3 +58,25 @@ def test_bad_task_steps_exit_2(capsys, tmp_path):
     assert study.main(["--out", str(tmp_path / "c"), "--task-steps", "0"]) == 2
     assert capsys.readouterr().err.strip() == "error: --task-steps: must be positive"
     assert not (tmp_path / "c").exists()
+
+
+def test_the_committed_summary_is_what_the_committed_grid_holds():
+    """claims/circles/result.json's numbers (docs/CLAIMS.md, claim 4) from its circles.csv (4 decimals)."""
+    import json
+    import os
+
+    from helpers import ROOT
+
+    folder = os.path.join(ROOT, study.OUT)
+    table = np.loadtxt(os.path.join(folder, "circles.csv"), delimiter=",", skiprows=1)
+    assert np.allclose(table[:, :2], study.actions())
+    summary = study.summarise(table[:, :2], table[:, 2:8])
+    with open(os.path.join(folder, "result.json")) as f:
+        committed = json.load(f)
+    assert committed["actions"] == 6006 and committed["task_steps"] == study.TASK_STEPS
+    assert abs(summary["one_action"]["performance"] - committed["one_action"]["performance"]) < 1e-4
+    assert summary["one_action"]["turn"] == committed["one_action"]["turn"] == 0.487
+    assert abs(summary["one_action_per_pair"] - committed["one_action_per_pair"]) < 1e-4
+    assert np.allclose([t["performance"] for t in summary["per_task"]],
+                       [t["performance"] for t in committed["per_task"]], atol=1e-4)
+    assert abs(committed["per_task"][0]["performance"] - 0.9792) < 1e-4  # the document's 0.979

@@ -154,3 +154,17 @@ def test_a_measure_of_no_run_goes_where_it_is_told(tmp_path):
         ("measure hand", str(tmp_path / "childhood"), ()), ("measure other", str(tmp_path / "measures" / "other"), ())]
     assert table.stage_command(stages[0])[0][1:] == ["-m", "experiments.childhood_study", "--out",
                                                      str(tmp_path / "childhood"), "hand", "--seeds", "2"]
+
+
+def test_a_row_of_fewer_generations_of_its_own_is_done_at_its_own_length():
+    """The childhood study's equal-compute run (2 lives a fitness, 15 generations) is done, though the table's are 30."""
+    from experiments.study import SCALES
+
+    scale = dict(SCALES["paper"], seeds=3, generations=30)
+    table = Table("t", "docs/T.md", 99, scale=scale, out="unused", results=RESULTS, rows=(
+        Row("2lives", "LE-LS", "skills", ("lives_per_fitness=2",), test=False, scale=dict(scale, generations=15)),
+        Row("new", "LE-LS", "skills", ("lives_per_fitness=2", "gamma=0.95"), test=False)))
+    stages, sizes = table.all_stages()
+    assert stages[0].out_dir == os.path.join(RESULTS, "childhood", "evolve", "LE-LS-skills-2lives")
+    assert [s.generations for s in stages] == [15, 30] and sizes["generations"] == 30
+    assert stage_done(stages[0], sizes) and not stage_done(stages[0]._replace(generations=0), sizes)
