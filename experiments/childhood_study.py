@@ -99,7 +99,10 @@ def finish(out: str, rows: list[dict], **summary) -> int:
 
 
 def read_rows(folder: str) -> list[dict]:
-    """A finished measure's rows (the CSV its result.json names), numbers as floats ("" where a row has none)."""
+    """A finished measure's rows (the CSV its result.json names), numbers as floats ("" where a row has none); none
+    before it has run."""
+    if not os.path.isfile(os.path.join(folder, "result.json")):
+        return []
     with open(os.path.join(folder, "result.json")) as f:
         path = os.path.join(folder, json.load(f)["csv"])
     with open(path) as f:
@@ -394,6 +397,9 @@ class ChildhoodTable(Table):
         ax = fig.add_subplot()
         for i, (row, run_dir) in enumerate(self.evolutions().items()):
             run = read_evolution(run_dir)
+            if run is None:
+                lines.append(f"| {LABELS[row][0]} | not started | - | - |")
+                continue
             lives = run["config"].get("lives_per_fitness", 1)
             x, mean, sd = lives * np.arange(len(run["best"])), np.nanmean(run["best"], 1), np.nanstd(run["best"], 1)
             dashed = not conditions.get(run["config"]["condition"]).learned_actors  # evolved experts
@@ -408,18 +414,20 @@ class ChildhoodTable(Table):
         ceiling, speed = read_rows(folders["ceiling"]), read_rows(folders["speed"])
         references = [(r["fitness"], "ideal colour followers, extension's selector") for r in ceiling
                       if r["rules"] == "extension" and r["task_steps"] == 100_000]
-        references.append((float(np.mean([r["fitness"] for r in speed if r["speed_bias"] == 4.0])),
-                           "hand-made colour reinforcers under skills"))
+        references += [(float(np.mean(fitness)), "hand-made colour reinforcers under skills")
+                       for fitness in [[r["fitness"] for r in speed if r["speed_bias"] == 4.0]] if fitness]
         for (value, label), style in zip(references, ("--", ":")):
             ax.axhline(value, color="0.35", lw=1.0, ls=style, label=f"{label}: {value:.2f}")
         ax.set_ylim(0, 1)
         style_axis(ax, "paper life lengths: best fitness (mean over seeds, +-1 sd)",
                    "generation (x lives per fitness: equal compute)", "best fitness")
-        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+        if ax.lines:
+            ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
         fig.tight_layout()
+        os.makedirs(self.out, exist_ok=True)
         drawn = [save(fig, os.path.join(self.out, "evolve.png"))]
         drawn += [plot_hand(read_rows(folders[name]), os.path.join(self.out, f"{name}.png"))
-                  for name in ("hand", "hand_fast")]
+                  for name in ("hand", "hand_fast") if read_rows(folders[name])]
         write_table(self.document, "\n".join(lines), f"<!-- {self.name} table: python -m experiments report "
                     f"{self.name} -->", f"<!-- end of {self.name} table -->")
         print(f"{len(lines) - 2} evolutions; wrote {', '.join(drawn)} and the table of {self.document}")

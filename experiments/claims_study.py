@@ -301,7 +301,7 @@ def speed_dial(claims: dict, rows=DIAL_ROWS) -> list[DialPoint]:
     """Claim 3's two sides against the initial speed bias, from claims.json's ``claims`` (rows not measured are left out)."""
     points = []
     for name in rows:
-        if name not in claims:
+        if name not in claims or "LE-LS" not in claims[name]["fresh"]:  # measured, or its fresh lives not lived
             continue
         bias = float(config_of(BY_NAME[name], "LE-LS").initial_speed_bias)
         three, fresh = claims[name]["3"]["numbers"], claims[name]["fresh"]["LE-LS"]

@@ -162,7 +162,8 @@ def claims_figure(measured: dict, path: str) -> str:
                 ax.bar(x, [r[key] for _, r in found], width, yerr=[r[sd_key] for _, r in found] if sd_key else None,
                        capsize=2, color=STRATEGY_STYLES[strategy]["color"], alpha=0.8, label=strategy)
         ax.set_xticks(range(len(names)), names)
-        ax.legend(fontsize=7)
+        if ax.patches:  # a bar drawn: there is a legend to show
+            ax.legend(fontsize=7)
     style_axis(ax_colours, "claim 3's experts: colours followed", "", "colours an individual's experts follow")
     ax_colours.set_ylim(0, 3)
     if measured["sle"]:

@@ -57,10 +57,11 @@ def test_the_fixed_six_experts_rows_are_the_claims_studys_runs_found_by_key():
     from imrl_jax.config import make_config
 
     evolutions, tests = study.TABLE.evolutions(), study.TABLE.tests()
-    claim8 = {s.out_dir for s in claims_study.plan_experts()}
+    claim8 = claims_study.experts_runs(claims_study.EXPERTS_TABLE)
     for name, rule in (("LE-LS-6", "skills"), ("LE-LS-6-faithful", "paper-selector")):
-        found = claims_study.experts_dir(rule, "LE-LS", 6, "evolve", claims_study.OUT)
-        assert evolutions[name] == found and claim8 >= {found, tests[name]}
+        evolved, tested, _ = claim8[rule, "LE-LS", 6]
+        assert (evolutions[name], tests[name]) == (evolved, tested)
+        assert evolved == os.path.join(claims_study.OUT, rule, "experts6", "evolve", "LE-LS")
     assert evolutions["LE-LS-N6"] == os.path.join(study.OUT, "LE-LS-N6", "evolve")
     # under faithful: the claims study's paper-selector run of 6 experts, whose lives are the same
     faithful = next(r for r in study.TABLE.rows if r.name == "LE-LS-6-faithful")
