@@ -265,13 +265,10 @@ def report_table(rows: dict) -> str:
     lines += ["", "| claim | " + " | ".join(row["label"] for row in rows.values()) + " |",
               "|---|" + "---|" * len(rows)]
     short = {"holds": "**holds**", "partly": "partly", "does not hold": "no", "n/a": "n/a"}
-    for k in range(1, 8):
-        cells = []
-        for row in rows.values():
-            claim = None if row["measured"] is None else row["measured"]["claims"][k]
-            cells.append("not finished" if claim is None else f"{short[claim['verdict']]}: "
-                                                               f"{claim['measured'].split(';')[0]}")
-        lines.append(f"| {k}: {CLAIMS[k]} | " + " | ".join(cells) + " |")
+    claims = [None if row["measured"] is None else row["measured"]["claims"] for row in rows.values()]
+    lines += [f"| {k}: {CLAIMS[k]} | " + " | ".join("not finished" if c is None else f"{short[c[k]['verdict']]}: "
+                                                    f"{c[k]['measured'].split(';')[0]}" for c in claims) + " |"
+              for k in range(1, 8)]
     return "\n".join(lines)
 
 
