@@ -22,7 +22,7 @@ import sys
 import numpy as np
 
 from experiments.loading import read_json
-from experiments.reproduce import MEASURED, evolution_dir, test_dir
+from experiments.reproduce import MEASURED
 from experiments.study import REPRODUCTION, RESULTS, SCREEN, Study
 from experiments.table import Measure, Row, Table
 from imrl_jax.config import ADULT_SELECTOR
@@ -137,18 +137,26 @@ class TimescaleTable(Table):
         """The rows of each option ("PRESET+OPTION"), in order."""
         return {variant: list(rows) for variant, rows in itertools.groupby(self.rows, lambda r: r.name.split(" ")[0])}
 
+    def per_step_runs(self):
+        """The per-step baseline's runs (``claims_study.RowRuns``), found by key as the claims study finds them."""
+        from experiments import claims_study
+
+        return claims_study.rule_runs(claims_study.BY_NAME[BASELINE], self.claims_out, self.reproduction)
+
+    @property
+    def claims_out(self) -> str:
+        """The claims study's folder under this table's results (where a per-step run not found would be made)."""
+        from experiments.claims_study import OUT as CLAIMS
+
+        return os.path.join(self.results, os.path.relpath(CLAIMS, RESULTS))
+
     def option_runs(self, variant: str, finished=None):
         """An option's runs (``claims_study.RowRuns``): its own rows' (only those ``finished``, if given), and the
-        reproduction's EE-ES (``paper``'s: its selector chooses every step) and SLE (``skills``': no selector)
-        where it has none of its own."""
-        from experiments.claims_study import RowRuns
-
-        runs = RowRuns({"EE-ES": evolution_dir(self.reproduction, "paper", "EE-ES")},
-                       {"EE-ES": test_dir(self.reproduction, "paper", "EE-ES"),
-                        "SLE": test_dir(self.reproduction, BASELINE, "SLE")}, {"EE-ES": "paper"})
-        evolutions, tests = self.evolutions(), self.tests()
+        per-step baseline's where it has none of its own: EE-ES (``paper``'s: its selector chooses every step) and
+        SLE (no selector)."""
+        runs, evolutions, tests = self.per_step_runs(), self.evolutions(), self.tests()
         for row in self.variants()[variant]:
-            for folders in (runs.evolutions, runs.tests, runs.reproduction):
+            for folders in runs:  # evolutions, tests, and the reproduction's variant of each borrowed run
                 folders.pop(row.condition, None)
             if finished is None or row.condition in finished:
                 runs.evolutions[row.condition], runs.tests[row.condition] = evolutions[row.name], tests[row.name]
@@ -158,12 +166,11 @@ class TimescaleTable(Table):
         """The per-step baseline's claims and each option's: {variant: label, progress, measured}; an option's
         evolutions are measured once finished (a running one's population is not its last), its best genomes
         living fresh lives and probed; a claim that needs a run still to come is n/a."""
-        from experiments.claims_study import BY_NAME, measure_rule, measure_runs
+        from experiments.claims_study import BY_NAME, measure_rule, measure_runs, reproduction_summary
 
-        summary = self.summary if self.summary is not None else read_json(
-            os.path.join("docs", "reproduction", "summary.json"))
+        summary = self.summary if self.summary is not None else reproduction_summary(self.document)
         rows = {BASELINE: dict(label=f"{BASELINE}, per-step selector (the paper's)", progress=None,
-                               measured=measure_rule(BY_NAME[BASELINE], summary, reproduction=self.reproduction))}
+                               measured=measure_rule(BY_NAME[BASELINE], summary, self.claims_out, self.reproduction))}
         measured = {m["row"]: m for m in self.measure()}
         for variant, own in self.variants().items():
             finished = {r.condition for r in own if "final_mean" in measured[r.name]}
@@ -178,12 +185,11 @@ class TimescaleTable(Table):
         (dashed) against each option (solid), LE-LS and EE-LS."""
         from matplotlib.ticker import MaxNLocator
 
-        from experiments.claims_study import BY_NAME, rule_runs
         from experiments.figures import _band
         from experiments.loading import read_evolution, read_test
         from imrl_jax.plotting import new_figure, save, style_axis
 
-        sources = [(f"{BASELINE}, per-step", rule_runs(BY_NAME[BASELINE], reproduction=self.reproduction), "--")]
+        sources = [(f"{BASELINE}, per-step", self.per_step_runs(), "--")]
         sources += [(variant.replace("+", ", "), self.option_runs(variant), "-") for variant in self.variants()]
         fig = new_figure(12.0, 4.0)
         evolution_ax, test_ax = fig.subplots(1, 2)

@@ -191,17 +191,18 @@ def test_report_compares_the_option_with_the_per_step_runs(tmp_path):
     """Hand-made runs of 100 generations: a running option shows its progress; a finished one its claims."""
     reproduction, out = str(tmp_path / "paper"), str(tmp_path / "timescale")
     constant = lambda *values: [[v] * 100 for v in values]  # noqa: E731  one flat curve per seed
-    _fake_evolution(os.path.join(reproduction, "skills", "evolve", "LE-LS"), constant(0.8, 0.76))
-    _fake_evolution(os.path.join(reproduction, "skills", "evolve", "EE-LS"), constant(0.4, 0.5))
-    _fake_evolution(os.path.join(reproduction, "paper", "evolve", "EE-ES"), constant(0.3, 0.4))
-    for variant, condition, runs in (("skills", "LE-LS", (0.8, 0.8)), ("skills", "EE-LS", (0.5, 0.5)),
-                                     ("skills", "SLE", (0.4, 0.4)), ("paper", "EE-ES", (0.3, 0.3))):
-        _fake_test(os.path.join(reproduction, variant, "test", condition), runs)
-    _measured(out)  # colour-60 is evolved
     document = tmp_path / "TIMESCALE.md"
     document.write_text(f"intro\n{study.REPORT_START}\nSTALE\n{study.REPORT_END}\nend\n")
+    _measured(out)  # colour-60 is evolved
     table = study.timescale_table(out, results=str(tmp_path), reproduction=reproduction, summary={},
                                   document=str(document))
+    per_step = table.per_step_runs()  # where the per-step runs' keys find them under tmp_path
+    assert all(folder.startswith(str(tmp_path)) for folder in [*per_step.evolutions.values(), *per_step.tests.values()])
+    for condition, curves in (("LE-LS", constant(0.8, 0.76)), ("EE-LS", constant(0.4, 0.5)),
+                              ("EE-ES", constant(0.3, 0.4))):
+        _fake_evolution(per_step.evolutions[condition], curves)
+    for condition, runs in (("LE-LS", (0.8, 0.8)), ("EE-LS", (0.5, 0.5)), ("SLE", (0.4, 0.4)), ("EE-ES", (0.3, 0.3))):
+        _fake_test(per_step.tests[condition], runs)
     evolved = {row.condition: table.evolutions()[row.name] for row in table.rows}
     _fake_evolution(evolved["EE-LS"], [[0.7] * 40, [0.74] * 40])  # running
     rows = table.claims()
