@@ -1,22 +1,24 @@
 """Which learning-extension values make the adult selector learn (MODEL.md "Learning extensions").
 
+    python -m experiments list|run selector-sweep     # its one stage, done once its result.json is written
+    python -m experiments.selector_sweep --out experiments/results/selector_sweep sweep [--lambdas 0 ...]   # by hand
+
 EE-LS without evolution: the three experts are fixed perceptron colour-followers
 (:func:`imrl_jax.controllers.perceptron_followers`) and only the selector learns, once per
 task, for a whole adult task (100,000 steps). The sweep is a full grid over the eligibility
 trace lambda and the selector's actor and critic learning rates; every point lives the same
 lanes with the same keys. The winner (highest mean task performance over the whole task,
 since an evolved individual is scored on the whole task) becomes the ``extension`` preset.
-
-    python experiments/selector_sweep.py --out experiments/results/selector_sweep
-
-Writes ``sweep.csv`` (one row per point), ``sweep.json`` (the winner, the paper's point,
-the command and the git commit) and ``sweep.png``.
+It writes ``sweep.csv`` (one row per point), ``sweep.png``, ``sweep.json`` (the winner, the
+paper's point, the command and the git commit) and last the same summary as ``result.json``,
+which tells the runner the sweep is done.
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
 import itertools
 import json
 import os
@@ -25,18 +27,40 @@ import time
 
 import numpy as np
 
+from experiments.reproduce import MEASURED
+from experiments.study import RESULTS
+from experiments.table import Measure, Table
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--out", default="experiments/results/selector_sweep")
-    p.add_argument("--task-steps", type=int, default=100_000)
-    p.add_argument("--seeds", type=int, default=3, help="lanes per task and point (different keys)")
-    p.add_argument("--lambdas", default="0,0.5,0.9,0.95,0.98")
-    p.add_argument("--selector-actor-rates", default="0.01,0.1,0.3,1")
-    p.add_argument("--selector-critic-rates", default="0.001,0.003,0.01")
+OUT = os.path.join(RESULTS, "selector_sweep")
+#: The grid's axes (the command line's defaults): trace decay, selector actor rate, selector critic rate.
+GRID = dict(lambdas="0,0.5,0.9,0.95,0.98", selector_actor_rates="0.01,0.1,0.3,1", selector_critic_rates="0.001,0.003,0.01")
+#: Its sizes: lanes per task and point, and the task's length.
+SIZES = dict(seeds=3, task_steps=100_000)
+
+
+def floats(text: str) -> list[float]:
+    """A comma-separated list of numbers (a grid axis)."""
+    try:
+        return [float(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a comma-separated list of numbers: {text!r}") from None
+
+
+def parser() -> argparse.ArgumentParser:
+    """The sweep's command line (``sweep`` names it, beside the study's own)."""
+    p = argparse.ArgumentParser(prog="python -m experiments.selector_sweep", description=__doc__.split("\n\n")[0])
+    p.add_argument("sweep", choices=("sweep",))
+    p.add_argument("--out", default=OUT)
+    p.add_argument("--task-steps", type=int, default=SIZES["task_steps"])
+    p.add_argument("--seeds", type=int, default=SIZES["seeds"], help="lanes per task and point (different keys)")
+    for name, default in GRID.items():
+        p.add_argument(f"--{name.replace('_', '-')}", type=floats, default=default)
     p.add_argument("--turn-gain", type=float, default=0.1)
-    args = p.parse_args(argv)
+    return p
 
+
+def sweep(args, command: str) -> dict:
+    """Live every point of the grid; write sweep.csv, sweep.json, sweep.png and result.json last; the summary."""
     import jax
     import jax.numpy as jnp
 
@@ -44,58 +68,63 @@ def main(argv=None) -> int:
     from imrl_jax.checkpoint import git_commit
     from imrl_jax.config import make_config
     from imrl_jax.controllers import perceptron_followers
-    from imrl_jax.plotting import new_figure, save
 
-    floats = lambda text: [float(v) for v in text.split(",")]  # noqa: E731
-    grid = list(itertools.product(floats(args.lambdas), floats(args.selector_actor_rates),
-                                  floats(args.selector_critic_rates)))
+    grid = list(itertools.product(*(getattr(args, name) for name in GRID)))
     config = make_config("paper", condition="EE-LS", task_steps=args.task_steps, num_bins=10)
-    sweep = sweeps.from_settings(config, [dict(trace_lambda=lam, eta_selector_actor=sa, eta_selector_critic=sc)
-                                          for lam, sa, sc in grid])
+    points = sweeps.from_settings(config, [dict(trace_lambda=lam, eta_selector_actor=sa, eta_selector_critic=sc)
+                                           for lam, sa, sc in grid])
     genome = perceptron_followers(config, args.turn_gain).reshape(-1)
     genomes = jnp.broadcast_to(genome, (args.seeds,) + genome.shape)
     lanes = len(grid) * args.seeds * config.num_tasks
     print(f"{len(grid)} points x {args.seeds} seeds x {config.num_tasks} tasks = {lanes} lanes of "
           f"{args.task_steps} steps", flush=True)
     start = time.perf_counter()
-    result = sweeps.make_lifetime_sweep(config)(jax.random.key(0), genomes, sweep.points)
+    result = sweeps.make_lifetime_sweep(config)(jax.random.key(0), genomes, points.points)
     performance = np.asarray(result.performance)  # (V, seeds, tasks)
     last = sweeps.normalised_curve(config, np.asarray(result.reward_curve))[..., -1]  # (V, seeds, tasks)
     seconds = time.perf_counter() - start
     print(f"done in {seconds:.0f} s ({lanes * args.task_steps / seconds / 1e6:.2f} M lane-steps/s)")
 
     os.makedirs(args.out, exist_ok=True)
-    rows = []
-    for i, (lam, sa, sc) in enumerate(grid):
-        rows.append(dict(trace_lambda=lam, eta_selector_actor=sa, eta_selector_critic=sc,
-                         performance=float(performance[i].mean()), performance_sd=float(performance[i].mean(1).std()),
-                         last_tenth=float(last[i].mean()), worst_task=float(performance[i].mean(0).min()),
-                         **{f"task_{t + 1}": float(performance[i, :, t].mean()) for t in range(config.num_tasks)}))
+    rows = [dict(trace_lambda=lam, eta_selector_actor=sa, eta_selector_critic=sc,
+                 performance=float(performance[i].mean()), performance_sd=float(performance[i].mean(1).std()),
+                 last_tenth=float(last[i].mean()), worst_task=float(performance[i].mean(0).min()),
+                 **{f"task_{t + 1}": float(performance[i, :, t].mean()) for t in range(config.num_tasks)})
+            for i, (lam, sa, sc) in enumerate(grid)]
     with open(os.path.join(args.out, "sweep.csv"), "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
+    figure(rows, os.path.join(args.out, "sweep.png"), args.task_steps)
     best = max(rows, key=lambda r: r["performance"])
     paper = next((r for r in rows if (r["trace_lambda"], r["eta_selector_actor"], r["eta_selector_critic"])
                   == (0.0, 0.01, 0.01)), None)  # the paper's rules, when the grid holds them
     summary = dict(best=best, paper=paper, task_steps=args.task_steps, seeds=args.seeds, turn_gain=args.turn_gain,
-                   seconds=round(seconds, 1), backend=jax.default_backend(),
-                   command="python experiments/selector_sweep.py " + " ".join(argv if argv is not None else sys.argv[1:]),
-                   git_commit=git_commit())
-    with open(os.path.join(args.out, "sweep.json"), "w") as f:
-        json.dump(summary, f, indent=2)
+                   seconds=round(seconds, 1), backend=jax.default_backend(), command=command, git_commit=git_commit())
+    for name in ("sweep.json", MEASURED):  # result.json last: the stage is done
+        with open(os.path.join(args.out, name), "w") as f:
+            json.dump(summary, f, indent=2)
+    print(f"best: lambda={best['trace_lambda']:g} selector actor={best['eta_selector_actor']:g} "
+          f"critic={best['eta_selector_critic']:g}: {best['performance']:.3f} (last tenth {best['last_tenth']:.3f})")
+    if paper:
+        print(f"paper's rules: {paper['performance']:.3f} (last tenth {paper['last_tenth']:.3f})")
+    return summary
 
-    # One panel per lambda: performance over (selector actor rate, selector critic rate).
-    lambdas, actor_rates, critic_rates = (sorted(set(v)) for v in zip(*grid))
-    fig = new_figure(3.0 * len(lambdas), 3.0)
+
+def figure(rows: list[dict], path: str, task_steps: int) -> str:
+    """One panel per lambda: task performance over (selector actor rate, selector critic rate)."""
+    from imrl_jax.plotting import new_figure, save
+
+    lambdas, actor_rates, critic_rates = (sorted({r[k] for r in rows})
+                                          for k in ("trace_lambda", "eta_selector_actor", "eta_selector_critic"))
+    fig = new_figure(3.0 * len(lambdas), 3.2)
     axes = fig.subplots(1, len(lambdas), squeeze=False)[0]
     for ax, lam in zip(axes, lambdas):
         image = np.full((len(actor_rates), len(critic_rates)), np.nan)
-        for r in rows:
-            if r["trace_lambda"] == lam:
-                image[actor_rates.index(r["eta_selector_actor"]), critic_rates.index(r["eta_selector_critic"])] = \
-                    r["performance"]
-        ax.imshow(image, vmin=0, vmax=1, cmap="viridis", origin="lower")
+        for r in (r for r in rows if r["trace_lambda"] == lam):
+            image[actor_rates.index(r["eta_selector_actor"]), critic_rates.index(r["eta_selector_critic"])] = \
+                r["performance"]
+        ax.imshow(image, vmin=0, vmax=1, cmap="viridis", origin="lower", aspect="auto")
         for (a, c), v in np.ndenumerate(image):
             ax.text(c, a, f"{v:.2f}", ha="center", va="center", color="w" if v < 0.5 else "k", fontsize=8)
         ax.set_xticks(range(len(critic_rates)), [f"{v:g}" for v in critic_rates])
@@ -103,14 +132,29 @@ def main(argv=None) -> int:
         ax.set_xlabel("selector critic rate")
         ax.set_title(f"lambda = {lam:g}")
     axes[0].set_ylabel("selector actor rate")
-    fig.suptitle(f"EE-LS selector over fixed colour-followers: task performance over {args.task_steps:,} steps")
-    save(fig, os.path.join(args.out, "sweep.png"))
-    print(f"best: lambda={best['trace_lambda']:g} selector actor={best['eta_selector_actor']:g} "
-          f"critic={best['eta_selector_critic']:g}: {best['performance']:.3f} (last tenth {best['last_tenth']:.3f})")
-    if paper:
-        print(f"paper's rules: {paper['performance']:.3f} (last tenth {paper['last_tenth']:.3f})")
+    fig.suptitle(f"EE-LS selector over fixed colour-followers: task performance over {task_steps:,} steps")
+    fig.tight_layout(rect=(0, 0, 1, 0.92))  # the panels' titles below the figure's
+    return save(fig, path)
+
+
+#: The study: one measure of no run, done once its committed folder holds result.json.
+SWEEP = Table("selector-sweep", os.path.join("docs", "MODEL.md"), 0.5, rows=(), scale=SIZES, out=OUT, measures=(
+    Measure("sweep", "", ("sweep",), "experiments.selector_sweep", float(5 * 4 * 3 * SIZES["seeds"] * 6
+                                                                          * SIZES["task_steps"]), OUT),))
+all_stages = SWEEP.all_stages
+
+
+def main(argv=None) -> int:
+    """The sweep (``sweep``), or the study's run of it on the stage runner."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if "sweep" not in argv:
+        return SWEEP.main(argv)
+    sweep(parser().parse_args(argv), "python -m experiments.selector_sweep " + " ".join(argv))
     return 0
 
+
+#: The studies of this module (python -m experiments finds them); its stage draws its figure, so no report of its own.
+STUDIES = (dataclasses.replace(SWEEP.study(__name__.rsplit(".", 1)[-1]), report_argv=None),)
 
 if __name__ == "__main__":
     sys.exit(main())

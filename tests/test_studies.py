@@ -7,8 +7,8 @@ import pytest
 from experiments import __main__ as cli
 from experiments import study as S
 
-ORDER = ["timescale", "novel-tasks", "claims-screen", "reproduction", "claims-experts", "search", "future-work",
-         "reproduction-cpu", "goals", "childhood"]
+ORDER = ["selector-sweep", "timescale", "novel-tasks", "claims-screen", "reproduction", "claims-experts", "search",
+         "future-work", "reproduction-cpu", "goals", "childhood"]
 
 
 def test_every_study_is_found_in_order():
@@ -97,8 +97,8 @@ def test_studies_run_in_order_and_a_failure_stops_the_rest(monkeypatch, capsys):
     ran = []
     monkeypatch.setattr(cli.subprocess, "Popen", _fake_run(ran, fail="experiments.reproduce"))
     assert cli.main(["run", "all"]) == 3
-    assert ran == ["experiments.timescale", "experiments.novel_tasks", "experiments.claims_study screen",
-                   "experiments.reproduce --scale paper"]
+    assert ran == ["experiments.selector_sweep", "experiments.timescale", "experiments.novel_tasks",
+                   "experiments.claims_study screen", "experiments.reproduce --scale paper"]
     assert "study reproduction stopped with exit code 3" in capsys.readouterr().err
     ran.clear()
     assert cli.main(["run", "search"]) == 0 and ran == ["experiments.search"]
@@ -122,8 +122,9 @@ def test_ctrl_c_waits_for_the_study_to_stop_and_stops_with_one_line(monkeypatch,
     ran, processes = [], []
     monkeypatch.setattr(cli.subprocess, "Popen", _fake_run(ran, interrupt=True, processes=processes))
     assert cli.main(["run"]) == 130
-    assert ran == ["experiments.timescale"] and processes[0].waits == 2 and not processes[0].killed
-    assert capsys.readouterr().err.strip() == "interrupted in study timescale: run the same command again to go on"
+    assert ran == ["experiments.selector_sweep"] and processes[0].waits == 2 and not processes[0].killed
+    assert capsys.readouterr().err.strip() == ("interrupted in study selector-sweep: run the same command again to "
+                                               "go on")
 
 
 def test_bad_fan_out_options_exit_2(capsys):
@@ -135,4 +136,4 @@ def test_bad_fan_out_options_exit_2(capsys):
 def test_an_unknown_study_is_one_line_and_exit_2(capsys):
     assert cli.main(["run", "serch"]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("error: study: unknown study 'serch' (choose from all, timescale,") and err.count("\n") == 1
+    assert err.startswith("error: study: unknown study 'serch' (choose from all, selector-sweep, timescale,") and err.count("\n") == 1
