@@ -459,6 +459,27 @@ def plot_learning_test(config: Config, curve: np.ndarray):
     return fig
 
 
+def plot_baseline(curves: list[dict], tasks, steps: int, title: str):
+    """A baseline's performance against cycles of experience per task, the mean over seeds (learning_curve.png).
+
+    ``curves``: a row per evaluation (task, seed, step, performance); ``steps``: the x axis' end.
+    """
+    fig = new_figure(6.0, 3.6)
+    fig.set_layout_engine("constrained")
+    ax = fig.subplots()
+    colours = ["tab:red", "tab:orange", "tab:green", "tab:olive", "tab:blue", "tab:purple"]
+    for task in tasks:
+        points = [c for c in curves if c["task"] == task]
+        steps_done = sorted({c["step"] for c in points})
+        mean = [np.mean([c["performance"] for c in points if c["step"] == s]) for s in steps_done]
+        ax.plot(steps_done, mean, color=colours[(task - 1) % len(colours)], lw=1.5, label=f"task {task}")
+    ax.set_ylim(0, 1)
+    ax.set_xlim(0, steps)
+    style_axis(ax, title, "control cycles of experience on the task", "performance (1: straight line)")
+    ax.legend(fontsize=7)
+    return fig
+
+
 def _series_colours(n: int) -> list:
     """n distinguishable line colours in order (viridis-like ramp for ordered values)."""
     from matplotlib import colormaps

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import contextlib
+import csv
 import errno
+import io
 import json
 import os
 import re
@@ -125,6 +127,15 @@ def write_atomic(path: str, data: bytes) -> None:
             os.remove(tmp)
         # A failed write() names no file and a failed open() the temporary one: name the file being written.
         raise OSError(error.errno, error.strerror, path) from error
+
+
+def csv_bytes(rows: list[dict]) -> bytes:
+    """Rows as the bytes of a CSV file: a header of the first row's fields, then a line per row."""
+    out = io.StringIO()
+    writer = csv.DictWriter(out, list(rows[0]), lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    return out.getvalue().encode()
 
 
 def check_writable(path: str, flag: str = "--out") -> None:
