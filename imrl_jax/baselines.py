@@ -19,10 +19,8 @@ settings, the command and the git commit).
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
 import functools
-import io
 import math
 import json
 import os
@@ -290,13 +288,16 @@ AGENTS = {
 # ----------------------------------------------------------------------------- the run
 
 OUTPUTS = ("runs.csv", "curves.csv", "learning_curve.png", "summary.json")
+#: The packages whose versions summary.json records.
+VERSIONS = ("jax", "brax", "flax", "optax")
 
 
 def run(b: Baseline, out_dir: str, config: Config | None = None, quiet: bool = False, command: str = "") -> dict:
     """Train ``b.agent`` on every task and seed of ``b``, write the outputs to ``out_dir``; return the summary."""
     from imrl_jax import brax_env  # noqa: F401  (brax, its environments, the jax shim)
-    from imrl_jax.checkpoint import git_commit
-    from imrl_jax.rundir import write_atomic
+    from imrl_jax.checkpoint import git_commit, package_versions
+    from imrl_jax.plotting import save
+    from imrl_jax.rundir import csv_bytes, write_atomic
 
     config = Config() if config is None else config
     if max(b.tasks) > config.num_tasks:
@@ -330,14 +331,13 @@ def run(b: Baseline, out_dir: str, config: Config | None = None, quiet: bool = F
         progress.update(len(rows), 0.0, 0.0, sps,
                         scores=f"task {task} seed {seed}: performance {sto:.3f} (deterministic {det:.3f})")
     summary = summarise(b, config, rows, curves)
+    settings = {name: list(v) if isinstance(v, tuple) else v for name, v in dataclasses.asdict(b).items()}
     summary.update(seconds=round(time.perf_counter() - started, 1), command=command, git_commit=git_commit(),
-                   versions=_versions(), backend=jax.default_backend(), settings=_jsonable(dataclasses.asdict(b)),
+                   versions=package_versions(VERSIONS), backend=jax.default_backend(), settings=settings,
                    task_set=[dataclasses.asdict(t) for t in config.tasks])
     os.makedirs(out_dir, exist_ok=True)
-    write_atomic(os.path.join(out_dir, "runs.csv"), _csv(rows))
-    write_atomic(os.path.join(out_dir, "curves.csv"), _csv(curves))
-    from imrl_jax.plotting import save
-
+    write_atomic(os.path.join(out_dir, "runs.csv"), csv_bytes(rows))
+    write_atomic(os.path.join(out_dir, "curves.csv"), csv_bytes(curves))
     save(plot_learning_curve(b, curves), os.path.join(out_dir, "learning_curve.png"))
     write_atomic(os.path.join(out_dir, "summary.json"), json.dumps(summary, indent=2).encode())  # last: marks completion
     return summary
@@ -363,50 +363,13 @@ def summarise(b: Baseline, config: Config, rows: list[dict], curves: list[dict])
                         f"own step; performance_deterministic: the same with the policy's mode")
 
 
-def _versions() -> dict:
-    from importlib.metadata import PackageNotFoundError, version
-
-    found = {}
-    for name in ("jax", "brax", "flax", "optax"):
-        try:
-            found[name] = version(name)
-        except PackageNotFoundError:
-            found[name] = None
-    return found
-
-
-def _jsonable(value):
-    return list(value) if isinstance(value, tuple) else value if not isinstance(value, dict) else \
-        {k: _jsonable(v) for k, v in value.items()}
-
-
-def _csv(rows: list[dict]) -> bytes:
-    out = io.StringIO()
-    writer = csv.DictWriter(out, list(rows[0]), lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(rows)
-    return out.getvalue().encode()
-
-
 def plot_learning_curve(b: Baseline, curves: list[dict]):
     """Performance against cycles of experience per task, the mean over seeds (learning_curve.png)."""
-    from imrl_jax.plotting import new_figure, style_axis
+    from imrl_jax.plotting import plot_baseline
 
-    fig = new_figure(6.0, 3.6)
-    fig.set_layout_engine("constrained")
-    ax = fig.subplots()
-    colours = ["tab:red", "tab:orange", "tab:green", "tab:olive", "tab:blue", "tab:purple"]
-    for task in b.tasks:
-        points = [c for c in curves if c["task"] == task]
-        steps = sorted({c["step"] for c in points})
-        mean = [np.mean([c["performance"] for c in points if c["step"] == s]) for s in steps]
-        ax.plot(steps, mean, color=colours[(task - 1) % len(colours)], lw=1.5, label=f"task {task}")
-    ax.set_ylim(0, 1)
-    ax.set_xlim(0, steps_trained(b))  # brax trains whole updates: the last point lies past b.steps
-    style_axis(ax, f"{b.agent.upper()} from brax.training: {b.seeds} seed(s), mean over seeds",
-               "control cycles of experience on the task", "performance (1: straight line)")
-    ax.legend(fontsize=7)
-    return fig
+    # brax trains whole updates: the last point lies past b.steps
+    return plot_baseline(curves, b.tasks, steps_trained(b),
+                         f"{b.agent.upper()} from brax.training: {b.seeds} seed(s), mean over seeds")
 
 
 # ----------------------------------------------------------------------------- command line

@@ -240,18 +240,14 @@ def float64():
 
 def environment(check: Check) -> dict:
     """The device, its memory and the versions of everything the engine uses."""
-    import importlib.metadata
-
     import jax
+
+    from imrl_jax.checkpoint import package_versions
 
     check.stage = "api"
     device = jax.devices()[0]
-    versions = {}
-    for name in ("jax", "jaxlib", "numpy", "optax", "orbax-checkpoint", "matplotlib", "brax", "evosax", "triton"):
-        try:
-            versions[name] = importlib.metadata.version(name)
-        except importlib.metadata.PackageNotFoundError:
-            versions[name] = None
+    versions = package_versions(("jax", "jaxlib", "numpy", "optax", "orbax-checkpoint", "matplotlib", "brax", "evosax",
+                                 "triton"))
     stats = device_memory = None
     with contextlib.suppress(Exception):
         stats = device.memory_stats() or {}

@@ -35,8 +35,8 @@ from imrl_jax.cli import HelpFormatter, Parser, UsageError, exit_codes
 from imrl_jax.config import Config
 from imrl_jax.ga import init_population
 from imrl_jax.run_state import generations_recorded
-from imrl_jax.rundir import (RunDirError, best_genomes as best_of, check_writable, load_run, make_dir, read_config,
-                             read_json, write_atomic)
+from imrl_jax.rundir import (RunDirError, best_genomes as best_of, check_writable, load_kept_best, load_run, make_dir,
+                             read_config, read_json, write_atomic)
 
 #: What ``landscape.json`` records per piece: the summary numbers of each measure.
 RESULT = "result.json"
@@ -85,8 +85,6 @@ def parents_at(run_dir: str, config: Config, seeds: list[int], seed: int, genera
     index = seeds.index(seed)
     if generation == config.num_generations - 1:
         if best_genomes:
-            from imrl_jax.learning_test import load_kept_best
-
             _, kept_seeds, genomes = load_kept_best(run_dir, best_genomes, num_parents)
             return genomes[kept_seeds.index(seed)], {"source": f"the best kept in {best_genomes}"}
         path = os.path.join(run_dir, "final_population.npz")

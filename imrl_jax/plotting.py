@@ -422,6 +422,64 @@ def plot_learning_curves(config: Config, curves: dict, title: str = "", bin_step
     return fig
 
 
+#: The paper's learning tests: tasks of 1,000,000 cycles, 10 runs x 10 best x 10 tests.
+PAPER_TEST = dict(task_steps=1_000_000, shape=(10, 10, 10))
+
+
+def scale_label(config: Config, shape: tuple[int, ...]) -> str:
+    """", reduced scale (...)" when a test is shorter or smaller than the paper's, else ""."""
+    short = bool(config.task_steps < PAPER_TEST["task_steps"])
+    small = bool(np.prod(shape) < np.prod(PAPER_TEST["shape"]))
+    parts = [f"{config.task_steps:,} cycles"] * short + [f"{int(np.prod(shape)):,} tests"] * small
+    return f", reduced scale ({', '.join(parts)})" if parts else ""
+
+
+def plot_learning_test(config: Config, curve: np.ndarray):
+    """A learning test's mean performance per bin and the range of its runs' means (learning_curve.png).
+
+    ``curve`` (runs, best, tests, tasks, bins): every test's performance per bin
+    (:func:`imrl_jax.learning_test.performance_curve`).
+    """
+    bin_steps = config.task_steps // config.num_bins
+    x = (np.arange(config.num_bins) + 0.5) * bin_steps
+    fig = new_figure(6.0, 3.6)
+    fig.set_layout_engine("constrained")
+    ax = fig.subplots()
+    per_run = curve.mean((1, 2, 3))
+    ax.fill_between(x, per_run.min(0), per_run.max(0), color="0.85", label="range of the runs' means")
+    ax.plot(x, curve.mean((0, 1, 2, 3)), color="k", lw=2, label="mean of all tests")
+    ax.set_ylim(0, 1)
+    ax.set_xlim(0, config.task_steps)
+    runs, best, tests = curve.shape[:3]
+    style_axis(ax, f"{config.condition} learning test: {runs} run(s) x {best} best x {tests} test(s), "
+                   f"{config.num_tasks} tasks each{scale_label(config, curve.shape[:3])}",
+               "cycles of the task (bin centres)",
+               "performance per bin (1: straight line)")
+    ax.legend(fontsize=7)
+    return fig
+
+
+def plot_baseline(curves: list[dict], tasks, steps: int, title: str):
+    """A baseline's performance against cycles of experience per task, the mean over seeds (learning_curve.png).
+
+    ``curves``: a row per evaluation (task, seed, step, performance); ``steps``: the x axis' end.
+    """
+    fig = new_figure(6.0, 3.6)
+    fig.set_layout_engine("constrained")
+    ax = fig.subplots()
+    colours = ["tab:red", "tab:orange", "tab:green", "tab:olive", "tab:blue", "tab:purple"]
+    for task in tasks:
+        points = [c for c in curves if c["task"] == task]
+        steps_done = sorted({c["step"] for c in points})
+        mean = [np.mean([c["performance"] for c in points if c["step"] == s]) for s in steps_done]
+        ax.plot(steps_done, mean, color=colours[(task - 1) % len(colours)], lw=1.5, label=f"task {task}")
+    ax.set_ylim(0, 1)
+    ax.set_xlim(0, steps)
+    style_axis(ax, title, "control cycles of experience on the task", "performance (1: straight line)")
+    ax.legend(fontsize=7)
+    return fig
+
+
 def _series_colours(n: int) -> list:
     """n distinguishable line colours in order (viridis-like ramp for ordered values)."""
     from matplotlib import colormaps

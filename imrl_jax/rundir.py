@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import contextlib
+import csv
 import errno
+import io
 import json
 import os
 import re
@@ -127,6 +129,15 @@ def write_atomic(path: str, data: bytes) -> None:
         raise OSError(error.errno, error.strerror, path) from error
 
 
+def csv_bytes(rows: list[dict]) -> bytes:
+    """Rows as the bytes of a CSV file: a header of the first row's fields, then a line per row."""
+    out = io.StringIO()
+    writer = csv.DictWriter(out, list(rows[0]), lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    return out.getvalue().encode()
+
+
 def check_writable(path: str, flag: str = "--out") -> None:
     """Raise RunDirError naming ``flag`` unless ``path`` (a directory, existing or not) can be written in.
 
@@ -245,6 +256,20 @@ def read_kept_best(path: str, variant: str, condition: str) -> KeptBest:
     return KeptBest(arrays[f"{key}__genomes"], [int(s) for s in arrays[f"{key}__seeds"]], arrays.get(f"{key}__fitness"))
 
 
+def load_kept_best(run_dir: str, path: str, num_best: int) -> tuple[Config, list[int], np.ndarray]:
+    """A run's config and the ``num_best`` best genomes of each seed kept in a report's ``best_genomes.npz``
+    (for a run whose final population was not kept); its key is the run's ``VARIANT/evolve/CONDITION`` path."""
+    config, _ = read_config(run_dir)
+    variant = os.path.basename(os.path.dirname(os.path.dirname(os.path.abspath(run_dir))))
+    genomes, seeds, _ = read_kept_best(path, variant, config.condition)
+    if not 1 <= num_best <= genomes.shape[1]:
+        raise RunDirError(f"--best: must be between 1 and the {genomes.shape[1]} kept in {path}")
+    if genomes.shape[-1] != config.num_genes:
+        raise RunDirError(f"--best-genomes: {variant}__{config.condition} has {genomes.shape[-1]} genes, the run's "
+                          f"config {config.num_genes}")
+    return config, seeds, genomes[:, :num_best]
+
+
 def best_genomes(run: Run, num_best: int) -> np.ndarray:
     """The ``num_best`` fittest genomes of each seed, fittest first: (seeds, num_best, genes)."""
     if not 1 <= num_best <= run.evaluated.shape[1]:
@@ -332,6 +357,16 @@ def check_unlocked(path: str) -> None:
     holder = read_lock(os.path.join(path, LOCK))
     if holder is not None and holder != _me() and holder_alive(holder) is not False:
         raise _refusal(path, holder)
+
+
+def unfinished(run_dir: str, run: Run) -> str:
+    """Why ``run`` is not a finished evolution ("" if it is): generations left, or a live writer."""
+    holder = read_lock(os.path.join(run_dir, LOCK))
+    writing = holder is not None and holder_alive(holder) is not False
+    if run.generation >= run.config.num_generations and not writing:
+        return ""
+    return (f"{run_dir} has {run.generation} of its {run.config.num_generations} generations evaluated"
+            + (f" and is being written by pid {holder.pid} on {holder.host}" if writing else ""))
 
 
 @contextlib.contextmanager

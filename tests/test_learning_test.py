@@ -8,7 +8,7 @@ import jax
 import numpy as np
 import pytest
 
-from imrl_jax import conditions, learning_test
+from imrl_jax import cli, conditions, learning_test, learning_test_state, plotting, rundir
 from imrl_jax.ga import init_population
 from imrl_jax.lifetime import live
 
@@ -245,12 +245,12 @@ def test_kept_runs_and_their_spec_are_read_bounded(tmp_path):
     np.savez_compressed(partial / "run_000.npz", reaches=np.zeros((10, 6, 1000), np.int32),
                         selections=np.zeros((10, 6, 1000, 3), np.int32))
     warnings = []
-    assert learning_test.finished_runs(str(partial), "f", 1, warn=warnings.append, limit=10_000) == {}
+    assert learning_test_state.finished_runs(str(partial), "f", 1, warn=warnings.append, limit=10_000) == {}
     assert warnings == [f"warning: {partial / 'run_000.npz'} cannot be read (RunDirError); run 0 is tested again"]
-    assert list(learning_test.finished_runs(str(partial), "f", 1, warn=warnings.append, limit=10**6)) == [0]
+    assert list(learning_test_state.finished_runs(str(partial), "f", 1, warn=warnings.append, limit=10**6)) == [0]
     (partial / "spec.json").write_bytes(b"\xff\xfe")
-    with pytest.raises(learning_test.UsageError, match=r"spec.json cannot be read \(RunDirError\)"):
-        learning_test.finished_runs(str(partial), "f", 1)
+    with pytest.raises(cli.UsageError, match=r"spec.json cannot be read \(RunDirError\)"):
+        learning_test_state.finished_runs(str(partial), "f", 1)
 
 
 def test_an_empty_out_is_refused(tmp_path, capsys, monkeypatch):
@@ -389,9 +389,9 @@ def test_absurd_sizes_and_sets_of_options_are_refused(tmp_path, capsys, argv, me
 
 def test_a_test_smaller_or_shorter_than_the_papers_is_labelled_reduced_scale(tiny):
     config = tiny("EE-LS")
-    assert learning_test.scale_label(config.replace(task_steps=1_000_000), (10, 10, 10)) == ""
-    assert learning_test.scale_label(config.replace(task_steps=1_000_000), (5, 4, 5)) == ", reduced scale (100 tests)"
-    assert (learning_test.scale_label(config.replace(task_steps=20), (10, 10, 10))
+    assert plotting.scale_label(config.replace(task_steps=1_000_000), (10, 10, 10)) == ""
+    assert plotting.scale_label(config.replace(task_steps=1_000_000), (5, 4, 5)) == ", reduced scale (100 tests)"
+    assert (plotting.scale_label(config.replace(task_steps=20), (10, 10, 10))
             == ", reduced scale (20 cycles)")
 
 
@@ -426,7 +426,7 @@ def test_the_best_genomes_a_report_kept_stand_in_for_a_lost_final_population(tin
     shutil.copy(os.path.join(tiny_run, "config.json"), run / "config.json")  # no final_population.npz
     kept = tmp_path / "best_genomes.npz"
     np.savez(kept, **{f"v__{config.condition}__genomes": best, f"v__{config.condition}__seeds": np.asarray(seeds)})
-    found = learning_test.load_kept_best(str(run), str(kept), 1)
+    found = rundir.load_kept_best(str(run), str(kept), 1)
     assert found[0] == config and found[1] == seeds
     np.testing.assert_array_equal(found[2], best[:, :1])
     other = tmp_path / "w" / "evolve" / config.condition

@@ -279,8 +279,9 @@ def test_paper_and_cpu_reports_each_name_the_other_and_an_unfinished_run_says_so
 
 def _write_baselines(root):
     """A baselines directory as imrl_jax.baselines writes it: PPO, 1M cycles, 2 seeds at 0.5 and 0.7 on every task."""
-    from imrl_jax.baselines import Baseline, _csv, summarise
+    from imrl_jax.baselines import Baseline, summarise
     from imrl_jax.config import Config
+    from imrl_jax.rundir import csv_bytes
 
     b = Baseline(agent="ppo", steps=1_000_000, seeds=2)
     rows = [dict(agent="ppo", task=t, seed=s, steps=1_024_000, performance=0.5 + 0.2 * s,
@@ -290,8 +291,8 @@ def _write_baselines(root):
               for t in b.tasks for s in (0, 1) for step, value in ((0, 0.0), (1024, 0.25), (1_024_000, 1.0))]
     out = root / "ppo_1M"
     out.mkdir(parents=True)
-    (out / "runs.csv").write_bytes(_csv(rows))
-    (out / "curves.csv").write_bytes(_csv(curves))
+    (out / "runs.csv").write_bytes(csv_bytes(rows))
+    (out / "curves.csv").write_bytes(csv_bytes(curves))
     (out / "summary.json").write_text(json.dumps(summarise(b, Config(), rows, curves)))
 
 
