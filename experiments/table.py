@@ -87,7 +87,9 @@ def evolution_spec(row: Row, scale: dict) -> runspec.RunSpec:
 @dataclasses.dataclass(frozen=True)
 class Measure:
     """A measure: ``python -m MODULE RUN --out OUT ARGS`` (RUN a row's evolution, a committed run's folder, or
-    none: ``run=""``), done when OUT holds result.json; OUT is ``out``, or ``TABLE_OUT/measures/NAME``."""
+    none: ``run=""``); OUT is ``out``, or ``TABLE_OUT/measures/NAME``. Done as its ``kind`` of stage is done:
+    a "measure" when OUT holds result.json, a "test" (``imrl_jax.learning_test`` with options of its own, such
+    as another task set) its steady.json, a "baseline" (``imrl_jax.baselines``) its summary.json."""
 
     name: str
     run: str  # a row's name, a run directory, or "" (the measure reads no run)
@@ -95,6 +97,7 @@ class Measure:
     module: str = "imrl_jax.landscape_run"
     cost: float = 0.0  # lane-steps, estimated
     out: str | None = None  # its folder (None: the table's measures/NAME)
+    kind: str = "measure"  # measure, test or baseline: what makes it done (reproduce.stage_done)
 
 
 class Sweep(NamedTuple):
@@ -145,6 +148,12 @@ class Table:
     out: str  # its manifest and logs (its runs lie wherever their keys find them under ``results``)
     results: str = RESULTS
     measures: tuple[Measure, ...] = ()
+
+    def __post_init__(self):
+        names = [row.name for row in self.rows] + [f"{m.kind} {m.name}" for m in self.measures]
+        twice = sorted({name for name in names if names.count(name) > 1})
+        if twice:  # a row's runs are found by its name
+            raise ValueError(f"table {self.name}: two rows or measures are named {twice[0]!r}")
 
     def scale_of(self, row: Row) -> dict:
         """The row's sizes: its own, or the table's."""
@@ -246,15 +255,15 @@ class Table:
                                     test_cost(scale, row.condition), needs=(evolving[evolved],)))
         for measure in self.measures:
             row = next((r for r in self.rows if r.name == measure.run), None)
-            stages.append(Stage(f"measure {measure.name}", "measure", measure.name, row.condition if row else "",
+            stages.append(Stage(f"{measure.kind} {measure.name}", measure.kind, measure.name, row.condition if row else "",
                                 measure.out or os.path.join(self.out, "measures", measure.name), measure.cost,
                                 needs=(evolving[evolutions[row.name]],) if row and row.evolved else ()))
         return stages, self.scale
 
     def stage_command(self, stage: Stage) -> tuple[list[str], None]:
         """A stage's command line: a measure, the row's evolution, or the learning test of the run it found."""
-        if stage.kind == "measure":
-            measure = next(m for m in self.measures if m.name == stage.variant)
+        measure = next((m for m in self.measures if m.name == stage.variant and m.kind == stage.kind), None)
+        if measure is not None:
             run = self.evolutions().get(measure.run) or measure.run
             return [sys.executable, "-m", measure.module, *([run] if run else []), "--out", stage.out_dir,
                     *measure.args], None

@@ -168,3 +168,22 @@ def test_a_row_of_fewer_generations_of_its_own_is_done_at_its_own_length():
     assert stages[0].out_dir == os.path.join(RESULTS, "childhood", "evolve", "LE-LS-skills-2lives")
     assert [s.generations for s in stages] == [15, 30] and sizes["generations"] == 30
     assert stage_done(stages[0], sizes) and not stage_done(stages[0]._replace(generations=0), sizes)
+
+
+def test_a_learning_test_of_its_own_options_waits_for_its_row_and_two_rows_of_one_name_are_refused(tmp_path):
+    """A test-kind measure (the novel tasks' learning test on another task set) is done by its steady.json and
+    waits for its row's evolution; a name given twice is refused, naming it."""
+    import pytest
+
+    table = Table("t", "docs/T.md", 99, scale=SCREEN, out=str(tmp_path), results=RESULTS,
+                  rows=(Row("EE-LS-T", "EE-LS-T", "skills"),),
+                  measures=(Measure("novel", "EE-LS-T", ("--task-set", "novel"), module="imrl_jax.learning_test",
+                                    out=os.path.join(RESULTS, "goals", "EE-LS-T", "test"), kind="test"),))
+    stages, _ = table.all_stages()
+    assert [(s.name, s.kind, s.needs) for s in stages][-1] == ("test novel", "test", ("evolve EE-LS-T",))
+    assert stage_done(stages[-1], SCREEN)  # the folder holds a steady.json
+    command = table.stage_command(stages[-1])[0]
+    assert command[1:4] == ["-m", "imrl_jax.learning_test", os.path.join(RESULTS, "goals", "EE-LS-T", "evolve")]
+    assert command[-2:] == ["--task-set", "novel"]
+    with pytest.raises(ValueError, match="table t: two rows or measures are named 'a'"):
+        Table("t", "docs/T.md", 99, scale=SCREEN, out=str(tmp_path), rows=(Row("a", "LE-LS", "skills"),) * 2)
