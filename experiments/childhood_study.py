@@ -76,25 +76,13 @@ def measure(config, agent, records=None) -> dict:
     return row
 
 
-def write_csv(path: str, rows: list[dict]) -> None:
-    """Rows as CSV (floats with 4 decimals)."""
-    with open(path, "w", newline="") as f:
-        fields = list(dict.fromkeys(name for row in rows for name in row))  # rows may lack some (EE: no childhood)
-        writer = csv.DictWriter(f, fieldnames=fields, restval="", lineterminator="\n")
-        writer.writeheader()
-        writer.writerows({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
-
-
 def finish(out: str, rows: list[dict], **summary) -> int:
-    """A measure's rows into OUT/NAME.csv, then its result.json (what makes it done) naming the CSV."""
-    from imrl_jax.checkpoint import git_commit
+    """A measure's rows into OUT/NAME.csv (floats with 4 decimals), then its result.json naming the CSV."""
+    from experiments.tables import write_measure
 
-    name = os.path.basename(os.path.normpath(out)) + ".csv"
-    os.makedirs(out, exist_ok=True)
-    write_csv(os.path.join(out, name), rows)
-    with open(os.path.join(out, "result.json"), "w") as f:
-        json.dump(dict(csv=name, command="python -m experiments.childhood_study " + " ".join(sys.argv[1:]),
-                       git_commit=git_commit(), **summary), f, indent=2)
+    name = os.path.basename(os.path.normpath(out))
+    write_measure(out, name, rows, "python -m experiments.childhood_study " + " ".join(sys.argv[1:]), 4,
+                  csv=name + ".csv", **summary)
     return 0
 
 
@@ -372,13 +360,8 @@ LABELS = {
 }
 
 
-def last_generation(run_dir: str) -> tuple[np.ndarray, np.ndarray]:
-    """Each seed's best fitness of its run's last generation, and that individual's performance on each task."""
-    with open(os.path.join(run_dir, "history.csv")) as f:
-        rows = list(csv.DictReader(f))
-    last = [r for r in rows if int(r["generation"]) == max(int(r["generation"]) for r in rows)]
-    return (np.array([float(r["best"]) for r in last]),
-            np.array([[float(v) for k, v in r.items() if k.startswith("best_task")] for r in last]))
+#: A history.csv's columns of each seed's best: its fitness, then its performance on each of the paper's tasks.
+BEST_COLUMNS = ("best", *(f"best_task{t + 1}" for t in range(6)))
 
 
 class ChildhoodTable(Table):
@@ -387,18 +370,19 @@ class ChildhoodTable(Table):
     def report(self) -> int:
         from experiments.loading import read_evolution
         from experiments.study import write_table
+        from experiments.tables import head, history_columns, line
         from imrl_jax import conditions
         from imrl_jax.plotting import new_figure, save, style_axis
 
         folders = {s.variant: s.out_dir for s in self.all_stages()[0] if s.kind == "measure"}
-        lines = ["| run | final best (per seed) | every task of the best | 10 best x 3 seeds: individuals with "
-                 "0 / 1 / 2 / 3 colours followed |", "|---|---|---|---|"]
+        lines = head("run", "final best (per seed)", "every task of the best",
+                     "10 best x 3 seeds: individuals with 0 / 1 / 2 / 3 colours followed")
         fig = new_figure(8.8, 3.8)
         ax = fig.add_subplot()
         for i, (row, run_dir) in enumerate(self.evolutions().items()):
             run = read_evolution(run_dir)
             if run is None:
-                lines.append(f"| {LABELS[row][0]} | not started | - | - |")
+                lines.append(line(LABELS[row][0], "not started", "-", "-"))
                 continue
             lives = run["config"].get("lives_per_fitness", 1)
             x, mean, sd = lives * np.arange(len(run["best"])), np.nanmean(run["best"], 1), np.nanstd(run["best"], 1)
@@ -407,10 +391,11 @@ class ChildhoodTable(Table):
                     marker="o", ms=2.5, lw=1.4)
             ax.fill_between(x, mean - sd, mean + sd, color=f"C{i}", alpha=0.12, lw=0)
             label, probes, note = LABELS[row]
-            best, tasks = last_generation(run_dir)
+            last = history_columns(run_dir, BEST_COLUMNS)[-1]
+            best, tasks = last[:, 0], last[:, 1:]
             colours = np.bincount([int(r["num_colours"]) for r in read_rows(folders[probes])], minlength=4)
-            lines.append(f"| {label} | {best.mean():.3f} ({', '.join(f'{b:.3f}' for b in best)}) | "
-                         f"{tasks.min():.2f}-{tasks.max():.2f}{note} | {' / '.join(str(c) for c in colours)} |")
+            lines.append(line(label, f"{best.mean():.3f} ({', '.join(f'{b:.3f}' for b in best)})",
+                               f"{tasks.min():.2f}-{tasks.max():.2f}{note}", " / ".join(str(c) for c in colours)))
         ceiling, speed = read_rows(folders["ceiling"]), read_rows(folders["speed"])
         references = [(r["fitness"], "ideal colour followers, extension's selector") for r in ceiling
                       if r["rules"] == "extension" and r["task_steps"] == 100_000]

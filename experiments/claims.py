@@ -337,6 +337,18 @@ def claim_specialisation(colours: dict, pairs: dict | None = None) -> dict:
     return _claim(verdict, measured, **numbers)
 
 
+def evolved_claims(done: dict, per_run: dict, path: dict | None) -> dict:
+    """Claims 1-4 and 6, those a search decides: from each finished evolution's numbers ``done[c]`` (as
+    :func:`measure` gives them), each condition's steady state per run and the best EE-ES's path (None: not relived)."""
+    get = lambda c, k: done[c][k] if c in done else None  # noqa: E731
+    return {1: claim_evolvability({c: get(c, "plateau_generation") for c in EVOLVED}),
+            2: claim_reliability({c: get(c, "final_best_sd") for c in EVOLVED}),
+            3: claim_ee_ls_higher(get("EE-LS", "final_best_per_seed"), get("LE-LS", "final_best_per_seed")),
+            4: claim_ee_es_about(get("EE-ES", "final_best_mean"), get("LE-LS", "final_best_mean"),
+                                 path["stereotypy_per_task"] if path else None, path["speed"] if path else None),
+            6: claim_ordering(per_run)}
+
+
 def measure(data: dict, lives: dict, probes: dict | None = None, sle_whole_test=False) -> dict:
     """Every number of the report: per variant, the evolutions' and tests' statistics and the claims.
 
@@ -373,29 +385,20 @@ def measure(data: dict, lives: dict, probes: dict | None = None, sle_whole_test=
                                                       "num_runs", "num_best", "num_tests", "task_steps",
                                                       "steady_steps", "num_bins")}
             tests[condition]["pairs_both_ways"] = test.get("pairs_both_ways")
-        get = lambda d, c, k: d[c][k] if c in d else None  # noqa: E731
         done = {c: e for c, e in evolution.items() if e["finished"]}  # claims judge finished evolutions only
-        steady = {c: get(tests, c, "steady_mean") for c in TESTED}
-        ee_es_life = lives.get(("paper", "EE-ES"))
+        steady = {c: tests[c]["steady_mean"] if c in tests else None for c in TESTED}
         sle = data["tests"].get((variant, "SLE"))
         sle_noise = (sle["steady"].get("config") or {}).get("sle_noise_steps", 0) if sle else None
-        claims = {
-            1: claim_evolvability({c: get(done, c, "plateau_generation") for c in EVOLVED}),
-            2: claim_reliability({c: get(done, c, "final_best_sd") for c in EVOLVED}),
-            3: claim_ee_ls_higher(get(done, "EE-LS", "final_best_per_seed"),
-                                  get(done, "LE-LS", "final_best_per_seed")),
-            4: claim_ee_es_about(get(done, "EE-ES", "final_best_mean"), get(done, "LE-LS", "final_best_mean"),
-                                 ee_es_life["stereotypy_per_task"] if ee_es_life else None,
-                                 ee_es_life["speed"] if ee_es_life else None),
+        claims = dict(sorted({**evolved_claims(done, {c: tests[c]["steady_per_run"] if c in tests else None
+                                                      for c in TESTED}, lives.get(("paper", "EE-ES"))),
             5: claim_learning_speed({c: (data["tests"][variant, c]["steps"], data["tests"][variant, c]["mean"])
                                      for c in TESTED if (variant, c) in data["tests"]}, steady, sle_noise,
                                     sle_whole_test if isinstance(sle_whole_test, bool) else
                                     variant in sle_whole_test),
-            6: claim_ordering({c: get(tests, c, "steady_per_run") for c in TESTED}),
             7: claim_specialisation({c: probes.get((variant, c)) for c in ("LE-LS", "EE-LS")},
                                     {c: data["tests"][variant, c]["pairs_both_ways"] for c in EVOLVED
                                      if data["tests"].get((variant, c), {}).get("pairs_both_ways") is not None}),
-        }
+        }.items()))
         out[variant] = dict(evolution=evolution, learning_tests=tests, claims=claims)
     return out
 

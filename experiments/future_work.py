@@ -15,7 +15,6 @@ measures every finished row (final best fitness, its spread and plateau, fresh l
 
 from __future__ import annotations
 
-import csv
 import json
 import os
 import sys
@@ -29,12 +28,11 @@ from experiments.claims import NUM_BEST
 from experiments.reproduce import test_dir
 from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN
 from experiments.table import Row, Table
+from experiments.tables import head, line, mean_sd
 from imrl_jax import conditions
 
 OUT = os.path.join(RESULTS, "future_work")
 DOCUMENT = os.path.join("docs", "FUTURE_WORK.md")
-#: The reproduction's report, whose fresh lives of its runs' best genomes the reference rows show.
-SUMMARY = os.path.join("docs", "reproduction", "summary.json")
 #: SLE's tests beside the study's, read where the reproduction and the claims study (``skills-sle-test``: the noise
 #: over the whole test, EXT-LS-whole's reference) made them: a test from scratch has no key to be found by.
 SLE_TESTS = {Row("skills SLE", "SLE", "skills"): test_dir(REPRODUCTION, "skills", "SLE"),
@@ -102,24 +100,19 @@ STYLES = {"LE-LS-6": dict(color="0.3", lw=1.2, ls="-."), "EXT-LS-whole": dict(co
           "LE-LS-6-faithful": dict(color="0.3", lw=1.0, ls=":")}
 
 
-def read_traits(run_dir: str) -> dict | None:
+def read_traits(run_dir: str | None) -> dict | None:
     """An evolution's evolved values from its history.csv: names and (generations, seeds, values, 2) (population
     mean, the best's), or None without any."""
+    from experiments.tables import history_columns
+
     path = os.path.join(run_dir or "", "history.csv")
     if not os.path.isfile(path):
         return None
     with open(path) as f:
-        rows = list(csv.DictReader(f))
-    names = [c[len("mean_"):] for c in (rows[0] if rows else ()) if c.startswith("mean_")
-             and f"best_{c[len('mean_'):]}" in rows[0]]
-    if not names:
-        return None
-    seeds = sorted({int(r["seed"]) for r in rows})
-    values = np.full((max(int(r["generation"]) for r in rows) + 1, len(seeds), len(names), 2), np.nan)
-    for r in rows:
-        values[int(r["generation"]), seeds.index(int(r["seed"]))] = [[float(r[f"{which}_{n}"]) for which in
-                                                                      ("mean", "best")] for n in names]
-    return dict(names=names, values=values)
+        header = f.readline().strip().split(",")
+    names = [c[len("mean_"):] for c in header if c.startswith("mean_") and f"best_{c[len('mean_'):]}" in header]
+    values = history_columns(run_dir, [f"{which}_{n}" for n in names for which in ("mean", "best")]) if names else None
+    return None if values is None else dict(names=names, values=values.reshape(*values.shape[:2], len(names), 2))
 
 
 def _evolution(run_dir: str | None, fresh) -> dict | None:
@@ -305,18 +298,14 @@ def verdict_lines(verdicts: list[dict]) -> list[str]:
     """The verdicts' table and the rules behind them."""
     from experiments.claims import FUTURE, FUTURE_RULES
 
-    lines = ["| question | rules | rows | verdict | measured |", "|---|---|---|---|---|"]
-    shown = set()
+    lines, shown = head("question", "rules", "rows", "verdict", "measured"), set()
     for v in verdicts:
-        first = v["question"] not in shown
+        question = "" if v["question"] in shown else f"({v['question']}) {FUTURE[v['question']]}"
         shown.add(v["question"])
-        question = f"({v['question']}) {FUTURE[v['question']]}" if first else ""
         verdict = f"**{v['verdict']}**" + (f" so far (not finished: {', '.join(v['missing'])})"
                                              if v["missing"] and v["verdict"] != "n/a" else "")
-        lines.append(f"| {question} | {v['rules']} | {', '.join(v['rows'])} | {verdict} | {v['measured']} |")
-    lines += ["", "Rules (n/a: a row not finished yet):", ""]
-    lines += [f"- ({q}) {rule}" for q, rule in FUTURE_RULES.items()]
-    return lines
+        lines.append(line(question, v["rules"], ", ".join(v["rows"]), verdict, v["measured"]))
+    return lines + ["", "Rules (n/a: a row not finished yet):", "", *(f"- ({q}) {r}" for q, r in FUTURE_RULES.items())]
 
 
 def _value(v: float) -> str:
@@ -324,33 +313,30 @@ def _value(v: float) -> str:
     return f"{v:,.0f}" if abs(v) >= 1000 else f"{v:.3g}"
 
 
-def _row_cells(row: dict) -> list[str]:
+def _row_cells(r: dict) -> list[str]:
     """The main table's cells of a row after its name, condition and description."""
-    e, t = row["evolution"], row["test"]
-    if not row["evolved"]:
+    e, t = r["evolution"], r["test"]
+    if not r["evolved"]:
         cells = ["not evolved", "-", "-", "-", "-"]
     elif e is None:
         cells = ["-", NOT_RUN, "-", "-", "-"]
     elif not e["finished"]:
         cells = [f"{e['seeds']} x {e['generations']} of {e['planned']}", "running", "-", "-", "-"]
     else:
-        plateau = "-" if e["plateau_generation"] is None else str(e["plateau_generation"])
-        fresh = "-" if e.get("fresh") is None else f"{e['fresh']:.3f} ({e['fresh_sd']:.3f})"
-        cells = [f"{e['seeds']} x {e['generations']}", f"{e['final_best']:.3f}", f"{e['final_best_sd']:.3f}", fresh,
-                 plateau]
-    return cells + ([NOT_RUN, "-"] if t is None else [f"{t['steady_mean']:.3f} +- {t['steady_sd']:.3f}",
-                                                        str(t["runs"])])
+        cells = [f"{e['seeds']} x {e['generations']}", f"{e['final_best']:.3f}", f"{e['final_best_sd']:.3f}",
+                 "-" if e.get("fresh") is None else f"{e['fresh']:.3f} ({e['fresh_sd']:.3f})",
+                 "-" if e["plateau_generation"] is None else str(e["plateau_generation"])]
+    return cells + ([NOT_RUN, "-"] if t is None else [mean_sd(t["steady_mean"], t["steady_sd"]), str(t["runs"])])
 
 
 def table(measured: dict) -> str:
     """The report's markdown: every row's fitness and steady state, (c)'s evolved learning values, (d)'s experts."""
     from experiments.claims import LAST_GENERATIONS, PLATEAU_FRACTION
 
-    lines = ["| row | condition | what | seeds x generations | final best fitness (best of a generation's noisy lives) "
-             "| sd over seeds | fresh lives (sd over seeds) | plateau generation | steady state (mean +- sd over runs) "
-             "| runs |", "|---|---|---|---|---|---|---|---|---|---|"]
-    lines += [f"| {r['name']} | {r['condition']} | {r['about']} | " + " | ".join(_row_cells(r)) + " |"
-              for r in measured["rows"]]
+    lines = head("row", "condition", "what", "seeds x generations",
+                 "final best fitness (best of a generation's noisy lives)", "sd over seeds",
+                 "fresh lives (sd over seeds)", "plateau generation", "steady state (mean +- sd over runs)", "runs")
+    lines += [line(r["name"], r["condition"], r["about"], *_row_cells(r)) for r in measured["rows"]]
     lines += ["", f"Final best fitness: a seed's mean of its last {LAST_GENERATIONS} generations' best, then the mean "
               f"over seeds; fresh lives: each seed's best genome of the last generation in 10 new lives (keys the GA "
               f"never used), mean and sd over seeds (ddof 1); plateau: the first generation whose best (mean over seeds) reaches {PLATEAU_FRACTION:.0%} "
@@ -358,18 +344,15 @@ def table(measured: dict) -> str:
               *_colour_lines(measured["rows"]),
               "", "(c) The evolved learning values, last generation, mean over seeds, beside the values set by hand:", ""]
     values = measured["learning_values"]
-    lines += ["| value | " + " | ".join(f"{p} (by hand)" for p in values["hand"]) + " | " + " | ".join(
-        f"{r}: population mean | {r}: the best's" for r in PARAMETER_ROWS) + " |",
-              "|---|" + "---|" * len(values["hand"]) + "---|---|" * len(PARAMETER_ROWS)]
+    lines += head("value", *(f"{p} (by hand)" for p in values["hand"]),
+                  *(f"{r}: {w}" for r in PARAMETER_ROWS for w in ("population mean", "the best's")))
     for name in values["names"]:
         cells = [_value(hand[name]) for hand in values["hand"].values()]
-        for row in PARAMETER_ROWS:
-            evolved = values["evolved"][row]
-            if evolved is None:
-                cells += [NOT_RUN, NOT_RUN]
-            else:  # a value the row does not evolve (LE-LS-P's childhood) is the preset's
-                cells += [_value(evolved[name][w]) if name in evolved else "-" for w in ("mean", "best")]
-        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+        for evolved in (values["evolved"][r] for r in PARAMETER_ROWS):
+            # a value the row does not evolve (LE-LS-P's childhood) is the preset's
+            cells += ([NOT_RUN] * 2 if evolved is None else
+                      [_value(evolved[name][w]) if name in evolved else "-" for w in ("mean", "best")])
+        lines.append(line(name, *cells))
     for experts in measured["experts"]:
         lines += _experts_lines(experts, measured["rows"])
     lines += ["", "The paper's questions, each with its verdict:", ""] + verdict_lines(measured["verdicts"])
@@ -383,16 +366,14 @@ def _colour_lines(rows: list[dict]) -> list[str]:
     probed = [r for r in rows if r.get("colours")]
     if not probed:
         return []
-    lines = ["", f"What the experts do (claim 7's junction probe of each seed's {NUM_BEST} fittest genomes of the last "
-             "generation, after a fresh childhood; an expert follows a colour when it takes it at "
-             f"{FOLLOW_CHOICE:.0%} of the junctions "
-             "offering it; an expert not expressed follows none):", "",
-             "| row | genomes | experts following a colour, per genome | distinct colours followed, per genome "
-             "| the colours followed: genomes |", "|---|---|---|---|---|"]
-    lines += [f"| {r['name']} | {r['colours']['genomes']} | {r['colours']['experts_following']:.2f} | "
-              f"{r['colours']['colours']:.2f} | "
-              + ", ".join(f"{name} {n}" for name, n in r["colours"]["sets"].items()) + " |" for r in probed]
-    return lines
+    return ["", f"What the experts do (claim 7's junction probe of each seed's {NUM_BEST} fittest genomes of the last "
+            "generation, after a fresh childhood; an expert follows a colour when it takes it at "
+            f"{FOLLOW_CHOICE:.0%} of the junctions offering it; an expert not expressed follows none):", "",
+            *head("row", "genomes", "experts following a colour, per genome", "distinct colours followed, per genome",
+                  "the colours followed: genomes"),
+            *(line(r["name"], r["colours"]["genomes"], f"{r['colours']['experts_following']:.2f}",
+                  f"{r['colours']['colours']:.2f}", ", ".join(f"{k} {n}" for k, n in r["colours"]["sets"].items()))
+              for r in probed)]
 
 
 def _experts_lines(experts: dict, rows: list[dict]) -> list[str]:
@@ -402,21 +383,18 @@ def _experts_lines(experts: dict, rows: list[dict]) -> list[str]:
         lines.append(f"{experts['row']}: {NOT_RUN}.")
     else:
         counts = list(experts["generations"][0]["shares"])
-        lines += ["| generation | expressed: population mean | the best's | " + " | ".join(
-            f"share with {k}" for k in counts) + " |", "|---|---|---|" + "---|" * len(counts)]
-        lines += [f"| {g['generation']} | {g['mean']:.2f} | {g['best']:.2f} | " + " | ".join(
-            f"{g['shares'][k]:.3f}" for k in counts) + " |" for g in experts["generations"]]
-    if experts["generations"] is not None and not experts["compared"]:
-        lines.append(f"\nIts final best fitness against {' and '.join(experts['against'])}: {NOT_RUN}.")
+        lines += head("generation", "expressed: population mean", "the best's", *(f"share with {k}" for k in counts))
+        lines += [line(g["generation"], f"{g['mean']:.2f}", f"{g['best']:.2f}",
+                       *(f"{g['shares'][k]:.3f}" for k in counts)) for g in experts["generations"]]
+        if not experts["compared"]:
+            lines.append(f"\nIts final best fitness against {' and '.join(experts['against'])}: {NOT_RUN}.")
     if experts["compared"]:
         mine = next(r for r in rows if r["name"] == experts["row"])["evolution"]
-        lines += ["", f"| final best fitness of {experts['row']} ({mine['seeds']} seeds) | its | theirs | their seeds | "
-                  "difference | se |", "|---|---|---|---|---|---|"]
-        lines += [f"| against {c['name']} | {mine['final_best']:.3f} | {c['final_best']:.3f} | {c['seeds']} | "
-                  f"{c['difference']:+.3f} | {c['standard_error']:.3f} |" for c in experts["compared"]]
+        lines += ["", *head(f"final best fitness of {experts['row']} ({mine['seeds']} seeds)", "its", "theirs",
+                            "their seeds", "difference", "se")]
+        lines += [line(f"against {c['name']}", f"{mine['final_best']:.3f}", f"{c['final_best']:.3f}", c["seeds"],
+                      f"{c['difference']:+.3f}", f"{c['standard_error']:.3f}") for c in experts["compared"]]
     return lines
-
-
 
 
 def _style(row: dict) -> dict:
@@ -541,12 +519,13 @@ class FutureWorkTable(Table):
     experts, the verdicts and a figure per question."""
 
     def report(self) -> int:
-        from experiments.loading import read_json
+        from experiments.claims_study import reproduction_summary
         from experiments.study import write_table
 
         rows = {row.name: row for row in (*self.rows, *SLE_TESTS)}
         tests = {**self.tests(), **{row.name: folder for row, folder in SLE_TESTS.items()}}
-        measured = measure(rows, self.evolutions(), tests, read_json(SUMMARY) or {})
+        # the reproduction's report beside the study's document: its runs' fresh lives, which the reference rows show
+        measured = measure(rows, self.evolutions(), tests, reproduction_summary(DOCUMENT) or {})
         os.makedirs(self.out, exist_ok=True)
         with open(os.path.join(self.out, "report.json"), "w") as f:
             json.dump(measured, f, indent=2)

@@ -23,6 +23,7 @@ import numpy as np
 from experiments.reproduce import owner, test_dir
 from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN
 from experiments.table import Row, Table
+from experiments.tables import head, line, mean_sd
 from imrl_jax import conditions
 from imrl_jax.strategies import GA_NAME
 
@@ -37,8 +38,6 @@ COMPARED = (GA_NAME, *STRATEGIES)
 #: Their lines in the figures.
 STRATEGY_STYLES = {GA_NAME: dict(color="black", lw=2.0), "sep_cma_es": dict(color="tab:blue", lw=1.6, ls="--"),
                    "snes": dict(color="tab:orange", lw=1.6, ls=":")}
-#: The finished reproduction's report: the GA's fresh lives, junction probes and relived best EE-ES (claim 4's path).
-GA_SUMMARY = os.path.join("docs", "reproduction", "summary.json")
 #: SLE evolves nothing: the reproduction's ``skills`` test of it is every strategy's SLE in claim 6.
 SLE_TEST = test_dir(REPRODUCTION, PRESET, "SLE")
 #: The claims that depend on the search (the evolutions, or the learning tests of what they found).
@@ -53,24 +52,15 @@ def strategy_of(row: Row) -> str:
 
 def judge(strategies, rows: list[dict], sle_per_run: list[float] | None, paths: dict) -> dict:
     """Claims 1-4 and 6 per strategy from its rows (finished evolutions only), SLE's test and its EE-ES's path."""
-    from experiments.claims import (EVOLVED, claim_evolvability, claim_ee_es_about, claim_ee_ls_higher,
-                                    claim_ordering, claim_reliability)
+    from experiments.claims import evolved_claims
 
     claims = {}
     for strategy in strategies:
         mine = {r["condition"]: r for r in rows if r["strategy"] == strategy}
-        done = {c: r for c, r in mine.items() if r["finished"]}
-        get = lambda d, c, k: d[c].get(k) if c in d else None  # noqa: E731
-        path = paths.get(strategy)
-        claims[strategy] = {
-            1: claim_evolvability({c: get(done, c, "plateau_generation") for c in EVOLVED}),
-            2: claim_reliability({c: get(done, c, "final_best_sd") for c in EVOLVED}),
-            3: claim_ee_ls_higher(get(done, "EE-LS", "final_best_per_seed"), get(done, "LE-LS", "final_best_per_seed")),
-            4: claim_ee_es_about(get(done, "EE-ES", "final_best_mean"), get(done, "LE-LS", "final_best_mean"),
-                                 path["stereotypy_per_task"] if path else None, path["speed"] if path else None),
-            6: claim_ordering({**{c: get(mine, c, "steady_per_run") for c in CONDITIONS}, "SLE": sle_per_run}),
-        }
-        claims[strategy][4]["path_probe"] = path is not None
+        claims[strategy] = evolved_claims({c: r for c, r in mine.items() if r["finished"]}, {
+            **{c: mine[c].get("steady_per_run") if c in mine else None for c in CONDITIONS}, "SLE": sle_per_run},
+            paths.get(strategy))
+        claims[strategy][4]["path_probe"] = paths.get(strategy) is not None
     return claims
 
 
@@ -86,16 +76,15 @@ def table(measured: dict) -> str:
     per strategy."""
     from experiments.claims import CLAIMS
 
-    lines = ["| strategy | condition | fresh lives (sd over seeds) | colours followed (share with 3) |", "|---|---|---|---|"]
-    for r in measured["rows"]:
-        fresh = "-" if r.get("fresh_mean") is None else f"{r['fresh_mean']:.3f} ({r['fresh_sd']:.3f})"
-        colours = "-" if r.get("colours_mean") is None else f"{r['colours_mean']:.2f} ({r['specialised_share']:.2f})"
-        lines.append(f"| {r['strategy']} | {r['condition']} | {fresh} | {colours} |")
+    lines = head("strategy", "condition", "fresh lives (sd over seeds)", "colours followed (share with 3)")
+    lines += [line(r["strategy"], r["condition"],
+                   "-" if r.get("fresh_mean") is None else f"{r['fresh_mean']:.3f} ({r['fresh_sd']:.3f})",
+                   "-" if r.get("colours_mean") is None else f"{r['colours_mean']:.2f} ({r['specialised_share']:.2f})")
+              for r in measured["rows"]]
     sle = measured["sle"]
     lines += ["", "SLE evolves nothing: every strategy's claim 6 uses the reproduction's `skills` test of it"
-              + (f" (steady state {sle['steady_mean']:.3f} +- {sle['steady_sd']:.3f} over {sle['test_runs']} runs)."
-                 if sle else " (not found)."), "",
-              "| claim | strategy | verdict | measured |", "|---|---|---|---|"]
+              + (f" (steady state {mean_sd(sle['steady_mean'], sle['steady_sd'])} over {sle['test_runs']} runs)."
+                 if sle else " (not found)."), "", *head("claim", "strategy", "verdict", "measured")]
     shown = [strategy for strategy in measured["claims"] if any(r["strategy"] == strategy for r in measured["rows"])]
     for number in CLAIM_NUMBERS:
         for i, strategy in enumerate(shown):
@@ -103,11 +92,11 @@ def table(measured: dict) -> str:
             note = "" if number != 4 else "; path: " + ("not measured" if not claim["path_probe"] else
                                                          "the GA's relived best EE-ES" if strategy == GA_NAME else
                                                          "its relived best EE-ES")
-            lines.append(f"| {'' if i else f'{number}: {CLAIMS[number]}'} | {strategy} | **{claim['verdict']}** | "
-                         f"{claim['measured']}{note} |")
+            lines.append(line("" if i else f"{number}: {CLAIMS[number]}", strategy, f"**{claim['verdict']}**",
+                              claim["measured"] + note))
     lines += ["", "Claim 4's path: for the GA, the path is that of the reproduction's relived best EE-ES individual "
-              f"({GA_SUMMARY}); for the others, the fittest genome of the last generation relived, then each task "
-              "driven (`experiments.relive.run_path`, kept in the run's `path.json`). The rules are "
+              "(docs/reproduction/summary.json); for the others, the fittest genome of the last generation relived, "
+              "then each task driven (`experiments.relive.run_path`, kept in the run's `path.json`). The rules are "
               "`experiments.claims.RULES`, as in [REPRODUCTION.md](REPRODUCTION.md); the claims judge finished "
               "evolutions only (n/a: a condition not finished), and a strategy with nothing run yet is left out."]
     return "\n".join(lines)
@@ -185,13 +174,15 @@ def claims_figure(measured: dict, path: str) -> str:
 class SearchTable(Table):
     """The search study's table: its rows measured per strategy, the claims judged per strategy, its figures."""
 
-    def measure_search(self, ga_summary: str = GA_SUMMARY) -> dict:
-        """Per strategy and condition the evolution's and learning test's numbers, and claims 1-4 and 6 per strategy."""
+    def measure_search(self) -> dict:
+        """Per strategy and condition the evolution's and learning test's numbers, and claims 1-4 and 6 per strategy;
+        the GA's fresh lives, junction probes and relived best EE-ES (claim 4's path) are the reproduction's report's."""
         from experiments.claims import final_best
-        from experiments.loading import read_json, read_test
+        from experiments.claims_study import reproduction_summary
+        from experiments.loading import read_test
         from experiments.relive import colours_followed, reproduction_fresh, run_fresh, run_path, run_probe
 
-        summary = read_json(ga_summary) or {}
+        summary = reproduction_summary(self.document) or {}
         rows, paths = [], {}
         for row, m, tested in zip(self.rows, self.measure(), self.tests().values()):
             strategy, condition = strategy_of(row), row.condition

@@ -12,7 +12,6 @@ fresh lives). Then the rows they call for (:func:`evolution_groups`), found by t
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
 import itertools
 import json
@@ -249,31 +248,31 @@ def timescale_table(out: str = OUT, results: str = RESULTS, **fields) -> Timesca
 def report_table(rows: dict) -> str:
     """Markdown: per row and condition the recorded and fresh fitness and the steady state, then claims 1-7."""
     from experiments.claims import CLAIMS
+    from experiments.tables import head, mean_sd, line
 
-    lines = ["| selector | condition | seeds x generations | final best fitness (recorded) | fresh lives of each "
-             "seed's best | plateau generation | steady state (learning test) |", "|---|---|---|---|---|---|---|"]
+    lines = head("selector", "condition", "seeds x generations", "final best fitness (recorded)",
+                 "fresh lives of each seed's best", "plateau generation", "steady state (learning test)")
     for row in rows.values():
         measured = row["measured"]
         for condition in EVOLVED:
             if measured is None or condition not in measured["evolution"]:
                 done = (row["progress"] or {}).get(condition)
                 size = "not started" if done is None else f"{done[1]} x {done[0]} of {SCREEN['generations']}, running"
-                lines.append(f"| {row['label']} | {condition} | {size} | - | - | - | - |")
+                lines.append(line(row["label"], condition, size, "-", "-", "-", "-"))
                 continue
             e, t = measured["evolution"].get(condition), measured["learning_tests"].get(condition)
             f = measured["fresh"].get(condition)
-            lines.append(f"| {row['label']} | {condition} | {len(e['final_best_per_seed'])} x {e['generations']} | "
-                         f"{e['final_best_mean']:.3f} +- {e['final_best_sd']:.3f} | "
-                         + ("-" if f is None else f"{f['fresh']:.3f} (sd {f['fresh_sd_over_seeds']:.3f} over seeds)")
-                         + f" | {e['plateau_generation']} | "
-                         + ("-" if t is None else f"{t['steady_mean']:.3f} +- {t['steady_sd']:.3f} "
-                            f"({t['num_runs']} runs)") + " |")
-    lines += ["", "| claim | " + " | ".join(row["label"] for row in rows.values()) + " |",
-              "|---|" + "---|" * len(rows)]
+            lines.append(line(row["label"], condition, f"{len(e['final_best_per_seed'])} x {e['generations']}",
+                               mean_sd(e["final_best_mean"], e["final_best_sd"]),
+                               "-" if f is None else f"{f['fresh']:.3f} (sd {f['fresh_sd_over_seeds']:.3f} over seeds)",
+                               e["plateau_generation"],
+                               "-" if t is None else
+                               f"{mean_sd(t['steady_mean'], t['steady_sd'])} ({t['num_runs']} runs)"))
     short = {"holds": "**holds**", "partly": "partly", "does not hold": "no", "n/a": "n/a"}
     claims = [None if row["measured"] is None else row["measured"]["claims"] for row in rows.values()]
-    lines += [f"| {k}: {CLAIMS[k]} | " + " | ".join("not finished" if c is None else f"{short[c[k]['verdict']]}: "
-                                                    f"{c[k]['measured'].split(';')[0]}" for c in claims) + " |"
+    lines += ["", *head("claim", *(row["label"] for row in rows.values()))]
+    lines += [line(f"{k}: {CLAIMS[k]}", *("not finished" if c is None else
+                                         f"{short[c[k]['verdict']]}: {c[k]['measured'].split(';')[0]}" for c in claims))
               for k in range(1, 8)]
     return "\n".join(lines)
 
@@ -301,16 +300,11 @@ def _numbers(config, result, fitness: np.ndarray) -> dict:
 
 
 def _write_measure(out_dir: str, name: str, rows: list[dict], lives: int, key: int, **recorded) -> None:
-    """A measurement's NAME.csv, then its result.json (the stage is done)."""
-    from imrl_jax.checkpoint import git_commit
+    """A measurement's NAME.csv, then its result.json with its rows (the stage is done)."""
+    from experiments.tables import write_measure
 
-    with open(os.path.join(out_dir, f"{name}.csv"), "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    with open(os.path.join(out_dir, MEASURED), "w") as f:
-        json.dump(dict(command=f"python -m experiments.timescale --out {out_dir} {name} --lives {lives} --key {key}",
-                       git_commit=git_commit(), **recorded, rows=rows), f, indent=2)
+    write_measure(out_dir, name, rows, f"python -m experiments.timescale --out {out_dir} {name} --lives {lives} "
+                  f"--key {key}", **recorded, rows=rows)
 
 
 def measure_ceiling(out_dir: str, lives: int = LIVES, key: int = 0, task_steps: int = TASK_STEPS) -> list[dict]:
@@ -394,7 +388,6 @@ def measure_confirm(out_dir: str, lives: int = LIVES, key: int = 1, task_steps: 
                          sweep_fitness=best["fitness"]))
         print(f"confirm {option:>9}: {rows[-1]['fitness']:.3f} in {lives} fresh lives, {best['fitness']:.3f} in the "
               "sweep", file=sys.stderr, flush=True)
-    os.makedirs(out_dir, exist_ok=True)
     _write_measure(out_dir, "confirm", rows, lives, key)
     return rows
 
