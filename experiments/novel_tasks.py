@@ -82,25 +82,25 @@ def advantage_table(measured: dict, evolutions: str) -> str:
     """The report's markdown: learning's advantage per row and set of tasks, brax's agents, the held-out evolutions
     (``evolutions``: their table) and their probes, then the verdicts."""
     from experiments.claims import UNSEEN_RULE
+    from experiments.tables import head, line
 
-    lines = ["| comparison | tasks | runs | steady state | EE-ES | advantage | se |", "|---|---|---|---|---|---|---|"]
-    lines += [f"| {r['name']} | {r['tasks']} | {r['runs']} | {r['steady']:.3f} | {r['ee_es']:.3f} | "
-              f"{r['advantage']:+.3f} | {r['standard_error']:.3f} |" for r in measured["rows"]] or [
-        "| (no stage has finished yet) | | | | | | |"]
+    lines = head("comparison", "tasks", "runs", "steady state", "EE-ES", "advantage", "se") + [
+        line(r["name"], r["tasks"], r["runs"], f"{r['steady']:.3f}", f"{r['ee_es']:.3f}", f"{r['advantage']:+.3f}",
+             f"{r['standard_error']:.3f}") for r in measured["rows"]] or ["| (no stage has finished yet) | | | | | | |"]
     if measured["scratch"]:
         lines += ["", "brax's agents from scratch, 1,000,000 cycles per task (docs/BASELINES.md's measure):", "",
-                  "| agent | tasks | seeds | performance | sd over seeds |", "|---|---|---|---|---|"]
-        lines += [f"| {r['agent']} | {r['tasks']} | {r['seeds']} | {r['performance']:.3f} | {r['sd']:.3f} |"
+                  *head("agent", "tasks", "seeds", "performance", "sd over seeds")]
+        lines += [line(r["agent"], r["tasks"], r["seeds"], f"{r['performance']:.3f}", f"{r['sd']:.3f}")
                   for r in measured["scratch"]]
     lines += ["", f"The held-out evolutions on tasks {HELD_OUT['seen']} (final best fitness: the best of each "
               f"generation's noisy lives, the mean of the last 5 generations per seed, then over seeds):", "", evolutions]
     if measured["probes"]:
         lines += ["", f"The colours the held-out individuals' experts follow (the junction probe of claim 7, the "
                   f"{PROBED} best of each seed; LE-LS after a fresh childhood):", "",
-                  "| condition | individuals | following 0 / 1 / 2 / 3 colours | with an expert following red / green / "
-                  "blue |", "|---|---|---|---|"]
-        lines += [f"| held out {c} | {p['individuals']} | {' / '.join(map(str, p['counts']))} | "
-                  + " / ".join(f"{p['shares'][n]:.0%}" for n in COLOUR_NAMES) + " |" for c, p in measured["probes"].items()]
+                  *head("condition", "individuals", "following 0 / 1 / 2 / 3 colours",
+                        "with an expert following red / green / blue")]
+        lines += [line(f"held out {c}", p["individuals"], " / ".join(map(str, p["counts"])),
+                       " / ".join(f"{p['shares'][n]:.0%}" for n in COLOUR_NAMES)) for c, p in measured["probes"].items()]
     lines += ["", f"Rule: {UNSEEN_RULE} SLE's rows are shown, not judged: it evolves nothing, so every set is new "
               f"to it.", ""]
     return "\n".join(lines + [f"- **{q}: {v['verdict']}.** {v['measured']}" for q, v in measured["verdicts"].items()])
