@@ -42,13 +42,13 @@ bench: $(STAMP)
 gpu-check:
 	PYTHONPATH=. $(PYTHON) -m imrl_jax.gpu_check --out $(OUT)/gpu_check
 
-# The paper's Fig. 3 and claims, both variants of the learning rules (experiments/reproduce.py).
-# Resumable: run the same target again after an interruption.
+# The paper's Fig. 3 and claims under each variant of the learning rules (experiments/reproduction.py), then
+# the report. Resumable: run the same target again after an interruption.
 reproduce: $(STAMP)
-	$(BIN)/python experiments/reproduce.py --scale paper
+	$(BIN)/python -m experiments run reproduction && $(BIN)/python -m experiments report reproduction
 
 reproduce-cpu: $(STAMP)
-	$(BIN)/python experiments/reproduce.py --scale cpu
+	$(BIN)/python -m experiments run reproduction-cpu && $(BIN)/python -m experiments report reproduction-cpu
 
 clean:
 	rm -rf $(VENV) .venv-min $(OUT) .pytest_cache

@@ -5,7 +5,7 @@
 Every stage is a ``python -m imrl_jax.baselines`` command, printed before it runs; a stage
 whose ``summary.json`` exists is skipped, so the same command goes on after an
 interruption. Then ``comparison.png`` puts the baselines beside the learning tests of a
-results directory of ``experiments/reproduce.py`` (``--tests``; the paper scale's when it
+results directory of ``experiments.reproduction`` (``--tests``; the paper scale's when it
 has any, else the cpu scale's), labelled with that directory's scale.
 
 The budgets: 1,000,000 cycles per task (the paper's learning test) on 5 seeds, and
@@ -47,10 +47,12 @@ def draw(out: str, tests_dir: str) -> str:
     """comparison.png: the baselines in ``out`` beside the learning tests of ``tests_dir``."""
     from experiments.document import scale_label
     from experiments.figures import fig_baselines
-    from experiments.loading import load, read_baselines
+    from experiments.loading import read_baselines
+    from experiments.reproduction import TABLES
     from imrl_jax.plotting import save
 
-    data = load(tests_dir) if os.path.isdir(tests_dir) else dict(tests={}, manifest=None)
+    table = next((t for t in TABLES.values() if os.path.abspath(t.out) == os.path.abspath(tests_dir)), None)
+    data = table.data() if table is not None else dict(tests={}, manifest=None)
     title = (f"brax.training baselines beside the paper's architecture\n(its learning tests at the "
              f"{scale_label(data['manifest'])})")
     fig = fig_baselines(read_baselines(out), data["tests"], title if data["tests"] else "brax.training baselines")
@@ -61,7 +63,7 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--out", default=os.path.join(ROOT, RESULTS, "baselines"),
                    help="where the baselines are written")
-    p.add_argument("--tests", default=None, help="a results directory of experiments/reproduce.py to compare with "
+    p.add_argument("--tests", default=None, help="a reproduction's results directory to compare with "
                                                  "(default: paper scale if it has learning tests, else cpu scale)")
     args = p.parse_args(argv)
     started = time.perf_counter()

@@ -7,21 +7,31 @@ import os
 
 import numpy as np
 
-from experiments.study import RESULTS, SCALES
-from experiments.claims import (CLAIMS, LAST_GENERATIONS, PAPER, PLATEAU_FRACTION, RULES, SEEN,
+from experiments.study import SCALES
+from experiments.claims import (CLAIMS, EVOLVED, LAST_GENERATIONS, PAPER, PLATEAU_FRACTION, RULES, SEEN,
                                 _fmt, specialisation_score)
 from experiments.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEPS, FRESH_LIVES, PATH_STEPS
-from experiments.reproduce import (DEFAULT_VARIANTS, LEARNING_EVOLVED, owner, report_paths,  # noqa: F401
-                                   shared, sharers)
+from imrl_jax import conditions
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def figures_of(document: str) -> str:
+    """The folder of a report's figures and summaries: beside it, named after it (docs/reproduction_cpu)."""
+    return os.path.join(os.path.dirname(document), os.path.splitext(os.path.basename(document))[0].lower())
+
+
+def report_name(scale: str) -> str:
+    """The report of a scale: the paper scale's is REPRODUCTION.md, others are labelled (REPRODUCTION_CPU.md)."""
+    return "REPRODUCTION.md" if scale == "paper" else f"REPRODUCTION_{scale.upper()}.md"
 
 
 def other_scale_section(doc_dir: str, scale: str) -> list[str]:
     """A labelled section on each other scale's report found beside this one (``scale``'s): its verdicts, a link."""
     out = []
     for other in [s for s in SCALES if s != scale]:
-        doc, figures = (os.path.basename(p) for p in report_paths(other))
+        doc = report_name(other)
+        figures = os.path.basename(figures_of(doc))
         claims_path = os.path.join(doc_dir, figures, "claims.json")
         if not (os.path.isfile(os.path.join(doc_dir, doc)) and os.path.isfile(claims_path)):
             continue
@@ -35,16 +45,6 @@ def other_scale_section(doc_dir: str, scale: str) -> list[str]:
                       [[n, c["text"], *(f"{c['variants'][v]['verdict']} ({c['variants'][v]['measured']})"
                                         for v in variants)] for n, c in claims["claims"].items()])]
     return out
-
-
-def missing_stages(results: str, manifest: dict | None) -> list[str]:
-    """The evolutions and learning tests of the manifest's plan that are not finished (the report aside)."""
-    from experiments.reproduce import plan, stage_done
-
-    if not manifest or not manifest.get("sizes") or not manifest.get("variants"):
-        return []
-    return [stage.name for stage in plan(manifest["sizes"], results, manifest["variants"], report=False)
-            if not stage_done(stage, manifest["sizes"])]
 
 
 def scale_label(manifest: dict | None) -> str:
@@ -99,20 +99,16 @@ VARIANT_TEXT = {
 }
 
 
-def pipeline_command(results: str, manifest: dict | None) -> str:
-    """The command that (re)makes a results directory."""
-    if not manifest:
-        return "python experiments/reproduce.py (scale unknown)"
-    scale = manifest.get("scale", "?")
-    command = f"python experiments/reproduce.py --scale {scale}"
-    default = os.path.join(ROOT, RESULTS, scale)
-    if os.path.abspath(results) != os.path.abspath(default):
-        command += f" --out {results}"
-    if "variants" in manifest and list(manifest["variants"]) != list(DEFAULT_VARIANTS.get(scale, ())):
-        command += f" --variants {','.join(manifest['variants'])}"
-    target = {"cpu": "make reproduce-cpu", "paper": "make reproduce"}.get(scale)
-    plain = command == f"python experiments/reproduce.py --scale {scale}"
-    return f"`{target}` (`{command}`)" if target and plain else f"`{command}`"
+def pipeline_command(study: str) -> str:
+    """The command that (re)makes a study's runs (the make target of the two committed scales)."""
+    command = f"python -m experiments run {study}"
+    target = {"reproduction": "make reproduce", "reproduction-cpu": "make reproduce-cpu"}.get(study)
+    return f"`{target}` (`{command}`)" if target else f"`{command}`"
+
+
+def sharers(data: dict, variant: str, condition: str) -> list[str]:
+    """The variants whose run of a condition is ``variant``'s (faithful's EE-LS: skills and faithful)."""
+    return [v for v in data["variants"] if data["owners"].get((v, condition)) == variant]
 
 
 def table(header: list[str], rows: list[list]) -> str:
@@ -135,7 +131,7 @@ def specialisation_rows(lives: dict) -> list[dict]:
                         else specialisation_score(shares, steps)[1])
             total = max(int(np.sum(steps)), 1)
             for e, (row, n) in enumerate(zip(shares, steps)):
-                rows.append(dict(variant="both" if shared(condition) else variant, condition=condition, phase=phase,
+                rows.append(dict(variant="both" if not conditions.get(condition).learns else variant, condition=condition, phase=phase,
                                  seed=life["seed"], generation=life["generation"], expert=e + 1, steps=int(n),
                                  control_share=round(int(n) / total, 4),
                                  **{name: (None if not np.isfinite(v) else round(float(v), 4))
@@ -145,7 +141,7 @@ def specialisation_rows(lives: dict) -> list[dict]:
 
 
 def write_document(path: str, figures: str, data: dict, numbers: dict, lives: dict, spec_rows: list[dict],
-                   written: dict, baselines: dict | None = None) -> None:
+                   written: dict, baselines: dict | None = None, study: str = "reproduction") -> None:
     """The markdown report (with a section on the brax baselines when ``baselines`` has any)."""
     from imrl_jax.checkpoint import git_commit
 
@@ -170,15 +166,16 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
     commits = sorted({c for c in [run.get("git_commit") for run in data["evolutions"].values()]
                       + [t["steady"].get("git_commit") for t in data["tests"].values()] if c})
     about = "; ".join(VARIANT_TEXT.get(v, f"`{v}`: a row of docs/CLAIMS.md") for v in data["variants"])
-    out += ["", f"- Command: {pipeline_command(results, manifest)}",
+    owners = data["owners"]
+    out += ["", f"- Command: {pipeline_command(study)}",
             f"- Results made at commit `{(manifest or {}).get('git_commit', 'unknown')}`"
             + (f" (stages ran at {', '.join(f'`{c[:10]}`' for c in commits)})" if len(commits) > 1 else ""),
             f"- Report written at commit `{git_commit()}`" + (" (with uncommitted changes)" if _dirty() else ""),
             f"- Variants: {', '.join(data['variants'])} ({about}). "
             f"EE-ES learns nothing, so its one evolution serves every variant"
-            + "".join(f"; {v}'s {c} is the {owner(v, c)} run (the same rules for it)" for v in data["variants"]
-                      for c in LEARNING_EVOLVED if owner(v, c) != v) + "."]
-    missing = missing_stages(results, manifest)
+            + "".join(f"; {v}'s {c} is the {owners[v, c]} run (the same rules for it)" for v in data["variants"]
+                      for c in EVOLVED if conditions.get(c).learns and owners.get((v, c), v) != v) + "."]
+    missing = data["missing"]
     if missing:
         out += ["", f"**Unfinished run: {len(missing)} stage(s) not done yet** ({', '.join(missing)}). What they "
                     f"would measure is shown as not available; run the command again to go on."]
@@ -210,7 +207,7 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
     expected = ((manifest or {}).get("sizes") or {}).get("generations")
     for variant in data["variants"]:
         for condition, e in numbers[variant]["evolution"].items():
-            life = lives.get((owner(variant, condition), condition))
+            life = lives.get((owners[variant, condition], condition))
             rows.append([variant, condition, f"{e['final_best_mean']:.3f} +- {e['final_best_sd']:.3f}",
                          ", ".join(f"{v:.3f}" for v in e["final_best_per_seed"]), _fmt(e["plateau_generation"]),
                          e["generations"] if e["generations"] == expected else f"{e['generations']} of {expected}",
@@ -273,8 +270,8 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
         out += ["", "(not drawn: no population or best_genomes.npz, or `--no-behaviour`)"]
     for (variant, condition), name in written["paths"].items():
         life = lives[variant, condition]
-        header = (f"{condition} (every variant)" if shared(condition) else
-                  f"{condition}, {' and '.join(sharers(variant, condition, data['variants'])) or variant}")
+        header = (f"{condition} (every variant)" if not conditions.get(condition).learns else
+                  f"{condition}, {' and '.join(sharers(data, variant, condition)) or variant}")
         out += ["", f"**{header}**: stereotypy (share of turns the same way) {_fmt(life['stereotypy'], 2)}, "
                     f"speed {_fmt(life['speed'], 2)} cm/step (at most {life['config'].max_speed:g}), most-used "
                     f"expert in control {life['dominant_expert']:.0%} of the steps", "",

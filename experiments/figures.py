@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from experiments.claims import SEEN
+from experiments.claims import SEEN, TESTED
 from experiments.relive import DRAWN_STEPS
-from experiments.reproduce import TESTED
 from imrl_jax.plotting import style_axis
 
 

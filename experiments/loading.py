@@ -1,4 +1,4 @@
-"""Reading a results directory of experiments/reproduce.py, and keeping its best genomes."""
+"""Reading evolutions, learning tests and baselines as the reports read them, and keeping the best genomes."""
 
 from __future__ import annotations
 
@@ -10,7 +10,6 @@ import os
 import numpy as np
 
 from experiments.claims import NUM_BEST  # genomes kept per seed in best_genomes.npz: those claim 7 probes
-from experiments.reproduce import EVOLVED, TESTED, VARIANTS, evolution_dir, owner, test_dir
 from imrl_jax.config import Config
 from imrl_jax.learning_test import pairs_both_ways, performance_curve, steady_bins
 
@@ -48,13 +47,6 @@ def read_curve(path: str) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     return data["end_step"].astype(int), data["mean"].astype(float), data["sd_over_runs"].astype(float)
 
 
-def variants_of(results: str, manifest: dict | None) -> list[str]:
-    """The variants a results directory holds (the manifest's, else those with a directory)."""
-    if manifest and manifest.get("variants"):
-        return list(manifest["variants"])
-    return [v for v in VARIANTS if os.path.isdir(os.path.join(results, v))]
-
-
 def read_evolution(run_dir: str) -> dict | None:
     """An evolution's history and config, as the report reads them (None before its first generation)."""
     history = read_history(os.path.join(run_dir, "history.csv"))
@@ -85,23 +77,6 @@ def read_test(out_dir: str) -> dict | None:
     return test
 
 
-def load(results: str) -> dict:
-    """Everything the report reads from a results directory (missing parts are left out)."""
-    manifest = read_json(os.path.join(results, "manifest.json"))
-    data = dict(results=results, manifest=manifest, variants=variants_of(results, manifest), evolutions={},
-                tests={})
-    for variant in data["variants"]:
-        for condition in EVOLVED:
-            run = read_evolution(evolution_dir(results, variant, condition))
-            if run is not None:
-                data["evolutions"][variant, condition] = run
-        for condition in TESTED:
-            test = read_test(test_dir(results, variant, condition))
-            if test is not None:
-                data["tests"][variant, condition] = test
-    return data
-
-
 def _key(variant: str, condition: str, field: str) -> str:
     return f"{variant}__{condition}__{field}"
 
@@ -121,9 +96,10 @@ def best_of_population(path: str, num_best: int = NUM_BEST) -> dict | None:
 def update_best_genomes(data: dict, num_best: int = NUM_BEST) -> dict:
     """The best genomes of every evolution, from final_population.npz where present (else from best_genomes.npz).
 
-    Returns ``{(variant, condition): dict(genomes (S, B, G), fitness (S, B), index (S, B),
-    seeds (S,), generations, config)}`` for the evolutions' own directories (EE-ES under ``paper``)
-    and rewrites RESULTS_DIR/best_genomes.npz when anything came from a population.
+    ``data``: a reproduction table's (``ReproductionTable.data``). Returns ``{(variant, condition): dict(genomes
+    (S, B, G), fitness (S, B), index (S, B), seeds (S,), generations, config)}`` keyed by the variant whose folder
+    holds each run (EE-ES under ``paper``) and rewrites the table's best_genomes.npz when anything came from a
+    population.
     """
     path = os.path.join(data["results"], "best_genomes.npz")
     stored = {}
@@ -132,7 +108,7 @@ def update_best_genomes(data: dict, num_best: int = NUM_BEST) -> dict:
             stored = {name: saved[name] for name in saved.files}
     found, fresh = {}, False
     for (variant, condition), run in data["evolutions"].items():
-        shared = owner(variant, condition)
+        shared = data["owners"][variant, condition]
         if (shared, condition) in found:
             continue
         population = os.path.join(run["dir"], "final_population.npz")

@@ -1,55 +1,20 @@
-"""The whole reproduction of the paper's Fig. 3, resumable: evolutions, learning tests, report.
+"""The resumable stage runner every study shares: stages, their commands, costs, progress and published checkpoints.
 
-    python experiments/reproduce.py --scale paper   # make reproduce: the paper's sizes
-    python experiments/reproduce.py --scale cpu     # make reproduce-cpu: 1 h 44 min on 2 CPU cores (measured)
-    python experiments/reproduce.py --scale paper --kernel pallas   # on a GPU: the step as one kernel
-
-Variants of the learning rules (presets of ``imrl_jax.config``), run one after the other:
-``skills`` (the rules docs/CHILDHOOD.md chose: experts learn one colour each in childhood and
-a selector composes them; the paper scale's first variant), ``paper`` (the rules as written),
-``faithful`` (the rules as written but for the adult selector's unstated values, SLE's noise
-over the whole test: the reading under which the most of the paper's claims hold,
-docs/CLAIMS.md; the paper scale's third variant, its EE-LS ``skills``') and ``extension``
-(MODEL.md's learning extensions at the values found by ``experiments/selector_sweep.py``; the
-cpu scale's second variant). For each variant: the
-three evolved conditions, then the learning tests of LE-LS, EE-LS, EE-ES and SLE (EE-ES
-learns nothing, so its evolution and its test are the same under every variant: each is run
-once, under ``paper``, where the first variant needs it). So the first variant's Fig. 3 is
-whole before the second's evolutions start. A row of the claims map (docs/CLAIMS.md,
-``experiments.rule_sets.RULE_SETS``) is a variant too: ``--variants skills,paper,ROW`` runs it
-at the scale's sizes with its preset and overrides (SLE's noise schedule included), its EE-LS
-shared with the preset's whose EE-LS it shares in the map. Then
-``python -m experiments.report`` writes the report and its figures (docs/REPRODUCTION.md at the
-paper scale, docs/REPRODUCTION_CPU.md at the cpu scale).
-
-Every stage is a command of the package, printed before it runs, its progress line shown
-beside the whole pipeline's (stage i of N, elapsed time, and an ETA from the stages' costs in
-lane-steps at the rate measured so far, or an assumed one before any stage is timed). A
-finished stage is skipped; an interrupted evolution resumes from its last checkpoint; an
-interrupted learning test goes on from its first unfinished run (the runs it finished are
-kept in its ``partial/`` folder, committed with the results). Run the same command again to
-go on after an interruption. The newest checkpoint of every evolution, unfinished or
-finished, is copied into its run directory's ``resume_checkpoint/`` (``checkpoints/`` is
-not committed), so that a fresh clone with the results committed goes on from there, or
-extends a finished run (``evolve --resume --generations 150``).
-
-Scales (what ``cpu`` shrinks, and by how much, is the whole difference):
-
-| | paper | cpu |
-|---|---|---|
-| seeds (runs) | 10 | 5 |
-| generations | 100 | 40 |
-| population, parents | 50, 10 | 50, 10 |
-| childhood steps | 150,000 | 30,000 (1/5) |
-| steps per adult task | 100,000 | 20,000 (1/5) |
-| learning test: best x tests | 10 x 10 | 10 x 2 |
-| learning test: cycles per task | 1,000,000 | 200,000 (1/5) |
-| steady state: last cycles | 100,000 | 20,000 (1/5) |
+Every stage is a command of the package, printed before it runs, its progress line shown beside
+the whole pipeline's (stage i of N, elapsed time, and an ETA from the stages' costs in lane-steps
+at the rate measured so far, or an assumed one before any stage is timed). A finished stage is
+skipped; an interrupted evolution resumes from its last checkpoint; an interrupted learning test
+goes on from its first unfinished run (the runs it finished are kept in its ``partial/`` folder,
+committed with the results). Run the same command again to go on after an interruption. The newest
+checkpoint of every evolution, unfinished or finished, is copied into its run directory's
+``resume_checkpoint/`` (``checkpoints/`` is not committed), so that a fresh clone with the results
+committed goes on from there, or extends a finished run (``evolve --resume --generations 150``).
+The studies (``python -m experiments list|run|report NAME``) plan their stages as tables over
+shared runs (``experiments.table``); the paper's Fig. 3 is ``experiments.reproduction``.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import shutil
@@ -60,76 +25,30 @@ from typing import NamedTuple
 
 from imrl_jax import conditions  # the condition table (no JAX)
 from imrl_jax.rundir import recorded_points, saved_steps
-from experiments.rule_sets import BY_NAME
-from experiments.study import RESULTS, SCALES, Study
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-VARIANTS = ("skills", "paper", "extension", "faithful")
-#: The variants a scale runs unless ``--variants`` says otherwise.
-DEFAULT_VARIANTS = {"paper": ("skills", "paper", "faithful"), "cpu": ("paper", "extension"),
-                    "tiny": ("paper", "extension")}
 #: The paper's conditions (rows of imrl_jax.conditions): those evolved, and those learning-tested.
 EVOLVED = conditions.PAPER_EVOLVED
 TESTED = conditions.PAPER
-#: The evolved conditions whose experts learn (LE-LS, EE-LS): probed for claim 7, shared between variants.
-LEARNING_EVOLVED = tuple(c for c in EVOLVED if conditions.get(c).learns)
 
 
-class Variant(NamedTuple):
-    """How a variant's runs are made: a preset, overrides, SLE's noise horizon, and the runs it shares."""
-
-    preset: str
-    sets: tuple[str, ...] = ()
-    sle_noise_steps: int | None = None  # None: one task's length (the pipeline's); 0: the whole test
-    shares: tuple[tuple[str, str], ...] = ()  # (condition, the variant whose run of it this one's is)
-
-
-#: The preset variants that are not plain presets: ``faithful`` is the claims map's
-#: ``paper-selector-sle-test`` at full scale (docs/CLAIMS.md): SLE's noise over the whole test, and
-#: skills' EE-LS (EE-LS reads only the adult selector's values, which the two presets share).
-PRESET_VARIANTS = {"faithful": Variant("faithful", sle_noise_steps=0, shares=(("EE-LS", "skills"),))}
-
-
-def variant_spec(name: str) -> Variant:
-    """A variant by name: a preset of :data:`VARIANTS`, or a row of the claims map (its EE-LS shared as there).
-
-    Raises ValueError for an unknown name."""
-    if name in VARIANTS:
-        return PRESET_VARIANTS.get(name, Variant(name))
-    rule = BY_NAME.get(name)
-    if rule is None:
-        raise ValueError(f"unknown variant {name!r} (choose from {', '.join(VARIANTS)} or a row of docs/CLAIMS.md: "
-                         f"{', '.join(n for n in BY_NAME if n not in VARIANTS)})")
-    shares = (("EE-LS", rule.ee_ls),) if rule.ee_ls in VARIANTS else ()
-    return Variant(rule.preset, rule.sets, rule.sle_noise_steps, shares)
-
-
+# The committed layout of the reproduction's results (``results/SCALE/VARIANT/{evolve,test}/CONDITION``), which
+# the search, future-work and timescale studies still read by path; the reproduction finds its runs by key.
 def owner(variant: str, condition: str) -> str:
-    """The variant whose folder holds a condition's runs: one that learns nothing (EE-ES) is the same under
-    every variant, so every variant shares paper's; a claims-map row shares its EE-LS as the map does."""
-    if not conditions.get(condition).learns:
+    """The variant whose folder holds a condition's runs: EE-ES learns nothing, so its runs are paper's for every
+    variant; faithful differs from skills in childhood alone, so an evolved condition without one is skills'."""
+    spec = conditions.get(condition)
+    if not spec.learns:
         return "paper"
-    return dict(variant_spec(variant).shares).get(condition, variant)
-
-
-def sharers(variant: str, condition: str, variants) -> list[str]:
-    """Those of ``variants`` whose runs of a condition are ``variant``'s (faithful's EE-LS: skills and faithful)."""
-    return [v for v in variants if owner(v, condition) == variant]
-
-
-def shared(condition: str) -> bool:
-    """Whether a condition's runs are one for every variant (it learns nothing: EE-ES)."""
-    return not conditions.get(condition).learns
+    return "skills" if variant == "faithful" and spec.evolved and not spec.has_childhood else variant
 
 
 def evolution_dir(out: str, variant: str, condition: str) -> str:
-    """Where a variant's evolution of a condition lives (EE-ES: one run shared by every variant)."""
+    """Where the reproduction's evolution of a condition under a variant lies (see :func:`owner`)."""
     return os.path.join(out, owner(variant, condition), "evolve", condition)
 
 
 def test_dir(out: str, variant: str, condition: str) -> str:
-    """Where a variant's learning test of a condition lives (EE-ES: one test shared by every variant)."""
+    """Where the reproduction's learning test of a condition under a variant lies (see :func:`owner`)."""
     return os.path.join(out, owner(variant, condition), "test", condition)
 
 
@@ -217,30 +136,6 @@ def test_cost(scale: dict, condition: str, *, num_tasks: int = 6) -> float:
                  * life_steps(scale, condition, scale["test_steps"], num_tasks=num_tasks))
 
 
-def plan(scale: dict, out: str, variants, report: bool = True) -> list[Stage]:
-    """Every stage in order: per variant its evolutions then its learning tests (EE-ES's once, under paper); the report."""
-    stages, names = [], set()
-    for variant in variants:
-        for condition in EVOLVED:
-            name = f"evolve {owner(variant, condition)} {condition}"
-            cost = evolution_cost(scale, condition)
-            if name not in names:
-                names.add(name)
-                stages.append(Stage(name, "evolve", owner(variant, condition), condition,
-                                    evolution_dir(out, variant, condition), float(cost)))
-        for condition in TESTED:
-            name = f"learning test {owner(variant, condition)} {condition}"
-            cost = test_cost(scale, condition)
-            if name not in names:
-                names.add(name)
-                stages.append(Stage(name, "test", owner(variant, condition), condition,
-                                    test_dir(out, variant, condition), float(cost)))
-    if report:  # the probes of claim 7: a childhood for each best LE-LS individual
-        cost = len(variants) * scale["seeds"] * scale["best"] * scale["childhood_steps"]
-        stages.append(Stage("report", "report", "", "", out, float(cost)))
-    return stages
-
-
 def sweep_points(run_dir: str) -> list[str] | None:
     """The point directories of a sweep (``evolve --sweep``), or None if ``run_dir`` is not a sweep."""
     points = recorded_points(run_dir)
@@ -275,7 +170,7 @@ def stage_done(stage: Stage, scale: dict) -> bool:
     """A finished evolution (all generations in its history), learning test (its steady.json), measurement (its
     result.json) or baseline (its summary.json); the report when it ran after every stage its manifest records
     now, each as recorded then (a stage run since, or run again, makes it due; after a change to the report
-    itself, ``python -m experiments.report RESULTS_DIR`` writes it again)."""
+    itself, the study's report writes it again)."""
     if stage.kind == "evolve":
         return generations_done(stage.out_dir) >= (stage.generations or scale["generations"])
     if stage.kind == "test":  # a sweep's test (of every point) writes sweep_tests.json when all are done
@@ -461,23 +356,6 @@ def record_stage(manifest: dict, manifest_path: str, stage: Stage, command: list
         json.dump(manifest, f, indent=2)
 
 
-def stage_command(stage: Stage, scale: dict, out: str, kernel: str,
-                  report_paths: tuple[str, str] | None = None) -> tuple[list[str], dict | None]:
-    """The command line of a stage and its environment (None: this one's); ``report_paths``: where the report
-    writes its document and figures (None: the repository's docs/)."""
-    spec = variant_spec(stage.variant) if stage.kind in ("evolve", "test") else None
-    if stage.kind == "evolve":
-        return evolve_command(scale, spec.preset, stage.condition, stage.out_dir, kernel, sets=spec.sets), None
-    if stage.kind == "test":
-        return test_command(scale, spec.preset, stage.condition, evolution_dir(out, stage.variant, stage.condition),
-                            stage.out_dir, kernel, sets=spec.sets, sle_noise_steps=spec.sle_noise_steps), None
-    # The report is a module of the experiments package: the repository root goes on its path.
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    path = os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)
-    where = ["--doc", report_paths[0], "--figures", report_paths[1]] if report_paths else []
-    return [sys.executable, "-m", "experiments.report", out, *where], {**os.environ, "PYTHONPATH": path}
-
-
 def run_stages(stages: list[Stage], scale: dict, manifest: dict, manifest_path: str, command_for, jobs: int = 1,
                executor=None) -> int:
     """The resumable stage runner every study shares: skip finished stages, resume the others, one after another
@@ -542,77 +420,3 @@ def load_manifest(out: str, **fields) -> tuple[dict, str]:
 
     manifest["git_commit"] = git_commit()
     return manifest, manifest_path
-
-
-def parser() -> argparse.ArgumentParser:
-    """The command line's options."""
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--scale", choices=sorted(SCALES), default="cpu")
-    p.add_argument("--out", help="results directory (default: experiments/results/SCALE); given, the report goes in it "
-                                 "too (REPRODUCTION_SCALE.md, reproduction_SCALE/), not in docs/")
-    p.add_argument("--variants", help="comma-separated, in the order to run: skills, paper, extension, faithful "
-                   "or a row of docs/CLAIMS.md (default: skills,paper,faithful at the paper scale, paper,extension "
-                   "at the cpu scale)")
-    p.add_argument("--no-report", action="store_true", help="skip the report (python -m experiments.report)")
-    p.add_argument("--kernel", choices=("xla", "pallas"), default="xla",
-                   help="the step kernel (Config.step_kernel): pallas runs each bin of steps as one GPU kernel")
-    from experiments.executor import add_options
-
-    add_options(p)
-    return p
-
-
-def _chosen(args) -> tuple[dict, str, list[str]]:
-    """A parsed command line's scale, results directory and variants."""
-    out = args.out or os.path.join(RESULTS, args.scale)
-    return SCALES[args.scale], out, args.variants.split(",") if args.variants else list(DEFAULT_VARIANTS[args.scale])
-
-
-def stages_for(argv) -> tuple[list[Stage], dict]:
-    """The stages the command line ``argv`` runs, and their scale (for ``python -m experiments list``)."""
-    args = parser().parse_args(argv)
-    scale, out, variants = _chosen(args)
-    return plan(scale, out, variants, report=not args.no_report), scale
-
-
-def main(argv=None) -> int:
-    args = parser().parse_args(argv)
-    scale, out, variants = _chosen(args)
-    try:
-        for name in variants:
-            variant_spec(name)
-    except ValueError as error:
-        print(f"error: --variants: {error}", file=sys.stderr)
-        return 2
-    manifest, manifest_path = load_manifest(out, scale=args.scale, sizes=scale, variants=variants, kernel=args.kernel)
-    stages = plan(scale, out, variants, report=not args.no_report)
-    from experiments.executor import from_options
-
-    where = out_report_paths(args.scale, out) if args.out else None  # a command given --out writes nowhere else
-    return run_stages(stages, scale, manifest, manifest_path,
-                      lambda stage: stage_command(stage, scale, out, args.kernel, where), **from_options(args, out))
-
-
-def report_paths(scale: str) -> tuple[str, str]:
-    """The report and figures folder of a scale: the paper scale's is docs/REPRODUCTION.md, others are labelled."""
-    if scale == "paper":
-        return os.path.join(ROOT, "docs", "REPRODUCTION.md"), os.path.join(ROOT, "docs", "reproduction")
-    return (os.path.join(ROOT, "docs", f"REPRODUCTION_{scale.upper()}.md"),
-            os.path.join(ROOT, "docs", f"reproduction_{scale}"))
-
-
-def out_report_paths(scale: str, out: str) -> tuple[str, str]:
-    """The report's document and figures folder inside ``out`` (their names in docs/, for a results directory of
-    one's own)."""
-    return tuple(os.path.join(out, os.path.basename(path)) for path in report_paths(scale))
-
-
-#: The studies of this module (python -m experiments finds them).
-STUDIES = (Study("reproduction", "reproduce", "docs/REPRODUCTION.md", 4, ("--scale", "paper"),
-                 ("experiments/results/paper",), "report"),
-           Study("reproduction-cpu", "reproduce", "docs/REPRODUCTION_CPU.md", 8, ("--scale", "cpu"),
-                 ("experiments/results/cpu",), "report"))
-
-
-if __name__ == "__main__":
-    sys.exit(main())

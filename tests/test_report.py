@@ -1,4 +1,4 @@
-"""The report's claim rules on hand-made numbers (experiments.claims); the report of a made-up results directory."""
+"""The report's claim rules on hand-made numbers (experiments.claims); the report of a made-up reproduction's runs."""
 
 import json
 import math
@@ -12,7 +12,9 @@ import pytest
 from experiments import claims
 from experiments import reproduce
 from experiments.claims import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY
-from experiments.report import main, share_probes, shared_once
+from experiments.report import run, share_probes, shared_once
+from experiments.reproduction import ReproductionTable, variant_rows
+from experiments.table import evolution_spec
 
 
 def test_measures():
@@ -138,57 +140,72 @@ def test_claim_7_specialisation():
     assert claims.claim_specialisation({}, composes)["verdict"] == NOT_AVAILABLE
 
 
-def _write_results(root, generations=8, seeds=(0, 1, 2), variants=("paper", "extension")):
-    """A results directory in reproduce.py's layout with made-up numbers (no population: no behaviour)."""
+#: The made-up runs' sizes: 3 seeds x 8 generations, learning tests of 2 runs x 2 best x 1 test.
+SIZES = dict(seeds=3, generations=8, childhood_steps=30_000, task_steps=20_000, bins=20, best=2, tests=1,
+             test_steps=1000, test_bins=10, steady_steps=200)
+
+
+def _write_results(root, doc, generations=8, variants=("paper", "extension"), scale="cpu"):
+    """A reproduction table over made-up runs in the committed layout (``reproduce.evolution_dir``), found there by
+    their keys; its document ``doc`` (no population: no behaviour)."""
+    rows = sum((variant_rows(v, 0 if v == "faithful" else None) for v in variants), ())
+    table = ReproductionTable(f"made-up-{scale}", str(doc), 0, rows=rows, scale=SIZES, out=str(root),
+                              results=str(root), scale_name=scale, whole_test=("faithful",))
     plateau = {"LE-LS": 1, "EE-LS": 6, "EE-ES": 3}
     final = {"LE-LS": 0.5, "EE-LS": 0.7, "EE-ES": 0.45}
-    for variant in variants:
-        for condition in reproduce.EVOLVED:
-            run_dir = reproduce.evolution_dir(str(root), variant, condition)
-            os.makedirs(run_dir, exist_ok=True)
-            rows = ["generation,seed,best,mean,std," + ",".join(f"best_task{i}" for i in range(1, 7))]
-            for g in range(generations):
-                for s in seeds:
-                    best = final[condition] * min(1.0, (g + 1) / (plateau[condition] + 1))
-                    best += (0.01 if condition == "LE-LS" else 0.05) * (s - 1)
-                    rows.append(f"{g},{s},{best:.6f},{best / 2:.6f},0.1," + ",".join(["0.5"] * 6))
-            with open(os.path.join(run_dir, "history.csv"), "w") as f:
-                f.write("\n".join(rows) + "\n")
-            with open(os.path.join(run_dir, "config.json"), "w") as f:
-                json.dump({"seeds": list(seeds), "git_commit": "abc", "config": {"population_size": 50,
-                                                                                 "num_parents": 10}}, f)
-        steady = {"EE-LS": 0.8, "SLE": 0.7, "LE-LS": 0.5, "EE-ES": 0.3}
-        rise = {"EE-LS": 2, "LE-LS": 2, "SLE": 8, "EE-ES": 0}
-        for condition in reproduce.TESTED:
-            out = reproduce.test_dir(str(root), variant, condition)
-            os.makedirs(out, exist_ok=True)
-            level = steady[condition]
-            curve = [level * min(1.0, (b + 1) / (rise[condition] + 1)) for b in range(10)]
-            lines = ["bin,end_step,mean,sd_over_runs,run_0,run_1"]
-            lines += [f"{b},{(b + 1) * 100},{v:.5f},0.01,{v:.5f},{v:.5f}" for b, v in enumerate(curve)]
-            with open(os.path.join(out, "curve.csv"), "w") as f:
-                f.write("\n".join(lines) + "\n")
-            with open(os.path.join(out, "steady.json"), "w") as f:
-                json.dump(dict(steady_mean=level, steady_sd=0.02, steady_best_run=level + 0.02, best_run=1,
-                               steady_per_run=[level - 0.02, level + 0.02], steady_per_task=[level] * 6,
-                               whole_test_mean=float(np.mean(curve)), num_runs=2, num_best=2, num_tests=1,
-                               task_steps=1000, steady_steps=200, num_bins=10, git_commit="abc",
-                               config=dict(sle_noise_steps=100 if condition == "SLE" and variant != "faithful"
-                                           else 0)), f)
-    sizes = dict(seeds=len(seeds), generations=generations, childhood_steps=30_000, task_steps=20_000, bins=20,
-                 best=2, tests=1, test_steps=1000, test_bins=10, steady_steps=200)
+    for row in (r for r in rows if r.evolved):
+        run_dir = reproduce.evolution_dir(str(root), row.preset, row.condition)
+        if os.path.isdir(run_dir):  # a run two variants share
+            continue
+        spec = evolution_spec(row, SIZES)
+        os.makedirs(run_dir)
+        lines = ["generation,seed,best,mean,std," + ",".join(f"best_task{i}" for i in range(1, 7))]
+        for g in range(generations):
+            for s in spec.seeds:
+                best = final[row.condition] * min(1.0, (g + 1) / (plateau[row.condition] + 1))
+                best += (0.01 if row.condition == "LE-LS" else 0.05) * (s - 1)
+                lines.append(f"{g},{s},{best:.6f},{best / 2:.6f},0.1," + ",".join(["0.5"] * 6))
+        with open(os.path.join(run_dir, "history.csv"), "w") as f:
+            f.write("\n".join(lines) + "\n")
+        with open(os.path.join(run_dir, "config.json"), "w") as f:
+            json.dump({"seeds": list(spec.seeds), "git_commit": "abc", "config": spec.config.to_dict()}, f)
+    steady = {"EE-LS": 0.8, "SLE": 0.7, "LE-LS": 0.5, "EE-ES": 0.3}
+    rise = {"EE-LS": 2, "LE-LS": 2, "SLE": 8, "EE-ES": 0}
+    for row, out in zip(rows, table.tests().values()):
+        if os.path.isdir(out):
+            continue
+        os.makedirs(out)
+        level = steady[row.condition]
+        curve = [level * min(1.0, (b + 1) / (rise[row.condition] + 1)) for b in range(10)]
+        lines = ["bin,end_step,mean,sd_over_runs,run_0,run_1"]
+        lines += [f"{b},{(b + 1) * 100},{v:.5f},0.01,{v:.5f},{v:.5f}" for b, v in enumerate(curve)]
+        with open(os.path.join(out, "curve.csv"), "w") as f:
+            f.write("\n".join(lines) + "\n")
+        with open(os.path.join(out, "steady.json"), "w") as f:  # SLE's config: its noise horizon alone
+            json.dump(dict(steady_mean=level, steady_sd=0.02, steady_best_run=level + 0.02, best_run=1,
+                           steady_per_run=[level - 0.02, level + 0.02], steady_per_task=[level] * 6,
+                           whole_test_mean=float(np.mean(curve)), num_runs=2, num_best=2, num_tests=1,
+                           task_steps=1000, steady_steps=200, num_bins=10, git_commit="abc",
+                           config=dict(sle_noise_steps=100 if row.preset != "faithful" else 0)), f)
     with open(os.path.join(root, "manifest.json"), "w") as f:
-        json.dump(dict(scale="cpu", sizes=sizes, variants=list(variants),
-                       stages={"evolve paper LE-LS": {"command": "python -m imrl_jax.evolve ...", "seconds": 1.0}},
+        json.dump(dict(stages={"evolve paper LE-LS": {"command": "python -m imrl_jax.evolve ...", "seconds": 1.0}},
                        git_commit="abc"), f)
+    return table
+
+
+def _report(table, baselines=None):
+    """The report of a table without reliving anyone; its figures folder."""
+    run(table, behaviour=False, baselines_dir=str(baselines or os.path.join(os.path.dirname(table.document), "none")))
+    return os.path.join(os.path.dirname(table.document), os.path.splitext(os.path.basename(table.document))[0].lower())
 
 
 def test_report_of_a_fabricated_results_directory(tmp_path):
-    results, doc, figures = tmp_path / "results", tmp_path / "docs" / "REPRODUCTION.md", tmp_path / "docs" / "fig"
-    _write_results(results)
+    results, doc = tmp_path / "results", tmp_path / "docs" / "REPRODUCTION.md"
+    table = _write_results(results, doc)
+    assert table.data()["missing"] == [] and len(table.all_stages()[0]) == 5 + 7  # every made-up run found by key
     (results / "discussion.md").write_text("Hand-written words.\n")
-    assert main([str(results), "--doc", str(doc), "--figures", str(figures), "--no-behaviour",
-                 "--baselines", str(tmp_path / "no_baselines")]) == 0
+    figures = tmp_path / "docs" / "reproduction"
+    assert _report(table) == str(figures)
     for name in ("fig1_arena.png", "fig3a_paper.png", "fig3a_extension.png", "fig3b_paper.png", "fig3c.png",
                  "fig3_paper.png", "fig3_extension.png",
                  "summary.json", "claims.json", "specialisation.csv"):
@@ -203,23 +220,26 @@ def test_report_of_a_fabricated_results_directory(tmp_path):
     summary = json.loads((figures / "summary.json").read_text())
     assert summary["evolution"]["paper"]["LE-LS"]["final_best_mean"] == pytest.approx(0.5)
     text = doc.read_text()
-    assert "cpu scale" in text and "](fig/fig3a_paper.png)" in text and "](fig/fig3_paper.png)" in text
+    assert "cpu scale" in text and "](reproduction/fig3a_paper.png)" in text and "](reproduction/fig3_paper.png)" in text
     assert "## Discussion\n\nHand-written words." in text
-    assert "`make reproduce-cpu`" not in text  # the results are not in the default directory
+    assert "- Command: `python -m experiments run made-up-cpu`\n" in text  # not a committed study: no make target
+    assert "EE-ES learns nothing, so its one evolution serves every variant." in text
     assert "brax" not in text and not (figures / "baselines.png").exists()  # no baselines: no section
 
 
 def test_the_faithful_variant_has_claim_5_measured_over_the_whole_test(tmp_path):
     """Its SLE explores the whole test by definition: claim 5 is measured at the test's length, not n/a."""
-    results, doc, figures = tmp_path / "results", tmp_path / "docs" / "REPRODUCTION.md", tmp_path / "docs" / "fig"
-    _write_results(results, variants=("paper", "faithful"))
-    assert main([str(results), "--doc", str(doc), "--figures", str(figures), "--no-behaviour",
-                 "--baselines", str(tmp_path / "no_baselines")]) == 0
+    results, doc = tmp_path / "results", tmp_path / "docs" / "REPRODUCTION.md"
+    table = _write_results(results, doc, variants=("paper", "faithful"))
+    figures = tmp_path / "docs" / "reproduction"
+    _report(table)
     claim5 = json.loads((figures / "claims.json").read_text())["claims"]["5"]["variants"]
     # paper's SLE anneals over 100 cycles: measured; faithful's over the whole test: measured too, at its length
     assert claim5["paper"]["verdict"] == PARTLY and claim5["faithful"]["verdict"] == PARTLY
     assert "the whole test of 1,000 cycles, the paper's length" in claim5["faithful"]["measured"]
-    assert os.path.isdir(results / "skills" / "evolve" / "EE-LS")  # faithful's EE-LS is skills'
+    # faithful's EE-LS lives skills' lives: its key finds the run in skills' folder
+    assert table.evolutions()["faithful EE-LS"] == str(results / "skills" / "evolve" / "EE-LS")
+    assert table.data()["owners"]["faithful", "EE-LS"] == "skills"
     assert "`faithful`: the learning rules as written but for the extension's selector" in doc.read_text()
     assert "faithful's EE-LS is the skills run (the same rules for it)" in doc.read_text()
 
@@ -227,34 +247,30 @@ def test_the_faithful_variant_has_claim_5_measured_over_the_whole_test(tmp_path)
 def test_a_variant_that_shares_a_run_shares_its_probes():
     """faithful's EE-LS is skills': claim 7 reads skills' EE-LS probes for it; its own LE-LS keeps its own."""
     probes = {("skills", "EE-LS"): [3, 2], ("skills", "LE-LS"): [1], ("faithful", "LE-LS"): [2, 2]}
-    shared = share_probes(probes, ("skills", "paper", "faithful"))
+    owners = {(v, c): v for v in ("skills", "paper", "faithful") for c in ("LE-LS", "EE-LS")}
+    shared = share_probes(probes, dict(owners={**owners, ("faithful", "EE-LS"): "skills"}))
     assert shared[("faithful", "EE-LS")] == [3, 2] and shared[("faithful", "LE-LS")] == [2, 2]
     assert ("paper", "EE-LS") not in shared and probes.keys() <= shared.keys() and len(shared) == 4
 
 
 def test_paper_and_cpu_reports_each_name_the_other_and_an_unfinished_run_says_so(tmp_path):
     """Each scale's report has its own file; the other scale's verdicts are a labelled section; missing stages are named."""
-    from experiments.document import report_paths
+    from experiments.document import figures_of, report_name
+    from experiments.reproduction import TABLES
 
-    assert report_paths("paper")[0].endswith(os.path.join("docs", "REPRODUCTION.md"))
-    assert report_paths("cpu") == (report_paths("paper")[0].replace(".md", "_CPU.md"),
-                                   report_paths("paper")[1] + "_cpu")
+    assert [report_name(s) for s in ("paper", "cpu")] == ["REPRODUCTION.md", "REPRODUCTION_CPU.md"]
+    assert [t.document for t in TABLES.values()] == ["docs/REPRODUCTION.md", "docs/REPRODUCTION_CPU.md"]
+    assert figures_of("docs/REPRODUCTION_CPU.md") == os.path.join("docs", "reproduction_cpu")
     docs = tmp_path / "docs"
-    cpu, paper = tmp_path / "cpu", tmp_path / "paper"
-    _write_results(cpu)
-    _write_results(paper)
-    manifest = json.loads((paper / "manifest.json").read_text())
-    (paper / "manifest.json").write_text(json.dumps({**manifest, "scale": "paper"}))
-    os.remove(reproduce.test_dir(str(paper), "extension", "SLE") + "/steady.json")
-    history = paper / "paper" / "evolve" / "EE-ES" / "history.csv"  # EE-ES stopped after 5 of 8 generations
+    cpu = _write_results(tmp_path / "cpu", docs / "REPRODUCTION_CPU.md")
+    paper = _write_results(tmp_path / "paper", docs / "REPRODUCTION.md", scale="paper")
+    os.remove(os.path.join(paper.tests()["extension SLE"], "steady.json"))
+    history = tmp_path / "paper" / "paper" / "evolve" / "EE-ES" / "history.csv"  # EE-ES stopped after 5 of 8
     history.write_text("".join(history.read_text().splitlines(keepends=True)[:1 + 5 * 3]))
-    common = ["--no-behaviour", "--baselines", str(tmp_path / "no_baselines")]
-    assert main([str(cpu), "--doc", str(docs / "REPRODUCTION_CPU.md"), "--figures", str(docs / "reproduction_cpu"),
-                 *common]) == 0
+    _report(cpu)
     assert "Unfinished run" not in (docs / "REPRODUCTION_CPU.md").read_text()
     assert "(REPRODUCTION.md)" not in (docs / "REPRODUCTION_CPU.md").read_text()  # no paper-scale report yet
-    assert main([str(paper), "--doc", str(docs / "REPRODUCTION.md"), "--figures", str(docs / "reproduction"),
-                 *common]) == 0
+    _report(paper)
     text = (docs / "REPRODUCTION.md").read_text()
     assert "**Unfinished run: 2 stage(s) not done yet** (evolve paper EE-ES, learning test extension SLE)" in text
     assert "| paper | EE-ES | " in text and "| 5 of 8 |" in text  # drawn and tabled, labelled unfinished
@@ -269,8 +285,7 @@ def test_paper_and_cpu_reports_each_name_the_other_and_an_unfinished_run_says_so
     assert f"| 1 | {cpu_claims['1']['text']} | {first['paper']['verdict']} ({first['paper']['measured']}) |" in section
     assert text.startswith("# Reproduction of Schembri, Mirolli & Baldassarre (2007): Fig. 3 and the seven claims\n")
     # The reduced report, written again, links the paper-scale one and says it is reduced; it repeats no verdicts.
-    assert main([str(cpu), "--doc", str(docs / "REPRODUCTION_CPU.md"), "--figures", str(docs / "reproduction_cpu"),
-                 *common]) == 0
+    _report(cpu)
     text = (docs / "REPRODUCTION_CPU.md").read_text()
     assert text.startswith("# Reproduction of Schembri, Mirolli & Baldassarre (2007): Fig. 3 and the seven claims, "
                            "at the cpu scale (reduced)\n")
@@ -297,15 +312,15 @@ def _write_baselines(root):
 
 
 def test_report_shows_the_baselines_beside_the_learning_tests(tmp_path):
-    results, doc, figures = tmp_path / "results", tmp_path / "docs" / "REPRODUCTION.md", tmp_path / "docs" / "fig"
-    _write_results(results)
+    doc = tmp_path / "docs" / "REPRODUCTION.md"
+    table = _write_results(tmp_path / "results", doc)
     _write_baselines(tmp_path / "baselines")
     (tmp_path / "baselines" / "unfinished").mkdir()  # no summary.json: left out
-    assert main([str(results), "--doc", str(doc), "--figures", str(figures), "--no-behaviour",
-                 "--baselines", str(tmp_path / "baselines")]) == 0
+    figures = tmp_path / "docs" / "reproduction"
+    _report(table, tmp_path / "baselines")
     assert (figures / "baselines.png").is_file()
     text = doc.read_text()
-    assert "## Modern deep RL baselines (brax.training)" in text and "](fig/baselines.png)" in text
+    assert "## Modern deep RL baselines (brax.training)" in text and "](reproduction/baselines.png)" in text
     # mean over seeds of each seed's mean over tasks: (0.5 + 0.7) / 2, sd 0.1; at the tests' 1,000 cycles,
     # interpolated between 0 (at 0 cycles) and 0.15 (at 1,024): 0.146; the mode's performance 0.4
     assert "| PPO, 1M cycles (2 seeds) | 0.600 +- 0.100 | 0.60, 0.60, 0.60, 0.60, 0.60, 0.60 | 0.146 | 0.400 |" in text
@@ -448,8 +463,11 @@ def test_reproduction_fresh_reads_the_reports_lives():
 
 def test_runs_shared_by_variants_are_drawn_once():
     """faithful's EE-LS is skills' and EE-ES is every variant's: each appears once, labelled by its sharers."""
-    runs = {(v, c): f"{v}/{c}" for v in ("skills", "paper", "faithful") for c in ("LE-LS", "EE-LS", "EE-ES")}
-    assert shared_once(runs, ("skills", "paper", "faithful")) == {
+    variants = ("skills", "paper", "faithful")
+    runs = {(v, c): f"{v}/{c}" for v in variants for c in ("LE-LS", "EE-LS", "EE-ES")}
+    owners = {**{(v, c): v for v in variants for c in ("LE-LS", "EE-LS")}, ("faithful", "EE-LS"): "skills",
+              **{(v, "EE-ES"): "paper" for v in variants}}
+    assert shared_once(runs, dict(variants=variants, owners=owners)) == {
         ("skills", "LE-LS"): "skills/LE-LS", ("skills, faithful", "EE-LS"): "skills/EE-LS",
         ("every variant", "EE-ES"): "paper/EE-ES", ("paper", "LE-LS"): "paper/LE-LS",
         ("paper", "EE-LS"): "paper/EE-LS", ("faithful", "LE-LS"): "faithful/LE-LS"}

@@ -1,41 +1,45 @@
-"""The reproduction pipeline: its plan, progress and ETA, published checkpoints; end to end at the tiny scale (slow)."""
+"""The stage runner (progress and ETA, published checkpoints) and the reproduction's tables; end to end at the tiny
+scale (slow)."""
 
 import io
 import json
 import os
 import shutil
-import subprocess
 import sys
 
 import pytest
-from helpers import ROOT, evolve_args, outputs
+from helpers import evolve_args, outputs
 
 from experiments import reproduce
+from experiments.reproduction import TABLES, ReproductionTable, variant_rows
 from experiments.study import SCALES
 from imrl_jax import evolve
 
 
+def tiny_table(results, variants=("paper", "extension")) -> ReproductionTable:
+    """The reproduction at the tiny scale, its runs under ``results``."""
+    rows = sum((variant_rows(v, 0 if v == "faithful" else None) for v in variants), ())
+    return ReproductionTable("tiny", os.path.join(str(results), "REPRODUCTION_TINY.md"), 0, rows=rows,
+                             scale=SCALES["tiny"], out=str(results), results=str(results), scale_name="tiny")
+
+
 @pytest.mark.slow
-def test_pipeline_runs_and_resumes(tmp_path):
-    out = str(tmp_path / "results")
-    command = [sys.executable, os.path.join(ROOT, "experiments", "reproduce.py"), "--scale", "tiny", "--out", out,
-               "--no-report"]
-    first = subprocess.run(command, cwd=ROOT, capture_output=True, text=True)
-    assert first.returncode == 0, first.stderr[-2000:]
-    with open(os.path.join(out, "manifest.json")) as f:
+def test_pipeline_runs_and_resumes(tmp_path, capsys):
+    table = tiny_table(tmp_path / "results")
+    assert table.main([]) == 0
+    with open(os.path.join(table.out, "manifest.json")) as f:
         stages = json.load(f)["stages"]
-    assert len(stages) == 5 + 7  # 5 evolutions and 7 learning tests (EE-ES's once each)
-    for variant in ("paper", "extension"):
-        for condition in ("LE-LS", "EE-LS", "EE-ES", "SLE"):
-            assert os.path.exists(os.path.join(reproduce.test_dir(out, variant, condition), "steady.json"))
-    assert not os.path.exists(os.path.join(out, "extension", "test", "EE-ES"))
-    # An interrupted learning test (no steady.json) is run again; everything else is skipped.
-    os.remove(os.path.join(out, "extension", "test", "SLE", "steady.json"))
-    second = subprocess.run(command, cwd=ROOT, capture_output=True, text=True)
-    assert second.returncode == 0, second.stderr[-2000:]
-    assert second.stdout.count(": done (") == 5 + 6
-    assert "] learning test extension SLE\n" in second.stdout
-    assert "imrl_jax.evolve" not in second.stdout
+    assert len(stages) == 3 + 5  # 3 evolutions (two of them sweeps of two runs) and 5 learning tests
+    tests = table.tests()
+    for row, tested in tests.items():
+        assert os.path.exists(os.path.join(tested, "steady.json")), row
+    assert tests["extension EE-ES"] == tests["paper EE-ES"] and tests["extension LE-LS"] != tests["paper LE-LS"]
+    # A learning test not made yet (its folder gone) is run again; everything else is skipped.
+    shutil.rmtree(tests["extension SLE"])
+    capsys.readouterr()
+    assert table.main([]) == 0
+    out = capsys.readouterr().out
+    assert out.count(": done (") == 3 + 4 and "] learning test extension SLE\n" in out and "imrl_jax.evolve" not in out
 
 
 def test_partial_runs_counts_the_runs_an_interrupted_test_kept(tmp_path):
@@ -46,36 +50,69 @@ def test_partial_runs_counts_the_runs_an_interrupted_test_kept(tmp_path):
     assert reproduce.partial_runs(str(tmp_path)) == 2
 
 
-def test_plan_costs_and_eta():
-    scale = SCALES["tiny"]
-    stages = reproduce.plan(scale, "out", ("paper", "extension"))
-    # a variant's Fig. 3 is whole (its evolutions, then its tests) before the next variant starts
-    assert [s.kind for s in stages] == ["evolve"] * 3 + ["test"] * 4 + ["evolve"] * 2 + ["test"] * 3 + ["report"]
-    assert [s.name for s in stages if s.kind == "evolve"] == [
-        "evolve paper LE-LS", "evolve paper EE-LS", "evolve paper EE-ES", "evolve extension LE-LS",
-        "evolve extension EE-LS"]
-    assert [s.name for s in stages[3:7]] == [f"learning test paper {c}" for c in ("LE-LS", "EE-LS", "EE-ES", "SLE")]
-    assert [s.name for s in stages[9:12]] == [f"learning test extension {c}" for c in ("LE-LS", "EE-LS", "SLE")]
-    # EE-ES is evolved and tested once, under paper, where the first variant needs it
-    first = reproduce.plan(scale, "out", ("skills", "paper"))
-    assert [s.name for s in first[:3]] == ["evolve skills LE-LS", "evolve skills EE-LS", "evolve paper EE-ES"]
-    assert first[2].out_dir == os.path.join("out", "paper", "evolve", "EE-ES")
-    assert [s.name for s in first[3:7]] == ["learning test skills LE-LS", "learning test skills EE-LS",
-                                           "learning test paper EE-ES", "learning test skills SLE"]
-    assert first[5].out_dir == os.path.join("out", "paper", "test", "EE-ES")
-    assert reproduce.test_dir("out", "skills", "EE-ES") == first[5].out_dir
-    assert [sum(s.condition == "EE-ES" and s.kind == kind for s in first) for kind in ("evolve", "test")] == [1, 1]
-    assert reproduce.DEFAULT_VARIANTS["paper"] == ("skills", "paper", "faithful")
-    # 2 seeds x 6 individuals x 2 generations x (400 childhood + 6 x 400 task steps)
-    assert stages[0].cost == 2 * 6 * 2 * (400 + 6 * 400) and stages[1].cost == 2 * 6 * 2 * 6 * 400
-    # 2 runs x 2 best x 1 test x 6 x 800 cycles; the report: a childhood per probed LE-LS individual
-    assert stages[-2].cost == 2 * 2 * 1 * 6 * 800 and stages[-1].cost == 2 * 2 * 2 * 400
+def test_plan_costs_and_eta(tmp_path):
+    stages, scale = tiny_table(tmp_path).all_stages()
+    # each evolution then its test; paper's and extension's runs differ only in dynamic values: one program each
+    # (a sweep); EE-ES's once, under the first variant; SLE tested from scratch
+    assert [s.name for s in stages] == [
+        "evolve paper LE-LS+extension LE-LS (one sweep)", "learning test paper LE-LS+extension LE-LS (one sweep)",
+        "evolve paper EE-LS+extension EE-LS (one sweep)", "learning test paper EE-LS+extension EE-LS (one sweep)",
+        "evolve paper EE-ES", "learning test paper EE-ES", "learning test paper SLE", "learning test extension SLE"]
+    assert stages[5].needs == ("evolve paper EE-ES",) and stages[6].needs == ()
+    # 2 seeds x 6 individuals x 2 generations x (400 childhood + 6 x 400 task steps), twice (the sweep's points)
+    assert stages[0].cost == 2 * 2 * 6 * 2 * (400 + 6 * 400) and stages[4].cost == 2 * 6 * 2 * 6 * 400
+    # 2 runs x 2 best x 1 test x 6 x 800 cycles
+    assert stages[-1].cost == 2 * 2 * 1 * 6 * 800
+    # under skills, paper and faithful: faithful's EE-LS is skills' run, EE-ES one run for all
+    stages = tiny_table(tmp_path / "other", ("skills", "paper", "faithful")).all_stages()[0]
+    assert sum(s.kind == "evolve" and "EE-ES" in s.name for s in stages) == 1
+    assert sum(s.kind == "evolve" and "EE-LS" in s.name for s in stages) == 1  # skills' (= faithful's) and paper's
     # 100 lane-steps/s; the first stage half done at its own rate of 50: 1/2 x 1000/50 + 3000/100
     few = [s._replace(cost=c) for s, c in zip(stages, (1000.0, 1000.0, 2000.0))]
     assert reproduce.eta_seconds(few, 100.0, 0.5, 50.0) == pytest.approx(10 + 30)
     assert reproduce.eta_seconds(few, 100.0) == pytest.approx(40)
     assert reproduce.measured_rate({"stages": {"a": dict(cost=300, seconds=2), "b": dict(cost=100, seconds=2),
                                                "old": dict(seconds=9)}}) == 100
+
+
+def test_the_reproduction_finds_every_committed_run():
+    """Both scales' rows find their committed runs by key: nothing is left to run, no run is recomputed."""
+    for table in TABLES.values():
+        stages, scale = table.all_stages()
+        assert [s.name for s in stages if not reproduce.stage_done(s, scale)] == [], table.name
+        assert all(s.out_dir.startswith(table.out + os.sep) for s in stages), table.name
+    paper, cpu = TABLES["paper"], TABLES["cpu"]
+    assert paper.variants == ["skills", "paper", "faithful"] and cpu.variants == ["paper", "extension"]
+    assert len(paper.all_stages()[0]) == 15 and len(cpu.all_stages()[0]) == 12
+    evolutions = paper.evolutions()
+    # EE-ES learns nothing: one run for every variant, paper's; faithful's EE-LS lives skills' lives
+    assert {evolutions[f"{v} EE-ES"] for v in paper.variants} == {os.path.join(paper.out, "paper", "evolve", "EE-ES")}
+    assert evolutions["faithful EE-LS"] == os.path.join(paper.out, "skills", "evolve", "EE-LS")
+    assert paper.data()["owners"]["faithful", "EE-LS"] == "skills"
+
+
+def test_the_reproductions_commands():
+    """faithful evolves its own preset and tests SLE's noise over the whole test; skills' SLE anneals over one task."""
+    paper = TABLES["paper"]
+    stages = {s.name: s for s in paper.all_stages()[0]}
+    evolve = paper.stage_command(stages["evolve faithful LE-LS"])[0]
+    assert evolve[evolve.index("--preset") + 1] == "faithful" and "--set" not in evolve
+    assert evolve[evolve.index("--seeds") + 1] == "10" and evolve[evolve.index("--generations") + 1] == "100"
+    sle = paper.stage_command(stages["learning test faithful SLE"])[0]
+    assert sle[sle.index("--set") + 1] == "sle_noise_steps=0" and sle.count("--set") == 1
+    skills_sle = paper.stage_command(stages["learning test skills SLE"])[0]
+    assert "sle_noise_steps=100000" in skills_sle and skills_sle[skills_sle.index("--preset") + 1] == "skills"
+    test = paper.stage_command(stages["learning test faithful LE-LS"])[0]
+    assert test[test.index("imrl_jax.learning_test") + 1] == stages["evolve faithful LE-LS"].out_dir
+    # the cpu scale's SLE tests were made with SLE's noise over the whole test: so they are found
+    cpu = TABLES["cpu"]
+    assert [r.sets for r in cpu.rows if not r.evolved] == [("sle_noise_steps=0",)] * 2 and cpu.whole_test == ()
+    assert paper.whole_test == ("faithful",)
+    # the preset is the screen's row: the same lives as paper + the adult selector's values of skills
+    from imrl_jax.config import make_config
+
+    screened = make_config("paper", trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001)
+    assert make_config("faithful") == screened and make_config("faithful") != make_config("paper")
 
 
 def test_stage_progress_is_shown_with_the_whole_pipelines(tmp_path, capfd):
@@ -191,57 +228,6 @@ def test_a_resumed_test_stage_counts_its_own_runs(tmp_path, capsys):
     assert reproduce.measured_rate({"stages": {"a": dict(cost=300, seconds=3), "bad": dict(cost=-900, seconds=1)}}) == 100
 
 
-def test_a_claims_map_row_is_a_variant_with_its_overrides_and_shares():
-    """paper-selector-sle-test at full scale: its own LE-LS and SLE, skills' EE-LS, paper's EE-ES."""
-    scale = SCALES["paper"]
-    stages = reproduce.plan(scale, "out", ("skills", "paper-selector-sle-test"), report=False)
-    row = [s for s in stages if s.variant == "paper-selector-sle-test"]
-    assert [s.name for s in row] == ["evolve paper-selector-sle-test LE-LS", "learning test paper-selector-sle-test LE-LS",
-                                     "learning test paper-selector-sle-test SLE"]
-    assert reproduce.evolution_dir("out", "paper-selector-sle-test", "EE-LS") == os.path.join("out", "skills", "evolve",
-                                                                                               "EE-LS")
-    evolve = reproduce.stage_command(row[0], scale, "out", "xla")[0]
-    assert evolve[evolve.index("--preset") + 1] == "paper" and evolve[evolve.index("--seeds") + 1] == "10"
-    assert [evolve[i + 1] for i, w in enumerate(evolve) if w == "--set"] == [
-        "trace_lambda=0.98", "eta_selector_actor=0.3", "eta_selector_critic=0.001"]
-    sle = reproduce.stage_command(row[2], scale, "out", "xla")[0]
-    assert sle[sle.index("--preset") + 1] == "paper" and "sle_noise_steps=0" in sle and "trace_lambda=0.98" in sle
-    test = reproduce.stage_command(row[1], scale, "out", "xla")[0]
-    assert test[test.index("imrl_jax.learning_test") + 1] == row[0].out_dir
-    # a preset variant is unchanged: skills' SLE anneals over one task's length
-    skills_sle = reproduce.stage_command([s for s in stages if s.name == "learning test skills SLE"][0], scale, "out",
-                                         "xla")[0]
-    assert "sle_noise_steps=100000" in skills_sle and "--set" in skills_sle
-
-
-def test_the_faithful_preset_is_the_claims_maps_closest_row_at_full_scale():
-    """make reproduce's third variant: its own LE-LS and SLE (noise over the whole test), skills' EE-LS."""
-    scale = SCALES["paper"]
-    stages = reproduce.plan(scale, "out", reproduce.DEFAULT_VARIANTS["paper"], report=False)
-    row = [s for s in stages if s.variant == "faithful"]
-    assert [s.name for s in row] == ["evolve faithful LE-LS", "learning test faithful LE-LS",
-                                     "learning test faithful SLE"]
-    assert reproduce.evolution_dir("out", "faithful", "EE-LS") == os.path.join("out", "skills", "evolve", "EE-LS")
-    assert reproduce.test_dir("out", "faithful", "EE-ES") == os.path.join("out", "paper", "test", "EE-ES")
-    evolve = reproduce.stage_command(row[0], scale, "out", "xla")[0]
-    assert evolve[evolve.index("--preset") + 1] == "faithful" and "--set" not in evolve
-    sle = reproduce.stage_command(row[2], scale, "out", "xla")[0]
-    assert sle[sle.index("--set") + 1] == "sle_noise_steps=0" and sle.count("--set") == 1
-    # the preset is the screen's row: the same lives as paper + the adult selector's values of skills
-    from imrl_jax.config import make_config
-
-    screened = make_config("paper", trace_lambda=0.98, eta_selector_actor=0.3, eta_selector_critic=0.001)
-    assert make_config("faithful") == screened and make_config("faithful") != make_config("paper")
-
-
-def test_an_unknown_variant_exits_2_with_one_line(tmp_path, capsys):
-    assert reproduce.main(["--scale", "tiny", "--out", str(tmp_path / "r"), "--variants", "paper,skils"]) == 2
-    err = capsys.readouterr().err.strip()
-    assert err.startswith("error: --variants: unknown variant 'skils' "
-                          "(choose from skills, paper, extension, faithful or a row")
-    assert "paper-selector-sle-test" in err and "\n" not in err and not (tmp_path / "r").exists()
-
-
 def test_a_report_run_by_the_pipeline_is_done_until_another_stage_runs(tmp_path):
     """run_stage records what the report followed: the next sitting skips it, a stage run since makes it due."""
     stages = [reproduce.Stage("evolve paper LE-LS", "evolve", "paper", "LE-LS", str(tmp_path / "e"), 1.0),
@@ -253,26 +239,3 @@ def test_a_report_run_by_the_pipeline_is_done_until_another_stage_runs(tmp_path)
     assert reproduce.stage_done(stages[1], {}) and reproduce.cost_left(stages[1], {}) == 0.0
     reproduce.run_stage(stages[0], 0, [sys.executable, "-c", "pass"], reproduce.Overall(stages, manifest), path)
     assert not reproduce.stage_done(stages[1], {})
-
-
-def test_given_out_the_report_is_written_there_and_not_into_docs(tmp_path, monkeypatch):
-    """--scale tiny --out DIR wrote docs/REPRODUCTION_TINY.md into the repository (cpu would overwrite the committed
-    docs/REPRODUCTION_CPU.md): a command given --out writes nowhere else."""
-    commands = {}
-
-    def run_stages(stages, scale, manifest, manifest_path, command_for, **fan):
-        commands.update({stage.kind: command_for(stage)[0] for stage in stages})
-        return 0
-
-    monkeypatch.setattr(reproduce, "run_stages", run_stages)
-    out = str(tmp_path / "r")
-    for scale in ("tiny", "cpu"):
-        assert reproduce.main(["--scale", scale, "--out", out]) == 0
-        report = commands["report"]
-        assert report[report.index("--doc") + 1] == os.path.join(out, f"REPRODUCTION_{scale.upper()}.md")
-        assert report[report.index("--figures") + 1] == os.path.join(out, f"reproduction_{scale}")
-        written = [arg for arg in sum(commands.values(), []) if os.path.isabs(arg) and arg.startswith(ROOT)]
-        assert [arg for arg in written if not arg.startswith(out) and arg != sys.executable] == []
-    monkeypatch.chdir(tmp_path)
-    assert reproduce.main(["--scale", "tiny"]) == 0  # its own results directory: the report in docs/, as committed
-    assert "--doc" not in commands["report"]

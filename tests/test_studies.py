@@ -15,8 +15,8 @@ def test_every_study_is_found_in_order():
     found = S.studies()
     assert list(found) == ORDER
     assert found["claims-experts"].command() == [sys.executable, "-m", "experiments.claims_study", "experts"]
-    assert found["reproduction"].command(report=True) == [sys.executable, "-m", "experiments.report",
-                                                           "experiments/results/paper"]
+    assert found["reproduction"].command(report=True) == [sys.executable, "-m", "experiments.reproduction", "paper",
+                                                           "--report"]
 
 
 @pytest.mark.parametrize("name", ORDER)
@@ -95,10 +95,10 @@ def _fake_run(ran, fail=None, interrupt=False, processes=None):
 
 def test_studies_run_in_order_and_a_failure_stops_the_rest(monkeypatch, capsys):
     ran = []
-    monkeypatch.setattr(cli.subprocess, "Popen", _fake_run(ran, fail="experiments.reproduce"))
+    monkeypatch.setattr(cli.subprocess, "Popen", _fake_run(ran, fail="experiments.reproduction"))
     assert cli.main(["run", "all"]) == 3
     assert ran == ["experiments.selector_sweep", "experiments.timescale", "experiments.novel_tasks",
-                   "experiments.claims_study screen", "experiments.reproduce --scale paper"]
+                   "experiments.claims_study screen", "experiments.reproduction paper"]
     assert "study reproduction stopped with exit code 3" in capsys.readouterr().err
     ran.clear()
     assert cli.main(["run", "search"]) == 0 and ran == ["experiments.search"]
@@ -111,9 +111,9 @@ def test_report_writes_each_studys_tables(monkeypatch):
     monkeypatch.setattr(cli.subprocess, "Popen", _fake_run(ran))
     assert cli.main(["report"]) == 0
     assert ran == ["experiments.timescale --report", "experiments.novel_tasks --report",
-                   "experiments.claims_study screen --report", "experiments.report experiments/results/paper",
+                   "experiments.claims_study screen --report", "experiments.reproduction paper --report",
                    "experiments.claims_study experts --report", "experiments.search --report",
-                   "experiments.future_work --report", "experiments.report experiments/results/cpu",
+                   "experiments.future_work --report", "experiments.reproduction cpu --report",
                    "experiments.goals --report", "experiments.childhood_study --report"]
 
 

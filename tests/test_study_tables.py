@@ -53,10 +53,12 @@ def write_evolution(folder: str, spec, generations: int, best: float) -> None:
 
 
 def write_test(folder: str, steady: float, num_runs: int) -> None:
-    """A finished learning test: its steady state ``steady`` in every run, and a two-bin curve."""
+    """A finished learning test: its steady state ``steady`` in every run and task, and a two-bin curve."""
     os.makedirs(folder, exist_ok=True)
     with open(os.path.join(folder, "steady.json"), "w") as f:
-        json.dump(dict(steady_mean=steady, steady_sd=0.0, steady_per_run=[steady] * num_runs, pairs_both_ways=0.0), f)
+        json.dump(dict(steady_mean=steady, steady_sd=0.0, steady_per_run=[steady] * num_runs, pairs_both_ways=0.0,
+                       steady_best_run=steady, best_run=0, steady_per_task=[steady] * 6, whole_test_mean=steady / 2,
+                       num_runs=num_runs, num_best=1, num_tests=1), f)
     with open(os.path.join(folder, "curve.csv"), "w") as f:
         f.write(f"bin,end_step,mean,sd_over_runs\n0,10,{steady / 2},0.0\n1,20,{steady},0.0\n")
 
