@@ -25,7 +25,6 @@ import numpy as np
 # NUM_BEST: the junction probe drives claim 7's number of each seed's fittest genomes, so that a run shared with
 # the claims study (LE-LS-6) keeps one probe.json
 from experiments.claims import NUM_BEST
-from experiments.reproduce import test_dir
 from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN
 from experiments.table import Row, Table
 from experiments.tables import head, line, mean_sd
@@ -33,12 +32,11 @@ from imrl_jax import conditions
 
 OUT = os.path.join(RESULTS, "future_work")
 DOCUMENT = os.path.join("docs", "FUTURE_WORK.md")
-#: SLE's tests beside the study's, read where the reproduction and the claims study (``skills-sle-test``: the noise
-#: over the whole test, EXT-LS-whole's reference) made them: a test from scratch has no key to be found by.
-SLE_TESTS = {Row("skills SLE", "SLE", "skills"): test_dir(REPRODUCTION, "skills", "SLE"),
-             Row("skills SLE-whole", "SLE", "skills"): os.path.join(RESULTS, "claims", "skills-sle-test", "test",
-                                                                     "SLE"),
-             Row("faithful SLE", "SLE", "faithful"): test_dir(REPRODUCTION, "faithful", "SLE")}
+#: SLE's tests beside the study's, found by their keys: the reproduction's, and the claims study's
+#: ``skills-sle-test`` (the noise over the whole test, EXT-LS-whole's reference).
+SLE_TESTS = (Row("skills SLE", "SLE", "skills", scale=SCALES["paper"]),
+             Row("skills SLE-whole", "SLE", "skills", ("sle_noise_steps=0",)),
+             Row("faithful SLE", "SLE", "faithful", ("sle_noise_steps=0",), scale=SCALES["paper"]))
 #: Every row the report shows, in order, with what it is: the reproduction's first, then the study's.
 ABOUT = {"skills LE-LS": "the reproduction's LE-LS", "skills EE-LS": "the reproduction's EE-LS",
          "skills EE-ES": "the reproduction's EE-ES", "skills SLE": "the reproduction's SLE",
@@ -204,12 +202,12 @@ def _noise(test: dict | None) -> str:
     return "" if steps is None else ", noise over the whole test" if not steps else f", noise over {steps:,} cycles"
 
 
-def measure(rows: dict[str, Row], evolutions: dict, tests: dict, summary: dict) -> dict:
+def measure(rows: dict[str, Row], evolutions: dict, tests: dict, summary: dict, reproduction: str = REPRODUCTION) -> dict:
     """Every row of :data:`ABOUT` (its evolution and test folders, None where it has none), (c)'s evolved learning
     values and (d)'s experts, from what finished; ``summary``: the reproduction's report (its rows' fresh lives)."""
     from experiments.claims import _difference
     from experiments.relive import reproduction_fresh, run_fresh, run_probe
-    from experiments.reproduce import owner
+    from experiments.claims_study import reproduction_variant
     from imrl_jax import networks
     from imrl_jax.config import make_config
 
@@ -217,7 +215,8 @@ def measure(rows: dict[str, Row], evolutions: dict, tests: dict, summary: dict) 
     for name, about in ABOUT.items():
         row, reference = rows[name], name in REFERENCES
         evolved = conditions.get(row.condition).evolved
-        fresh = ((lambda run, r=row: reproduction_fresh(summary, owner(r.preset, r.condition), r.condition))
+        fresh = ((lambda run, r=row: reproduction_fresh(summary, reproduction_variant(run["dir"], reproduction),
+                                                          r.condition))
                  if reference else lambda run: run_fresh(run["dir"], run["config"]))
         evolution = _evolution(evolutions.get(name), fresh) if evolved else None
         entry = dict(name=name, condition=row.condition, about=about, evolved=evolved, evolution=evolution,
@@ -522,10 +521,10 @@ class FutureWorkTable(Table):
         from experiments.claims_study import reproduction_summary
         from experiments.study import write_table
 
-        rows = {row.name: row for row in (*self.rows, *SLE_TESTS)}
-        tests = {**self.tests(), **{row.name: folder for row, folder in SLE_TESTS.items()}}
+        rows = {row.name: row for row in self.rows}
         # the reproduction's report beside the study's document: its runs' fresh lives, which the reference rows show
-        measured = measure(rows, self.evolutions(), tests, reproduction_summary(DOCUMENT) or {})
+        measured = measure(rows, self.evolutions(), self.tests(), reproduction_summary(DOCUMENT) or {},
+                           os.path.join(self.results, os.path.relpath(REPRODUCTION, RESULTS)))
         os.makedirs(self.out, exist_ok=True)
         with open(os.path.join(self.out, "report.json"), "w") as f:
             json.dump(measured, f, indent=2)
@@ -542,6 +541,7 @@ TABLE = FutureWorkTable("future-work", DOCUMENT, 7, scale=SCREEN, out=OUT, rows=
     # the reproduction's runs at the paper's sizes (its EE-ES is paper's: the same lives), read beside the study's
     Row("skills LE-LS", "LE-LS", "skills", scale=PAPER), Row("skills EE-LS", "EE-LS", "skills", scale=PAPER),
     Row("skills EE-ES", "EE-ES", "skills", scale=PAPER), Row("faithful LE-LS", "LE-LS", "faithful", scale=PAPER),
+    *SLE_TESTS,
     Row("EV-LS", "EV-LS", "skills"), Row("EV-LS-diff", "EV-LS-diff", "skills"), Row("EXT-LS", "EXT-LS", "skills"),
     Row("EXT-LS-whole", "EXT-LS", "skills", ("sle_noise_steps=0",)),
     Row("LE-LS-P", "LE-LS-P", "skills"), Row("LE-LS-PC", "LE-LS-PC", "skills"),

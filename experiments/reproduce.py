@@ -33,25 +33,6 @@ TESTED = conditions.PAPER
 
 # The committed layout of the reproduction's results (``results/SCALE/VARIANT/{evolve,test}/CONDITION``), which
 # the search, future-work and timescale studies still read by path; the reproduction finds its runs by key.
-def owner(variant: str, condition: str) -> str:
-    """The variant whose folder holds a condition's runs: EE-ES learns nothing, so its runs are paper's for every
-    variant; faithful differs from skills in childhood alone, so an evolved condition without one is skills'."""
-    spec = conditions.get(condition)
-    if not spec.learns:
-        return "paper"
-    return "skills" if variant == "faithful" and spec.evolved and not spec.has_childhood else variant
-
-
-def evolution_dir(out: str, variant: str, condition: str) -> str:
-    """Where the reproduction's evolution of a condition under a variant lies (see :func:`owner`)."""
-    return os.path.join(out, owner(variant, condition), "evolve", condition)
-
-
-def test_dir(out: str, variant: str, condition: str) -> str:
-    """Where the reproduction's learning test of a condition under a variant lies (see :func:`owner`)."""
-    return os.path.join(out, owner(variant, condition), "test", condition)
-
-
 def _kernel_options(kernel: str) -> list[str]:
     return [] if kernel == "xla" else ["--set", f"step_kernel={kernel}"]
 

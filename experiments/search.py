@@ -14,13 +14,13 @@ learning tests behind them.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import sys
 
 import numpy as np
 
-from experiments.reproduce import owner, test_dir
 from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN
 from experiments.table import Row, Table
 from experiments.tables import head, line, mean_sd
@@ -39,7 +39,7 @@ COMPARED = (GA_NAME, *STRATEGIES)
 STRATEGY_STYLES = {GA_NAME: dict(color="black", lw=2.0), "sep_cma_es": dict(color="tab:blue", lw=1.6, ls="--"),
                    "snes": dict(color="tab:orange", lw=1.6, ls=":")}
 #: SLE evolves nothing: the reproduction's ``skills`` test of it is every strategy's SLE in claim 6.
-SLE_TEST = test_dir(REPRODUCTION, PRESET, "SLE")
+SLE = Row("SLE", "SLE", PRESET, scale=SCALES["paper"])
 #: The claims that depend on the search (the evolutions, or the learning tests of what they found).
 CLAIM_NUMBERS = (1, 2, 3, 4, 6)
 
@@ -178,11 +178,12 @@ class SearchTable(Table):
         """Per strategy and condition the evolution's and learning test's numbers, and claims 1-4 and 6 per strategy;
         the GA's fresh lives, junction probes and relived best EE-ES (claim 4's path) are the reproduction's report's."""
         from experiments.claims import final_best
-        from experiments.claims_study import reproduction_summary
+        from experiments.claims_study import reproduction_summary, reproduction_variant
         from experiments.loading import read_test
         from experiments.relive import colours_followed, reproduction_fresh, run_fresh, run_path, run_probe
 
         summary = reproduction_summary(self.document) or {}
+        reproduction = os.path.join(self.results, os.path.relpath(REPRODUCTION, RESULTS))
         rows, paths = [], {}
         for row, m, tested in zip(self.rows, self.measure(), self.tests().values()):
             strategy, condition = strategy_of(row), row.condition
@@ -198,7 +199,7 @@ class SearchTable(Table):
                              final_best_per_seed=[float(v) for v in final_best(m["best"])],
                              plateau_generation=m["plateau"])
                 # the GA's runs kept no population: their fresh lives, probes and path are the reproduction's
-                ga, variant = strategy == GA_NAME, owner(row.preset, condition)
+                ga, variant = strategy == GA_NAME, reproduction_variant(m["dir"], reproduction)
                 fresh = reproduction_fresh(summary, variant, condition) if ga else run_fresh(m["dir"])
                 if fresh is not None:
                     entry.update(fresh_mean=fresh["mean"], fresh_sd=fresh["sd_over_seeds"])
@@ -216,7 +217,8 @@ class SearchTable(Table):
             if "steady_mean" in m:
                 entry.update(steady(read_test(tested)))
             rows.append(entry)
-        sle = None if read_test(SLE_TEST) is None else steady(read_test(SLE_TEST))
+        sle_test = read_test(dataclasses.replace(self, rows=(SLE,)).tests()[SLE.name])  # the reproduction's, by key
+        sle = None if sle_test is None else steady(sle_test)
         claims = judge(COMPARED, rows, sle["steady_per_run"] if sle else None, paths)
         return dict(rows=rows, claims=claims, sle=sle, paths=paths)
 

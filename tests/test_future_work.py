@@ -25,12 +25,15 @@ def test_every_committed_run_is_found_by_its_key(monkeypatch):
     """Nothing to run: each row finds its committed evolution and learning test, the reproduction's at its sizes."""
     monkeypatch.chdir(ROOT)
     stages, scale = study.all_stages()
-    assert len(stages) == 31 and [s.name for s in stages if not stage_done(s, scale)] == []
+    assert len(stages) == 34 and [s.name for s in stages if not stage_done(s, scale)] == []
     evolutions = study.TABLE.evolutions()
     assert evolutions["EV-LS"] == os.path.join(study.OUT, "EV-LS", "evolve") and evolutions["EXT-LS"] is None
     assert evolutions["skills EE-ES"] == os.path.join("experiments", "results", "paper", "paper", "evolve", "EE-ES")
-    assert study.TABLE.tests()["EXT-LS-whole"] == os.path.join(study.OUT, "EXT-LS-whole", "test")
-    assert set(study.ABOUT) == {r.name for r in (*study.TABLE.rows, *study.SLE_TESTS)}
+    tests = study.TABLE.tests()
+    assert tests["EXT-LS-whole"] == os.path.join(study.OUT, "EXT-LS-whole", "test")
+    assert tests["skills SLE-whole"] == os.path.join("experiments", "results", "claims", "skills-sle-test", "test", "SLE")
+    assert tests["faithful SLE"] == os.path.join("experiments", "results", "paper", "faithful", "test", "SLE")
+    assert set(study.ABOUT) == {r.name for r in study.TABLE.rows}
 
 
 def test_the_table_evolves_the_evolved_rows_and_tests_the_others_from_scratch():
@@ -203,13 +206,16 @@ def _fake_test(folder, per_run, sle_noise_steps=None):
 
 
 #: Every row the report shows, by name, as the table and SLE's tests describe it.
-ROWS = {r.name: r for r in (*study.TABLE.rows, *study.SLE_TESTS)}
+ROWS = {r.name: r for r in study.TABLE.rows}
 
 
 def _fake_study(tmp_path):
     """The reproduction's LE-LS, EE-LS and tests, and the study's LE-LS-6, LE-LS-N6, LE-LS-P, a running EV-LS, EXT-LS,
-    each row's folders ``ROW/evolve`` and ``ROW/test``; and the reproduction report's summary."""
-    row = lambda name, kind: tmp_path / name / kind  # noqa: E731
+    each row's folders ``ROW/evolve`` and ``ROW/test`` (the reproduction's evolutions in ``paper/VARIANT/evolve``);
+    and the reproduction report's summary."""
+    reproduction = {"skills LE-LS": tmp_path / "paper" / "skills" / "evolve" / "LE-LS",
+                    "skills EE-LS": tmp_path / "paper" / "skills" / "evolve" / "EE-LS"}
+    row = lambda name, kind: reproduction[name] if kind == "evolve" and name in reproduction else tmp_path / name / kind  # noqa: E731
     _fake_evolution(row("skills LE-LS", "evolve"), [[0.2, 0.4, 0.6, 0.6, 0.6], [0.4, 0.6, 0.8, 0.8, 0.8]], 5)
     _fake_evolution(row("skills EE-LS", "evolve"), [[0.5] * 5, [0.7] * 5], 5)
     _fake_test(row("skills LE-LS", "test"), [0.8, 0.9])
@@ -228,7 +234,7 @@ def _fake_study(tmp_path):
     _fake_test(row("EXT-LS", "test"), [0.6, 0.7, 0.8])
     summary = dict(best_individuals={"skills/LE-LS": dict(fresh_mean_per_seed=[0.5, 0.6])})  # its fresh lives
     return (ROWS, {n: str(row(n, "evolve")) if r.evolved else None for n, r in ROWS.items()},
-            {n: str(row(n, "test")) for n in ROWS}, summary)
+            {n: str(row(n, "test")) for n in ROWS}, summary, str(tmp_path / "paper"))
 
 
 def test_measure_reads_every_finished_row_and_the_reproductions(tmp_path):
@@ -236,7 +242,7 @@ def test_measure_reads_every_finished_row_and_the_reproductions(tmp_path):
     measured = study.measure(*_fake_study(tmp_path))
     rows = {r["name"]: r for r in measured["rows"]}
     assert list(rows) == ["skills LE-LS", "skills EE-LS", "skills EE-ES", "skills SLE", "skills SLE-whole",
-                          "faithful LE-LS", "faithful SLE", *(r.name for r in study.TABLE.rows[4:])]
+                          "faithful LE-LS", "faithful SLE", *(r.name for r in study.TABLE.rows[7:])]
     assert rows["faithful LE-LS"]["evolution"] is None and rows["faithful SLE"]["test"]["runs"] == 2
     le_ls = rows["skills LE-LS"]["evolution"]  # seeds' means of 5 generations: 2.4 / 5 and 3.4 / 5
     assert le_ls["final_best"] == pytest.approx(0.58) and le_ls["final_best_sd"] == pytest.approx(0.1)

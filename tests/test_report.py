@@ -15,6 +15,7 @@ from experiments.claims import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY
 from experiments.report import run, share_probes, shared_once
 from experiments.reproduction import ReproductionTable, variant_rows
 from experiments.table import evolution_spec
+from imrl_jax import conditions
 
 
 def test_measures():
@@ -146,18 +147,21 @@ SIZES = dict(seeds=3, generations=8, childhood_steps=30_000, task_steps=20_000, 
 
 
 def _write_results(root, doc, generations=8, variants=("paper", "extension"), scale="cpu"):
-    """A reproduction table over made-up runs in the committed layout (``reproduce.evolution_dir``), found there by
-    their keys; its document ``doc`` (no population: no behaviour)."""
+    """A reproduction table over made-up runs in the committed layout (``VARIANT/evolve/CONDITION``; a run two
+    variants share, once), found there by their keys; its document ``doc`` (no population: no behaviour)."""
     rows = sum((variant_rows(v, 0 if v == "faithful" else None) for v in variants), ())
     table = ReproductionTable(f"made-up-{scale}", str(doc), 0, rows=rows, scale=SIZES, out=str(root),
                               results=str(root), scale_name=scale, whole_test=("faithful",))
     plateau = {"LE-LS": 1, "EE-LS": 6, "EE-ES": 3}
     final = {"LE-LS": 0.5, "EE-LS": 0.7, "EE-ES": 0.45}
-    for row in (r for r in rows if r.evolved):
-        run_dir = reproduce.evolution_dir(str(root), row.preset, row.condition)
-        if os.path.isdir(run_dir):  # a run two variants share
+    written = set()  # in the committed layout a shared run lies in paper's folder, else in skills'
+    for row in sorted((r for r in rows if r.evolved), key=lambda r: {"paper": 0, "skills": 1}.get(r.preset, 2)):
+        # faithful differs from skills in childhood alone: its runs without one lie in skills' folder
+        folder = "skills" if row.preset == "faithful" and not conditions.get(row.condition).has_childhood else row.preset
+        run_dir, spec = os.path.join(str(root), folder, "evolve", row.condition), evolution_spec(row, SIZES)
+        if spec.key() in written:  # a run two variants share
             continue
-        spec = evolution_spec(row, SIZES)
+        written.add(spec.key())
         os.makedirs(run_dir)
         lines = ["generation,seed,best,mean,std," + ",".join(f"best_task{i}" for i in range(1, 7))]
         for g in range(generations):
