@@ -78,7 +78,7 @@ def measure(config, agent, records=None) -> dict:
 
 def finish(out: str, rows: list[dict], **summary) -> int:
     """A measure's rows into OUT/NAME.csv (floats with 4 decimals), then its result.json naming the CSV."""
-    from experiments.tables import write_measure
+    from experiments.study import write_measure
 
     name = os.path.basename(os.path.normpath(out))
     write_measure(out, name, rows, "python -m experiments.childhood_study " + " ".join(sys.argv[1:]), 4,
@@ -370,7 +370,8 @@ class ChildhoodTable(Table):
     def report(self) -> int:
         from experiments.loading import read_evolution
         from experiments.study import write_table
-        from experiments.tables import head, history_columns, line
+        from experiments.loading import history_columns
+        from experiments.markdown import head, line
         from imrl_jax import conditions
         from imrl_jax.plotting import new_figure, save, style_axis
 

@@ -18,7 +18,7 @@ import sys
 
 import numpy as np
 
-from experiments.reproduce import MEASURED
+from experiments.study import MEASURED
 from experiments.study import RESULTS
 from imrl_jax.cli import HelpFormatter, Parser, UsageError, exit_codes
 

@@ -27,7 +27,7 @@ import numpy as np
 from experiments.claims import NUM_BEST
 from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN
 from experiments.table import Row, Table
-from experiments.tables import head, line, mean_sd
+from experiments.markdown import head, line, mean_sd
 from imrl_jax import conditions
 
 OUT = os.path.join(RESULTS, "future_work")
@@ -101,7 +101,7 @@ STYLES = {"LE-LS-6": dict(color="0.3", lw=1.2, ls="-."), "EXT-LS-whole": dict(co
 def read_traits(run_dir: str | None) -> dict | None:
     """An evolution's evolved values from its history.csv: names and (generations, seeds, values, 2) (population
     mean, the best's), or None without any."""
-    from experiments.tables import history_columns
+    from experiments.loading import history_columns
 
     path = os.path.join(run_dir or "", "history.csv")
     if not os.path.isfile(path):

@@ -160,3 +160,20 @@ def read_baselines(path: str) -> dict:
                            per_task=per_task)))
     order = lambda item: (["ppo", "es"].index(item[0]) if item[0] in ("ppo", "es") else 2, item[1])  # noqa: E731
     return {name: entry for _, _, name, entry in sorted(found, key=order)}
+
+
+def history_columns(run_dir: str | None, names) -> np.ndarray | None:
+    """The columns ``names`` of a run's history.csv as (generations, seeds, names) (NaN where a seed has not written
+    a generation); None without the file or any row."""
+    path = os.path.join(run_dir or "", "history.csv")
+    if not os.path.isfile(path):
+        return None
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    if not rows:
+        return None
+    seeds = sorted({int(r["seed"]) for r in rows})
+    values = np.full((max(int(r["generation"]) for r in rows) + 1, len(seeds), len(names)), np.nan)
+    for r in rows:
+        values[int(r["generation"]), seeds.index(int(r["seed"]))] = [float(r[n]) for n in names]
+    return values

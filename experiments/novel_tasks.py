@@ -82,7 +82,7 @@ def advantage_table(measured: dict, evolutions: str) -> str:
     """The report's markdown: learning's advantage per row and set of tasks, brax's agents, the held-out evolutions
     (``evolutions``: their table) and their probes, then the verdicts."""
     from experiments.claims import UNSEEN_RULE
-    from experiments.tables import head, line
+    from experiments.markdown import head, line
 
     lines = head("comparison", "tasks", "runs", "steady state", "EE-ES", "advantage", "se") + [
         line(r["name"], r["tasks"], r["runs"], f"{r['steady']:.3f}", f"{r['ee_es']:.3f}", f"{r['advantage']:+.3f}",

@@ -23,6 +23,7 @@ import sys
 import time
 from typing import NamedTuple
 
+from experiments.study import MEASURED
 from imrl_jax import conditions  # the condition table (no JAX)
 from imrl_jax.rundir import recorded_points, saved_steps
 
@@ -80,8 +81,6 @@ def test_command(scale: dict, variant: str, condition: str, run_dir: str, out_di
 DEFAULT_RATE = 1.2e6
 #: Where an unfinished evolution's newest checkpoint is copied (committed: checkpoints/ is not).
 PUBLISHED = "resume_checkpoint"
-#: What a "measure" stage writes last, into its out_dir: its presence means the stage is done.
-MEASURED = "result.json"
 #: How often the runner reads a running stage's events.
 POLL_SECONDS = 0.5
 

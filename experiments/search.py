@@ -23,7 +23,7 @@ import numpy as np
 
 from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN
 from experiments.table import Row, Table
-from experiments.tables import head, line, mean_sd
+from experiments.markdown import head, line, mean_sd
 from imrl_jax import conditions
 from imrl_jax.strategies import GA_NAME
 

@@ -27,7 +27,7 @@ import time
 
 import numpy as np
 
-from experiments.reproduce import MEASURED
+from experiments.study import MEASURED
 from experiments.study import RESULTS
 from experiments.table import Measure, Table
 

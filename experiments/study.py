@@ -8,14 +8,18 @@ new study is its module and its document: nothing else registers it (docs/STUDIE
 
 from __future__ import annotations
 
+import csv
 import dataclasses
 import importlib
+import json
 import os
 import pkgutil
 import sys
 
 #: Where every study's results lie (relative to the repository's root, where the commands run).
 RESULTS = os.path.join("experiments", "results")
+#: What a measure stage writes last, into its folder: its presence means the stage is done.
+MEASURED = "result.json"
 #: The paper's runs (the reproduction's), which other studies compare with and reuse.
 REPRODUCTION = os.path.join(RESULTS, "paper")
 
@@ -86,3 +90,20 @@ def environment() -> dict:
     """This environment with the repository root on the path (the studies are modules of the experiments package)."""
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     return {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}
+
+
+def write_measure(out_dir: str, name: str, table: list[dict], command: str, digits: int | None = None,
+                  **recorded) -> None:
+    """A measure's rows (``table``) as ``out_dir/NAME.csv`` (floats to ``digits`` decimals, if given; a row may lack
+    a column), then its result.json, which makes the measure done: its command, commit and ``recorded``."""
+    from imrl_jax.checkpoint import git_commit
+
+    os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, f"{name}.csv"), "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(dict.fromkeys(k for r in table for k in r)), restval="",
+                                lineterminator="\n")
+        writer.writeheader()
+        writer.writerows({k: f"{v:.{digits}f}" if digits is not None and isinstance(v, float) else v
+                          for k, v in r.items()} for r in table)
+    with open(os.path.join(out_dir, MEASURED), "w") as f:
+        json.dump(dict(command=command, git_commit=git_commit(), **recorded), f, indent=2)

@@ -21,7 +21,7 @@ import sys
 import numpy as np
 
 from experiments.loading import read_json
-from experiments.reproduce import MEASURED
+from experiments.study import MEASURED
 from experiments.study import REPRODUCTION, RESULTS, SCREEN, Study
 from experiments.table import Measure, Row, Table
 from imrl_jax.config import ADULT_SELECTOR
@@ -248,7 +248,7 @@ def timescale_table(out: str = OUT, results: str = RESULTS, **fields) -> Timesca
 def report_table(rows: dict) -> str:
     """Markdown: per row and condition the recorded and fresh fitness and the steady state, then claims 1-7."""
     from experiments.claims import CLAIMS
-    from experiments.tables import head, mean_sd, line
+    from experiments.markdown import head, mean_sd, line
 
     lines = head("selector", "condition", "seeds x generations", "final best fitness (recorded)",
                  "fresh lives of each seed's best", "plateau generation", "steady state (learning test)")
@@ -301,7 +301,7 @@ def _numbers(config, result, fitness: np.ndarray) -> dict:
 
 def _write_measure(out_dir: str, name: str, rows: list[dict], lives: int, key: int, **recorded) -> None:
     """A measurement's NAME.csv, then its result.json with its rows (the stage is done)."""
-    from experiments.tables import write_measure
+    from experiments.study import write_measure
 
     write_measure(out_dir, name, rows, f"python -m experiments.timescale --out {out_dir} {name} --lives {lives} "
                   f"--key {key}", **recorded, rows=rows)
