@@ -12,12 +12,14 @@ when they have any, else the cpu scale's, labelled with that scale.
 import os
 import sys
 
-from experiments.study import RESULTS
+from experiments.study import RESULTS, SCALES
 from experiments.table import Measure, Table
 from imrl_jax import conditions
 
 #: The study's folder: each stage's (one per agent and budget) and comparison.png.
 OUT = os.path.join(RESULTS, "baselines")
+#: The budgets' unit: the paper's learning test, cycles per task (the first budget; the second is 5 times it).
+SIZES = dict(test_steps=SCALES["paper"]["test_steps"])
 #: Lane-steps a cycle of a baseline costs on 2 cores: the four stages' 244 M cycles took 43.5 min (BASELINES.md).
 LANE_STEPS_PER_CYCLE = 31
 
@@ -25,8 +27,8 @@ LANE_STEPS_PER_CYCLE = 31
 def baseline(agent: str, steps: int, num_seeds: int, num_evals: int) -> Measure:
     """One agent at one budget per task, ``num_seeds`` seeds on each of the six tasks, in ``OUT/AGENT_BUDGET``."""
     name = f"{agent}_{steps // 1_000_000}M"
-    return Measure(name, "", ("--agent", agent, "--steps", str(steps), "--seeds", str(num_seeds), "--evals",
-                              str(num_evals)), "imrl_jax.baselines", float(LANE_STEPS_PER_CYCLE * 6 * num_seeds * steps),
+    args = ("--agent", agent, "--steps", str(steps), "--seeds", str(num_seeds), "--evals", str(num_evals))
+    return Measure(name, "", args, "imrl_jax.baselines", float(LANE_STEPS_PER_CYCLE * 6 * num_seeds * steps),
                    os.path.join(OUT, name), kind="baseline")
 
 
@@ -36,11 +38,12 @@ class BaselinesTable(Table):
     def tests_dir(self) -> str:
         """The paper scale's reproduction where its learning tests exist, else the cpu scale's."""
         paper = os.path.join(self.results, "paper")
-        return paper if any(os.path.isfile(os.path.join(paper, v, "test", c, "steady.json"))
-                            for v in ("skills", "paper", "extension") for c in conditions.PAPER) else \
-            os.path.join(self.results, "cpu")
+        tested = any(os.path.isfile(os.path.join(paper, preset, "test", condition, "steady.json"))
+                     for preset in ("skills", "paper", "extension") for condition in conditions.PAPER)
+        return paper if tested else os.path.join(self.results, "cpu")
 
     def report(self) -> int:
+        """comparison.png: the finished baselines beside the learning tests of :meth:`tests_dir`."""
         from experiments.document import scale_label
         from experiments.figures import fig_baselines
         from experiments.loading import read_baselines
@@ -59,9 +62,10 @@ class BaselinesTable(Table):
         return 0
 
 
-TABLE = BaselinesTable("baselines", os.path.join("docs", "BASELINES.md"), 11, rows=(), scale={}, out=OUT, measures=(
-    baseline("ppo", 1_000_000, 5, 11), baseline("es", 1_000_000, 5, 11),
-    baseline("ppo", 5_000_000, 3, 21), baseline("es", 5_000_000, 3, 21)))
+TABLE = BaselinesTable("baselines", os.path.join("docs", "BASELINES.md"), 11, rows=(), scale=SIZES, out=OUT,
+                       measures=tuple(baseline(agent, budget * SIZES["test_steps"], num_seeds, num_evals)
+                                      for budget, num_seeds, num_evals in ((1, 5, 11), (5, 3, 21))
+                                      for agent in ("ppo", "es")))
 all_stages, main = TABLE.all_stages, TABLE.main
 #: The studies of this module (python -m experiments finds them).
 STUDIES = (TABLE.study(__name__.rsplit(".", 1)[-1]),)

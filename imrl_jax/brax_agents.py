@@ -1,4 +1,4 @@
-"""brax.training's agents on the six tasks: a baseline's settings, PPO and ES training, and its measure (docs/BASELINES.md).
+"""brax.training's agents on the six tasks: a baseline's settings, PPO and ES training and their measure (BASELINES.md).
 
 Each task is learned from scratch by brax's PPO or ES on the arena's brax environments
 (:mod:`imrl_jax.brax_env`, imported only when an agent trains). The measure is the paper's task

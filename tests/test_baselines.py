@@ -195,6 +195,7 @@ def test_the_study_draws_the_baselines_beside_the_paper_scale_where_it_has_tests
     steady.parent.mkdir(parents=True)
     steady.write_text("{}")
     assert table.tests_dir() == str(tmp_path / "results" / "paper")
-    shutil.copytree(os.path.join(ROOT, "experiments", "results", "baselines", "es_5M"), tmp_path / "baselines" / "es_5M")
+    committed = os.path.join(ROOT, "experiments", "results", "baselines", "es_5M")
+    shutil.copytree(committed, tmp_path / "baselines" / "es_5M")
     assert table.report() == 0
     assert os.path.getsize(tmp_path / "baselines" / "comparison.png") > 10_000
