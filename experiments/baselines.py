@@ -1,87 +1,74 @@
 """The committed brax baselines (docs/BASELINES.md): PPO and ES on the six tasks at two budgets, then a figure.
 
-    python experiments/baselines.py [--out experiments/results/baselines] [--tests experiments/results/cpu]
+    python -m experiments run baselines       # run (or go on with) its four stages
+    python -m experiments list baselines      # the stages, done or to run
+    python -m experiments report baselines    # comparison.png
 
-Every stage is a ``python -m imrl_jax.baselines`` command, printed before it runs; a stage
-whose ``summary.json`` exists is skipped, so the same command goes on after an
-interruption. Then ``comparison.png`` puts the baselines beside the learning tests of a
-results directory of ``experiments.reproduction`` (``--tests``; the paper scale's when it
-has any, else the cpu scale's), labelled with that directory's scale.
-
-The budgets: 1,000,000 cycles per task (the paper's learning test) on 5 seeds, and
-5,000,000 on 3 seeds. On the 2-core CPU this took under an hour in all (docs/BASELINES.md).
+Each stage is ``python -m imrl_jax.baselines`` into its folder, done once its summary.json is
+written. The report puts the baselines beside the learning tests of the paper scale's results
+when they have any, else the cpu scale's, labelled with that scale.
 """
 
-from __future__ import annotations
-
-import argparse
 import os
-import subprocess
 import sys
-import time
 
-from experiments.study import RESULTS
+from experiments.study import RESULTS, SCALES
+from experiments.table import Measure, Table
 from imrl_jax import conditions
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-#: (directory, arguments of python -m imrl_jax.baselines)
-STAGES = (
-    ("ppo_1M", ["--agent", "ppo", "--steps", "1000000", "--seeds", "5", "--evals", "11"]),
-    ("es_1M", ["--agent", "es", "--steps", "1000000", "--seeds", "5", "--evals", "11"]),
-    ("ppo_5M", ["--agent", "ppo", "--steps", "5000000", "--seeds", "3", "--evals", "21"]),
-    ("es_5M", ["--agent", "es", "--steps", "5000000", "--seeds", "3", "--evals", "21"]),
-)
+#: The study's folder: each stage's (one per agent and budget) and comparison.png.
+OUT = os.path.join(RESULTS, "baselines")
+#: The budgets' unit: the paper's learning test, cycles per task (the first budget; the second is 5 times it).
+SIZES = dict(test_steps=SCALES["paper"]["test_steps"])
+#: Lane-steps a cycle of a baseline costs on 2 cores: the four stages' 244 M cycles took 43.5 min (BASELINES.md).
+LANE_STEPS_PER_CYCLE = 31
 
 
-def default_tests() -> str:
-    """The paper scale's results where its learning tests exist, else the cpu scale's."""
-    paper = os.path.join(ROOT, RESULTS, "paper")
-    if any(os.path.isfile(os.path.join(paper, v, "test", c, "steady.json"))
-           for v in ("skills", "paper", "extension") for c in conditions.PAPER):
-        return paper
-    return os.path.join(ROOT, RESULTS, "cpu")
+def baseline(agent: str, steps: int, num_seeds: int, num_evals: int) -> Measure:
+    """One agent at one budget per task, ``num_seeds`` seeds on each of the six tasks, in ``OUT/AGENT_BUDGET``."""
+    name = f"{agent}_{steps // 1_000_000}M"
+    args = ("--agent", agent, "--steps", str(steps), "--seeds", str(num_seeds), "--evals", str(num_evals))
+    return Measure(name, "", args, "imrl_jax.baselines", float(LANE_STEPS_PER_CYCLE * 6 * num_seeds * steps),
+                   os.path.join(OUT, name), kind="baseline")
 
 
-def draw(out: str, tests_dir: str) -> str:
-    """comparison.png: the baselines in ``out`` beside the learning tests of ``tests_dir``."""
-    from experiments.document import scale_label
-    from experiments.figures import fig_baselines
-    from experiments.loading import read_baselines
-    from experiments.reproduction import TABLES
-    from imrl_jax.plotting import save
+class BaselinesTable(Table):
+    """The baselines' stages; the report draws them beside the paper's architecture (comparison.png)."""
 
-    table = next((t for t in TABLES.values() if os.path.abspath(t.out) == os.path.abspath(tests_dir)), None)
-    data = table.data() if table is not None else dict(tests={}, manifest=None)
-    title = (f"brax.training baselines beside the paper's architecture\n(its learning tests at the "
-             f"{scale_label(data['manifest'])})")
-    fig = fig_baselines(read_baselines(out), data["tests"], title if data["tests"] else "brax.training baselines")
-    return save(fig, os.path.join(out, "comparison.png"))
+    def tests_dir(self) -> str:
+        """The paper scale's reproduction where its learning tests exist, else the cpu scale's."""
+        paper = os.path.join(self.results, "paper")
+        tested = any(os.path.isfile(os.path.join(paper, preset, "test", condition, "steady.json"))
+                     for preset in ("skills", "paper", "extension") for condition in conditions.PAPER)
+        return paper if tested else os.path.join(self.results, "cpu")
+
+    def report(self) -> int:
+        """comparison.png: the finished baselines beside the learning tests of :meth:`tests_dir`."""
+        from experiments.document import scale_label
+        from experiments.figures import fig_baselines
+        from experiments.loading import read_baselines
+        from experiments.reproduction import TABLES
+        from imrl_jax.plotting import save
+
+        found = read_baselines(self.out)
+        if not found:
+            print(f"no baseline has finished in {self.out}: nothing to draw")
+            return 0
+        tests = next((t for t in TABLES.values() if os.path.abspath(t.out) == os.path.abspath(self.tests_dir())), None)
+        data = tests.data() if tests is not None else dict(tests={}, manifest=None)
+        title = (f"brax.training baselines beside the paper's architecture\n(its learning tests at the "
+                 f"{scale_label(data['manifest'])})") if data["tests"] else "brax.training baselines"
+        print(f"wrote {save(fig_baselines(found, data['tests'], title), os.path.join(self.out, 'comparison.png'))}")
+        return 0
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--out", default=os.path.join(ROOT, RESULTS, "baselines"),
-                   help="where the baselines are written")
-    p.add_argument("--tests", default=None, help="a reproduction's results directory to compare with "
-                                                 "(default: paper scale if it has learning tests, else cpu scale)")
-    args = p.parse_args(argv)
-    started = time.perf_counter()
-    for i, (name, options) in enumerate(STAGES, 1):
-        out_dir = os.path.join(args.out, name)
-        command = [sys.executable, "-m", "imrl_jax.baselines", *options, "--out", out_dir]
-        if os.path.isfile(os.path.join(out_dir, "summary.json")):
-            print(f"stage {i}/{len(STAGES)} {name}: done, skipped", flush=True)
-            continue
-        print(f"stage {i}/{len(STAGES)} {name} ({time.perf_counter() - started:,.0f} s elapsed): "
-              f"{' '.join(command[1:])}", flush=True)
-        if subprocess.run(command, cwd=ROOT).returncode:
-            print(f"error: stage {name} failed", file=sys.stderr)
-            return 1
-    print(f"wrote {draw(args.out, args.tests or default_tests())}")
-    return 0
-
+TABLE = BaselinesTable("baselines", os.path.join("docs", "BASELINES.md"), 11, rows=(), scale=SIZES, out=OUT,
+                       measures=tuple(baseline(agent, budget * SIZES["test_steps"], num_seeds, num_evals)
+                                      for budget, num_seeds, num_evals in ((1, 5, 11), (5, 3, 21))
+                                      for agent in ("ppo", "es")))
+all_stages, main = TABLE.all_stages, TABLE.main
+#: The studies of this module (python -m experiments finds them).
+STUDIES = (TABLE.study(__name__.rsplit(".", 1)[-1]),)
 
 if __name__ == "__main__":
-    sys.path.insert(0, ROOT)  # run as a script from anywhere: the experiments package
     sys.exit(main())

@@ -275,8 +275,8 @@ def reference(args: tuple[str, ...]) -> dict:
 
 
 def tiny_baseline(agent: str = "ppo", **overrides):
-    """A brax baseline of a few thousand steps with tiny networks and evaluations (imrl_jax.baselines)."""
-    from imrl_jax.baselines import Baseline
+    """A brax baseline of a few thousand steps with tiny networks and evaluations (imrl_jax.brax_agents)."""
+    from imrl_jax.brax_agents import Baseline
 
     sizes = dict(steps=3000, seeds=1, tasks=(1,), num_evals=3, eval_lanes=4, eval_steps=300, hidden=(16,),
                  num_envs=8, unroll_length=10, batch_size=8, num_minibatches=4, updates_per_batch=2,

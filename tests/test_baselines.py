@@ -1,4 +1,5 @@
-"""Baselines from brax.training (imrl_jax.baselines): the pipeline end to end at a tiny scale, the measure, the command."""
+"""Baselines from brax.training (imrl_jax.brax_agents, imrl_jax.baselines): the pipeline end to end at a tiny scale, the
+measure, the command, and the committed study (experiments/baselines.py)."""
 
 import csv
 import json
@@ -11,7 +12,7 @@ import pytest
 pytest.importorskip("brax", reason="the brax extra: pip install -e '.[brax]'")
 
 from helpers import ROOT, SHORT_TASK, tiny_baseline  # noqa: E402
-from imrl_jax import baselines  # noqa: E402
+from imrl_jax import baselines, brax_agents  # noqa: E402
 from imrl_jax.brax_env import TaskEnv, wrap_for_training  # noqa: E402
 from imrl_jax.config import Config  # noqa: E402
 
@@ -34,7 +35,7 @@ def test_ppo_trains_end_to_end_and_its_reaches_replay_on_the_project_step():
     reaches through the brax environment equal its replay by the project's own step."""
     config = Config(tasks=(SHORT_TASK,))  # a target 40 cm ahead: reaches come early
     b = tiny_baseline()
-    run = baselines.train_ppo(b, config, 1, seed=0)
+    run = brax_agents.train_ppo(b, config, 1, seed=0)
     assert len(run.steps) == b.num_evals and run.steps[0] == 0 and run.steps[-1] >= b.steps
     assert run.losses and all(np.isfinite(v) for v in run.losses.values()), run.losses
     assert {"policy_loss", "v_loss"} <= set(run.losses)
@@ -43,23 +44,23 @@ def test_ppo_trains_end_to_end_and_its_reaches_replay_on_the_project_step():
     total = 0
     for deterministic in (True, False):
         policy = run.make_policy(run.params, deterministic=deterministic)
-        replayed = jax.jit(lambda k: baselines.rollout(k, env, policy, 4, 400))(key)
+        replayed = jax.jit(lambda k: brax_agents.rollout(k, env, policy, 4, 400))(key)
         through_brax = jax.jit(lambda k: wrapped_reaches(env, policy, k, 4, 400))(key)
         assert replayed.shape == (4,)
         np.testing.assert_array_equal(np.asarray(through_brax), np.asarray(replayed))
         total += int(replayed.sum())
     assert total > 0  # reaches happened, so the counts compared are not all zero
     # The evaluation is that replay, as a performance: reaches / theoretical maximum.
-    acting, _ = baselines.make_evaluate(b, env, run.make_policy)(key, run.params)
+    acting, _ = brax_agents.make_evaluate(b, env, run.make_policy)(key, run.params)
     policy = run.make_policy(run.params, deterministic=False)
-    reaches = baselines.rollout(key, env, policy, b.eval_lanes, b.eval_steps).sum()
+    reaches = brax_agents.rollout(key, env, policy, b.eval_lanes, b.eval_steps).sum()
     assert float(acting) == pytest.approx(float(reaches) * config.steps_per_trip()[0] / (b.eval_lanes * b.eval_steps))
 
 
 def test_performance_is_reaches_over_the_theoretical_maximum():
     config = Config()  # task 3: 30 steps per trip; 3,000 steps allow 100 trips
-    assert baselines.performance(config, 3, 50, 3000) == pytest.approx(0.5)
-    assert baselines.performance(config, 2, [65, 0], 6500).tolist() == [0.65, 0.0]
+    assert brax_agents.performance(config, 3, 50, 3000) == pytest.approx(0.5)
+    assert brax_agents.performance(config, 2, [65, 0], 6500).tolist() == [0.65, 0.0]
 
 
 @pytest.mark.slow
@@ -122,14 +123,14 @@ def test_steps_trained_is_what_the_committed_runs_trained():
         folder = os.path.join(ROOT, "experiments", "results", "baselines", name)
         with open(os.path.join(folder, "summary.json")) as f:
             settings = json.load(f)["settings"]
-        b = baselines.Baseline(**{**settings, "tasks": tuple(settings["tasks"]), "hidden": tuple(settings["hidden"])})
+        b = brax_agents.Baseline(**{**settings, "tasks": tuple(settings["tasks"]), "hidden": tuple(settings["hidden"])})
         with open(os.path.join(folder, "runs.csv")) as f:
-            assert {int(r["steps"]) for r in csv.DictReader(f)} == {baselines.steps_trained(b)}, name
-    assert baselines.steps_trained(baselines.Baseline(agent="es", steps=20_000)) == 32_000  # one generation
+            assert {int(r["steps"]) for r in csv.DictReader(f)} == {brax_agents.steps_trained(b)}, name
+    assert brax_agents.steps_trained(brax_agents.Baseline(agent="es", steps=20_000)) == 32_000  # one generation
 
 
 def test_the_learning_curve_shows_its_last_point_past_the_budget_asked():
-    b = baselines.Baseline(agent="ppo", steps=20_000, tasks=(3,), seeds=1, num_evals=2)  # 2 updates: 20,480
+    b = brax_agents.Baseline(agent="ppo", steps=20_000, tasks=(3,), seeds=1, num_evals=2)  # 2 updates: 20,480
     curves = [dict(task=3, seed=0, step=s, performance=p) for s, p in ((0, 0.0), (20_480, 0.5))]
     ax = baselines.plot_learning_curve(b, curves).axes[0]
     assert ax.get_xlim() == (0, 20_480) and ax.get_lines()[0].get_xdata()[-1] == 20_480
@@ -157,3 +158,44 @@ def test_the_tasks_default_to_every_task_of_the_task_set(tmp_path, monkeypatch):
     monkeypatch.setattr(baselines, "run", run)
     assert baselines.main(["--agent", "es", "--task-set", str(two), "--out", str(tmp_path / "out"), "--quiet"]) == 0
     assert seen["b"].tasks == (1, 2) and seen["config"].tasks == Config().tasks[2:4]
+
+
+def test_the_study_finds_every_committed_baseline_and_its_commands_made_them():
+    """python -m experiments list baselines: 0 stages left, each the committed folder; each stage's command, parsed,
+    asks for the settings its summary.json recorded."""
+    from experiments.baselines import TABLE
+    from experiments.reproduce import stage_done
+
+    stages, scale = TABLE.all_stages()
+    assert [s.out_dir for s in stages] == [os.path.join("experiments", "results", "baselines", name)
+                                           for name in ("ppo_1M", "es_1M", "ppo_5M", "es_5M")]
+    assert all(s.kind == "baseline" and stage_done(s, scale) for s in stages)
+    for stage in stages:
+        command = TABLE.stage_command(stage)[0]
+        assert command[1:3] == ["-m", "imrl_jax.baselines"]
+        args = baselines.parser().parse_args(command[3:])
+        with open(os.path.join(ROOT, stage.out_dir, "summary.json")) as f:
+            settings = json.load(f)["settings"]
+        assert (args.out, args.agent, args.steps, args.seeds, args.evals) == (
+            stage.out_dir, settings["agent"], settings["steps"], settings["seeds"], settings["num_evals"]), stage.name
+
+
+def test_the_study_draws_the_baselines_beside_the_paper_scale_where_it_has_tests(tmp_path, capsys):
+    """The report: nothing to draw before a baseline has finished; comparison.png of what has; the learning tests
+    of the paper scale once it has any, else the cpu scale's."""
+    import dataclasses
+    import shutil
+
+    from experiments.baselines import TABLE
+
+    table = dataclasses.replace(TABLE, results=str(tmp_path / "results"), out=str(tmp_path / "baselines"))
+    assert table.report() == 0 and "nothing to draw" in capsys.readouterr().out
+    assert table.tests_dir() == str(tmp_path / "results" / "cpu")
+    steady = tmp_path / "results" / "paper" / "skills" / "test" / "LE-LS" / "steady.json"
+    steady.parent.mkdir(parents=True)
+    steady.write_text("{}")
+    assert table.tests_dir() == str(tmp_path / "results" / "paper")
+    committed = os.path.join(ROOT, "experiments", "results", "baselines", "es_5M")
+    shutil.copytree(committed, tmp_path / "baselines" / "es_5M")
+    assert table.report() == 0
+    assert os.path.getsize(tmp_path / "baselines" / "comparison.png") > 10_000

@@ -178,7 +178,8 @@ def test_device_put_replicated_shim(monkeypatch):
 
 
 def test_the_core_package_does_not_import_brax():
-    code = ("import sys, imrl_jax, imrl_jax.lifetime, imrl_jax.evolve, imrl_jax.learning_test, imrl_jax.baselines; "
+    code = ("import sys, imrl_jax, imrl_jax.lifetime, imrl_jax.evolve, imrl_jax.learning_test, imrl_jax.baselines, "
+            "imrl_jax.brax_agents; "
             "print(sorted(m for m in ('brax', 'flax', 'mujoco') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr

@@ -298,7 +298,8 @@ def test_paper_and_cpu_reports_each_name_the_other_and_an_unfinished_run_says_so
 
 def _write_baselines(root):
     """A baselines directory as imrl_jax.baselines writes it: PPO, 1M cycles, 2 seeds at 0.5 and 0.7 on every task."""
-    from imrl_jax.baselines import Baseline, summarise
+    from imrl_jax.baselines import summarise
+    from imrl_jax.brax_agents import Baseline
     from imrl_jax.config import Config
     from imrl_jax.rundir import csv_bytes
 

@@ -8,7 +8,7 @@ from experiments import __main__ as cli
 from experiments import study as S
 
 ORDER = ["selector-sweep", "timescale", "novel-tasks", "claims-screen", "reproduction", "claims-experts", "search",
-         "future-work", "reproduction-cpu", "goals", "childhood"]
+         "future-work", "reproduction-cpu", "goals", "childhood", "baselines"]
 
 
 def test_every_study_is_found_in_order():
@@ -114,7 +114,8 @@ def test_report_writes_each_studys_tables(monkeypatch):
                    "experiments.claims_study screen --report", "experiments.reproduction paper --report",
                    "experiments.claims_study experts --report", "experiments.search --report",
                    "experiments.future_work --report", "experiments.reproduction cpu --report",
-                   "experiments.goals --report", "experiments.childhood_study --report"]
+                   "experiments.goals --report", "experiments.childhood_study --report",
+                   "experiments.baselines --report"]
 
 
 def test_ctrl_c_waits_for_the_study_to_stop_and_stops_with_one_line(monkeypatch, capsys):
