@@ -339,7 +339,7 @@ def baselines_section(baselines: dict, data: dict, written: dict, rel, label: st
            "trained policy acting (sampling its actions, as the paper's learners are measured while they act) "
            "from the task's start, replayed by the project's own step; the policy's mode in the last column. The "
            "baselines' own scale is their budget of cycles per task, not this report's: the paper's learning "
-           "test gives 1,000,000. Made by `python experiments/baselines.py`; what, how and why in "
+           "test gives 1,000,000. Made by `python -m experiments run baselines`; what, how and why in "
            "[BASELINES.md](BASELINES.md)."]
     if written.get("baselines"):
         out += ["", f"![baselines]({rel(written['baselines'])})"]

@@ -55,7 +55,7 @@ def _jsonable(value):
     return value
 
 
-#: Where experiments/baselines.py writes the brax baselines (the report shows them when present).
+#: Where the baselines study (experiments/baselines.py) writes the brax baselines (the report shows them when present).
 BASELINES = os.path.join(ROOT, RESULTS, "baselines")
 
 
