@@ -22,22 +22,6 @@ def read_json(path: str) -> dict | None:
         return json.load(f)
 
 
-def read_history(path: str) -> tuple[list[int], np.ndarray] | None:
-    """A history.csv as (seeds, best fitness (generations, seeds)), or None when absent or empty."""
-    if not os.path.isfile(path):
-        return None
-    with open(path) as f:
-        rows = list(csv.DictReader(f))
-    if not rows:
-        return None
-    seeds = sorted({int(r["seed"]) for r in rows})
-    generations = max(int(r["generation"]) for r in rows) + 1
-    best = np.full((generations, len(seeds)), np.nan)
-    for r in rows:
-        best[int(r["generation"]), seeds.index(int(r["seed"]))] = float(r["best"])
-    return seeds, best
-
-
 def read_curve(path: str) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """A learning test's curve.csv as (end cycle of each bin, mean over all tests, sd over runs)."""
     if not os.path.isfile(path):
@@ -49,11 +33,11 @@ def read_curve(path: str) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
 
 def read_evolution(run_dir: str) -> dict | None:
     """An evolution's history and config, as the report reads them (None before its first generation)."""
-    history = read_history(os.path.join(run_dir, "history.csv"))
+    history = history_seeds(run_dir, ["best"])
     if history is None:
         return None
     saved = read_json(os.path.join(run_dir, "config.json")) or {}
-    return dict(dir=run_dir, seeds=history[0], best=history[1], config=saved.get("config"),
+    return dict(dir=run_dir, seeds=history[0], best=history[1][..., 0], config=saved.get("config"),
                 git_commit=saved.get("git_commit"))
 
 
@@ -162,9 +146,9 @@ def read_baselines(path: str) -> dict:
     return {name: entry for _, _, name, entry in sorted(found, key=order)}
 
 
-def history_columns(run_dir: str | None, names) -> np.ndarray | None:
-    """The columns ``names`` of a run's history.csv as (generations, seeds, names) (NaN where a seed has not written
-    a generation); None without the file or any row."""
+def history_seeds(run_dir: str | None, names) -> tuple[list[int], np.ndarray] | None:
+    """A run's seeds and the columns ``names`` of its history.csv as (generations, seeds, names) (NaN where a seed has
+    not written a generation); None without the file or any row."""
     path = os.path.join(run_dir or "", "history.csv")
     if not os.path.isfile(path):
         return None
@@ -176,4 +160,10 @@ def history_columns(run_dir: str | None, names) -> np.ndarray | None:
     values = np.full((max(int(r["generation"]) for r in rows) + 1, len(seeds), len(names)), np.nan)
     for r in rows:
         values[int(r["generation"]), seeds.index(int(r["seed"]))] = [float(r[n]) for n in names]
-    return values
+    return seeds, values
+
+
+def history_columns(run_dir: str | None, names) -> np.ndarray | None:
+    """The columns ``names`` of a run's history.csv as (generations, seeds, names); None without any row."""
+    history = history_seeds(run_dir, names)
+    return None if history is None else history[1]
