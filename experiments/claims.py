@@ -503,7 +503,7 @@ FUTURE_RULES = {
          f"the first bin of the mean learning curve at or above it; *much faster* = LE-LS needs at most "
          f"1/{MUCH_FASTER:g} of EXT-LS's cycles (or EXT-LS never reaches it). **holds** if both; **partly** "
          f"if one; **does not hold** (the hierarchy on the task's reward is enough) if neither. EXT-LS against SLE "
-         f"(the hierarchy against a flat learner, the same noise) is shown as claim 6's pairs are.",
+         "(the hierarchy against a flat learner, the same noise) is shown as claim 6's pairs are.",
     "c": f"For each learning value on which `skills` and the paper differ: its position in its gene's range (the "
          f"decoding map of MODEL.md, log scale for rates and for 1 - discount; 0-1) for each seed's best individual "
          f"of the last generation, mean over seeds; *nearer skills* when that is nearer `skills`' position than the "

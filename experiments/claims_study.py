@@ -17,6 +17,7 @@ adult values, bias and noise schedule. Claim 8's table adds 4 and 6 experts to t
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import os
 import sys
@@ -26,8 +27,8 @@ import numpy as np
 
 from experiments.reproduce import EVOLVED, TESTED
 from experiments.rule_sets import BY_NAME, RULE_SETS, RuleSet
-from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN, Study, write_table
-from experiments.table import Measure, Row, Table
+from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN, write_table
+from experiments.table import Measure, Row, Table, dispatch, studies_of
 from imrl_jax import conditions
 
 OUT = os.path.join(RESULTS, "claims")
@@ -611,20 +612,9 @@ EXPERTS_TABLE = ExpertsTable("claims-experts", "docs/CLAIMS.md", 5, scale=SCREEN
 TABLES = {"screen": SCREEN_TABLE, "experts": EXPERTS_TABLE}
 
 
-def stages_for(argv) -> tuple[list, dict]:
-    """The stages of the table ``argv`` names, and their scale (for ``python -m experiments list``)."""
-    return TABLES[argv[0]].all_stages()
-
-
-def main(argv=None) -> int:
-    """``python -m experiments.claims_study [screen|experts] [--report] [runner options]``."""
-    argv = list(sys.argv[1:] if argv is None else argv)
-    return (TABLES[argv.pop(0)] if argv and argv[0] in TABLES else SCREEN_TABLE).main(argv)
-
-
 #: The studies of this module (python -m experiments finds them).
-STUDIES = tuple(Study(table.name, "claims_study", table.document, table.order, (name,), (name, "--report"))
-                for name, table in TABLES.items())
+STUDIES = studies_of("claims_study", TABLES)
+main = functools.partial(dispatch, TABLES)
 
 
 if __name__ == "__main__":

@@ -33,11 +33,12 @@ Scales (what ``cpu`` shrinks, and by how much, is the whole difference):
 from __future__ import annotations
 
 import dataclasses
+import functools
 import os
 import sys
 
-from experiments.study import REPRODUCTION, RESULTS, SCALES, Study
-from experiments.table import Row, Table
+from experiments.study import REPRODUCTION, RESULTS, SCALES
+from experiments.table import Row, Table, dispatch, studies_of
 from imrl_jax import conditions
 
 
@@ -107,20 +108,9 @@ CPU_TABLE = ReproductionTable(
 TABLES = {"paper": PAPER_TABLE, "cpu": CPU_TABLE}
 
 
-def stages_for(argv) -> tuple[list, dict]:
-    """The stages of the table ``argv`` names, and their scale (for ``python -m experiments list``)."""
-    return TABLES[argv[0]].all_stages()
-
-
-def main(argv=None) -> int:
-    """``python -m experiments.reproduction [paper|cpu] [--report] [runner options]``."""
-    argv = list(sys.argv[1:] if argv is None else argv)
-    return (TABLES[argv.pop(0)] if argv and argv[0] in TABLES else PAPER_TABLE).main(argv)
-
-
 #: The studies of this module (python -m experiments finds them).
-STUDIES = tuple(Study(table.name, "reproduction", table.document, table.order, (name,), (name, "--report"))
-                for name, table in TABLES.items())
+STUDIES = studies_of("reproduction", TABLES)
+main = functools.partial(dispatch, TABLES)
 
 
 if __name__ == "__main__":

@@ -61,7 +61,9 @@ class Study:
     def stages(self):
         """Its stages (``reproduce.Stage``) and their scale, as its run would plan them now."""
         module = importlib.import_module(f"experiments.{self.module}")
-        return module.stages_for(list(self.argv)) if self.argv else module.all_stages()
+        if self.argv and self.argv[0] in getattr(module, "TABLES", {}):  # a module of several tables
+            return module.TABLES[self.argv[0]].all_stages()
+        return module.all_stages()
 
     def command(self, report: bool = False, options: tuple[str, ...] = ()) -> list[str]:
         """The command line that runs (or goes on with) its stages with the runner's ``options`` (--jobs, --executor),

@@ -371,3 +371,16 @@ class Table:
     def study(self, module: str) -> Study:
         """Its entry for ``python -m experiments``."""
         return Study(self.name, module, self.document, self.order)
+
+
+def studies_of(module: str, tables: dict[str, Table]) -> tuple[Study, ...]:
+    """The studies of a module of several tables (``TABLES``), each run as ``python -m experiments.MODULE NAME``."""
+    return tuple(Study(table.name, module, table.document, table.order, (name,), (name, "--report"))
+                 for name, table in tables.items())
+
+
+def dispatch(tables: dict[str, Table], argv=None) -> int:
+    """``python -m experiments.MODULE [NAME] [--report] [runner options]``: table NAME's command line (the first
+    table's when none is named)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    return (tables[argv.pop(0)] if argv and argv[0] in tables else next(iter(tables.values()))).main(argv)
