@@ -558,3 +558,34 @@ def test_search_states_of_more_than_a_thousand_arrays_come_back_in_order():
     leaves = [np.float32(i) for i in range(1001)]
     saved = _saved(RunState(np.asarray(1), None, None, None, None, None, search=leaves))
     assert [float(x) for x in _search_from_saved(leaves, saved["search"])] == list(range(1001))
+
+
+def test_the_options_build_the_config_seeds_and_search_without_running_anything():
+    """evolve_options holds the command line; evolve keeps its names (experiments/table.py keys rows with them)."""
+    from imrl_jax import evolve_options
+    from imrl_jax.strategies import describe
+
+    assert (evolve.parser, evolve.build_config, evolve.build_strategy) == (
+        evolve_options.parser, evolve_options.build_config, evolve_options.build_strategy)
+    args = evolve_options.parser().parse_args(["--cond", "EE-ES", "--preset", "small", "--seeds", "3", "--first-seed",
+                                               "5", "--population", "8", "--set", "trace_lambda=0.5"])
+    config, seeds = evolve_options.build_config(args)
+    assert (config.condition, config.population_size, config.trace_lambda, config.num_generations, seeds) == (
+        "EE-ES", 8, 0.5, 10, [5, 6, 7])
+    saved = (config.replace(num_generations=4), [5, 6, 7])  # resuming: what the command line leaves out is the run's
+    resumed, resumed_seeds = evolve_options.build_config(evolve_options.parser().parse_args(["--resume"]), saved)
+    assert (resumed.num_generations, resumed.population_size, resumed_seeds) == (4, 8, [5, 6, 7])
+    assert describe(evolve_options.build_strategy(args, config)) == {"strategy": "ga", "settings": {}}
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--cond", "NOPE"], "--cond: unknown condition 'NOPE' (choose from LE-LS, EE-LS, EE-ES"),
+    (["--resume"], "--resume: give the run to continue with --out RUN"),
+    ([], "--cond: required (or --resume --out RUN to continue a run with its own config)"),
+])
+def test_the_condition_check_names_the_option(argv, message):
+    from imrl_jax import evolve_options
+
+    with pytest.raises(evolve.UsageError) as error:
+        evolve_options.check_condition(evolve_options.parser().parse_args(argv))
+    assert str(error.value).startswith(message)
