@@ -25,11 +25,14 @@ from typing import NamedTuple
 
 import numpy as np
 
+from experiments.claims import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY
+from experiments.markdown import head, line
 from experiments.reproduce import EVOLVED, TESTED
 from experiments.rule_sets import BY_NAME, RULE_SETS, RuleSet
 from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN, write_table
 from experiments.table import Measure, Row, Table, dispatch, studies_of
 from imrl_jax import conditions
+from imrl_jax.plotting import new_figure, save
 
 OUT = os.path.join(RESULTS, "claims")
 
@@ -217,57 +220,40 @@ def sizes(rule: RuleSet, condition: str) -> str:
 TABLE_START, TABLE_END = "<!-- claims table: python -m experiments report claims-screen -->", "<!-- end of table -->"
 
 
+#: A verdict in one word, as the map's table and figure show it.
+SHORT = {HOLDS: "holds", PARTLY: "partly", DOES_NOT: "no", NOT_AVAILABLE: "n/a"}
+
+
 def table_markdown(measured: dict, names) -> str:
     """The claims map as markdown: rule sets as rows, the seven claims as columns (verdict, then the numbers)."""
-    short = {"holds": "**holds**", "partly": "partly", "does not hold": "no", "n/a": "n/a"}
-    lines = ["| rule set | runs (LE-LS, SLE) | " + " | ".join(f"claim {k}" for k in range(1, 8)) + " |",
-             "|---|---|" + "---|" * 7]
+    lines = head("rule set", "runs (LE-LS, SLE)", *(f"claim {k}" for k in range(1, 8)))
     for name in names:
+        found = measured.get(name, {}).get("claims")
+        cells = [f"{'**holds**' if c['verdict'] == HOLDS else SHORT[c['verdict']]}: {c['measured'].split(';')[0]}"
+                 for c in (found[k] for k in range(1, 8))] if found else ["-"] * 7
         rule = BY_NAME[name]
-        if name not in measured:
-            lines.append(f"| `{name}` | not finished | " + " | ".join("-" for _ in range(7)) + " |")
-            continue
-        cells = []
-        for k in range(1, 8):
-            claim = measured[name]["claims"][k]
-            cells.append(f"{short[claim['verdict']]}: {claim['measured'].split(';')[0]}")
-        lines.append(f"| `{name}` | {sizes(rule, 'LE-LS')}, {sizes(rule, 'SLE')} | " + " | ".join(cells) + " |")
+        lines.append(line(f"`{name}`", f"{sizes(rule, 'LE-LS')}, {sizes(rule, 'SLE')}" if found else "not finished",
+                          *cells))
     return "\n".join(lines)
 
 
-#: Where the claims map's figure goes.
-FIGURE = os.path.join("docs", "claims", "claims_map.png")
+#: The resolution the claims map's figures are drawn at.
+DPI = 120
 
 
-def save_figure(fig, path: str) -> str:
-    """Lay out, write (creating its folder) and close a figure; its path."""
-    import matplotlib.pyplot as plt
-
-    fig.tight_layout()
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
-
-
-def figure(measured: dict, names, path: str = FIGURE) -> str:
+def figure(measured: dict, names, path: str) -> str:
     """The claims map as a grid: rule sets as rows, claims as columns, coloured by verdict; written to ``path``."""
-    import matplotlib
+    from matplotlib.patches import Rectangle
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    shades = {"holds": "#2e7d32", "partly": "#f9a825", "does not hold": "#c62828", "n/a": "#bdbdbd"}
-    fig, ax = plt.subplots(figsize=(8.5, 0.45 * len(names) + 1.6))
+    shades = {HOLDS: "#2e7d32", PARTLY: "#f9a825", DOES_NOT: "#c62828", NOT_AVAILABLE: "#bdbdbd"}
+    fig = new_figure(8.5, 0.45 * len(names) + 1.6)
+    ax = fig.add_subplot()
     for row, name in enumerate(names):
         for k in range(1, 8):
             verdict = measured[name]["claims"][k]["verdict"] if name in measured else None
-            ax.add_patch(plt.Rectangle((k - 1, row), 0.95, 0.9, color=shades.get(verdict, "white"),
-                                       ec="0.6", lw=0.5))
-            ax.text(k - 0.53, row + 0.45, {"holds": "holds", "partly": "partly", "does not hold": "no",
-                                           "n/a": "n/a"}.get(verdict, "not run"),
-                    ha="center", va="center", fontsize=8, color="white" if verdict in ("holds", "does not hold")
-                    else "black")
+            ax.add_patch(Rectangle((k - 1, row), 0.95, 0.9, color=shades.get(verdict, "white"), ec="0.6", lw=0.5))
+            ax.text(k - 0.53, row + 0.45, SHORT.get(verdict, "not run"), ha="center", va="center", fontsize=8,
+                    color="white" if verdict in (HOLDS, DOES_NOT) else "black")
     ax.set_xlim(0, 7)
     ax.set_ylim(len(names), 0)
     ax.set_xticks([k - 0.53 for k in range(1, 8)], [f"claim {k}" for k in range(1, 8)], fontsize=9)
@@ -277,12 +263,12 @@ def figure(measured: dict, names, path: str = FIGURE) -> str:
         side.set_visible(False)
     ax.set_title("The paper's seven claims under each rule set (the report's verdict rules; paper lengths)",
                  fontsize=10)
-    return save_figure(fig, path)
+    fig.tight_layout()
+    return save(fig, path, DPI)
 
 
 #: The rows that differ from ``skills`` only in the learned actors' initial speed bias (``skills`` is bias 4).
 DIAL_ROWS = ("skills-bias0", "skills-bias1", "skills-bias2", "skills")
-DIAL_FIGURE = os.path.join("docs", "claims", "speed_dial.png")
 
 
 class DialPoint(NamedTuple):
@@ -313,15 +299,11 @@ def speed_dial(claims: dict, rows=DIAL_ROWS) -> list[DialPoint]:
     return sorted(points)
 
 
-def dial_figure(points: list[DialPoint], path: str = DIAL_FIGURE) -> str:
+def dial_figure(points: list[DialPoint], path: str) -> str:
     """LE-LS's final best and learning-test level against the learned actors' initial speed, EE-LS's as lines."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     speed = [100 * p.speed for p in points]
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.6), sharey=True)
+    fig = new_figure(9, 3.6)
+    axes = fig.subplots(1, 2, sharey=True)
     ax = axes[0]
     ax.plot(speed, [p.le_ls_recorded for p in points], "o-", color="C0", label="LE-LS, recorded best")
     ax.errorbar(speed, [p.le_ls_fresh for p in points], [p.le_ls_fresh_sd for p in points], fmt="s--", color="C0",
@@ -337,7 +319,8 @@ def dial_figure(points: list[DialPoint], path: str = DIAL_FIGURE) -> str:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="lower right")
     fig.suptitle("skills with only the initial speed bias changed: where LE-LS passes EE-LS", fontsize=10)
-    return save_figure(fig, path)
+    fig.tight_layout()
+    return save(fig, path, DPI)
 
 
 #: Where the fresh-life table goes in docs/CLAIMS.md.
@@ -347,16 +330,11 @@ FRESH_END = "<!-- end of fresh-life table -->"
 
 def fresh_table(measured: dict, names) -> str:
     """Recorded final best fitness (claims 1-4's measure) beside the fresh-life fitness of each seed's best genome."""
-    lines = ["| rule set | LE-LS recorded / fresh | EE-LS recorded / fresh | EE-ES recorded / fresh |", "|---|---|---|---|"]
-    for name in names:
-        if name not in measured:
-            continue
-        cells = []
-        for condition in EVOLVED:
-            f = measured[name].get("fresh", {}).get(condition)
-            cells.append("-" if f is None else f"{f['recorded']:.3f} / {f['fresh']:.3f} (sd {f['fresh_sd_over_seeds']:.3f}, "
-                                               f"{f['seeds']} seeds)")
-        lines.append(f"| `{name}` | " + " | ".join(cells) + " |")
+    lines = head("rule set", *(f"{c} recorded / fresh" for c in EVOLVED))
+    for name in (name for name in names if name in measured):
+        fresh = [measured[name].get("fresh", {}).get(c) for c in EVOLVED]
+        lines.append(line(f"`{name}`", *("-" if f is None else f"{f['recorded']:.3f} / {f['fresh']:.3f} (sd "
+                                          f"{f['fresh_sd_over_seeds']:.3f}, {f['seeds']} seeds)" for f in fresh)))
     return "\n".join(lines)
 
 
@@ -404,9 +382,11 @@ def measure_experts(rule: RuleSet, found: dict, summary: dict | None = None, rep
     expected = [(m, c, k) for m in ("final", "steady") for c in EXPERT_CONDITIONS for k in (3, *EXPERT_COUNTS)]
     have = {"final": final, "steady": steady}
     missing = [f"{c} {m} {k}" for m, c, k in expected if (c, k) not in have[m]]
-    levels = [ExpertsLevel(rule.name, c, m, k, float(np.mean(v)), float(np.std(v, ddof=1)) if len(v) > 1 else 0.0,
-                           len(v)) for m, values in have.items() for (c, k), v in sorted(values.items())]
-    return dict(claim, sizes=sizes_, missing=missing, levels=[level._asdict() for level in levels], runs=runs)
+    # a point of claim 8's figure: "final", the final best per seed, or "steady", the steady state per run (sd ddof 1)
+    levels = [dict(rule=rule.name, condition=c, measure=m, num_experts=k, mean=float(np.mean(v)),
+                   sd=float(np.std(v, ddof=1)) if len(v) > 1 else 0.0, count=len(v))
+              for m, values in have.items() for (c, k), v in sorted(values.items())]
+    return dict(claim, sizes=sizes_, missing=missing, levels=levels, runs=runs)
 
 
 def experts_probe(evolved: str, config: dict, summary: dict | None = None, owner: str = "",
@@ -432,26 +412,14 @@ def experts_probe(evolved: str, config: dict, summary: dict | None = None, owner
                 idle_experts=idle)
 
 
-class ExpertsLevel(NamedTuple):
-    """One point of claim 8's figure: a rule set's condition with ``num_experts`` experts, by one measure."""
-
-    rule: str
-    condition: str
-    measure: str  # "final": final best fitness per seed; "steady": the learning test's steady state per run
-    num_experts: int
-    mean: float
-    sd: float  # over seeds (final) or runs (steady), ddof 1
-    count: int
-
-
 def experts_table(measured: dict) -> str:
     """Claim 8 as markdown: one row per rule set, the verdict and the comparisons (``so far`` while runs are missing)."""
-    lines = ["| rule set | runs (seeds x generations) | claim 8 |", "|---|---|---|"]
+    lines = head("rule set", "runs (seeds x generations)", "claim 8")
     for name, claim in measured.items():
-        runs = ", ".join(f"{k}: {v}" for k, v in claim["sizes"].items()) or "none finished"
         missing = claim.get("missing") or []
         verdict = f"{claim['verdict']} so far (not finished: {', '.join(missing)})" if missing else claim["verdict"]
-        lines.append(f"| `{name}` | {runs} | {verdict}: {claim['measured']} |")
+        lines.append(line(f"`{name}`", ", ".join(f"{k}: {v}" for k, v in claim["sizes"].items()) or "none finished",
+                          f"{verdict}: {claim['measured']}"))
     return "\n".join(lines)
 
 
@@ -459,9 +427,9 @@ def experts_runs_table(measured: dict) -> str:
     """Claim 8's runs as markdown, each once (a shared run under its owner): fitness, and what the best do."""
     levels = {(p["rule"], p["condition"], p["measure"], p["num_experts"]): p
               for claim in measured.values() for p in claim.get("levels", [])}
-    lines = ["| run | experts | seeds x generations | final best (recorded) | fresh lives (sd over seeds) | steady state "
-             "(sd over runs) | best individuals following 0/1/2/3 colours | experts following none (mean) |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = head("run", "experts", "seeds x generations", "final best (recorded)", "fresh lives (sd over seeds)",
+                 "steady state (sd over runs)", "best individuals following 0/1/2/3 colours",
+                 "experts following none (mean)")
     seen = set()
     for name, claim in measured.items():
         for run in claim.get("runs", []):
@@ -475,8 +443,7 @@ def experts_runs_table(measured: dict) -> str:
                      f"{steady['mean']:.3f} ({steady['sd']:.3f})" if steady else "-",
                      "-" if run["colours"] is None else "/".join(map(str, run["colours"])),
                      "-" if run["idle_experts"] is None else f"{run['idle_experts']:.1f}"]
-            lines.append(f"| {run['rule']} {run['condition']} | {run['num_experts']} | {run['size']} | "
-                         + " | ".join(cells) + " |")
+            lines.append(line(f"{run['rule']} {run['condition']}", run["num_experts"], run["size"], *cells))
     return "\n".join(lines)
 
 
@@ -491,14 +458,10 @@ EXPERTS_FIGURE = os.path.join("docs", "claims", "experts.png")
 
 def experts_figure(measured: dict, path: str = EXPERTS_FIGURE) -> str:
     """Final best fitness and steady state against the number of experts, a line per rule set and condition."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from experiments.claims import ABOUT
 
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.8), sharey=True)
+    fig = new_figure(9, 3.8)
+    axes = fig.subplots(1, 2, sharey=True)
     titles = {"final": "a. final best fitness (recorded best; sd over seeds)",
               "steady": "b. learning tests' steady state (sd over runs)"}
     markers = {"LE-LS": "o", "EE-LS": "s"}
@@ -528,16 +491,15 @@ def experts_figure(measured: dict, path: str = EXPERTS_FIGURE) -> str:
         ax.legend(fontsize=8, loc="upper right")
     axes[0].set_ylabel("fitness")
     fig.suptitle("claim 8: more experts, 100 generations (shaded: within [0.8, 1.25] of 3 experts)", fontsize=10)
-    return save_figure(fig, path)
+    fig.tight_layout()
+    return save(fig, path, DPI)
 
 
 def reproduction_summary(document: str) -> dict | None:
     """The reproduction report's summary beside ``document`` (reproduction/summary.json), or None."""
-    path = os.path.join(os.path.dirname(document), "reproduction", "summary.json")
-    if not os.path.isfile(path):
-        return None
-    with open(path) as f:
-        return json.load(f)
+    from experiments.loading import read_json
+
+    return read_json(os.path.join(os.path.dirname(document), "reproduction", "summary.json"))
 
 
 def write_experts(table: ClaimsTable) -> dict:
