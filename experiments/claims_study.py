@@ -132,21 +132,23 @@ def load_runs(name: str, runs: RowRuns) -> dict:
     return data
 
 
-class SharedProbes(NamedTuple):
-    """The reproduction report's probes of a shared run (None where the report has none)."""
+def probed(folder: str, config: dict | None, summary: dict | None = None, owner: str = "",
+           condition: str = "") -> tuple[list | None, list | None, dict | None]:
+    """What a finished run's best genomes do: the distinct colours each of the 10 best per seed follows (claim 7's
+    junction probe), how many of its experts follow none, and each seed's best in fresh lives (``run_fresh``'s form).
 
-    colours: dict | None  # colours followed per best individual
-    best_life: dict | None  # the relived best individual (its fresh lives per seed among them)
+    Kept beside the run (probe.json, fresh.json); a reproduction run (``summary`` given: its report's, the run
+    ``owner``'s) is read from that report, which keeps only the colours followed (not the idle experts)."""
+    from experiments.claims import NUM_BEST
+    from experiments.relive import colours_followed, reproduction_fresh, run_fresh, run_probe
 
-
-def shared_numbers(reproduction_summary: dict, owner: str | None, condition: str) -> SharedProbes | None:
-    """The reproduction report's probes of the run of ``condition`` under variant ``owner`` (None: not the
-    reproduction's run)."""
-    if owner is None:
-        return None
-    key = f"{owner}/{condition}"
-    return SharedProbes(reproduction_summary.get("colours_followed", {}).get(key),
-                        reproduction_summary.get("best_individuals", {}).get(key))
+    if summary is not None:
+        colours = (summary.get("colours_followed") or {}).get(f"{owner}/{condition}")
+        return colours, None, reproduction_fresh(summary, owner, condition)
+    followed = (run_probe(folder, config, NUM_BEST) or {}).get("followed")
+    if followed is None:
+        return None, None, run_fresh(folder, config)
+    return colours_followed(followed), [sum(c == -1 for c in f) for f in followed], run_fresh(folder, config)
 
 
 def measure_runs(name: str, runs: RowRuns, reproduction_summary: dict, sle_whole_test: bool = False) -> dict:
@@ -154,35 +156,24 @@ def measure_runs(name: str, runs: RowRuns, reproduction_summary: dict, sle_whole
 
     Shared runs reuse the reproduction report's probes (docs/reproduction/summary.json: colours
     followed by the 10 best of each seed, the relived best EE-ES individual); a row's own
-    LE-LS and EE-LS are probed here as the report probes them (LE-LS after a fresh childhood, then
-    the junction probe), and each seed's best genome lives 10 fresh lives.
+    LE-LS and EE-LS are probed here as the report probes them (:func:`probed`).
     """
-    from experiments.claims import NUM_BEST, final_best, measure
-    from experiments.relive import colours_followed, run_fresh, run_probe
+    from experiments.claims import final_best, measure
 
     data = load_runs(name, runs)
     probes, lives, fresh = {}, {}, {}
-    shared_runs = {c: shared_numbers(reproduction_summary, runs.reproduction.get(c), c) for c in EVOLVED}
-    for condition, shared in shared_runs.items():
-        run = data["evolutions"].get((name, condition))
-        if shared is not None:
-            if conditions.get(condition).learns:  # EE-ES learns nothing: no learned experts to probe
-                probes[name, condition] = shared.colours
-            per_seed = (shared.best_life or {}).get("fresh_mean_per_seed")
-        else:
-            per_seed = None  # a row without this condition's run (runs.evolutions lacks it) has nothing to live
-            population = os.path.join(runs.evolutions.get(condition, ""), "final_population.npz")
-            if run is not None and os.path.isfile(population):
-                followed = run_probe(runs.evolutions[condition], run["config"], NUM_BEST)["followed"]
-                probes[name, condition] = colours_followed(followed)  # claim 7's probe, kept beside the run
-                print(f"fresh lives of each seed's best {condition} genome ({name})", flush=True)
-                per_seed = run_fresh(runs.evolutions[condition], run["config"])["mean_per_seed"]
-        if run is not None and per_seed is not None:  # the recorded best beside the same genomes' fresh lives
-            fresh[condition] = dict(recorded=float(final_best(run["best"]).mean()), fresh=float(np.mean(per_seed)),
-                                    fresh_sd_over_seeds=float(np.std(per_seed, ddof=1)), seeds=len(per_seed))
-    ee_es = shared_runs["EE-ES"]
-    if ee_es is not None and ee_es.best_life is not None:
-        lives["paper", "EE-ES"] = ee_es.best_life
+    for condition, folder in runs.evolutions.items():
+        run, owner = data["evolutions"].get((name, condition)), runs.reproduction.get(condition)
+        if run is None:
+            continue
+        probes[name, condition], _, lived = probed(folder, run["config"], reproduction_summary if owner else None,
+                                                   owner or "", condition)
+        if lived is not None:  # the recorded best beside the same genomes' fresh lives
+            fresh[condition] = dict(recorded=float(final_best(run["best"]).mean()), fresh=lived["mean"],
+                                    fresh_sd_over_seeds=lived["sd_over_seeds"], seeds=len(lived["mean_per_seed"]))
+    ee_es = (reproduction_summary.get("best_individuals") or {}).get(f"{runs.reproduction.get('EE-ES')}/EE-ES")
+    if ee_es is not None:  # the reproduction's relived best EE-ES individual: claim 4's paths
+        lives["paper", "EE-ES"] = ee_es
     measured = measure(data, lives, probes, sle_whole_test=sle_whole_test)[name]
     measured["fresh"] = fresh
     return measured
@@ -375,9 +366,12 @@ def measure_experts(rule: RuleSet, found: dict, summary: dict | None = None, rep
                 steady[condition, k] = test["steady"]["steady_per_run"]
             if done:
                 variant = reproduction_variant(evolved, reproduction)
+                colours, idle, fresh = probed(evolved, run["config"], summary if variant else None, variant or "",
+                                              condition)
                 runs.append(dict(rule=owner, condition=condition, num_experts=k, size=sizes_[f"{condition} {k}"],
-                                 **experts_probe(evolved, run["config"], summary if variant else None, variant or "",
-                                                 condition)))
+                                 fresh=fresh and fresh["mean"], fresh_sd=fresh and fresh["sd_over_seeds"],
+                                 colours=None if colours is None else [colours.count(c) for c in range(4)],
+                                 idle_experts=None if idle is None else float(np.mean(idle))))
     claim = claim_experts(final, steady)
     expected = [(m, c, k) for m in ("final", "steady") for c in EXPERT_CONDITIONS for k in (3, *EXPERT_COUNTS)]
     have = {"final": final, "steady": steady}
@@ -387,29 +381,6 @@ def measure_experts(rule: RuleSet, found: dict, summary: dict | None = None, rep
                    sd=float(np.std(v, ddof=1)) if len(v) > 1 else 0.0, count=len(v))
               for m, values in have.items() for (c, k), v in sorted(values.items())]
     return dict(claim, sizes=sizes_, missing=missing, levels=levels, runs=runs)
-
-
-def experts_probe(evolved: str, config: dict, summary: dict | None = None, owner: str = "",
-                  condition: str = "") -> dict:
-    """A finished run's best genomes: each seed's best in 10 fresh lives, and the junction probe of each seed's 10
-    best (claim 7's: how many distinct colours an individual's experts follow, and how many experts follow none).
-
-    Kept beside the run (fresh.json, probe.json); a reproduction run (``summary`` given) is read from its report,
-    which keeps only the number of colours each individual follows."""
-    from experiments.claims import NUM_BEST
-    from experiments.relive import colours_followed, reproduction_fresh, run_fresh, run_probe
-
-    if summary is not None:
-        fresh = reproduction_fresh(summary, owner, condition)
-        distinct, idle = (summary.get("colours_followed") or {}).get(f"{owner}/{condition}"), None
-    else:
-        fresh, probe = run_fresh(evolved, config), run_probe(evolved, config, NUM_BEST)
-        followed = probe["followed"] if probe else None
-        distinct = None if followed is None else colours_followed(followed)
-        idle = None if followed is None else float(np.mean([sum(c == -1 for c in f) for f in followed]))
-    return dict(fresh=None if fresh is None else fresh["mean"], fresh_sd=None if fresh is None else fresh["sd_over_seeds"],
-                colours=None if distinct is None else [int(sum(d == c for d in distinct)) for c in range(4)],
-                idle_experts=idle)
 
 
 def experts_table(measured: dict) -> str:
