@@ -119,17 +119,11 @@ def load_runs(name: str, runs: RowRuns) -> dict:
     """A row's runs in the form the report's claims read (one variant: ``name``)."""
     from experiments.loading import read_evolution, read_test
 
-    data = dict(results=None, manifest=dict(sizes=dict(generations=SCREEN["generations"])), variants=[name],
-                evolutions={}, tests={})
-    for condition, folder in runs.evolutions.items():
-        run = read_evolution(folder)
-        if run is not None:
-            data["evolutions"][name, condition] = run
-    for condition, folder in runs.tests.items():
-        test = read_test(folder)
-        if test is not None:
-            data["tests"][name, condition] = test
-    return data
+    evolutions = {(name, c): run for c, folder in runs.evolutions.items()
+                  if (run := read_evolution(folder)) is not None}
+    tests = {(name, c): test for c, folder in runs.tests.items() if (test := read_test(folder)) is not None}
+    return dict(results=None, manifest=dict(sizes=dict(generations=SCREEN["generations"])), variants=[name],
+                evolutions=evolutions, tests=tests)
 
 
 def probed(folder: str, config: dict | None, summary: dict | None = None, owner: str = "",
@@ -489,40 +483,38 @@ def write_experts(table: ClaimsTable) -> dict:
     return claim8
 
 
-def write_claims(table: ClaimsTable) -> int:
-    """Measure every finished rule set; write claims.json, the document's tables and figures, and claim 8's."""
-    summary, measured = reproduction_summary(table.document) or {}, {}
-    reproduction = os.path.join(table.results, os.path.relpath(REPRODUCTION, RESULTS))
-    names = [rule.name for rule in RULE_SETS]
-    for name in names:
-        rule = BY_NAME[name]
-        if table.finished(rule):
-            print(f"measuring {name}", flush=True)
-            measured[name] = measure_runs(name, table.runs_of(rule), summary, sle_whole_test=rule.sle_noise_steps == 0)
-    os.makedirs(table.out, exist_ok=True)
-    numbers = {name: {**{str(k): v for k, v in m["claims"].items()}, "fresh": m.get("fresh", {})}
-               for name, m in measured.items()}
-    with open(os.path.join(table.out, "claims.json"), "w") as f:
-        json.dump(dict(sizes=dict(screen=SCREEN, full=SCALES["paper"]), rule_sets={r.name: r._asdict() for r in RULE_SETS},
-                       claims=numbers), f, indent=2, default=str)
-    write_table(table.document, table_markdown(measured, names), TABLE_START, TABLE_END)
-    write_table(table.document, fresh_table(measured, names), FRESH_START, FRESH_END)
-    figures = os.path.join(os.path.dirname(table.document), "claims")
-    figure(measured, names, os.path.join(figures, "claims_map.png"))
-    points = speed_dial(numbers)
-    if len(points) > 1:
-        dial_figure(points, os.path.join(figures, "speed_dial.png"))
-    write_experts(dataclasses.replace(EXPERTS_TABLE, results=table.results, out=table.out, document=table.document))
-    print(f"wrote {table.document}'s tables and {os.path.join(table.out, 'claims.json')}: {len(measured)} of "
-          f"{len(names)} rule sets finished ({reproduction})")
-    return 0
-
-
 class ScreenTable(ClaimsTable):
     """The claims map: every rule set's runs; its report, the map's tables and figures (and claim 8's)."""
 
     def report(self) -> int:
-        return write_claims(self)
+        """Measure every finished rule set; write claims.json, the document's tables and figures, and claim 8's."""
+        summary, measured = reproduction_summary(self.document) or {}, {}
+        reproduction = os.path.join(self.results, os.path.relpath(REPRODUCTION, RESULTS))
+        names = [rule.name for rule in RULE_SETS]
+        for name in names:
+            rule = BY_NAME[name]
+            if self.finished(rule):
+                print(f"measuring {name}", flush=True)
+                measured[name] = measure_runs(name, self.runs_of(rule), summary,
+                                              sle_whole_test=rule.sle_noise_steps == 0)
+        os.makedirs(self.out, exist_ok=True)
+        numbers = {name: {**{str(k): v for k, v in m["claims"].items()}, "fresh": m.get("fresh", {})}
+                   for name, m in measured.items()}
+        with open(os.path.join(self.out, "claims.json"), "w") as f:
+            rule_sets = {r.name: r._asdict() for r in RULE_SETS}
+            json.dump(dict(sizes=dict(screen=SCREEN, full=SCALES["paper"]), rule_sets=rule_sets, claims=numbers), f,
+                      indent=2, default=str)
+        write_table(self.document, table_markdown(measured, names), TABLE_START, TABLE_END)
+        write_table(self.document, fresh_table(measured, names), FRESH_START, FRESH_END)
+        figures = os.path.join(os.path.dirname(self.document), "claims")
+        figure(measured, names, os.path.join(figures, "claims_map.png"))
+        points = speed_dial(numbers)
+        if len(points) > 1:
+            dial_figure(points, os.path.join(figures, "speed_dial.png"))
+        write_experts(dataclasses.replace(EXPERTS_TABLE, results=self.results, out=self.out, document=self.document))
+        print(f"wrote {self.document}'s tables and {os.path.join(self.out, 'claims.json')}: {len(measured)} of "
+              f"{len(names)} rule sets finished ({reproduction})")
+        return 0
 
 
 class ExpertsTable(ClaimsTable):

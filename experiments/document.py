@@ -136,7 +136,8 @@ def specialisation_rows(lives: dict) -> list[dict]:
 
 def panels(figures: dict, variants: list[str], what: str, rel) -> list[str]:
     """A figure of each variant that has one (``figures``: variant -> path), under the variant's name."""
-    return [text for v in variants if v in figures for text in ("", f"**{v}**", "", f"![{what}, {v}]({rel(figures[v])})")]
+    return [text for v in variants if v in figures
+            for text in ("", f"**{v}**", "", f"![{what}, {v}]({rel(figures[v])})")]
 
 
 def write_document(path: str, figures: str, data: dict, numbers: dict, lives: dict, spec_rows: list[dict],

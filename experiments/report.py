@@ -84,8 +84,8 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
             written["fig3b"][variant] = save(fig_learning(tests, f"Fig. 3b, {variant} rules ({short})"),
                                              at(f"fig3b_{variant}.png"))
         if evolutions or tests:  # the three panels side by side, as the paper draws them
-            written["fig3"][variant] = save(fig3(evolutions, tests, steady, variant, f"Fig. 3, {variant} rules ({short})"),
-                                            at(f"fig3_{variant}.png"))
+            written["fig3"][variant] = save(fig3(evolutions, tests, steady, variant,
+                                                 f"Fig. 3, {variant} rules ({short})"), at(f"fig3_{variant}.png"))
     if steady:
         variants = [v for v in data["variants"] if any((v, c) in steady for c in TESTED)]
         written["fig3c"] = save(fig_steady(steady, variants, f"Fig. 3c: steady state ({short})"), at("fig3c.png"))
