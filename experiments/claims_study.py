@@ -342,7 +342,7 @@ def experts_runs(table: ClaimsTable) -> dict[tuple[str, str, int], tuple[str, st
 
 def measure_experts(rule: RuleSet, found: dict, summary: dict | None = None, reproduction: str = REPRODUCTION) -> dict:
     """Claim 8 for a rule set: its finished 4- and 6-expert runs against its own 3-expert ones (``found``:
-    :func:`experts_runs`), and what each run's best individuals do (:func:`experts_probe`; ``summary``: the
+    :func:`experts_runs`), and what each run's best individuals do (:func:`probed`; ``summary``: the
     reproduction report's, for its runs)."""
     from experiments.claims import claim_experts, final_best
     from experiments.loading import read_evolution, read_test
