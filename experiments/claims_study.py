@@ -25,11 +25,14 @@ from typing import NamedTuple
 
 import numpy as np
 
+from experiments.claims import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY
+from experiments.markdown import head, line
 from experiments.reproduce import EVOLVED, TESTED
 from experiments.rule_sets import BY_NAME, RULE_SETS, RuleSet
 from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN, write_table
 from experiments.table import Measure, Row, Table, dispatch, studies_of
 from imrl_jax import conditions
+from imrl_jax.plotting import new_figure, save
 
 OUT = os.path.join(RESULTS, "claims")
 
@@ -116,34 +119,30 @@ def load_runs(name: str, runs: RowRuns) -> dict:
     """A row's runs in the form the report's claims read (one variant: ``name``)."""
     from experiments.loading import read_evolution, read_test
 
-    data = dict(results=None, manifest=dict(sizes=dict(generations=SCREEN["generations"])), variants=[name],
-                evolutions={}, tests={})
-    for condition, folder in runs.evolutions.items():
-        run = read_evolution(folder)
-        if run is not None:
-            data["evolutions"][name, condition] = run
-    for condition, folder in runs.tests.items():
-        test = read_test(folder)
-        if test is not None:
-            data["tests"][name, condition] = test
-    return data
+    evolutions = {(name, c): run for c, folder in runs.evolutions.items()
+                  if (run := read_evolution(folder)) is not None}
+    tests = {(name, c): test for c, folder in runs.tests.items() if (test := read_test(folder)) is not None}
+    return dict(results=None, manifest=dict(sizes=dict(generations=SCREEN["generations"])), variants=[name],
+                evolutions=evolutions, tests=tests)
 
 
-class SharedProbes(NamedTuple):
-    """The reproduction report's probes of a shared run (None where the report has none)."""
+def probed(folder: str, config: dict | None, summary: dict | None = None, owner: str = "",
+           condition: str = "") -> tuple[list | None, list | None, dict | None]:
+    """What a finished run's best genomes do: the distinct colours each of the 10 best per seed follows (claim 7's
+    junction probe), how many of its experts follow none, and each seed's best in fresh lives (``run_fresh``'s form).
 
-    colours: dict | None  # colours followed per best individual
-    best_life: dict | None  # the relived best individual (its fresh lives per seed among them)
+    Kept beside the run (probe.json, fresh.json); a reproduction run (``summary`` given: its report's, the run
+    ``owner``'s) is read from that report, which keeps only the colours followed (not the idle experts)."""
+    from experiments.claims import NUM_BEST
+    from experiments.relive import colours_followed, reproduction_fresh, run_fresh, run_probe
 
-
-def shared_numbers(reproduction_summary: dict, owner: str | None, condition: str) -> SharedProbes | None:
-    """The reproduction report's probes of the run of ``condition`` under variant ``owner`` (None: not the
-    reproduction's run)."""
-    if owner is None:
-        return None
-    key = f"{owner}/{condition}"
-    return SharedProbes(reproduction_summary.get("colours_followed", {}).get(key),
-                        reproduction_summary.get("best_individuals", {}).get(key))
+    if summary is not None:
+        colours = (summary.get("colours_followed") or {}).get(f"{owner}/{condition}")
+        return colours, None, reproduction_fresh(summary, owner, condition)
+    followed = (run_probe(folder, config, NUM_BEST) or {}).get("followed")
+    if followed is None:
+        return None, None, run_fresh(folder, config)
+    return colours_followed(followed), [sum(c == -1 for c in f) for f in followed], run_fresh(folder, config)
 
 
 def measure_runs(name: str, runs: RowRuns, reproduction_summary: dict, sle_whole_test: bool = False) -> dict:
@@ -151,35 +150,24 @@ def measure_runs(name: str, runs: RowRuns, reproduction_summary: dict, sle_whole
 
     Shared runs reuse the reproduction report's probes (docs/reproduction/summary.json: colours
     followed by the 10 best of each seed, the relived best EE-ES individual); a row's own
-    LE-LS and EE-LS are probed here as the report probes them (LE-LS after a fresh childhood, then
-    the junction probe), and each seed's best genome lives 10 fresh lives.
+    LE-LS and EE-LS are probed here as the report probes them (:func:`probed`).
     """
-    from experiments.claims import NUM_BEST, final_best, measure
-    from experiments.relive import colours_followed, run_fresh, run_probe
+    from experiments.claims import final_best, measure
 
     data = load_runs(name, runs)
     probes, lives, fresh = {}, {}, {}
-    shared_runs = {c: shared_numbers(reproduction_summary, runs.reproduction.get(c), c) for c in EVOLVED}
-    for condition, shared in shared_runs.items():
-        run = data["evolutions"].get((name, condition))
-        if shared is not None:
-            if conditions.get(condition).learns:  # EE-ES learns nothing: no learned experts to probe
-                probes[name, condition] = shared.colours
-            per_seed = (shared.best_life or {}).get("fresh_mean_per_seed")
-        else:
-            per_seed = None  # a row without this condition's run (runs.evolutions lacks it) has nothing to live
-            population = os.path.join(runs.evolutions.get(condition, ""), "final_population.npz")
-            if run is not None and os.path.isfile(population):
-                followed = run_probe(runs.evolutions[condition], run["config"], NUM_BEST)["followed"]
-                probes[name, condition] = colours_followed(followed)  # claim 7's probe, kept beside the run
-                print(f"fresh lives of each seed's best {condition} genome ({name})", flush=True)
-                per_seed = run_fresh(runs.evolutions[condition], run["config"])["mean_per_seed"]
-        if run is not None and per_seed is not None:  # the recorded best beside the same genomes' fresh lives
-            fresh[condition] = dict(recorded=float(final_best(run["best"]).mean()), fresh=float(np.mean(per_seed)),
-                                    fresh_sd_over_seeds=float(np.std(per_seed, ddof=1)), seeds=len(per_seed))
-    ee_es = shared_runs["EE-ES"]
-    if ee_es is not None and ee_es.best_life is not None:
-        lives["paper", "EE-ES"] = ee_es.best_life
+    for condition, folder in runs.evolutions.items():
+        run, owner = data["evolutions"].get((name, condition)), runs.reproduction.get(condition)
+        if run is None:
+            continue
+        probes[name, condition], _, lived = probed(folder, run["config"], reproduction_summary if owner else None,
+                                                   owner or "", condition)
+        if lived is not None:  # the recorded best beside the same genomes' fresh lives
+            fresh[condition] = dict(recorded=float(final_best(run["best"]).mean()), fresh=lived["mean"],
+                                    fresh_sd_over_seeds=lived["sd_over_seeds"], seeds=len(lived["mean_per_seed"]))
+    ee_es = (reproduction_summary.get("best_individuals") or {}).get(f"{runs.reproduction.get('EE-ES')}/EE-ES")
+    if ee_es is not None:  # the reproduction's relived best EE-ES individual: claim 4's paths
+        lives["paper", "EE-ES"] = ee_es
     measured = measure(data, lives, probes, sle_whole_test=sle_whole_test)[name]
     measured["fresh"] = fresh
     return measured
@@ -217,57 +205,40 @@ def sizes(rule: RuleSet, condition: str) -> str:
 TABLE_START, TABLE_END = "<!-- claims table: python -m experiments report claims-screen -->", "<!-- end of table -->"
 
 
+#: A verdict in one word, as the map's table and figure show it.
+SHORT = {HOLDS: "holds", PARTLY: "partly", DOES_NOT: "no", NOT_AVAILABLE: "n/a"}
+
+
 def table_markdown(measured: dict, names) -> str:
     """The claims map as markdown: rule sets as rows, the seven claims as columns (verdict, then the numbers)."""
-    short = {"holds": "**holds**", "partly": "partly", "does not hold": "no", "n/a": "n/a"}
-    lines = ["| rule set | runs (LE-LS, SLE) | " + " | ".join(f"claim {k}" for k in range(1, 8)) + " |",
-             "|---|---|" + "---|" * 7]
+    lines = head("rule set", "runs (LE-LS, SLE)", *(f"claim {k}" for k in range(1, 8)))
     for name in names:
+        found = measured.get(name, {}).get("claims")
+        cells = [f"{'**holds**' if c['verdict'] == HOLDS else SHORT[c['verdict']]}: {c['measured'].split(';')[0]}"
+                 for c in (found[k] for k in range(1, 8))] if found else ["-"] * 7
         rule = BY_NAME[name]
-        if name not in measured:
-            lines.append(f"| `{name}` | not finished | " + " | ".join("-" for _ in range(7)) + " |")
-            continue
-        cells = []
-        for k in range(1, 8):
-            claim = measured[name]["claims"][k]
-            cells.append(f"{short[claim['verdict']]}: {claim['measured'].split(';')[0]}")
-        lines.append(f"| `{name}` | {sizes(rule, 'LE-LS')}, {sizes(rule, 'SLE')} | " + " | ".join(cells) + " |")
+        lines.append(line(f"`{name}`", f"{sizes(rule, 'LE-LS')}, {sizes(rule, 'SLE')}" if found else "not finished",
+                          *cells))
     return "\n".join(lines)
 
 
-#: Where the claims map's figure goes.
-FIGURE = os.path.join("docs", "claims", "claims_map.png")
+#: The resolution the claims map's figures are drawn at.
+DPI = 120
 
 
-def save_figure(fig, path: str) -> str:
-    """Lay out, write (creating its folder) and close a figure; its path."""
-    import matplotlib.pyplot as plt
-
-    fig.tight_layout()
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
-
-
-def figure(measured: dict, names, path: str = FIGURE) -> str:
+def figure(measured: dict, names, path: str) -> str:
     """The claims map as a grid: rule sets as rows, claims as columns, coloured by verdict; written to ``path``."""
-    import matplotlib
+    from matplotlib.patches import Rectangle
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    shades = {"holds": "#2e7d32", "partly": "#f9a825", "does not hold": "#c62828", "n/a": "#bdbdbd"}
-    fig, ax = plt.subplots(figsize=(8.5, 0.45 * len(names) + 1.6))
+    shades = {HOLDS: "#2e7d32", PARTLY: "#f9a825", DOES_NOT: "#c62828", NOT_AVAILABLE: "#bdbdbd"}
+    fig = new_figure(8.5, 0.45 * len(names) + 1.6)
+    ax = fig.add_subplot()
     for row, name in enumerate(names):
         for k in range(1, 8):
             verdict = measured[name]["claims"][k]["verdict"] if name in measured else None
-            ax.add_patch(plt.Rectangle((k - 1, row), 0.95, 0.9, color=shades.get(verdict, "white"),
-                                       ec="0.6", lw=0.5))
-            ax.text(k - 0.53, row + 0.45, {"holds": "holds", "partly": "partly", "does not hold": "no",
-                                           "n/a": "n/a"}.get(verdict, "not run"),
-                    ha="center", va="center", fontsize=8, color="white" if verdict in ("holds", "does not hold")
-                    else "black")
+            ax.add_patch(Rectangle((k - 1, row), 0.95, 0.9, color=shades.get(verdict, "white"), ec="0.6", lw=0.5))
+            ax.text(k - 0.53, row + 0.45, SHORT.get(verdict, "not run"), ha="center", va="center", fontsize=8,
+                    color="white" if verdict in (HOLDS, DOES_NOT) else "black")
     ax.set_xlim(0, 7)
     ax.set_ylim(len(names), 0)
     ax.set_xticks([k - 0.53 for k in range(1, 8)], [f"claim {k}" for k in range(1, 8)], fontsize=9)
@@ -277,12 +248,12 @@ def figure(measured: dict, names, path: str = FIGURE) -> str:
         side.set_visible(False)
     ax.set_title("The paper's seven claims under each rule set (the report's verdict rules; paper lengths)",
                  fontsize=10)
-    return save_figure(fig, path)
+    fig.tight_layout()
+    return save(fig, path, DPI)
 
 
 #: The rows that differ from ``skills`` only in the learned actors' initial speed bias (``skills`` is bias 4).
 DIAL_ROWS = ("skills-bias0", "skills-bias1", "skills-bias2", "skills")
-DIAL_FIGURE = os.path.join("docs", "claims", "speed_dial.png")
 
 
 class DialPoint(NamedTuple):
@@ -313,15 +284,11 @@ def speed_dial(claims: dict, rows=DIAL_ROWS) -> list[DialPoint]:
     return sorted(points)
 
 
-def dial_figure(points: list[DialPoint], path: str = DIAL_FIGURE) -> str:
+def dial_figure(points: list[DialPoint], path: str) -> str:
     """LE-LS's final best and learning-test level against the learned actors' initial speed, EE-LS's as lines."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     speed = [100 * p.speed for p in points]
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.6), sharey=True)
+    fig = new_figure(9, 3.6)
+    axes = fig.subplots(1, 2, sharey=True)
     ax = axes[0]
     ax.plot(speed, [p.le_ls_recorded for p in points], "o-", color="C0", label="LE-LS, recorded best")
     ax.errorbar(speed, [p.le_ls_fresh for p in points], [p.le_ls_fresh_sd for p in points], fmt="s--", color="C0",
@@ -337,7 +304,8 @@ def dial_figure(points: list[DialPoint], path: str = DIAL_FIGURE) -> str:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="lower right")
     fig.suptitle("skills with only the initial speed bias changed: where LE-LS passes EE-LS", fontsize=10)
-    return save_figure(fig, path)
+    fig.tight_layout()
+    return save(fig, path, DPI)
 
 
 #: Where the fresh-life table goes in docs/CLAIMS.md.
@@ -347,16 +315,11 @@ FRESH_END = "<!-- end of fresh-life table -->"
 
 def fresh_table(measured: dict, names) -> str:
     """Recorded final best fitness (claims 1-4's measure) beside the fresh-life fitness of each seed's best genome."""
-    lines = ["| rule set | LE-LS recorded / fresh | EE-LS recorded / fresh | EE-ES recorded / fresh |", "|---|---|---|---|"]
-    for name in names:
-        if name not in measured:
-            continue
-        cells = []
-        for condition in EVOLVED:
-            f = measured[name].get("fresh", {}).get(condition)
-            cells.append("-" if f is None else f"{f['recorded']:.3f} / {f['fresh']:.3f} (sd {f['fresh_sd_over_seeds']:.3f}, "
-                                               f"{f['seeds']} seeds)")
-        lines.append(f"| `{name}` | " + " | ".join(cells) + " |")
+    lines = head("rule set", *(f"{c} recorded / fresh" for c in EVOLVED))
+    for name in (name for name in names if name in measured):
+        fresh = [measured[name].get("fresh", {}).get(c) for c in EVOLVED]
+        lines.append(line(f"`{name}`", *("-" if f is None else f"{f['recorded']:.3f} / {f['fresh']:.3f} (sd "
+                                          f"{f['fresh_sd_over_seeds']:.3f}, {f['seeds']} seeds)" for f in fresh)))
     return "\n".join(lines)
 
 
@@ -379,7 +342,7 @@ def experts_runs(table: ClaimsTable) -> dict[tuple[str, str, int], tuple[str, st
 
 def measure_experts(rule: RuleSet, found: dict, summary: dict | None = None, reproduction: str = REPRODUCTION) -> dict:
     """Claim 8 for a rule set: its finished 4- and 6-expert runs against its own 3-expert ones (``found``:
-    :func:`experts_runs`), and what each run's best individuals do (:func:`experts_probe`; ``summary``: the
+    :func:`experts_runs`), and what each run's best individuals do (:func:`probed`; ``summary``: the
     reproduction report's, for its runs)."""
     from experiments.claims import claim_experts, final_best
     from experiments.loading import read_evolution, read_test
@@ -397,61 +360,31 @@ def measure_experts(rule: RuleSet, found: dict, summary: dict | None = None, rep
                 steady[condition, k] = test["steady"]["steady_per_run"]
             if done:
                 variant = reproduction_variant(evolved, reproduction)
+                colours, idle, fresh = probed(evolved, run["config"], summary if variant else None, variant or "",
+                                              condition)
                 runs.append(dict(rule=owner, condition=condition, num_experts=k, size=sizes_[f"{condition} {k}"],
-                                 **experts_probe(evolved, run["config"], summary if variant else None, variant or "",
-                                                 condition)))
+                                 fresh=fresh and fresh["mean"], fresh_sd=fresh and fresh["sd_over_seeds"],
+                                 colours=None if colours is None else [colours.count(c) for c in range(4)],
+                                 idle_experts=None if idle is None else float(np.mean(idle))))
     claim = claim_experts(final, steady)
     expected = [(m, c, k) for m in ("final", "steady") for c in EXPERT_CONDITIONS for k in (3, *EXPERT_COUNTS)]
     have = {"final": final, "steady": steady}
     missing = [f"{c} {m} {k}" for m, c, k in expected if (c, k) not in have[m]]
-    levels = [ExpertsLevel(rule.name, c, m, k, float(np.mean(v)), float(np.std(v, ddof=1)) if len(v) > 1 else 0.0,
-                           len(v)) for m, values in have.items() for (c, k), v in sorted(values.items())]
-    return dict(claim, sizes=sizes_, missing=missing, levels=[level._asdict() for level in levels], runs=runs)
-
-
-def experts_probe(evolved: str, config: dict, summary: dict | None = None, owner: str = "",
-                  condition: str = "") -> dict:
-    """A finished run's best genomes: each seed's best in 10 fresh lives, and the junction probe of each seed's 10
-    best (claim 7's: how many distinct colours an individual's experts follow, and how many experts follow none).
-
-    Kept beside the run (fresh.json, probe.json); a reproduction run (``summary`` given) is read from its report,
-    which keeps only the number of colours each individual follows."""
-    from experiments.claims import NUM_BEST
-    from experiments.relive import colours_followed, reproduction_fresh, run_fresh, run_probe
-
-    if summary is not None:
-        fresh = reproduction_fresh(summary, owner, condition)
-        distinct, idle = (summary.get("colours_followed") or {}).get(f"{owner}/{condition}"), None
-    else:
-        fresh, probe = run_fresh(evolved, config), run_probe(evolved, config, NUM_BEST)
-        followed = probe["followed"] if probe else None
-        distinct = None if followed is None else colours_followed(followed)
-        idle = None if followed is None else float(np.mean([sum(c == -1 for c in f) for f in followed]))
-    return dict(fresh=None if fresh is None else fresh["mean"], fresh_sd=None if fresh is None else fresh["sd_over_seeds"],
-                colours=None if distinct is None else [int(sum(d == c for d in distinct)) for c in range(4)],
-                idle_experts=idle)
-
-
-class ExpertsLevel(NamedTuple):
-    """One point of claim 8's figure: a rule set's condition with ``num_experts`` experts, by one measure."""
-
-    rule: str
-    condition: str
-    measure: str  # "final": final best fitness per seed; "steady": the learning test's steady state per run
-    num_experts: int
-    mean: float
-    sd: float  # over seeds (final) or runs (steady), ddof 1
-    count: int
+    # a point of claim 8's figure: "final", the final best per seed, or "steady", the steady state per run (sd ddof 1)
+    levels = [dict(rule=rule.name, condition=c, measure=m, num_experts=k, mean=float(np.mean(v)),
+                   sd=float(np.std(v, ddof=1)) if len(v) > 1 else 0.0, count=len(v))
+              for m, values in have.items() for (c, k), v in sorted(values.items())]
+    return dict(claim, sizes=sizes_, missing=missing, levels=levels, runs=runs)
 
 
 def experts_table(measured: dict) -> str:
     """Claim 8 as markdown: one row per rule set, the verdict and the comparisons (``so far`` while runs are missing)."""
-    lines = ["| rule set | runs (seeds x generations) | claim 8 |", "|---|---|---|"]
+    lines = head("rule set", "runs (seeds x generations)", "claim 8")
     for name, claim in measured.items():
-        runs = ", ".join(f"{k}: {v}" for k, v in claim["sizes"].items()) or "none finished"
         missing = claim.get("missing") or []
         verdict = f"{claim['verdict']} so far (not finished: {', '.join(missing)})" if missing else claim["verdict"]
-        lines.append(f"| `{name}` | {runs} | {verdict}: {claim['measured']} |")
+        lines.append(line(f"`{name}`", ", ".join(f"{k}: {v}" for k, v in claim["sizes"].items()) or "none finished",
+                          f"{verdict}: {claim['measured']}"))
     return "\n".join(lines)
 
 
@@ -459,9 +392,9 @@ def experts_runs_table(measured: dict) -> str:
     """Claim 8's runs as markdown, each once (a shared run under its owner): fitness, and what the best do."""
     levels = {(p["rule"], p["condition"], p["measure"], p["num_experts"]): p
               for claim in measured.values() for p in claim.get("levels", [])}
-    lines = ["| run | experts | seeds x generations | final best (recorded) | fresh lives (sd over seeds) | steady state "
-             "(sd over runs) | best individuals following 0/1/2/3 colours | experts following none (mean) |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = head("run", "experts", "seeds x generations", "final best (recorded)", "fresh lives (sd over seeds)",
+                 "steady state (sd over runs)", "best individuals following 0/1/2/3 colours",
+                 "experts following none (mean)")
     seen = set()
     for name, claim in measured.items():
         for run in claim.get("runs", []):
@@ -475,8 +408,7 @@ def experts_runs_table(measured: dict) -> str:
                      f"{steady['mean']:.3f} ({steady['sd']:.3f})" if steady else "-",
                      "-" if run["colours"] is None else "/".join(map(str, run["colours"])),
                      "-" if run["idle_experts"] is None else f"{run['idle_experts']:.1f}"]
-            lines.append(f"| {run['rule']} {run['condition']} | {run['num_experts']} | {run['size']} | "
-                         + " | ".join(cells) + " |")
+            lines.append(line(f"{run['rule']} {run['condition']}", run["num_experts"], run["size"], *cells))
     return "\n".join(lines)
 
 
@@ -491,14 +423,10 @@ EXPERTS_FIGURE = os.path.join("docs", "claims", "experts.png")
 
 def experts_figure(measured: dict, path: str = EXPERTS_FIGURE) -> str:
     """Final best fitness and steady state against the number of experts, a line per rule set and condition."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from experiments.claims import ABOUT
 
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.8), sharey=True)
+    fig = new_figure(9, 3.8)
+    axes = fig.subplots(1, 2, sharey=True)
     titles = {"final": "a. final best fitness (recorded best; sd over seeds)",
               "steady": "b. learning tests' steady state (sd over runs)"}
     markers = {"LE-LS": "o", "EE-LS": "s"}
@@ -528,16 +456,15 @@ def experts_figure(measured: dict, path: str = EXPERTS_FIGURE) -> str:
         ax.legend(fontsize=8, loc="upper right")
     axes[0].set_ylabel("fitness")
     fig.suptitle("claim 8: more experts, 100 generations (shaded: within [0.8, 1.25] of 3 experts)", fontsize=10)
-    return save_figure(fig, path)
+    fig.tight_layout()
+    return save(fig, path, DPI)
 
 
 def reproduction_summary(document: str) -> dict | None:
     """The reproduction report's summary beside ``document`` (reproduction/summary.json), or None."""
-    path = os.path.join(os.path.dirname(document), "reproduction", "summary.json")
-    if not os.path.isfile(path):
-        return None
-    with open(path) as f:
-        return json.load(f)
+    from experiments.loading import read_json
+
+    return read_json(os.path.join(os.path.dirname(document), "reproduction", "summary.json"))
 
 
 def write_experts(table: ClaimsTable) -> dict:
@@ -556,40 +483,38 @@ def write_experts(table: ClaimsTable) -> dict:
     return claim8
 
 
-def write_claims(table: ClaimsTable) -> int:
-    """Measure every finished rule set; write claims.json, the document's tables and figures, and claim 8's."""
-    summary, measured = reproduction_summary(table.document) or {}, {}
-    reproduction = os.path.join(table.results, os.path.relpath(REPRODUCTION, RESULTS))
-    names = [rule.name for rule in RULE_SETS]
-    for name in names:
-        rule = BY_NAME[name]
-        if table.finished(rule):
-            print(f"measuring {name}", flush=True)
-            measured[name] = measure_runs(name, table.runs_of(rule), summary, sle_whole_test=rule.sle_noise_steps == 0)
-    os.makedirs(table.out, exist_ok=True)
-    numbers = {name: {**{str(k): v for k, v in m["claims"].items()}, "fresh": m.get("fresh", {})}
-               for name, m in measured.items()}
-    with open(os.path.join(table.out, "claims.json"), "w") as f:
-        json.dump(dict(sizes=dict(screen=SCREEN, full=SCALES["paper"]), rule_sets={r.name: r._asdict() for r in RULE_SETS},
-                       claims=numbers), f, indent=2, default=str)
-    write_table(table.document, table_markdown(measured, names), TABLE_START, TABLE_END)
-    write_table(table.document, fresh_table(measured, names), FRESH_START, FRESH_END)
-    figures = os.path.join(os.path.dirname(table.document), "claims")
-    figure(measured, names, os.path.join(figures, "claims_map.png"))
-    points = speed_dial(numbers)
-    if len(points) > 1:
-        dial_figure(points, os.path.join(figures, "speed_dial.png"))
-    write_experts(dataclasses.replace(EXPERTS_TABLE, results=table.results, out=table.out, document=table.document))
-    print(f"wrote {table.document}'s tables and {os.path.join(table.out, 'claims.json')}: {len(measured)} of "
-          f"{len(names)} rule sets finished ({reproduction})")
-    return 0
-
-
 class ScreenTable(ClaimsTable):
     """The claims map: every rule set's runs; its report, the map's tables and figures (and claim 8's)."""
 
     def report(self) -> int:
-        return write_claims(self)
+        """Measure every finished rule set; write claims.json, the document's tables and figures, and claim 8's."""
+        summary, measured = reproduction_summary(self.document) or {}, {}
+        reproduction = os.path.join(self.results, os.path.relpath(REPRODUCTION, RESULTS))
+        names = [rule.name for rule in RULE_SETS]
+        for name in names:
+            rule = BY_NAME[name]
+            if self.finished(rule):
+                print(f"measuring {name}", flush=True)
+                measured[name] = measure_runs(name, self.runs_of(rule), summary,
+                                              sle_whole_test=rule.sle_noise_steps == 0)
+        os.makedirs(self.out, exist_ok=True)
+        numbers = {name: {**{str(k): v for k, v in m["claims"].items()}, "fresh": m.get("fresh", {})}
+                   for name, m in measured.items()}
+        with open(os.path.join(self.out, "claims.json"), "w") as f:
+            rule_sets = {r.name: r._asdict() for r in RULE_SETS}
+            json.dump(dict(sizes=dict(screen=SCREEN, full=SCALES["paper"]), rule_sets=rule_sets, claims=numbers), f,
+                      indent=2, default=str)
+        write_table(self.document, table_markdown(measured, names), TABLE_START, TABLE_END)
+        write_table(self.document, fresh_table(measured, names), FRESH_START, FRESH_END)
+        figures = os.path.join(os.path.dirname(self.document), "claims")
+        figure(measured, names, os.path.join(figures, "claims_map.png"))
+        points = speed_dial(numbers)
+        if len(points) > 1:
+            dial_figure(points, os.path.join(figures, "speed_dial.png"))
+        write_experts(dataclasses.replace(EXPERTS_TABLE, results=self.results, out=self.out, document=self.document))
+        print(f"wrote {self.document}'s tables and {os.path.join(self.out, 'claims.json')}: {len(measured)} of "
+              f"{len(names)} rule sets finished ({reproduction})")
+        return 0
 
 
 class ExpertsTable(ClaimsTable):

@@ -7,6 +7,7 @@ import os
 
 import numpy as np
 
+from experiments.markdown import mean_sd, table
 from experiments.study import SCALES
 from experiments.claims import (CLAIMS, EVOLVED, LAST_GENERATIONS, PAPER, PLATEAU_FRACTION, RULES, SEEN,
                                 _fmt, specialisation_score)
@@ -111,13 +112,6 @@ def sharers(data: dict, variant: str, condition: str) -> list[str]:
     return [v for v in data["variants"] if data["owners"].get((v, condition)) == variant]
 
 
-def table(header: list[str], rows: list[list]) -> str:
-    """A markdown table."""
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
-    return "\n".join(lines)
-
-
 def specialisation_rows(lives: dict) -> list[dict]:
     """One row per expert of each best individual and phase (adult tasks; LE-LS also the end of childhood)."""
     rows = []
@@ -138,6 +132,12 @@ def specialisation_rows(lives: dict) -> list[dict]:
                                     for name, v in zip(SEEN, row)},
                                  follows=followed[e] or ""))
     return rows
+
+
+def panels(figures: dict, variants: list[str], what: str, rel) -> list[str]:
+    """A figure of each variant that has one (``figures``: variant -> path), under the variant's name."""
+    return [text for v in variants if v in figures
+            for text in ("", f"**{v}**", "", f"![{what}, {v}]({rel(figures[v])})")]
 
 
 def write_document(path: str, figures: str, data: dict, numbers: dict, lives: dict, spec_rows: list[dict],
@@ -193,22 +193,17 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
                 "the evolved conditions, (b) the learning tests of the conditions that learn (LE-LS, EE-LS, SLE; "
                 "EE-ES learns nothing and appears in (c) only, as in the paper), (c) the steady state of all four "
                 f"(dark: mean over runs, +-1 sd; light: the best run). The sections below show each panel with "
-                f"its numbers ({label})."]
-        for variant in data["variants"]:
-            if variant in written["fig3"]:
-                out += ["", f"**{variant}**", "", f"![Fig. 3, {variant}]({rel(written['fig3'][variant])})"]
+                f"its numbers ({label})."] + panels(written["fig3"], data["variants"], "Fig. 3", rel)
 
     out += ["", "## Fig. 3a: evolution of the best fitness", "",
             f"Best fitness per generation, mean over seeds with a band of +-1 sd ({label})."]
-    for variant in data["variants"]:
-        if variant in written["fig3a"]:
-            out += ["", f"**{variant}**", "", f"![Fig. 3a, {variant}]({rel(written['fig3a'][variant])})"]
+    out += panels(written["fig3a"], data["variants"], "Fig. 3a", rel)
     rows = []
     expected = ((manifest or {}).get("sizes") or {}).get("generations")
     for variant in data["variants"]:
         for condition, e in numbers[variant]["evolution"].items():
             life = lives.get((owners[variant, condition], condition))
-            rows.append([variant, condition, f"{e['final_best_mean']:.3f} +- {e['final_best_sd']:.3f}",
+            rows.append([variant, condition, mean_sd(e["final_best_mean"], e["final_best_sd"]),
                          ", ".join(f"{v:.3f}" for v in e["final_best_per_seed"]), _fmt(e["plateau_generation"]),
                          e["generations"] if e["generations"] == expected else f"{e['generations']} of {expected}",
                          "-" if life is None else f"seed {life['seed']}, gen {life['generation']}: "
@@ -235,10 +230,7 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
     out += ["", "## Fig. 3b: learning tests", "",
             f"Performance per bin (reaches / the bin's theoretical maximum), mean over all tests and tasks, band "
             f"+-1 sd over runs ({label}). LE-LS tests start with a fresh childhood; EE-ES does not learn; SLE "
-            f"learns from scratch."]
-    for variant in data["variants"]:
-        if variant in written["fig3b"]:
-            out += ["", f"**{variant}**", "", f"![Fig. 3b, {variant}]({rel(written['fig3b'][variant])})"]
+            f"learns from scratch."] + panels(written["fig3b"], data["variants"], "Fig. 3b", rel)
 
     out += ["", "## Fig. 3c: steady state", ""]
     if written.get("fig3c"):
@@ -246,7 +238,7 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
     rows = []
     for variant in data["variants"]:
         for condition, t in numbers[variant]["learning_tests"].items():
-            rows.append([variant, condition, f"{t['steady_mean']:.3f} +- {t['steady_sd']:.3f}",
+            rows.append([variant, condition, mean_sd(t["steady_mean"], t["steady_sd"]),
                          f"{t['steady_best_run']:.3f} (run {t['best_run']})",
                          ", ".join(f"{v:.2f}" for v in t["steady_per_task"]), f"{t['whole_test_mean']:.3f}",
                          f"{t['num_runs']} x {t['num_best']} x {t['num_tests']}"])
@@ -350,7 +342,7 @@ def baselines_section(baselines: dict, data: dict, written: dict, rel, label: st
     rows = []
     for b in baselines.values():
         summary = b["summary"]
-        row = [baseline_label(b), f"{summary['performance_mean']:.3f} +- {summary['performance_sd_over_seeds']:.3f}",
+        row = [baseline_label(b), mean_sd(summary["performance_mean"], summary["performance_sd_over_seeds"]),
                ", ".join(f"{v:.2f}" for v in b["per_task"])]
         if test_steps:
             value = _at(b["steps"], b["mean"], test_steps)
@@ -360,7 +352,7 @@ def baselines_section(baselines: dict, data: dict, written: dict, rel, label: st
     for (variant, condition), t in data["tests"].items():
         steady = t["steady"]
         row = [f"{condition}, {variant} rules: steady state ({label.split(':')[0]})",
-               f"{steady['steady_mean']:.3f} +- {steady['steady_sd']:.3f}",
+               mean_sd(steady["steady_mean"], steady["steady_sd"]),
                ", ".join(f"{v:.2f}" for v in steady["steady_per_task"])]
         if test_steps:
             row.append(f"{steady['steady_mean']:.3f}")

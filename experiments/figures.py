@@ -6,14 +6,13 @@ import numpy as np
 
 from experiments.claims import SEEN, TESTED
 from experiments.relive import DRAWN_STEPS
-from imrl_jax.plotting import style_axis
+from imrl_jax.plotting import (CONDITION_STYLES, EXPERT_COLOURS, SEEN_COLOURS, draw_arena, draw_path, expert_legend,
+                               new_figure, style_axis)
 
 
 def _draw_curves(ax, series: dict, title: str, xlabel: str, ylabel: str, integer_x: bool = False) -> None:
     """Mean curves with a +-1 sd band, one per condition in the paper's line styles: {condition: (x, mean, sd, label)}."""
     from matplotlib.ticker import MaxNLocator
-
-    from imrl_jax.plotting import CONDITION_STYLES
 
     banded = set()
     for condition, (x, mean, sd, label) in series.items():
@@ -31,8 +30,6 @@ def _draw_curves(ax, series: dict, title: str, xlabel: str, ylabel: str, integer
 
 def _curves_figure(series: dict, title: str, xlabel: str, ylabel: str, integer_x: bool = False):
     """One axis of :func:`_draw_curves`."""
-    from imrl_jax.plotting import new_figure
-
     fig = new_figure(5.6, 3.5)
     _draw_curves(fig.add_subplot(), series, title, xlabel, ylabel, integer_x)
     fig.tight_layout()
@@ -49,10 +46,13 @@ def fig_fitness(evolutions: dict, title: str):
     return _curves_figure(_fitness_series(evolutions), title, "generation", "best fitness", integer_x=True)
 
 
+def _learning_series(tests: dict) -> dict:
+    return {c: (t["steps"], t["mean"], t["sd"], c) for c, t in tests.items()}
+
+
 def fig_learning(tests: dict, title: str):
     """Fig. 3b: performance per bin of the learning tests (mean over all tests, +-1 sd over runs), x in cycles."""
-    series = {c: (t["steps"], t["mean"], t["sd"], c) for c, t in tests.items()}
-    return _curves_figure(series, title, "cycles of the task", "performance per bin")
+    return _curves_figure(_learning_series(tests), title, "cycles of the task", "performance per bin")
 
 
 def _draw_steady(ax, steady: dict, variant: str, title: str, ylabel: str = "steady-state performance") -> None:
@@ -72,8 +72,6 @@ def _draw_steady(ax, steady: dict, variant: str, title: str, ylabel: str = "stea
 
 def fig_steady(steady: dict, variants: list[str], title: str):
     """Fig. 3c: steady state per condition, mean over runs (dark, +-1 sd) and best run (light); a panel per variant."""
-    from imrl_jax.plotting import new_figure
-
     fig = new_figure(3.0 * len(variants) + 0.6, 3.3)
     axes = fig.subplots(1, len(variants), sharey=True, squeeze=False)[0]
     for ax, variant in zip(axes, variants):
@@ -93,13 +91,11 @@ def fig3(evolutions: dict, tests: dict, steady: dict, variant: str, title: str):
 
     As in the paper, (b) shows LE-LS, EE-LS and SLE (EE-ES learns nothing) and (c) all four conditions.
     """
-    from imrl_jax.plotting import new_figure
-
     fig = new_figure(14.0, 3.8)
     a, b, c = fig.subplots(1, 3, gridspec_kw=dict(width_ratios=[1.0, 1.0, 0.8]))
     _draw_curves(a, _fitness_series(evolutions), "(a) best fitness, mean +-1 sd over seeds", "generation",
                  "best fitness", integer_x=True)
-    _draw_curves(b, {k: (t["steps"], t["mean"], t["sd"], k) for k, t in tests.items() if k in FIG3B},
+    _draw_curves(b, _learning_series({k: t for k, t in tests.items() if k in FIG3B}),
                  "(b) learning tests, mean +-1 sd over runs", "cycles of the task", "performance per bin")
     _draw_steady(c, steady, variant, "(c) steady state: last cycles of (b)")
     c.legend(fontsize=7)
@@ -119,8 +115,6 @@ STILL_CM = 2.0
 def fig_paths(life: dict, title: str):
     """Each task's path after learning coloured by the expert in control, the last childhood steps, what experts see."""
     from matplotlib.patches import Circle
-
-    from imrl_jax.plotting import EXPERT_COLOURS, SEEN_COLOURS, draw_arena, draw_path, expert_legend, new_figure
 
     config = life["config"]
     fig = new_figure(12.8, 8.0)  # tall enough that the lower row's two-line titles clear the upper row
@@ -197,8 +191,6 @@ def fig_baselines(baselines: dict, tests: dict, title: str):
     of the report's learning tests (their curves, and steady states per task), drawn thin, a run shared by
     several variants once (``variant`` is then the label, e.g. "every variant").
     """
-    from imrl_jax.plotting import CONDITION_STYLES, new_figure
-
     fig = new_figure(11.0, 5.0)
     curves, bars = fig.subplots(1, 2, gridspec_kw=dict(width_ratios=[1.0, 1.25]))
     budgets = sorted({b["summary"]["steps"] for b in baselines.values()})

@@ -1,4 +1,4 @@
-"""Markdown for the studies' documents: a table's rows and its "mean +- sd" cells."""
+"""Markdown for the studies' documents: a table, its rows and its "mean +- sd" cells."""
 
 from __future__ import annotations
 
@@ -11,6 +11,11 @@ def line(*cells) -> str:
 def head(*names) -> list[str]:
     """A markdown table's header row and its rule."""
     return [line(*names), "|" + "---|" * len(names)]
+
+
+def table(names, rows) -> str:
+    """A markdown table: its header, then a row per list of cells."""
+    return "\n".join(head(*names) + [line(*row) for row in rows])
 
 
 def mean_sd(mean: float, sd: float, digits: int = 3) -> str:

@@ -70,37 +70,30 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
     label = scale_label(data["manifest"])
     short = (data["manifest"] or {}).get("scale", "unknown") + " scale"
     written = dict(fig3={}, fig3a={}, fig3b={}, paths={})
+    at = lambda name: os.path.join(figures, name)  # noqa: E731
 
-    written["arena"] = save(plot_arena(make_config("paper"), "the arena and the six tasks"),
-                            os.path.join(figures, "fig1_arena.png"))
+    written["arena"] = save(plot_arena(make_config("paper"), "the arena and the six tasks"), at("fig1_arena.png"))
+    steady = {k: t["steady"] for k, t in data["tests"].items()}
     for variant in data["variants"]:
         evolutions = {c: data["evolutions"][variant, c]["best"] for c in EVOLVED if (variant, c) in data["evolutions"]}
+        tests = {c: data["tests"][variant, c] for c in TESTED if (variant, c) in data["tests"]}
         if evolutions:
             written["fig3a"][variant] = save(fig_fitness(evolutions, f"Fig. 3a, {variant} rules ({short})"),
-                                             os.path.join(figures, f"fig3a_{variant}.png"))
-        tests = {c: data["tests"][variant, c] for c in TESTED if (variant, c) in data["tests"]}
+                                             at(f"fig3a_{variant}.png"))
         if tests:
             written["fig3b"][variant] = save(fig_learning(tests, f"Fig. 3b, {variant} rules ({short})"),
-                                             os.path.join(figures, f"fig3b_{variant}.png"))
-    steady = {k: t["steady"] for k, t in data["tests"].items()}
+                                             at(f"fig3b_{variant}.png"))
+        if evolutions or tests:  # the three panels side by side, as the paper draws them
+            written["fig3"][variant] = save(fig3(evolutions, tests, steady, variant,
+                                                 f"Fig. 3, {variant} rules ({short})"), at(f"fig3_{variant}.png"))
     if steady:
         variants = [v for v in data["variants"] if any((v, c) in steady for c in TESTED)]
-        written["fig3c"] = save(fig_steady(steady, variants, f"Fig. 3c: steady state ({short})"),
-                                os.path.join(figures, "fig3c.png"))
-    for variant in data["variants"]:  # the three panels side by side, as the paper draws them
-        evolutions = {c: data["evolutions"][variant, c]["best"] for c in EVOLVED if (variant, c) in data["evolutions"]}
-        tests = {c: data["tests"][variant, c] for c in TESTED if (variant, c) in data["tests"]}
-        if evolutions or tests:
-            written["fig3"][variant] = save(fig3(evolutions, tests, steady, variant,
-                                                 f"Fig. 3, {variant} rules ({short})"),
-                                            os.path.join(figures, f"fig3_{variant}.png"))
-
+        written["fig3c"] = save(fig_steady(steady, variants, f"Fig. 3c: steady state ({short})"), at("fig3c.png"))
     baselines = read_baselines(baselines_dir)
     if baselines:
-        tests = shared_once(data["tests"], data)
-        written["baselines"] = save(fig_baselines(baselines, tests, f"brax.training baselines beside the learning "
-                                                                    f"tests ({short})"),
-                                    os.path.join(figures, "baselines.png"))
+        written["baselines"] = save(fig_baselines(baselines, shared_once(data["tests"], data),
+                                                  f"brax.training baselines beside the learning tests ({short})"),
+                                    at("baselines.png"))
 
     best = update_best_genomes(data)
     lives, probes = {}, {}
@@ -118,7 +111,7 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
                      f"{life['seed']}, generation {life['generation']}, fitness {life['fitness']:.3f}, relived "
                      f"{life['relived_fitness']:.3f}); {short}\npaths: the last {DRAWN_STEPS} of {PATH_STEPS:,} "
                      f"steps driven after each task's learning period, coloured by the expert in control")
-            written["paths"][variant, condition] = save(fig_paths(life, title), os.path.join(figures, name))
+            written["paths"][variant, condition] = save(fig_paths(life, title), at(name))
         for (variant, condition), entry in best.items():
             if entry["config"] is not None and conditions.get(condition).learns:
                 print(f"probing the experts of the {entry['genomes'].shape[1]} best {condition} individuals of "
@@ -129,7 +122,7 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
     # a variant whose SLE explores the whole test by definition (faithful) has claim 5 measured at the test's length
     numbers = measure(data, lives, probes, sle_whole_test=set(table.whole_test))
     spec_rows = specialisation_rows(lives)
-    written["specialisation"] = os.path.join(figures, "specialisation.csv")
+    written["specialisation"] = at("specialisation.csv")
     with open(written["specialisation"], "w", newline="") as f:
         fields = ["variant", "condition", "phase", "seed", "generation", "expert", "steps", "control_share", *SEEN,
                   "follows"]
@@ -146,26 +139,14 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
                    stages=manifest.get("stages", {}),
                    evolution={v: numbers[v]["evolution"] for v in numbers},
                    learning_tests={v: numbers[v]["learning_tests"] for v in numbers},
-                   best_individuals={f"{v}/{c}": dict(seed=life["seed"], index=life["index"],
-                                                      generation=life["generation"], fitness=life["fitness"],
-                                                      relived_fitness=life["relived_fitness"],
-                                                      performance=life["performance"],
-                                                      stereotypy=life["stereotypy"],
-                                                      stereotypy_per_task=life["stereotypy_per_task"],
-                                                      speed=life["speed"],
-                                                      dominant_expert_share=life["dominant_expert"],
-                                                      follows=[int(c) for c in life["probe"].followed],
-                                                      fresh_mean_per_seed=life["fresh"]["mean"],
-                                                      fresh_sd_per_seed=life["fresh"]["sd"],
-                                                      fresh_lives=life["fresh"]["num_lives"])
-                                     for (v, c), life in lives.items()},
+                   best_individuals={f"{v}/{c}": best_individual(life) for (v, c), life in lives.items()},
                    colours_followed={f"{v}/{c}": colours for (v, c), colours in probes.items()})
     claims = dict(scale=summary["scale"], scale_label=label, rules={str(n): r for n, r in RULES.items()},
                   claims={str(n): dict(text=text, paper=PAPER[n],
                                        variants={v: numbers[v]["claims"][n] for v in numbers})
                           for n, text in CLAIMS.items()})
     for name, content in (("summary.json", summary), ("claims.json", claims)):
-        written[name] = os.path.join(figures, name)
+        written[name] = at(name)
         text = json.dumps(_jsonable(content), indent=2)  # all of it first: a failure leaves the old file whole
         with open(written[name], "w") as f:
             f.write(text)
@@ -173,6 +154,19 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
     write_document(doc, figures, data, numbers, lives, spec_rows, written, baselines, table.name)
     written["doc"] = doc
     return written
+
+
+#: What summary.json keeps of a relived best individual, each under the name it has in the life.
+LIFE_FIELDS = ("seed", "index", "generation", "fitness", "relived_fitness", "performance", "stereotypy",
+               "stereotypy_per_task", "speed")
+
+
+def best_individual(life: dict) -> dict:
+    """A relived best individual as summary.json keeps it: the life's numbers, the colours its experts follow, its
+    fresh lives."""
+    return dict({name: life[name] for name in LIFE_FIELDS}, dominant_expert_share=life["dominant_expert"],
+                follows=[int(c) for c in life["probe"].followed], fresh_mean_per_seed=life["fresh"]["mean"],
+                fresh_sd_per_seed=life["fresh"]["sd"], fresh_lives=life["fresh"]["num_lives"])
 
 
 def shared_once(runs: dict, data: dict) -> dict:

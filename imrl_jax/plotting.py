@@ -30,17 +30,18 @@ def new_figure(width: float, height: float):
     return Figure(figsize=(width, height))
 
 
-def save(fig, path: str) -> str:
-    """Write a figure (format from the extension) through a temporary file renamed when complete; return the path."""
+def save(fig, path: str, dpi: int = DPI) -> str:
+    """Write a figure (format from the extension; its folder made) through a temporary file renamed when done; the path."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     if not isinstance(fig.canvas, FigureCanvasAgg):
         FigureCanvasAgg(fig)
     folder, name = os.path.split(os.path.abspath(path))
     base, ext = os.path.splitext(name)
+    os.makedirs(folder, exist_ok=True)
     tmp = os.path.join(folder, f".{base}.tmp-{os.getpid()}{ext}")
     try:
-        fig.savefig(tmp, dpi=DPI)
+        fig.savefig(tmp, dpi=dpi)
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):

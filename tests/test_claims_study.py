@@ -96,13 +96,15 @@ def test_the_screen_and_claim_8_are_two_studies_of_one_module():
 
 
 def test_shared_runs_read_the_reproduction_reports_probes():
-    summary = dict(colours_followed={"skills/EE-LS": {"red": 3}}, best_individuals={"paper/EE-ES": {"fitness": 0.4}})
+    summary = dict(colours_followed={"skills/EE-LS": [3, 2, 3]},
+                   best_individuals={"paper/EE-ES": {"fitness": 0.4, "fresh_mean_per_seed": [0.3, 0.5]}})
     owners = study.rule_runs(study.BY_NAME["paper-selector"]).reproduction  # EE-LS skills', EE-ES paper's
     assert owners == {"EE-LS": "skills", "EE-ES": "paper"}  # its LE-LS is its own: not the reproduction's
-    assert study.shared_numbers(summary, owners.get("EE-LS"), "EE-LS") == study.SharedProbes(colours={"red": 3},
-                                                                                              best_life=None)
-    assert study.shared_numbers(summary, owners.get("EE-ES"), "EE-ES").best_life == {"fitness": 0.4}
-    assert study.shared_numbers(summary, owners.get("LE-LS"), "LE-LS") is None
+    assert study.probed("/nonexistent", None, summary, owners["EE-LS"], "EE-LS") == ([3, 2, 3], None, None)
+    colours, idle, fresh = study.probed("/nonexistent", None, summary, owners["EE-ES"], "EE-ES")
+    assert colours is None and idle is None and fresh["mean"] == pytest.approx(0.4)
+    assert fresh["sd_over_seeds"] == pytest.approx(np.std([0.3, 0.5], ddof=1))
+    assert study.probed(None, None, summary, "paper", "LE-LS") == (None, None, None)  # the report has none
 
 
 def test_claim_5_under_the_whole_test_reading_is_measured_not_na():

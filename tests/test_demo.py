@@ -76,6 +76,10 @@ def test_figures_are_returned_not_drawn_with_pyplot(tiny, tmp_path):
     assert [line.get_label() for line in lines] == ["EE-LS", "other"] and lines[0].get_color() == "0.55"
     path = plotting.save(fitness, str(tmp_path / "fitness.png"))
     assert os.listdir(tmp_path) == ["fitness.png"] and path.endswith("fitness.png")
+    from PIL import Image
+
+    finer = plotting.save(fitness, str(tmp_path / "new" / "fitness.png"), dpi=2 * plotting.DPI)  # its folder made
+    assert Image.open(finer).size == tuple(2 * n for n in Image.open(path).size)
 
 
 def test_a_long_title_is_wrapped_inside_the_figure():

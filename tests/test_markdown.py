@@ -10,6 +10,7 @@ from experiments import loading, markdown, study
 def test_markdown_rows_and_mean_sd():
     assert markdown.head("row", "steady state") == ["| row | steady state |", "|---|---|"]
     assert markdown.line("", 3, "0.5") == "|  | 3 | 0.5 |"
+    assert markdown.table(["a", "b"], [[1, "x"], ["", 0.5]]) == "| a | b |\n|---|---|\n| 1 | x |\n|  | 0.5 |"
     assert markdown.mean_sd(0.8456, 0.0125) == "0.846 +- 0.013" and markdown.mean_sd(2, 0.5, 1) == "2.0 +- 0.5"
 
 
