@@ -138,7 +138,8 @@ def learning_test_dir(evolved: str) -> str:
 
 @dataclasses.dataclass(frozen=True)
 class Table:
-    """A study of rows at one scale: its stages, their commands and its command line."""
+    """A study: its rows (runs found by what they compute) and measures, their stages and commands, its command line
+    and its report."""
 
     name: str
     document: str
