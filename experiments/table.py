@@ -23,8 +23,9 @@ import numpy as np
 from experiments.executor import add_options, from_options
 from experiments.reproduce import (Stage, evolution_cost, evolve_command, load_manifest, run_stages, test_command,
                                    test_cost)
-from experiments.study import RESULTS, Study
+from experiments.study import REPRODUCTION, RESULTS, Study
 from imrl_jax import conditions, runspec
+from imrl_jax.rundir import RunDirError
 
 
 
@@ -151,10 +152,19 @@ class Table:
     measures: tuple[Measure, ...] = ()
 
     def __post_init__(self):
-        names = [row.name for row in self.rows] + [f"{m.kind} {m.name}" for m in self.measures]
+        names = [row.name for row in self.rows] + [m.name for m in self.measures]
         twice = sorted({name for name in names if names.count(name) > 1})
-        if twice:  # a row's runs are found by its name
+        if twice:  # a row's runs and a stage's command are found by its name
             raise ValueError(f"table {self.name}: two rows or measures are named {twice[0]!r}")
+        scratch = [m for m in self.measures for r in self.rows if r.name == m.run and not r.evolved]
+        if scratch:
+            raise ValueError(f"table {self.name}: measure {scratch[0].name} reads row {scratch[0].run}, which is not "
+                             f"evolved (a measure reads a run)")
+
+    @property
+    def reproduction(self) -> str:
+        """The reproduction's runs under this table's results folder (``REPRODUCTION`` for the committed ones)."""
+        return os.path.join(self.results, os.path.relpath(REPRODUCTION, RESULTS))
 
     def scale_of(self, row: Row) -> dict:
         """The row's sizes: its own, or the table's."""
@@ -228,7 +238,7 @@ class Table:
                 if tested not in testing:
                     testing.add(tested)
                     stages.append(Stage(f"learning test {row.name}", "test", row.name, row.condition, tested,
-                                        test_cost(scale, row.condition), needs=()))
+                                        test_cost(scale, row.condition), runs=scale["seeds"], needs=()))
                 continue
             root = os.path.dirname(evolved)
             if root in sweeps:
@@ -241,19 +251,23 @@ class Table:
                 evolving[evolved] = evolving[root]
             elif evolved not in evolving:
                 evolving[evolved] = f"evolve {row.name}"
+                # rows of one run may ask for different lengths (not part of its key): the longest is made
+                longest = max(self.scale_of(r)["generations"] for r, e in zip(self.rows, evolutions.values())
+                              if e == evolved)
                 stages.append(Stage(evolving[evolved], "evolve", row.name, row.condition, evolved,
-                                    evolution_cost(scale, row.condition), generations=scale["generations"]))
+                                    evolution_cost(scale, row.condition), generations=longest))
             if root in sweeps and all(r.test for r in sweeps[root].rows):  # its points tested in one program too
                 if f"test {root}" not in evolving:
                     members = sweeps[root].rows
                     evolving[f"test {root}"] = f"learning test {'+'.join(r.name for r in members)} (one sweep)"
                     stages.append(Stage(evolving[f"test {root}"], "test", row.name, row.condition,
                                         learning_test_dir(root), sum(test_cost(scale, r.condition)
-                                                                     for r in members), needs=(evolving[root],)))
+                                                                     for r in members), runs=scale["seeds"],
+                                        needs=(evolving[root],)))
             elif row.test and tested not in testing:  # a test two rows share is one stage
                 testing.add(tested)
                 stages.append(Stage(f"learning test {row.name}", "test", row.name, row.condition, tested,
-                                    test_cost(scale, row.condition), needs=(evolving[evolved],)))
+                                    test_cost(scale, row.condition), runs=scale["seeds"], needs=(evolving[evolved],)))
         for measure in self.measures:
             row = next((r for r in self.rows if r.name == measure.run), None)
             stages.append(Stage(f"{measure.kind} {measure.name}", measure.kind, measure.name, row.condition if row else "",
@@ -263,7 +277,7 @@ class Table:
 
     def stage_command(self, stage: Stage) -> tuple[list[str], None]:
         """A stage's command line: a measure, the row's evolution, or the learning test of the run it found."""
-        measure = next((m for m in self.measures if m.name == stage.variant and m.kind == stage.kind), None)
+        measure = next((m for m in self.measures if stage.name == f"{m.kind} {m.name}"), None)
         if measure is not None:
             run = self.evolutions().get(measure.run) or measure.run
             return [sys.executable, "-m", measure.module, *([run] if run else []), "--out", stage.out_dir,
@@ -271,6 +285,7 @@ class Table:
         row = next(r for r in self.rows if r.name == stage.variant)
         scale = self.scale_of(row)
         if stage.kind == "evolve":
+            scale = dict(scale, generations=stage.generations or scale["generations"])  # the longest of its rows
             sweep = self.sweeps().get(stage.out_dir)
             if sweep is not None and os.path.isfile(os.path.join(stage.out_dir, "sweep.json")):  # goes on as it began
                 return [sys.executable, "-m", "imrl_jax.evolve", "--resume", "--out", stage.out_dir, "--generations",
@@ -310,16 +325,17 @@ class Table:
 
     def table(self, measured: list[dict]) -> str:
         """The rows as markdown: what ran, the final best fitness, the plateau and the steady state."""
-        lines = ["| row | condition | preset | seeds | generations | final best fitness | plateau generation | "
-                 "steady state |", "|---|---|---|---|---|---|---|---|"]
+        from experiments.markdown import head, line, mean_sd
+
+        lines = head("row", "condition", "preset", "seeds", "generations", "final best fitness", "plateau generation",
+                     "steady state")
         for m in measured:
-            final = (f"{m['final_mean']:.3f} +- {m['final_sd']:.3f}" if "final_mean" in m else
+            final = (mean_sd(m["final_mean"], m["final_sd"]) if "final_mean" in m else
                      "running" if m["generations"] else "not started")
-            steady = (f"{m['steady_mean']:.3f} +- {m['steady_sd']:.3f} ({m['test_runs']} runs)" if "steady_mean" in m
+            steady = (f"{mean_sd(m['steady_mean'], m['steady_sd'])} ({m['test_runs']} runs)" if "steady_mean" in m
                       else "-")
-            lines.append(f"| {m['row']} | {m['condition']} | {m['preset']} | {m.get('seeds', '-')} | "
-                         f"{m['generations']} of {m['target']} | {final} | {m.get('plateau', '-')} | "
-                         f"{steady} |")
+            lines.append(line(m["row"], m["condition"], m["preset"], m.get("seeds", "-"),
+                              f"{m['generations']} of {m['target']}", final, m.get("plateau", "-"), steady))
         return "\n".join(lines)
 
     def figure(self, measured: list[dict], path: str) -> str:
@@ -363,9 +379,13 @@ class Table:
         p.add_argument("--report", action="store_true", help="the table and figure of what has finished (runs nothing)")
         add_options(p)
         args = p.parse_args(argv)
-        if args.report:
-            return self.report()
-        stages, scale = self.all_stages()
+        try:
+            if args.report:
+                return self.report()
+            stages, scale = self.all_stages()
+        except (runspec.DuplicateRunError, RunDirError) as error:  # two folders of one run, an unreadable config.json
+            print(f"error: {error}", file=sys.stderr)
+            return 2
         manifest, manifest_path = load_manifest(self.out, study=self.name, sizes=scale)
         return run_stages(stages, scale, manifest, manifest_path, self.stage_command, **from_options(args, self.out))
 

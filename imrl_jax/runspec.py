@@ -142,8 +142,8 @@ def test_index(root: str) -> dict[str, str]:
         with open(os.path.join(folder, "steady.json")) as f:
             steady = json.load(f)
         condition = conditions.CONDITIONS.get((steady.get("config") or {}).get("condition"))
-        if condition is None or condition.evolved:  # a test of evolved genomes is found beside its run
-            continue
+        if condition is None or condition.evolved or any(name not in steady for name in TEST_SIZES):
+            continue  # a test of evolved genomes is found beside its run; one without its sizes is no test of ours
         key = test_key(Config.from_dict(steady["config"]), steady)
         if key in keys:
             raise DuplicateRunError(f"{folder} and {os.path.join(root, keys[key])} hold the same learning test (key "

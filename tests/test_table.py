@@ -187,3 +187,42 @@ def test_a_learning_test_of_its_own_options_waits_for_its_row_and_two_rows_of_on
     assert command[-2:] == ["--task-set", "novel"]
     with pytest.raises(ValueError, match="table t: two rows or measures are named 'a'"):
         Table("t", "docs/T.md", 99, scale=SCREEN, out=str(tmp_path), rows=(Row("a", "LE-LS", "skills"),) * 2)
+
+
+def test_rows_of_one_run_make_the_longest_and_a_measure_cannot_take_a_rows_name_or_read_a_test(tmp_path):
+    """Two rows of one run asking for 2 and 3 generations: one stage of 3, whose command asks for 3; a test stage
+    counts its row's runs; a measure named as a row, or reading a row that is not evolved, is refused."""
+    import pytest
+
+    from experiments.study import SCALES
+
+    tiny = SCALES["tiny"]
+    table = Table("t", "docs/T.md", 99, scale=tiny, out=str(tmp_path), results=str(tmp_path / "results"),
+                  rows=(Row("short", "EE-LS", "skills"), Row("long", "EE-LS", "skills", scale=dict(tiny, generations=3)),
+                        Row("sle", "SLE", "skills", scale=dict(tiny, seeds=3))))
+    stages, _ = table.all_stages()
+    assert [(s.name, s.generations, s.runs) for s in stages] == [
+        ("evolve short", 3, 0), ("learning test short", 0, 2), ("learning test sle", 0, 3)]
+    command = table.stage_command(stages[0])[0]
+    assert command[command.index("--generations") + 1] == "3"
+    with pytest.raises(ValueError, match="two rows or measures are named 'short'"):
+        Table("t", "docs/T.md", 99, scale=tiny, out=str(tmp_path), rows=table.rows,
+              measures=(Measure("short", "short", kind="test"),))
+    with pytest.raises(ValueError, match="measure m reads row sle, which is not evolved"):
+        Table("t", "docs/T.md", 99, scale=tiny, out=str(tmp_path), rows=table.rows, measures=(Measure("m", "sle"),))
+
+
+def test_two_folders_of_one_run_are_one_line_and_exit_2(tmp_path, capsys):
+    """The same committed run copied twice under a table's results: planning stops with the error naming both."""
+    import shutil
+
+    results = tmp_path / "results"
+    for copy in ("a", "b"):
+        shutil.copytree(os.path.join(RESULTS, "goals", "EE-LS-T", "evolve"), results / copy / "evolve",
+                        ignore=shutil.ignore_patterns("checkpoints", "resume_checkpoint", "*.npz", "*.png"))
+    table = Table("t", "docs/T.md", 99, scale=SCREEN, out=str(tmp_path / "out"), results=str(results),
+                  rows=(Row("EE-LS-T", "EE-LS-T", "skills"),))
+    assert table.main([]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and "hold the same run" in err and err.count("\n") == 1
+    assert not (tmp_path / "out").exists()
