@@ -93,7 +93,7 @@ class ClaimsTable(Table):
         """A rule set's runs, wherever their keys found them (its own and the ones it shares)."""
         rows = rule_rows(rule, num_experts)
         evolutions, tests = self.evolutions(), self.tests()
-        reproduction = os.path.join(self.results, os.path.relpath(REPRODUCTION, RESULTS))
+        reproduction = self.reproduction
         found = {row.condition: evolutions[row.name] for row in rows if row.evolved}
         return RowRuns(found, {row.condition: tests[row.name] for row in rows},
                        {c: v for c, folder in found.items() if (v := reproduction_variant(folder, reproduction))})
@@ -102,9 +102,11 @@ class ClaimsTable(Table):
         """Whether every run of a rule set's row has finished (its own and the ones it shares)."""
         from experiments.loading import read_evolution, read_test
 
+        rows = {row.condition: row for row in rule_rows(rule)}
         runs = self.runs_of(rule)
-        evolved = [read_evolution(folder) for folder in runs.evolutions.values()]
-        return all(r is not None and len(r["best"]) >= SCREEN["generations"] for r in evolved) and all(
+        return all((run := read_evolution(folder)) is not None
+                   and len(run["best"]) >= self.scale_of(rows[condition])["generations"]
+                   for condition, folder in runs.evolutions.items()) and all(
             read_test(folder) is not None for folder in runs.tests.values())
 
 
@@ -471,7 +473,7 @@ def write_experts(table: ClaimsTable) -> dict:
     """Claim 8 of every rule set that runs it: claim8.json, the document's tables and the figure (a run's fresh
     lives and probe are computed once, about a minute, then kept beside it)."""
     summary, found = reproduction_summary(table.document), experts_runs(table)
-    reproduction = os.path.join(table.results, os.path.relpath(REPRODUCTION, RESULTS))
+    reproduction = table.reproduction
     claim8 = {name: measure_experts(BY_NAME[name], found, summary, reproduction) for name in EXPERT_RULE_SETS}
     os.makedirs(table.out, exist_ok=True)
     with open(os.path.join(table.out, "claim8.json"), "w") as f:
@@ -489,7 +491,7 @@ class ScreenTable(ClaimsTable):
     def report(self) -> int:
         """Measure every finished rule set; write claims.json, the document's tables and figures, and claim 8's."""
         summary, measured = reproduction_summary(self.document) or {}, {}
-        reproduction = os.path.join(self.results, os.path.relpath(REPRODUCTION, RESULTS))
+        reproduction = self.reproduction
         names = [rule.name for rule in RULE_SETS]
         for name in names:
             rule = BY_NAME[name]

@@ -25,15 +25,13 @@ from typing import NamedTuple
 
 from experiments.study import MEASURED
 from imrl_jax import conditions  # the condition table (no JAX)
-from imrl_jax.rundir import recorded_points, saved_steps
+from imrl_jax.rundir import saved_steps, sweep_points
 
 #: The paper's conditions (rows of imrl_jax.conditions): those evolved, and those learning-tested.
 EVOLVED = conditions.PAPER_EVOLVED
 TESTED = conditions.PAPER
 
 
-# The committed layout of the reproduction's results (``results/SCALE/VARIANT/{evolve,test}/CONDITION``), which
-# the search, future-work and timescale studies still read by path; the reproduction finds its runs by key.
 def _kernel_options(kernel: str) -> list[str]:
     return [] if kernel == "xla" else ["--set", f"step_kernel={kernel}"]
 
@@ -114,12 +112,6 @@ def test_cost(scale: dict, condition: str, *, num_tasks: int = 6) -> float:
     """Lane-steps of a learning test of ``condition`` at ``scale`` on ``num_tasks`` tasks."""
     return float(scale["seeds"] * scale["best"] * scale["tests"]
                  * life_steps(scale, condition, scale["test_steps"], num_tasks=num_tasks))
-
-
-def sweep_points(run_dir: str) -> list[str] | None:
-    """The point directories of a sweep (``evolve --sweep``), or None if ``run_dir`` is not a sweep."""
-    points = recorded_points(run_dir)
-    return None if points is None else [os.path.join(run_dir, key) for key, _ in points]
 
 
 def generations_done(run_dir: str) -> int:

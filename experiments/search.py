@@ -21,7 +21,7 @@ import sys
 
 import numpy as np
 
-from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN
+from experiments.study import RESULTS, SCALES, SCREEN
 from experiments.table import Row, Table
 from experiments.markdown import head, line, mean_sd
 from imrl_jax import conditions
@@ -183,7 +183,7 @@ class SearchTable(Table):
         from experiments.relive import colours_followed, reproduction_fresh, run_fresh, run_path, run_probe
 
         summary = reproduction_summary(self.document) or {}
-        reproduction = os.path.join(self.results, os.path.relpath(REPRODUCTION, RESULTS))
+        reproduction = self.reproduction
         rows, paths = [], {}
         for row, m, tested in zip(self.rows, self.measure(), self.tests().values()):
             strategy, condition = strategy_of(row), row.condition

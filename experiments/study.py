@@ -4,6 +4,10 @@ A study module declares ``STUDIES``, a tuple of :class:`Study` (a module may hol
 claims map's screen and its claim 8 are two studies of one module). :func:`studies` imports every
 module of the package and collects them, in the order their results are needed (``order``), so a
 new study is its module and its document: nothing else registers it (docs/STUDIES.md).
+
+It also holds what every study shares: where the results lie (``RESULTS``, the reproduction's
+``REPRODUCTION``), the sizes of their runs (``SCALES``, ``SCREEN``), and the writers of a document's
+table (:func:`write_table`) and of a measure's rows and result.json (:func:`write_measure`, ``MEASURED``).
 """
 
 from __future__ import annotations

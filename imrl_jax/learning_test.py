@@ -52,9 +52,9 @@ from imrl_jax.learning_test_options import (OPTION_FIELDS, check_condition, chec
                                             parser, scratch_genomes, tested_config)
 from imrl_jax.learning_test_state import (PARTIAL, fingerprint, finished_runs, keep_run, locked_out_dir, start_partial,
                                           write_errors, write_outputs)
-from imrl_jax.learning_test_sweep import run_points, sweep_points
+from imrl_jax.learning_test_sweep import run_points
 from imrl_jax.progress import Progress
-from imrl_jax.rundir import best_genomes, load_run as read_run
+from imrl_jax.rundir import best_genomes, load_run as read_run, sweep_points
 
 
 class TestState(NamedTuple):

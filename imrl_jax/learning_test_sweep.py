@@ -20,12 +20,6 @@ from imrl_jax.rundir import load_run, read_json, recorded_points, write_atomic
 SWEEP_TESTS = "sweep_tests.json"
 
 
-def sweep_points(run_dir: str) -> list[str] | None:
-    """A sweep's point directories (``evolve --sweep``, in its order), or None if ``run_dir`` is not a sweep."""
-    points = recorded_points(run_dir)
-    return None if points is None else [os.path.join(run_dir, key) for key, _ in points]
-
-
 def run_points(args, points: list[str], test: Callable[[str, str], dict]) -> list[tuple[str, dict | None]]:
     """Each point's (out_dir, summary) once ``test(point_dir, out_dir)`` has tested those not tested before (their
     summary None), and the sweep's summary written."""

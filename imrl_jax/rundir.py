@@ -442,6 +442,12 @@ def recorded_points(out_dir: str) -> list[tuple[str, dict]] | None:
         raise RunDirError(f"{path} is unreadable ({error})") from None
 
 
+def sweep_points(run_dir: str) -> list[str] | None:
+    """A sweep's point directories (``evolve --sweep``, in its order), or None if ``run_dir`` is not a sweep."""
+    points = recorded_points(run_dir)
+    return None if points is None else [os.path.join(run_dir, key) for key, _ in points]
+
+
 def saved_steps(directory: str) -> list[int]:
     """The generations a checkpoints folder holds, oldest first, read from its folders' names (no orbax)."""
     return sorted(int(d) for d in os.listdir(directory) if d.isdigit()) if os.path.isdir(directory) else []
