@@ -18,8 +18,7 @@ import sys
 
 import numpy as np
 
-from experiments.study import RESULTS
-from experiments.study import SCREEN
+from experiments.study import RESULTS, SCALES, SCREEN
 from experiments.table import Measure, Row, Table
 
 #: The study's manifest, logs and measures (its runs lie wherever their keys find them).
@@ -33,7 +32,7 @@ LIFE = {"LE-LS": 750_000, "EE-LS": 600_000}
 LIVES, CUT_LIVES = 3 * 150 * 4 + 200 + 550, 3 * 150 * 4 + 200
 
 
-def landscape(name: str, run: str, life: int, cut: str | None = None, *extra: str) -> Measure:
+def landscape(name: str, run: "str | Row", life: int, cut: str | None = None, *extra: str) -> Measure:
     """The landscape measures (H3, H4) of a row's or a committed run's seed 0 at generations 0, 10 and the last."""
     args = (("--cut", cut) if cut else ()) + extra
     return Measure(f"landscape-{name}", run, args, cost=float(life * (LIVES + (CUT_LIVES if cut else 0))))
@@ -176,21 +175,22 @@ class GoalsTable(Table):
         return code
 
 
+PAPER = SCALES["paper"]
 TABLE = GoalsTable("goals", "docs/GOALS.md", 9, out=OUT, scale=SCREEN, rows=(
     Row("EE-LS-T", "EE-LS-T", "skills"),  # behaviours at goals' size
     Row("LE-LS-2R", "LE-LS-2R", "skills"),  # goals at behaviours' size
     Row("EE-LS-T-faithful", "EE-LS-T", "faithful"),
     Row("LE-LS-2R-faithful", "LE-LS-2R", "faithful"),
-), measures=(  # under skills (EE-ES learns nothing: its paper run is its only one); H3's cuts: LE-LS-like
+), measures=(  # under skills, on the paper-scale runs of the reproduction and others' runs, found by key (EE-ES
+    # learns nothing: its paper run is its only one); H3's cuts: LE-LS-like
     # childhoods to a third (LE-LS's to a tenth too: no genome scores then), EE-LS-like adult selectors to nothing
     # (imrl_jax.landscape.learning_cut)
-    landscape("EE-ES", os.path.join(RESULTS, "paper", "paper", "evolve", "EE-ES"), LIFE["EE-LS"], None, *KEPT),
+    landscape("EE-ES", Row("EE-ES", "EE-ES", "skills", scale=PAPER), LIFE["EE-LS"], None, *KEPT),
     landscape("EE-LS-T", "EE-LS-T", LIFE["EE-LS"], "0"),
-    landscape("EE-LS", os.path.join(RESULTS, "paper", "skills", "evolve", "EE-LS"), LIFE["EE-LS"], "0", *KEPT),
-    landscape("LE-LS", os.path.join(RESULTS, "paper", "skills", "evolve", "LE-LS"), LIFE["LE-LS"], "0.1,0.33",
-              *KEPT),
+    landscape("EE-LS", Row("EE-LS", "EE-LS", "skills", scale=PAPER), LIFE["EE-LS"], "0", *KEPT),
+    landscape("LE-LS", Row("LE-LS", "LE-LS", "skills", scale=PAPER), LIFE["LE-LS"], "0.1,0.33", *KEPT),
     landscape("LE-LS-2R", "LE-LS-2R", LIFE["LE-LS"], "0.33"),
-    landscape("EV-LS", os.path.join(RESULTS, "future_work", "EV-LS", "evolve"), LIFE["LE-LS"], "0.33"),
+    landscape("EV-LS", Row("EV-LS", "EV-LS", "skills"), LIFE["LE-LS"], "0.33"),  # the future-work study's run
 ))
 all_stages, main = TABLE.all_stages, TABLE.main
 #: The studies of this module (python -m experiments finds them).

@@ -87,13 +87,13 @@ def evolution_spec(row: Row, scale: dict) -> runspec.RunSpec:
 
 @dataclasses.dataclass(frozen=True)
 class Measure:
-    """A measure: ``python -m MODULE RUN --out OUT ARGS`` (RUN a row's evolution, a committed run's folder, or
-    none: ``run=""``); OUT is ``out``, or ``TABLE_OUT/measures/NAME``. Done as its ``kind`` of stage is done:
+    """A measure: ``python -m MODULE RUN --out OUT ARGS`` (RUN a row's evolution, the run a Row of the measure's own
+    finds by its key (a run another study made, not a row of this table), a folder, or none: ``run=""``); OUT is ``out``, or ``TABLE_OUT/measures/NAME``. Done as its ``kind`` of stage is done:
     a "measure" when OUT holds result.json, a "test" (``imrl_jax.learning_test`` with options of its own, such
     as another task set) its steady.json, a "baseline" (``imrl_jax.baselines``) its summary.json."""
 
     name: str
-    run: str  # a row's name, a run directory, or "" (the measure reads no run)
+    run: "str | Row"  # a row's name, a Row of its own (its run found by key), a run directory, or "" (none)
     args: tuple[str, ...] = ()
     module: str = "imrl_jax.landscape_run"
     cost: float = 0.0  # lane-steps, estimated
@@ -165,6 +165,12 @@ class Table:
     def reproduction(self) -> str:
         """The reproduction's runs under this table's results folder (``REPRODUCTION`` for the committed ones)."""
         return os.path.join(self.results, os.path.relpath(REPRODUCTION, RESULTS))
+
+    def measured_run(self, measure: Measure) -> str:
+        """The folder a measure reads: its row's run, or its own Row's found by key, or the folder it names."""
+        if isinstance(measure.run, Row):
+            return dataclasses.replace(self, rows=(measure.run,), measures=()).evolutions()[measure.run.name] or ""
+        return self.evolutions().get(measure.run) or measure.run
 
     def scale_of(self, row: Row) -> dict:
         """The row's sizes: its own, or the table's."""
@@ -269,17 +275,19 @@ class Table:
                 stages.append(Stage(f"learning test {row.name}", "test", row.name, row.condition, tested,
                                     test_cost(scale, row.condition), runs=scale["seeds"], needs=(evolving[evolved],)))
         for measure in self.measures:
-            row = next((r for r in self.rows if r.name == measure.run), None)
-            stages.append(Stage(f"{measure.kind} {measure.name}", measure.kind, measure.name, row.condition if row else "",
+            run = self.measured_run(measure)
+            row = next((r for r, e in zip(self.rows, evolutions.values()) if e is not None and e == run), None)
+            condition = measure.run.condition if isinstance(measure.run, Row) else row.condition if row else ""
+            stages.append(Stage(f"{measure.kind} {measure.name}", measure.kind, measure.name, condition,
                                 measure.out or os.path.join(self.out, "measures", measure.name), measure.cost,
-                                needs=(evolving[evolutions[row.name]],) if row and row.evolved else ()))
+                                needs=(evolving[run],) if row else ()))
         return stages, self.scale
 
     def stage_command(self, stage: Stage) -> tuple[list[str], None]:
         """A stage's command line: a measure, the row's evolution, or the learning test of the run it found."""
         measure = next((m for m in self.measures if stage.name == f"{m.kind} {m.name}"), None)
         if measure is not None:
-            run = self.evolutions().get(measure.run) or measure.run
+            run = self.measured_run(measure)
             return [sys.executable, "-m", measure.module, *([run] if run else []), "--out", stage.out_dir,
                     *measure.args], None
         row = next(r for r in self.rows if r.name == stage.variant)

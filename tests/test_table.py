@@ -226,3 +226,14 @@ def test_two_folders_of_one_run_are_one_line_and_exit_2(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("error: ") and "hold the same run" in err and err.count("\n") == 1
     assert not (tmp_path / "out").exists()
+
+
+def test_a_measure_of_a_run_of_its_own_finds_it_by_key(tmp_path):
+    """A measure on a run that is no row of the table (the future-work study's EV-LS) finds it by its key and waits
+    for nothing; a folder given by hand is read as it is."""
+    table = Table("t", "docs/T.md", 99, scale=SCREEN, out=str(tmp_path), results=RESULTS, rows=(),
+                  measures=(Measure("ev", Row("EV-LS", "EV-LS", "skills")), Measure("there", "some/folder")))
+    stages, _ = table.all_stages()
+    assert [(s.name, s.condition, s.needs) for s in stages] == [("measure ev", "EV-LS", ()), ("measure there", "", ())]
+    assert table.stage_command(stages[0])[0][3] == os.path.join(RESULTS, "future_work", "EV-LS", "evolve")
+    assert table.stage_command(stages[1])[0][3] == "some/folder"
