@@ -29,7 +29,7 @@ def baseline(agent: str, steps: int, num_seeds: int, num_evals: int) -> Measure:
     name = f"{agent}_{steps // 1_000_000}M"
     args = ("--agent", agent, "--steps", str(steps), "--seeds", str(num_seeds), "--evals", str(num_evals))
     return Measure(name, "", args, "imrl_jax.baselines", float(LANE_STEPS_PER_CYCLE * 6 * num_seeds * steps),
-                   os.path.join(OUT, name), kind="baseline")
+                   name, kind="baseline")
 
 
 class BaselinesTable(Table):

@@ -529,7 +529,7 @@ class ExpertsTable(ClaimsTable):
 
 
 #: Claim 4 and the arena: what a circular path can score on the six tasks (experiments/circular_paths.py).
-CIRCLES = Measure("circles", "", module="experiments.circular_paths", out=os.path.join(OUT, "circles"),
+CIRCLES = Measure("circles", "", module="experiments.circular_paths", out="circles",
                   cost=1001 * 6 * 6 * 20_000.0)  # its grid: 1,001 turns x 6 speeds, 6 tasks of 20,000 steps
 SCREEN_TABLE = ScreenTable("claims-screen", "docs/CLAIMS.md", 3, scale=SCREEN, out=OUT, measures=(CIRCLES,),
                            rows=tuple(row for name in SCREEN_ORDER for row in rule_rows(BY_NAME[name])))

@@ -38,10 +38,10 @@ CURVE_AXES = ("cycles of the task", "performance per bin")
 
 
 def learning_test(name: str, row: Row, scale: dict, options: tuple[str, ...], out: str, num_tasks: int = 6) -> Measure:
-    """A learning test of ``row``'s run with options of its own (another task set) into ``OUT/out``."""
+    """A learning test of ``row``'s run with options of its own (another task set) into the table's ``out``."""
     runner = tuple(test_command(scale, "paper", "EE-ES", "RUN", "OUT")[4:-2])  # the runner's options, at ``scale``
     return Measure(name, row.name, runner + options, "imrl_jax.learning_test",
-                   test_cost(scale, row.condition, num_tasks=num_tasks), os.path.join(OUT, out), kind="test")
+                   test_cost(scale, row.condition, num_tasks=num_tasks), out, kind="test")
 
 
 class Question(NamedTuple):
@@ -191,15 +191,6 @@ def held_out_figure(measured: dict, path: str) -> str:
 class NovelTasksTable(Table):
     """The study's table, whose report measures learning's advantage per question and draws a figure for each."""
 
-    def measure_dir(self, measure: Measure) -> str:
-        """A measure's folder under this table's own (a table moved elsewhere, as in the tests, writes its own)."""
-        return os.path.join(self.out, os.path.relpath(measure.out, OUT))
-
-    def all_stages(self):
-        stages, scale = super().all_stages()
-        moved = {f"{m.kind} {m.name}": self.measure_dir(m) for m in self.measures}
-        return [s._replace(out_dir=moved.get(s.name, s.out_dir)) for s in stages], scale
-
     def advantages(self) -> dict:
         """Learning's advantage per row and set of tasks, the verdicts, brax's agents, the held-out evolutions (the
         table's measure of their rows) and their probes, and the tests drawn."""
@@ -207,7 +198,7 @@ class NovelTasksTable(Table):
         from experiments.loading import read_json, read_test
         from experiments.relive import run_probe
 
-        folders = {**self.tests(), **{m.name: self.measure_dir(m) for m in self.measures}}
+        folders = {**self.tests(), **{m.name: self.measure_folder(m) for m in self.measures}}
         tests = {name: test for name, folder in folders.items() if (test := read_test(folder)) is not None}
         steady = {name: test["steady"]["steady_per_run"] for name, test in tests.items()}
         measured = dict(rows=[], advantages=(found := {}), verdicts={}, tests=tests, scratch=[], probes={})
@@ -221,7 +212,7 @@ class NovelTasksTable(Table):
             measured["verdicts"][q.name] = claim_unseen(*({r.name: found[r.name, label] for r in q.rows
                                                            if judged(r) and (r.name, label) in found} for label in q.labels))
         brax = [("paper's six", agent, os.path.join(self.results, "baselines", f"{agent}_1M")) for agent in ("ppo", "es")]
-        for tasks, agent, folder in brax + [("novel", m.args[1], self.measure_dir(m)) for m in self.measures
+        for tasks, agent, folder in brax + [("novel", m.args[1], self.measure_folder(m)) for m in self.measures
                                             if m.kind == "baseline"]:  # from scratch, so they learn each set alike
             if (summary := read_json(os.path.join(folder, "summary.json"))) is not None:
                 measured["scratch"].append(dict(agent=agent.upper(), tasks=tasks, seeds=len(summary["seeds"]),
@@ -258,7 +249,7 @@ TABLE = NovelTasksTable("novel-tasks", "docs/NOVEL_TASKS.md", 2, out=OUT, scale=
       "best_genomes.npz"), *NOVEL), os.path.join("novel", r.preset, r.condition)) for r in FINISHED if r.evolved),
     *(Measure(f"{agent} on novel", "", ("--agent", agent, "--steps", str(FINISHED_TEST["test_steps"]), "--seeds", "5",
               "--evals", "11", *NOVEL), "imrl_jax.baselines", 5 * 6.0 * FINISHED_TEST["test_steps"],
-              os.path.join(OUT, "novel", "baselines", f"{agent}_1M"), kind="baseline") for agent in ("ppo", "es")),
+              os.path.join("novel", "baselines", f"{agent}_1M"), kind="baseline") for agent in ("ppo", "es")),
     *(learning_test(f"{r.name} on the {which} tasks", r, SCREEN, ("--task-set", TASK_FILES[which]),
                     os.path.join("held_out", r.condition, f"test_{which}"), len(tasks))
       for r in HELD for which, tasks in HELD_OUT.items())))

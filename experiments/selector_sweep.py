@@ -140,7 +140,7 @@ def figure(rows: list[dict], path: str, task_steps: int) -> str:
 #: The study: one measure of no run, done once its committed folder holds result.json.
 SWEEP = Table("selector-sweep", os.path.join("docs", "MODEL.md"), 0.5, rows=(), scale=SIZES, out=OUT, measures=(
     Measure("sweep", "", ("sweep",), "experiments.selector_sweep", float(5 * 4 * 3 * SIZES["seeds"] * 6
-                                                                          * SIZES["task_steps"]), OUT),))
+                                                                          * SIZES["task_steps"]), "."),))
 all_stages = SWEEP.all_stages
 
 

@@ -97,7 +97,7 @@ class Measure:
     args: tuple[str, ...] = ()
     module: str = "imrl_jax.landscape_run"
     cost: float = 0.0  # lane-steps, estimated
-    out: str | None = None  # its folder (None: the table's measures/NAME)
+    out: str | None = None  # its folder within the table's (None: measures/NAME)
     kind: str = "measure"  # measure, test or baseline: what makes it done (reproduce.stage_done)
 
 
@@ -165,6 +165,11 @@ class Table:
     def reproduction(self) -> str:
         """The reproduction's runs under this table's results folder (``REPRODUCTION`` for the committed ones)."""
         return os.path.join(self.results, os.path.relpath(REPRODUCTION, RESULTS))
+
+    def measure_folder(self, measure: Measure) -> str:
+        """Where a measure writes: its ``out`` within the table's folder (so a table moved elsewhere, as in the
+        tests, moves its measures too), or ``OUT/measures/NAME``."""
+        return os.path.normpath(os.path.join(self.out, measure.out or os.path.join("measures", measure.name)))
 
     def measured_run(self, measure: Measure) -> str:
         """The folder a measure reads: its row's run, or its own Row's found by key, or the folder it names."""
@@ -279,7 +284,7 @@ class Table:
             row = next((r for r, e in zip(self.rows, evolutions.values()) if e is not None and e == run), None)
             condition = measure.run.condition if isinstance(measure.run, Row) else row.condition if row else ""
             stages.append(Stage(f"{measure.kind} {measure.name}", measure.kind, measure.name, condition,
-                                measure.out or os.path.join(self.out, "measures", measure.name), measure.cost,
+                                self.measure_folder(measure), measure.cost,
                                 needs=(evolving[run],) if row else ()))
         return stages, self.scale
 

@@ -109,11 +109,12 @@ def evolution_groups(out: str = OUT) -> dict[str, tuple[tuple[str, ...], tuple[s
     return groups
 
 
-def measures(out: str = OUT) -> tuple[Measure, ...]:
-    """The three measurements, each this module's own command writing into ``out/NAME``; cost in lane-steps."""
+def measures() -> tuple[Measure, ...]:
+    """The three measurements, each this module's own command writing into the table's ``NAME``; cost in
+    lane-steps."""
     life = 6 * TASK_STEPS
     points = len(RATE_OPTIONS) * len(list(itertools.product(*RATE_GRID.values())))
-    return tuple(Measure(name, "", (name,), "experiments.timescale", float(cost * life), os.path.join(out, name))
+    return tuple(Measure(name, "", (name,), "experiments.timescale", float(cost * life), name)
                  for name, cost in (("ceiling", len(OPTIONS) * len(RULES) * LIVES), ("rates", points * RATE_LIVES),
                                     ("confirm", len(RATE_OPTIONS) * LIVES)))
 
@@ -242,7 +243,7 @@ def timescale_table(out: str = OUT, results: str = RESULTS, **fields) -> Timesca
     rows = tuple(Row(f"{variant} {condition}", condition, variant.split("+")[0], sets)
                  for variant, (sets, names) in evolution_groups(out).items() for condition in names)
     return TimescaleTable("timescale", fields.pop("document", DOCUMENT), 1, rows=rows, scale=SCREEN, out=out,
-                          results=results, measures=measures(out), **fields)
+                          results=results, measures=measures(), **fields)
 
 
 def report_table(rows: dict) -> str:

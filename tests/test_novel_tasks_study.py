@@ -72,7 +72,7 @@ def relocated(tmp_path):
 
 def fake_test(table, name, per_run, curve=(0.1, 0.3)):
     """A finished learning test of the row or measure ``name``, as the report reads it: steady.json and curve.csv."""
-    folder = {**table.tests(), **{m.name: table.measure_dir(m) for m in table.measures}}[name]
+    folder = {**table.tests(), **{m.name: table.measure_folder(m) for m in table.measures}}[name]
     os.makedirs(folder)
     with open(os.path.join(folder, "steady.json"), "w") as f:
         json.dump(dict(steady_per_run=list(per_run), steady_mean=sum(per_run) / len(per_run), steady_sd=0.0,

@@ -80,7 +80,8 @@ def test_a_table_study_plans_lists_and_reports_what_was_made_by_hand(name, tmp_p
     stages, scale = table.all_stages()
     measures = {f"{m.kind} {m.name}" for m in table.measures}  # of any kind (a learning test on another task set too)
     row_stages = [s for s in stages if s.name not in measures]  # none in a table of measures alone (the baselines)
-    assert bool(row_stages) == bool(table.rows) and not any(stage_done(s, scale) for s in row_stages)
+    assert bool(row_stages) == bool(table.rows) and not any(stage_done(s, scale) for s in stages)
+    assert all(s.out_dir.startswith(str(tmp_path)) for s in stages if s.name in measures)  # its measures moved too
     for stage in stages:
         command = table.stage_command(stage)[0]
         assert command[command.index("--out") + 1] == stage.out_dir
@@ -97,7 +98,7 @@ def test_a_table_study_plans_lists_and_reports_what_was_made_by_hand(name, tmp_p
         if (row.test or evolved is None) and not os.path.isdir(table.tests()[row.name]):
             write_test(table.tests()[row.name], made[row.name][1], sizes["seeds"])
     stages, scale = table.all_stages()
-    assert all(stage_done(s, scale) for s in stages if s.name not in measures)
+    assert all(stage_done(s, scale) == (s.name not in measures) for s in stages)  # the measures still to run
     capsys.readouterr()
     assert table.main(["--report"]) == 0
     text = generic_table(table)
