@@ -97,11 +97,10 @@ def main(argv=None) -> int:
     chosen = list(found.values()) if args.study == "all" else [found[args.study]]
     if args.action == "list":
         from imrl_jax.rundir import RunDirError
-        from imrl_jax.runspec import DuplicateRunError
 
         try:
             return list_studies(chosen)
-        except (DuplicateRunError, RunDirError) as error:  # two folders of one run, an unreadable config.json
+        except RunDirError as error:  # two folders of one run (runspec.DuplicateRunError), an unreadable config.json
             print(f"error: {error}", file=sys.stderr)
             return 2
     return run_studies(chosen, report=args.action == "report", options=tuple(options_argv(args)))

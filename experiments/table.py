@@ -63,14 +63,12 @@ def scratch_test_command(row: Row, scale: dict, out_dir: str) -> list[str]:
 
 def scratch_test_key(row: Row, scale: dict) -> str:
     """The key of a row's learning test from scratch (``runspec.test_key``): the config and sizes its command
-    builds, as the learning test builds them."""
-    from imrl_jax import cli, learning_test
-    from imrl_jax.config import make_config
+    builds, by the learning test's own builders."""
+    from imrl_jax import cli
+    from imrl_jax.learning_test_options import parser, scratch_genomes, tested_config
 
-    args = learning_test.parser().parse_args(scratch_test_command(row, scale, os.devnull)[3:])
-    base = make_config(args.preset, **{**cli.parse_sets(args.set), "condition": args.cond})
-    config = cli.apply_task_set(lambda **tasks: base.replace(task_steps=args.task_steps, num_bins=args.bins, **tasks),
-                                args)
+    args = parser().parse_args(scratch_test_command(row, scale, os.devnull)[3:])
+    config, _ = tested_config(args, scratch_genomes(args, cli.parse_sets(args.set))[0], "")
     return runspec.test_key(config, dict(num_runs=args.runs, num_best=args.best, num_tests=args.tests,
                                          steady_steps=args.steady_steps, seed=args.seed))
 
@@ -396,7 +394,7 @@ class Table:
             if args.report:
                 return self.report()
             stages, scale = self.all_stages()
-        except (runspec.DuplicateRunError, RunDirError) as error:  # two folders of one run, an unreadable config.json
+        except RunDirError as error:  # two folders of one run (DuplicateRunError), an unreadable config.json
             print(f"error: {error}", file=sys.stderr)
             return 2
         manifest, manifest_path = load_manifest(self.out, study=self.name, sizes=scale)

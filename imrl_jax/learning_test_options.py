@@ -20,9 +20,6 @@ from imrl_jax.rundir import best_genomes, load_kept_best, load_run, unfinished
 
 #: Conditions that are not evolved: tested from scratch (``--cond``), without a run directory (the table's at import;
 #: :func:`from_scratch` also has the rows registered since).
-FROM_SCRATCH = tuple(name for name, condition in TABLE.items() if not condition.evolved)
-
-
 def from_scratch() -> tuple[str, ...]:
     """The conditions of the table as it is now that are not evolved (tested from scratch)."""
     return tuple(name for name, condition in TABLE.items() if not condition.evolved)
@@ -34,9 +31,9 @@ def parser() -> argparse.ArgumentParser:
                                "evolution, or SLE from scratch, learn each task anew.",
                    formatter_class=HelpFormatter)
     p.add_argument("run_dir", nargs="?",
-                   help=f"an evolution's run directory (omit with --cond {' or '.join(FROM_SCRATCH)})")
+                   help=f"an evolution's run directory (omit with --cond {' or '.join(from_scratch())})")
     p.add_argument("--cond", metavar="{" + ",".join(CONDITIONS) + "}",
-                   help=f"{', '.join(FROM_SCRATCH)}: test learning from scratch (no run directory); "
+                   help=f"{', '.join(from_scratch())}: test learning from scratch (no run directory); "
                         "another condition: check that run_dir is a run of it")
     cli.add_register(p)
     p.add_argument("--runs", type=int, default=10, help="from scratch: groups of tests, like an evolution's seeds")

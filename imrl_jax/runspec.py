@@ -22,7 +22,8 @@ import json
 import os
 from typing import Iterable
 
-from imrl_jax.config import COMPUTE_FIELDS, Config
+from imrl_jax.config import COMPUTE_FIELDS, Config, ConfigError
+from imrl_jax.rundir import RunDirError, read_json
 
 #: The search a run records when it records none: the paper's GA (``strategies.GA_RECORD``).
 GA_SEARCH = {"strategy": "ga", "settings": {}}
@@ -39,8 +40,18 @@ def canonical(value) -> str:
     return json.dumps(plain, sort_keys=True, separators=(",", ":"))
 
 
-class DuplicateRunError(ValueError):
+class DuplicateRunError(RunDirError):
     """Two run directories hold the same run (the same key)."""
+
+
+def model(config: Config) -> dict:
+    """A config's model: its fields less the compute choices, the run's length and those its condition never reads."""
+    skip = set(COMPUTE_FIELDS) | set(PROGRESS_FIELDS) | config.spec.ignored_fields()
+    return {k: v for k, v in config.to_dict().items() if k not in skip}
+
+
+def _hash(identity: dict) -> str:
+    return hashlib.sha256(canonical(identity).encode()).hexdigest()[:KEY_LENGTH]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -59,7 +70,7 @@ class RunSpec:
     @classmethod
     def from_run_dir(cls, run_dir: str) -> "RunSpec":
         """The spec a run directory's ``config.json`` records (raises RunDirError naming the file)."""
-        from imrl_jax.rundir import RunDirError, read_config
+        from imrl_jax.rundir import read_config
 
         config, seeds = read_config(run_dir)
         path = os.path.join(run_dir, "config.json")
@@ -72,25 +83,26 @@ class RunSpec:
 
     def identity(self) -> dict:
         """What the key is made of: the model's fields, the seeds and the search, as plain JSON values."""
-        skip = set(COMPUTE_FIELDS) | set(PROGRESS_FIELDS) | self.config.spec.ignored_fields()
-        model = {k: v for k, v in self.config.to_dict().items() if k not in skip}
-        return {"model": model, "seeds": list(self.seeds), "search": json.loads(self.search)}
+        return {"model": model(self.config), "seeds": list(self.seeds), "search": json.loads(self.search)}
 
     def key(self) -> str:
         """The run's content key: a hash of :meth:`identity` in canonical JSON (:func:`canonical`)."""
-        return hashlib.sha256(canonical(self.identity()).encode()).hexdigest()[:KEY_LENGTH]
+        return _hash(self.identity())
+
+
+def _walk(root: str, name: str):
+    """Every folder under ``root`` holding a file ``name``, in order; a run's checkpoints, a test's partial runs
+    and a landscape measure's replay of a few generations of one seed (a means, not a run) left out."""
+    for folder, subfolders, files in os.walk(root):
+        subfolders[:] = sorted(d for d in subfolders if d not in ("checkpoints", "resume_checkpoint", "partial")
+                               and not d.startswith("landscape_replay"))
+        if name in files:
+            yield folder
 
 
 def run_dirs(root: str) -> list[str]:
     """Every evolution's directory under ``root`` (one holding a ``config.json``), sorted, relative to ``root``."""
-    found = []
-    for folder, subfolders, files in os.walk(root):
-        # A landscape measure's replay of a few generations of one seed (imrl_jax.landscape_run) is a means, not a run.
-        subfolders[:] = sorted(d for d in subfolders if d not in ("checkpoints", "resume_checkpoint", "partial")
-                               and not d.startswith("landscape_replay"))
-        if "config.json" in files:
-            found.append(os.path.relpath(folder, root))
-    return sorted(found)
+    return sorted(os.path.relpath(folder, root) for folder in _walk(root, "config.json"))
 
 
 def index(root: str) -> dict[str, str]:
@@ -123,28 +135,27 @@ TEST_SIZES = ("num_runs", "num_best", "num_tests", "steady_steps", "seed")
 def test_key(config: Config, sizes: dict) -> str:
     """The content key of a learning test from scratch (a condition that is not evolved): its model, as a run's,
     and its sizes (:data:`TEST_SIZES`)."""
-    skip = set(COMPUTE_FIELDS) | set(PROGRESS_FIELDS) | config.spec.ignored_fields()
-    model = {k: v for k, v in config.to_dict().items() if k not in skip}
-    identity = {"model": model, "sizes": {name: sizes[name] for name in TEST_SIZES}}
-    return hashlib.sha256(canonical(identity).encode()).hexdigest()[:KEY_LENGTH]
+    return _hash({"model": model(config), "sizes": {name: sizes[name] for name in TEST_SIZES}})
 
 
 def test_index(root: str) -> dict[str, str]:
     """``{key: directory relative to root}`` of every finished learning test from scratch under ``root`` (a
-    ``steady.json`` of a condition that is not evolved); two directories of one test are an error."""
+    ``steady.json`` of a condition that is not evolved); two directories of one test, or an unreadable one, are
+    an error (RunDirError naming the file)."""
     from imrl_jax import conditions
 
     keys: dict[str, str] = {}
-    for folder, subfolders, files in os.walk(root):
-        subfolders[:] = sorted(d for d in subfolders if d not in ("checkpoints", "resume_checkpoint", "partial"))
-        if "steady.json" not in files:
-            continue
-        with open(os.path.join(folder, "steady.json")) as f:
-            steady = json.load(f)
-        condition = conditions.CONDITIONS.get((steady.get("config") or {}).get("condition"))
+    for folder in _walk(root, "steady.json"):
+        path = os.path.join(folder, "steady.json")
+        steady = read_json(path, "")
+        config = steady.get("config") if isinstance(steady, dict) else None
+        condition = conditions.CONDITIONS.get(config.get("condition")) if isinstance(config, dict) else None
         if condition is None or condition.evolved or any(name not in steady for name in TEST_SIZES):
             continue  # a test of evolved genomes is found beside its run; one without its sizes is no test of ours
-        key = test_key(Config.from_dict(steady["config"]), steady)
+        try:
+            key = test_key(Config.from_dict(steady["config"]), steady)
+        except ConfigError as error:
+            raise RunDirError(f"{path} is unreadable ({error})") from None
         if key in keys:
             raise DuplicateRunError(f"{folder} and {os.path.join(root, keys[key])} hold the same learning test (key "
                                     f"{key})")
@@ -154,31 +165,26 @@ def test_index(root: str) -> dict[str, str]:
 
 def main(argv=None) -> int:
     """``python -m imrl_jax.runspec ROOT [--record PATH]``: every run under ROOT with its key."""
-    import argparse
-    import sys
+    from imrl_jax.cli import Parser, UsageError, exit_codes
 
-    from imrl_jax.rundir import RunDirError
+    @exit_codes
+    def listed(argv) -> int:
+        parser = Parser(prog="python -m imrl_jax.runspec", description=main.__doc__.split(": ", 1)[1])
+        parser.add_argument("root", help="a results folder (for instance experiments/results)")
+        parser.add_argument("--record", help="also write {directory: key} to this JSON file")
+        args = parser.parse_args(argv)
+        if not os.path.isdir(args.root):
+            raise UsageError(f"{args.root}: not a folder")
+        known = sorted(index(args.root).items(), key=lambda item: item[1])
+        for key, folder in known:
+            print(f"{key}  {folder}")
+        if args.record:
+            from imrl_jax.rundir import write_atomic
 
-    parser = argparse.ArgumentParser(prog="python -m imrl_jax.runspec", description=main.__doc__.split(": ", 1)[1])
-    parser.add_argument("root", help="a results folder (for instance experiments/results)")
-    parser.add_argument("--record", help="also write {directory: key} to this JSON file")
-    args = parser.parse_args(argv)
-    if not os.path.isdir(args.root):
-        print(f"error: {args.root}: not a folder", file=sys.stderr)
-        return 2
-    try:
-        known = index(args.root)
-    except (RunDirError, DuplicateRunError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    for key, folder in sorted(known.items(), key=lambda item: item[1]):
-        print(f"{key}  {folder}")
-    if args.record:
-        from imrl_jax.rundir import write_atomic
+            write_atomic(args.record, (json.dumps({folder: key for key, folder in known}, indent=1) + "\n").encode())
+        return 0
 
-        record = {folder: key for key, folder in sorted(known.items(), key=lambda item: item[1])}
-        write_atomic(args.record, (json.dumps(record, indent=1) + "\n").encode())
-    return 0
+    return listed(argv)
 
 
 if __name__ == "__main__":

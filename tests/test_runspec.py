@@ -99,3 +99,26 @@ def test_tests_from_scratch_are_indexed_by_what_they_compute(tmp_path):
                         ignore=shutil.ignore_patterns("*.npz", "*.png"))
     with pytest.raises(runspec.DuplicateRunError, match="same learning test"):
         runspec.test_index(str(tmp_path))
+
+
+def test_an_unreadable_test_or_two_folders_of_one_run_are_one_line_and_exit_2(tmp_path, capsys):
+    """A steady.json of a test from scratch that is not JSON, or whose config names no field of ours, is a
+    RunDirError naming the file; the command reports two folders of one run in one line, exit 2."""
+    from imrl_jax.rundir import RunDirError
+
+    folder = tmp_path / "t"
+    folder.mkdir()
+    (folder / "steady.json").write_text("{not json")
+    with pytest.raises(RunDirError, match="steady.json"):
+        runspec.test_index(str(tmp_path))
+    steady = json.loads(open(os.path.join(RESULTS, "claims", "skills-bias0", "test", "SLE", "steady.json")).read())
+    (folder / "steady.json").write_text(json.dumps(dict(steady, config=dict(steady["config"], bogus_field=1))))
+    with pytest.raises(RunDirError, match="steady.json is unreadable"):
+        runspec.test_index(str(tmp_path))
+    for copy in ("a", "b"):
+        shutil.copytree(os.path.join(RESULTS, "goals", "EE-LS-T", "evolve"), tmp_path / "runs" / copy,
+                        ignore=shutil.ignore_patterns("checkpoints", "resume_checkpoint", "*.npz", "*.png"))
+    assert runspec.main([str(tmp_path / "runs")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and "hold the same run" in err and err.count("\n") == 1
+    assert runspec.main([str(tmp_path / "none")]) == 2 and "not a folder" in capsys.readouterr().err
