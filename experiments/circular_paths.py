@@ -108,7 +108,7 @@ def main(argv=None) -> int:
     """The measure's command line: the grid at ``--task-steps`` steps per task into ``--out``."""
     p = Parser(prog="python -m experiments.circular_paths", description=__doc__.split("\n\n")[0],
                formatter_class=HelpFormatter)
-    p.add_argument("--out", default=OUT, help="results directory")
+    p.add_argument("--out", required=True, help="its folder (the claims study's stage gives its own)")
     p.add_argument("--task-steps", type=int, default=TASK_STEPS, help="steps per task")
     args = p.parse_args(argv)
     if args.task_steps <= 0:

@@ -523,7 +523,7 @@ class FutureWorkTable(Table):
 
         rows = {row.name: row for row in self.rows}
         # the reproduction's report beside the study's document: its runs' fresh lives, which the reference rows show
-        measured = measure(rows, self.evolutions(), self.tests(), reproduction_summary(DOCUMENT) or {},
+        measured = measure(rows, self.evolutions(), self.tests(), reproduction_summary(self.document) or {},
                            self.reproduction)
         os.makedirs(self.out, exist_ok=True)
         with open(os.path.join(self.out, "report.json"), "w") as f:

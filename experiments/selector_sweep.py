@@ -50,7 +50,7 @@ def parser() -> argparse.ArgumentParser:
     """The sweep's command line (``sweep`` names it, beside the study's own)."""
     p = argparse.ArgumentParser(prog="python -m experiments.selector_sweep", description=__doc__.split("\n\n")[0])
     p.add_argument("sweep", choices=("sweep",))
-    p.add_argument("--out", default=OUT)
+    p.add_argument("--out", required=True, help="its folder (the study's stage gives its own)")
     p.add_argument("--task-steps", type=int, default=SIZES["task_steps"])
     p.add_argument("--seeds", type=int, default=SIZES["seeds"], help="lanes per task and point (different keys)")
     for name, default in GRID.items():

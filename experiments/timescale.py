@@ -427,15 +427,15 @@ def measure_main(argv: list[str]) -> int:
     """One measurement's command line: ``--out DIR NAME [--lives N] [--key K] [--task-steps N]``."""
     p = argparse.ArgumentParser(prog="python -m experiments.timescale")
     p.add_argument("measurement", choices=MEASUREMENTS)
-    p.add_argument("--out", help=f"its folder (default: {OUT}/NAME)")
+    p.add_argument("--out", required=True, help="its folder (the study's stage gives its own: a committed one is "
+                                              "not written over by hand)")
     p.add_argument("--lives", type=int)
     p.add_argument("--key", type=int)
     p.add_argument("--task-steps", type=int, default=TASK_STEPS)
     args = p.parse_args(argv)
     given = {k: v for k, v in dict(lives=args.lives, key=args.key).items() if v is not None}
     try:
-        MEASUREMENTS[args.measurement](args.out or os.path.join(OUT, args.measurement), task_steps=args.task_steps,
-                                       **given)
+        MEASUREMENTS[args.measurement](args.out, task_steps=args.task_steps, **given)
     except ValueError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

@@ -5,6 +5,7 @@ import dataclasses
 import json
 import math
 import os
+import shutil
 
 import pytest
 from helpers import ROOT
@@ -331,6 +332,8 @@ def test_the_report_of_the_committed_runs_is_the_documents(tmp_path, monkeypatch
         os.symlink(os.path.abspath(os.path.join(study.OUT, name)), out / name)
     document = tmp_path / "FUTURE_WORK.md"
     document.write_text(f"intro\n{study.TABLE_START}\nold\n{study.TABLE_END}\nend\n")
+    (tmp_path / "reproduction").mkdir()  # the reproduction's report beside the document, as in docs/
+    shutil.copy(os.path.join("docs", "reproduction", "summary.json"), tmp_path / "reproduction")
     assert dataclasses.replace(study.TABLE, document=str(document), out=str(out)).report() == 0
     with open(study.DOCUMENT) as f:
         committed = f.read()
