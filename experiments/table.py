@@ -12,6 +12,7 @@ evolution (the last ``evolve`` of the path replaced by ``test``); a condition th
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import json
 import os
@@ -75,12 +76,21 @@ def scratch_test_key(row: Row, scale: dict) -> str:
 
 def evolution_spec(row: Row, scale: dict) -> runspec.RunSpec:
     """What the row's evolve command computes: the config, seeds and search it builds from its own command line."""
-    from imrl_jax import evolve
-    from imrl_jax.strategies import describe
+    return _evolution_spec(row, json.dumps(scale, sort_keys=True))
 
-    args = evolve.parser().parse_args(evolution_command(row, scale, os.devnull)[3:])
+
+@functools.lru_cache(maxsize=None)
+def _evolution_spec(row: Row, scale: str) -> runspec.RunSpec:
+    # Memoised: a study's plan asks for each row's spec several times (its evolutions, tests, measures, stages).
+    from imrl_jax import evolve
+    from imrl_jax.strategies import GA_NAME, GA_RECORD, parse_settings
+
+    args = evolve.parser().parse_args(evolution_command(row, json.loads(scale), os.devnull)[3:])
     config, seeds = evolve.build_config(args)
-    return runspec.RunSpec.make(config, seeds, describe(evolve.build_strategy(args, config)))
+    # the search as the run records it (strategies.describe), without building the strategy (evosax compiles)
+    search = GA_RECORD if (args.strategy or GA_NAME) == GA_NAME else {
+        "strategy": args.strategy, "settings": parse_settings(args.strategy_set)}
+    return runspec.RunSpec.make(config, seeds, search)
 
 
 @dataclasses.dataclass(frozen=True)
