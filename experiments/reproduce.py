@@ -32,22 +32,18 @@ EVOLVED = conditions.PAPER_EVOLVED
 TESTED = conditions.PAPER
 
 
-def _kernel_options(kernel: str) -> list[str]:
-    return [] if kernel == "xla" else ["--set", f"step_kernel={kernel}"]
-
-
 def _set_options(sets) -> list[str]:
     return [option for assignment in sets for option in ("--set", assignment)]
 
 
-def evolve_command(scale: dict, variant: str, condition: str, out_dir: str, kernel: str = "xla",
-                   sets: tuple[str, ...] = (), sweep: tuple[str, ...] = ()) -> list[str]:
+def evolve_command(scale: dict, variant: str, condition: str, out_dir: str, sets: tuple[str, ...] = (),
+                   sweep: tuple[str, ...] = ()) -> list[str]:
     """The evolve command of a stage: ``variant`` is the preset, ``sets`` more FIELD=VALUE overrides, ``sweep``
     FIELD=V1,V2 values taken in step (``--sweep ... --zip``: a sweep's points in one program)."""
     command = [sys.executable, "-m", "imrl_jax.evolve", "--cond", condition, "--preset", variant, *_set_options(sets),
                "--seeds", str(scale["seeds"]), "--generations", str(scale["generations"]),
                "--childhood-steps", str(scale["childhood_steps"]), "--task-steps", str(scale["task_steps"]),
-               "--bins", str(scale["bins"]), "--out", out_dir, *_kernel_options(kernel)]
+               "--bins", str(scale["bins"]), "--out", out_dir]
     if "population" in scale:
         command += ["--population", str(scale["population"]), "--parents", str(scale["parents"])]
     if sweep:
@@ -57,15 +53,14 @@ def evolve_command(scale: dict, variant: str, condition: str, out_dir: str, kern
 
 
 def test_command(scale: dict, variant: str, condition: str, run_dir: str, out_dir: str,
-                 kernel: str = "xla", sets: tuple[str, ...] = (), sle_noise_steps: int | None = None) -> list[str]:
+                 sets: tuple[str, ...] = (), sle_noise_steps: int | None = None) -> list[str]:
     """The learning-test command of a stage (SLE: ``variant`` is the preset, ``sets`` more overrides)."""
     command = [sys.executable, "-m", "imrl_jax.learning_test"]
     if not conditions.get(condition).evolved:
         # SLE's noise anneals over an adult task's length, not the whole test (claim 5 compares speeds);
         # sle_noise_steps=0 anneals it over the whole test instead.
         noise_steps = scale["task_steps"] if sle_noise_steps is None else sle_noise_steps
-        command += ["--cond", condition, "--preset", variant, "--runs", str(scale["seeds"]), *_kernel_options(kernel),
-                    *_set_options(sets), "--set", f"sle_noise_steps={noise_steps}"]
+        command += ["--cond", condition, "--preset", variant, "--runs", str(scale["seeds"]), *_set_options(sets), "--set", f"sle_noise_steps={noise_steps}"]
     else:  # the test runs with its evolution's config, step kernel included
         command += [run_dir]
     return command + ["--best", str(scale["best"]), "--tests", str(scale["tests"]),

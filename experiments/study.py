@@ -60,7 +60,6 @@ class Study:
     order: float  # its place in ``all`` (whole questions early)
     argv: tuple[str, ...] = ()  # its module's options for its stages ((): the module's default stages)
     report_argv: tuple[str, ...] | None = ("--report",)  # the options that write its report (None: a stage does)
-    report_module: str | None = None  # the module that writes its report (None: its own)
 
     def stages(self):
         """Its stages (``reproduce.Stage``) and their scale, as its run would plan them now."""
@@ -73,7 +72,7 @@ class Study:
         """The command line that runs (or goes on with) its stages with the runner's ``options`` (--jobs, --executor),
         or writes its report."""
         if report:
-            return [sys.executable, "-m", f"experiments.{self.report_module or self.module}", *self.report_argv]
+            return [sys.executable, "-m", f"experiments.{self.module}", *self.report_argv]
         return [sys.executable, "-m", f"experiments.{self.module}", *self.argv, *options]
 
 
