@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from imrl_jax.conditions import PAPER as TESTED, PAPER_EVOLVED as EVOLVED
-from imrl_jax.learning_test import PAIR_LEVEL
+from imrl_jax.steady_state import PAIR_LEVEL
 
 HOLDS, PARTLY, DOES_NOT, NOT_AVAILABLE = "holds", "partly", "does not hold", "n/a"
 

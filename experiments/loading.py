@@ -11,7 +11,7 @@ import numpy as np
 
 from experiments.claims import NUM_BEST  # genomes kept per seed in best_genomes.npz: those claim 7 probes
 from imrl_jax.config import Config
-from imrl_jax.learning_test import pairs_both_ways, performance_curve, steady_bins
+from imrl_jax.steady_state import pairs_both_ways, performance_curve, steady_bins
 
 
 def read_json(path: str) -> dict | None:

@@ -55,6 +55,7 @@ from imrl_jax.learning_test_state import (PARTIAL, fingerprint, finished_runs, k
 from imrl_jax.learning_test_sweep import run_points
 from imrl_jax.progress import Progress
 from imrl_jax.rundir import best_genomes, load_run as read_run, sweep_points
+from imrl_jax.steady_state import performance_curve, steady_bins, summarise
 
 
 class TestState(NamedTuple):
@@ -156,52 +157,6 @@ def run_tests(keys: jax.Array, config: Config, params: LearningParams, genomes, 
     return np.concatenate(reaches, -1), np.concatenate(selections, -2)
 
 
-# ----------------------------------------------------------------------------- statistics
-
-PAIR_LEVEL = 0.2  # a task counts as solved in a test at this steady-state performance
-
-
-def performance_curve(config: Config, reaches: np.ndarray) -> np.ndarray:
-    """Reaches per bin (..., tasks, bins) as task performance per bin (the paper's normalised reward)."""
-    per_bin = np.asarray(config.theoretical_max()) / config.num_bins
-    return np.asarray(reaches, float) / per_bin[:, None]
-
-
-def steady_bins(config: Config, steady_steps: int) -> int:
-    """Number of final bins that make up the last ``steady_steps`` cycles."""
-    bin_steps = config.task_steps // config.num_bins
-    if steady_steps % bin_steps or not 0 < steady_steps <= config.task_steps:
-        raise ConfigError(f"steady_steps: {steady_steps} is not a whole number of bins of {bin_steps} steps "
-                          f"within a task of {config.task_steps}")
-    return steady_steps // bin_steps
-
-
-def summarise(config: Config, reaches: np.ndarray, steady_steps: int) -> dict:
-    """Fig. 3c numbers from reaches (runs, best, tests, tasks, bins): steady state per run, mean, best run."""
-    curve = performance_curve(config, reaches)
-    steady = curve[..., -steady_bins(config, steady_steps):].mean(-1)  # (runs, best, tests, tasks)
-    per_run = steady.mean((1, 2, 3))
-    return dict(
-        steady_mean=float(per_run.mean()), steady_sd=float(per_run.std()), best_run=int(per_run.argmax()),
-        steady_best_run=float(per_run.max()), steady_per_run=[float(v) for v in per_run],
-        steady_per_task=[float(v) for v in steady.mean((0, 1, 2))],
-        whole_test_mean=float(curve.mean()),
-        pairs_both_ways=pairs_both_ways(steady),
-    )
-
-
-def pairs_both_ways(performance, level: float = PAIR_LEVEL) -> float:
-    """Share of (test, task pair) with both tasks of the pair at performance ``level`` or more.
-
-    ``performance`` (..., tasks): each test's steady state per task. Tasks 2i and 2i+1 look
-    the same up to their first junction and turn the other way there, so a fixed controller
-    solves at most one of them: solving both takes choices learned for each task.
-    """
-    performance = np.asarray(performance, float)
-    pairs = performance.reshape(performance.shape[:-1] + (-1, 2))
-    return float((pairs >= level).all(-1).mean())
-
-
 # ----------------------------------------------------------------------------- command line
 
 
@@ -234,18 +189,16 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
         check_log(log)
     except ValueError as error:
         raise UsageError(str(error)) from None
-    with locked_out_dir(out_dir):
+    with locked_out_dir(out_dir), write_errors(out_dir):  # a full disk: one line, the finished runs kept
         for line in [*warnings, *([] if quiet else notes)]:
             print(line, file=sys.stderr, flush=True)
-        with write_errors(out_dir):  # a full disk: one line, the finished runs kept
-            return _run_locked(config, genomes, out_dir, num_tests=num_tests, steady_steps=steady_steps,
-                               num_chunks=num_chunks, seed=seed, quiet=quiet, source=source, command=command,
-                               evolved=evolved, log=log)
+        return _test_runs(config, genomes, out_dir, num_tests, steady_steps, num_chunks, seed, quiet, source,
+                          command, evolved, log)
 
 
-def _run_locked(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, steady_steps: int,
-                num_chunks: int, seed: int, quiet: bool, source: str, command: str,
-                evolved: dict | None = None, log: str | None = None) -> dict:
+
+def _test_runs(config: Config, genomes: np.ndarray, out_dir: str, num_tests: int, steady_steps: int, num_chunks: int,
+               seed: int, quiet: bool, source: str, command: str, evolved: dict | None, log: str | None) -> dict:
     """:func:`run` once the directory is checked and locked."""
     num_runs, num_best = genomes.shape[:2]
     keys = test_keys(seed, num_runs, num_best, num_tests).reshape(num_runs, num_best * num_tests)

@@ -439,7 +439,7 @@ def plot_learning_test(config: Config, curve: np.ndarray):
     """A learning test's mean performance per bin and the range of its runs' means (learning_curve.png).
 
     ``curve`` (runs, best, tests, tasks, bins): every test's performance per bin
-    (:func:`imrl_jax.learning_test.performance_curve`).
+    (:func:`imrl_jax.steady_state.performance_curve`).
     """
     bin_steps = config.task_steps // config.num_bins
     x = (np.arange(config.num_bins) + 0.5) * bin_steps

@@ -8,7 +8,7 @@ import jax
 import numpy as np
 import pytest
 
-from imrl_jax import cli, conditions, learning_test, learning_test_state, plotting, rundir
+from imrl_jax import cli, conditions, learning_test, learning_test_state, plotting, rundir, steady_state
 from imrl_jax.ga import init_population
 from imrl_jax.lifetime import live
 
@@ -40,15 +40,15 @@ def test_statistics_by_hand(tiny):
     reaches = np.zeros((2, 1, 1, 6, 4))
     reaches[0, ..., 3] = 0.5 * per_bin_max  # run 0: 0.5 in the last bin, 0 before
     reaches[1, ..., 2:] = 0.25 * per_bin_max[:, None]  # run 1: 0.25 in the last two bins
-    summary = learning_test.summarise(config, reaches, steady_steps=200)  # last 2 bins
+    summary = steady_state.summarise(config, reaches, steady_steps=200)  # last 2 bins
     assert summary["steady_per_run"] == pytest.approx([0.25, 0.25])
-    summary = learning_test.summarise(config, reaches, steady_steps=100)  # last bin
+    summary = steady_state.summarise(config, reaches, steady_steps=100)  # last bin
     assert summary["steady_per_run"] == pytest.approx([0.5, 0.25])
     assert summary["steady_mean"] == pytest.approx(0.375)
     assert summary["best_run"] == 0 and summary["steady_best_run"] == pytest.approx(0.5)
     assert summary["whole_test_mean"] == pytest.approx((0.5 + 0.5) / 8)
     with pytest.raises(Exception, match="steady_steps"):
-        learning_test.steady_bins(config, 150)
+        steady_state.steady_bins(config, 150)
 
 
 def test_command_line(tiny_run, tmp_path, capsys):
@@ -73,7 +73,7 @@ def test_command_line(tiny_run, tmp_path, capsys):
         reaches = data["reaches"]
     assert reaches.shape == (len(seeds), 2, 2, 6, 4)
     test_config = config.replace(task_steps=400, num_bins=4)
-    assert summary["steady_mean"] == pytest.approx(learning_test.summarise(test_config, reaches, 200)["steady_mean"])
+    assert summary["steady_mean"] == pytest.approx(steady_state.summarise(test_config, reaches, 200)["steady_mean"])
     assert (summary["generation"], summary["generations_done"], summary["num_generations"]) == (0, 1, 1)
     assert os.path.exists(os.path.join(out, "learning_curve.png"))
     rows = open(os.path.join(out, "curve.csv")).read().splitlines()
@@ -264,8 +264,8 @@ def test_pairs_both_ways_by_hand():
     """Both tasks of a pair at the level count; one of them does not (what a fixed controller gets at best)."""
     performance = np.array([[0.5, 0.3, 0.9, 0.1, 0.0, 0.0],   # pair 1 both ways; pair 2 one way; pair 3 none
                             [0.2, 0.2, 0.2, 0.2, 0.19, 0.8]])  # pairs 1 and 2 (at the level), not 3
-    assert learning_test.pairs_both_ways(performance) == pytest.approx(3 / 6)
-    assert learning_test.pairs_both_ways(performance, level=0.25) == pytest.approx(1 / 6)
+    assert steady_state.pairs_both_ways(performance) == pytest.approx(3 / 6)
+    assert steady_state.pairs_both_ways(performance, level=0.25) == pytest.approx(1 / 6)
 
 
 def test_unwritable_out_is_refused_before_testing(tmp_path, capsys):
