@@ -4,9 +4,9 @@ The stage runner (``reproduce.run_stages``) runs a study's stages one after anot
 above 1 or another executor it hands them to :func:`run_fanned`, which starts each stage as soon
 as the stages it needs are done, up to ``jobs`` at once:
 
-* an evolution needs nothing (but a measure or report planned before it);
+* an evolution needs nothing (but a measure planned before it);
 * a learning test needs the evolutions of its condition planned before it;
-* a measure or a report needs every stage planned before it (a ``Stage.needs`` says otherwise).
+* a measure needs every stage planned before it (a ``Stage.needs`` says otherwise).
 
 The executors run a stage's command line (the same as the sequential runner's, so a stage that was
 killed or preempted resumes from its checkpoint when it is submitted again, bitwise as ever):
@@ -24,7 +24,7 @@ import sys
 import time
 from typing import Protocol
 
-BARRIERS = ("measure", "report")
+BARRIERS = ("measure",)
 
 
 def needs(stages) -> dict[str, tuple[str, ...]]:

@@ -82,7 +82,7 @@ class Stage(NamedTuple):
     """One stage of the pipeline: what it is, where it writes, what it costs (lane-steps, estimated)."""
 
     name: str
-    kind: str  # evolve, test, report, measure (a command that writes MEASURED into out_dir when it is done), baseline
+    kind: str  # evolve, test, measure (a command that writes MEASURED into out_dir when it is done), baseline
     variant: str
     condition: str
     out_dir: str
@@ -128,16 +128,9 @@ def partial_runs(test_dir: str) -> int:
     return sum(name.startswith("run_") for name in os.listdir(folder)) if os.path.isdir(folder) else 0
 
 
-def followed(recorded: dict, report: str) -> dict:
-    """What a report reads of the other stages a manifest records: each one's seconds (a rerun changes them)."""
-    return {name: entry.get("seconds") for name, entry in recorded.items() if name != report}
-
-
 def stage_done(stage: Stage, scale: dict) -> bool:
     """A finished evolution (all generations in its history), learning test (its steady.json), measurement (its
-    result.json) or baseline (its summary.json); the report when it ran after every stage its manifest records
-    now, each as recorded then (a stage run since, or run again, makes it due; after a change to the report
-    itself, the study's report writes it again)."""
+    result.json) or baseline (its summary.json)."""
     if stage.kind == "evolve":
         return generations_done(stage.out_dir) >= (stage.generations or scale["generations"])
     if stage.kind == "test":  # a sweep's test (of every point) writes sweep_tests.json when all are done
@@ -146,14 +139,6 @@ def stage_done(stage: Stage, scale: dict) -> bool:
         return os.path.exists(os.path.join(stage.out_dir, MEASURED))
     if stage.kind == "baseline":  # python -m imrl_jax.baselines writes its summary last
         return os.path.exists(os.path.join(stage.out_dir, "summary.json"))
-    if stage.kind == "report":
-        path = os.path.join(stage.out_dir, "manifest.json")
-        if not os.path.isfile(path):
-            return False
-        with open(path) as f:
-            recorded = json.load(f).get("stages", {})
-        after = recorded.get(stage.name, {}).get("after")
-        return after is not None and after == followed(recorded, stage.name)
     return False
 
 
@@ -313,11 +298,9 @@ def run_stage(stage: Stage, index: int, command: list[str], overall: Overall, ma
 
 def record_stage(manifest: dict, manifest_path: str, stage: Stage, command: list[str], seconds: float,
                  done_before: float = 0.0) -> None:
-    """Write a finished stage into the manifest: its command, time and cost (a report: what it reported on)."""
+    """Write a finished stage into the manifest: its command, time and cost."""
     entry = dict(command=" ".join(["python"] + command[1:]), seconds=round(seconds, 1),
                  cost=round(stage.cost * (1.0 - done_before)))
-    if stage.kind == "report":  # what it reported on: it is due again when any of these changes
-        entry["after"] = followed(manifest["stages"], stage.name)
     manifest["stages"][stage.name] = entry
     with open(manifest_path, "w") as f:
         json.dump(manifest, f, indent=2)

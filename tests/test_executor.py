@@ -17,7 +17,7 @@ from experiments.reproduce import Stage, load_manifest, run_stages
 
 #: A resumable stand-in for the package's commands: an "evolution" appends one generation at a time to its
 #: history.csv (going on from what it holds, as evolve --resume does), a "test" refuses to start before its
-#: evolution is whole and writes steady.json, a "report" writes the manifest's record of what it followed.
+#: evolution is whole and writes steady.json.
 FAKE = textwrap.dedent('''
     import json, os, sys, time
     kind, out = sys.argv[1], sys.argv[2]
@@ -95,7 +95,7 @@ def test_what_waits_for_what():
     stages = [Stage("circles", "measure", "", "EE-ES", "c", 1.0), Stage("evolve a LE-LS", "evolve", "a", "LE-LS", "e1", 1),
               Stage("evolve a EE-LS", "evolve", "a", "EE-LS", "e2", 1), Stage("test b LE-LS", "test", "b", "LE-LS", "t", 1),
               Stage("test SLE", "test", "a", "SLE", "s", 1), Stage("baseline", "baseline", "", "PPO", "b", 1),
-              Stage("report", "report", "", "", "r", 1), Stage("odd", "test", "a", "EE-LS", "o", 1, needs=("circles",))]
+              Stage("report", "measure", "", "", "r", 1), Stage("odd", "test", "a", "EE-LS", "o", 1, needs=("circles",))]
     assert X.needs(stages) == {
         "circles": (), "evolve a LE-LS": ("circles",), "evolve a EE-LS": ("circles",),
         # a test waits for the evolutions of its condition planned before it, whatever their variant
@@ -201,11 +201,11 @@ def test_a_submitit_job_gives_its_commands_exit_code_and_logs_as_it_runs(tmp_pat
     assert job.poll() == 5 and log.read_text() == "half way\n"
 
 
-def test_a_report_is_judged_when_it_could_start(tmp_path):
-    """A report done before is due again once a stage it follows has run (as in the sequential runner)."""
+def test_a_measure_is_judged_when_it_could_start(tmp_path):
+    """A measure done before is due again once a stage it follows has run and undone it."""
     stages = [Stage("evolve a", "evolve", "v", "LE-LS", str(tmp_path / "a"), 1.0),
-              Stage("report", "report", "", "", str(tmp_path), 1.0)]
-    finished = {"report"}  # the report was done; the evolution was not
+              Stage("report", "measure", "", "", str(tmp_path), 1.0)]
+    finished = {"report"}  # the measure was done; the evolution was not
     ran = []
 
     def command_for(stage):

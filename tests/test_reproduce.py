@@ -173,7 +173,7 @@ def test_a_fresh_clone_continues_from_the_published_checkpoint(tmp_path):
 
 
 def test_a_stage_is_done_when_its_last_file_exists(tmp_path):
-    """Each kind of stage is done by the file its command writes last; the report when nothing ran since it."""
+    """Each kind of stage is done by the file its command writes last."""
     from experiments import reproduce
 
     scale = dict(generations=3)
@@ -192,22 +192,6 @@ def test_a_stage_is_done_when_its_last_file_exists(tmp_path):
     assert reproduce.cost_left(stage, scale) == 0.0  # the finished baseline
     (tmp_path / "evolve" / "history.csv").write_text("generation,seed,best\n0,0,0.1\n1,0,0.2\n2,0,0.3\n")
     assert reproduce.stage_done(evolve, scale) and reproduce.cost_left(evolve, scale) == 0.0
-    report = reproduce.Stage("report", "report", "", "", str(tmp_path), 1.0)
-    assert not reproduce.stage_done(report, scale)  # no manifest
-    evolved = {"command": "python -m imrl_jax.evolve", "seconds": 2.0, "cost": 3}
-    manifest = {"stages": {"evolve paper LE-LS": evolved, "report": {"seconds": 1.0}}}
-    (tmp_path / "manifest.json").write_text(json.dumps(manifest))
-    assert not reproduce.stage_done(report, scale)  # a report of before it said what it followed
-    manifest["stages"]["report"]["after"] = {"evolve paper LE-LS": 2.0}
-    (tmp_path / "manifest.json").write_text(json.dumps(manifest))
-    assert reproduce.stage_done(report, scale)
-    manifest["stages"]["evolve paper LE-LS"]["seconds"] = 5.0  # the evolution extended since
-    (tmp_path / "manifest.json").write_text(json.dumps(manifest))
-    assert not reproduce.stage_done(report, scale)
-    manifest["stages"]["report"]["after"]["evolve paper LE-LS"] = 5.0
-    manifest["stages"]["learning test paper SLE"] = {"seconds": 7.0}  # a stage finished since
-    (tmp_path / "manifest.json").write_text(json.dumps(manifest))
-    assert not reproduce.stage_done(report, scale)
 
 
 def test_a_resumed_test_stage_counts_its_own_runs(tmp_path, capsys):
@@ -226,16 +210,3 @@ def test_a_resumed_test_stage_counts_its_own_runs(tmp_path, capsys):
         assert json.load(f)["stages"]["a test of 10 runs"]["cost"] == 100
     # a cost recorded wrongly before (negative) is no measurement
     assert reproduce.measured_rate({"stages": {"a": dict(cost=300, seconds=3), "bad": dict(cost=-900, seconds=1)}}) == 100
-
-
-def test_a_report_run_by_the_pipeline_is_done_until_another_stage_runs(tmp_path):
-    """run_stage records what the report followed: the next sitting skips it, a stage run since makes it due."""
-    stages = [reproduce.Stage("evolve paper LE-LS", "evolve", "paper", "LE-LS", str(tmp_path / "e"), 1.0),
-              reproduce.Stage("report", "report", "", "", str(tmp_path), 1.0)]
-    manifest = {"sizes": {"generations": 1},
-                "stages": {"evolve paper LE-LS": {"command": "python -m imrl_jax.evolve", "seconds": 2.0}}}
-    path = str(tmp_path / "manifest.json")
-    reproduce.run_stage(stages[1], 1, [sys.executable, "-c", "pass"], reproduce.Overall(stages, manifest), path)
-    assert reproduce.stage_done(stages[1], {}) and reproduce.cost_left(stages[1], {}) == 0.0
-    reproduce.run_stage(stages[0], 0, [sys.executable, "-c", "pass"], reproduce.Overall(stages, manifest), path)
-    assert not reproduce.stage_done(stages[1], {})
