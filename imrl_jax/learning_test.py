@@ -260,8 +260,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         def test(run_dir: str, out_dir: str) -> dict:  # a run directory, or a sweep's point, into out_dir
             return _test(args, *evolved_genomes(args, run_dir, sets), sets, command, out_dir)
 
+        def config_of(run_dir: str) -> Config:  # what a point's test computes (a test made before is checked)
+            base, _, source, _, _ = evolved_genomes(args, run_dir, sets)
+            return tested_config(args, base, source)[0]
+
         summaries = ([(args.out, test(args.run_dir, args.out))] if points is None else
-                     run_points(args, points, test))
+                     run_points(args, points, test, config_of))
     for out_dir, summary in summaries:
         if summary is None:
             print(f"{out_dir}: tested before (steady.json)")

@@ -3,8 +3,8 @@
 A sweep's directory (``evolve --sweep``: each point a run directory ``SWEEP/KEY``) is tested point by
 point into ``OUT/KEY``, each point as the test of its run directory alone would be (the points share one
 program: they differ only in dynamic values). A point tested before (its ``steady.json``) is checked against
-the settings asked and passed over, so that the same command after an interruption goes on with the next
-point; once every point is tested, ``OUT/sweep_tests.json`` holds each point's settings and steady state.
+the settings and the model asked (``--set`` included) and passed over, so that the same command after an
+interruption goes on with the next point; once every point is tested, ``OUT/sweep_tests.json`` holds each point's settings and steady state.
 """
 
 from __future__ import annotations
@@ -14,22 +14,25 @@ import os
 from typing import Callable
 
 from imrl_jax.cli import UsageError
+from imrl_jax.config import Config
 from imrl_jax.rundir import load_run, read_json, recorded_points, write_atomic
 
 #: What the test of a sweep writes beside its points' tests once all are done.
 SWEEP_TESTS = "sweep_tests.json"
 
 
-def run_points(args, points: list[str], test: Callable[[str, str], dict]) -> list[tuple[str, dict | None]]:
+def run_points(args, points: list[str], test: Callable[[str, str], dict],
+               config_of: Callable[[str], Config]) -> list[tuple[str, dict | None]]:
     """Each point's (out_dir, summary) once ``test(point_dir, out_dir)`` has tested those not tested before (their
-    summary None), and the sweep's summary written."""
+    summary None; ``config_of(point_dir)``: the config its test would run, checked against theirs), and the sweep's
+    summary written."""
     if args.best_genomes:
         raise UsageError(f"--best-genomes: {args.run_dir} is a sweep: its points' populations are kept")
     summaries = []
     for point in points:
         out_dir = os.path.join(args.out, os.path.basename(point))
         if os.path.isfile(os.path.join(out_dir, "steady.json")):
-            check_tested_before(args, point, out_dir)
+            check_tested_before(args, point, out_dir, config_of(point))
             summaries.append((out_dir, None))  # a point tested before: the sweep's test goes on after it
             continue
         summaries.append((out_dir, test(point, out_dir)))
@@ -37,12 +40,16 @@ def run_points(args, points: list[str], test: Callable[[str, str], dict]) -> lis
     return summaries
 
 
-def check_tested_before(args, run_dir: str, out_dir: str) -> None:
-    """Refuse a point's earlier test (in a sweep's test) made with other settings or of another generation."""
+def check_tested_before(args, run_dir: str, out_dir: str, config: Config) -> None:
+    """Refuse a point's earlier test (in a sweep's test) made with other settings, of another generation or of
+    another model than ``config`` (``Config.model_differences``: another ``--set``)."""
     steady = read_json(os.path.join(out_dir, "steady.json"), "")
     asked = dict(num_best=args.best, num_tests=args.tests, task_steps=args.task_steps, steady_steps=args.steady_steps,
                  seed=args.seed, generations_done=load_run(run_dir).generation)
     differ = [f"{name} {steady.get(name)} (asked {value})" for name, value in asked.items() if steady.get(name) != value]
+    tested = Config.from_dict(steady["config"]) if steady.get("config") else None
+    differ += [f"{name} {getattr(tested, name)} (asked {getattr(config, name)})"
+               for name in ([] if tested is None else tested.model_differences(config))]
     if differ:
         raise UsageError(f"--out: {out_dir} holds a test of other settings: {', '.join(differ)}; choose another --out")
 

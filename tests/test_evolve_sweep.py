@@ -166,6 +166,11 @@ def test_a_sweeps_learning_test_tests_every_point_as_its_own_test_would(finished
     assert capsys.readouterr().out.count("tested before (steady.json)") == 4
     assert learning_test.main([finished_sweep, "--out", str(out), *lengths, "--tests", "2"]) == 2  # not mixed in
     assert "holds a test of other settings: num_tests 1 (asked 2)" in capsys.readouterr().err
+    # another model (--set) is refused too, though every size is as asked; nothing is written
+    before = {p: p.stat().st_mtime_ns for p in out.rglob("*")}
+    assert learning_test.main([finished_sweep, "--out", str(out), *lengths, "--set", "gamma=0.5"]) == 2
+    assert "holds a test of other settings: gamma 0.99 (asked 0.5)" in capsys.readouterr().err
+    assert {p: p.stat().st_mtime_ns for p in out.rglob("*")} == before
 
 
 def test_a_sweep_that_cannot_go_on_together_or_differs_is_refused_and_nothing_changes(finished_sweep, tmp_path,
