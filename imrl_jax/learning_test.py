@@ -43,7 +43,7 @@ from jax.sharding import NamedSharding, PartitionSpec
 from imrl_jax.checkpoint import git_commit
 from imrl_jax.devices import check_memory, make_mesh, use_host_cores
 from imrl_jax.config import Config, ConfigError, LearningParams
-from imrl_jax import cli
+from imrl_jax import cli, runspec
 from imrl_jax.cli import UsageError, exit_codes, parse_sets
 from imrl_jax.lifetime import grow_up, lifetime_keys, run_phase, task_spec, task_start
 from imrl_jax.state import State
@@ -215,7 +215,8 @@ def _test_runs(config: Config, genomes: np.ndarray, out_dir: str, num_tests: int
                      + ", run by run" + (f"; {len(done)} run(s) done before, kept in {partial}" if done else ""))
     start = time.perf_counter()
     params = config.learning_params()
-    start_partial(partial, stamp, command)
+    sizes = dict(num_runs=num_runs, num_best=num_best, num_tests=num_tests, steady_steps=steady_steps, seed=seed)
+    start_partial(partial, stamp, command, None if config.spec.evolved else runspec.test_key(config, sizes))
     for r in range(num_runs):
         if r in done:
             continue

@@ -82,10 +82,12 @@ def finished_runs(partial: str, stamp: str, num_runs: int, warn: Callable[[str],
     return done
 
 
-def start_partial(partial: str, stamp: str, command: str) -> None:
-    """Make ``partial`` and record in its ``spec.json`` the fingerprint (and command) of the runs it will keep."""
+def start_partial(partial: str, stamp: str, command: str, key: str | None = None) -> None:
+    """Make ``partial`` and record in its ``spec.json`` the fingerprint (and command) of the runs it will keep, and
+    a test from scratch's key (``runspec.test_key``: the studies find it by that while it runs)."""
     os.makedirs(partial, exist_ok=True)
-    write_atomic(os.path.join(partial, "spec.json"), json.dumps(dict(fingerprint=stamp, command=command)).encode())
+    write_atomic(os.path.join(partial, "spec.json"),
+                 json.dumps(dict(fingerprint=stamp, command=command, **({} if key is None else dict(key=key)))).encode())
 
 
 def keep_run(partial: str, run: int, reaches: np.ndarray, selections: np.ndarray) -> None:

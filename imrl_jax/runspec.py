@@ -91,12 +91,13 @@ class RunSpec:
 
 
 def _walk(root: str, name: str):
-    """Every folder under ``root`` holding a file ``name``, in order; a run's checkpoints, a test's partial runs
-    and a landscape measure's replay of a few generations of one seed (a means, not a run) left out."""
+    """Every folder under ``root`` holding a file ``name`` (a path within it), in order; a run's checkpoints, a
+    test's partial runs and a landscape measure's replay of a few generations of one seed (a means, not a run)
+    left out."""
     for folder, subfolders, files in os.walk(root):
         subfolders[:] = sorted(d for d in subfolders if d not in ("checkpoints", "resume_checkpoint", "partial")
                                and not d.startswith("landscape_replay"))
-        if name in files:
+        if os.path.isfile(os.path.join(folder, name)):
             yield folder
 
 
@@ -139,8 +140,9 @@ def test_key(config: Config, sizes: dict) -> str:
 
 
 def test_index(root: str) -> dict[str, str]:
-    """``{key: directory relative to root}`` of every finished learning test from scratch under ``root`` (a
-    ``steady.json`` of a condition that is not evolved); two directories of one test, or an unreadable one, are
+    """``{key: directory relative to root}`` of every learning test from scratch under ``root``: finished (a
+    ``steady.json`` of a condition that is not evolved) or begun (its ``partial/spec.json`` records its key, so
+    that a second study asking for it goes on with it); two directories of one test, or an unreadable one, are
     an error (RunDirError naming the file)."""
     from imrl_jax import conditions
 
@@ -160,6 +162,13 @@ def test_index(root: str) -> dict[str, str]:
             raise DuplicateRunError(f"{folder} and {os.path.join(root, keys[key])} hold the same learning test (key "
                                     f"{key})")
         keys[key] = os.path.relpath(folder, root)
+    for folder in _walk(root, os.path.join("partial", "spec.json")):
+        key = read_json(os.path.join(folder, "partial", "spec.json"), "").get("key")
+        if key is not None and os.path.relpath(folder, root) not in keys.values():
+            if key in keys:
+                raise DuplicateRunError(f"{folder} and {os.path.join(root, keys[key])} hold the same learning test "
+                                        f"(key {key})")
+            keys[key] = os.path.relpath(folder, root)
     return keys
 
 

@@ -122,3 +122,32 @@ def test_an_unreadable_test_or_two_folders_of_one_run_are_one_line_and_exit_2(tm
     err = capsys.readouterr().err
     assert err.startswith("error: ") and "hold the same run" in err and err.count("\n") == 1
     assert runspec.main([str(tmp_path / "none")]) == 2 and "not a folder" in capsys.readouterr().err
+
+
+def test_a_test_from_scratch_is_found_by_its_key_while_it_runs(tmp_path, monkeypatch):
+    """Interrupted after its first run, an SLE test is indexed (its partial/spec.json) under the key its finished
+    steady.json gives, so a second study asking for it goes on with it; a second begun copy is refused."""
+    from imrl_jax import learning_test
+
+    argv = ["--cond", "SLE", "--runs", "2", "--best", "1", "--tests", "1", "--task-steps", "200", "--bins", "2",
+            "--steady-steps", "100", "--chunks", "1", "--quiet", "--out", str(tmp_path / "results" / "sle")]
+    real, calls = learning_test.run_tests, []
+
+    def stopped_after_one(*args, **kwargs):
+        if calls:
+            raise KeyboardInterrupt
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(learning_test, "run_tests", stopped_after_one)
+    with pytest.raises(KeyboardInterrupt):
+        learning_test.main(argv)
+    begun = runspec.test_index(str(tmp_path / "results"))
+    assert list(begun.values()) == ["sle"]
+    shutil.copytree(tmp_path / "results" / "sle", tmp_path / "results" / "copy")
+    with pytest.raises(runspec.DuplicateRunError, match="same learning test"):
+        runspec.test_index(str(tmp_path / "results"))
+    shutil.rmtree(tmp_path / "results" / "copy")
+    monkeypatch.setattr(learning_test, "run_tests", real)
+    assert learning_test.main(argv) == 0
+    assert runspec.test_index(str(tmp_path / "results")) == begun  # the finished test: the same key and folder
