@@ -96,7 +96,9 @@ def _evolution_spec(row: Row, scale: str) -> runspec.RunSpec:
 @dataclasses.dataclass(frozen=True)
 class Measure:
     """A measure: ``python -m MODULE RUN --out OUT ARGS`` (RUN a row's evolution, the run a Row of the measure's own
-    finds by its key (a run another study made, not a row of this table), a folder, or none: ``run=""``); OUT is ``out``, or ``TABLE_OUT/measures/NAME``. Done as its ``kind`` of stage is done:
+    finds by its key (a run another study made, not a row of this table), a folder, or none: ``run=""``); OUT is
+    ``out``, or ``TABLE_OUT/measures/NAME``. An argument ``{ROW}`` is the evolution folder of the table's row ROW:
+    a measure of several runs names them so, and waits for each. Done as its ``kind`` of stage is done:
     a "measure" when OUT holds result.json, a "test" (``imrl_jax.learning_test`` with options of its own, such
     as another task set) its steady.json, a "baseline" (``imrl_jax.baselines``) its summary.json."""
 
@@ -107,6 +109,10 @@ class Measure:
     cost: float = 0.0  # lane-steps, estimated
     out: str | None = None  # its folder within the table's (None: measures/NAME)
     kind: str = "measure"  # measure, test or baseline: what makes it done (reproduce.stage_done)
+
+    def rows_named(self) -> list[str]:
+        """The rows its arguments name as ``{ROW}``."""
+        return [a[1:-1] for a in self.args if len(a) > 2 and a[0] == "{" and a[-1] == "}"]
 
 
 class Sweep(NamedTuple):
@@ -164,10 +170,12 @@ class Table:
         twice = sorted({name for name in names if names.count(name) > 1})
         if twice:  # a row's runs and a stage's command are found by its name
             raise ValueError(f"table {self.name}: two rows or measures are named {twice[0]!r}")
-        scratch = [m for m in self.measures for r in self.rows if r.name == m.run and not r.evolved]
-        if scratch:
-            raise ValueError(f"table {self.name}: measure {scratch[0].name} reads row {scratch[0].run}, which is not "
-                             f"evolved (a measure reads a run)")
+        rows = {r.name: r for r in self.rows}
+        for m in self.measures:
+            for name in [*m.rows_named(), *([m.run] if isinstance(m.run, str) and m.run in rows else [])]:
+                if name not in rows or not rows[name].evolved:
+                    raise ValueError(f"table {self.name}: measure {m.name} reads row {name}, which is "
+                                     f"{'no row' if name not in rows else 'not evolved'} (a measure reads a run)")
 
     @property
     def reproduction(self) -> str:
@@ -291,18 +299,20 @@ class Table:
             run = self.measured_run(measure)
             row = next((r for r, e in zip(self.rows, evolutions.values()) if e is not None and e == run), None)
             condition = measure.run.condition if isinstance(measure.run, Row) else row.condition if row else ""
+            named = [evolving[evolutions[name]] for name in measure.rows_named()]
             stages.append(Stage(f"{measure.kind} {measure.name}", measure.kind, measure.name, condition,
                                 self.measure_folder(measure), measure.cost,
-                                needs=(evolving[run],) if row else ()))
+                                needs=tuple(dict.fromkeys(([evolving[run]] if row else []) + named))))
         return stages, self.scale
 
     def stage_command(self, stage: Stage) -> tuple[list[str], None]:
         """A stage's command line: a measure, the row's evolution, or the learning test of the run it found."""
         measure = next((m for m in self.measures if stage.name == f"{m.kind} {m.name}"), None)
         if measure is not None:
-            run = self.measured_run(measure)
+            run, evolutions = self.measured_run(measure), self.evolutions()
+            args = [evolutions[a[1:-1]] if a[1:-1] in measure.rows_named() else a for a in measure.args]
             return [sys.executable, "-m", measure.module, *([run] if run else []), "--out", stage.out_dir,
-                    *measure.args], None
+                    *args], None
         row = next(r for r in self.rows if r.name == stage.variant)
         scale = self.scale_of(row)
         if stage.kind == "evolve":

@@ -2,6 +2,8 @@
 
 import os
 
+import pytest
+
 from helpers import ROOT
 
 from experiments.study import SCREEN
@@ -237,3 +239,23 @@ def test_a_measure_of_a_run_of_its_own_finds_it_by_key(tmp_path):
     assert [(s.name, s.condition, s.needs) for s in stages] == [("measure ev", "EV-LS", ()), ("measure there", "", ())]
     assert table.stage_command(stages[0])[0][3] == os.path.join(RESULTS, "future_work", "EV-LS", "evolve")
     assert table.stage_command(stages[1])[0][3] == "some/folder"
+
+
+def test_a_measure_of_several_rows_runs_names_them_and_waits_for_each(tmp_path):
+    """``{ROW}`` arguments are the rows' evolution folders (the childhood study's heritability of four runs): the
+    measure waits for each row's evolution, and a name that is no evolved row is refused."""
+    table = Table("t", "docs/T.md", 99, scale=SCREEN, out=str(tmp_path), results=RESULTS,
+                  rows=(Row("ev", "EV-LS", "skills"), Row("new", "EV-LS", "skills", ("gamma=0.95",), test=False),
+                        Row("sle", "SLE", "skills")),
+                  measures=(Measure("both", "", ("heritability", "{ev}", "{new}", "--lives", "2"), module="m"),))
+    stages, _ = table.all_stages()
+    both = next(s for s in stages if s.name == "measure both")
+    assert both.needs == ("evolve ev", "evolve new")
+    evolutions = table.evolutions()
+    assert table.stage_command(both)[0][1:] == ["-m", "m", "--out", str(tmp_path / "measures" / "both"),
+                                                "heritability", evolutions["ev"], evolutions["new"], "--lives", "2"]
+    assert evolutions["ev"] == os.path.join(RESULTS, "future_work", "EV-LS", "evolve")
+    for name, why in (("sle", "not evolved"), ("nothing", "no row")):
+        with pytest.raises(ValueError, match=f"measure m reads row {name}, which is {why}"):
+            Table("t", "docs/T.md", 99, scale=SCREEN, out=str(tmp_path), rows=table.rows,
+                  measures=(Measure("m", "", (f"{{{name}}}",)),))
