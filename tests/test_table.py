@@ -175,8 +175,6 @@ def test_a_row_of_fewer_generations_of_its_own_is_done_at_its_own_length():
 def test_a_learning_test_of_its_own_options_waits_for_its_row_and_two_rows_of_one_name_are_refused(tmp_path):
     """A test-kind measure (the novel tasks' learning test on another task set) is done by its steady.json and
     waits for its row's evolution; a name given twice is refused, naming it."""
-    import pytest
-
     table = Table("t", "docs/T.md", 99, scale=SCREEN, out=str(tmp_path), results=RESULTS,
                   rows=(Row("EE-LS-T", "EE-LS-T", "skills"),),
                   measures=(Measure("novel", "EE-LS-T", ("--task-set", "novel"), module="imrl_jax.learning_test",
@@ -194,8 +192,6 @@ def test_a_learning_test_of_its_own_options_waits_for_its_row_and_two_rows_of_on
 def test_rows_of_one_run_make_the_longest_and_a_measure_cannot_take_a_rows_name_or_read_a_test(tmp_path):
     """Two rows of one run asking for 2 and 3 generations: one stage of 3, whose command asks for 3; a test stage
     counts its row's runs; a measure named as a row, or reading a row that is not evolved, is refused."""
-    import pytest
-
     from experiments.study import SCALES
 
     tiny = SCALES["tiny"]
