@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+import hashlib
+import json
+import os
+
 import numpy as np
 
 from experiments.claims import mean_speed, turn_consistency
+from experiments.loading import best_of_population, read_json
 
 PATH_STEPS = 1000  # steps each task is driven after its learning period (shares, stereotypy)
 DRAWN_STEPS = 300  # of which the last ones are drawn
@@ -80,9 +85,6 @@ FRESH_FILE = "fresh.json"
 
 def fresh_key(best: dict, config_dict: dict, num_lives: int = FRESH_LIVES, seed: int = FRESH_SEED) -> dict:
     """What :func:`run_fresh`'s kept lives depend on: the generation, seeds, genomes, config, lives and key."""
-    import hashlib
-    import json
-
     genomes = np.ascontiguousarray(np.asarray(best["genomes"])[:, 0], np.float32)
     return dict(generations=int(best["generations"]), seeds=[int(s) for s in best["seeds"]], num_lives=num_lives,
                 seed=seed, genomes_sha256=hashlib.sha256(genomes.tobytes()).hexdigest(),
@@ -91,10 +93,6 @@ def fresh_key(best: dict, config_dict: dict, num_lives: int = FRESH_LIVES, seed:
 
 def last_generation(run_dir: str, num_best: int = 1) -> dict | None:
     """Each seed's ``num_best`` fittest of an evolution's last evaluated generation (None without a population)."""
-    import os
-
-    from experiments.loading import best_of_population
-
     population = os.path.join(run_dir, "final_population.npz")
     return best_of_population(population, num_best) if os.path.isfile(population) else None
 
@@ -102,11 +100,6 @@ def last_generation(run_dir: str, num_best: int = 1) -> dict | None:
 def kept(path: str, key: dict, compute) -> dict:
     """``compute()``'s numbers with ``key``, kept in ``path``: read back while ``key`` is the same, else computed
     again and written whole (a killed report leaves no half file)."""
-    import json
-    import os
-
-    from experiments.loading import read_json
-
     cached = read_json(path)
     if cached is not None and all(cached.get(k) == v for k, v in key.items()):
         return cached
@@ -119,10 +112,6 @@ def kept(path: str, key: dict, compute) -> dict:
 
 def run_config(run_dir: str, config_dict: dict | None = None) -> dict:
     """An evolution's config as its config.json holds it (``config_dict`` when given)."""
-    import os
-
-    from experiments.loading import read_json
-
     return config_dict if config_dict is not None else (read_json(os.path.join(run_dir, "config.json")) or {})["config"]
 
 
@@ -135,8 +124,6 @@ def run_fresh(run_dir: str, config_dict: dict | None = None, num_lives: int = FR
     population. Returns the mean per seed,
     their mean and sd over seeds (ddof 1), and each genome's sd over its lives.
     """
-    import os
-
     best = last_generation(run_dir)
     if best is None:
         return None
@@ -162,8 +149,6 @@ def run_probe(run_dir: str, config_dict: dict | None = None, num_best: int = 10,
     Kept in ``run_dir/probe.json`` and probed again only when what it depends on changed (:func:`fresh_key`
     with ``num_best`` and ``key`` for the lives and their key); None without a population.
     """
-    import os
-
     best = last_generation(run_dir, num_best)
     if best is None:
         return None
@@ -186,8 +171,6 @@ def run_path(run_dir: str, config_dict: dict | None = None) -> dict | None:
     Returns its stereotypy per task, speed, seed, recorded and relived fitness; kept in ``run_dir/path.json``
     and relived again only when what it depends on changed (:func:`fresh_key`); None without a population.
     """
-    import os
-
     best = last_generation(run_dir)
     if best is None:
         return None

@@ -11,6 +11,7 @@ evolution (the last ``evolve`` of the path replaced by ``test``); a condition th
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import functools
 import hashlib
@@ -21,10 +22,13 @@ from typing import NamedTuple
 
 import numpy as np
 
+from experiments.claims import final_best, plateau_generation
 from experiments.executor import add_options, from_options
+from experiments.loading import read_evolution, read_test
+from experiments.markdown import head, line, mean_sd
 from experiments.reproduce import (Stage, evolution_cost, evolve_command, load_manifest, run_stages, test_command,
                                    test_cost)
-from experiments.study import REPRODUCTION, RESULTS, Study
+from experiments.study import REPRODUCTION, RESULTS, Study, write_table
 from imrl_jax import conditions, runspec
 from imrl_jax.rundir import RunDirError
 
@@ -333,9 +337,6 @@ class Table:
 
     def measure(self) -> list[dict]:
         """Each row's evolution (final best fitness, its spread and plateau, once finished) and learning test."""
-        from experiments.claims import final_best, plateau_generation
-        from experiments.loading import read_evolution, read_test
-
         measured = []
         for row, evolved, tested in zip(self.rows, self.evolutions().values(), self.tests().values()):
             run, test = (None if evolved is None else read_evolution(evolved)), read_test(tested)
@@ -356,8 +357,6 @@ class Table:
 
     def table(self, measured: list[dict]) -> str:
         """The rows as markdown: what ran, the final best fitness, the plateau and the steady state."""
-        from experiments.markdown import head, line, mean_sd
-
         lines = head("row", "condition", "preset", "seeds", "generations", "final best fitness", "plateau generation",
                      "steady state")
         for m in measured:
@@ -391,8 +390,6 @@ class Table:
 
     def report(self) -> int:
         """Measure what has finished; write the table into the document (between its markers) and the figure."""
-        from experiments.study import write_table
-
         measured = self.measure()
         os.makedirs(self.out, exist_ok=True)
         drawn = self.figure(measured, os.path.join(self.out, f"{self.name}.png"))
@@ -404,8 +401,6 @@ class Table:
 
     def main(self, argv=None) -> int:
         """The study's command line: run (or go on with) its stages, or ``--report``."""
-        import argparse
-
         p = argparse.ArgumentParser(prog=f"python -m experiments run {self.name}")
         p.add_argument("--report", action="store_true", help="the table and figure of what has finished (runs nothing)")
         add_options(p)
