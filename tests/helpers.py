@@ -289,3 +289,46 @@ def reference_life(config, key, genome) -> dict:
     from imrl_jax import lifetime, reference
 
     return reference.live_with(config, genome, lifetime.life_draws(key, config, np.float64))
+
+
+# ----------------------------------------------------------------------------- made-up results, as the reports read them
+
+
+def write_evolution(folder, best, config: dict | None = None, columns: dict | None = None, seeds=None) -> None:
+    """An evolution as the reports read it: history.csv with ``best[generation][seed]`` (of ``seeds``, else 0, 1, ...)
+    and ``columns`` (name: one value, or [generation][seed]), and config.json holding ``config`` (its whole JSON) if
+    given."""
+    os.makedirs(folder, exist_ok=True)
+    columns = columns or {}
+    cell = lambda v, g, s: v if np.ndim(v) == 0 else v[g][s]  # noqa: E731
+    with open(os.path.join(folder, "history.csv"), "w") as f:
+        f.write(",".join(["generation", "seed", "best", *columns]) + "\n")
+        f.writelines(",".join(str(x) for x in [g, s if seeds is None else seeds[s], best[g][s],
+                                                *(cell(v, g, s) for v in columns.values())]) + "\n"
+                     for g in range(len(best)) for s in range(len(best[g])))
+    if config is not None:
+        with open(os.path.join(folder, "config.json"), "w") as f:
+            json.dump(config, f)
+
+
+def write_learning_test(folder, per_run, curve=(0.1, 0.3), bin_steps: int = 1000, **fields) -> None:
+    """A finished learning test as the reports read it: steady.json (the steady state ``per_run``, its mean and sd
+    over runs, ``fields``) and curve.csv (the mean curve ``curve``, a bin of ``bin_steps`` each)."""
+    os.makedirs(folder, exist_ok=True)
+    with open(os.path.join(folder, "steady.json"), "w") as f:
+        json.dump(dict(dict(steady_per_run=list(per_run), steady_mean=float(np.mean(per_run)),
+                            steady_sd=float(np.std(per_run)), num_runs=len(per_run)), **fields), f)
+    with open(os.path.join(folder, "curve.csv"), "w") as f:
+        f.write("bin,end_step,mean,sd_over_runs\n" + "".join(f"{b},{(b + 1) * bin_steps},{v},0.01\n"
+                                                              for b, v in enumerate(curve)))
+
+
+def relocated(table, tmp_path, document: str | None = None):
+    """A study's table writing into ``tmp_path``: its results and folder there, and its document a copy (``document``:
+    that text instead)."""
+    import dataclasses
+
+    copy = tmp_path / os.path.basename(table.document)
+    copy.write_text(open(os.path.join(ROOT, table.document)).read() if document is None else document)
+    results = tmp_path / "results"
+    return dataclasses.replace(table, results=str(results), out=str(results / table.name), document=str(copy))

@@ -5,14 +5,12 @@ empty (every stage to run, a report that says so), then with an evolution and a 
 by hand for every row (every stage done, the report's table showing exactly the numbers written).
 """
 
-import dataclasses
 import importlib
 import json
 import os
-import shutil
 
 import pytest
-from helpers import ROOT
+from helpers import relocated, write_evolution, write_learning_test
 
 from experiments import study as S
 from experiments.reproduce import stage_done
@@ -40,36 +38,6 @@ def test_every_study_but_two_is_found_as_a_table():
     every other study is a table this test runs."""
     assert sorted(TABLES) == ["baselines", "childhood", "claims-experts", "claims-screen", "future-work", "goals",
                               "novel-tasks", "reproduction", "reproduction-cpu", "search"]
-
-
-def relocated(table: Table, tmp_path) -> Table:
-    """The table writing into ``tmp_path``: its results, its own folder and a copy of its document."""
-    document = tmp_path / os.path.basename(table.document)
-    shutil.copy(os.path.join(ROOT, table.document), document)
-    results = tmp_path / "results"
-    return dataclasses.replace(table, results=str(results), out=str(results / table.name), document=str(document))
-
-
-def write_evolution(folder: str, spec, generations: int, best: float) -> None:
-    """An evolution's config.json and history.csv: every seed's best ``best`` in every generation."""
-    os.makedirs(folder, exist_ok=True)
-    with open(os.path.join(folder, "config.json"), "w") as f:
-        json.dump(dict(config=spec.config.to_dict(), seeds=list(spec.seeds), search=json.loads(spec.search)), f)
-    with open(os.path.join(folder, "history.csv"), "w") as f:
-        f.write("generation,seed,best,mean,std," + ",".join(f"best_task{t}" for t in range(1, 7)) + "\n")
-        f.writelines(f"{g},{s},{best},{best / 2},0.0" + f",{best}" * 6 + "\n" for g in range(generations)
-                     for s in spec.seeds)
-
-
-def write_test(folder: str, steady: float, num_runs: int) -> None:
-    """A finished learning test: its steady state ``steady`` in every run and task, and a two-bin curve."""
-    os.makedirs(folder, exist_ok=True)
-    with open(os.path.join(folder, "steady.json"), "w") as f:
-        json.dump(dict(steady_mean=steady, steady_sd=0.0, steady_per_run=[steady] * num_runs, pairs_both_ways=0.0,
-                       steady_best_run=steady, best_run=0, steady_per_task=[steady] * 6, whole_test_mean=steady / 2,
-                       num_runs=num_runs, num_best=1, num_tests=1), f)
-    with open(os.path.join(folder, "curve.csv"), "w") as f:
-        f.write(f"bin,end_step,mean,sd_over_runs\n0,10,{steady / 2},0.0\n1,20,{steady},0.0\n")
 
 
 def generic_table(table: Table) -> str | None:
@@ -102,9 +70,17 @@ def test_a_table_study_plans_lists_and_reports_what_was_made_by_hand(name, tmp_p
         sizes = table.scale_of(row)
         evolved = table.evolutions()[row.name]
         if evolved is not None and not os.path.isdir(evolved):  # a run two rows share is written once
-            write_evolution(evolved, evolution_spec(row, sizes), sizes["generations"], made[row.name][0])
+            spec, best = evolution_spec(row, sizes), made[row.name][0]
+            write_evolution(evolved, [[best] * len(spec.seeds)] * sizes["generations"], seeds=spec.seeds,
+                            config=dict(config=spec.config.to_dict(), seeds=list(spec.seeds),
+                                        search=json.loads(spec.search)),
+                            columns=dict(mean=best / 2, std=0.0, **{f"best_task{t}": best for t in range(1, 7)}))
         if (row.test or evolved is None) and not os.path.isdir(table.tests()[row.name]):
-            write_test(table.tests()[row.name], made[row.name][1], sizes["seeds"])
+            steady = made[row.name][1]
+            write_learning_test(table.tests()[row.name], [steady] * sizes["seeds"], (steady / 2, steady), 10,
+                                steady_sd=0.0, pairs_both_ways=0.0, steady_best_run=steady, best_run=0,
+                                steady_per_task=[steady] * 6,
+                                whole_test_mean=steady / 2, num_best=1, num_tests=1)
     stages, scale = table.all_stages()
     assert all(stage_done(s, scale) == (s.name not in measures) for s in stages)  # the measures still to run
     capsys.readouterr()
