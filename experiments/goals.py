@@ -45,7 +45,8 @@ KINDS = {"EE-ES": ("behaviours + selector, 333", "#8c2d04"), "EE-LS": ("behaviou
 
 
 def read_landscapes(out: str) -> dict[str, dict]:
-    """Each condition's landscape measures as far as they have come (landscape.json, result.json once done)."""
+    """Each condition's landscape measures as far as they have come (landscape.json, result.json once done): its
+    random genomes by learning ("learning" or its cut) and its generations' mutations, in the order measured."""
     from experiments.loading import read_json
 
     found = {}
@@ -53,13 +54,10 @@ def read_landscapes(out: str) -> dict[str, dict]:
         folder = os.path.join(out, "measures", f"landscape-{name}")
         done = read_json(os.path.join(folder, "result.json"))
         if (measured := done or read_json(os.path.join(folder, "landscape.json"))) is not None:
-            found[name] = dict(measured, done=done is not None)
+            pieces = measured["pieces"].items()
+            found[name] = dict(done=done is not None, generations=[r for p, r in pieces if p.startswith("generation")],
+                               random={p.split(", ")[1]: r for p, r in pieces if p.startswith("random genomes")})
     return found
-
-
-def pieces(measured: dict, kind: str) -> list[tuple[str, dict]]:
-    """A condition's pieces of one kind, "random genomes" or a "generation"'s mutations: (piece, its numbers)."""
-    return [(piece, r) for piece, r in measured["pieces"].items() if piece.startswith(kind)]
 
 
 def landscape_tables(found: dict[str, dict]) -> str:
@@ -70,15 +68,15 @@ def landscape_tables(found: dict[str, dict]) -> str:
         return "NaN" if (value := r["rho_noise_corrected"][0]) is None else f"{value:.2f}"
 
     random = table(("condition", "evolves, genes", "learning", "mean", "sd", "median", "best", "share at 0"), [
-        (name, KINDS[name][0], piece.split(", ")[1], *(f"{v:.4f}" for v in (r["mean"], r["std"], r["quantiles"][2], r["quantiles"][4])),
-         f"{r['share_zero']:.0%}") for name, m in found.items() for piece, r in pieces(m, "random genomes")])
+        (name, KINDS[name][0], learning, *(f"{v:.4f}" for v in (r["mean"], r["std"], *r["quantiles"][2::2])),
+         f"{r['share_zero']:.0%}") for name, m in found.items() for learning, r in m["random"].items()])
     mutations = table(("condition", "generation", "learning", "parents' fitness", "mean effect", "relative", "neutral",
                        "deleterious", "beneficial", "mutational variance", "rho(1)"), [
         (name, r["generation"], r["learning"], f"{r['parent_mean']:.4f}", f"{r['effect_mean']:+.4f}",
          # relative to the parents' fitness: a measure the lives' noise does not bias
          f"{r['effect_mean'] / r['parent_mean']:+.1%}" if r["parent_mean"] else "-",
          *(f"{r[f'share_{k}']:.0%}" for k in ("neutral", "deleterious", "beneficial")),
-         f"{r['mutational_variance']:.2e}", rho(r)) for name, m in found.items() for _, r in pieces(m, "generation")])
+         f"{r['mutational_variance']:.2e}", rho(r)) for name, m in found.items() for r in m["generations"]])
     lines = ["**Random genomes** (H4): 50 genomes of generation 0's draw, 4 fresh lives each; fitness = the mean of a "
              "genome's lives.", "", random, "",
              "**Mutations around the parents** (H3): each generation's 10 parents (the GA's), 9 mutants each "
@@ -101,9 +99,8 @@ def landscape_figure(found: dict[str, dict], path: str) -> str:
     fig = new_figure(13.0, 3.5)
     ax_random, ax_effect, ax_bad, ax_rho = fig.subplots(1, 4, gridspec_kw=dict(width_ratios=[1.3, 1, 1, 1]))
     for i, (name, m) in enumerate(found.items()):
-        randoms = [(piece.split(", ")[1], r) for piece, r in pieces(m, "random")]
-        for j, (learning, r) in enumerate(randoms):
-            x = i + (j - (len(randoms) - 1) / 2) * 0.6 / len(randoms)  # side by side within the condition's slot
+        for j, (learning, r) in enumerate(m["random"].items()):
+            x = i + (j - (len(m["random"]) - 1) / 2) * 0.6 / len(m["random"])  # side by side in the condition's slot
             ax_random.scatter(x + np.linspace(-0.06, 0.06, len(r["fitness"])), np.asarray(r["fitness"]), s=3,
                               color=KINDS[name][1], alpha=0.9 if learning == "learning" else 0.3)
             ax_random.plot([x - 0.09, x + 0.09], [r["mean"]] * 2, color="k", lw=1.2,
@@ -118,10 +115,9 @@ def landscape_figure(found: dict[str, dict], path: str) -> str:
               (ax_rho, lambda b: b["rho"][0], "rho(1), lives' noise included", "autocorrelation"))
     for ax, value, title, ylabel in panels:
         for name, m in found.items():
-            generations = [r for _, r in pieces(m, "generation")]
-            cuts = sorted({b["learning"] for b in generations} - {"learning"}, key=lambda c: -float(c.split()[1]))
+            cuts = sorted({b["learning"] for b in m["generations"]} - {"learning"}, key=lambda c: -float(c.split()[1]))
             for learning, ls_ in [("learning", "-"), *zip(cuts, ("--", ":"))]:
-                points = sorted(({0: 0, 10: 1}.get(b["generation"], 2), value(b)) for b in generations
+                points = sorted(({0: 0, 10: 1}.get(b["generation"], 2), value(b)) for b in m["generations"]
                                 if b["learning"] == learning and value(b) is not None)  # x: generation 0, 10, last
                 if points:
                     x, y = zip(*points)
