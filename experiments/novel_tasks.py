@@ -92,7 +92,8 @@ def advantage_table(measured: dict, evolutions: str) -> str:
                       (r["agent"], r["tasks"], r["seeds"], f"{r['performance']:.3f}", f"{r['sd']:.3f}")
                       for r in measured["scratch"]])]
     lines += ["", f"The held-out evolutions on tasks {HELD_OUT['seen']} (final best fitness: the best of each "
-              f"generation's noisy lives, the mean of the last 5 generations per seed, then over seeds):", "", evolutions]
+              f"generation's noisy lives, the mean of the last 5 generations per seed, then over seeds):", "",
+              evolutions]
     if measured["probes"]:
         lines += ["", f"The colours the held-out individuals' experts follow (the junction probe of claim 7, the "
                   f"{PROBED} best of each seed; LE-LS after a fresh childhood):", "",
@@ -184,8 +185,8 @@ def held_out_figure(measured: dict, path: str) -> str:
                  "generation", "best fitness", integer_x=True)
     draw_bars(fig.add_subplot(grid[1, 3:]), {f"held out {c}": [(p["shares"][n], np.nan) for n in COLOUR_NAMES]
                                               for c, p in measured["probes"].items()},
-              [f"an expert follows {n}" for n in COLOUR_NAMES],
-              f"why: the colours its experts follow ({PROBED} best of each seed)", "share of individuals", FLOOR_COLOURS)
+              [f"an expert follows {n}" for n in COLOUR_NAMES], f"why: the colours its experts follow ({PROBED} best "
+              f"of each seed)", "share of individuals", FLOOR_COLOURS)
     return finish(fig, path)
 
 
@@ -239,7 +240,8 @@ class NovelTasksTable(Table):
                  held_out_figure(measured, os.path.join(self.out, "held_out.png"))]
         write_table(self.document, advantage_table(measured, self.table(measured["evolutions"])), f"<!-- advantage "
                     f"table: python -m experiments report {self.name} -->", "<!-- end of advantage table -->")
-        print(f"{len(measured['rows'])} comparisons measured; wrote {', '.join(drawn)} and the table of {self.document}")
+        print(f"{len(measured['rows'])} comparisons measured; wrote {', '.join(drawn)} and the table of "
+              f"{self.document}")
         return 0
 
 
