@@ -101,30 +101,28 @@ def landscape_figure(found: dict[str, dict], path: str) -> str:
     for i, (name, m) in enumerate(found.items()):
         for j, (learning, r) in enumerate(m["random"].items()):
             x = i + (j - (len(m["random"]) - 1) / 2) * 0.6 / len(m["random"])  # side by side in the condition's slot
-            ax_random.scatter(x + np.linspace(-0.06, 0.06, len(r["fitness"])), np.asarray(r["fitness"]), s=3,
-                              color=KINDS[name][1], alpha=0.9 if learning == "learning" else 0.3)
-            ax_random.plot([x - 0.09, x + 0.09], [r["mean"]] * 2, color="k", lw=1.2,
-                           ls="-" if learning == "learning" else "--")
+            faded = learning != "learning"
+            ax_random.scatter(x + np.linspace(-0.06, 0.06, len(r["fitness"])), r["fitness"], s=3, color=KINDS[name][1],
+                              alpha=0.3 if faded else 0.9)
+            ax_random.plot([x - 0.09, x + 0.09], [r["mean"]] * 2, color="k", lw=1.2, ls="--" if faded else "-")
     ax_random.set_xticks(range(len(found)), list(found), rotation=30, fontsize=7)
     style_axis(ax_random, "H4: random genomes (faded: learning cut)", "", "fitness (mean of 4 lives)")
-    limit = 0.25  # a relative effect beyond is drawn at the edge, as a triangle (a parent of almost no fitness)
+    # A relative effect beyond 0.25 is drawn at the edge, as a triangle (a parent of almost no fitness).
     panels = ((ax_effect, lambda b: b["effect_mean"] / b["parent_mean"] if b["parent_mean"] else None,
-               "a mutation's mean effect", "over its parents' fitness"),
-              (ax_bad, lambda b: b["share_deleterious"], "deleterious mutations", "share of mutants"),
+               "a mutation's mean effect", "over its parents' fitness", 0.25),
+              (ax_bad, lambda b: b["share_deleterious"], "deleterious mutations", "share of mutants", np.inf),
               # As observed: the correction for the lives' noise overshoots 1 where the walks' variance is small.
-              (ax_rho, lambda b: b["rho"][0], "rho(1), lives' noise included", "autocorrelation"))
-    for ax, value, title, ylabel in panels:
+              (ax_rho, lambda b: b["rho"][0], "rho(1), lives' noise included", "autocorrelation", np.inf))
+    for ax, value, title, ylabel, limit in panels:
         for name, m in found.items():
             cuts = sorted({b["learning"] for b in m["generations"]} - {"learning"}, key=lambda c: -float(c.split()[1]))
             for learning, ls_ in [("learning", "-"), *zip(cuts, ("--", ":"))]:
                 points = sorted(({0: 0, 10: 1}.get(b["generation"], 2), value(b)) for b in m["generations"]
                                 if b["learning"] == learning and value(b) is not None)  # x: generation 0, 10, last
                 if points:
-                    x, y = zip(*points)
-                    if ax is ax_effect:
-                        y = np.clip(y, -limit, limit)
-                        beyond = np.abs(y) >= limit
-                        ax.scatter(np.asarray(x)[beyond], y[beyond], marker="^", s=30, color=KINDS[name][1])
+                    x, y = np.array(points).T
+                    y = np.clip(y, -limit, limit)
+                    ax.scatter(x[np.abs(y) >= limit], y[np.abs(y) >= limit], marker="^", s=30, color=KINDS[name][1])
                     ax.plot(x, y, marker="o", ms=3, ls=ls_, color=KINDS[name][1],
                             label=name if learning == "learning" else None)
         ax.set_xticks(range(3), ["0", "10", "last"])
