@@ -64,9 +64,6 @@ def landscape_tables(found: dict[str, dict]) -> str:
     """H4's table (random genomes) and H3's (mutations and ruggedness around each generation's parents)."""
     from experiments.markdown import table
 
-    def rho(r: dict) -> str:
-        return "NaN" if (value := r["rho_noise_corrected"][0]) is None else f"{value:.2f}"
-
     random = table(("condition", "evolves, genes", "learning", "mean", "sd", "median", "best", "share at 0"), [
         (name, KINDS[name][0], learning, *(f"{v:.4f}" for v in (r["mean"], r["std"], *r["quantiles"][2::2])),
          f"{r['share_zero']:.0%}") for name, m in found.items() for learning, r in m["random"].items()])
@@ -76,16 +73,16 @@ def landscape_tables(found: dict[str, dict]) -> str:
          # relative to the parents' fitness: a measure the lives' noise does not bias
          f"{r['effect_mean'] / r['parent_mean']:+.1%}" if r["parent_mean"] else "-",
          *(f"{r[f'share_{k}']:.0%}" for k in ("neutral", "deleterious", "beneficial")),
-         f"{r['mutational_variance']:.2e}", rho(r)) for name, m in found.items() for r in m["generations"]])
+         f"{r['mutational_variance']:.2e}", "NaN" if (rho := r["rho_noise_corrected"][0]) is None else f"{rho:.2f}")
+        for name, m in found.items() for r in m["generations"]])
     lines = ["**Random genomes** (H4): 50 genomes of generation 0's draw, 4 fresh lives each; fitness = the mean of a "
              "genome's lives.", "", random, "",
-             "**Mutations around the parents** (H3): each generation's 10 parents (the GA's), 9 mutants each "
-             "under the paper's operator, 4 fresh lives per genome; mean effect: of fitness(mutant) - fitness(parent), "
-             "relative: over the parents' fitness; "
-             "an effect is neutral within 2 standard errors of its lives' noise (noisier lives call more neutral); "
-             "rho(1): the fitness autocorrelation one mutation apart along 5 random walks of 9 steps, corrected "
-             "for the lives' noise (NaN: no variance; with 5 short walks an uncertain estimate, past 1 where the walks "
-             "vary little).", "", mutations]
+             "**Mutations around the parents** (H3): each generation's 10 parents (the GA's), 9 mutants each under the "
+             "paper's operator, 4 fresh lives per genome; mean effect: of fitness(mutant) - fitness(parent), relative: "
+             "over the parents' fitness; an effect is neutral within 2 standard errors of its lives' noise (noisier "
+             "lives call more neutral); rho(1): the fitness autocorrelation one mutation apart along 5 random walks of "
+             "9 steps, corrected for the lives' noise (NaN: no variance; with 5 short walks an uncertain estimate, "
+             "past 1 where the walks vary little).", "", mutations]
     still = [f"{name} (running)" for name, m in found.items() if not m["done"]] + [n for n in KINDS if n not in found]
     return "\n".join(lines + (["", f"Still to measure: {', '.join(still)}."] if still else []))
 
