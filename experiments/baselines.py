@@ -24,14 +24,6 @@ SIZES = dict(test_steps=SCALES["paper"]["test_steps"])
 LANE_STEPS_PER_CYCLE = 31
 
 
-def baseline(agent: str, steps: int, num_seeds: int, num_evals: int) -> Measure:
-    """One agent at one budget per task, ``num_seeds`` seeds on each of the six tasks, in ``OUT/AGENT_BUDGET``."""
-    name = f"{agent}_{steps // 1_000_000}M"
-    args = ("--agent", agent, "--steps", str(steps), "--seeds", str(num_seeds), "--evals", str(num_evals))
-    return Measure(name, "", args, "imrl_jax.baselines", float(LANE_STEPS_PER_CYCLE * 6 * num_seeds * steps),
-                   name, kind="baseline")
-
-
 class BaselinesTable(Table):
     """The baselines' stages; the report draws them beside the paper's architecture (comparison.png)."""
 
@@ -50,22 +42,24 @@ class BaselinesTable(Table):
         from experiments.reproduction import TABLES
         from imrl_jax.plotting import save
 
-        found = read_baselines(self.out)
-        if not found:
+        if not (found := read_baselines(self.out)):
             print(f"no baseline has finished in {self.out}: nothing to draw")
             return 0
-        tests = next((t for t in TABLES.values() if os.path.abspath(t.out) == os.path.abspath(self.tests_dir())), None)
-        data = tests.data() if tests is not None else dict(tests={}, manifest=None)
+        tests = [t for t in TABLES.values() if os.path.abspath(t.out) == os.path.abspath(self.tests_dir())]
+        data = tests[0].data() if tests else dict(tests={}, manifest=None)
         title = (f"brax.training baselines beside the paper's architecture\n(its learning tests at the "
                  f"{scale_label(data['manifest'])})") if data["tests"] else "brax.training baselines"
         print(f"wrote {save(fig_baselines(found, data['tests'], title), os.path.join(self.out, 'comparison.png'))}")
         return 0
 
 
-TABLE = BaselinesTable("baselines", os.path.join("docs", "BASELINES.md"), 11, rows=(), scale=SIZES, out=OUT,
-                       measures=tuple(baseline(agent, budget * SIZES["test_steps"], num_seeds, num_evals)
-                                      for budget, num_seeds, num_evals in ((1, 5, 11), (5, 3, 21))
-                                      for agent in ("ppo", "es")))
+#: Each agent at each budget per task (its seeds on each of the six tasks), in ``OUT/AGENT_BUDGET``.
+TABLE = BaselinesTable("baselines", os.path.join("docs", "BASELINES.md"), 11, rows=(), scale=SIZES, out=OUT, measures=(
+    *(Measure(f"{agent}_{budget}M", "", ("--agent", agent, "--steps", str(budget * SIZES["test_steps"]), "--seeds",
+                                         str(num_seeds), "--evals", str(num_evals)), "imrl_jax.baselines",
+              float(LANE_STEPS_PER_CYCLE * 6 * num_seeds * budget * SIZES["test_steps"]), f"{agent}_{budget}M",
+              kind="baseline") for budget, num_seeds, num_evals in ((1, 5, 11), (5, 3, 21)) for agent in ("ppo", "es")),
+))
 all_stages, main = TABLE.all_stages, TABLE.main
 #: The studies of this module (python -m experiments finds them).
 STUDIES = (TABLE.study(__name__.rsplit(".", 1)[-1]),)

@@ -12,7 +12,6 @@ measures (``python -m imrl_jax.landscape_run``) of seed 0 of each condition unde
 generations 0, 10 and the last, with learning cut too (H3), and the fitness of random genomes (H4).
 """
 
-import json
 import os
 import sys
 
@@ -38,73 +37,54 @@ def landscape(name: str, run: "str | Row", life: int, cut: str | None = None, *e
     return Measure(f"landscape-{name}", run, args, cost=float(life * (LIVES + (CUT_LIVES if cut else 0))))
 
 
-#: The conditions in the order the landscape tables and figures show them: behaviours, then goals.
-ORDER = ("EE-ES", "EE-LS", "EE-LS-T", "LE-LS", "LE-LS-2R", "EV-LS")
-#: What each condition evolves, with its genes.
-KINDS = {"EE-ES": "behaviours + selector, 333", "EE-LS": "behaviours, 222", "EE-LS-T": "behaviours (turn), 111",
-         "LE-LS": "goals, 111", "LE-LS-2R": "goals (2 units), 222", "EV-LS": "evaluators, 111"}
+#: The conditions in the order the landscape tables and figure show them (behaviours, then goals): what each evolves,
+#: with its genes, and its colour in the figure (behaviours warm, goals and evaluators cool).
+KINDS = {"EE-ES": ("behaviours + selector, 333", "#8c2d04"), "EE-LS": ("behaviours, 222", "#e6550d"),
+         "EE-LS-T": ("behaviours (turn), 111", "#fdae6b"), "LE-LS": ("goals, 111", "#08519c"),
+         "LE-LS-2R": ("goals (2 units), 222", "#6baed6"), "EV-LS": ("evaluators, 111", "#31a354")}
 
 
-def read_landscapes(out: str | None = None) -> dict[str, dict]:
-    """Each condition's landscape measures as far as they have come (landscape.json, result.json once done)."""
-    out = OUT if out is None else out
+def read_landscapes(out: str) -> dict[str, dict]:
+    """Each condition's landscape measures as far as they have come (landscape.json, result.json once done): its
+    random genomes by learning ("learning" or its cut) and its generations' mutations, in the order measured."""
+    from experiments.loading import read_json
+
     found = {}
-    for name in ORDER:
+    for name in KINDS:
         folder = os.path.join(out, "measures", f"landscape-{name}")
-        for file in ("result.json", "landscape.json"):
-            path = os.path.join(folder, file)
-            if os.path.isfile(path):
-                with open(path) as f:
-                    found[name] = dict(json.load(f), done=file == "result.json")
-                break
+        done = read_json(os.path.join(folder, "result.json"))
+        if (measured := done or read_json(os.path.join(folder, "landscape.json"))) is not None:
+            pieces = measured["pieces"].items()
+            found[name] = dict(done=done is not None, generations=[r for p, r in pieces if p.startswith("generation")],
+                               random={p.split(", ")[1]: r for p, r in pieces if p.startswith("random genomes")})
     return found
-
-
-def relative(piece: dict) -> str:
-    """A mutation's mean effect as a share of its parents' fitness (a measure the lives' noise does not bias)."""
-    return "-" if not piece["parent_mean"] else f"{piece['effect_mean'] / piece['parent_mean']:+.1%}"
 
 
 def landscape_tables(found: dict[str, dict]) -> str:
     """H4's table (random genomes) and H3's (mutations and ruggedness around each generation's parents)."""
+    from experiments.markdown import table
+
+    random = table(("condition", "evolves, genes", "learning", "mean", "sd", "median", "best", "share at 0"), [
+        (name, KINDS[name][0], learning, *(f"{v:.4f}" for v in (r["mean"], r["std"], *r["quantiles"][2::2])),
+         f"{r['share_zero']:.0%}") for name, m in found.items() for learning, r in m["random"].items()])
+    mutations = table(("condition", "generation", "learning", "parents' fitness", "mean effect", "relative", "neutral",
+                       "deleterious", "beneficial", "mutational variance", "rho(1)"), [
+        (name, r["generation"], r["learning"], f"{r['parent_mean']:.4f}", f"{r['effect_mean']:+.4f}",
+         # relative to the parents' fitness: a measure the lives' noise does not bias
+         f"{r['effect_mean'] / r['parent_mean']:+.1%}" if r["parent_mean"] else "-",
+         *(f"{r[f'share_{k}']:.0%}" for k in ("neutral", "deleterious", "beneficial")),
+         f"{r['mutational_variance']:.2e}", "NaN" if (rho := r["rho_noise_corrected"][0]) is None else f"{rho:.2f}")
+        for name, m in found.items() for r in m["generations"]])
     lines = ["**Random genomes** (H4): 50 genomes of generation 0's draw, 4 fresh lives each; fitness = the mean of a "
-             "genome's lives.", "",
-             "| condition | evolves, genes | learning | mean | sd | median | best | share at 0 |",
-             "|---|---|---|---|---|---|---|---|"]
-    for name, m in found.items():
-        for piece, r in m["pieces"].items():
-            if piece.startswith("random genomes"):
-                q = r["quantiles"]
-                lines.append(f"| {name} | {KINDS[name]} | {piece.split(', ')[1]} | {r['mean']:.4f} | {r['std']:.4f} | "
-                             f"{q[2]:.4f} | {q[4]:.4f} | {r['share_zero']:.0%} |")
-    lines += ["", "**Mutations around the parents** (H3): each generation's 10 parents (the GA's), 9 mutants each "
-              "under the paper's operator, 4 fresh lives per genome; mean effect: of fitness(mutant) - fitness(parent), "
-              "relative: over the parents' fitness; "
-              "an effect is neutral within 2 standard errors of its lives' noise (noisier lives call more neutral); "
-              "rho(1): the fitness autocorrelation one mutation apart along 5 random walks of 9 steps, corrected "
-              "for the lives' noise (NaN: no variance; with 5 short walks an uncertain estimate, past 1 where the walks "
-              "vary little).", "",
-              "| condition | generation | learning | parents' fitness | mean effect | relative | neutral | "
-              "deleterious | beneficial | mutational variance | rho(1) |", "|---|---|---|---|---|---|---|---|---|---|---|"]
-    for name, m in found.items():
-        for piece, r in m["pieces"].items():
-            if piece.startswith("generation"):
-                rho = r["rho_noise_corrected"][0]
-                lines.append(f"| {name} | {r['generation']} | {r['learning']} | {r['parent_mean']:.4f} | "
-                             f"{r['effect_mean']:+.4f} | {relative(r)} | {r['share_neutral']:.0%} | {r['share_deleterious']:.0%} | {r['share_beneficial']:.0%} | "
-                             f"{r['mutational_variance']:.2e} | {'NaN' if rho is None else f'{rho:.2f}'} |")
-    running = [name for name, m in found.items() if not m["done"]]
-    missing = [name for name in ORDER if name not in found]
-    if running or missing:
-        lines += ["", "Still to measure: " + ", ".join([*(f"{n} (running)" for n in running), *missing]) + "."]
-    return "\n".join(lines)
-
-
-#: The figure's colours: behaviours warm, goals and evaluators cool.
-COLOURS = {"EE-ES": "#8c2d04", "EE-LS": "#e6550d", "EE-LS-T": "#fdae6b", "LE-LS": "#08519c", "LE-LS-2R": "#6baed6",
-           "EV-LS": "#31a354"}
-#: Where a generation sits on the figure's x axis.
-POSITIONS = {0: 0, 10: 1}
+             "genome's lives.", "", random, "",
+             "**Mutations around the parents** (H3): each generation's 10 parents (the GA's), 9 mutants each under the "
+             "paper's operator, 4 fresh lives per genome; mean effect: of fitness(mutant) - fitness(parent), relative: "
+             "over the parents' fitness; an effect is neutral within 2 standard errors of its lives' noise (noisier "
+             "lives call more neutral); rho(1): the fitness autocorrelation one mutation apart along 5 random walks of "
+             "9 steps, corrected for the lives' noise (NaN: no variance; with 5 short walks an uncertain estimate, "
+             "past 1 where the walks vary little).", "", mutations]
+    still = [f"{name} (running)" for name, m in found.items() if not m["done"]] + [n for n in KINDS if n not in found]
+    return "\n".join(lines + (["", f"Still to measure: {', '.join(still)}."] if still else []))
 
 
 def landscape_figure(found: dict[str, dict], path: str) -> str:
@@ -115,38 +95,32 @@ def landscape_figure(found: dict[str, dict], path: str) -> str:
 
     fig = new_figure(13.0, 3.5)
     ax_random, ax_effect, ax_bad, ax_rho = fig.subplots(1, 4, gridspec_kw=dict(width_ratios=[1.3, 1, 1, 1]))
-    names = list(found)
-    for i, name in enumerate(names):
-        randoms = [(p.split(", ")[1], r) for p, r in found[name]["pieces"].items() if p.startswith("random")]
-        for j, (learning, r) in enumerate(randoms):
-            x = i + (j - (len(randoms) - 1) / 2) * 0.6 / len(randoms)  # side by side within the condition's slot
-            f = np.asarray(r["fitness"])
-            ax_random.scatter(x + np.linspace(-0.06, 0.06, len(f)), f, s=3, color=COLOURS.get(name, "0.4"),
-                              alpha=0.9 if learning == "learning" else 0.3)
-            ax_random.plot([x - 0.09, x + 0.09], [r["mean"]] * 2, color="k", lw=1.2,
-                           ls="-" if learning == "learning" else "--")
-    ax_random.set_xticks(range(len(names)), names, rotation=30, fontsize=7)
+    for i, (name, m) in enumerate(found.items()):
+        for j, (learning, r) in enumerate(m["random"].items()):
+            x = i + (j - (len(m["random"]) - 1) / 2) * 0.6 / len(m["random"])  # side by side in the condition's slot
+            faded = learning != "learning"
+            ax_random.scatter(x + np.linspace(-0.06, 0.06, len(r["fitness"])), r["fitness"], s=3, color=KINDS[name][1],
+                              alpha=0.3 if faded else 0.9)
+            ax_random.plot([x - 0.09, x + 0.09], [r["mean"]] * 2, color="k", lw=1.2, ls="--" if faded else "-")
+    ax_random.set_xticks(range(len(found)), list(found), rotation=30, fontsize=7)
     style_axis(ax_random, "H4: random genomes (faded: learning cut)", "", "fitness (mean of 4 lives)")
-    limit = 0.25  # a relative effect beyond is drawn at the edge, as a triangle (a parent of almost no fitness)
+    # A relative effect beyond 0.25 is drawn at the edge, as a triangle (a parent of almost no fitness).
     panels = ((ax_effect, lambda b: b["effect_mean"] / b["parent_mean"] if b["parent_mean"] else None,
-               "a mutation's mean effect", "over its parents' fitness"),
-              (ax_bad, lambda b: b["share_deleterious"], "deleterious mutations", "share of mutants"),
+               "a mutation's mean effect", "over its parents' fitness", 0.25),
+              (ax_bad, lambda b: b["share_deleterious"], "deleterious mutations", "share of mutants", np.inf),
               # As observed: the correction for the lives' noise overshoots 1 where the walks' variance is small.
-              (ax_rho, lambda b: b["rho"][0], "rho(1), lives' noise included", "autocorrelation"))
-    for ax, value, title, ylabel in panels:
-        for name in names:
-            cuts = sorted({b["learning"] for b in found[name]["pieces"].values() if "generation" in b} - {"learning"},
-                          key=lambda c: -float(c.split()[1]))
+              (ax_rho, lambda b: b["rho"][0], "rho(1), lives' noise included", "autocorrelation", np.inf))
+    for ax, value, title, ylabel, limit in panels:
+        for name, m in found.items():
+            cuts = sorted({b["learning"] for b in m["generations"]} - {"learning"}, key=lambda c: -float(c.split()[1]))
             for learning, ls_ in [("learning", "-"), *zip(cuts, ("--", ":"))]:
-                points = sorted((POSITIONS.get(b["generation"], 2), value(b)) for b in found[name]["pieces"].values()
-                                if b.get("learning") == learning and value(b) is not None)
+                points = sorted(({0: 0, 10: 1}.get(b["generation"], 2), value(b)) for b in m["generations"]
+                                if b["learning"] == learning and value(b) is not None)  # x: generation 0, 10, last
                 if points:
-                    x, y = zip(*points)
-                    if ax is ax_effect:
-                        y = np.clip(y, -limit, limit)
-                        beyond = np.abs(y) >= limit
-                        ax.scatter(np.asarray(x)[beyond], y[beyond], marker="^", s=30, color=COLOURS.get(name, "0.4"))
-                    ax.plot(x, y, marker="o", ms=3, ls=ls_, color=COLOURS.get(name, "0.4"),
+                    x, y = np.array(points).T
+                    y = np.clip(y, -limit, limit)
+                    ax.scatter(x[np.abs(y) >= limit], y[np.abs(y) >= limit], marker="^", s=30, color=KINDS[name][1])
+                    ax.plot(x, y, marker="o", ms=3, ls=ls_, color=KINDS[name][1],
                             label=name if learning == "learning" else None)
         ax.set_xticks(range(3), ["0", "10", "last"])
         ax.axhline(0, color="0.6", lw=0.6)

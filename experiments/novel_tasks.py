@@ -34,7 +34,6 @@ TASK_FILES = {which: os.path.join(OUT, f"tasks_{which}.json") for which in HELD_
 #: The held-out individuals probed at junctions per seed (claim 7's probe), and the key of their lives.
 PROBED, PROBE_KEY = 10, 0
 COLOUR_NAMES = ("red", "green", "blue")
-CURVE_AXES = ("cycles of the task", "performance per bin")
 
 
 def learning_test(name: str, row: Row, scale: dict, options: tuple[str, ...], out: str, num_tasks: int = 6) -> Measure:
@@ -82,40 +81,39 @@ def advantage_table(measured: dict, evolutions: str) -> str:
     """The report's markdown: learning's advantage per row and set of tasks, brax's agents, the held-out evolutions
     (``evolutions``: their table) and their probes, then the verdicts."""
     from experiments.claims import UNSEEN_RULE
-    from experiments.markdown import head, line
+    from experiments.markdown import table
 
-    lines = head("comparison", "tasks", "runs", "steady state", "EE-ES", "advantage", "se") + [
-        line(r["name"], r["tasks"], r["runs"], f"{r['steady']:.3f}", f"{r['ee_es']:.3f}", f"{r['advantage']:+.3f}",
-             f"{r['standard_error']:.3f}") for r in measured["rows"]] or ["| (no stage has finished yet) | | | | | | |"]
+    lines = [table(("comparison", "tasks", "runs", "steady state", "EE-ES", "advantage", "se"), [
+        (r["name"], r["tasks"], r["runs"], f"{r['steady']:.3f}", f"{r['ee_es']:.3f}", f"{r['advantage']:+.3f}",
+         f"{r['standard_error']:.3f}") for r in measured["rows"]])]
     if measured["scratch"]:
         lines += ["", "brax's agents from scratch, 1,000,000 cycles per task (docs/BASELINES.md's measure):", "",
-                  *head("agent", "tasks", "seeds", "performance", "sd over seeds")]
-        lines += [line(r["agent"], r["tasks"], r["seeds"], f"{r['performance']:.3f}", f"{r['sd']:.3f}")
-                  for r in measured["scratch"]]
+                  table(("agent", "tasks", "seeds", "performance", "sd over seeds"), [
+                      (r["agent"], r["tasks"], r["seeds"], f"{r['performance']:.3f}", f"{r['sd']:.3f}")
+                      for r in measured["scratch"]])]
     lines += ["", f"The held-out evolutions on tasks {HELD_OUT['seen']} (final best fitness: the best of each "
-              f"generation's noisy lives, the mean of the last 5 generations per seed, then over seeds):", "", evolutions]
+              f"generation's noisy lives, the mean of the last 5 generations per seed, then over seeds):", "",
+              evolutions]
     if measured["probes"]:
         lines += ["", f"The colours the held-out individuals' experts follow (the junction probe of claim 7, the "
                   f"{PROBED} best of each seed; LE-LS after a fresh childhood):", "",
-                  *head("condition", "individuals", "following 0 / 1 / 2 / 3 colours",
-                        "with an expert following red / green / blue")]
-        lines += [line(f"held out {c}", p["individuals"], " / ".join(map(str, p["counts"])),
-                       " / ".join(f"{p['shares'][n]:.0%}" for n in COLOUR_NAMES)) for c, p in measured["probes"].items()]
+                  table(("condition", "individuals", "following 0 / 1 / 2 / 3 colours",
+                         "with an expert following red / green / blue"), [
+                      (f"held out {c}", p["individuals"], " / ".join(map(str, p["counts"])),
+                       " / ".join(f"{p['shares'][n]:.0%}" for n in COLOUR_NAMES))
+                      for c, p in measured["probes"].items()])]
     lines += ["", f"Rule: {UNSEEN_RULE} SLE's rows are shown, not judged: it evolves nothing, so every set is new "
               f"to it.", ""]
     return "\n".join(lines + [f"- **{q}: {v['verdict']}.** {v['measured']}" for q, v in measured["verdicts"].items()])
 
 
-def mark_unfinished(fig) -> None:
-    """Say "not run yet" on each empty panel of ``fig`` rather than leave it blank (an unfinished stage)."""
-    for ax in (ax for ax in fig.axes if not ax.lines and not ax.patches):
-        ax.text(0.5, 0.5, "not run yet", transform=ax.transAxes, ha="center", va="center", color="0.4")
+def draw_tests(ax, measured: dict, rows, name: str, title: str) -> None:
+    """The learning curves of the tests ``name`` ("{}": the row's own) of ``rows``, one per condition."""
+    from experiments.figures import _draw_curves
 
-
-def curves_of(measured: dict, rows, name: str) -> dict:
-    """The learning curves of the tests ``name`` ("{}": the row's own) of ``rows``, by condition."""
-    return {r.condition: (t["steps"], t["mean"], t["sd"], r.condition) for r in rows
-            if (t := measured["tests"].get(name.format(r.name))) is not None}
+    _draw_curves(ax, {r.condition: (t["steps"], t["mean"], t["sd"], r.condition) for r in rows
+                      if (t := measured["tests"].get(name.format(r.name))) is not None}, title,
+                 "cycles of the task", "performance per bin")
 
 
 def draw_bars(ax, groups: dict, labels, title: str, ylabel: str, colours=("0.35", "tab:orange")) -> None:
@@ -144,14 +142,12 @@ def draw_advantages(ax, measured: dict, question: Question) -> None:
 
 def novel_figure(measured: dict, path: str) -> str:
     """The novel set: curves per preset, learning's advantage, and evolved skills beside learning from scratch."""
-    from experiments.figures import _draw_curves
-    from imrl_jax.plotting import new_figure, save
+    from imrl_jax.plotting import new_figure
 
     (skills, paper), (advantages, scratch) = (fig := new_figure(11.0, 7.4)).subplots(2, 2)
     for ax, preset in ((skills, "skills"), (paper, "paper")):
-        rows = [r for r in FINISHED if r.preset == preset or not conditions.get(r.condition).learns]
-        _draw_curves(ax, curves_of(measured, rows, QUESTIONS[0].tests[1]), f"novel set, {preset}: learning tests",
-                     *CURVE_AXES)
+        draw_tests(ax, measured, [r for r in FINISHED if r.preset == preset or not conditions.get(r.condition).learns],
+                   QUESTIONS[0].tests[1], f"novel set, {preset}: learning tests")
     draw_advantages(advantages, measured, QUESTIONS[0])
     groups = {name: [(a["steady"], np.nan) if (a := measured["advantages"].get((name, label))) else None
                      for label in QUESTIONS[0].labels] for name in ("skills LE-LS", "skills SLE")}
@@ -159,21 +155,19 @@ def novel_figure(measured: dict, path: str) -> str:
         groups.setdefault(r["agent"], [None, None])[r["tasks"] == "novel"] = (r["performance"], np.nan)
     draw_bars(scratch, groups, ("the paper's six", "the novel set"), "evolved skills beside learning from scratch",
               "steady state (brax: final performance)")
-    mark_unfinished(fig)
-    fig.tight_layout()
-    return save(fig, path)
+    return finish(fig, path)
 
 
 def held_out_figure(measured: dict, path: str) -> str:
     """The held-out tasks: learning tests on both sets, learning's advantage, the evolutions' best fitness and the
     colours the evolved experts follow."""
     from experiments.figures import _draw_curves, _fitness_series
-    from imrl_jax.plotting import FLOOR_COLOURS, new_figure, save
+    from imrl_jax.plotting import FLOOR_COLOURS, new_figure
 
     grid = (fig := new_figure(13.0, 7.4)).add_gridspec(2, 6)
     for k, (which, name) in enumerate(zip(HELD_OUT, QUESTIONS[1].tests)):
-        _draw_curves(fig.add_subplot(grid[0, 2 * k:2 * k + 2]), curves_of(measured, HELD, name),
-                     f"held out, tasks {', '.join(map(str, HELD_OUT[which]))} ({which}): learning tests", *CURVE_AXES)
+        draw_tests(fig.add_subplot(grid[0, 2 * k:2 * k + 2]), measured, HELD, name,
+                   f"held out, tasks {', '.join(map(str, HELD_OUT[which]))} ({which}): learning tests")
     draw_advantages(fig.add_subplot(grid[0, 4:]), measured, QUESTIONS[1])
     _draw_curves(fig.add_subplot(grid[1, :3]), _fitness_series({m["condition"]: m["best"] for m in
                                                                 measured["evolutions"] if m["generations"]}),
@@ -181,11 +175,9 @@ def held_out_figure(measured: dict, path: str) -> str:
                  "generation", "best fitness", integer_x=True)
     draw_bars(fig.add_subplot(grid[1, 3:]), {f"held out {c}": [(p["shares"][n], np.nan) for n in COLOUR_NAMES]
                                               for c, p in measured["probes"].items()},
-              [f"an expert follows {n}" for n in COLOUR_NAMES],
-              f"why: the colours its experts follow ({PROBED} best of each seed)", "share of individuals", FLOOR_COLOURS)
-    mark_unfinished(fig)
-    fig.tight_layout()
-    return save(fig, path)
+              [f"an expert follows {n}" for n in COLOUR_NAMES], f"why: the colours its experts follow ({PROBED} best "
+              f"of each seed)", "share of individuals", FLOOR_COLOURS)
+    return finish(fig, path)
 
 
 class NovelTasksTable(Table):
@@ -201,23 +193,22 @@ class NovelTasksTable(Table):
         folders = {**self.tests(), **{m.name: self.measure_folder(m) for m in self.measures}}
         tests = {name: test for name, folder in folders.items() if (test := read_test(folder)) is not None}
         steady = {name: test["steady"]["steady_per_run"] for name, test in tests.items()}
-        measured = dict(rows=[], advantages=(found := {}), verdicts={}, tests=tests, scratch=[], probes={})
+        measured = dict(advantages=(found := {}), verdicts={}, tests=tests, probes={})
         for q in QUESTIONS:
             reference = next(r for r in q.rows if not conditions.get(r.condition).learns)
             for row, (name, label) in ((r, t) for r in q.rows if r is not reference for t in zip(q.tests, q.labels)):
                 mine, theirs = steady.get(name.format(row.name)), steady.get(name.format(reference.name))
                 if mine and theirs:
                     found[row.name, label] = dict(advantage(mine, theirs), tasks=label, runs=len(mine))
-                    measured["rows"].append(dict(name=row.name, **found[row.name, label]))
-            measured["verdicts"][q.name] = claim_unseen(*({r.name: found[r.name, label] for r in q.rows
-                                                           if judged(r) and (r.name, label) in found} for label in q.labels))
-        brax = [("paper's six", agent, os.path.join(self.results, "baselines", f"{agent}_1M")) for agent in ("ppo", "es")]
-        for tasks, agent, folder in brax + [("novel", m.args[1], self.measure_folder(m)) for m in self.measures
-                                            if m.kind == "baseline"]:  # from scratch, so they learn each set alike
-            if (summary := read_json(os.path.join(folder, "summary.json"))) is not None:
-                measured["scratch"].append(dict(agent=agent.upper(), tasks=tasks, seeds=len(summary["seeds"]),
-                                                performance=summary["performance_mean"],
-                                                sd=summary["performance_sd_over_seeds"]))
+            measured["verdicts"][q.name] = claim_unseen(*({r.name: found[r.name, label] for r in q.rows if judged(r)
+                                                           and (r.name, label) in found} for label in q.labels))
+        measured["rows"] = [dict(name=name, **a) for (name, _), a in found.items()]
+        brax = [("paper's six", a, os.path.join(self.results, "baselines", f"{a}_1M")) for a in ("ppo", "es")] + [
+            ("novel", m.args[1], self.measure_folder(m)) for m in self.measures if m.kind == "baseline"]
+        measured["scratch"] = [  # from scratch, so they learn each set alike
+            dict(agent=agent.upper(), tasks=tasks, seeds=len(s["seeds"]), performance=s["performance_mean"],
+                 sd=s["performance_sd_over_seeds"])
+            for tasks, agent, folder in brax if (s := read_json(os.path.join(folder, "summary.json"))) is not None]
         measured["evolutions"] = [m for m in self.measure() if m["row"] in {r.name for r in HELD}]  # in HELD's order
         measured["evolved"] = [dict(condition=m["condition"], seeds=m["seeds"], generations=m["generations"],
                                     final_best=m["final_mean"], sd=m["final_sd"])
@@ -239,14 +230,17 @@ class NovelTasksTable(Table):
                  held_out_figure(measured, os.path.join(self.out, "held_out.png"))]
         write_table(self.document, advantage_table(measured, self.table(measured["evolutions"])), f"<!-- advantage "
                     f"table: python -m experiments report {self.name} -->", "<!-- end of advantage table -->")
-        print(f"{len(measured['rows'])} comparisons measured; wrote {', '.join(drawn)} and the table of {self.document}")
+        print(f"{len(measured['rows'])} comparisons measured; wrote {', '.join(drawn)} and the table of "
+              f"{self.document}")
         return 0
+
 
 TABLE = NovelTasksTable("novel-tasks", "docs/NOVEL_TASKS.md", 2, out=OUT, scale=SCREEN, rows=(
     *FINISHED, *(Row(f"{preset} SLE on novel", "SLE", preset, options=NOVEL) for preset in ("skills", "paper")), *HELD,
 ), measures=(
-    *(learning_test(f"{r.name} on novel", r, FINISHED_TEST, ("--best-genomes", os.path.join(REPRODUCTION,
-      "best_genomes.npz"), *NOVEL), os.path.join("novel", r.preset, r.condition)) for r in FINISHED if r.evolved),
+    *(learning_test(f"{r.name} on novel", r, FINISHED_TEST, ("--best-genomes", os.path.join(
+        REPRODUCTION, "best_genomes.npz"), *NOVEL), os.path.join("novel", r.preset, r.condition))
+      for r in FINISHED if r.evolved),
     *(Measure(f"{agent} on novel", "", ("--agent", agent, "--steps", str(FINISHED_TEST["test_steps"]), "--seeds", "5",
               "--evals", "11", *NOVEL), "imrl_jax.baselines", 5 * 6.0 * FINISHED_TEST["test_steps"],
               os.path.join("novel", "baselines", f"{agent}_1M"), kind="baseline") for agent in ("ppo", "es")),
@@ -256,6 +250,18 @@ TABLE = NovelTasksTable("novel-tasks", "docs/NOVEL_TASKS.md", 2, out=OUT, scale=
 all_stages, main = TABLE.all_stages, TABLE.main
 #: The studies of this module (python -m experiments finds them).
 STUDIES = (TABLE.study(__name__.rsplit(".", 1)[-1]),)
+
+
+# shared candidate: the studies' figures mark a panel whose stage has not finished alike (figures.py, search.py).
+def finish(fig, path: str) -> str:
+    """Say "not run yet" on each empty panel (an unfinished stage) rather than leave it blank; lay out and save."""
+    from imrl_jax.plotting import save
+
+    for ax in (ax for ax in fig.axes if not ax.lines and not ax.patches):
+        ax.text(0.5, 0.5, "not run yet", transform=ax.transAxes, ha="center", va="center", color="0.4")
+    fig.tight_layout()
+    return save(fig, path)
+
 
 if __name__ == "__main__":
     sys.exit(main())
