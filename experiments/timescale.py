@@ -21,30 +21,18 @@ import sys
 import numpy as np
 
 from experiments.loading import read_json
-from experiments.study import MEASURED
-from experiments.study import REPRODUCTION, RESULTS, SCREEN, Study
+from experiments.study import MEASURED, REPRODUCTION, RESULTS, SCREEN, Study
 from experiments.table import Measure, Row, Table
 from imrl_jax.config import ADULT_SELECTOR
 
 OUT = os.path.join(RESULTS, "timescale")
 DOCUMENT = os.path.join("docs", "TIMESCALE.md")
 #: The selector's options: name -> Config fields. "per-step" is the paper's selector.
-OPTIONS = {
-    "per-step": dict(selector_period=1),
-    "period-5": dict(selector_period=5),
-    "period-10": dict(selector_period=10),
-    "period-20": dict(selector_period=20),
-    "period-40": dict(selector_period=40),
-    "colour-20": dict(selector_period=20, selector_termination="colour"),
-    "colour-60": dict(selector_period=60, selector_termination="colour"),
-}
-#: Adult learning rules of the ceiling: the paper's one-step rules, and skills' adult selector (traces, rates).
-RULES = {
-    "paper": {},
-    "skills": dict(ADULT_SELECTOR),
-    # The selector does not learn: what choosing at random (s = 0.5 for every expert) is worth, per option.
-    "random": dict(eta_selector_actor=0.0, eta_selector_critic=0.0),
-}
+OPTIONS = {"per-step": dict(selector_period=1), **{f"period-{p}": dict(selector_period=p) for p in (5, 10, 20, 40)},
+           **{f"colour-{p}": dict(selector_period=p, selector_termination="colour") for p in (20, 60)}}
+#: Adult learning rules of the ceiling: the paper's one-step rules, skills' adult selector (traces, rates), and a
+#: selector that does not learn: what choosing at random (s = 0.5 for every expert) is worth, per option.
+RULES = dict(paper={}, skills=dict(ADULT_SELECTOR), random=dict(eta_selector_actor=0.0, eta_selector_critic=0.0))
 RULE_LABELS = dict(paper="paper's one-step selector rules", skills="skills' adult selector (traces, rates)",
                    random="selector does not learn (random choices)")
 #: A ceiling at least this high means composition pays under those rules: above what one colour follower
@@ -78,12 +66,6 @@ def best_rates(rows: list[dict], option: str, trace_lambda: float | None = None)
     return max(mine, key=lambda r: r["fitness"])
 
 
-def best_option(rows: list[dict], rules: str) -> tuple[str, float]:
-    """The option other than per-step with the highest mean ceiling under ``rules``, and that ceiling."""
-    best = max((r for r in rows if r["rules"] == rules and r["option"] != "per-step"), key=lambda r: r["fitness"])
-    return best["option"], best["fitness"]
-
-
 def option_sets(option: str) -> tuple[str, ...]:
     """The ``--set`` assignments of an option."""
     return tuple(f"{field}={value}" for field, value in OPTIONS[option].items())
@@ -103,9 +85,9 @@ def evolution_groups(out: str = OUT) -> dict[str, tuple[tuple[str, ...], tuple[s
     best = max((r for r in confirmed if r["option"] != "per-step"), key=lambda r: r["fitness"])
     tuned = tuple(f"{field}={best[field]}" for field in RATE_GRID)
     groups = {f"skills+{best['option']}": (option_sets(best["option"]) + tuned, EVOLVED)}
-    option, value = best_option(ceiling, "paper")
-    if value >= COMPOSES:
-        groups[f"paper+{option}"] = (option_sets(option), EVOLVED + ("EE-ES",))
+    paper = max((r for r in ceiling if r["rules"] == "paper" and r["option"] != "per-step"), key=lambda r: r["fitness"])
+    if paper["fitness"] >= COMPOSES:
+        groups[f"paper+{paper['option']}"] = (option_sets(paper["option"]), EVOLVED + ("EE-ES",))
     return groups
 
 
@@ -138,17 +120,12 @@ class TimescaleTable(Table):
         return {variant: list(rows) for variant, rows in itertools.groupby(self.rows, lambda r: r.name.split(" ")[0])}
 
     def per_step_runs(self):
-        """The per-step baseline's runs (``claims_study.RowRuns``), found by key as the claims study finds them."""
+        """The per-step baseline's runs (``claims_study.RowRuns``), found by key as the claims study finds them (one
+        not found would be made in the claims study's folder under this table's results)."""
         from experiments import claims_study
 
-        return claims_study.rule_runs(claims_study.BY_NAME[BASELINE], self.claims_out, self.reproduction)
-
-    @property
-    def claims_out(self) -> str:
-        """The claims study's folder under this table's results (where a per-step run not found would be made)."""
-        from experiments.claims_study import OUT as CLAIMS
-
-        return os.path.join(self.results, os.path.relpath(CLAIMS, RESULTS))
+        out = os.path.join(self.results, os.path.relpath(claims_study.OUT, RESULTS))
+        return claims_study.rule_runs(claims_study.BY_NAME[BASELINE], out, self.reproduction)
 
     def option_runs(self, variant: str, finished=None):
         """An option's runs (``claims_study.RowRuns``): its own rows' (only those ``finished``, if given), and the
@@ -166,11 +143,12 @@ class TimescaleTable(Table):
         """The per-step baseline's claims and each option's: {variant: label, progress, measured}; an option's
         evolutions are measured once finished (a running one's population is not its last), its best genomes
         living fresh lives and probed; a claim that needs a run still to come is n/a."""
-        from experiments.claims_study import BY_NAME, measure_rule, measure_runs, reproduction_summary
+        from experiments.claims_study import BY_NAME, measure_runs, reproduction_summary
 
         summary = self.summary if self.summary is not None else reproduction_summary(self.document)
         rows = {BASELINE: dict(label=f"{BASELINE}, per-step selector (the paper's)", progress=None,
-                               measured=measure_rule(BY_NAME[BASELINE], summary, self.claims_out, self.reproduction))}
+                               measured=measure_runs(BASELINE, self.per_step_runs(), summary,
+                                                     sle_whole_test=BY_NAME[BASELINE].sle_noise_steps == 0))}
         measured = {m["row"]: m for m in self.measure()}
         for variant, own in self.variants().items():
             finished = {r.condition for r in own if "final_mean" in measured[r.name]}
@@ -226,11 +204,9 @@ class TimescaleTable(Table):
             print(f"error: {self.out}: the measurements have not run, so no evolution is planned yet", file=sys.stderr)
             return 2
         rows = self.claims()
-        with open(os.path.join(self.out, "evolutions.json"), "w") as f:
+        with open(os.path.join(self.out, "evolutions.json"), "w") as f:  # json writes the claims' numbers as keys
             json.dump({variant: dict(label=row["label"], progress=row["progress"],
-                                     claims=None if row["measured"] is None else
-                                     {str(k): v for k, v in row["measured"]["claims"].items()},
-                                     fresh=None if row["measured"] is None else row["measured"]["fresh"])
+                                     **{k: (row["measured"] or {}).get(k) for k in ("claims", "fresh")})
                        for variant, row in rows.items()}, f, indent=2, default=str)
         drawn = self.figure(os.path.join(self.out, "evolutions.png"))
         write_table(self.document, report_table(rows), REPORT_START, REPORT_END)
@@ -246,29 +222,30 @@ def timescale_table(out: str = OUT, results: str = RESULTS, **fields) -> Timesca
                           results=results, measures=measures(), **fields)
 
 
+def _cells(row: dict, condition: str) -> tuple:
+    """A row's cells for one condition: its numbers once its evolution has finished, its progress before."""
+    from experiments.markdown import mean_sd
+
+    measured = row["measured"]
+    if measured is None or condition not in measured["evolution"]:
+        done = (row["progress"] or {}).get(condition)
+        return ("not started" if done is None else f"{done[1]} x {done[0]} of {SCREEN['generations']}, running",
+                "-", "-", "-", "-")
+    e, t, f = (measured[part].get(condition) for part in ("evolution", "learning_tests", "fresh"))
+    return (f"{len(e['final_best_per_seed'])} x {e['generations']}", mean_sd(e["final_best_mean"], e["final_best_sd"]),
+            "-" if f is None else f"{f['fresh']:.3f} (sd {f['fresh_sd_over_seeds']:.3f} over seeds)",
+            e["plateau_generation"],
+            "-" if t is None else f"{mean_sd(t['steady_mean'], t['steady_sd'])} ({t['num_runs']} runs)")
+
+
 def report_table(rows: dict) -> str:
     """Markdown: per row and condition the recorded and fresh fitness and the steady state, then claims 1-7."""
     from experiments.claims import CLAIMS
-    from experiments.markdown import head, mean_sd, line
+    from experiments.markdown import head, line
 
     lines = head("selector", "condition", "seeds x generations", "final best fitness (recorded)",
                  "fresh lives of each seed's best", "plateau generation", "steady state (learning test)")
-    for row in rows.values():
-        measured = row["measured"]
-        for condition in EVOLVED:
-            if measured is None or condition not in measured["evolution"]:
-                done = (row["progress"] or {}).get(condition)
-                size = "not started" if done is None else f"{done[1]} x {done[0]} of {SCREEN['generations']}, running"
-                lines.append(line(row["label"], condition, size, "-", "-", "-", "-"))
-                continue
-            e, t = measured["evolution"].get(condition), measured["learning_tests"].get(condition)
-            f = measured["fresh"].get(condition)
-            lines.append(line(row["label"], condition, f"{len(e['final_best_per_seed'])} x {e['generations']}",
-                               mean_sd(e["final_best_mean"], e["final_best_sd"]),
-                               "-" if f is None else f"{f['fresh']:.3f} (sd {f['fresh_sd_over_seeds']:.3f} over seeds)",
-                               e["plateau_generation"],
-                               "-" if t is None else
-                               f"{mean_sd(t['steady_mean'], t['steady_sd'])} ({t['num_runs']} runs)"))
+    lines += [line(row["label"], condition, *_cells(row, condition)) for row in rows.values() for condition in EVOLVED]
     short = {"holds": "**holds**", "partly": "partly", "does not hold": "no", "n/a": "n/a"}
     claims = [None if row["measured"] is None else row["measured"]["claims"] for row in rows.values()]
     lines += ["", *head("claim", *(row["label"] for row in rows.values()))]
@@ -277,27 +254,33 @@ def report_table(rows: dict) -> str:
               for k in range(1, 8)]
     return "\n".join(lines)
 
-
 # ----------------------------------------------------------------------------- the measurements
 
+def _config(task_steps: int, fields: dict):
+    """EE-LS under the paper's preset with ``fields`` (an option, rules), its tasks ``task_steps`` long in 10 bins."""
+    from imrl_jax.config import make_config
+
+    return make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **fields)
+
+
+def _numbers(config, result) -> dict:
+    """Fitness over lives (the last axis) and each task's last tenth (its last of 10 bins: the composition once
+    learned), averaged over everything but the first axes (a sweep's points)."""
+    from imrl_jax.sweeps import normalised_curve
+
+    fitness, last = np.asarray(result.fitness), normalised_curve(config, result.reward_curve)[..., -1]
+    axes = tuple(range(fitness.ndim - 1, last.ndim))
+    return dict(fitness=fitness.mean(-1), fitness_sd=fitness.std(-1), last_tenth=last.mean(axes))
+
+
 def _composed(config, lives: int, key: int) -> tuple[dict, object]:
-    """Ideal followers composed by ``config``'s selector in ``lives`` lives: the mean fitness, its sd over lives and
-    the last tenth of each task (its last of 10 bins: the composition once learned); and the result."""
+    """Ideal followers composed by ``config``'s selector in ``lives`` lives: :func:`_numbers`, and the result."""
     import jax
 
     from imrl_jax.controllers import composition_ceiling
 
     result = composition_ceiling(jax.random.key(key), config, lives)
-    return _numbers(config, result, np.asarray(result.fitness)), result
-
-
-def _numbers(config, result, fitness: np.ndarray) -> dict:
-    """Fitness over lives (the last axis) and each task's last tenth, averaged over everything but the first axes."""
-    from imrl_jax.sweeps import normalised_curve
-
-    last = normalised_curve(config, result.reward_curve)[..., -1]
-    axes = tuple(range(fitness.ndim - 1, last.ndim))
-    return dict(fitness=fitness.mean(-1), fitness_sd=fitness.std(-1), last_tenth=last.mean(axes))
+    return {k: float(v) for k, v in _numbers(config, result).items()}, result
 
 
 def _write_measure(out_dir: str, name: str, rows: list[dict], lives: int, key: int, **recorded) -> None:
@@ -311,27 +294,20 @@ def _write_measure(out_dir: str, name: str, rows: list[dict], lives: int, key: i
 def measure_ceiling(out_dir: str, lives: int = LIVES, key: int = 0, task_steps: int = TASK_STEPS) -> list[dict]:
     """Stage 1: the composition ceiling of every option under every rule set; writes ceiling.csv, the figure,
     and result.json last."""
-    from imrl_jax.config import make_config
-
     rows = []
     for rules, option in itertools.product(RULES, OPTIONS):
-        config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **RULES[rules],
-                             **OPTIONS[option])
-        numbers, result = _composed(config, lives, key)
+        numbers, result = _composed(_config(task_steps, {**RULES[rules], **OPTIONS[option]}), lives, key)
         selections = np.asarray(result.adult_selections).sum(axis=2)  # (lives, tasks, K)
-        rows.append(dict(rules=rules, option=option, lives=lives, task_steps=task_steps,
-                         **{k: float(v) for k, v in numbers.items()},
+        rows.append(dict(rules=rules, option=option, lives=lives, task_steps=task_steps, **numbers,
                          **{f"task_{t + 1}": float(v) for t, v in enumerate(np.asarray(result.performance).mean(0))},
                          # the mean share of a task's steps its most used expert was in control (1: one does it all)
                          top_share=float((selections.max(-1) / selections.sum(-1)).mean())))
         print(f"ceiling ({len(rows)}/{len(RULES) * len(OPTIONS)}) {rules:>6} {option:>9}: {rows[-1]['fitness']:.3f}",
               file=sys.stderr, flush=True)
-    os.makedirs(out_dir, exist_ok=True)
     plot_bars([(RULE_LABELS.get(rules, rules), ("0.35", "tab:orange", "0.75")[i % 3],
-                [next(r for r in rows if r["rules"] == rules and r["option"] == o) for o in OPTIONS])
-               for i, rules in enumerate(RULES)], list(OPTIONS), os.path.join(out_dir, "ceiling.png"),
-              "Ideal colour followers composed by a learning selector, per option of the selector "
-              f"({task_steps:,} steps per task)", threshold=COMPOSES)
+                [r for r in rows if r["rules"] == rules]) for i, rules in enumerate(RULES)], list(OPTIONS),
+              os.path.join(out_dir, "ceiling.png"), "Ideal colour followers composed by a learning selector, per "
+              f"option of the selector ({task_steps:,} steps per task)", threshold=COMPOSES)
     _write_measure(out_dir, "ceiling", rows, lives, key, options=OPTIONS, rules=RULES)
     return rows
 
@@ -344,23 +320,20 @@ def measure_rates(out_dir: str, lives: int = RATE_LIVES, key: int = 0, task_step
     from matplotlib import colormaps
 
     from imrl_jax import sweeps
-    from imrl_jax.config import make_config
     from imrl_jax.controllers import perceptron_followers
 
     rows = []
     for option in RATE_OPTIONS:
-        config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **OPTIONS[option])
-        sweep = sweeps.grid(config, **RATE_GRID)
-        genome = perceptron_followers(config).reshape(-1)
-        result = sweeps.make_lifetime_sweep(config)(jax.random.key(key), jnp.broadcast_to(genome, (lives,) + genome.shape),
-                                                    sweep.points)
-        numbers = _numbers(config, result, np.asarray(result.fitness))  # per point: (points, lives) fitness
+        config = _config(task_steps, OPTIONS[option])
+        sweep, genome = sweeps.grid(config, **RATE_GRID), perceptron_followers(config).reshape(-1)
+        result = sweeps.make_lifetime_sweep(config)(jax.random.key(key), jnp.broadcast_to(
+            genome, (lives,) + genome.shape), sweep.points)
+        numbers = _numbers(config, result)  # per point: (points, lives) fitness
         rows += [dict(option=option, **settings, lives=lives, **{k: float(v[i]) for k, v in numbers.items()})
                  for i, settings in enumerate(sweep.settings)]
         best = best_rates(rows, option)
         print(f"rates {option:>9}: best {best['fitness']:.3f} at {[best[f] for f in RATE_GRID]}", file=sys.stderr,
               flush=True)
-    os.makedirs(out_dir, exist_ok=True)
     lambdas = list(dict.fromkeys(r["trace_lambda"] for r in rows))
     plot_bars([(f"lambda {lam}: best rates", colormaps["viridis"](0.15 + 0.7 * i / max(len(lambdas) - 1, 1)),
                 [best_rates(rows, option, lam) for option in RATE_OPTIONS]) for i, lam in enumerate(lambdas)],
@@ -373,8 +346,6 @@ def measure_rates(out_dir: str, lives: int = RATE_LIVES, key: int = 0, task_step
 def measure_confirm(out_dir: str, lives: int = LIVES, key: int = 1, task_steps: int = TASK_STEPS) -> list[dict]:
     """Stage 3: each option of :data:`RATE_OPTIONS` at its best point of the rate sweep (in the sibling ``rates``
     folder), in ``lives`` fresh lives of another key: the sweep's best of 54 points of 3 lives flatters itself."""
-    from imrl_jax.config import make_config
-
     rates = read_measure(os.path.dirname(os.path.normpath(out_dir)), "rates")
     if rates is None:
         raise ValueError(f"{out_dir}: the rate sweep has not run (its result.json is missing)")
@@ -382,11 +353,8 @@ def measure_confirm(out_dir: str, lives: int = LIVES, key: int = 1, task_steps: 
     for option in RATE_OPTIONS:
         best = best_rates(rates, option)
         values = {field: best[field] for field in RATE_GRID}
-        config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **OPTIONS[option],
-                             **values)
-        numbers, _ = _composed(config, lives, key)
-        rows.append(dict(option=option, **values, lives=lives, **{k: float(v) for k, v in numbers.items()},
-                         sweep_fitness=best["fitness"]))
+        numbers, _ = _composed(_config(task_steps, {**OPTIONS[option], **values}), lives, key)
+        rows.append(dict(option=option, **values, lives=lives, **numbers, sweep_fitness=best["fitness"]))
         print(f"confirm {option:>9}: {rows[-1]['fitness']:.3f} in {lives} fresh lives, {best['fitness']:.3f} in the "
               "sweep", file=sys.stderr, flush=True)
     _write_measure(out_dir, "confirm", rows, lives, key)
@@ -423,41 +391,36 @@ def plot_bars(groups, options: list[str], path: str, title: str, threshold: floa
 MEASUREMENTS = dict(ceiling=measure_ceiling, rates=measure_rates, confirm=measure_confirm)
 
 
-def measure_main(argv: list[str]) -> int:
-    """One measurement's command line: ``--out DIR NAME [--lives N] [--key K] [--task-steps N]``."""
-    p = argparse.ArgumentParser(prog="python -m experiments.timescale")
-    p.add_argument("measurement", choices=MEASUREMENTS)
-    p.add_argument("--out", required=True, help="its folder (the study's stage gives its own: a committed one is "
-                                              "not written over by hand)")
-    p.add_argument("--lives", type=int)
-    p.add_argument("--key", type=int)
-    p.add_argument("--task-steps", type=int, default=TASK_STEPS)
-    args = p.parse_args(argv)
-    given = {k: v for k, v in dict(lives=args.lives, key=args.key).items() if v is not None}
-    try:
-        MEASUREMENTS[args.measurement](args.out, task_steps=args.task_steps, **given)
-    except ValueError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    return 0
-
-
-def all_stages():
-    """Every stage planned so far (the evolutions once the measurements have run), and their scale."""
-    return timescale_table().all_stages()
-
-
 def main(argv=None) -> int:
-    """A measurement, or the study's run (measurements, then the evolutions they call for) or ``--report``."""
+    """A measurement (``--out DIR NAME [--lives N] [--key K] [--task-steps N]``), or the study's run (measurements,
+    then the evolutions they call for) or ``--report``."""
     argv = sys.argv[1:] if argv is None else list(argv)
     if set(argv) & set(MEASUREMENTS):
-        return measure_main(argv)
+        p = argparse.ArgumentParser(prog="python -m experiments.timescale")
+        p.add_argument("measurement", choices=MEASUREMENTS)
+        p.add_argument("--out", dest="out_dir", metavar="OUT", required=True, help="its folder (the study's stage "
+                       "gives its own: a committed one is not written over by hand)")
+        for option in ("--lives", "--key"):  # absent: the measurement's own
+            p.add_argument(option, type=int, default=argparse.SUPPRESS)
+        p.add_argument("--task-steps", type=int, default=TASK_STEPS)
+        options = vars(p.parse_args(argv))
+        try:
+            MEASUREMENTS[options.pop("measurement")](**options)
+        except ValueError as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 2
+        return 0
     planned = timescale_table()
     code = planned.main(argv)
     if code or planned.rows or "--report" in argv:
         return code
     measured = timescale_table()  # the measurements have run since: the evolutions they call for
     return measured.main(argv) if measured.rows else code
+
+
+def all_stages():
+    """Every stage planned so far (the evolutions once the measurements have run), and their scale."""
+    return timescale_table().all_stages()
 
 
 #: The studies of this module (python -m experiments finds them).
