@@ -15,15 +15,26 @@ import argparse
 import dataclasses
 import itertools
 import json
+import math
 import os
 import sys
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
-from experiments.loading import read_json
-from experiments.study import MEASURED, REPRODUCTION, RESULTS, SCREEN, Study
+from experiments import claims_study
+from experiments.claims import CLAIMS
+from experiments.figures import _band
+from experiments.loading import read_evolution, read_json, read_test
+from experiments.markdown import head, line, mean_sd
+from experiments.rule_sets import BY_NAME
+from experiments.study import MEASURED, REPRODUCTION, RESULTS, SCREEN, Study, write_measure, write_table
 from experiments.table import Measure, Row, Table
-from imrl_jax.config import ADULT_SELECTOR
+from imrl_jax import sweeps
+from imrl_jax.config import ADULT_SELECTOR, make_config
+from imrl_jax.controllers import composition_ceiling, perceptron_followers
+from imrl_jax.plotting import new_figure, save, style_axis, wrap_title
 
 OUT = os.path.join(RESULTS, "timescale")
 DOCUMENT = os.path.join("docs", "TIMESCALE.md")
@@ -66,11 +77,6 @@ def best_rates(rows: list[dict], option: str, trace_lambda: float | None = None)
     return max(mine, key=lambda r: r["fitness"])
 
 
-def option_sets(option: str) -> tuple[str, ...]:
-    """The ``--set`` assignments of an option."""
-    return tuple(f"{field}={value}" for field, value in OPTIONS[option].items())
-
-
 def evolution_groups(out: str = OUT) -> dict[str, tuple[tuple[str, ...], tuple[str, ...]]]:
     """The evolutions the measures call for: {"PRESET+OPTION": (--set assignments, conditions)} (none before they ran).
 
@@ -83,22 +89,12 @@ def evolution_groups(out: str = OUT) -> dict[str, tuple[tuple[str, ...], tuple[s
     if ceiling is None or confirmed is None:
         return {}
     best = max((r for r in confirmed if r["option"] != "per-step"), key=lambda r: r["fitness"])
-    tuned = tuple(f"{field}={best[field]}" for field in RATE_GRID)
-    groups = {f"skills+{best['option']}": (option_sets(best["option"]) + tuned, EVOLVED)}
     paper = max((r for r in ceiling if r["rules"] == "paper" and r["option"] != "per-step"), key=lambda r: r["fitness"])
+    groups = {f"skills+{best['option']}": ({**OPTIONS[best["option"]], **{f: best[f] for f in RATE_GRID}}, EVOLVED)}
     if paper["fitness"] >= COMPOSES:
-        groups[f"paper+{paper['option']}"] = (option_sets(paper["option"]), EVOLVED + ("EE-ES",))
-    return groups
-
-
-def measures() -> tuple[Measure, ...]:
-    """The three measurements, each this module's own command writing into the table's ``NAME``; cost in
-    lane-steps."""
-    life = 6 * TASK_STEPS
-    points = len(RATE_OPTIONS) * len(list(itertools.product(*RATE_GRID.values())))
-    return tuple(Measure(name, "", (name,), "experiments.timescale", float(cost * life), name)
-                 for name, cost in (("ceiling", len(OPTIONS) * len(RULES) * LIVES), ("rates", points * RATE_LIVES),
-                                    ("confirm", len(RATE_OPTIONS) * LIVES)))
+        groups[f"paper+{paper['option']}"] = (OPTIONS[paper["option"]], EVOLVED + ("EE-ES",))
+    return {name: (tuple(f"{field}={value}" for field, value in sets.items()), conditions)
+            for name, (sets, conditions) in groups.items()}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -119,20 +115,14 @@ class TimescaleTable(Table):
         """The rows of each option ("PRESET+OPTION"), in order."""
         return {variant: list(rows) for variant, rows in itertools.groupby(self.rows, lambda r: r.name.split(" ")[0])}
 
-    def per_step_runs(self):
-        """The per-step baseline's runs (``claims_study.RowRuns``), found by key as the claims study finds them (one
-        not found would be made in the claims study's folder under this table's results)."""
-        from experiments import claims_study
-
+    def option_runs(self, variant: str | None = None, finished=None) -> claims_study.RowRuns:
+        """An option's runs: its own rows' (only those ``finished``, if given), the per-step baseline's where it has
+        none of its own: EE-ES (``paper``'s: its selector chooses every step) and SLE; the baseline's for None."""
+        # found by key as the claims study finds them: one not found is made in its folder under this table's results
         out = os.path.join(self.results, os.path.relpath(claims_study.OUT, RESULTS))
-        return claims_study.rule_runs(claims_study.BY_NAME[BASELINE], out, self.reproduction)
-
-    def option_runs(self, variant: str, finished=None):
-        """An option's runs (``claims_study.RowRuns``): its own rows' (only those ``finished``, if given), and the
-        per-step baseline's where it has none of its own: EE-ES (``paper``'s: its selector chooses every step) and
-        SLE (no selector)."""
-        runs, evolutions, tests = self.per_step_runs(), self.evolutions(), self.tests()
-        for row in self.variants()[variant]:
+        runs = claims_study.rule_runs(BY_NAME[BASELINE], out, self.reproduction)
+        evolutions, tests = self.evolutions(), self.tests()
+        for row in self.variants().get(variant, ()):
             for folders in runs:  # evolutions, tests, and the reproduction's variant of each borrowed run
                 folders.pop(row.condition, None)
             if finished is None or row.condition in finished:
@@ -143,19 +133,17 @@ class TimescaleTable(Table):
         """The per-step baseline's claims and each option's: {variant: label, progress, measured}; an option's
         evolutions are measured once finished (a running one's population is not its last), its best genomes
         living fresh lives and probed; a claim that needs a run still to come is n/a."""
-        from experiments.claims_study import BY_NAME, measure_runs, reproduction_summary
-
-        summary = self.summary if self.summary is not None else reproduction_summary(self.document)
+        summary = self.summary if self.summary is not None else claims_study.reproduction_summary(self.document)
+        whole = BY_NAME[BASELINE].sle_noise_steps == 0  # SLE's noise annealed over the whole test
         rows = {BASELINE: dict(label=f"{BASELINE}, per-step selector (the paper's)", progress=None,
-                               measured=measure_runs(BASELINE, self.per_step_runs(), summary,
-                                                     sle_whole_test=BY_NAME[BASELINE].sle_noise_steps == 0))}
+                               measured=claims_study.measure_runs(BASELINE, self.option_runs(), summary, whole))}
         measured = {m["row"]: m for m in self.measure()}
         for variant, own in self.variants().items():
             finished = {r.condition for r in own if "final_mean" in measured[r.name]}
             rows[variant] = dict(label=variant.replace("+", ", ") + " selector", progress={
                 r.condition: (measured[r.name]["generations"], measured[r.name]["seeds"])
-                if measured[r.name]["generations"] else None for r in own},
-                measured=measure_runs(variant, self.option_runs(variant, finished), summary) if finished else None)
+                if measured[r.name]["generations"] else None for r in own}, measured=claims_study.measure_runs(
+                    variant, self.option_runs(variant, finished), summary) if finished else None)
         return rows
 
     def figure(self, path: str) -> str:
@@ -163,11 +151,7 @@ class TimescaleTable(Table):
         (dashed) against each option (solid), LE-LS and EE-LS."""
         from matplotlib.ticker import MaxNLocator
 
-        from experiments.figures import _band
-        from experiments.loading import read_evolution, read_test
-        from imrl_jax.plotting import new_figure, save, style_axis
-
-        sources = [(f"{BASELINE}, per-step", self.per_step_runs(), "--")]
+        sources = [(f"{BASELINE}, per-step", self.option_runs(), "--")]
         sources += [(variant.replace("+", ", "), self.option_runs(variant), "-") for variant in self.variants()]
         fig = new_figure(12.0, 4.0)
         evolution_ax, test_ax = fig.subplots(1, 2)
@@ -198,8 +182,6 @@ class TimescaleTable(Table):
     def report(self) -> int:
         """Measure what has finished; write evolutions.json and evolutions.png under ``out`` and the tables into
         the document."""
-        from experiments.study import write_table
-
         if not self.rows:
             print(f"error: {self.out}: the measurements have not run, so no evolution is planned yet", file=sys.stderr)
             return 2
@@ -218,14 +200,17 @@ def timescale_table(out: str = OUT, results: str = RESULTS, **fields) -> Timesca
     """The study's table as its measurements under ``out`` plan it now (no rows before they have run)."""
     rows = tuple(Row(f"{variant} {condition}", condition, variant.split("+")[0], sets)
                  for variant, (sets, names) in evolution_groups(out).items() for condition in names)
+    # each measurement is this module's own command writing into the table's NAME; its cost in lane-steps
+    lives = dict(ceiling=len(OPTIONS) * len(RULES) * LIVES, confirm=len(RATE_OPTIONS) * LIVES,
+                 rates=len(RATE_OPTIONS) * math.prod(len(values) for values in RATE_GRID.values()) * RATE_LIVES)
+    measures = tuple(Measure(name, "", (name,), "experiments.timescale", float(lives[name] * 6 * TASK_STEPS), name)
+                     for name in ("ceiling", "rates", "confirm"))
     return TimescaleTable("timescale", fields.pop("document", DOCUMENT), 1, rows=rows, scale=SCREEN, out=out,
-                          results=results, measures=measures(), **fields)
+                          results=results, measures=measures, **fields)
 
 
 def _cells(row: dict, condition: str) -> tuple:
     """A row's cells for one condition: its numbers once its evolution has finished, its progress before."""
-    from experiments.markdown import mean_sd
-
     measured = row["measured"]
     if measured is None or condition not in measured["evolution"]:
         done = (row["progress"] or {}).get(condition)
@@ -240,9 +225,6 @@ def _cells(row: dict, condition: str) -> tuple:
 
 def report_table(rows: dict) -> str:
     """Markdown: per row and condition the recorded and fresh fitness and the steady state, then claims 1-7."""
-    from experiments.claims import CLAIMS
-    from experiments.markdown import head, line
-
     lines = head("selector", "condition", "seeds x generations", "final best fitness (recorded)",
                  "fresh lives of each seed's best", "plateau generation", "steady state (learning test)")
     lines += [line(row["label"], condition, *_cells(row, condition)) for row in rows.values() for condition in EVOLVED]
@@ -258,35 +240,25 @@ def report_table(rows: dict) -> str:
 
 def _config(task_steps: int, fields: dict):
     """EE-LS under the paper's preset with ``fields`` (an option, rules), its tasks ``task_steps`` long in 10 bins."""
-    from imrl_jax.config import make_config
-
     return make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **fields)
 
 
 def _numbers(config, result) -> dict:
     """Fitness over lives (the last axis) and each task's last tenth (its last of 10 bins: the composition once
     learned), averaged over everything but the first axes (a sweep's points)."""
-    from imrl_jax.sweeps import normalised_curve
-
-    fitness, last = np.asarray(result.fitness), normalised_curve(config, result.reward_curve)[..., -1]
+    fitness, last = np.asarray(result.fitness), sweeps.normalised_curve(config, result.reward_curve)[..., -1]
     axes = tuple(range(fitness.ndim - 1, last.ndim))
     return dict(fitness=fitness.mean(-1), fitness_sd=fitness.std(-1), last_tenth=last.mean(axes))
 
 
 def _composed(config, lives: int, key: int) -> tuple[dict, object]:
     """Ideal followers composed by ``config``'s selector in ``lives`` lives: :func:`_numbers`, and the result."""
-    import jax
-
-    from imrl_jax.controllers import composition_ceiling
-
     result = composition_ceiling(jax.random.key(key), config, lives)
     return {k: float(v) for k, v in _numbers(config, result).items()}, result
 
 
 def _write_measure(out_dir: str, name: str, rows: list[dict], lives: int, key: int, **recorded) -> None:
     """A measurement's NAME.csv, then its result.json with its rows (the stage is done)."""
-    from experiments.study import write_measure
-
     write_measure(out_dir, name, rows, f"python -m experiments.timescale --out {out_dir} {name} --lives {lives} "
                   f"--key {key}", **recorded, rows=rows)
 
@@ -315,12 +287,7 @@ def measure_ceiling(out_dir: str, lives: int = LIVES, key: int = 0, task_steps: 
 def measure_rates(out_dir: str, lives: int = RATE_LIVES, key: int = 0, task_steps: int = TASK_STEPS) -> list[dict]:
     """Stage 2: the ceiling over a grid of the selector's trace decay and rates (:data:`RATE_GRID`), per option of
     :data:`RATE_OPTIONS`: one compiled program per option, every point living the same lanes with the same keys."""
-    import jax
-    import jax.numpy as jnp
     from matplotlib import colormaps
-
-    from imrl_jax import sweeps
-    from imrl_jax.controllers import perceptron_followers
 
     rows = []
     for option in RATE_OPTIONS:
@@ -365,8 +332,6 @@ def plot_bars(groups, options: list[str], path: str, title: str, threshold: floa
               ncol: int = 2) -> str:
     """Bars of fitness per option (+-1 sd over lives), one per group (label, colour, a row per option), with each
     bar's last tenth of the tasks (a triangle) and the level at which composition pays (``threshold``)."""
-    from imrl_jax.plotting import new_figure, save, wrap_title
-
     fig = new_figure(8.0, 4.0)
     ax = fig.add_subplot()
     width = 0.8 / len(groups)
