@@ -32,6 +32,7 @@ from experiments.rule_sets import BY_NAME
 from experiments.study import MEASURED, REPRODUCTION, RESULTS, SCREEN, Study, write_measure, write_table
 from experiments.table import Measure, Row, Table
 from imrl_jax import sweeps
+from imrl_jax.cli import Parser, UsageError, exit_codes
 from imrl_jax.config import ADULT_SELECTOR, make_config
 from imrl_jax.controllers import composition_ceiling, perceptron_followers
 from imrl_jax.plotting import new_figure, save, style_axis, wrap_title
@@ -77,8 +78,8 @@ def best_rates(rows: list[dict], option: str, trace_lambda: float | None = None)
     return max(mine, key=lambda r: r["fitness"])
 
 
-def evolution_groups(out: str = OUT) -> dict[str, tuple[tuple[str, ...], tuple[str, ...]]]:
-    """The evolutions the measures call for: {"PRESET+OPTION": (--set assignments, conditions)} (none before they ran).
+def evolution_groups(out: str = OUT) -> tuple[Row, ...]:
+    """The rows the measures call for, "PRESET+OPTION CONDITION" (none before they ran).
 
     Under ``skills``: LE-LS and EE-LS with the option (other than per-step) whose best point of the rate
     sweep scores highest in the confirmation's fresh lives, at that point's rates. Under ``paper``: LE-LS,
@@ -87,20 +88,19 @@ def evolution_groups(out: str = OUT) -> dict[str, tuple[tuple[str, ...], tuple[s
     """
     ceiling, confirmed = read_measure(out, "ceiling"), read_measure(out, "confirm")
     if ceiling is None or confirmed is None:
-        return {}
+        return ()
     best = max((r for r in confirmed if r["option"] != "per-step"), key=lambda r: r["fitness"])
     paper = max((r for r in ceiling if r["rules"] == "paper" and r["option"] != "per-step"), key=lambda r: r["fitness"])
-    groups = {f"skills+{best['option']}": ({**OPTIONS[best["option"]], **{f: best[f] for f in RATE_GRID}}, EVOLVED)}
+    groups = [(f"skills+{best['option']}", {**OPTIONS[best["option"]], **{f: best[f] for f in RATE_GRID}}, EVOLVED)]
     if paper["fitness"] >= COMPOSES:
-        groups[f"paper+{paper['option']}"] = (OPTIONS[paper["option"]], EVOLVED + ("EE-ES",))
-    return {name: (tuple(f"{field}={value}" for field, value in sets.items()), conditions)
-            for name, (sets, conditions) in groups.items()}
+        groups.append((f"paper+{paper['option']}", OPTIONS[paper["option"]], EVOLVED + ("EE-ES",)))
+    return tuple(Row(f"{variant} {c}", c, variant.split("+")[0], tuple(f"{k}={v}" for k, v in fields.items()))
+                 for variant, fields, conditions in groups for c in conditions)
 
 
 @dataclasses.dataclass(frozen=True)
 class TimescaleTable(Table):
-    """The study's table: its measurements first, then the rows they call for ("PRESET+OPTION CONDITION"); its
-    report compares each option's runs with the per-step selector's by the claims' rules."""
+    """The study: its measurements, then the rows they call for, compared with the per-step selector's runs."""
 
     reproduction: str = REPRODUCTION  # the per-step runs compared with, and the EE-ES and SLE an option borrows
     summary: dict | None = dataclasses.field(default=None, hash=False)  # the reproduction report's probes
@@ -130,9 +130,8 @@ class TimescaleTable(Table):
         return runs
 
     def claims(self) -> dict:
-        """The per-step baseline's claims and each option's: {variant: label, progress, measured}; an option's
-        evolutions are measured once finished (a running one's population is not its last), its best genomes
-        living fresh lives and probed; a claim that needs a run still to come is n/a."""
+        """The per-step baseline's claims and each option's: {variant: label, progress, measured}; an option's own
+        runs are measured once finished (a running one's population is not its last): a claim needing one is n/a."""
         summary = self.summary if self.summary is not None else claims_study.reproduction_summary(self.document)
         whole = BY_NAME[BASELINE].sle_noise_steps == 0  # SLE's noise annealed over the whole test
         rows = {BASELINE: dict(label=f"{BASELINE}, per-step selector (the paper's)", progress=None,
@@ -147,8 +146,7 @@ class TimescaleTable(Table):
         return rows
 
     def figure(self, path: str) -> str:
-        """Fig. 3a and 3b side by side: best fitness per generation and the learning tests' curves, per-step
-        (dashed) against each option (solid), LE-LS and EE-LS."""
+        """Fig. 3a and 3b side by side for LE-LS and EE-LS: per-step (dashed) against each option (solid)."""
         from matplotlib.ticker import MaxNLocator
 
         sources = [(f"{BASELINE}, per-step", self.option_runs(), "--")]
@@ -180,8 +178,7 @@ class TimescaleTable(Table):
         return save(fig, path)
 
     def report(self) -> int:
-        """Measure what has finished; write evolutions.json and evolutions.png under ``out`` and the tables into
-        the document."""
+        """Measure what has finished: evolutions.json and evolutions.png under ``out``, the document's tables."""
         if not self.rows:
             print(f"error: {self.out}: the measurements have not run, so no evolution is planned yet", file=sys.stderr)
             return 2
@@ -198,15 +195,13 @@ class TimescaleTable(Table):
 
 def timescale_table(out: str = OUT, results: str = RESULTS, **fields) -> TimescaleTable:
     """The study's table as its measurements under ``out`` plan it now (no rows before they have run)."""
-    rows = tuple(Row(f"{variant} {condition}", condition, variant.split("+")[0], sets)
-                 for variant, (sets, names) in evolution_groups(out).items() for condition in names)
     # each measurement is this module's own command writing into the table's NAME; its cost in lane-steps
     lives = dict(ceiling=len(OPTIONS) * len(RULES) * LIVES, confirm=len(RATE_OPTIONS) * LIVES,
                  rates=len(RATE_OPTIONS) * math.prod(len(values) for values in RATE_GRID.values()) * RATE_LIVES)
     measures = tuple(Measure(name, "", (name,), "experiments.timescale", float(lives[name] * 6 * TASK_STEPS), name)
                      for name in ("ceiling", "rates", "confirm"))
-    return TimescaleTable("timescale", fields.pop("document", DOCUMENT), 1, rows=rows, scale=SCREEN, out=out,
-                          results=results, measures=measures, **fields)
+    return TimescaleTable("timescale", fields.pop("document", DOCUMENT), 1, rows=evolution_groups(out), scale=SCREEN,
+                          out=out, results=results, measures=measures, **fields)
 
 
 def _cells(row: dict, condition: str) -> tuple:
@@ -238,21 +233,16 @@ def report_table(rows: dict) -> str:
 
 # ----------------------------------------------------------------------------- the measurements
 
-def _config(task_steps: int, fields: dict):
-    """EE-LS under the paper's preset with ``fields`` (an option, rules), its tasks ``task_steps`` long in 10 bins."""
-    return make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **fields)
-
-
 def _numbers(config, result) -> dict:
-    """Fitness over lives (the last axis) and each task's last tenth (its last of 10 bins: the composition once
-    learned), averaged over everything but the first axes (a sweep's points)."""
+    """Fitness over lives (the last axis) and each task's last tenth (the composition once learned), per point."""
     fitness, last = np.asarray(result.fitness), sweeps.normalised_curve(config, result.reward_curve)[..., -1]
     axes = tuple(range(fitness.ndim - 1, last.ndim))
     return dict(fitness=fitness.mean(-1), fitness_sd=fitness.std(-1), last_tenth=last.mean(axes))
 
 
-def _composed(config, lives: int, key: int) -> tuple[dict, object]:
-    """Ideal followers composed by ``config``'s selector in ``lives`` lives: :func:`_numbers`, and the result."""
+def _composed(fields: dict, lives: int, key: int, task_steps: int) -> tuple[dict, object]:
+    """Ideal followers composed by the paper's EE-LS selector with ``fields``: :func:`_numbers`, and the result."""
+    config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **fields)
     result = composition_ceiling(jax.random.key(key), config, lives)
     return {k: float(v) for k, v in _numbers(config, result).items()}, result
 
@@ -264,11 +254,10 @@ def _write_measure(out_dir: str, name: str, rows: list[dict], lives: int, key: i
 
 
 def measure_ceiling(out_dir: str, lives: int = LIVES, key: int = 0, task_steps: int = TASK_STEPS) -> list[dict]:
-    """Stage 1: the composition ceiling of every option under every rule set; writes ceiling.csv, the figure,
-    and result.json last."""
+    """Stage 1: every option's ceiling under every rule set; writes ceiling.csv, the figure, then result.json."""
     rows = []
     for rules, option in itertools.product(RULES, OPTIONS):
-        numbers, result = _composed(_config(task_steps, {**RULES[rules], **OPTIONS[option]}), lives, key)
+        numbers, result = _composed({**RULES[rules], **OPTIONS[option]}, lives, key, task_steps)
         selections = np.asarray(result.adult_selections).sum(axis=2)  # (lives, tasks, K)
         rows.append(dict(rules=rules, option=option, lives=lives, task_steps=task_steps, **numbers,
                          **{f"task_{t + 1}": float(v) for t, v in enumerate(np.asarray(result.performance).mean(0))},
@@ -285,13 +274,12 @@ def measure_ceiling(out_dir: str, lives: int = LIVES, key: int = 0, task_steps: 
 
 
 def measure_rates(out_dir: str, lives: int = RATE_LIVES, key: int = 0, task_steps: int = TASK_STEPS) -> list[dict]:
-    """Stage 2: the ceiling over a grid of the selector's trace decay and rates (:data:`RATE_GRID`), per option of
-    :data:`RATE_OPTIONS`: one compiled program per option, every point living the same lanes with the same keys."""
+    """Stage 2: the ceiling over :data:`RATE_GRID` per option: one program per option, every point the same lanes."""
     from matplotlib import colormaps
 
     rows = []
     for option in RATE_OPTIONS:
-        config = _config(task_steps, OPTIONS[option])
+        config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **OPTIONS[option])
         sweep, genome = sweeps.grid(config, **RATE_GRID), perceptron_followers(config).reshape(-1)
         result = sweeps.make_lifetime_sweep(config)(jax.random.key(key), jnp.broadcast_to(
             genome, (lives,) + genome.shape), sweep.points)
@@ -311,16 +299,16 @@ def measure_rates(out_dir: str, lives: int = RATE_LIVES, key: int = 0, task_step
 
 
 def measure_confirm(out_dir: str, lives: int = LIVES, key: int = 1, task_steps: int = TASK_STEPS) -> list[dict]:
-    """Stage 3: each option of :data:`RATE_OPTIONS` at its best point of the rate sweep (in the sibling ``rates``
-    folder), in ``lives`` fresh lives of another key: the sweep's best of 54 points of 3 lives flatters itself."""
+    """Stage 3: each option at its best point of the sibling ``rates`` sweep in fresh lives of another key."""
+    # the sweep's best of 54 points of 3 lives flatters itself
     rates = read_measure(os.path.dirname(os.path.normpath(out_dir)), "rates")
     if rates is None:
-        raise ValueError(f"{out_dir}: the rate sweep has not run (its result.json is missing)")
+        raise UsageError(f"{out_dir}: the rate sweep has not run (its result.json is missing)")
     rows = []
     for option in RATE_OPTIONS:
         best = best_rates(rates, option)
         values = {field: best[field] for field in RATE_GRID}
-        numbers, _ = _composed(_config(task_steps, {**OPTIONS[option], **values}), lives, key)
+        numbers, _ = _composed({**OPTIONS[option], **values}, lives, key, task_steps)
         rows.append(dict(option=option, **values, lives=lives, **numbers, sweep_fitness=best["fitness"]))
         print(f"confirm {option:>9}: {rows[-1]['fitness']:.3f} in {lives} fresh lives, {best['fitness']:.3f} in the "
               "sweep", file=sys.stderr, flush=True)
@@ -330,8 +318,7 @@ def measure_confirm(out_dir: str, lives: int = LIVES, key: int = 1, task_steps: 
 
 def plot_bars(groups, options: list[str], path: str, title: str, threshold: float | None = None,
               ncol: int = 2) -> str:
-    """Bars of fitness per option (+-1 sd over lives), one per group (label, colour, a row per option), with each
-    bar's last tenth of the tasks (a triangle) and the level at which composition pays (``threshold``)."""
+    """Fitness per option (+-1 sd), a bar per group (label, colour, rows), its last tenth and the ``threshold``."""
     fig = new_figure(8.0, 4.0)
     ax = fig.add_subplot()
     width = 0.8 / len(groups)
@@ -356,12 +343,12 @@ def plot_bars(groups, options: list[str], path: str, title: str, threshold: floa
 MEASUREMENTS = dict(ceiling=measure_ceiling, rates=measure_rates, confirm=measure_confirm)
 
 
+@exit_codes
 def main(argv=None) -> int:
-    """A measurement (``--out DIR NAME [--lives N] [--key K] [--task-steps N]``), or the study's run (measurements,
-    then the evolutions they call for) or ``--report``."""
+    """A measurement (``--out DIR NAME [--lives N] [--key K] [--task-steps N]``), or the study's run or report."""
     argv = sys.argv[1:] if argv is None else list(argv)
     if set(argv) & set(MEASUREMENTS):
-        p = argparse.ArgumentParser(prog="python -m experiments.timescale")
+        p = Parser(prog="python -m experiments.timescale")
         p.add_argument("measurement", choices=MEASUREMENTS)
         p.add_argument("--out", dest="out_dir", metavar="OUT", required=True, help="its folder (the study's stage "
                        "gives its own: a committed one is not written over by hand)")
@@ -369,11 +356,7 @@ def main(argv=None) -> int:
             p.add_argument(option, type=int, default=argparse.SUPPRESS)
         p.add_argument("--task-steps", type=int, default=TASK_STEPS)
         options = vars(p.parse_args(argv))
-        try:
-            MEASUREMENTS[options.pop("measurement")](**options)
-        except ValueError as error:
-            print(f"error: {error}", file=sys.stderr)
-            return 2
+        MEASUREMENTS[options.pop("measurement")](**options)
         return 0
     planned = timescale_table()
     code = planned.main(argv)
