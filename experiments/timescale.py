@@ -11,11 +11,9 @@ fresh lives). Then the rows they call for (:func:`evolution_groups`), found by t
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import itertools
 import json
-import math
 import os
 import sys
 
@@ -197,7 +195,7 @@ def timescale_table(out: str = OUT, results: str = RESULTS, **fields) -> Timesca
     """The study's table as its measurements under ``out`` plan it now (no rows before they have run)."""
     # each measurement is this module's own command writing into the table's NAME; its cost in lane-steps
     lives = dict(ceiling=len(OPTIONS) * len(RULES) * LIVES, confirm=len(RATE_OPTIONS) * LIVES,
-                 rates=len(RATE_OPTIONS) * math.prod(len(values) for values in RATE_GRID.values()) * RATE_LIVES)
+                 rates=len(RATE_OPTIONS) * len(list(itertools.product(*RATE_GRID.values()))) * RATE_LIVES)
     measures = tuple(Measure(name, "", (name,), "experiments.timescale", float(lives[name] * 6 * TASK_STEPS), name)
                      for name in ("ceiling", "rates", "confirm"))
     return TimescaleTable("timescale", fields.pop("document", DOCUMENT), 1, rows=evolution_groups(out), scale=SCREEN,
@@ -289,7 +287,7 @@ def measure_rates(out_dir: str, lives: int = RATE_LIVES, key: int = 0, task_step
         best = best_rates(rows, option)
         print(f"rates {option:>9}: best {best['fitness']:.3f} at {[best[f] for f in RATE_GRID]}", file=sys.stderr,
               flush=True)
-    lambdas = list(dict.fromkeys(r["trace_lambda"] for r in rows))
+    lambdas = RATE_GRID["trace_lambda"]  # a colour each, from dark to light
     plot_bars([(f"lambda {lam}: best rates", colormaps["viridis"](0.15 + 0.7 * i / max(len(lambdas) - 1, 1)),
                 [best_rates(rows, option, lam) for option in RATE_OPTIONS]) for i, lam in enumerate(lambdas)],
               list(RATE_OPTIONS), os.path.join(out_dir, "rates.png"),
@@ -353,9 +351,9 @@ def main(argv=None) -> int:
         p.add_argument("--out", dest="out_dir", metavar="OUT", required=True, help="its folder (the study's stage "
                        "gives its own: a committed one is not written over by hand)")
         for option in ("--lives", "--key"):  # absent: the measurement's own
-            p.add_argument(option, type=int, default=argparse.SUPPRESS)
+            p.add_argument(option, type=int)
         p.add_argument("--task-steps", type=int, default=TASK_STEPS)
-        options = vars(p.parse_args(argv))
+        options = {k: v for k, v in vars(p.parse_args(argv)).items() if v is not None}
         MEASUREMENTS[options.pop("measurement")](**options)
         return 0
     planned = timescale_table()
