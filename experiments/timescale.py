@@ -11,40 +11,38 @@ fresh lives). Then the rows they call for (:func:`evolution_groups`), found by t
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import itertools
 import json
 import os
 import sys
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
-from experiments.loading import read_json
-from experiments.study import MEASURED
-from experiments.study import REPRODUCTION, RESULTS, SCREEN, Study
+from experiments import claims_study
+from experiments.claims import CLAIMS
+from experiments.figures import _band
+from experiments.loading import read_evolution, read_json, read_test
+from experiments.markdown import head, line, mean_sd
+from experiments.rule_sets import BY_NAME
+from experiments.study import MEASURED, REPRODUCTION, RESULTS, SCREEN, Study, write_measure, write_table
 from experiments.table import Measure, Row, Table
-from imrl_jax.config import ADULT_SELECTOR
+from imrl_jax import sweeps
+from imrl_jax.cli import Parser, UsageError, exit_codes
+from imrl_jax.config import ADULT_SELECTOR, make_config
+from imrl_jax.controllers import composition_ceiling, perceptron_followers
+from imrl_jax.plotting import new_figure, save, style_axis, wrap_title
 
 OUT = os.path.join(RESULTS, "timescale")
 DOCUMENT = os.path.join("docs", "TIMESCALE.md")
 #: The selector's options: name -> Config fields. "per-step" is the paper's selector.
-OPTIONS = {
-    "per-step": dict(selector_period=1),
-    "period-5": dict(selector_period=5),
-    "period-10": dict(selector_period=10),
-    "period-20": dict(selector_period=20),
-    "period-40": dict(selector_period=40),
-    "colour-20": dict(selector_period=20, selector_termination="colour"),
-    "colour-60": dict(selector_period=60, selector_termination="colour"),
-}
-#: Adult learning rules of the ceiling: the paper's one-step rules, and skills' adult selector (traces, rates).
-RULES = {
-    "paper": {},
-    "skills": dict(ADULT_SELECTOR),
-    # The selector does not learn: what choosing at random (s = 0.5 for every expert) is worth, per option.
-    "random": dict(eta_selector_actor=0.0, eta_selector_critic=0.0),
-}
+OPTIONS = {"per-step": dict(selector_period=1), **{f"period-{p}": dict(selector_period=p) for p in (5, 10, 20, 40)},
+           **{f"colour-{p}": dict(selector_period=p, selector_termination="colour") for p in (20, 60)}}
+#: Adult learning rules of the ceiling: the paper's one-step rules, skills' adult selector (traces, rates), and a
+#: selector that does not learn: what choosing at random (s = 0.5 for every expert) is worth, per option.
+RULES = dict(paper={}, skills=dict(ADULT_SELECTOR), random=dict(eta_selector_actor=0.0, eta_selector_critic=0.0))
 RULE_LABELS = dict(paper="paper's one-step selector rules", skills="skills' adult selector (traces, rates)",
                    random="selector does not learn (random choices)")
 #: A ceiling at least this high means composition pays under those rules: above what one colour follower
@@ -78,19 +76,8 @@ def best_rates(rows: list[dict], option: str, trace_lambda: float | None = None)
     return max(mine, key=lambda r: r["fitness"])
 
 
-def best_option(rows: list[dict], rules: str) -> tuple[str, float]:
-    """The option other than per-step with the highest mean ceiling under ``rules``, and that ceiling."""
-    best = max((r for r in rows if r["rules"] == rules and r["option"] != "per-step"), key=lambda r: r["fitness"])
-    return best["option"], best["fitness"]
-
-
-def option_sets(option: str) -> tuple[str, ...]:
-    """The ``--set`` assignments of an option."""
-    return tuple(f"{field}={value}" for field, value in OPTIONS[option].items())
-
-
-def evolution_groups(out: str = OUT) -> dict[str, tuple[tuple[str, ...], tuple[str, ...]]]:
-    """The evolutions the measures call for: {"PRESET+OPTION": (--set assignments, conditions)} (none before they ran).
+def evolution_groups(out: str = OUT) -> tuple[Row, ...]:
+    """The rows the measures call for, "PRESET+OPTION CONDITION" (none before they ran).
 
     Under ``skills``: LE-LS and EE-LS with the option (other than per-step) whose best point of the rate
     sweep scores highest in the confirmation's fresh lives, at that point's rates. Under ``paper``: LE-LS,
@@ -99,30 +86,19 @@ def evolution_groups(out: str = OUT) -> dict[str, tuple[tuple[str, ...], tuple[s
     """
     ceiling, confirmed = read_measure(out, "ceiling"), read_measure(out, "confirm")
     if ceiling is None or confirmed is None:
-        return {}
+        return ()
     best = max((r for r in confirmed if r["option"] != "per-step"), key=lambda r: r["fitness"])
-    tuned = tuple(f"{field}={best[field]}" for field in RATE_GRID)
-    groups = {f"skills+{best['option']}": (option_sets(best["option"]) + tuned, EVOLVED)}
-    option, value = best_option(ceiling, "paper")
-    if value >= COMPOSES:
-        groups[f"paper+{option}"] = (option_sets(option), EVOLVED + ("EE-ES",))
-    return groups
-
-
-def measures() -> tuple[Measure, ...]:
-    """The three measurements, each this module's own command writing into the table's ``NAME``; cost in
-    lane-steps."""
-    life = 6 * TASK_STEPS
-    points = len(RATE_OPTIONS) * len(list(itertools.product(*RATE_GRID.values())))
-    return tuple(Measure(name, "", (name,), "experiments.timescale", float(cost * life), name)
-                 for name, cost in (("ceiling", len(OPTIONS) * len(RULES) * LIVES), ("rates", points * RATE_LIVES),
-                                    ("confirm", len(RATE_OPTIONS) * LIVES)))
+    paper = max((r for r in ceiling if r["rules"] == "paper" and r["option"] != "per-step"), key=lambda r: r["fitness"])
+    groups = [(f"skills+{best['option']}", {**OPTIONS[best["option"]], **{f: best[f] for f in RATE_GRID}}, EVOLVED)]
+    if paper["fitness"] >= COMPOSES:
+        groups.append((f"paper+{paper['option']}", OPTIONS[paper["option"]], EVOLVED + ("EE-ES",)))
+    return tuple(Row(f"{variant} {c}", c, variant.split("+")[0], tuple(f"{k}={v}" for k, v in fields.items()))
+                 for variant, fields, conditions in groups for c in conditions)
 
 
 @dataclasses.dataclass(frozen=True)
 class TimescaleTable(Table):
-    """The study's table: its measurements first, then the rows they call for ("PRESET+OPTION CONDITION"); its
-    report compares each option's runs with the per-step selector's by the claims' rules."""
+    """The study: its measurements, then the rows they call for, compared with the per-step selector's runs."""
 
     reproduction: str = REPRODUCTION  # the per-step runs compared with, and the EE-ES and SLE an option borrows
     summary: dict | None = dataclasses.field(default=None, hash=False)  # the reproduction report's probes
@@ -137,25 +113,14 @@ class TimescaleTable(Table):
         """The rows of each option ("PRESET+OPTION"), in order."""
         return {variant: list(rows) for variant, rows in itertools.groupby(self.rows, lambda r: r.name.split(" ")[0])}
 
-    def per_step_runs(self):
-        """The per-step baseline's runs (``claims_study.RowRuns``), found by key as the claims study finds them."""
-        from experiments import claims_study
-
-        return claims_study.rule_runs(claims_study.BY_NAME[BASELINE], self.claims_out, self.reproduction)
-
-    @property
-    def claims_out(self) -> str:
-        """The claims study's folder under this table's results (where a per-step run not found would be made)."""
-        from experiments.claims_study import OUT as CLAIMS
-
-        return os.path.join(self.results, os.path.relpath(CLAIMS, RESULTS))
-
-    def option_runs(self, variant: str, finished=None):
-        """An option's runs (``claims_study.RowRuns``): its own rows' (only those ``finished``, if given), and the
-        per-step baseline's where it has none of its own: EE-ES (``paper``'s: its selector chooses every step) and
-        SLE (no selector)."""
-        runs, evolutions, tests = self.per_step_runs(), self.evolutions(), self.tests()
-        for row in self.variants()[variant]:
+    def option_runs(self, variant: str | None = None, finished=None) -> claims_study.RowRuns:
+        """An option's runs: its own rows' (only those ``finished``, if given), the per-step baseline's where it has
+        none of its own: EE-ES (``paper``'s: its selector chooses every step) and SLE; the baseline's for None."""
+        # found by key as the claims study finds them: one not found is made in its folder under this table's results
+        out = os.path.join(self.results, os.path.relpath(claims_study.OUT, RESULTS))
+        runs = claims_study.rule_runs(BY_NAME[BASELINE], out, self.reproduction)
+        evolutions, tests = self.evolutions(), self.tests()
+        for row in self.variants().get(variant, ()):
             for folders in runs:  # evolutions, tests, and the reproduction's variant of each borrowed run
                 folders.pop(row.condition, None)
             if finished is None or row.condition in finished:
@@ -163,33 +128,26 @@ class TimescaleTable(Table):
         return runs
 
     def claims(self) -> dict:
-        """The per-step baseline's claims and each option's: {variant: label, progress, measured}; an option's
-        evolutions are measured once finished (a running one's population is not its last), its best genomes
-        living fresh lives and probed; a claim that needs a run still to come is n/a."""
-        from experiments.claims_study import BY_NAME, measure_rule, measure_runs, reproduction_summary
-
-        summary = self.summary if self.summary is not None else reproduction_summary(self.document)
+        """The per-step baseline's claims and each option's: {variant: label, progress, measured}; an option's own
+        runs are measured once finished (a running one's population is not its last): a claim needing one is n/a."""
+        summary = self.summary if self.summary is not None else claims_study.reproduction_summary(self.document)
+        whole = BY_NAME[BASELINE].sle_noise_steps == 0  # SLE's noise annealed over the whole test
         rows = {BASELINE: dict(label=f"{BASELINE}, per-step selector (the paper's)", progress=None,
-                               measured=measure_rule(BY_NAME[BASELINE], summary, self.claims_out, self.reproduction))}
+                               measured=claims_study.measure_runs(BASELINE, self.option_runs(), summary, whole))}
         measured = {m["row"]: m for m in self.measure()}
         for variant, own in self.variants().items():
             finished = {r.condition for r in own if "final_mean" in measured[r.name]}
             rows[variant] = dict(label=variant.replace("+", ", ") + " selector", progress={
                 r.condition: (measured[r.name]["generations"], measured[r.name]["seeds"])
-                if measured[r.name]["generations"] else None for r in own},
-                measured=measure_runs(variant, self.option_runs(variant, finished), summary) if finished else None)
+                if measured[r.name]["generations"] else None for r in own}, measured=claims_study.measure_runs(
+                    variant, self.option_runs(variant, finished), summary) if finished else None)
         return rows
 
     def figure(self, path: str) -> str:
-        """Fig. 3a and 3b side by side: best fitness per generation and the learning tests' curves, per-step
-        (dashed) against each option (solid), LE-LS and EE-LS."""
+        """Fig. 3a and 3b side by side for LE-LS and EE-LS: per-step (dashed) against each option (solid)."""
         from matplotlib.ticker import MaxNLocator
 
-        from experiments.figures import _band
-        from experiments.loading import read_evolution, read_test
-        from imrl_jax.plotting import new_figure, save, style_axis
-
-        sources = [(f"{BASELINE}, per-step", self.per_step_runs(), "--")]
+        sources = [(f"{BASELINE}, per-step", self.option_runs(), "--")]
         sources += [(variant.replace("+", ", "), self.option_runs(variant), "-") for variant in self.variants()]
         fig = new_figure(12.0, 4.0)
         evolution_ax, test_ax = fig.subplots(1, 2)
@@ -218,19 +176,14 @@ class TimescaleTable(Table):
         return save(fig, path)
 
     def report(self) -> int:
-        """Measure what has finished; write evolutions.json and evolutions.png under ``out`` and the tables into
-        the document."""
-        from experiments.study import write_table
-
+        """Measure what has finished: evolutions.json and evolutions.png under ``out``, the document's tables."""
         if not self.rows:
             print(f"error: {self.out}: the measurements have not run, so no evolution is planned yet", file=sys.stderr)
             return 2
         rows = self.claims()
-        with open(os.path.join(self.out, "evolutions.json"), "w") as f:
+        with open(os.path.join(self.out, "evolutions.json"), "w") as f:  # json writes the claims' numbers as keys
             json.dump({variant: dict(label=row["label"], progress=row["progress"],
-                                     claims=None if row["measured"] is None else
-                                     {str(k): v for k, v in row["measured"]["claims"].items()},
-                                     fresh=None if row["measured"] is None else row["measured"]["fresh"])
+                                     **{k: (row["measured"] or {}).get(k) for k in ("claims", "fresh")})
                        for variant, row in rows.items()}, f, indent=2, default=str)
         drawn = self.figure(os.path.join(self.out, "evolutions.png"))
         write_table(self.document, report_table(rows), REPORT_START, REPORT_END)
@@ -240,35 +193,34 @@ class TimescaleTable(Table):
 
 def timescale_table(out: str = OUT, results: str = RESULTS, **fields) -> TimescaleTable:
     """The study's table as its measurements under ``out`` plan it now (no rows before they have run)."""
-    rows = tuple(Row(f"{variant} {condition}", condition, variant.split("+")[0], sets)
-                 for variant, (sets, names) in evolution_groups(out).items() for condition in names)
-    return TimescaleTable("timescale", fields.pop("document", DOCUMENT), 1, rows=rows, scale=SCREEN, out=out,
-                          results=results, measures=measures(), **fields)
+    # each measurement is this module's own command writing into the table's NAME; its cost in lane-steps
+    lives = dict(ceiling=len(OPTIONS) * len(RULES) * LIVES, confirm=len(RATE_OPTIONS) * LIVES,
+                 rates=len(RATE_OPTIONS) * len(list(itertools.product(*RATE_GRID.values()))) * RATE_LIVES)
+    measures = tuple(Measure(name, "", (name,), "experiments.timescale", float(lives[name] * 6 * TASK_STEPS), name)
+                     for name in ("ceiling", "rates", "confirm"))
+    return TimescaleTable("timescale", fields.pop("document", DOCUMENT), 1, rows=evolution_groups(out), scale=SCREEN,
+                          out=out, results=results, measures=measures, **fields)
+
+
+def _cells(row: dict, condition: str) -> tuple:
+    """A row's cells for one condition: its numbers once its evolution has finished, its progress before."""
+    measured = row["measured"]
+    if measured is None or condition not in measured["evolution"]:
+        done = (row["progress"] or {}).get(condition)
+        return ("not started" if done is None else f"{done[1]} x {done[0]} of {SCREEN['generations']}, running",
+                "-", "-", "-", "-")
+    e, t, f = (measured[part].get(condition) for part in ("evolution", "learning_tests", "fresh"))
+    return (f"{len(e['final_best_per_seed'])} x {e['generations']}", mean_sd(e["final_best_mean"], e["final_best_sd"]),
+            "-" if f is None else f"{f['fresh']:.3f} (sd {f['fresh_sd_over_seeds']:.3f} over seeds)",
+            e["plateau_generation"],
+            "-" if t is None else f"{mean_sd(t['steady_mean'], t['steady_sd'])} ({t['num_runs']} runs)")
 
 
 def report_table(rows: dict) -> str:
     """Markdown: per row and condition the recorded and fresh fitness and the steady state, then claims 1-7."""
-    from experiments.claims import CLAIMS
-    from experiments.markdown import head, mean_sd, line
-
     lines = head("selector", "condition", "seeds x generations", "final best fitness (recorded)",
                  "fresh lives of each seed's best", "plateau generation", "steady state (learning test)")
-    for row in rows.values():
-        measured = row["measured"]
-        for condition in EVOLVED:
-            if measured is None or condition not in measured["evolution"]:
-                done = (row["progress"] or {}).get(condition)
-                size = "not started" if done is None else f"{done[1]} x {done[0]} of {SCREEN['generations']}, running"
-                lines.append(line(row["label"], condition, size, "-", "-", "-", "-"))
-                continue
-            e, t = measured["evolution"].get(condition), measured["learning_tests"].get(condition)
-            f = measured["fresh"].get(condition)
-            lines.append(line(row["label"], condition, f"{len(e['final_best_per_seed'])} x {e['generations']}",
-                               mean_sd(e["final_best_mean"], e["final_best_sd"]),
-                               "-" if f is None else f"{f['fresh']:.3f} (sd {f['fresh_sd_over_seeds']:.3f} over seeds)",
-                               e["plateau_generation"],
-                               "-" if t is None else
-                               f"{mean_sd(t['steady_mean'], t['steady_sd'])} ({t['num_runs']} runs)"))
+    lines += [line(row["label"], condition, *_cells(row, condition)) for row in rows.values() for condition in EVOLVED]
     short = {"holds": "**holds**", "partly": "partly", "does not hold": "no", "n/a": "n/a"}
     claims = [None if row["measured"] is None else row["measured"]["claims"] for row in rows.values()]
     lines += ["", *head("claim", *(row["label"] for row in rows.values()))]
@@ -277,91 +229,65 @@ def report_table(rows: dict) -> str:
               for k in range(1, 8)]
     return "\n".join(lines)
 
-
 # ----------------------------------------------------------------------------- the measurements
 
-def _composed(config, lives: int, key: int) -> tuple[dict, object]:
-    """Ideal followers composed by ``config``'s selector in ``lives`` lives: the mean fitness, its sd over lives and
-    the last tenth of each task (its last of 10 bins: the composition once learned); and the result."""
-    import jax
-
-    from imrl_jax.controllers import composition_ceiling
-
-    result = composition_ceiling(jax.random.key(key), config, lives)
-    return _numbers(config, result, np.asarray(result.fitness)), result
-
-
-def _numbers(config, result, fitness: np.ndarray) -> dict:
-    """Fitness over lives (the last axis) and each task's last tenth, averaged over everything but the first axes."""
-    from imrl_jax.sweeps import normalised_curve
-
-    last = normalised_curve(config, result.reward_curve)[..., -1]
+def _numbers(config, result) -> dict:
+    """Fitness over lives (the last axis) and each task's last tenth (the composition once learned), per point."""
+    fitness, last = np.asarray(result.fitness), sweeps.normalised_curve(config, result.reward_curve)[..., -1]
     axes = tuple(range(fitness.ndim - 1, last.ndim))
     return dict(fitness=fitness.mean(-1), fitness_sd=fitness.std(-1), last_tenth=last.mean(axes))
 
 
+def _composed(fields: dict, lives: int, key: int, task_steps: int) -> tuple[dict, object]:
+    """Ideal followers composed by the paper's EE-LS selector with ``fields``: :func:`_numbers`, and the result."""
+    config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **fields)
+    result = composition_ceiling(jax.random.key(key), config, lives)
+    return {k: float(v) for k, v in _numbers(config, result).items()}, result
+
+
 def _write_measure(out_dir: str, name: str, rows: list[dict], lives: int, key: int, **recorded) -> None:
     """A measurement's NAME.csv, then its result.json with its rows (the stage is done)."""
-    from experiments.study import write_measure
-
     write_measure(out_dir, name, rows, f"python -m experiments.timescale --out {out_dir} {name} --lives {lives} "
                   f"--key {key}", **recorded, rows=rows)
 
 
 def measure_ceiling(out_dir: str, lives: int = LIVES, key: int = 0, task_steps: int = TASK_STEPS) -> list[dict]:
-    """Stage 1: the composition ceiling of every option under every rule set; writes ceiling.csv, the figure,
-    and result.json last."""
-    from imrl_jax.config import make_config
-
+    """Stage 1: every option's ceiling under every rule set; writes ceiling.csv, the figure, then result.json."""
     rows = []
     for rules, option in itertools.product(RULES, OPTIONS):
-        config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **RULES[rules],
-                             **OPTIONS[option])
-        numbers, result = _composed(config, lives, key)
+        numbers, result = _composed({**RULES[rules], **OPTIONS[option]}, lives, key, task_steps)
         selections = np.asarray(result.adult_selections).sum(axis=2)  # (lives, tasks, K)
-        rows.append(dict(rules=rules, option=option, lives=lives, task_steps=task_steps,
-                         **{k: float(v) for k, v in numbers.items()},
+        rows.append(dict(rules=rules, option=option, lives=lives, task_steps=task_steps, **numbers,
                          **{f"task_{t + 1}": float(v) for t, v in enumerate(np.asarray(result.performance).mean(0))},
                          # the mean share of a task's steps its most used expert was in control (1: one does it all)
                          top_share=float((selections.max(-1) / selections.sum(-1)).mean())))
         print(f"ceiling ({len(rows)}/{len(RULES) * len(OPTIONS)}) {rules:>6} {option:>9}: {rows[-1]['fitness']:.3f}",
               file=sys.stderr, flush=True)
-    os.makedirs(out_dir, exist_ok=True)
     plot_bars([(RULE_LABELS.get(rules, rules), ("0.35", "tab:orange", "0.75")[i % 3],
-                [next(r for r in rows if r["rules"] == rules and r["option"] == o) for o in OPTIONS])
-               for i, rules in enumerate(RULES)], list(OPTIONS), os.path.join(out_dir, "ceiling.png"),
-              "Ideal colour followers composed by a learning selector, per option of the selector "
-              f"({task_steps:,} steps per task)", threshold=COMPOSES)
+                [r for r in rows if r["rules"] == rules]) for i, rules in enumerate(RULES)], list(OPTIONS),
+              os.path.join(out_dir, "ceiling.png"), "Ideal colour followers composed by a learning selector, per "
+              f"option of the selector ({task_steps:,} steps per task)", threshold=COMPOSES)
     _write_measure(out_dir, "ceiling", rows, lives, key, options=OPTIONS, rules=RULES)
     return rows
 
 
 def measure_rates(out_dir: str, lives: int = RATE_LIVES, key: int = 0, task_steps: int = TASK_STEPS) -> list[dict]:
-    """Stage 2: the ceiling over a grid of the selector's trace decay and rates (:data:`RATE_GRID`), per option of
-    :data:`RATE_OPTIONS`: one compiled program per option, every point living the same lanes with the same keys."""
-    import jax
-    import jax.numpy as jnp
+    """Stage 2: the ceiling over :data:`RATE_GRID` per option: one program per option, every point the same lanes."""
     from matplotlib import colormaps
-
-    from imrl_jax import sweeps
-    from imrl_jax.config import make_config
-    from imrl_jax.controllers import perceptron_followers
 
     rows = []
     for option in RATE_OPTIONS:
         config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **OPTIONS[option])
-        sweep = sweeps.grid(config, **RATE_GRID)
-        genome = perceptron_followers(config).reshape(-1)
-        result = sweeps.make_lifetime_sweep(config)(jax.random.key(key), jnp.broadcast_to(genome, (lives,) + genome.shape),
-                                                    sweep.points)
-        numbers = _numbers(config, result, np.asarray(result.fitness))  # per point: (points, lives) fitness
+        sweep, genome = sweeps.grid(config, **RATE_GRID), perceptron_followers(config).reshape(-1)
+        result = sweeps.make_lifetime_sweep(config)(jax.random.key(key), jnp.broadcast_to(
+            genome, (lives,) + genome.shape), sweep.points)
+        numbers = _numbers(config, result)  # per point: (points, lives) fitness
         rows += [dict(option=option, **settings, lives=lives, **{k: float(v[i]) for k, v in numbers.items()})
                  for i, settings in enumerate(sweep.settings)]
         best = best_rates(rows, option)
         print(f"rates {option:>9}: best {best['fitness']:.3f} at {[best[f] for f in RATE_GRID]}", file=sys.stderr,
               flush=True)
-    os.makedirs(out_dir, exist_ok=True)
-    lambdas = list(dict.fromkeys(r["trace_lambda"] for r in rows))
+    lambdas = RATE_GRID["trace_lambda"]  # a colour each, from dark to light
     plot_bars([(f"lambda {lam}: best rates", colormaps["viridis"](0.15 + 0.7 * i / max(len(lambdas) - 1, 1)),
                 [best_rates(rows, option, lam) for option in RATE_OPTIONS]) for i, lam in enumerate(lambdas)],
               list(RATE_OPTIONS), os.path.join(out_dir, "rates.png"),
@@ -371,22 +297,17 @@ def measure_rates(out_dir: str, lives: int = RATE_LIVES, key: int = 0, task_step
 
 
 def measure_confirm(out_dir: str, lives: int = LIVES, key: int = 1, task_steps: int = TASK_STEPS) -> list[dict]:
-    """Stage 3: each option of :data:`RATE_OPTIONS` at its best point of the rate sweep (in the sibling ``rates``
-    folder), in ``lives`` fresh lives of another key: the sweep's best of 54 points of 3 lives flatters itself."""
-    from imrl_jax.config import make_config
-
+    """Stage 3: each option at its best point of the sibling ``rates`` sweep in fresh lives of another key."""
+    # the sweep's best of 54 points of 3 lives flatters itself
     rates = read_measure(os.path.dirname(os.path.normpath(out_dir)), "rates")
     if rates is None:
-        raise ValueError(f"{out_dir}: the rate sweep has not run (its result.json is missing)")
+        raise UsageError(f"{out_dir}: the rate sweep has not run (its result.json is missing)")
     rows = []
     for option in RATE_OPTIONS:
         best = best_rates(rates, option)
         values = {field: best[field] for field in RATE_GRID}
-        config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **OPTIONS[option],
-                             **values)
-        numbers, _ = _composed(config, lives, key)
-        rows.append(dict(option=option, **values, lives=lives, **{k: float(v) for k, v in numbers.items()},
-                         sweep_fitness=best["fitness"]))
+        numbers, _ = _composed({**OPTIONS[option], **values}, lives, key, task_steps)
+        rows.append(dict(option=option, **values, lives=lives, **numbers, sweep_fitness=best["fitness"]))
         print(f"confirm {option:>9}: {rows[-1]['fitness']:.3f} in {lives} fresh lives, {best['fitness']:.3f} in the "
               "sweep", file=sys.stderr, flush=True)
     _write_measure(out_dir, "confirm", rows, lives, key)
@@ -395,10 +316,7 @@ def measure_confirm(out_dir: str, lives: int = LIVES, key: int = 1, task_steps: 
 
 def plot_bars(groups, options: list[str], path: str, title: str, threshold: float | None = None,
               ncol: int = 2) -> str:
-    """Bars of fitness per option (+-1 sd over lives), one per group (label, colour, a row per option), with each
-    bar's last tenth of the tasks (a triangle) and the level at which composition pays (``threshold``)."""
-    from imrl_jax.plotting import new_figure, save, wrap_title
-
+    """Fitness per option (+-1 sd), a bar per group (label, colour, rows), its last tenth and the ``threshold``."""
     fig = new_figure(8.0, 4.0)
     ax = fig.add_subplot()
     width = 0.8 / len(groups)
@@ -423,41 +341,32 @@ def plot_bars(groups, options: list[str], path: str, title: str, threshold: floa
 MEASUREMENTS = dict(ceiling=measure_ceiling, rates=measure_rates, confirm=measure_confirm)
 
 
-def measure_main(argv: list[str]) -> int:
-    """One measurement's command line: ``--out DIR NAME [--lives N] [--key K] [--task-steps N]``."""
-    p = argparse.ArgumentParser(prog="python -m experiments.timescale")
-    p.add_argument("measurement", choices=MEASUREMENTS)
-    p.add_argument("--out", required=True, help="its folder (the study's stage gives its own: a committed one is "
-                                              "not written over by hand)")
-    p.add_argument("--lives", type=int)
-    p.add_argument("--key", type=int)
-    p.add_argument("--task-steps", type=int, default=TASK_STEPS)
-    args = p.parse_args(argv)
-    given = {k: v for k, v in dict(lives=args.lives, key=args.key).items() if v is not None}
-    try:
-        MEASUREMENTS[args.measurement](args.out, task_steps=args.task_steps, **given)
-    except ValueError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    return 0
-
-
-def all_stages():
-    """Every stage planned so far (the evolutions once the measurements have run), and their scale."""
-    return timescale_table().all_stages()
-
-
+@exit_codes
 def main(argv=None) -> int:
-    """A measurement, or the study's run (measurements, then the evolutions they call for) or ``--report``."""
+    """A measurement (``--out DIR NAME [--lives N] [--key K] [--task-steps N]``), or the study's run or report."""
     argv = sys.argv[1:] if argv is None else list(argv)
     if set(argv) & set(MEASUREMENTS):
-        return measure_main(argv)
+        p = Parser(prog="python -m experiments.timescale")
+        p.add_argument("measurement", choices=MEASUREMENTS)
+        p.add_argument("--out", dest="out_dir", metavar="OUT", required=True, help="its folder (the study's stage "
+                       "gives its own: a committed one is not written over by hand)")
+        for option in ("--lives", "--key"):  # absent: the measurement's own
+            p.add_argument(option, type=int)
+        p.add_argument("--task-steps", type=int, default=TASK_STEPS)
+        options = {k: v for k, v in vars(p.parse_args(argv)).items() if v is not None}
+        MEASUREMENTS[options.pop("measurement")](**options)
+        return 0
     planned = timescale_table()
     code = planned.main(argv)
     if code or planned.rows or "--report" in argv:
         return code
     measured = timescale_table()  # the measurements have run since: the evolutions they call for
     return measured.main(argv) if measured.rows else code
+
+
+def all_stages():
+    """Every stage planned so far (the evolutions once the measurements have run), and their scale."""
+    return timescale_table().all_stages()
 
 
 #: The studies of this module (python -m experiments finds them).

@@ -196,7 +196,7 @@ def test_report_compares_the_option_with_the_per_step_runs(tmp_path):
     _measured(out)  # colour-60 is evolved
     table = study.timescale_table(out, results=str(tmp_path), reproduction=reproduction, summary={},
                                   document=str(document))
-    per_step = table.per_step_runs()  # where the per-step runs' keys find them under tmp_path
+    per_step = table.option_runs()  # the per-step runs alone, where their keys find them under tmp_path
     assert all(folder.startswith(str(tmp_path)) for folder in [*per_step.evolutions.values(), *per_step.tests.values()])
     for condition, curves in (("LE-LS", constant(0.8, 0.76)), ("EE-LS", constant(0.4, 0.5)),
                               ("EE-ES", constant(0.3, 0.4))):
