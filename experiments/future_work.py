@@ -4,13 +4,11 @@
     python -m experiments list future-work      # the stages, done or to run
     python -m experiments report future-work    # the tables and figures of whatever has finished
 
-Each row is a condition of the table (``imrl_jax.conditions``) under a preset and ``--set`` overrides,
-evolved at the paper's lengths (5 seeds x 100 generations, then its 5 best x 4 learning tests) or, not
-evolved, tested from scratch (5 runs x 5 x 4), beside the reproduction's paper runs (10 seeds); each
-run is found by its key wherever a study made it (the claims study's claim-8 runs: LE-LS-6). The report
-measures every finished row (final best fitness, its spread and plateau, fresh lives, steady state),
-(c)'s evolved learning values, (d)'s expressed experts, judges the paper's four questions
-(``claims.FUTURE``) and draws a figure per question.
+Each row is a condition (``imrl_jax.conditions``) under a preset and ``--set`` overrides, evolved at the paper's
+lengths (5 seeds x 100 generations, then its 5 best x 4 learning tests) or tested from scratch (5 runs x 5 x 4),
+beside the reproduction's paper runs (10 seeds); each run is found by its key wherever a study made it. The report
+measures every finished row, (c)'s evolved learning values and (d)'s expressed experts, judges the paper's four
+questions (``claims.FUTURE``) and draws a figure per question.
 """
 
 from __future__ import annotations
@@ -51,7 +49,6 @@ STUDIED = (
     (Row("LE-LS-P", "LE-LS-P", "skills"), "(c) evolved learning parameters"),
     (Row("LE-LS-PC", "LE-LS-PC", "skills"), "(c) evolved learning parameters and childhood length"),
     (Row("LE-LS-N6", "LE-LS-N", "skills", ("num_experts=6",)), "(d) up to 6 experts, each expressed by a gene"),
-    # the claims study's claim-8 run: found by its key
     (Row("LE-LS-6", "LE-LS", "skills", ("num_experts=6",)),
      "(d)'s comparison: 6 experts, all expressed (the claims study's claim-8 run)"),
     # The same questions under the claims map's chosen rule set (docs/CLAIMS.md, "The decision"): run after skills'.
@@ -60,7 +57,6 @@ STUDIED = (
      "(b) under `faithful`, the noise over the whole test (its SLE's reading)"),
     (Row("LE-LS-P-faithful", "LE-LS-P", "faithful"), "(c) under `faithful`"),
     (Row("LE-LS-N6-faithful", "LE-LS-N", "faithful", ("num_experts=6",)), "(d) under `faithful`"),
-    # claim 8's paper-selector run: the same lives
     (Row("LE-LS-6-faithful", "LE-LS", "faithful", ("num_experts=6",)),
      "(d)'s comparison under `faithful` (the claims study's claim-8 run of paper-selector, the same lives)"))
 #: Every row the report shows, in order, with what it is: the reproduction's first, then the study's.
@@ -74,8 +70,7 @@ JUDGED = (
     ("b", "skills, noise over 100,000 cycles", ("EXT-LS", "skills LE-LS", "skills SLE")),
     ("b", "skills, noise over the whole test", ("EXT-LS-whole", "skills LE-LS", "skills SLE-whole")),
     ("b", "faithful", ("EXT-LS-faithful", "faithful LE-LS", "faithful SLE")),
-    ("c", "skills", ("LE-LS-P",)),
-    ("c", "skills, childhood length evolved", ("LE-LS-PC",)),
+    ("c", "skills", ("LE-LS-P",)), ("c", "skills, childhood length evolved", ("LE-LS-PC",)),
     ("c", "faithful", ("LE-LS-P-faithful",)),
     ("d", "skills", ("LE-LS-N6", "skills LE-LS", "LE-LS-6")),
     ("d", "faithful", ("LE-LS-N6-faithful", "faithful LE-LS", "LE-LS-6-faithful")))
@@ -90,8 +85,7 @@ STYLES = {"LE-LS-6": dict(color="0.3", lw=1.2, ls="-."), "EXT-LS-whole": dict(co
 
 
 def read_traits(run_dir: str | None) -> dict | None:
-    """An evolution's evolved values from its history.csv: names and (generations, seeds, values, 2) (population
-    mean, the best's), or None without any."""
+    """An evolution's evolved values from history.csv: names, (generations, seeds, values, 2) (mean, the best's)."""
     from experiments.loading import history_columns
 
     path = os.path.join(run_dir or "", "history.csv")
@@ -138,13 +132,9 @@ def _test(out_dir: str) -> dict | None:
                 curve_steps=test["steps"].tolist(), curve_mean=test["mean"].tolist())
 
 
-def _traits(evolution: dict | None) -> dict | None:
-    """A finished evolution's evolved values (:func:`read_traits`), None before it has finished."""
-    return read_traits(evolution["dir"]) if (evolution or {}).get("finished") else None
-
-
-def _last_values(traits: dict | None) -> dict | None:
-    """(c): the evolved values of the last generation, mean over seeds: {name: dict(mean, best, best_per_seed)}."""
+def _last_values(evolution: dict | None) -> dict | None:
+    """(c): a finished evolution's values of the last generation, mean over seeds: {name: dict(mean, best, ...)}."""
+    traits = read_traits(evolution["dir"]) if (evolution or {}).get("finished") else None
     if traits is None:
         return None
     values = traits["values"][-1]  # (seeds, values, 2)
@@ -153,9 +143,9 @@ def _last_values(traits: dict | None) -> dict | None:
             for t, n in enumerate(traits["names"])}
 
 
-def _expressed(traits: dict | None) -> list[dict] | None:
-    """(d): at generations 0, 10, 25, 50 and the last, the expressed experts (population mean, the best's) and the
-    population's share expressing each number, mean over seeds."""
+def _expressed(evolution: dict | None) -> list[dict] | None:
+    """(d): at generations 0, 10, 25, 50 and the last, the experts expressed (mean, the best's) and their shares."""
+    traits = read_traits(evolution["dir"]) if (evolution or {}).get("finished") else None
     if traits is None or "expressed_experts" not in traits["names"]:
         return None
     names, values = traits["names"], traits["values"].mean(1)  # (generations, values, 2)
@@ -168,9 +158,8 @@ def _expressed(traits: dict | None) -> list[dict] | None:
 
 
 def colour_sets(followed: list[list[int]] | None) -> dict | None:
-    """From the colour each probed genome's experts follow (-1: none, or not expressed), how many genomes
-    follow each set of colours (``"blue + red"``; ``"none"``), the mean number of experts following one and of
-    distinct colours followed (claim 7's colours followed)."""
+    """From the colour each probed genome's experts follow (-1: none): the genomes per set of colours followed
+    (``"blue + red"``, ``"none"``), the mean number of experts following one and of colours followed (claim 7's)."""
     from collections import Counter
 
     from experiments.relive import colours_followed
@@ -186,8 +175,7 @@ def colour_sets(followed: list[list[int]] | None) -> dict | None:
 
 def measure(rows: dict[str, Row], evolutions: dict, tests: dict, summary: dict,
             reproduction: str = REPRODUCTION) -> dict:
-    """Every row of :data:`ABOUT` (its evolution and test folders, None where it has none), (c)'s evolved learning
-    values and (d)'s experts, from what finished; ``summary``: the reproduction's report (its rows' fresh lives)."""
+    """Every row of :data:`ABOUT`, (c)'s values and (d)'s experts; ``summary``: the reproduction's report."""
     from experiments.claims import _difference
     from experiments.claims_study import reproduction_variant
     from experiments.relive import reproduction_fresh, run_fresh, run_probe
@@ -215,7 +203,7 @@ def measure(rows: dict[str, Row], evolutions: dict, tests: dict, summary: dict,
     names = networks.trait_names(make_config("skills", condition="LE-LS-PC"))
     hand = {preset: {n: float(config.childhood_steps if n == "childhood_length" else getattr(config, n)) for n in names}
             for preset, config in ((p, make_config(p)) for p in ("skills", "paper", "faithful"))}
-    evolved = {name: _last_values(_traits(by_name[name])) for name in ("LE-LS-P", "LE-LS-PC", "LE-LS-P-faithful")}
+    evolved = {name: _last_values(by_name[name]) for name in ("LE-LS-P", "LE-LS-PC", "LE-LS-P-faithful")}
     # (d): the expressed experts over generations, and the final best against 6 experts all expressed and 3
     final = lambda name: (by_name[name] or {}).get("final_best_per_seed")  # noqa: E731
     experts = []
@@ -225,7 +213,7 @@ def measure(rows: dict[str, Row], evolutions: dict, tests: dict, summary: dict,
                          **dict(zip(("difference", "standard_error"), _difference(final(row), final(o)))))
                     for o in others if final(row) and final(o)]
         experts.append(dict(row=row, against=list(others), compared=compared,
-                            generations=_expressed(_traits(by_name[row]))))
+                            generations=_expressed(by_name[row])))
     measured = dict(rows=measured_rows, learning_values=dict(names=list(names), hand=hand, evolved=evolved),
                     experts=experts)
     measured["verdicts"] = judge(measured)
@@ -250,24 +238,21 @@ def judge(measured: dict) -> list[dict]:
         t = rows[name]["test"]
         return None if t is None else dict(steps=t["curve_steps"], mean=t["curve_mean"], per_run=t["steady_per_run"])
 
+    def hand_values(row):
+        evolved = values["evolved"].get(row) or {}
+        return claims.claim_hand_values({n: v["best_per_seed"] for n, v in evolved.items()}, values["hand"]["skills"],
+                                        values["hand"]["paper"])
+
     def three_enough(row, *others):
         kept = experts.get(row)
         return claims.claim_three_enough(kept[-1]["best_per_seed"] if kept else None, final(row), *map(final, others))
 
     rules = dict(a=lambda actors, *criteria: claims.claim_criteria_easier(  # the criterion rows that finished
         {n: evolution(n) for n in criteria if final(n)}, evolution(actors)),
-        b=lambda *names: claims.claim_motivation_needed(*map(test, names)),
-        c=lambda row: claims.claim_hand_values({n: v["best_per_seed"] for n, v in (values["evolved"].get(row) or {})
-                                                .items()}, values["hand"]["skills"], values["hand"]["paper"]),
-        d=three_enough)
+        b=lambda *names: claims.claim_motivation_needed(*map(test, names)), c=hand_values, d=three_enough)
     # (a) names the criterion rows not finished until they have
     return [dict(question=q, rules=rule, rows=list(names), missing=[n for n in names[1:] if q == "a" and not final(n)],
                  **rules[q](*names)) for q, rule, names in JUDGED]
-
-
-def _value(v: float) -> str:
-    """A learning value for the table: 3 significant digits, a count of steps in full."""
-    return f"{v:,.0f}" if abs(v) >= 1000 else f"{v:.3g}"
 
 
 def _row_cells(r: dict) -> list[str]:
@@ -300,17 +285,34 @@ def table(measured: dict) -> str:
               "", "(c) The evolved learning values, last generation, mean over seeds, beside the values set by hand:",
               ""]
     values = measured["learning_values"]
+    value = lambda v: f"{v:,.0f}" if abs(v) >= 1000 else f"{v:.3g}"  # noqa: E731 (a count of steps in full)
     lines += head("value", *(f"{p} (by hand)" for p in values["hand"]),
                   *(f"{r}: {w}" for r in values["evolved"] for w in ("population mean", "the best's")))
     for name in values["names"]:
-        cells = [_value(hand[name]) for hand in values["hand"].values()]
+        cells = [value(hand[name]) for hand in values["hand"].values()]
         for evolved in values["evolved"].values():
             # a value the row does not evolve (LE-LS-P's childhood) is the preset's
             cells += ([NOT_RUN] * 2 if evolved is None else
-                      [_value(evolved[name][w]) if name in evolved else "-" for w in ("mean", "best")])
+                      [value(evolved[name][w]) if name in evolved else "-" for w in ("mean", "best")])
         lines.append(line(name, *cells))
-    for experts in measured["experts"]:
-        lines += _experts_lines(experts, measured["rows"])
+    for experts in measured["experts"]:  # (d): the experts expressed over generations, its final best against others
+        row, shown, compared = experts["row"], experts["generations"], experts["compared"]
+        lines += ["", f"(d) {row}: the experts expressed, mean over seeds:", ""]
+        if shown is None:
+            lines.append(f"{row}: {NOT_RUN}.")
+        else:
+            lines += head("generation", "expressed: population mean", "the best's",
+                          *(f"share with {k}" for k in shown[0]["shares"]))
+            lines += [line(g["generation"], f"{g['mean']:.2f}", f"{g['best']:.2f}",
+                           *(f"{s:.3f}" for s in g["shares"].values())) for g in shown]
+            if not compared:
+                lines.append(f"\nIts final best fitness against {' and '.join(experts['against'])}: {NOT_RUN}.")
+        if compared:
+            mine = next(r for r in measured["rows"] if r["name"] == row)["evolution"]
+            lines += ["", *head(f"final best fitness of {row} ({mine['seeds']} seeds)", "its", "theirs", "their seeds",
+                                "difference", "se")]
+            lines += [line(f"against {c['name']}", f"{mine['final_best']:.3f}", f"{c['final_best']:.3f}", c["seeds"],
+                           f"{c['difference']:+.3f}", f"{c['standard_error']:.3f}") for c in compared]
     lines += ["", "The paper's questions, each with its verdict:", "",
               *head("question", "rules", "rows", "verdict", "measured")]
     for i, v in enumerate(measured["verdicts"]):  # the question named on its first verdict
@@ -338,28 +340,6 @@ def _colour_lines(rows: list[dict]) -> list[str]:
                       ("distinct colours followed, per genome", lambda c: f"{c['colours']:.2f}"),
                       ("the colours followed: genomes", lambda c: ", ".join(f"{k} {n}" for k, n in c["sets"].items()))),
                      probed)]
-
-
-def _experts_lines(experts: dict, rows: list[dict]) -> list[str]:
-    """(d)'s tables of one row: the experts expressed over generations, and its final best against the others."""
-    row, shown, compared = experts["row"], experts["generations"], experts["compared"]
-    lines = ["", f"(d) {row}: the experts expressed, mean over seeds:", ""]
-    if shown is None:
-        lines.append(f"{row}: {NOT_RUN}.")
-    else:
-        lines += head("generation", "expressed: population mean", "the best's",
-                      *(f"share with {k}" for k in shown[0]["shares"]))
-        lines += [line(g["generation"], f"{g['mean']:.2f}", f"{g['best']:.2f}",
-                       *(f"{s:.3f}" for s in g["shares"].values())) for g in shown]
-        if not compared:
-            lines.append(f"\nIts final best fitness against {' and '.join(experts['against'])}: {NOT_RUN}.")
-    if compared:
-        mine = next(r for r in rows if r["name"] == row)["evolution"]
-        lines += ["", *head(f"final best fitness of {row} ({mine['seeds']} seeds)", "its", "theirs", "their seeds",
-                            "difference", "se")]
-        lines += [line(f"against {c['name']}", f"{mine['final_best']:.3f}", f"{c['final_best']:.3f}", c["seeds"],
-                       f"{c['difference']:+.3f}", f"{c['standard_error']:.3f}") for c in compared]
-    return lines
 
 
 def _style(row: dict) -> dict:
