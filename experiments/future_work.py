@@ -255,19 +255,6 @@ def judge(measured: dict) -> list[dict]:
                  **rules[q](*names)) for q, rule, names in JUDGED]
 
 
-def _row_cells(r: dict) -> list[str]:
-    """The main table's cells of a row after its name, condition and description."""
-    e, t = r["evolution"], r["test"]
-    if not (e or {}).get("finished"):
-        cells = (["not evolved", "-"] if not r["evolved"] else ["-", NOT_RUN] if e is None else
-                 [f"{e['seeds']} x {e['generations']} of {e['planned']}", "running"]) + ["-"] * 3
-    else:
-        cells = [f"{e['seeds']} x {e['generations']}", f"{e['final_best']:.3f}", f"{e['final_best_sd']:.3f}",
-                 "-" if e.get("fresh") is None else f"{e['fresh']:.3f} ({e['fresh_sd']:.3f})",
-                 "-" if e["plateau_generation"] is None else str(e["plateau_generation"])]
-    return cells + ([NOT_RUN, "-"] if t is None else [mean_sd(t["steady_mean"], t["steady_sd"]), str(t["runs"])])
-
-
 def table(measured: dict) -> str:
     """The report's markdown: every row's fitness and steady state, (c)'s evolved learning values, (d)'s experts."""
     from experiments.claims import FUTURE, FUTURE_RULES, LAST_GENERATIONS, PLATEAU_FRACTION
@@ -275,7 +262,17 @@ def table(measured: dict) -> str:
     lines = head("row", "condition", "what", "seeds x generations",
                  "final best fitness (best of a generation's noisy lives)", "sd over seeds",
                  "fresh lives (sd over seeds)", "plateau generation", "steady state (mean +- sd over runs)", "runs")
-    lines += [line(r["name"], r["condition"], r["about"], *_row_cells(r)) for r in measured["rows"]]
+    for r in measured["rows"]:
+        e, t = r["evolution"], r["test"]
+        if not (e or {}).get("finished"):
+            cells = (["not evolved", "-"] if not r["evolved"] else ["-", NOT_RUN] if e is None else
+                     [f"{e['seeds']} x {e['generations']} of {e['planned']}", "running"]) + ["-"] * 3
+        else:
+            cells = [f"{e['seeds']} x {e['generations']}", f"{e['final_best']:.3f}", f"{e['final_best_sd']:.3f}",
+                     "-" if e.get("fresh") is None else f"{e['fresh']:.3f} ({e['fresh_sd']:.3f})",
+                     "-" if e["plateau_generation"] is None else str(e["plateau_generation"])]
+        cells += [NOT_RUN, "-"] if t is None else [mean_sd(t["steady_mean"], t["steady_sd"]), t["runs"]]
+        lines.append(line(r["name"], r["condition"], r["about"], *cells))
     lines += ["", f"Final best fitness: a seed's mean of its last {LAST_GENERATIONS} generations' best, then the mean "
               f"over seeds; fresh lives: each seed's best genome of the last generation in 10 new lives (keys the GA "
               f"never used), mean and sd over seeds (ddof 1); plateau: the first generation whose best (mean over "
@@ -442,8 +439,7 @@ def figure(measured: dict, question: str, path: str) -> str:
     from experiments.claims import FUTURE
     from imrl_jax.plotting import new_figure, save, style_axis
 
-    names = {n for q, _, rows in JUDGED if q == question for n in rows}
-    rows = [r for r in measured["rows"] if r["name"] in names]
+    rows = [r for r in measured["rows"] if any(r["name"] in names for q, _, names in JUDGED if q == question)]
     fig = new_figure(6.4 * len(PANELS[question]), 4.6)
     for ax, panel in zip(fig.subplots(1, len(PANELS[question]), squeeze=False)[0], PANELS[question]):
         drawn = panel(ax, rows, measured)
@@ -460,8 +456,7 @@ def figure(measured: dict, question: str, path: str) -> str:
 
 
 class FutureWorkTable(Table):
-    """The future-work study's table, whose report is its own: its rows beside SLE's tests, (c)'s values, (d)'s
-    experts, the verdicts and a figure per question."""
+    """The future-work study's table, whose report (:func:`measure`, :func:`table`, :func:`figure`) is its own."""
 
     def report(self) -> int:
         from experiments.claims_study import reproduction_summary
