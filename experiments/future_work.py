@@ -22,7 +22,7 @@ import numpy as np
 # NUM_BEST: the junction probe drives claim 7's number of each seed's fittest genomes, so that a run shared with
 # the claims study (LE-LS-6) keeps one probe.json
 from experiments.claims import NUM_BEST
-from experiments.markdown import columns, head, line, mean_sd
+from experiments.markdown import head, line, mean_sd
 from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN
 from experiments.table import Row, Table
 
@@ -132,17 +132,6 @@ def _test(out_dir: str) -> dict | None:
                 curve_steps=test["steps"].tolist(), curve_mean=test["mean"].tolist())
 
 
-def _last_values(evolution: dict | None) -> dict | None:
-    """(c): a finished evolution's values of the last generation, mean over seeds: {name: dict(mean, best, ...)}."""
-    traits = read_traits(evolution["dir"]) if (evolution or {}).get("finished") else None
-    if traits is None:
-        return None
-    values = traits["values"][-1]  # (seeds, values, 2)
-    last = values.mean(0)
-    return {n: dict(mean=float(last[t, 0]), best=float(last[t, 1]), best_per_seed=values[:, t, 1].tolist())
-            for t, n in enumerate(traits["names"])}
-
-
 def _expressed(evolution: dict | None) -> list[dict] | None:
     """(d): at generations 0, 10, 25, 50 and the last, the experts expressed (mean, the best's) and their shares."""
     traits = read_traits(evolution["dir"]) if (evolution or {}).get("finished") else None
@@ -203,7 +192,13 @@ def measure(rows: dict[str, Row], evolutions: dict, tests: dict, summary: dict,
     names = networks.trait_names(make_config("skills", condition="LE-LS-PC"))
     hand = {preset: {n: float(config.childhood_steps if n == "childhood_length" else getattr(config, n)) for n in names}
             for preset, config in ((p, make_config(p)) for p in ("skills", "paper", "faithful"))}
-    evolved = {name: _last_values(by_name[name]) for name in ("LE-LS-P", "LE-LS-PC", "LE-LS-P-faithful")}
+    evolved = {}
+    for name in ("LE-LS-P", "LE-LS-PC", "LE-LS-P-faithful"):
+        traits = read_traits(by_name[name]["dir"]) if (by_name[name] or {}).get("finished") else None
+        last = None if traits is None else traits["values"][-1]  # the last generation's (seeds, values, 2)
+        evolved[name] = None if last is None else {
+            n: dict(mean=float(mean[0]), best=float(mean[1]), best_per_seed=last[:, t, 1].tolist())
+            for t, (n, mean) in enumerate(zip(traits["names"], last.mean(0)))}
     # (d): the expressed experts over generations, and the final best against 6 experts all expressed and 3
     final = lambda name: (by_name[name] or {}).get("final_best_per_seed")  # noqa: E731
     experts = []
@@ -326,17 +321,16 @@ def _colour_lines(rows: list[dict]) -> list[str]:
     """What the experts of the study's finished evolutions do: the colours they follow, as a table."""
     from imrl_jax.behaviour import FOLLOW_CHOICE
 
-    probed = [r["colours"] | dict(row=r["name"]) for r in rows if r.get("colours")]
+    probed = [(r["name"], r["colours"]) for r in rows if r.get("colours")]
     if not probed:
         return []
     return ["", f"What the experts do (claim 7's junction probe of each seed's {NUM_BEST} fittest genomes of the last "
             "generation, after a fresh childhood; an expert follows a colour when it takes it at "
             f"{FOLLOW_CHOICE:.0%} of the junctions offering it; an expert not expressed follows none):", "",
-            *columns((("row", lambda c: c["row"]), ("genomes", lambda c: c["genomes"]),
-                      ("experts following a colour, per genome", lambda c: f"{c['experts_following']:.2f}"),
-                      ("distinct colours followed, per genome", lambda c: f"{c['colours']:.2f}"),
-                      ("the colours followed: genomes", lambda c: ", ".join(f"{k} {n}" for k, n in c["sets"].items()))),
-                     probed)]
+            *head("row", "genomes", "experts following a colour, per genome", "distinct colours followed, per genome",
+                  "the colours followed: genomes"),
+            *(line(name, c["genomes"], f"{c['experts_following']:.2f}", f"{c['colours']:.2f}",
+                   ", ".join(f"{k} {n}" for k, n in c["sets"].items())) for name, c in probed)]
 
 
 def _style(row: dict) -> dict:
