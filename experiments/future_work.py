@@ -204,11 +204,12 @@ def measure(rows: dict[str, Row], evolutions: dict, tests: dict, summary: dict,
     experts = []
     for row, others in (("LE-LS-N6", ("LE-LS-6", "skills LE-LS")),
                         ("LE-LS-N6-faithful", ("LE-LS-6-faithful", "faithful LE-LS"))):
-        compared = [dict(name=o, final_best=float(np.mean(final(o))), seeds=len(final(o)),
-                         **dict(zip(("difference", "standard_error"), _difference(final(row), final(o)))))
-                    for o in others if final(row) and final(o)]
-        experts.append(dict(row=row, against=list(others), compared=compared,
-                            generations=_expressed(by_name[row])))
+        compared = []
+        for other in (o for o in others if final(row) and final(o)):
+            difference, se = _difference(final(row), final(other))
+            compared.append(dict(name=other, final_best=float(np.mean(final(other))), seeds=len(final(other)),
+                                 difference=difference, standard_error=se))
+        experts.append(dict(row=row, against=list(others), compared=compared, generations=_expressed(by_name[row])))
     measured = dict(rows=measured_rows, learning_values=dict(names=list(names), hand=hand, evolved=evolved),
                     experts=experts)
     measured["verdicts"] = judge(measured)
