@@ -70,7 +70,8 @@ JUDGED = (
     ("b", "skills, noise over 100,000 cycles", ("EXT-LS", "skills LE-LS", "skills SLE")),
     ("b", "skills, noise over the whole test", ("EXT-LS-whole", "skills LE-LS", "skills SLE-whole")),
     ("b", "faithful", ("EXT-LS-faithful", "faithful LE-LS", "faithful SLE")),
-    ("c", "skills", ("LE-LS-P",)), ("c", "skills, childhood length evolved", ("LE-LS-PC",)),
+    ("c", "skills", ("LE-LS-P",)),
+    ("c", "skills, childhood length evolved", ("LE-LS-PC",)),
     ("c", "faithful", ("LE-LS-P-faithful",)),
     ("d", "skills", ("LE-LS-N6", "skills LE-LS", "LE-LS-6")),
     ("d", "faithful", ("LE-LS-N6-faithful", "faithful LE-LS", "LE-LS-6-faithful")))
@@ -383,8 +384,7 @@ def _steady(ax, rows: list[dict], measured: dict) -> bool:
 
 
 def _values(ax, rows: list[dict], measured: dict) -> bool:
-    """(c): each seed's best's evolved learning values (dots; their mean, a bar) in their genes' ranges, beside the
-    values `skills` and the paper set by hand."""
+    """(c): each seed's best's evolved values (dots; their mean, a bar) in their genes' ranges, beside the hand-set."""
     from experiments.claims import map_position
     from imrl_jax.conditions import EVOLVED_FIELDS
 
@@ -471,7 +471,7 @@ class FutureWorkTable(Table):
         return 0
 
 
-# the reproduction's runs in the table's order of old (evolutions first, then SLE's tests), then the study's
+# the reproduction's evolutions, then SLE's tests (the order of their stages), then the study's rows
 TABLE = FutureWorkTable("future-work", DOCUMENT, 7, scale=SCREEN, out=OUT, rows=(
     *sorted((row for row, _ in REFERENCES), key=lambda row: not row.evolved), *(row for row, _ in STUDIED)))
 all_stages, main = TABLE.all_stages, TABLE.main
