@@ -4,13 +4,11 @@
     python -m experiments list future-work      # the stages, done or to run
     python -m experiments report future-work    # the tables and figures of whatever has finished
 
-Each row is a condition of the table (``imrl_jax.conditions``) under a preset and ``--set`` overrides,
-evolved at the paper's lengths (5 seeds x 100 generations, then its 5 best x 4 learning tests) or, not
-evolved, tested from scratch (5 runs x 5 x 4), beside the reproduction's paper runs (10 seeds); each
-run is found by its key wherever a study made it (the claims study's claim-8 runs: LE-LS-6). The report
-measures every finished row (final best fitness, its spread and plateau, fresh lives, steady state),
-(c)'s evolved learning values, (d)'s expressed experts, judges the paper's four questions
-(``claims.FUTURE``) and draws a figure per question.
+Each row is a condition (``imrl_jax.conditions``) under a preset and ``--set`` overrides, evolved at the paper's
+lengths (5 seeds x 100 generations, then its 5 best x 4 learning tests) or tested from scratch (5 runs x 5 x 4),
+beside the reproduction's paper runs (10 seeds); each run is found by its key wherever a study made it. The report
+measures every finished row, (c)'s evolved learning values and (d)'s expressed experts, judges the paper's four
+questions (``claims.FUTURE``) and draws a figure per question.
 """
 
 from __future__ import annotations
@@ -18,76 +16,65 @@ from __future__ import annotations
 import json
 import os
 import sys
-from typing import NamedTuple
 
 import numpy as np
 
 # NUM_BEST: the junction probe drives claim 7's number of each seed's fittest genomes, so that a run shared with
 # the claims study (LE-LS-6) keeps one probe.json
 from experiments.claims import NUM_BEST
+from experiments.markdown import head, line, mean_sd
 from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN
 from experiments.table import Row, Table
-from experiments.markdown import head, line, mean_sd
-from imrl_jax import conditions
 
 OUT = os.path.join(RESULTS, "future_work")
 DOCUMENT = os.path.join("docs", "FUTURE_WORK.md")
-#: SLE's tests beside the study's, found by their keys: the reproduction's, and the claims study's
-#: ``skills-sle-test`` (the noise over the whole test, EXT-LS-whole's reference).
-SLE_TESTS = (Row("skills SLE", "SLE", "skills", scale=SCALES["paper"]),
-             Row("skills SLE-whole", "SLE", "skills", ("sle_noise_steps=0",)),
-             Row("faithful SLE", "SLE", "faithful", ("sle_noise_steps=0",), scale=SCALES["paper"]))
+PAPER = SCALES["paper"]
+#: The reproduction's rows, each with what it is, in the report's order: its runs at the paper's sizes (its EE-ES
+#: is paper's: the same lives) and SLE's tests, found by their keys (the claims study's ``skills-sle-test``: the
+#: noise over the whole test, EXT-LS-whole's reference). Their fresh lives come from the reproduction's report.
+REFERENCES = (
+    (Row("skills LE-LS", "LE-LS", "skills", scale=PAPER), "the reproduction's LE-LS"),
+    (Row("skills EE-LS", "EE-LS", "skills", scale=PAPER), "the reproduction's EE-LS"),
+    (Row("skills EE-ES", "EE-ES", "skills", scale=PAPER), "the reproduction's EE-ES"),
+    (Row("skills SLE", "SLE", "skills", scale=PAPER), "the reproduction's SLE"),
+    (Row("skills SLE-whole", "SLE", "skills", ("sle_noise_steps=0",)), "the claims study's SLE (skills-sle-test)"),
+    (Row("faithful LE-LS", "LE-LS", "faithful", scale=PAPER), "the reproduction's LE-LS"),
+    (Row("faithful SLE", "SLE", "faithful", ("sle_noise_steps=0",), scale=PAPER), "the reproduction's SLE"))
+#: The study's rows, each with what it is.
+STUDIED = (
+    (Row("EV-LS", "EV-LS", "skills"), "(a) evolved evaluators, gamma V(x_t) - V(x_{t-1})"),
+    (Row("EV-LS-diff", "EV-LS-diff", "skills"), "(a) evolved evaluators, V(x_t) - V(x_{t-1})"),
+    (Row("EXT-LS", "EXT-LS", "skills"), "(b) the hierarchy on the task's reward only, SLE's noise over 100,000 cycles"),
+    (Row("EXT-LS-whole", "EXT-LS", "skills", ("sle_noise_steps=0",)), "(b), the noise over the whole test"),
+    (Row("LE-LS-P", "LE-LS-P", "skills"), "(c) evolved learning parameters"),
+    (Row("LE-LS-PC", "LE-LS-PC", "skills"), "(c) evolved learning parameters and childhood length"),
+    (Row("LE-LS-N6", "LE-LS-N", "skills", ("num_experts=6",)), "(d) up to 6 experts, each expressed by a gene"),
+    (Row("LE-LS-6", "LE-LS", "skills", ("num_experts=6",)),
+     "(d)'s comparison: 6 experts, all expressed (the claims study's claim-8 run)"),
+    # The same questions under the claims map's chosen rule set (docs/CLAIMS.md, "The decision"): run after skills'.
+    (Row("EV-LS-faithful", "EV-LS", "faithful"), "(a) under `faithful`"),
+    (Row("EXT-LS-faithful", "EXT-LS", "faithful", ("sle_noise_steps=0",)),
+     "(b) under `faithful`, the noise over the whole test (its SLE's reading)"),
+    (Row("LE-LS-P-faithful", "LE-LS-P", "faithful"), "(c) under `faithful`"),
+    (Row("LE-LS-N6-faithful", "LE-LS-N", "faithful", ("num_experts=6",)), "(d) under `faithful`"),
+    (Row("LE-LS-6-faithful", "LE-LS", "faithful", ("num_experts=6",)),
+     "(d)'s comparison under `faithful` (the claims study's claim-8 run of paper-selector, the same lives)"))
 #: Every row the report shows, in order, with what it is: the reproduction's first, then the study's.
-ABOUT = {"skills LE-LS": "the reproduction's LE-LS", "skills EE-LS": "the reproduction's EE-LS",
-         "skills EE-ES": "the reproduction's EE-ES", "skills SLE": "the reproduction's SLE",
-         "skills SLE-whole": "the claims study's SLE (skills-sle-test)", "faithful LE-LS": "the reproduction's LE-LS",
-         "faithful SLE": "the reproduction's SLE",
-         "EV-LS": "(a) evolved evaluators, gamma V(x_t) - V(x_{t-1})",
-         "EV-LS-diff": "(a) evolved evaluators, V(x_t) - V(x_{t-1})",
-         "EXT-LS": "(b) the hierarchy on the task's reward only, SLE's noise over 100,000 cycles",
-         "EXT-LS-whole": "(b), the noise over the whole test", "LE-LS-P": "(c) evolved learning parameters",
-         "LE-LS-PC": "(c) evolved learning parameters and childhood length",
-         "LE-LS-N6": "(d) up to 6 experts, each expressed by a gene",
-         "LE-LS-6": "(d)'s comparison: 6 experts, all expressed (the claims study's claim-8 run)",
-         "EV-LS-faithful": "(a) under `faithful`",
-         "EXT-LS-faithful": "(b) under `faithful`, the noise over the whole test (its SLE's reading)",
-         "LE-LS-P-faithful": "(c) under `faithful`", "LE-LS-N6-faithful": "(d) under `faithful`",
-         "LE-LS-6-faithful": "(d)'s comparison under `faithful` (the claims study's claim-8 run of paper-selector, "
-                             "the same lives)"}
-#: The reproduction's rows (their fresh lives come from its report; the probe is not theirs to show).
-REFERENCES = ("skills LE-LS", "skills EE-LS", "skills EE-ES", "faithful LE-LS", *(r.name for r in SLE_TESTS))
-#: (c)'s rows: their evolved learning values beside the presets'.
-PARAMETER_ROWS = ("LE-LS-P", "LE-LS-PC", "LE-LS-P-faithful")
-#: The presets whose values (c)'s table shows beside the evolved ones.
-HAND_PRESETS = ("skills", "paper", "faithful")
-#: (d)'s rows, each with what its fitness is compared with: 6 experts all expressed, and the reproduction's 3.
-EXPERTS_ROWS = (("LE-LS-N6", ("LE-LS-6", "skills LE-LS")),
-                ("LE-LS-N6-faithful", ("LE-LS-6-faithful", "faithful LE-LS")))
-
-
-class Judged(NamedTuple):
-    """One verdict of the report: a question of the paper's (``claims.FUTURE``) on some rows, under a rule set."""
-
-    question: str  # "a" to "d"
-    rules: str  # the rule set, in words
-    rows: tuple[str, ...]  # (a): EE-LS, then the criterion rows; (b): EXT-LS, LE-LS, SLE; (c): the row;
-    # (d): the evolved number, 3 experts, 6 all expressed
-
-
-JUDGED: tuple[Judged, ...] = (
-    Judged("a", "skills", ("skills EE-LS", "skills LE-LS", "EV-LS", "EV-LS-diff")),
-    Judged("a", "faithful (its EE-LS is skills')", ("skills EE-LS", "faithful LE-LS", "EV-LS-faithful")),
-    Judged("b", "skills, noise over 100,000 cycles", ("EXT-LS", "skills LE-LS", "skills SLE")),
-    Judged("b", "skills, noise over the whole test", ("EXT-LS-whole", "skills LE-LS", "skills SLE-whole")),
-    Judged("b", "faithful", ("EXT-LS-faithful", "faithful LE-LS", "faithful SLE")),
-    Judged("c", "skills", ("LE-LS-P",)),
-    Judged("c", "skills, childhood length evolved", ("LE-LS-PC",)),
-    Judged("c", "faithful", ("LE-LS-P-faithful",)),
-    Judged("d", "skills", ("LE-LS-N6", "skills LE-LS", "LE-LS-6")),
-    Judged("d", "faithful", ("LE-LS-N6-faithful", "faithful LE-LS", "LE-LS-6-faithful")),
-)
-#: The generations of (d)'s table of expressed experts (the last one is added).
-GENERATIONS_SHOWN = (0, 10, 25, 50)
+ABOUT = {row.name: about for row, about in REFERENCES + STUDIED}
+#: The report's verdicts: a question of the paper's (``claims.FUTURE``), its rule set in words, and its rows: (a)
+#: EE-LS, then the criterion rows; (b) EXT-LS, LE-LS, SLE; (c) the row; (d) the evolved number, 3 experts, 6 all
+#: expressed.
+JUDGED = (
+    ("a", "skills", ("skills EE-LS", "skills LE-LS", "EV-LS", "EV-LS-diff")),
+    ("a", "faithful (its EE-LS is skills')", ("skills EE-LS", "faithful LE-LS", "EV-LS-faithful")),
+    ("b", "skills, noise over 100,000 cycles", ("EXT-LS", "skills LE-LS", "skills SLE")),
+    ("b", "skills, noise over the whole test", ("EXT-LS-whole", "skills LE-LS", "skills SLE-whole")),
+    ("b", "faithful", ("EXT-LS-faithful", "faithful LE-LS", "faithful SLE")),
+    ("c", "skills", ("LE-LS-P",)),
+    ("c", "skills, childhood length evolved", ("LE-LS-PC",)),
+    ("c", "faithful", ("LE-LS-P-faithful",)),
+    ("d", "skills", ("LE-LS-N6", "skills LE-LS", "LE-LS-6")),
+    ("d", "faithful", ("LE-LS-N6-faithful", "faithful LE-LS", "LE-LS-6-faithful")))
 NOT_RUN = "not run yet"
 #: Where the report's tables go in docs/FUTURE_WORK.md.
 TABLE_START = "<!-- future-work tables: python -m experiments report future-work -->"
@@ -99,8 +86,7 @@ STYLES = {"LE-LS-6": dict(color="0.3", lw=1.2, ls="-."), "EXT-LS-whole": dict(co
 
 
 def read_traits(run_dir: str | None) -> dict | None:
-    """An evolution's evolved values from its history.csv: names and (generations, seeds, values, 2) (population
-    mean, the best's), or None without any."""
+    """An evolution's evolved values from history.csv: names, (generations, seeds, values, 2) (mean, the best's)."""
     from experiments.loading import history_columns
 
     path = os.path.join(run_dir or "", "history.csv")
@@ -113,13 +99,12 @@ def read_traits(run_dir: str | None) -> dict | None:
     return None if values is None else dict(names=names, values=values.reshape(*values.shape[:2], len(names), 2))
 
 
-def _evolution(run_dir: str | None, fresh) -> dict | None:
-    """A row's evolution as the report shows it: its size and, once finished, its final best, spread and plateau,
-    and ``fresh(run)``: the fresh lives of each seed's best genome (None: not measured)."""
+def _evolution(run_dir: str | None) -> dict | None:
+    """A row's evolution as the report shows it: its size and, once finished, its final best, spread and plateau."""
     from experiments.claims import final_best, plateau_generation
     from experiments.loading import read_evolution
 
-    run = None if run_dir is None else read_evolution(run_dir)
+    run = read_evolution(run_dir)
     if run is None:
         return None
     best, planned = run["best"], (run["config"] or {}).get("num_generations")
@@ -131,9 +116,6 @@ def _evolution(run_dir: str | None, fresh) -> dict | None:
         entry.update(final_best=float(final.mean()), final_best_sd=float(final.std()),
                      final_best_per_seed=final.tolist(), plateau_generation=plateau_generation(best.mean(1)),
                      best_per_generation_mean=best.mean(1).tolist(), best_per_generation_sd=best.std(1).tolist())
-        lives = fresh(run)
-        if lives is not None:
-            entry.update(fresh=lives["mean"], fresh_sd=lives["sd_over_seeds"])
     return entry
 
 
@@ -148,102 +130,88 @@ def _test(out_dir: str) -> dict | None:
     return dict(dir=out_dir, runs=len(per_run), steady_mean=float(per_run.mean()), steady_sd=float(per_run.std()),
                 steady_best_run=float(per_run.max()), steady_per_run=per_run.tolist(),
                 sle_noise_steps=(test["steady"].get("config") or {}).get("sle_noise_steps"),
-                curve_steps=[int(v) for v in test["steps"]], curve_mean=[float(v) for v in test["mean"]])
-
-
-def _last_values(evolution: dict | None) -> dict | None:
-    """A finished evolution's evolved values in its last generation, mean over seeds: {name: dict(mean, best)}."""
-    traits = read_traits(evolution["dir"]) if (evolution or {}).get("finished") else None
-    if traits is None:
-        return None
-    values = traits["values"][-1]  # (seeds, values, 2)
-    last = values.mean(0)
-    return {n: dict(mean=float(last[t, 0]), best=float(last[t, 1]), best_per_seed=values[:, t, 1].tolist())
-            for t, n in enumerate(traits["names"])}
+                curve_steps=test["steps"].tolist(), curve_mean=test["mean"].tolist())
 
 
 def _expressed(evolution: dict | None) -> list[dict] | None:
-    """(d): per shown generation, the expressed experts (population mean, the best's) and the population's share
-    expressing each number, mean over seeds."""
+    """(d): at generations 0, 10, 25, 50 and the last, the experts expressed (mean, the best's) and their shares."""
     traits = read_traits(evolution["dir"]) if (evolution or {}).get("finished") else None
     if traits is None or "expressed_experts" not in traits["names"]:
         return None
     names, values = traits["names"], traits["values"].mean(1)  # (generations, values, 2)
     counts = sorted(int(n.split("_")[1]) for n in names if n.startswith("share_") and n.endswith("_experts"))
-    shown = sorted({g for g in GENERATIONS_SHOWN if g < len(values)} | {len(values) - 1})
     e = names.index("expressed_experts")
     return [dict(generation=g, mean=float(values[g, e, 0]), best=float(values[g, e, 1]),
                  shares={k: float(values[g, names.index(f"share_{k}_experts"), 0]) for k in counts},
-                 best_per_seed=traits["values"][g, :, e, 1].tolist()) for g in shown]
+                 best_per_seed=traits["values"][g, :, e, 1].tolist())
+            for g in sorted({g for g in (0, 10, 25, 50) if g < len(values)} | {len(values) - 1})]
 
 
 def colour_sets(followed: list[list[int]] | None) -> dict | None:
-    """From the colour each probed genome's experts follow (-1: none, or not expressed), how many genomes
-    follow each set of colours (``"blue + red"``; ``"none"``), the mean number of experts following one and of
-    distinct colours followed (claim 7's colours followed)."""
+    """From the colour each probed genome's experts follow (-1: none): the genomes per set of colours followed
+    (``"blue + red"``, ``"none"``), the mean number of experts following one and of colours followed (claim 7's)."""
+    from collections import Counter
+
     from experiments.relive import colours_followed
     from imrl_jax.behaviour import SEEN
 
     if not followed:
         return None
-    sets: dict[str, int] = {}
-    for experts in followed:
-        name = " + ".join(SEEN[c] for c in sorted(set(experts) - {-1})) or "none"
-        sets[name] = sets.get(name, 0) + 1
-    following = [sum(c >= 0 for c in experts) for experts in followed]
-    distinct = colours_followed(followed)
+    sets = Counter(" + ".join(SEEN[c] for c in sorted(set(experts) - {-1})) or "none" for experts in followed)
     return dict(genomes=len(followed), sets=dict(sorted(sets.items(), key=lambda kv: (-kv[1], kv[0]))),
-                experts_following=float(sum(following) / len(following)), colours=float(sum(distinct) / len(distinct)))
+                experts_following=float(np.mean([sum(c >= 0 for c in experts) for experts in followed])),
+                colours=float(np.mean(colours_followed(followed))))
 
 
-def _noise(test: dict | None) -> str:
-    """How a finished SLE test annealed its noise, in words ("" before it has finished or without its config)."""
-    steps = (test or {}).get("sle_noise_steps")
-    return "" if steps is None else ", noise over the whole test" if not steps else f", noise over {steps:,} cycles"
-
-
-def measure(rows: dict[str, Row], evolutions: dict, tests: dict, summary: dict, reproduction: str = REPRODUCTION) -> dict:
-    """Every row of :data:`ABOUT` (its evolution and test folders, None where it has none), (c)'s evolved learning
-    values and (d)'s experts, from what finished; ``summary``: the reproduction's report (its rows' fresh lives)."""
+def measure(rows: dict[str, Row], evolutions: dict, tests: dict, summary: dict,
+            reproduction: str = REPRODUCTION) -> dict:
+    """Every row of :data:`ABOUT`, (c)'s values and (d)'s experts; ``summary``: the reproduction's report."""
     from experiments.claims import _difference
-    from experiments.relive import reproduction_fresh, run_fresh, run_probe
     from experiments.claims_study import reproduction_variant
+    from experiments.relive import reproduction_fresh, run_fresh, run_probe
     from imrl_jax import networks
     from imrl_jax.config import make_config
 
-    measured_rows = []
+    measured_rows, references = [], {row.name for row, _ in REFERENCES}
     for name, about in ABOUT.items():
-        row, reference = rows[name], name in REFERENCES
-        evolved = conditions.get(row.condition).evolved
-        fresh = ((lambda run, r=row: reproduction_fresh(summary, reproduction_variant(run["dir"], reproduction),
-                                                          r.condition))
-                 if reference else lambda run: run_fresh(run["dir"], run["config"]))
-        evolution = _evolution(evolutions.get(name), fresh) if evolved else None
-        entry = dict(name=name, condition=row.condition, about=about, evolved=evolved, evolution=evolution,
-                     test=_test(tests[name]), reference=reference, preset=row.preset)
-        entry["about"] += "" if evolved or not reference else _noise(entry["test"])
+        row, reference = rows[name], name in references
+        evolution, test = _evolution(evolutions.get(name)) if row.evolved else None, _test(tests[name])
+        if (evolution or {}).get("finished"):  # the fresh lives of each seed's best genome
+            lives = (reproduction_fresh(summary, reproduction_variant(evolution["dir"], reproduction), row.condition)
+                     if reference else run_fresh(evolution["dir"]))
+            evolution.update({} if lives is None else dict(fresh=lives["mean"], fresh_sd=lives["sd_over_seeds"]))
+        noise = (test or {}).get("sle_noise_steps") if reference and not row.evolved else None  # how SLE annealed it
+        about += "" if noise is None else f", noise over {noise:,} cycles" if noise else ", noise over the whole test"
+        entry = dict(name=name, condition=row.condition, about=about, evolved=row.evolved, evolution=evolution,
+                     test=test, reference=reference, preset=row.preset)
         if not reference:  # what the experts do (claim 7's junction probe), kept beside the run as its fresh lives
             probe = run_probe(evolution["dir"], num_best=NUM_BEST) if (evolution or {}).get("finished") else None
             entry["colours"] = colour_sets(probe["followed"] if probe else None)
         measured_rows.append(entry)
-    by_name = {row["name"]: row for row in measured_rows}
+    by_name = {row["name"]: row["evolution"] for row in measured_rows}
     # (c): the values of the genes LE-LS-PC carries (LE-LS-P's and the childhood's length), beside the presets'
     names = networks.trait_names(make_config("skills", condition="LE-LS-PC"))
     hand = {preset: {n: float(config.childhood_steps if n == "childhood_length" else getattr(config, n)) for n in names}
-            for preset, config in ((p, make_config(p)) for p in HAND_PRESETS)}
-    evolved_values = {name: _last_values(by_name[name]["evolution"]) for name in PARAMETER_ROWS}
+            for preset, config in ((p, make_config(p)) for p in ("skills", "paper", "faithful"))}
+    evolved = {}
+    for name in ("LE-LS-P", "LE-LS-PC", "LE-LS-P-faithful"):
+        traits = read_traits(by_name[name]["dir"]) if (by_name[name] or {}).get("finished") else None
+        last = None if traits is None else traits["values"][-1]  # the last generation's (seeds, values, 2)
+        evolved[name] = None if last is None else {
+            n: dict(mean=float(mean[0]), best=float(mean[1]), best_per_seed=last[:, t, 1].tolist())
+            for t, (n, mean) in enumerate(zip(traits["names"], last.mean(0)))}
     # (d): the expressed experts over generations, and the final best against 6 experts all expressed and 3
-    final = lambda name: (by_name[name]["evolution"] or {}).get("final_best_per_seed")  # noqa: E731
+    final = lambda name: (by_name[name] or {}).get("final_best_per_seed")  # noqa: E731
     experts = []
-    for row, others in EXPERTS_ROWS:
+    for row, others in (("LE-LS-N6", ("LE-LS-6", "skills LE-LS")),
+                        ("LE-LS-N6-faithful", ("LE-LS-6-faithful", "faithful LE-LS"))):
         compared = []
         for other in (o for o in others if final(row) and final(o)):
             difference, se = _difference(final(row), final(other))
             compared.append(dict(name=other, final_best=float(np.mean(final(other))), seeds=len(final(other)),
                                  difference=difference, standard_error=se))
-        experts.append(dict(row=row, against=list(others), compared=compared,
-                            generations=_expressed(by_name[row]["evolution"])))
-    measured = dict(rows=measured_rows, learning_values=dict(names=list(names), hand=hand, evolved=evolved_values),
+        experts.append(dict(row=row, against=list(others), compared=compared, generations=_expressed(by_name[row])))
+    measured = dict(rows=measured_rows, learning_values=dict(names=list(names), hand=hand, evolved=evolved),
                     experts=experts)
     measured["verdicts"] = judge(measured)
     return measured
@@ -254,107 +222,100 @@ def judge(measured: dict) -> list[dict]:
     from experiments import claims
     from imrl_jax.config import make_config
 
-    rows = {r["name"]: r for r in measured["rows"]}
+    rows, values = {r["name"]: r for r in measured["rows"]}, measured["learning_values"]
+    experts = {e["row"]: e["generations"] for e in measured["experts"]}
+    final = lambda name: (rows[name]["evolution"] or {}).get("final_best_per_seed")  # noqa: E731
 
     def evolution(name):
-        r = rows[name]
-        e = r["evolution"]
-        if not (e or {}).get("finished"):
-            return None
+        r, e = rows[name], rows[name]["evolution"]
         return dict(plateau=e["plateau_generation"], final_per_seed=e["final_best_per_seed"], fresh=e.get("fresh"),
-                    genes=make_config(r["preset"], condition=r["condition"]).num_genes)
+                    genes=make_config(r["preset"], condition=r["condition"]).num_genes) if final(name) else None
 
     def test(name):
         t = rows[name]["test"]
         return None if t is None else dict(steps=t["curve_steps"], mean=t["curve_mean"], per_run=t["steady_per_run"])
 
-    final = lambda name: (rows[name]["evolution"] or {}).get("final_best_per_seed")  # noqa: E731
-    experts = {e["row"]: e for e in measured["experts"]}
-    hand = measured["learning_values"]["hand"]
-    out = []
-    for j in JUDGED:
-        if j.question == "a":
-            criteria = {n: evolution(n) for n in j.rows[1:]}
-            claim = claims.claim_criteria_easier({n: c for n, c in criteria.items() if c is not None},
-                                                 evolution(j.rows[0]))
-        elif j.question == "b":
-            claim = claims.claim_motivation_needed(*(test(n) for n in j.rows))
-        elif j.question == "c":
-            evolved = measured["learning_values"]["evolved"].get(j.rows[0])
-            claim = claims.claim_hand_values({n: v["best_per_seed"] for n, v in (evolved or {}).items()},
-                                             hand["skills"], hand["paper"])
-        else:
-            shown = (experts.get(j.rows[0]) or {}).get("generations")
-            claim = claims.claim_three_enough(shown[-1]["best_per_seed"] if shown else None, final(j.rows[0]),
-                                              final(j.rows[1]), final(j.rows[2]))
-        # (a) judges the criterion rows that finished; the others are named until they have
-        missing = [n for n in j.rows[1:] if j.question == "a" and evolution(n) is None]
-        out.append(dict(question=j.question, rules=j.rules, rows=list(j.rows), missing=missing, **claim))
-    return out
+    def hand_values(row):
+        evolved = values["evolved"].get(row) or {}
+        return claims.claim_hand_values({n: v["best_per_seed"] for n, v in evolved.items()}, values["hand"]["skills"],
+                                        values["hand"]["paper"])
 
+    def three_enough(row, *others):
+        kept = experts.get(row)
+        return claims.claim_three_enough(kept[-1]["best_per_seed"] if kept else None, final(row), *map(final, others))
 
-def verdict_lines(verdicts: list[dict]) -> list[str]:
-    """The verdicts' table and the rules behind them."""
-    from experiments.claims import FUTURE, FUTURE_RULES
-
-    lines, shown = head("question", "rules", "rows", "verdict", "measured"), set()
-    for v in verdicts:
-        question = "" if v["question"] in shown else f"({v['question']}) {FUTURE[v['question']]}"
-        shown.add(v["question"])
-        verdict = f"**{v['verdict']}**" + (f" so far (not finished: {', '.join(v['missing'])})"
-                                             if v["missing"] and v["verdict"] != "n/a" else "")
-        lines.append(line(question, v["rules"], ", ".join(v["rows"]), verdict, v["measured"]))
-    return lines + ["", "Rules (n/a: a row not finished yet):", "", *(f"- ({q}) {r}" for q, r in FUTURE_RULES.items())]
-
-
-def _value(v: float) -> str:
-    """A learning value for the table: 3 significant digits, a count of steps in full."""
-    return f"{v:,.0f}" if abs(v) >= 1000 else f"{v:.3g}"
-
-
-def _row_cells(r: dict) -> list[str]:
-    """The main table's cells of a row after its name, condition and description."""
-    e, t = r["evolution"], r["test"]
-    if not r["evolved"]:
-        cells = ["not evolved", "-", "-", "-", "-"]
-    elif e is None:
-        cells = ["-", NOT_RUN, "-", "-", "-"]
-    elif not e["finished"]:
-        cells = [f"{e['seeds']} x {e['generations']} of {e['planned']}", "running", "-", "-", "-"]
-    else:
-        cells = [f"{e['seeds']} x {e['generations']}", f"{e['final_best']:.3f}", f"{e['final_best_sd']:.3f}",
-                 "-" if e.get("fresh") is None else f"{e['fresh']:.3f} ({e['fresh_sd']:.3f})",
-                 "-" if e["plateau_generation"] is None else str(e["plateau_generation"])]
-    return cells + ([NOT_RUN, "-"] if t is None else [mean_sd(t["steady_mean"], t["steady_sd"]), str(t["runs"])])
+    rules = dict(a=lambda actors, *criteria: claims.claim_criteria_easier(  # the criterion rows that finished
+        {n: evolution(n) for n in criteria if final(n)}, evolution(actors)),
+        b=lambda *names: claims.claim_motivation_needed(*map(test, names)), c=hand_values, d=three_enough)
+    # (a) names the criterion rows not finished until they have
+    return [dict(question=q, rules=rule, rows=list(names), missing=[n for n in names[1:] if q == "a" and not final(n)],
+                 **rules[q](*names)) for q, rule, names in JUDGED]
 
 
 def table(measured: dict) -> str:
     """The report's markdown: every row's fitness and steady state, (c)'s evolved learning values, (d)'s experts."""
-    from experiments.claims import LAST_GENERATIONS, PLATEAU_FRACTION
+    from experiments.claims import FUTURE, FUTURE_RULES, LAST_GENERATIONS, PLATEAU_FRACTION
 
     lines = head("row", "condition", "what", "seeds x generations",
                  "final best fitness (best of a generation's noisy lives)", "sd over seeds",
                  "fresh lives (sd over seeds)", "plateau generation", "steady state (mean +- sd over runs)", "runs")
-    lines += [line(r["name"], r["condition"], r["about"], *_row_cells(r)) for r in measured["rows"]]
+    for r in measured["rows"]:
+        e, t = r["evolution"], r["test"]
+        if not (e or {}).get("finished"):
+            cells = (["not evolved", "-"] if not r["evolved"] else ["-", NOT_RUN] if e is None else
+                     [f"{e['seeds']} x {e['generations']} of {e['planned']}", "running"]) + ["-"] * 3
+        else:
+            cells = [f"{e['seeds']} x {e['generations']}", f"{e['final_best']:.3f}", f"{e['final_best_sd']:.3f}",
+                     "-" if e.get("fresh") is None else f"{e['fresh']:.3f} ({e['fresh_sd']:.3f})",
+                     "-" if e["plateau_generation"] is None else str(e["plateau_generation"])]
+        cells += [NOT_RUN, "-"] if t is None else [mean_sd(t["steady_mean"], t["steady_sd"]), t["runs"]]
+        lines.append(line(r["name"], r["condition"], r["about"], *cells))
     lines += ["", f"Final best fitness: a seed's mean of its last {LAST_GENERATIONS} generations' best, then the mean "
               f"over seeds; fresh lives: each seed's best genome of the last generation in 10 new lives (keys the GA "
-              f"never used), mean and sd over seeds (ddof 1); plateau: the first generation whose best (mean over seeds) reaches {PLATEAU_FRACTION:.0%} "
+              f"never used), mean and sd over seeds (ddof 1); plateau: the first generation whose best (mean over "
+              f"seeds) reaches {PLATEAU_FRACTION:.0%} "
               f"of that; steady state: each learning-test run's last cycles (docs/CLAIMS.md's claims 1, 2 and 6).",
               *_colour_lines(measured["rows"]),
-              "", "(c) The evolved learning values, last generation, mean over seeds, beside the values set by hand:", ""]
+              "", "(c) The evolved learning values, last generation, mean over seeds, beside the values set by hand:",
+              ""]
     values = measured["learning_values"]
+    value = lambda v: f"{v:,.0f}" if abs(v) >= 1000 else f"{v:.3g}"  # noqa: E731 (a count of steps in full)
     lines += head("value", *(f"{p} (by hand)" for p in values["hand"]),
-                  *(f"{r}: {w}" for r in PARAMETER_ROWS for w in ("population mean", "the best's")))
+                  *(f"{r}: {w}" for r in values["evolved"] for w in ("population mean", "the best's")))
     for name in values["names"]:
-        cells = [_value(hand[name]) for hand in values["hand"].values()]
-        for evolved in (values["evolved"][r] for r in PARAMETER_ROWS):
+        cells = [value(hand[name]) for hand in values["hand"].values()]
+        for evolved in values["evolved"].values():
             # a value the row does not evolve (LE-LS-P's childhood) is the preset's
             cells += ([NOT_RUN] * 2 if evolved is None else
-                      [_value(evolved[name][w]) if name in evolved else "-" for w in ("mean", "best")])
+                      [value(evolved[name][w]) if name in evolved else "-" for w in ("mean", "best")])
         lines.append(line(name, *cells))
-    for experts in measured["experts"]:
-        lines += _experts_lines(experts, measured["rows"])
-    lines += ["", "The paper's questions, each with its verdict:", ""] + verdict_lines(measured["verdicts"])
+    for experts in measured["experts"]:  # (d): the experts expressed over generations, its final best against others
+        row, shown, compared = experts["row"], experts["generations"], experts["compared"]
+        lines += ["", f"(d) {row}: the experts expressed, mean over seeds:", ""]
+        if shown is None:
+            lines.append(f"{row}: {NOT_RUN}.")
+        else:
+            lines += head("generation", "expressed: population mean", "the best's",
+                          *(f"share with {k}" for k in shown[0]["shares"]))
+            lines += [line(g["generation"], f"{g['mean']:.2f}", f"{g['best']:.2f}",
+                           *(f"{s:.3f}" for s in g["shares"].values())) for g in shown]
+            if not compared:
+                lines.append(f"\nIts final best fitness against {' and '.join(experts['against'])}: {NOT_RUN}.")
+        if compared:
+            mine = next(r for r in measured["rows"] if r["name"] == row)["evolution"]
+            lines += ["", *head(f"final best fitness of {row} ({mine['seeds']} seeds)", "its", "theirs", "their seeds",
+                                "difference", "se")]
+            lines += [line(f"against {c['name']}", f"{mine['final_best']:.3f}", f"{c['final_best']:.3f}", c["seeds"],
+                           f"{c['difference']:+.3f}", f"{c['standard_error']:.3f}") for c in compared]
+    lines += ["", "The paper's questions, each with its verdict:", "",
+              *head("question", "rules", "rows", "verdict", "measured")]
+    for i, v in enumerate(measured["verdicts"]):  # the question named on its first verdict
+        first = all(w["question"] != v["question"] for w in measured["verdicts"][:i])
+        verdict = f"**{v['verdict']}**" + (f" so far (not finished: {', '.join(v['missing'])})"
+                                             if v["missing"] and v["verdict"] != "n/a" else "")
+        lines.append(line(f"({v['question']}) {FUTURE[v['question']]}" if first else "", v["rules"],
+                          ", ".join(v["rows"]), verdict, v["measured"]))
+    lines += ["", "Rules (n/a: a row not finished yet):", "", *(f"- ({q}) {r}" for q, r in FUTURE_RULES.items())]
     return "\n".join(lines)
 
 
@@ -362,7 +323,7 @@ def _colour_lines(rows: list[dict]) -> list[str]:
     """What the experts of the study's finished evolutions do: the colours they follow, as a table."""
     from imrl_jax.behaviour import FOLLOW_CHOICE
 
-    probed = [r for r in rows if r.get("colours")]
+    probed = [(r["name"], r["colours"]) for r in rows if r.get("colours")]
     if not probed:
         return []
     return ["", f"What the experts do (claim 7's junction probe of each seed's {NUM_BEST} fittest genomes of the last "
@@ -370,30 +331,8 @@ def _colour_lines(rows: list[dict]) -> list[str]:
             f"{FOLLOW_CHOICE:.0%} of the junctions offering it; an expert not expressed follows none):", "",
             *head("row", "genomes", "experts following a colour, per genome", "distinct colours followed, per genome",
                   "the colours followed: genomes"),
-            *(line(r["name"], r["colours"]["genomes"], f"{r['colours']['experts_following']:.2f}",
-                  f"{r['colours']['colours']:.2f}", ", ".join(f"{k} {n}" for k, n in r["colours"]["sets"].items()))
-              for r in probed)]
-
-
-def _experts_lines(experts: dict, rows: list[dict]) -> list[str]:
-    """(d)'s tables of one row: the experts expressed over generations, and its final best against the others."""
-    lines = ["", f"(d) {experts['row']}: the experts expressed, mean over seeds:", ""]
-    if experts["generations"] is None:
-        lines.append(f"{experts['row']}: {NOT_RUN}.")
-    else:
-        counts = list(experts["generations"][0]["shares"])
-        lines += head("generation", "expressed: population mean", "the best's", *(f"share with {k}" for k in counts))
-        lines += [line(g["generation"], f"{g['mean']:.2f}", f"{g['best']:.2f}",
-                       *(f"{g['shares'][k]:.3f}" for k in counts)) for g in experts["generations"]]
-        if not experts["compared"]:
-            lines.append(f"\nIts final best fitness against {' and '.join(experts['against'])}: {NOT_RUN}.")
-    if experts["compared"]:
-        mine = next(r for r in rows if r["name"] == experts["row"])["evolution"]
-        lines += ["", *head(f"final best fitness of {experts['row']} ({mine['seeds']} seeds)", "its", "theirs",
-                            "their seeds", "difference", "se")]
-        lines += [line(f"against {c['name']}", f"{mine['final_best']:.3f}", f"{c['final_best']:.3f}", c["seeds"],
-                      f"{c['difference']:+.3f}", f"{c['standard_error']:.3f}") for c in experts["compared"]]
-    return lines
+            *(line(name, c["genomes"], f"{c['experts_following']:.2f}", f"{c['colours']:.2f}",
+                   ", ".join(f"{k} {n}" for k, n in c["sets"].items())) for name, c in probed)]
 
 
 def _style(row: dict) -> dict:
@@ -433,28 +372,27 @@ def _learning(ax, rows: list[dict], measured: dict) -> bool:
 
 def _steady(ax, rows: list[dict], measured: dict) -> bool:
     """The rows' learning tests' steady states: mean over runs (+-1 sd) and best run (the paper's Fig. 3c)."""
-    drawn = [r for r in rows if r["test"] is not None]
+    drawn = [r["test"] | dict(name=r["name"]) for r in rows if r["test"] is not None]
     x = np.arange(len(drawn))
-    ax.bar(x - 0.19, [r["test"]["steady_mean"] for r in drawn], 0.38, yerr=[r["test"]["steady_sd"] for r in drawn],
-           color="0.35", capsize=3, label="mean over runs (+-1 sd)")
-    ax.bar(x + 0.19, [r["test"]["steady_best_run"] for r in drawn], 0.38, color="0.75", label="best run")
-    ax.set_xticks(x, [r["name"] for r in drawn], rotation=30, ha="right", fontsize=7)
+    ax.bar(x - 0.19, [t["steady_mean"] for t in drawn], 0.38, yerr=[t["steady_sd"] for t in drawn], color="0.35",
+           capsize=3, label="mean over runs (+-1 sd)")
+    ax.bar(x + 0.19, [t["steady_best_run"] for t in drawn], 0.38, color="0.75", label="best run")
+    ax.set_xticks(x, [t["name"] for t in drawn], rotation=30, ha="right", fontsize=7)
     ax.set(title="steady state of the learning tests", ylabel="steady-state performance")
     ax.grid(False, axis="x")
     return bool(drawn)
 
 
 def _values(ax, rows: list[dict], measured: dict) -> bool:
-    """(c): each seed's best's evolved learning values (dots; their mean, a bar) in their genes' ranges, beside the
-    values `skills` and the paper set by hand."""
+    """(c): each seed's best's evolved values (dots; their mean, a bar) in their genes' ranges, beside the hand-set."""
     from experiments.claims import map_position
     from imrl_jax.conditions import EVOLVED_FIELDS
 
     values = measured["learning_values"]
     names = [n for n in values["names"] if n in EVOLVED_FIELDS]
-    for preset, marker in (("skills", "s"), ("paper", "x")):
+    for preset, marker, colour in (("skills", "s", "k"), ("paper", "x", "0.5")):
         ax.scatter(range(len(names)), [map_position(n, values["hand"][preset][n]) for n in names], marker=marker,
-                   s=40, color="k" if preset == "skills" else "0.5", zorder=5, label=f"{preset} (by hand)")
+                   s=40, color=colour, zorder=5, label=f"{preset} (by hand)")
     drawn = [r for r in rows if values["evolved"].get(r["name"])]
     for i, row in enumerate(drawn):
         evolved, colour = values["evolved"][row["name"]], _style(row)["color"]
@@ -496,8 +434,7 @@ def figure(measured: dict, question: str, path: str) -> str:
     from experiments.claims import FUTURE
     from imrl_jax.plotting import new_figure, save, style_axis
 
-    names = {n for j in JUDGED if j.question == question for n in j.rows}
-    rows = [r for r in measured["rows"] if r["name"] in names]
+    rows = [r for r in measured["rows"] if any(r["name"] in names for q, _, names in JUDGED if q == question)]
     fig = new_figure(6.4 * len(PANELS[question]), 4.6)
     for ax, panel in zip(fig.subplots(1, len(PANELS[question]), squeeze=False)[0], PANELS[question]):
         drawn = panel(ax, rows, measured)
@@ -514,17 +451,15 @@ def figure(measured: dict, question: str, path: str) -> str:
 
 
 class FutureWorkTable(Table):
-    """The future-work study's table, whose report is its own: its rows beside SLE's tests, (c)'s values, (d)'s
-    experts, the verdicts and a figure per question."""
+    """The future-work study's table, whose report (:func:`measure`, :func:`table`, :func:`figure`) is its own."""
 
     def report(self) -> int:
         from experiments.claims_study import reproduction_summary
         from experiments.study import write_table
 
-        rows = {row.name: row for row in self.rows}
         # the reproduction's report beside the study's document: its runs' fresh lives, which the reference rows show
-        measured = measure(rows, self.evolutions(), self.tests(), reproduction_summary(self.document) or {},
-                           self.reproduction)
+        measured = measure({row.name: row for row in self.rows}, self.evolutions(), self.tests(),
+                           reproduction_summary(self.document) or {}, self.reproduction)
         os.makedirs(self.out, exist_ok=True)
         with open(os.path.join(self.out, "report.json"), "w") as f:
             json.dump(measured, f, indent=2)
@@ -536,22 +471,9 @@ class FutureWorkTable(Table):
         return 0
 
 
-PAPER = SCALES["paper"]
+# the reproduction's evolutions, then SLE's tests (the order of their stages), then the study's rows
 TABLE = FutureWorkTable("future-work", DOCUMENT, 7, scale=SCREEN, out=OUT, rows=(
-    # the reproduction's runs at the paper's sizes (its EE-ES is paper's: the same lives), read beside the study's
-    Row("skills LE-LS", "LE-LS", "skills", scale=PAPER), Row("skills EE-LS", "EE-LS", "skills", scale=PAPER),
-    Row("skills EE-ES", "EE-ES", "skills", scale=PAPER), Row("faithful LE-LS", "LE-LS", "faithful", scale=PAPER),
-    *SLE_TESTS,
-    Row("EV-LS", "EV-LS", "skills"), Row("EV-LS-diff", "EV-LS-diff", "skills"), Row("EXT-LS", "EXT-LS", "skills"),
-    Row("EXT-LS-whole", "EXT-LS", "skills", ("sle_noise_steps=0",)),
-    Row("LE-LS-P", "LE-LS-P", "skills"), Row("LE-LS-PC", "LE-LS-PC", "skills"),
-    Row("LE-LS-N6", "LE-LS-N", "skills", ("num_experts=6",)),
-    Row("LE-LS-6", "LE-LS", "skills", ("num_experts=6",)),  # the claims study's claim-8 run: found by its key
-    # The same questions under the claims map's chosen rule set (docs/CLAIMS.md, "The decision"): run after skills'.
-    Row("EV-LS-faithful", "EV-LS", "faithful"), Row("EXT-LS-faithful", "EXT-LS", "faithful", ("sle_noise_steps=0",)),
-    Row("LE-LS-P-faithful", "LE-LS-P", "faithful"), Row("LE-LS-N6-faithful", "LE-LS-N", "faithful", ("num_experts=6",)),
-    Row("LE-LS-6-faithful", "LE-LS", "faithful", ("num_experts=6",)),  # claim 8's paper-selector run: the same lives
-))
+    *sorted((row for row, _ in REFERENCES), key=lambda row: not row.evolved), *(row for row, _ in STUDIED)))
 all_stages, main = TABLE.all_stages, TABLE.main
 #: The studies of this module (python -m experiments finds them).
 STUDIES = (TABLE.study(__name__.rsplit(".", 1)[-1]),)
