@@ -8,7 +8,7 @@ import os
 import shutil
 
 import pytest
-from helpers import ROOT
+from helpers import ROOT, write_evolution, write_learning_test
 
 from experiments import future_work as study
 from experiments.reproduce import stage_done
@@ -183,27 +183,17 @@ def test_record_traits_and_their_history_columns_by_hand():
 
 
 def _fake_evolution(folder, best, planned, traits=None):
-    """A history.csv as evolve writes it: ``best[seed][generation]``; ``traits[name] = (mean, best's)``, each
-    [seed][generation]; and the config.json with the planned number of generations."""
-    folder.mkdir(parents=True)
-    names = list(traits or {})
-    lines = ["generation,seed,best,mean,std" + "".join(f",mean_{n},best_{n}" for n in names)]
-    for g in range(len(best[0])):
-        for s in range(len(best)):
-            lines.append(f"{g},{s},{best[s][g]},0.1,0.01" + "".join(f",{traits[n][0][s][g]},{traits[n][1][s][g]}"
-                                                                   for n in names))
-    (folder / "history.csv").write_text("\n".join(lines) + "\n")
-    (folder / "config.json").write_text(json.dumps(dict(config=dict(num_generations=planned))))
+    """An evolution of ``best[seed][generation]``, its traits ``traits[name] = (mean, best's)`` each [seed][generation],
+    planned for ``planned`` generations."""
+    columns = dict(mean=0.1, std=0.01, **{f"{which}_{n}": list(zip(*t[i])) for n, t in (traits or {}).items()
+                                          for i, which in enumerate(("mean", "best"))})
+    write_evolution(folder, list(zip(*best)), dict(config=dict(num_generations=planned)), columns)
 
 
 def _fake_test(folder, per_run, sle_noise_steps=None):
-    """A finished learning test as the report reads it: steady.json and curve.csv."""
-    folder.mkdir(parents=True)
-    steady = dict(steady_per_run=list(per_run), pairs_both_ways=0.5)
-    if sle_noise_steps is not None:
-        steady["config"] = dict(sle_noise_steps=sle_noise_steps)
-    (folder / "steady.json").write_text(json.dumps(steady))
-    (folder / "curve.csv").write_text("bin,end_step,mean,sd_over_runs\n0,1000,0.1,0.01\n1,2000,0.3,0.01\n")
+    """A finished learning test (SLE's: its noise's horizon in its config)."""
+    write_learning_test(folder, per_run, pairs_both_ways=0.5,
+                        **({} if sle_noise_steps is None else dict(config=dict(sle_noise_steps=sle_noise_steps))))
 
 
 #: Every row the report shows, by name, as the table and SLE's tests describe it.

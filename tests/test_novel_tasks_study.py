@@ -1,8 +1,10 @@
 """The novel-tasks study as a table: its committed runs found, its stages' commands, and its report's measure."""
 
-import dataclasses
 import json
 import os
+
+import helpers
+from helpers import write_evolution, write_learning_test
 
 from experiments import novel_tasks as study
 from experiments.reproduce import stage_done
@@ -62,24 +64,14 @@ def test_the_tests_on_other_task_sets_cost_the_tasks_they_run_and_one_childhood(
 
 def relocated(tmp_path):
     """The study's table writing into ``tmp_path``, its document a stub with the table's markers."""
-    document = tmp_path / "NOVEL_TASKS.md"
-    document.write_text("intro\n<!-- advantage table: python -m experiments report novel-tasks -->\nold\n"
-                        "<!-- end of advantage table -->\nend\n")
-    results = tmp_path / "results"
-    return dataclasses.replace(study.TABLE, results=str(results), out=str(results / "novel_tasks"),
-                               document=str(document))
+    return helpers.relocated(study.TABLE, tmp_path, "intro\n<!-- advantage table: python -m experiments report "
+                             "novel-tasks -->\nold\n<!-- end of advantage table -->\nend\n")
 
 
 def fake_test(table, name, per_run, curve=(0.1, 0.3)):
-    """A finished learning test of the row or measure ``name``, as the report reads it: steady.json and curve.csv."""
+    """A finished learning test of the row or measure ``name``."""
     folder = {**table.tests(), **{m.name: table.measure_folder(m) for m in table.measures}}[name]
-    os.makedirs(folder)
-    with open(os.path.join(folder, "steady.json"), "w") as f:
-        json.dump(dict(steady_per_run=list(per_run), steady_mean=sum(per_run) / len(per_run), steady_sd=0.0,
-                       steady_per_task=[0.5] * 6, pairs_both_ways=0.5), f)
-    with open(os.path.join(folder, "curve.csv"), "w") as f:
-        f.write("bin,end_step,mean,sd_over_runs\n" + "".join(f"{b},{(b + 1) * 1000},{v},0.01\n"
-                                                              for b, v in enumerate(curve)))
+    write_learning_test(folder, per_run, curve, steady_sd=0.0, steady_per_task=[0.5] * 6, pairs_both_ways=0.5)
 
 
 def test_report_measures_the_advantage_and_judges_it(tmp_path):
@@ -115,10 +107,7 @@ def test_report_measures_the_advantage_and_judges_it(tmp_path):
 
 def write_history(folder, generations, best):
     """An evolution's history.csv of 2 seeds: ``best(generation, seed)`` in each of its ``generations``."""
-    os.makedirs(folder)
-    rows = "".join(f"{g},{s},{best(g, s)},0.1\n" for g in range(generations) for s in range(2))
-    with open(os.path.join(folder, "history.csv"), "w") as f:
-        f.write("generation,seed,best,mean\n" + rows)
+    write_evolution(folder, [[best(g, s) for s in range(2)] for g in range(generations)], columns=dict(mean=0.1))
 
 
 def test_report_judges_held_out_tasks_and_leaves_sle_unjudged(tmp_path):

@@ -3,7 +3,7 @@
 import json
 import os
 
-from helpers import ROOT
+from helpers import ROOT, write_evolution, write_learning_test
 
 from experiments import reproduce
 from experiments import timescale as study
@@ -170,21 +170,13 @@ def test_confirmation_relives_each_options_best_point(tmp_path, monkeypatch):
 
 
 def _fake_evolution(folder, best_per_seed):
-    """An evolution's history.csv as the report reads it: a row per generation and seed."""
-    os.makedirs(folder)
-    rows = [f"{g},{seed},{v},0.0,0.0" for seed, curve in enumerate(best_per_seed) for g, v in enumerate(curve)]
-    with open(os.path.join(folder, "history.csv"), "w") as f:
-        f.write("generation,seed,best,mean,std\n" + "\n".join(rows) + "\n")
+    """An evolution of ``best_per_seed[seed][generation]``."""
+    write_evolution(folder, list(zip(*best_per_seed)), columns=dict(mean=0.0, std=0.0))
 
 
 def _fake_test(folder, per_run):
-    """A finished learning test as the report reads it: steady.json and curve.csv."""
-    os.makedirs(folder)
-    with open(os.path.join(folder, "steady.json"), "w") as f:
-        json.dump(dict(steady_per_run=list(per_run), steady_mean=sum(per_run) / len(per_run), steady_sd=0.0,
-                       num_runs=len(per_run), pairs_both_ways=0.5), f)
-    with open(os.path.join(folder, "curve.csv"), "w") as f:
-        f.write("bin,end_step,mean,sd_over_runs\n0,1000,0.1,0.01\n1,2000,0.3,0.01\n")
+    """A finished learning test."""
+    write_learning_test(folder, per_run, steady_sd=0.0, pairs_both_ways=0.5)
 
 
 def test_report_compares_the_option_with_the_per_step_runs(tmp_path):
