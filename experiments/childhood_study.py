@@ -157,26 +157,25 @@ def stage_ceiling(args) -> int:
 
 
 def best_of_run(run_dir: str, num_best: int):
-    """A run's config, seeds, and per seed the ``num_best`` best genomes of its last evaluated generation and their fitness."""
+    """A run's config, the ``num_best`` best genomes of each seed's last evaluated generation (one after the other,
+    seed by seed) and a row for each: its run, seed, rank and fitness."""
     from imrl_jax.rundir import best_genomes, load_run, read_config, read_kept_best
 
-    if not os.path.isfile(os.path.join(run_dir, "final_population.npz")):
+    if os.path.isfile(os.path.join(run_dir, "final_population.npz")):
+        run = load_run(run_dir)
+        config, seeds, genomes = run.config, run.seeds, best_genomes(run, num_best)
+        fitness = -np.sort(-run.fitness, axis=1)[:, :num_best]
+    else:
         # A reproduction's run directory keeps its best genomes in best_genomes.npz, three levels up
         # (RESULTS/VARIANT/evolve/COND), under VARIANT__COND__*.
         config, _ = read_config(run_dir)
-        run_dir = os.path.normpath(run_dir)
-        variant_dir = os.path.dirname(os.path.dirname(run_dir))
+        variant_dir = os.path.dirname(os.path.dirname(os.path.normpath(run_dir)))
         kept = read_kept_best(os.path.join(os.path.dirname(variant_dir), "best_genomes.npz"),
-                              os.path.basename(variant_dir), os.path.basename(run_dir))
-        return config, np.asarray(kept.seeds), kept.genomes[:, :num_best], kept.fitness[:, :num_best]
-    run = load_run(run_dir)
-    return run.config, np.asarray(run.seeds), best_genomes(run, num_best), -np.sort(-run.fitness, axis=1)[:, :num_best]
-
-
-def ranked(run_dir: str, seeds, fitness) -> list[dict]:
-    """A row per seed and rank of a run's best (as :func:`best_of_run` gives them): its run, seed, rank and fitness."""
-    return [dict(run=os.path.basename(run_dir.rstrip("/")), seed=int(seeds[s]), rank=rank + 1,
-                 fitness=float(fitness[s, rank])) for s, rank in np.ndindex(fitness.shape)]
+                              os.path.basename(variant_dir), os.path.basename(os.path.normpath(run_dir)))
+        seeds, genomes, fitness = kept.seeds, kept.genomes[:, :num_best], kept.fitness[:, :num_best]
+    return config, genomes.reshape(-1, genomes.shape[-1]), [
+        dict(run=os.path.basename(run_dir.rstrip("/")), seed=int(seeds[s]), rank=rank + 1,
+             fitness=float(fitness[s, rank])) for s, rank in np.ndindex(fitness.shape)]
 
 
 def probes(config, genomes, key: int) -> list[dict]:
@@ -194,9 +193,9 @@ def stage_evolved(args) -> int:
     """Probes of the best evolved individuals of run directories."""
     rows = []
     for run_dir in args.runs:
-        config, seeds, genomes, fitness = best_of_run(run_dir, args.best)
-        probed = probes(config, genomes.reshape(-1, genomes.shape[-1]), args.key)
-        rows += [dict(row, **probe) for row, probe in zip(ranked(run_dir, seeds, fitness), probed)]
+        config, genomes, best = best_of_run(run_dir, args.best)
+        probed = probes(config, genomes, args.key)
+        rows += [dict(row, **probe) for row, probe in zip(best, probed)]
         print(f"{run_dir}: individuals with 0-3 colours followed "
               f"{np.bincount([p['num_colours'] for p in probed], minlength=4).tolist()}", flush=True)
     return finish(args.out, rows)
@@ -226,13 +225,13 @@ def stage_heritability(args) -> int:
 
     rows = []
     for run_dir in args.runs:
-        config, seeds, genomes, fitness = best_of_run(run_dir, args.best)
+        config, genomes, best = best_of_run(run_dir, args.best)
         config = config.replace(lives_per_fitness=1)
-        flat = np.repeat(genomes.reshape(-1, genomes.shape[-1]), args.lives, axis=0)
-        relived = np.asarray(make_evaluate(config)(jax.random.key(args.key), config.learning_params(), flat).fitness)
+        relived = np.asarray(make_evaluate(config)(jax.random.key(args.key), config.learning_params(),
+                                                   np.repeat(genomes, args.lives, axis=0)).fitness)
         rows += [dict(row, relived_mean=float(lives.mean()), relived_sd=float(lives.std(ddof=1)),
                       **{f"life_{j + 1}": float(v) for j, v in enumerate(lives)})
-                 for row, lives in zip(ranked(run_dir, seeds, fitness), relived.reshape(-1, args.lives))]
+                 for row, lives in zip(best, relived.reshape(-1, args.lives))]
     return finish(args.out, rows)
 
 
