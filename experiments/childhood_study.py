@@ -6,14 +6,9 @@
 
 Its evolutions (3 seeds x 30 generations at the paper's life lengths) are rows, found by their key in
 ``results/childhood/evolve``. Its measures (``python -m experiments.childhood_study [RUN...] --out OUT
-STAGE``) each write OUT/NAME.csv, NAME the folder's, then OUT/result.json, which names the CSV:
-
-* ``hand``: childhood alone with hand-made colour reinforcers (:func:`imrl_jax.behaviour.colour_reinforcers`)
-  over its length, the walls, the selector's reward and the learning rules;
-* ``ceiling``: ideal colour followers composed by a learning selector, per adult rule set and task length;
-* ``speed``: hand-made colour reinforcers with experts that start fast;
-* ``evolved``: the junction probes (:func:`imrl_jax.behaviour.specialisation`) of runs' best, LE-LS's after
-  a fresh childhood; ``random``: random LE-LS genomes' fitness and probes; ``heritability``: runs' best relived.
+STAGE``, STAGE one of :data:`STAGES`: hand, ceiling, speed, evolved, random, heritability, each its
+``stage_NAME`` below; docs/CHILDHOOD.md's table says which measure runs which) each write OUT/NAME.csv,
+NAME the folder's, then OUT/result.json, which names the CSV.
 
 The measures made before the study was on the runner wrote their CSVs into ``results/childhood``; the
 result.json of each of their folders (``measures/NAME``), written once from the committed files,
@@ -34,7 +29,7 @@ import numpy as np
 from experiments.study import REPRODUCTION, RESULTS, SCALES
 from experiments.table import Measure, Row, Table
 from imrl_jax.cli import HelpFormatter, Parser, UsageError, exit_codes
-from imrl_jax.config import ADULT_SELECTOR
+from imrl_jax.config import ADULT_SELECTOR, CHILDHOOD_SELECTOR_REWARDS, CHILDHOOD_WALLS
 
 #: The study's results: its evolutions (evolve/NAME), its measures' folders (measures/NAME) and figures.
 OUT = os.path.join(RESULTS, "childhood")
@@ -107,22 +102,20 @@ def stage_hand(args) -> int:
     from imrl_jax.config import make_config
 
     rows, start = [], time.perf_counter()
+    lanes = [(rule, seed) for rule in args.rules.split(",") for seed in range(args.seeds)]
     for length, wall, reward in itertools.product([int(v) for v in args.lengths.split(",")], args.walls.split(","),
                                                   args.rewards.split(",")):
         config = make_config("paper", condition="LE-LS", childhood_steps=length, childhood_walls=wall,
                              childhood_selector_reward=reward, wall_respawn_steps=args.respawn_steps,
                              initial_speed_bias=args.speed_bias)
-        genome = jax.numpy.asarray(behaviour.colour_reinforcers(config))
-        lanes = [(rule, seed) for rule in args.rules.split(",") for seed in range(args.seeds)]
         points = sweeps.from_settings(config, [RULES[rule] for rule, _ in lanes]).points.params
         keys = jax.vmap(lambda s: jax.random.fold_in(jax.random.key(args.key), s))(
             jax.numpy.asarray([seed for _, seed in lanes]))
-        agents, (selections, on_wall, respawns) = behaviour.make_childhoods(config)(keys, points, genome)
-        agents, selections, on_wall, respawns = jax.device_get((agents, selections, on_wall, respawns))
-        for j, (rule, seed) in enumerate(lanes):
-            row = dict(length=length, walls=wall, reward=reward, rules=rule, seed=seed)
-            row.update(measure(config, jax.tree.map(lambda x: x[j], agents), (selections[j], on_wall[j], respawns[j])))
-            rows.append(row)
+        agents, records = jax.device_get(behaviour.make_childhoods(config)(
+            keys, points, jax.numpy.asarray(behaviour.colour_reinforcers(config))))
+        rows += [dict(length=length, walls=wall, reward=reward, rules=rule, seed=seed,
+                      **measure(config, jax.tree.map(lambda x: x[j], agents), tuple(x[j] for x in records)))
+                 for j, (rule, seed) in enumerate(lanes)]
         print(f"childhood {length:,} walls={wall} reward={reward}: {time.perf_counter() - start:.0f} s", flush=True)
     return finish(args.out, rows, seconds=round(time.perf_counter() - start, 1), seeds=args.seeds,
                   settings=summarise(rows, ("length", "walls", "reward", "rules")))
@@ -137,10 +130,9 @@ def summarise(rows, keys) -> list[dict]:
         for name in ("own_takes", "own_followers", "num_colours", "max_control", "wall_share", "wall_last_quarter",
                      "respawns", "speed"):
             values = np.asarray([r[name] for r in group], float)
-            entry[name] = round(float(values.mean()), 3)
-            entry[name + "_range"] = [round(float(values.min()), 3), round(float(values.max()), 3)]
-        entry["seeds"] = len(group)
-        out.append(entry)
+            entry.update({name: round(float(values.mean()), 3),
+                          name + "_range": [round(float(values.min()), 3), round(float(values.max()), 3)]})
+        out.append(dict(entry, seeds=len(group)))
     return out
 
 
@@ -152,56 +144,60 @@ def stage_ceiling(args) -> int:
     from imrl_jax.controllers import composition_ceiling
 
     rows = []
-    for task_steps in [int(v) for v in args.task_steps.split(",")]:
-        for name, rules in CEILING_RULES.items():
-            config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **rules)
-            result = composition_ceiling(jax.random.key(args.key), config, args.lives)
-            fitness = np.asarray(result.fitness)
-            performance = np.asarray(result.performance).mean(0)
-            rows.append(dict(rules=name, task_steps=task_steps, lives=args.lives, fitness=float(fitness.mean()),
-                             fitness_sd=float(fitness.std()),
-                             **{f"task_{t + 1}": float(v) for t, v in enumerate(performance)}))
-            print(f"{name:>18} {task_steps:>7,} steps: ideal followers {fitness.mean():.3f}", flush=True)
+    for task_steps, (name, rules) in itertools.product([int(v) for v in args.task_steps.split(",")],
+                                                       CEILING_RULES.items()):
+        config = make_config("paper", condition="EE-LS", task_steps=task_steps, num_bins=10, **rules)
+        result = composition_ceiling(jax.random.key(args.key), config, args.lives)
+        fitness = np.asarray(result.fitness)
+        rows.append(dict(rules=name, task_steps=task_steps, lives=args.lives, fitness=float(fitness.mean()),
+                         fitness_sd=float(fitness.std()),
+                         **{f"task_{t + 1}": float(v) for t, v in enumerate(np.asarray(result.performance).mean(0))}))
+        print(f"{name:>18} {task_steps:>7,} steps: ideal followers {fitness.mean():.3f}", flush=True)
     return finish(args.out, rows, rules=CEILING_RULES)
 
 
 def best_of_run(run_dir: str, num_best: int):
-    """A run's config, seeds, and per seed the ``num_best`` best genomes of its last evaluated generation and their fitness."""
+    """A run's config, the ``num_best`` best genomes of each seed's last evaluated generation (one after the other,
+    seed by seed) and a row for each: its run, seed, rank and fitness."""
     from imrl_jax.rundir import best_genomes, load_run, read_config, read_kept_best
 
-    if not os.path.isfile(os.path.join(run_dir, "final_population.npz")):
+    if os.path.isfile(os.path.join(run_dir, "final_population.npz")):
+        run = load_run(run_dir)
+        config, seeds, genomes = run.config, run.seeds, best_genomes(run, num_best)
+        fitness = -np.sort(-run.fitness, axis=1)[:, :num_best]
+    else:
         # A reproduction's run directory keeps its best genomes in best_genomes.npz, three levels up
         # (RESULTS/VARIANT/evolve/COND), under VARIANT__COND__*.
         config, _ = read_config(run_dir)
-        run_dir = os.path.normpath(run_dir)
-        variant_dir = os.path.dirname(os.path.dirname(run_dir))
+        variant_dir = os.path.dirname(os.path.dirname(os.path.normpath(run_dir)))
         kept = read_kept_best(os.path.join(os.path.dirname(variant_dir), "best_genomes.npz"),
-                              os.path.basename(variant_dir), os.path.basename(run_dir))
-        return config, np.asarray(kept.seeds), kept.genomes[:, :num_best], kept.fitness[:, :num_best]
-    run = load_run(run_dir)
-    return run.config, np.asarray(run.seeds), best_genomes(run, num_best), -np.sort(-run.fitness, axis=1)[:, :num_best]
+                              os.path.basename(variant_dir), os.path.basename(os.path.normpath(run_dir)))
+        seeds, genomes, fitness = kept.seeds, kept.genomes[:, :num_best], kept.fitness[:, :num_best]
+    return config, genomes.reshape(-1, genomes.shape[-1]), [
+        dict(run=os.path.basename(run_dir.rstrip("/")), seed=int(seeds[s]), rank=rank + 1,
+             fitness=float(fitness[s, rank])) for s, rank in np.ndindex(fitness.shape)]
+
+
+def probes(config, genomes, key: int) -> list[dict]:
+    """Each genome's :func:`measure`: of the experts it ends childhood with (LE-LS: a fresh one, keys from ``key``)."""
+    import jax
+
+    from imrl_jax.behaviour import grown_agents
+
+    agents, records = grown_agents(config, genomes, key)
+    return [measure(config, jax.tree.map(lambda x: x[i], agents),
+                    None if records is None else tuple(x[i] for x in records)) for i in range(len(genomes))]
 
 
 def stage_evolved(args) -> int:
     """Probes of the best evolved individuals of run directories."""
-    import jax
-
-    from imrl_jax import behaviour
-
     rows = []
     for run_dir in args.runs:
-        config, seeds, genomes, fitness = best_of_run(run_dir, args.best)
-        flat = genomes.reshape(-1, genomes.shape[-1])
-        agents, records = behaviour.grown_agents(config, flat, args.key)
-        for i in range(len(flat)):
-            s, rank = divmod(i, args.best)
-            row = dict(run=os.path.basename(run_dir.rstrip("/")), seed=int(seeds[s]), rank=rank + 1,
-                       fitness=float(fitness[s, rank]))
-            row.update(measure(config, jax.tree.map(lambda x: x[i], agents),
-                               None if records is None else tuple(x[i] for x in records)))
-            rows.append(row)
+        config, genomes, best = best_of_run(run_dir, args.best)
+        probed = probes(config, genomes, args.key)
+        rows += [dict(row, **probe) for row, probe in zip(best, probed)]
         print(f"{run_dir}: individuals with 0-3 colours followed "
-              f"{np.bincount([r['num_colours'] for r in rows[-len(flat):]], minlength=4).tolist()}", flush=True)
+              f"{np.bincount([p['num_colours'] for p in probed], minlength=4).tolist()}", flush=True)
     return finish(args.out, rows)
 
 
@@ -209,7 +205,6 @@ def stage_random(args) -> int:
     """Random genomes (generation 0) under a preset: one life's fitness each and the probes of their experts."""
     import jax
 
-    from imrl_jax import behaviour
     from imrl_jax.config import make_config
     from imrl_jax.lifetime import make_evaluate
 
@@ -218,11 +213,8 @@ def stage_random(args) -> int:
                                  maxval=1.0)
     fitness = np.asarray(make_evaluate(config)(jax.random.key(args.key + 1), config.learning_params(),
                                                genomes).fitness)
-    agents, records = behaviour.grown_agents(config, genomes, args.key + 2)
-    rows = [dict(preset=args.preset, individual=i, fitness=float(fitness[i]),
-                 **measure(config, jax.tree.map(lambda x: x[i], agents), tuple(x[i] for x in records)))
-            for i in range(args.individuals)]
-    return finish(args.out, rows)
+    return finish(args.out, [dict(preset=args.preset, individual=i, fitness=float(fitness[i]), **probe)
+                             for i, probe in enumerate(probes(config, genomes, args.key + 2))])
 
 
 def stage_heritability(args) -> int:
@@ -233,17 +225,13 @@ def stage_heritability(args) -> int:
 
     rows = []
     for run_dir in args.runs:
-        config, seeds, genomes, fitness = best_of_run(run_dir, args.best)
+        config, genomes, best = best_of_run(run_dir, args.best)
         config = config.replace(lives_per_fitness=1)
-        flat = np.repeat(genomes.reshape(-1, genomes.shape[-1]), args.lives, axis=0)
-        result = make_evaluate(config)(jax.random.key(args.key), config.learning_params(), flat)
-        relived = np.asarray(result.fitness).reshape(len(seeds), args.best, args.lives)
-        for s in range(len(seeds)):
-            for rank in range(args.best):
-                rows.append(dict(run=os.path.basename(run_dir.rstrip("/")), seed=int(seeds[s]), rank=rank + 1,
-                                 fitness=float(fitness[s, rank]), relived_mean=float(relived[s, rank].mean()),
-                                 relived_sd=float(relived[s, rank].std(ddof=1)),
-                                 **{f"life_{j + 1}": float(v) for j, v in enumerate(relived[s, rank])}))
+        relived = np.asarray(make_evaluate(config)(jax.random.key(args.key), config.learning_params(),
+                                                   np.repeat(genomes, args.lives, axis=0)).fitness)
+        rows += [dict(row, relived_mean=float(lives.mean()), relived_sd=float(lives.std(ddof=1)),
+                      **{f"life_{j + 1}": float(v) for j, v in enumerate(lives)})
+                 for row, lives in zip(best, relived.reshape(-1, args.lives))]
     return finish(args.out, rows)
 
 
@@ -254,7 +242,7 @@ def stage_speed(args) -> int:
     import jax.numpy as jnp
 
     from imrl_jax.arena import task_arrays
-    from imrl_jax.behaviour import colour_reinforcers, specialisation
+    from imrl_jax.behaviour import colour_reinforcers
     from imrl_jax.config import make_config
     from imrl_jax.lifetime import childhood_task, lifetime_keys, random_pose, run_phase, task_spec, task_start
     from imrl_jax.networks import decode
@@ -273,27 +261,23 @@ def stage_speed(args) -> int:
         state = for_phase(config, phase, init_state(config, agent, random_pose(keys.pose, config)))
         state, _ = run_phase(keys.childhood, config, phase, params, childhood_task(config), state,
                              config.childhood_steps)
-        grown = state.agent
 
         def task(task_key, index):
             _, curves = run_phase(task_key, config, config.spec.adult, params, task_spec(config, index),
-                                  task_start(config, grown, index), config.task_steps)
+                                  task_start(config, state.agent, index), config.task_steps)
             return curves.reaches.sum()
 
-        reaches = jax.vmap(task)(keys.tasks, jnp.arange(config.num_tasks))
-        return grown, reaches / best
+        return state.agent, jax.vmap(task)(keys.tasks, jnp.arange(config.num_tasks)) / best
 
-    biases = [float(b) for b in args.biases.split(",")]
-    lanes = [(b, i) for b in biases for i in range(args.lives)]
+    lanes = [(float(b), i) for b in args.biases.split(",") for i in range(args.lives)]
     keys = jax.random.split(jax.random.key(args.key), len(lanes))
     grown, performance = jax.jit(jax.vmap(life))(keys, jnp.asarray([b for b, _ in lanes]))
     performance = np.asarray(performance)
     rows = []
     for j, (bias, i) in enumerate(lanes):
-        spec = specialisation(config, jax.tree.map(lambda x: x[j], grown))
+        probe = measure(config, jax.tree.map(lambda x: x[j], grown))
         rows.append(dict(speed_bias=bias, life=i, fitness=float(performance[j].mean()),
-                         own_takes=float(np.diag(spec.takes).mean()), num_colours=spec.num_colours,
-                         speed=float(spec.speed.mean()),
+                         **{name: probe[name] for name in ("own_takes", "num_colours", "speed")},
                          **{f"task_{t + 1}": float(v) for t, v in enumerate(performance[j])}))
     return finish(args.out, rows, preset=args.preset)
 
@@ -302,31 +286,23 @@ def plot_hand(rows, path: str) -> str:
     """Own colour taken, largest control share and time on walls of every setting (mean bars, seed dots)."""
     from imrl_jax.plotting import new_figure, save
 
-    order = lambda values, first: sorted(set(values), key=lambda v: (v not in first, first.index(v) if v in first  # noqa: E731
-                                                                     else 0, v))
-    lengths = sorted({int(r["length"]) for r in rows})
-    walls = order([r["walls"] for r in rows], ["clamp", "respawn"])
-    rewards = order([r["reward"] for r in rows], ["surprise", "progress"])
-    rules = order([r["rules"] for r in rows], list(RULES))
-    groups = [(length, wall, reward) for length in lengths for wall in walls for reward in rewards]
+    walls, rewards, rules = ([v for v in known if any(r[name] == v for r in rows)] for name, known in (
+        ("walls", CHILDHOOD_WALLS), ("reward", CHILDHOOD_SELECTOR_REWARDS), ("rules", RULES)))
+    groups = list(itertools.product(sorted({int(r["length"]) for r in rows}), walls, rewards))
     metrics = (("own_takes", "own colour taken at junctions", 0.5),
                ("max_control", "largest control share, last quarter", 0.6),
                ("wall_share", "share of time on a wall", None))
-    fig = new_figure(12.0, 1.2 + 0.42 * len(groups))
-    fig.subplots_adjust(left=0.17, right=0.98, top=1 - 0.9 / (1.2 + 0.42 * len(groups)), bottom=0.06, wspace=0.08)
+    size = 1.2 + 0.42 * len(groups)  # the figure's height: a row of bars per setting
+    fig = new_figure(12.0, size)
+    fig.subplots_adjust(left=0.17, right=0.98, top=1 - 0.9 / size, bottom=0.06, wspace=0.08)
     axes = fig.subplots(1, len(metrics), sharey=True)
     height = 0.8 / len(rules)
     for ax, (name, title, target) in zip(axes, metrics):
-        for y, (length, wall, reward) in enumerate(groups):
-            for i, rule in enumerate(rules):
-                values = [r[name] for r in rows if (r["length"], r["walls"], r["reward"], r["rules"])
-                          == (length, wall, reward, rule)]
-                if not values:
-                    continue
-                yy = y - 0.4 + height * (i + 0.5)
-                ax.barh(yy, np.mean(values), height=height * 0.9, color=f"C{i}", alpha=0.55,
-                        label=rule if y == 0 else None)
-                ax.plot(values, [yy] * len(values), "k.", ms=2.5)
+        for (y, setting), (i, rule) in itertools.product(enumerate(groups), enumerate(rules)):
+            values = [r[name] for r in rows if (r["length"], r["walls"], r["reward"], r["rules"]) == (*setting, rule)]
+            yy = y - 0.4 + height * (i + 0.5)
+            ax.barh(yy, np.mean(values), height=height * 0.9, color=f"C{i}", alpha=0.55, label=rule if y == 0 else None)
+            ax.plot(values, [yy] * len(values), "k.", ms=2.5)
         if target is not None:
             ax.axvline(target, color="r", lw=0.8, ls="--")
         for y in range(len(rewards) * len(walls), len(groups), len(rewards) * len(walls)):
@@ -345,45 +321,45 @@ def plot_hand(rows, path: str) -> str:
 
 #: The evolutions at the paper's life lengths: 3 seeds x 30 generations (150,000 + 6 x 100,000 steps).
 EVOLVED = dict(SCALES["paper"], seeds=3, generations=30)
-#: Each row's line of the evolutions' table: what it is, its probes' measure and a note on its tasks.
-LABELS = {
-    "LE-LS-skills": ("LE-LS, `skills`", "evolved_skills", ""),
-    "LE-LS-skills-no-speed-bias": ("LE-LS, `skills` without the speed bias", "evolved_no_speed_bias", ""),
-    "LE-LS-extension": ("LE-LS, `extension`", "evolved_extension", ""),
-    "EE-LS-extension": ("EE-LS, `extension` (= `skills`: EE has no childhood)", "evolved_ee_ls",
-                        ": one task of a pair near 0"),
-    "LE-LS-skills-2lives": ("LE-LS, `skills`, fitness the mean of 2 lives, 15 generations (equal compute)",
-                            "evolved_skills_2lives", ""),
-    "LE-LS-extension-speed-bias": ("LE-LS, `extension` + `initial_speed_bias=4`", "evolved_extension_speed_bias",
+#: Each evolution (a row, not learning-tested): its condition, preset and sets; then its line of the evolutions'
+#: table: what it is, its probes' measure and a note on its tasks.
+EVOLUTIONS = {
+    "LE-LS-skills": ("LE-LS", "skills", (), "LE-LS, `skills`", "evolved_skills", ""),
+    "LE-LS-skills-no-speed-bias": ("LE-LS", "skills", ("initial_speed_bias=0",),
+                                   "LE-LS, `skills` without the speed bias", "evolved_no_speed_bias", ""),
+    "LE-LS-extension": ("LE-LS", "extension", (), "LE-LS, `extension`", "evolved_extension", ""),
+    "EE-LS-extension": ("EE-LS", "extension", (), "EE-LS, `extension` (= `skills`: EE has no childhood)",
+                        "evolved_ee_ls", ": one task of a pair near 0"),
+    "LE-LS-skills-2lives": ("LE-LS", "skills", ("lives_per_fitness=2",), "LE-LS, `skills`, fitness the mean of 2 "
+                            "lives, 15 generations (equal compute)", "evolved_skills_2lives", ""),
+    "LE-LS-extension-speed-bias": ("LE-LS", "extension", ("initial_speed_bias=4",), "LE-LS, `extension` + "
+                                   "`initial_speed_bias=4`", "evolved_extension_speed_bias",
                                    ": seed 2 solves task 1 at 0.00"),
-    "LE-LS-skills-clamp": ("LE-LS, `skills` with `childhood_walls=clamp`", "evolved_skills_clamp", ""),
+    "LE-LS-skills-clamp": ("LE-LS", "skills", ("childhood_walls=clamp",), "LE-LS, `skills` with "
+                           "`childhood_walls=clamp`", "evolved_skills_clamp", ""),
 }
-
-
-#: A history.csv's columns of each seed's best: its fitness, then its performance on each of the paper's tasks.
-BEST_COLUMNS = ("best", *(f"best_task{t + 1}" for t in range(6)))
 
 
 class ChildhoodTable(Table):
     """The study's table: its evolutions' final best, tasks and probes, evolve.png and the hand-made childhoods."""
 
     def report(self) -> int:
-        from experiments.loading import read_evolution
-        from experiments.study import write_table
-        from experiments.loading import history_columns
+        from experiments.loading import history_columns, read_evolution
         from experiments.markdown import head, line
+        from experiments.study import write_table
         from imrl_jax import conditions
         from imrl_jax.plotting import new_figure, save, style_axis
 
-        folders = {s.variant: s.out_dir for s in self.all_stages()[0] if s.kind == "measure"}
+        folders = {m.name: self.measure_folder(m) for m in self.measures}
         lines = head("run", "final best (per seed)", "every task of the best",
                      "10 best x 3 seeds: individuals with 0 / 1 / 2 / 3 colours followed")
         fig = new_figure(8.8, 3.8)
         ax = fig.add_subplot()
         for i, (row, run_dir) in enumerate(self.evolutions().items()):
+            *_, label, probed, note = EVOLUTIONS[row]
             run = read_evolution(run_dir)
             if run is None:
-                lines.append(line(LABELS[row][0], "not started", "-", "-"))
+                lines.append(line(label, "not started", "-", "-"))
                 continue
             lives = run["config"].get("lives_per_fitness", 1)
             x, mean, sd = lives * np.arange(len(run["best"])), np.nanmean(run["best"], 1), np.nanstd(run["best"], 1)
@@ -391,12 +367,12 @@ class ChildhoodTable(Table):
             ax.plot(x, mean, label=f"{row} ({len(run['seeds'])} seeds)", color=f"C{i}", ls="--" if dashed else "-",
                     marker="o", ms=2.5, lw=1.4)
             ax.fill_between(x, mean - sd, mean + sd, color=f"C{i}", alpha=0.12, lw=0)
-            label, probes, note = LABELS[row]
-            last = history_columns(run_dir, BEST_COLUMNS)[-1]
-            best, tasks = last[:, 0], last[:, 1:]
-            colours = np.bincount([int(r["num_colours"]) for r in read_rows(folders[probes])], minlength=4)
-            lines.append(line(label, f"{best.mean():.3f} ({', '.join(f'{b:.3f}' for b in best)})",
-                               f"{tasks.min():.2f}-{tasks.max():.2f}{note}", " / ".join(str(c) for c in colours)))
+            # each seed's best of the last generation: its fitness, then its performance on each of the paper's tasks
+            last = history_columns(run_dir, ("best", *(f"best_task{t + 1}" for t in range(6))))[-1]
+            colours = np.bincount([int(r["num_colours"]) for r in read_rows(folders[probed])], minlength=4)
+            lines.append(line(label, f"{last[:, 0].mean():.3f} ({', '.join(f'{b:.3f}' for b in last[:, 0])})",
+                              f"{last[:, 1:].min():.2f}-{last[:, 1:].max():.2f}{note}",
+                              " / ".join(str(c) for c in colours)))
         ceiling, speed = read_rows(folders["ceiling"]), read_rows(folders["speed"])
         references = [(r["fitness"], "ideal colour followers, extension's selector") for r in ceiling
                       if r["rules"] == "extension" and r["task_steps"] == 100_000]
@@ -420,44 +396,37 @@ class ChildhoodTable(Table):
         return 0
 
 
-#: Runs of other studies whose best the study probes: the cpu reproduction's and the paper-scale skills LE-LS.
-CPU = [os.path.join(RESULTS, "cpu", variant, "evolve", condition)
-       for condition in ("LE-LS", "EE-LS") for variant in ("paper", "extension")]
 #: The measures' module: this one.
 MODULE = "experiments.childhood_study"
-TABLE = ChildhoodTable("childhood", "docs/CHILDHOOD.md", 10, out=OUT, scale=EVOLVED, rows=(
-    Row("LE-LS-skills", "LE-LS", "skills", test=False),
-    Row("LE-LS-skills-no-speed-bias", "LE-LS", "skills", ("initial_speed_bias=0",), test=False),
-    Row("LE-LS-extension", "LE-LS", "extension", test=False),
-    Row("EE-LS-extension", "EE-LS", "extension", test=False),
-    Row("LE-LS-skills-2lives", "LE-LS", "skills", ("lives_per_fitness=2",), test=False,
-        scale=dict(EVOLVED, generations=15)),
-    Row("LE-LS-extension-speed-bias", "LE-LS", "extension", ("initial_speed_bias=4",), test=False),
-    Row("LE-LS-skills-clamp", "LE-LS", "skills", ("childhood_walls=clamp",), test=False),
-), measures=(
-    Measure("ceiling", "", ("ceiling",), module=MODULE),
-    Measure("hand", "", ("hand",), module=MODULE),
+TABLE = ChildhoodTable("childhood", "docs/CHILDHOOD.md", 10, out=OUT, scale=EVOLVED, rows=tuple(
+    # 2 lives a fitness: half the generations (equal compute)
+    Row(name, condition, preset, sets, test=False,
+        scale=dict(EVOLVED, generations=15) if "lives_per_fitness=2" in sets else None)
+    for name, (condition, preset, sets, *_) in EVOLUTIONS.items()), measures=(
+    Measure("ceiling", "", ("ceiling",), MODULE),
+    Measure("hand", "", ("hand",), MODULE),
     Measure("hand_fast", "", ("hand", "--lengths", "150000", "--walls", "respawn,clamp", "--rewards", "surprise",
-                              "--rules", "paper", "--speed-bias", "4"), module=MODULE),
-    Measure("speed", "", ("speed", "--biases", "0,1,2,3,4,6", "--lives", "6"), module=MODULE),
-    Measure("evolved_cpu", "", ("evolved", *CPU), module=MODULE),
-    *(Measure(probes, row, ("evolved",), module=MODULE) for row, (_, probes, _) in LABELS.items()),
-    Measure("random_skills", "", ("random",), module=MODULE),
+                              "--rules", "paper", "--speed-bias", "4"), MODULE),
+    Measure("speed", "", ("speed", "--biases", "0,1,2,3,4,6", "--lives", "6"), MODULE),
+    # the best of the cpu reproduction's runs
+    Measure("evolved_cpu", "", ("evolved", *(os.path.join(RESULTS, "cpu", variant, "evolve", condition)
+                                            for condition in ("LE-LS", "EE-LS") for variant in ("paper", "extension"))),
+            MODULE),
+    *(Measure(probed, row, ("evolved",), MODULE) for row, (*_, probed, _) in EVOLUTIONS.items()),
+    Measure("random_skills", "", ("random",), MODULE),
     Measure("heritability", "", ("heritability", *(os.path.join(OUT, "evolve", row) for row in (
-        "LE-LS-skills", "LE-LS-extension", "LE-LS-skills-no-speed-bias", "LE-LS-skills-2lives"))), module=MODULE),
-    Measure("evolved_paper_scale", "", ("evolved", os.path.join(REPRODUCTION, "skills", "evolve", "LE-LS")),
-            module=MODULE),
+        "LE-LS-skills", "LE-LS-extension", "LE-LS-skills-no-speed-bias", "LE-LS-skills-2lives"))), MODULE),
+    Measure("evolved_paper_scale", "", ("evolved", os.path.join(REPRODUCTION, "skills", "evolve", "LE-LS")), MODULE),
 ))
 all_stages = TABLE.all_stages
 #: The studies of this module (python -m experiments finds them).
 STUDIES = (TABLE.study("childhood_study"),)
 
 
-#: Each stage, and its own key and lives where they differ (the keys the committed measures were made with).
-STAGES = {"hand": stage_hand, "ceiling": stage_ceiling, "speed": stage_speed, "evolved": stage_evolved,
-          "random": stage_random, "heritability": stage_heritability}
-KEYS = dict(hand=0, ceiling=0, evolved=1, heritability=2, speed=3, random=4)
-LIVES = dict(ceiling=8, heritability=4, speed=4)
+#: Each stage, and its random key and lives (None: the stage has none) the committed measures were made with.
+STAGES = {"hand": (stage_hand, 0, None), "ceiling": (stage_ceiling, 0, 8), "speed": (stage_speed, 3, 4),
+          "evolved": (stage_evolved, 1, None), "random": (stage_random, 4, None),
+          "heritability": (stage_heritability, 2, 4)}
 
 
 def main(argv=None) -> int:
@@ -485,15 +454,16 @@ def measure_main(argv) -> int:
     p.add_argument("--preset", default="skills", help="speed, random: the preset")
     p.add_argument("--best", type=int, default=10, help="evolved, heritability: best genomes of each seed")
     p.add_argument("--individuals", type=int, default=30, help="random: genomes")
-    p.add_argument("--lives", type=int, help="ceiling 8, heritability 4, speed 4: lives of each")
-    p.add_argument("--key", type=int, help=f"the random key (default: {KEYS})")
+    p.add_argument("--lives", type=int, help="ceiling, heritability, speed: lives of each (default: the stage's)")
+    p.add_argument("--key", type=int, help="the random key (default: the stage's, as in STAGES)")
     args = p.parse_intermixed_args(argv)
     stages = [w for w in args.words if w in STAGES]
     if len(stages) != 1:
         raise UsageError(f"stage: name one of {', '.join(STAGES)} (got {' '.join(args.words)})")
     args.stage, args.runs = stages[0], [w for w in args.words if w not in STAGES]
-    args.key = KEYS[args.stage] if args.key is None else args.key
-    args.lives = LIVES.get(args.stage) if args.lives is None else args.lives
+    stage, key, lives = STAGES[args.stage]
+    args.key = key if args.key is None else args.key
+    args.lives = lives if args.lives is None else args.lives
     unknown = [r for r in args.rules.split(",") if r not in RULES]
     if unknown:
         raise UsageError(f"--rules: unknown rules {unknown[0]!r} (choose from {', '.join(RULES)})")
@@ -505,7 +475,7 @@ def measure_main(argv) -> int:
     from imrl_jax.devices import use_host_cores
 
     use_host_cores(1)
-    return STAGES[args.stage](args)
+    return stage(args)
 
 
 if __name__ == "__main__":

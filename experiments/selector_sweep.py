@@ -27,13 +27,15 @@ import time
 
 import numpy as np
 
-from experiments.study import MEASURED
-from experiments.study import RESULTS
+from experiments.study import MEASURED, RESULTS
 from experiments.table import Measure, Table
 
 OUT = os.path.join(RESULTS, "selector_sweep")
 #: The grid's axes (the command line's defaults): trace decay, selector actor rate, selector critic rate.
-GRID = dict(lambdas="0,0.5,0.9,0.95,0.98", selector_actor_rates="0.01,0.1,0.3,1", selector_critic_rates="0.001,0.003,0.01")
+GRID = dict(lambdas="0,0.5,0.9,0.95,0.98", selector_actor_rates="0.01,0.1,0.3,1",
+            selector_critic_rates="0.001,0.003,0.01")
+#: The LearningParams fields of the grid's axes, in its order.
+FIELDS = ("trace_lambda", "eta_selector_actor", "eta_selector_critic")
 #: Its sizes: lanes per task and point, and the task's length.
 SIZES = dict(seeds=3, task_steps=100_000)
 
@@ -46,21 +48,9 @@ def floats(text: str) -> list[float]:
         raise argparse.ArgumentTypeError(f"not a comma-separated list of numbers: {text!r}") from None
 
 
-def parser() -> argparse.ArgumentParser:
-    """The sweep's command line (``sweep`` names it, beside the study's own)."""
-    p = argparse.ArgumentParser(prog="python -m experiments.selector_sweep", description=__doc__.split("\n\n")[0])
-    p.add_argument("sweep", choices=("sweep",))
-    p.add_argument("--out", required=True, help="its folder (the study's stage gives its own)")
-    p.add_argument("--task-steps", type=int, default=SIZES["task_steps"])
-    p.add_argument("--seeds", type=int, default=SIZES["seeds"], help="lanes per task and point (different keys)")
-    for name, default in GRID.items():
-        p.add_argument(f"--{name.replace('_', '-')}", type=floats, default=default)
-    p.add_argument("--turn-gain", type=float, default=0.1)
-    return p
-
-
-def sweep(args, command: str) -> dict:
-    """Live every point of the grid; write sweep.csv, sweep.json, sweep.png and result.json last; the summary."""
+def sweep(argv: list[str]) -> int:
+    """The sweep's command line (``sweep`` names it, beside the study's own): live every point of the grid; write
+    sweep.csv, sweep.json, sweep.png and result.json last."""
     import jax
     import jax.numpy as jnp
 
@@ -69,38 +59,45 @@ def sweep(args, command: str) -> dict:
     from imrl_jax.config import make_config
     from imrl_jax.controllers import perceptron_followers
 
-    grid = list(itertools.product(*(getattr(args, name) for name in GRID)))
+    p = argparse.ArgumentParser(prog="python -m experiments.selector_sweep", description=__doc__.split("\n\n")[0])
+    p.add_argument("sweep", choices=("sweep",))
+    p.add_argument("--out", required=True, help="its folder (the study's stage gives its own)")
+    p.add_argument("--task-steps", type=int, default=SIZES["task_steps"])
+    p.add_argument("--seeds", type=int, default=SIZES["seeds"], help="lanes per task and point (different keys)")
+    for name, default in GRID.items():
+        p.add_argument(f"--{name.replace('_', '-')}", type=floats, default=default)
+    p.add_argument("--turn-gain", type=float, default=0.1)
+    args = p.parse_args(argv)
+    grid = [dict(zip(FIELDS, point)) for point in itertools.product(*(getattr(args, name) for name in GRID))]
     config = make_config("paper", condition="EE-LS", task_steps=args.task_steps, num_bins=10)
-    points = sweeps.from_settings(config, [dict(trace_lambda=lam, eta_selector_actor=sa, eta_selector_critic=sc)
-                                           for lam, sa, sc in grid])
     genome = perceptron_followers(config, args.turn_gain).reshape(-1)
-    genomes = jnp.broadcast_to(genome, (args.seeds,) + genome.shape)
     lanes = len(grid) * args.seeds * config.num_tasks
     print(f"{len(grid)} points x {args.seeds} seeds x {config.num_tasks} tasks = {lanes} lanes of "
           f"{args.task_steps} steps", flush=True)
+    genomes = jnp.broadcast_to(genome, (args.seeds,) + genome.shape)
     start = time.perf_counter()
-    result = sweeps.make_lifetime_sweep(config)(jax.random.key(0), genomes, points.points)
+    result = sweeps.make_lifetime_sweep(config)(jax.random.key(0), genomes, sweeps.from_settings(config, grid).points)
     performance = np.asarray(result.performance)  # (V, seeds, tasks)
     last = sweeps.normalised_curve(config, np.asarray(result.reward_curve))[..., -1]  # (V, seeds, tasks)
     seconds = time.perf_counter() - start
     print(f"done in {seconds:.0f} s ({lanes * args.task_steps / seconds / 1e6:.2f} M lane-steps/s)")
 
     os.makedirs(args.out, exist_ok=True)
-    rows = [dict(trace_lambda=lam, eta_selector_actor=sa, eta_selector_critic=sc,
-                 performance=float(performance[i].mean()), performance_sd=float(performance[i].mean(1).std()),
+    rows = [dict(point, performance=float(performance[i].mean()), performance_sd=float(performance[i].mean(1).std()),
                  last_tenth=float(last[i].mean()), worst_task=float(performance[i].mean(0).min()),
                  **{f"task_{t + 1}": float(performance[i, :, t].mean()) for t in range(config.num_tasks)})
-            for i, (lam, sa, sc) in enumerate(grid)]
+            for i, point in enumerate(grid)]
     with open(os.path.join(args.out, "sweep.csv"), "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
     figure(rows, os.path.join(args.out, "sweep.png"), args.task_steps)
     best = max(rows, key=lambda r: r["performance"])
-    paper = next((r for r in rows if (r["trace_lambda"], r["eta_selector_actor"], r["eta_selector_critic"])
-                  == (0.0, 0.01, 0.01)), None)  # the paper's rules, when the grid holds them
+    # the paper's rules, when the grid holds them
+    paper = next((r for r in rows if tuple(r[k] for k in FIELDS) == (0.0, 0.01, 0.01)), None)
     summary = dict(best=best, paper=paper, task_steps=args.task_steps, seeds=args.seeds, turn_gain=args.turn_gain,
-                   seconds=round(seconds, 1), backend=jax.default_backend(), command=command, git_commit=git_commit())
+                   seconds=round(seconds, 1), backend=jax.default_backend(),
+                   command="python -m experiments.selector_sweep " + " ".join(argv), git_commit=git_commit())
     for name in ("sweep.json", MEASURED):  # result.json last: the stage is done
         with open(os.path.join(args.out, name), "w") as f:
             json.dump(summary, f, indent=2)
@@ -108,15 +105,14 @@ def sweep(args, command: str) -> dict:
           f"critic={best['eta_selector_critic']:g}: {best['performance']:.3f} (last tenth {best['last_tenth']:.3f})")
     if paper:
         print(f"paper's rules: {paper['performance']:.3f} (last tenth {paper['last_tenth']:.3f})")
-    return summary
+    return 0
 
 
 def figure(rows: list[dict], path: str, task_steps: int) -> str:
     """One panel per lambda: task performance over (selector actor rate, selector critic rate)."""
     from imrl_jax.plotting import new_figure, save
 
-    lambdas, actor_rates, critic_rates = (sorted({r[k] for r in rows})
-                                          for k in ("trace_lambda", "eta_selector_actor", "eta_selector_critic"))
+    lambdas, actor_rates, critic_rates = (sorted({r[k] for r in rows}) for k in FIELDS)
     fig = new_figure(3.0 * len(lambdas), 3.2)
     axes = fig.subplots(1, len(lambdas), squeeze=False)[0]
     for ax, lam in zip(axes, lambdas):
@@ -139,19 +135,15 @@ def figure(rows: list[dict], path: str, task_steps: int) -> str:
 
 #: The study: one measure of no run, done once its committed folder holds result.json.
 SWEEP = Table("selector-sweep", os.path.join("docs", "MODEL.md"), 0.5, rows=(), scale=SIZES, out=OUT, measures=(
-    Measure("sweep", "", ("sweep",), "experiments.selector_sweep", float(5 * 4 * 3 * SIZES["seeds"] * 6
-                                                                          * SIZES["task_steps"]), "."),))
+    Measure("sweep", "", ("sweep",), "experiments.selector_sweep",
+            float(5 * 4 * 3 * SIZES["seeds"] * 6 * SIZES["task_steps"]), "."),))
 all_stages = SWEEP.all_stages
 
 
 def main(argv=None) -> int:
     """The sweep (``sweep``), or the study's run of it on the stage runner."""
     argv = sys.argv[1:] if argv is None else list(argv)
-    if "sweep" not in argv:
-        return SWEEP.main(argv)
-    sweep(parser().parse_args(argv), "python -m experiments.selector_sweep " + " ".join(argv))
-    return 0
-
+    return sweep(argv) if "sweep" in argv else SWEEP.main(argv)
 
 #: The studies of this module (python -m experiments finds them); its stage draws its figure, so no report of its own.
 STUDIES = (dataclasses.replace(SWEEP.study(__name__.rsplit(".", 1)[-1]), report_argv=None),)

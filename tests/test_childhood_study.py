@@ -21,7 +21,7 @@ def test_every_committed_run_and_measure_is_found(in_root):
     stages, scale = study.TABLE.all_stages()
     assert [s for s in stages if not stage_done(s, scale)] == []
     evolutions = {s.variant: s.out_dir for s in stages if s.kind == "evolve"}
-    assert evolutions == {name: os.path.join(study.OUT, "evolve", name) for name in study.LABELS}
+    assert evolutions == {name: os.path.join(study.OUT, "evolve", name) for name in study.EVOLUTIONS}
     assert [s.generations for s in stages if s.kind == "evolve"] == [30, 30, 30, 30, 15, 30, 30]
     measures = {s.variant: s for s in stages if s.kind == "measure"}
     assert len(measures) == 15 and measures["evolved_skills"].needs == ("evolve LE-LS-skills",)
