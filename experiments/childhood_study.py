@@ -414,7 +414,8 @@ TABLE = ChildhoodTable("childhood", "docs/CHILDHOOD.md", 10, out=OUT, scale=EVOL
             MODULE),
     *(Measure(probed, row, ("evolved",), MODULE) for row, (*_, probed, _) in EVOLUTIONS.items()),
     Measure("random_skills", "", ("random",), MODULE),
-    Measure("heritability", "", ("heritability", *(os.path.join(OUT, "evolve", row) for row in (
+    # the study's own runs, named as rows: the measure waits for their evolutions
+    Measure("heritability", "", ("heritability", *(f"{{{row}}}" for row in (
         "LE-LS-skills", "LE-LS-extension", "LE-LS-skills-no-speed-bias", "LE-LS-skills-2lives"))), MODULE),
     Measure("evolved_paper_scale", "", ("evolved", os.path.join(REPRODUCTION, "skills", "evolve", "LE-LS")), MODULE),
 ))
