@@ -96,27 +96,14 @@ class RowRuns(NamedTuple):
     reproduction: dict  # condition -> the reproduction's variant whose run it is (absent: the row's own run)
 
 
-class ClaimsTable(Table):
-    """A table of the claims map's runs, read back by rule set."""
-
-    def runs_of(self, rule: RuleSet) -> RowRuns:
-        """A rule set's runs, wherever their keys found them (its own and the ones it shares)."""
-        rows, evolutions, tests = rule_rows(rule), self.evolutions(), self.tests()
-        found = {row.condition: evolutions[row.name] for row in rows if row.evolved}
-        return RowRuns(found, {row.condition: tests[row.name] for row in rows},
-                       {c: v for c, folder in found.items() if (v := reproduction_variant(folder, self.reproduction))})
-
-    def finished(self, rule: RuleSet) -> bool:
-        """Whether every run of a rule set's row has finished (its own and the ones it shares)."""
-        return all("steady_mean" in m and ("final_mean" in m or m["dir"] is None)
-                   for m in dataclasses.replace(self, rows=rule_rows(rule)).measure())
-
-
 def rule_runs(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION) -> RowRuns:
-    """A rule set's runs, found by key under the results folder that holds ``reproduction``."""
-    table = ClaimsTable("rule", "", 0, rows=rule_rows(rule), scale=SCREEN, out=out,
-                        results=os.path.dirname(os.path.normpath(reproduction)))
-    return table.runs_of(rule)
+    """A rule set's runs (its own and the ones it shares), found by key under the results folder of ``reproduction``."""
+    rows, results = rule_rows(rule), os.path.dirname(os.path.normpath(reproduction))
+    table = Table("rule", "", 0, rows=rows, scale=SCREEN, out=out, results=results)
+    evolutions, tests = table.evolutions(), table.tests()
+    found = {row.condition: evolutions[row.name] for row in rows if row.evolved}
+    return RowRuns(found, {row.condition: tests[row.name] for row in rows},
+                   {c: v for c, folder in found.items() if (v := reproduction_variant(folder, table.reproduction))})
 
 
 def probed(folder: str, config: dict | None, summary: dict | None = None, owner: str = "",
@@ -159,7 +146,7 @@ def measure_rule(rule: RuleSet, reproduction_summary: dict, out: str = OUT, repr
 
 
 def config_of(rule: RuleSet, condition: str, num_experts: int | None = None):
-    """The config of a rule set's run of ``condition`` (its learning test's, for SLE; claim 8's with ``num_experts``)."""
+    """The config of a rule set's run of ``condition`` (its learning test's for SLE; claim 8's with ``num_experts``)."""
     from imrl_jax.cli import parse_sets
     from imrl_jax.config import make_config
 
@@ -219,7 +206,7 @@ DialPoint = collections.namedtuple("DialPoint", ("bias", "speed", "le_ls_recorde
 
 
 def speed_dial(claims: dict, rows=DIAL_ROWS) -> list[DialPoint]:
-    """Claim 3's two sides against the initial speed bias, from claims.json's ``claims`` (rows not measured left out)."""
+    """Claim 3's two sides against the initial speed bias, from claims.json's ``claims`` (unmeasured rows left out)."""
     points = []
     for name in (n for n in rows if n in claims and "LE-LS" in claims[n]["fresh"]):  # measured, its fresh lives lived
         bias = float(config_of(BY_NAME[name], "LE-LS").initial_speed_bias)
@@ -266,7 +253,7 @@ def fresh_table(measured: dict, names) -> str:
         for name in names if name in measured])
 
 
-def experts_runs(table: ClaimsTable) -> dict[tuple[str, str, int], tuple[str, str, str]]:
+def experts_runs(table: Table) -> dict[tuple[str, str, int], tuple[str, str, str]]:
     """Claim 8's runs and their 3-expert ones: (rule set, condition, experts) -> (evolution, learning test, owner: the
     first rule set of :data:`EXPERT_RULE_SETS` whose run it is, as a shared run is named)."""
     rows = {(name, row.condition, k): row for name in EXPERT_RULE_SETS for k in (3, *EXPERT_COUNTS)
@@ -388,7 +375,7 @@ def write_json(path: str, data: dict) -> None:
         json.dump(data, f, indent=2, default=str)
 
 
-def write_experts(table: ClaimsTable) -> dict:
+def write_experts(table: Table) -> dict:
     """Claim 8 of every rule set that runs it: claim8.json, the document's tables and the figure (a run's fresh
     lives and probe are computed once, about a minute, then kept beside it)."""
     summary, found = reproduction_summary(table.document), experts_runs(table)
@@ -401,17 +388,17 @@ def write_experts(table: ClaimsTable) -> dict:
     return claim8
 
 
-class ScreenTable(ClaimsTable):
+class ScreenTable(Table):
     """The claims map: every rule set's runs; its report, the map's tables and figures (and claim 8's)."""
 
     def report(self) -> int:
         """Measure every finished rule set; write claims.json, the document's tables and figures, and claim 8's."""
         summary, measured, names = reproduction_summary(self.document) or {}, {}, [rule.name for rule in RULE_SETS]
         for rule in RULE_SETS:
-            if self.finished(rule):
+            if all("steady_mean" in m and ("final_mean" in m or m["dir"] is None)  # every run of its row finished
+                   for m in dataclasses.replace(self, rows=rule_rows(rule)).measure()):
                 print(f"measuring {rule.name}", flush=True)
-                measured[rule.name] = measure_runs(rule.name, self.runs_of(rule), summary,
-                                                   sle_whole_test=rule.sle_noise_steps == 0)
+                measured[rule.name] = measure_rule(rule, summary, self.out, self.reproduction)
         numbers = {name: {**{str(k): v for k, v in m["claims"].items()}, "fresh": m.get("fresh", {})}
                    for name, m in measured.items()}
         write_json(os.path.join(self.out, "claims.json"), dict(sizes=dict(screen=SCREEN, full=SCALES["paper"]),
@@ -429,7 +416,7 @@ class ScreenTable(ClaimsTable):
         return 0
 
 
-class ExpertsTable(ClaimsTable):
+class ExpertsTable(Table):
     """Claim 8's runs: skills and paper-selector with 4 and 6 experts; its report, claim 8's tables and figure."""
 
     def report(self) -> int:
