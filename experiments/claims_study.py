@@ -108,8 +108,7 @@ def rule_runs(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION) -
 
 def probed(folder: str, config: dict | None, summary: dict | None = None, owner: str = "",
            condition: str = "") -> tuple[list | None, list | None, dict | None]:
-    """What a finished run's best genomes do: the distinct colours each of the 10 best per seed follows (claim 7's
-    junction probe, kept in probe.json), how many of its experts follow none, and each seed's best in fresh lives."""
+    """A finished run's best: colours each of the 10 best per seed follows, its experts following none, fresh lives."""
     if summary is not None:  # a reproduction run (``owner``'s): its report keeps only the colours followed
         colours = (summary.get("colours_followed") or {}).get(f"{owner}/{condition}")
         return colours, None, reproduction_fresh(summary, owner, condition)
@@ -119,8 +118,7 @@ def probed(folder: str, config: dict | None, summary: dict | None = None, owner:
 
 
 def measure_runs(name: str, runs: RowRuns, reproduction_summary: dict, sle_whole_test: bool = False) -> dict:
-    """The seven claims of one row of runs by the report's own rules, with the numbers behind them (shared runs
-    with the reproduction report's probes, docs/reproduction/summary.json; a row's own probed here)."""
+    """The seven claims of one row of runs by the report's own rules, with the numbers behind them."""
     evolutions = {c: run for c, folder in runs.evolutions.items() if (run := read_evolution(folder)) is not None}
     tests = {(name, c): test for c, folder in runs.tests.items() if (test := read_test(folder)) is not None}
     probes, fresh = {}, {}
@@ -187,8 +185,7 @@ def figure(measured: dict, names, path: str) -> str:
             ax.add_patch(Rectangle((k - 1, row), 0.95, 0.9, color=SHADES.get(verdict, "white"), ec="0.6", lw=0.5))
             ax.text(k - 0.53, row + 0.45, SHORT.get(verdict, "not run"), ha="center", va="center", fontsize=8,
                     color="white" if verdict in (HOLDS, DOES_NOT) else "black")
-    ax.set_xlim(0, 7)
-    ax.set_ylim(len(names), 0)
+    ax.set(xlim=(0, 7), ylim=(len(names), 0))
     ax.set_xticks([k - 0.53 for k in range(1, 8)], [f"claim {k}" for k in range(1, 8)], fontsize=9)
     ax.set_yticks([r + 0.45 for r in range(len(names))], names, fontsize=9)
     ax.tick_params(length=0)
@@ -254,20 +251,18 @@ def fresh_table(measured: dict, names) -> str:
 
 
 def experts_runs(table: Table) -> dict[tuple[str, str, int], tuple[str, str, str]]:
-    """Claim 8's runs and their 3-expert ones: (rule set, condition, experts) -> (evolution, learning test, owner: the
-    first rule set of :data:`EXPERT_RULE_SETS` whose run it is, as a shared run is named)."""
+    """Claim 8's runs and their 3-expert ones: (rule set, condition, experts) -> (evolution, learning test, owner)."""
     rows = {(name, row.condition, k): row for name in EXPERT_RULE_SETS for k in (3, *EXPERT_COUNTS)
             for row in rule_rows(BY_NAME[name], None if k == 3 else k) if row.condition in EXPERT_CONDITIONS}
     table = dataclasses.replace(table, rows=tuple(dict.fromkeys((*table.rows, *rows.values()))))
-    evolutions, tests, owners = table.evolutions(), table.tests(), {}
+    evolutions, tests, owners = table.evolutions(), table.tests(), {}  # owner: the first rule set whose run it is
     for (name, _, _), row in rows.items():
         owners.setdefault(evolutions[row.name], name)
     return {at: (evolutions[row.name], tests[row.name], owners[evolutions[row.name]]) for at, row in rows.items()}
 
 
 def measure_experts(rule: RuleSet, found: dict, summary: dict | None = None, reproduction: str = REPRODUCTION) -> dict:
-    """Claim 8 for a rule set: its finished 4- and 6-expert runs against its 3-expert ones (``found``:
-    :func:`experts_runs`), and what each run's best individuals do (:func:`probed`)."""
+    """Claim 8 for a rule set: its 4- and 6-expert runs (:func:`experts_runs`) against its 3-expert ones, probed."""
     final, steady, sizes, runs = {}, {}, {}, []
     for condition, k in ((c, k) for c in EXPERT_CONDITIONS for k in (3, *EXPERT_COUNTS)):
         evolved, tested, owner = found[rule.name, condition, k]
@@ -353,8 +348,7 @@ def experts_figure(measured: dict, path: str = EXPERTS_FIGURE) -> str:
             if base is not None:  # the rule's band: within [0.8, 1.25] of 3 experts is "unchanged"
                 ax.fill_between([2.8, 6.2], ABOUT[0] * base, min(ABOUT[1] * base, 1), color=colour, alpha=0.06)
         ax.set_title(titles[measure], fontsize=10)
-        ax.set_xticks([3, *EXPERT_COUNTS])
-        ax.set_xlabel("number of experts")
+        ax.set(xticks=[3, *EXPERT_COUNTS], xlabel="number of experts")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="upper right")
     axes[0].set_ylabel("fitness")
@@ -368,19 +362,13 @@ def reproduction_summary(document: str) -> dict | None:
     return read_json(os.path.join(os.path.dirname(document), "reproduction", "summary.json"))
 
 
-def write_json(path: str, data: dict) -> None:
-    """``data`` as indented JSON at ``path`` (its folder made)."""
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    with open(path, "w") as f:
-        json.dump(data, f, indent=2, default=str)
-
-
 def write_experts(table: Table) -> dict:
-    """Claim 8 of every rule set that runs it: claim8.json, the document's tables and the figure (a run's fresh
-    lives and probe are computed once, about a minute, then kept beside it)."""
-    summary, found = reproduction_summary(table.document), experts_runs(table)
+    """Claim 8 of every rule set that runs it: claim8.json, the document's tables and the figure."""
+    summary, found = reproduction_summary(table.document), experts_runs(table)  # a run's fresh lives, probe: kept
     claim8 = {name: measure_experts(BY_NAME[name], found, summary, table.reproduction) for name in EXPERT_RULE_SETS}
-    write_json(os.path.join(table.out, "claim8.json"), claim8)
+    os.makedirs(table.out, exist_ok=True)
+    with open(os.path.join(table.out, "claim8.json"), "w") as f:
+        json.dump(claim8, f, indent=2, default=str)
     write_table(table.document, experts_table(claim8), EXPERTS_START, EXPERTS_END)
     write_table(table.document, experts_runs_table(claim8), EXPERTS_RUNS_START, EXPERTS_RUNS_END)
     if any(claim["levels"] for claim in claim8.values()):
@@ -401,8 +389,10 @@ class ScreenTable(Table):
                 measured[rule.name] = measure_rule(rule, summary, self.out, self.reproduction)
         numbers = {name: {**{str(k): v for k, v in m["claims"].items()}, "fresh": m.get("fresh", {})}
                    for name, m in measured.items()}
-        write_json(os.path.join(self.out, "claims.json"), dict(sizes=dict(screen=SCREEN, full=SCALES["paper"]),
-                   rule_sets={r.name: r._asdict() for r in RULE_SETS}, claims=numbers))
+        os.makedirs(self.out, exist_ok=True)
+        with open(os.path.join(self.out, "claims.json"), "w") as f:
+            json.dump(dict(sizes=dict(screen=SCREEN, full=SCALES["paper"]), rule_sets={
+                r.name: r._asdict() for r in RULE_SETS}, claims=numbers), f, indent=2, default=str)
         write_table(self.document, table_markdown(measured, names), TABLE_START, TABLE_END)
         write_table(self.document, fresh_table(measured, names), FRESH_START, FRESH_END)
         figures = os.path.join(os.path.dirname(self.document), "claims")
