@@ -158,19 +158,16 @@ def config_of(rule: RuleSet, condition: str, num_experts: int | None = None):
 
 def table_markdown(measured: dict, names) -> str:
     """The claims map as markdown: rule sets as rows, the seven claims as columns (verdict, then the numbers)."""
-    def sizes(rule: RuleSet) -> str:
-        """Seeds x generations of its LE-LS, runs x best x tests of its SLE."""
-        le_ls, sle = (SCALES["paper"] if c in rule.full else SCREEN for c in ("LE-LS", "SLE"))
-        return f"{le_ls['seeds']}x{le_ls['generations']}, {sle['seeds']}x{sle['best']}x{sle['tests']}"
-
-    def cell(claim: dict) -> str:
-        """A claim's verdict in one word, then its first number."""
-        verdict = "**holds**" if claim["verdict"] == HOLDS else SHORT[claim["verdict"]]
-        return f"{verdict}: {claim['measured'].split(';')[0]}"
+    def cells(name: str) -> tuple:
+        """A measured rule set's sizes (LE-LS's seeds x generations, SLE's runs x best x tests), then each claim's
+        verdict in one word and its first number."""
+        le_ls, sle = (SCALES["paper"] if c in BY_NAME[name].full else SCREEN for c in ("LE-LS", "SLE"))
+        return (f"{le_ls['seeds']}x{le_ls['generations']}, {sle['seeds']}x{sle['best']}x{sle['tests']}", *(
+            f"{'**holds**' if c['verdict'] == HOLDS else SHORT[c['verdict']]}: {c['measured'].split(';')[0]}"
+            for c in (measured[name]["claims"][k] for k in range(1, 8))))
 
     return table(("rule set", "runs (LE-LS, SLE)", *(f"claim {k}" for k in range(1, 8))), [
-        (f"`{name}`", sizes(BY_NAME[name]), *(cell(measured[name]["claims"][k]) for k in range(1, 8)))
-        if name in measured else (f"`{name}`", "not finished", *["-"] * 7) for name in names])
+        (f"`{name}`", *(cells(name) if name in measured else ("not finished", *["-"] * 7))) for name in names])
 
 
 def figure(measured: dict, names, path: str) -> str:
@@ -240,13 +237,9 @@ def dial_figure(points: list[DialPoint], path: str) -> str:
 
 def fresh_table(measured: dict, names) -> str:
     """Recorded final best fitness (claims 1-4's measure) beside the fresh-life fitness of each seed's best genome."""
-    def cell(f: dict | None) -> str:
-        """Recorded / fresh (sd over seeds, seeds), or "-" for a condition not lived again."""
-        return "-" if f is None else (f"{f['recorded']:.3f} / {f['fresh']:.3f} (sd {f['fresh_sd_over_seeds']:.3f}, "
-                                      f"{f['seeds']} seeds)")
-
-    return table(("rule set", *(f"{c} recorded / fresh" for c in EVOLVED)), [
-        (f"`{name}`", *(cell(measured[name].get("fresh", {}).get(c)) for c in EVOLVED))
+    return table(("rule set", *(f"{c} recorded / fresh" for c in EVOLVED)), [(f"`{name}`", *(
+        "-" if f is None else f"{f['recorded']:.3f} / {f['fresh']:.3f} (sd {f['fresh_sd_over_seeds']:.3f}, "
+        f"{f['seeds']} seeds)" for f in (measured[name].get("fresh", {}).get(c) for c in EVOLVED)))
         for name in names if name in measured])
 
 
@@ -291,14 +284,10 @@ def measure_experts(rule: RuleSet, found: dict, summary: dict | None = None, rep
 
 def experts_table(measured: dict) -> str:
     """Claim 8 as markdown: a row per rule set, the verdict and the comparisons (``so far`` while runs are missing)."""
-    def verdict(claim: dict) -> str:
-        """The verdict, ``so far`` and what is not finished while runs are missing."""
-        missing = claim.get("missing")
-        return f"{claim['verdict']} so far (not finished: {', '.join(missing)})" if missing else claim["verdict"]
-
     return table(("rule set", "runs (seeds x generations)", "claim 8"), [
-        (f"`{name}`", ", ".join(f"{k}: {v}" for k, v in claim["sizes"].items()) or "none finished",
-         f"{verdict(claim)}: {claim['measured']}") for name, claim in measured.items()])
+        (f"`{name}`", ", ".join(f"{k}: {v}" for k, v in claim["sizes"].items()) or "none finished", claim["verdict"]
+         + (f" so far (not finished: {', '.join(claim['missing'])})" if claim.get("missing") else "")
+         + f": {claim['measured']}") for name, claim in measured.items()])
 
 
 def experts_runs_table(measured: dict) -> str:
