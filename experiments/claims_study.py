@@ -22,7 +22,6 @@ import functools
 import json
 import os
 import sys
-from typing import NamedTuple
 
 import numpy as np
 
@@ -87,13 +86,9 @@ def reproduction_variant(folder: str, reproduction: str = REPRODUCTION) -> str |
     return None if relative.startswith(os.pardir) else relative.split(os.sep)[0]
 
 
-class RowRuns(NamedTuple):
-    """Where one row's runs live: an evolution folder per evolved condition, a learning-test folder per tested
-    condition, and the owner (a variant of ``make reproduce``) of each run that is the finished reproduction's."""
-
-    evolutions: dict  # condition -> the evolution's folder
-    tests: dict  # condition -> the learning test's folder
-    reproduction: dict  # condition -> the reproduction's variant whose run it is (absent: the row's own run)
+#: Where one row's runs live, each a dict by condition: its evolutions' folders, its learning tests' folders, and the
+#: reproduction's variant (of ``make reproduce``) whose run each evolution is (absent: the row's own run).
+RowRuns = collections.namedtuple("RowRuns", ("evolutions", "tests", "reproduction"))
 
 
 def rule_runs(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION) -> RowRuns:
