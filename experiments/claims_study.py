@@ -408,8 +408,6 @@ EXPERTS_TABLE = ExpertsTable("claims-experts", "docs/CLAIMS.md", 5, scale=SCREEN
     row for name in EXPERT_RULE_SETS for k in EXPERT_COUNTS for row in rule_rows(BY_NAME[name], k)))
 #: The module's tables by the name its command line takes first (``screen`` when none is given).
 TABLES = {"screen": SCREEN_TABLE, "experts": EXPERTS_TABLE}
-
-
 #: The studies of this module (python -m experiments finds them).
 STUDIES = studies_of("claims_study", TABLES)
 main = functools.partial(dispatch, TABLES)
