@@ -67,8 +67,7 @@ def figure(grid: np.ndarray, performance: np.ndarray, path: str) -> str:
     for t in range(performance.shape[1]):
         ax.plot(turn_deg, performance[full, t], lw=1.0, label=f"task {t + 1}")
     ax.plot(turn_deg, performance[full].mean(1), color="black", lw=2.0, label="mean of the six")
-    ax.set_xlim(-4, 4)
-    ax.set_ylim(0, 1)
+    ax.set(xlim=(-4, 4), ylim=(0, 1))
     style_axis(ax, "one constant action from each task's start, at full speed", "turn per step (deg, + left)",
                "task performance")
     ax.legend(fontsize=7, loc="upper right")

@@ -107,7 +107,7 @@ def probed(folder: str, config: dict | None, summary: dict | None = None, owner:
     if summary is not None:  # a reproduction run (``owner``'s): its report keeps only the colours followed
         colours = (summary.get("colours_followed") or {}).get(f"{owner}/{condition}")
         return colours, None, reproduction_fresh(summary, owner, condition)
-    followed = (run_probe(folder, config, NUM_BEST) or {}).get("followed")
+    followed = (run_probe(folder, config, NUM_BEST) or {}).get("followed")  # kept beside the run, as its fresh lives
     idle = None if followed is None else [sum(c == -1 for c in f) for f in followed]
     return None if followed is None else colours_followed(followed), idle, run_fresh(folder, config)
 
@@ -117,7 +117,7 @@ def measure_runs(name: str, runs: RowRuns, reproduction_summary: dict, sle_whole
     evolutions = {c: run for c, folder in runs.evolutions.items() if (run := read_evolution(folder)) is not None}
     tests = {(name, c): test for c, folder in runs.tests.items() if (test := read_test(folder)) is not None}
     probes, fresh = {}, {}
-    for condition, run in evolutions.items():
+    for condition, run in evolutions.items():  # a shared run's probe is the reproduction report's (its summary.json)
         owner = runs.reproduction.get(condition)
         probes[name, condition], _, lived = probed(runs.evolutions[condition], run["config"],
                                                    reproduction_summary if owner else None, owner or "", condition)
