@@ -11,15 +11,12 @@ the claims study, done when ``result.json`` is written.
 
 from __future__ import annotations
 
-import csv
-import json
 import os
 import sys
 
 import numpy as np
 
-from experiments.study import MEASURED
-from experiments.study import RESULTS
+from experiments.study import RESULTS, write_measure
 from imrl_jax.cli import HelpFormatter, Parser, UsageError, exit_codes
 
 OUT = os.path.join(RESULTS, "claims", "circles")
@@ -35,29 +32,28 @@ PAIRS = ((0, 1), (2, 3), (4, 5))
 
 def actions() -> np.ndarray:
     """(turns x speeds, 2) every action of the grid, turn-major."""
-    turn, speed = np.meshgrid(TURNS, SPEEDS, indexing="ij")
-    return np.stack([turn.ravel(), speed.ravel()], axis=1)
+    return np.stack([values.ravel() for values in np.meshgrid(TURNS, SPEEDS, indexing="ij")], axis=1)
 
 
 def summarise(grid: np.ndarray, performance: np.ndarray, pairs=PAIRS) -> dict:
     """The numbers the document quotes, from each action's (actions, tasks) performance."""
-    mean = performance.mean(1)
-    best = int(mean.argmax())
-    per_task = [dict(task=t + 1, performance=float(performance[:, t].max()),
-                     turn=float(grid[performance[:, t].argmax(), 0]), speed=float(grid[performance[:, t].argmax(), 1]))
-                for t in range(performance.shape[1])]
+    def action(k: int) -> dict:
+        """The turn and speed of the grid's ``k``-th action."""
+        return dict(turn=float(grid[k, 0]), speed=float(grid[k, 1]))
+
+    best = int(performance.mean(1).argmax())
+    per_task = [dict(task=t + 1, performance=float(column.max()), **action(column.argmax()))
+                for t, column in enumerate(performance.T)]
     per_pair = []
     for i, j in pairs:  # one action for both tasks of a pair: what it scores on the two together
-        both = performance[:, i] + performance[:, j]
-        k = int(both.argmax())
+        k = int((performance[:, i] + performance[:, j]).argmax())
         per_pair.append(dict(tasks=[i + 1, j + 1], performance=[float(performance[k, i]), float(performance[k, j])],
                              turn=float(grid[k, 0])))
     # One action per pair (a controller that tells the pairs apart by their first colour, but not the
     # tasks of a pair): the mean over the six tasks of each pair's best action.
-    per_pair_mean = float(sum(sum(p["performance"]) for p in per_pair) / performance.shape[1])
-    return dict(one_action=dict(performance=float(mean[best]), turn=float(grid[best, 0]), speed=float(grid[best, 1]),
-                                per_task=[float(v) for v in performance[best]]),
-                per_task=per_task, per_pair=per_pair, one_action_per_pair=per_pair_mean)
+    return dict(one_action=dict(performance=float(performance.mean(1)[best]), **action(best),
+                                per_task=[float(v) for v in performance[best]]), per_task=per_task, per_pair=per_pair,
+                one_action_per_pair=float(sum(sum(p["performance"]) for p in per_pair) / performance.shape[1]))
 
 
 def figure(grid: np.ndarray, performance: np.ndarray, path: str) -> str:
@@ -71,8 +67,7 @@ def figure(grid: np.ndarray, performance: np.ndarray, path: str) -> str:
     for t in range(performance.shape[1]):
         ax.plot(turn_deg, performance[full, t], lw=1.0, label=f"task {t + 1}")
     ax.plot(turn_deg, performance[full].mean(1), color="black", lw=2.0, label="mean of the six")
-    ax.set_xlim(-4, 4)
-    ax.set_ylim(0, 1)
+    ax.set(xlim=(-4, 4), ylim=(0, 1))
     style_axis(ax, "one constant action from each task's start, at full speed", "turn per step (deg, + left)",
                "task performance")
     ax.legend(fontsize=7, loc="upper right")
@@ -81,25 +76,18 @@ def figure(grid: np.ndarray, performance: np.ndarray, path: str) -> str:
 
 
 def measure(out_dir: str = OUT, task_steps: int = TASK_STEPS) -> dict:
-    """Every action of the grid on the six tasks; writes circles.csv, circles.png, then result.json (done)."""
+    """Every action of the grid on the six tasks; writes circles.png, circles.csv, then result.json (done)."""
     from imrl_jax import controllers
-    from imrl_jax.checkpoint import git_commit
     from imrl_jax.config import make_config
 
-    config = make_config("paper")
-    grid = actions()
+    config, grid = make_config("paper"), actions()
     performance = np.asarray(controllers.constant_performance(config, grid, task_steps), float)
-    os.makedirs(out_dir, exist_ok=True)
-    with open(os.path.join(out_dir, "circles.csv"), "w", newline="") as f:
-        writer = csv.writer(f)
-        writer.writerow(["turn", "speed", *(f"task_{t + 1}" for t in range(config.num_tasks)), "mean"])
-        for action, row in zip(grid, performance):
-            writer.writerow([f"{action[0]:.3f}", f"{action[1]:.2f}", *(f"{v:.4f}" for v in row), f"{row.mean():.4f}"])
     figure(grid, performance, os.path.join(out_dir, "circles.png"))
     summary = summarise(grid, performance)
-    with open(os.path.join(out_dir, MEASURED), "w") as f:
-        json.dump(dict(command=f"python -m experiments.circular_paths --out {out_dir} --task-steps {task_steps}",
-                       git_commit=git_commit(), task_steps=task_steps, actions=len(grid), **summary), f, indent=2)
+    rows = [dict(turn=f"{turn:.3f}", speed=f"{speed:.2f}", **{f"task_{t + 1}": f"{v:.4f}" for t, v in enumerate(row)},
+                 mean=f"{row.mean():.4f}") for (turn, speed), row in zip(grid, performance)]
+    write_measure(out_dir, "circles", rows, f"python -m experiments.circular_paths --out {out_dir} --task-steps "
+                  f"{task_steps}", task_steps=task_steps, actions=len(grid), **summary)
     return summary
 
 

@@ -16,17 +16,20 @@ adult values, bias and noise schedule. Claim 8's table adds 4 and 6 experts to t
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import functools
 import json
 import os
 import sys
-from typing import NamedTuple
 
 import numpy as np
 
-from experiments.claims import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY
-from experiments.markdown import head, line
+from experiments.claims import (ABOUT, DOES_NOT, HOLDS, NOT_AVAILABLE, NUM_BEST, PARTLY, claim_experts, final_best,
+                                measure as measure_claims)
+from experiments.loading import read_evolution, read_json, read_test
+from experiments.markdown import table
+from experiments.relive import colours_followed, reproduction_fresh, run_fresh, run_probe
 from experiments.reproduce import EVOLVED, TESTED
 from experiments.rule_sets import BY_NAME, RULE_SETS, RuleSet
 from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN, write_table
@@ -35,33 +38,12 @@ from imrl_jax import conditions
 from imrl_jax.plotting import new_figure, save
 
 OUT = os.path.join(RESULTS, "claims")
-
-
-#: The order the screen runs its rule sets in: the cheap SLE tests first, then the evolutions that matter most
-#: (the reproduction's rule sets, whose runs the reproduction made, last).
+#: The order the screen runs its rule sets in: the cheap SLE tests first, then the evolutions that matter most (bias 1:
+#: where between 0 and 2 claim 3 turns), the reproduction's rule sets (whose runs the reproduction made) last.
 SCREEN_ORDER = ("skills-sle-test", "paper-sle-test", "skills-bias0", "skills-bias0-sle-test", "paper-selector",
-                "paper-selector-sle-test", "skills-bias2",
-                "skills-clamp", "skills-bias1", "extension",  # bias 1: where between 0 and 2 claim 3 turns
+                "paper-selector-sle-test", "skills-bias2", "skills-clamp", "skills-bias1", "extension",
                 "skills-bias2-sle-test", "skills-clamp-sle-test", "skills-bias1-sle-test", "extension-sle-test",
                 "paper", "skills", "faithful")
-
-
-def rule_rows(rule: RuleSet, num_experts: int | None = None) -> tuple[Row, ...]:
-    """A rule set's runs as rows (``RULE CONDITION``): each of the paper's conditions under its preset and overrides
-    (SLE's with its noise horizon), at the paper's sizes for ``rule.full``, else the screen's; with
-    ``num_experts``, claim 8's LE-LS and EE-LS (``RULE CONDITION K experts``, at the screen's sizes)."""
-    if num_experts is not None:
-        return tuple(Row(f"{rule.name} {c} {num_experts} experts", c, rule.preset,
-                         (*rule.sets, f"num_experts={num_experts}"), scale=SCREEN) for c in EXPERT_CONDITIONS)
-    rows = []
-    for condition in TESTED:
-        evolved = conditions.get(condition).evolved
-        noise = () if evolved or rule.sle_noise_steps is None else (f"sle_noise_steps={rule.sle_noise_steps}",)
-        rows.append(Row(f"{rule.name} {condition}", condition, rule.preset, (*rule.sets, *noise),
-                        scale=SCALES["paper"] if condition in rule.full else SCREEN))
-    return tuple(rows)
-
-
 #: Claim 8 (the paper: "the quality of results did not change in tests with a higher number of experts"):
 #: LE-LS and EE-LS with these many experts, under these rule sets, against their own 3-expert runs.
 EXPERT_COUNTS = (4, 6)
@@ -69,6 +51,33 @@ EXPERT_COUNTS = (4, 6)
 #: paper-selector-sle-test's; its EE-LS is skills', as with 3 experts).
 EXPERT_RULE_SETS = ("skills", "paper-selector")
 EXPERT_CONDITIONS = ("LE-LS", "EE-LS")
+#: The rows that differ from ``skills`` only in the learned actors' initial speed bias (``skills`` is bias 4).
+DIAL_ROWS = ("skills-bias0", "skills-bias1", "skills-bias2", "skills")
+
+#: Where the report's tables go in docs/CLAIMS.md (the text around them is written by hand), and claim 8's figure.
+TABLE_START, TABLE_END = "<!-- claims table: python -m experiments report claims-screen -->", "<!-- end of table -->"
+FRESH_START = "<!-- fresh-life table: python -m experiments report claims-screen -->"
+FRESH_END = "<!-- end of fresh-life table -->"
+EXPERTS_START = "<!-- claim 8 table: python -m experiments report claims-experts -->"
+EXPERTS_END = "<!-- end of claim 8 table -->"
+EXPERTS_RUNS_START = "<!-- claim 8 runs: python -m experiments report claims-experts -->"
+EXPERTS_RUNS_END = "<!-- end of claim 8 runs -->"
+EXPERTS_FIGURE = os.path.join("docs", "claims", "experts.png")
+#: A verdict in one word and its colour, as the map's table and figure show it; the figures' resolution.
+SHORT = {HOLDS: "holds", PARTLY: "partly", DOES_NOT: "no", NOT_AVAILABLE: "n/a"}
+SHADES = {HOLDS: "#2e7d32", PARTLY: "#f9a825", DOES_NOT: "#c62828", NOT_AVAILABLE: "#bdbdbd"}
+DPI = 120
+
+
+def rule_rows(rule: RuleSet, num_experts: int | None = None) -> tuple[Row, ...]:
+    """A rule set's runs as rows (``RULE CONDITION``; with ``num_experts``, claim 8's ``RULE CONDITION K experts``)."""
+    if num_experts is not None:  # claim 8's LE-LS and EE-LS, at the screen's sizes
+        return tuple(Row(f"{rule.name} {c} {num_experts} experts", c, rule.preset,
+                         (*rule.sets, f"num_experts={num_experts}"), scale=SCREEN) for c in EXPERT_CONDITIONS)
+    # each of the paper's conditions (SLE's with the rule set's noise horizon), at the paper's sizes for rule.full
+    noise = () if rule.sle_noise_steps is None else (f"sle_noise_steps={rule.sle_noise_steps}",)
+    return tuple(Row(f"{rule.name} {c}", c, rule.preset, rule.sets + (() if conditions.get(c).evolved else noise),
+                     scale=SCALES["paper"] if c in rule.full else SCREEN) for c in TESTED)
 
 
 def reproduction_variant(folder: str, reproduction: str = REPRODUCTION) -> str | None:
@@ -77,102 +86,50 @@ def reproduction_variant(folder: str, reproduction: str = REPRODUCTION) -> str |
     return None if relative.startswith(os.pardir) else relative.split(os.sep)[0]
 
 
-class RowRuns(NamedTuple):
-    """Where one row's runs live: an evolution folder per evolved condition, a learning-test folder per tested
-    condition, and the owner (a variant of ``make reproduce``) of each run that is the finished reproduction's."""
-
-    evolutions: dict  # condition -> the evolution's folder
-    tests: dict  # condition -> the learning test's folder
-    reproduction: dict  # condition -> the reproduction's variant whose run it is (absent: the row's own run)
-
-
-class ClaimsTable(Table):
-    """A table of the claims map's runs, read back by rule set."""
-
-    def runs_of(self, rule: RuleSet, num_experts: int | None = None) -> RowRuns:
-        """A rule set's runs, wherever their keys found them (its own and the ones it shares)."""
-        rows = rule_rows(rule, num_experts)
-        evolutions, tests = self.evolutions(), self.tests()
-        reproduction = self.reproduction
-        found = {row.condition: evolutions[row.name] for row in rows if row.evolved}
-        return RowRuns(found, {row.condition: tests[row.name] for row in rows},
-                       {c: v for c, folder in found.items() if (v := reproduction_variant(folder, reproduction))})
-
-    def finished(self, rule: RuleSet) -> bool:
-        """Whether every run of a rule set's row has finished (its own and the ones it shares)."""
-        from experiments.loading import read_evolution, read_test
-
-        rows = {row.condition: row for row in rule_rows(rule)}
-        runs = self.runs_of(rule)
-        return all((run := read_evolution(folder)) is not None
-                   and len(run["best"]) >= self.scale_of(rows[condition])["generations"]
-                   for condition, folder in runs.evolutions.items()) and all(
-            read_test(folder) is not None for folder in runs.tests.values())
+#: Where one row's runs live, each a dict by condition: its evolutions' folders, its learning tests' folders, and the
+#: reproduction's variant (of ``make reproduce``) whose run each evolution is (absent: the row's own run).
+RowRuns = collections.namedtuple("RowRuns", ("evolutions", "tests", "reproduction"))
 
 
 def rule_runs(rule: RuleSet, out: str = OUT, reproduction: str = REPRODUCTION) -> RowRuns:
-    """A rule set's runs, found by key under the results folder that holds ``reproduction``."""
-    table = ClaimsTable("rule", "", 0, rows=rule_rows(rule), scale=SCREEN, out=out,
-                        results=os.path.dirname(os.path.normpath(reproduction)))
-    return table.runs_of(rule)
-
-
-def load_runs(name: str, runs: RowRuns) -> dict:
-    """A row's runs in the form the report's claims read (one variant: ``name``)."""
-    from experiments.loading import read_evolution, read_test
-
-    evolutions = {(name, c): run for c, folder in runs.evolutions.items()
-                  if (run := read_evolution(folder)) is not None}
-    tests = {(name, c): test for c, folder in runs.tests.items() if (test := read_test(folder)) is not None}
-    return dict(results=None, manifest=dict(sizes=dict(generations=SCREEN["generations"])), variants=[name],
-                evolutions=evolutions, tests=tests)
+    """A rule set's runs (its own and the ones it shares), found by key under the results folder of ``reproduction``."""
+    rows, results = rule_rows(rule), os.path.dirname(os.path.normpath(reproduction))
+    table = Table("rule", "", 0, rows=rows, scale=SCREEN, out=out, results=results)
+    evolutions, tests = table.evolutions(), table.tests()
+    found = {row.condition: evolutions[row.name] for row in rows if row.evolved}
+    return RowRuns(found, {row.condition: tests[row.name] for row in rows},
+                   {c: v for c, folder in found.items() if (v := reproduction_variant(folder, table.reproduction))})
 
 
 def probed(folder: str, config: dict | None, summary: dict | None = None, owner: str = "",
            condition: str = "") -> tuple[list | None, list | None, dict | None]:
-    """What a finished run's best genomes do: the distinct colours each of the 10 best per seed follows (claim 7's
-    junction probe), how many of its experts follow none, and each seed's best in fresh lives (``run_fresh``'s form).
-
-    Kept beside the run (probe.json, fresh.json); a reproduction run (``summary`` given: its report's, the run
-    ``owner``'s) is read from that report, which keeps only the colours followed (not the idle experts)."""
-    from experiments.claims import NUM_BEST
-    from experiments.relive import colours_followed, reproduction_fresh, run_fresh, run_probe
-
-    if summary is not None:
+    """A finished run's best: colours each of the 10 best per seed follows, its experts following none, fresh lives."""
+    if summary is not None:  # a reproduction run (``owner``'s): its report keeps only the colours followed
         colours = (summary.get("colours_followed") or {}).get(f"{owner}/{condition}")
         return colours, None, reproduction_fresh(summary, owner, condition)
-    followed = (run_probe(folder, config, NUM_BEST) or {}).get("followed")
-    if followed is None:
-        return None, None, run_fresh(folder, config)
-    return colours_followed(followed), [sum(c == -1 for c in f) for f in followed], run_fresh(folder, config)
+    followed = (run_probe(folder, config, NUM_BEST) or {}).get("followed")  # kept beside the run, as its fresh lives
+    idle = None if followed is None else [sum(c == -1 for c in f) for f in followed]
+    return None if followed is None else colours_followed(followed), idle, run_fresh(folder, config)
 
 
 def measure_runs(name: str, runs: RowRuns, reproduction_summary: dict, sle_whole_test: bool = False) -> dict:
-    """The seven claims of one row of runs by the report's own rules, with the numbers behind them.
-
-    Shared runs reuse the reproduction report's probes (docs/reproduction/summary.json: colours
-    followed by the 10 best of each seed, the relived best EE-ES individual); a row's own
-    LE-LS and EE-LS are probed here as the report probes them (:func:`probed`).
-    """
-    from experiments.claims import final_best, measure
-
-    data = load_runs(name, runs)
-    probes, lives, fresh = {}, {}, {}
-    for condition, folder in runs.evolutions.items():
-        run, owner = data["evolutions"].get((name, condition)), runs.reproduction.get(condition)
-        if run is None:
-            continue
-        probes[name, condition], _, lived = probed(folder, run["config"], reproduction_summary if owner else None,
-                                                   owner or "", condition)
+    """The seven claims of one row of runs by the report's own rules, with the numbers behind them."""
+    evolutions = {c: run for c, folder in runs.evolutions.items() if (run := read_evolution(folder)) is not None}
+    tests = {(name, c): test for c, folder in runs.tests.items() if (test := read_test(folder)) is not None}
+    probes, fresh = {}, {}
+    for condition, run in evolutions.items():  # a shared run's probe is the reproduction report's (its summary.json)
+        owner = runs.reproduction.get(condition)
+        probes[name, condition], _, lived = probed(runs.evolutions[condition], run["config"],
+                                                   reproduction_summary if owner else None, owner or "", condition)
         if lived is not None:  # the recorded best beside the same genomes' fresh lives
             fresh[condition] = dict(recorded=float(final_best(run["best"]).mean()), fresh=lived["mean"],
                                     fresh_sd_over_seeds=lived["sd_over_seeds"], seeds=len(lived["mean_per_seed"]))
+    # the reproduction's relived best EE-ES individual: claim 4's paths
     ee_es = (reproduction_summary.get("best_individuals") or {}).get(f"{runs.reproduction.get('EE-ES')}/EE-ES")
-    if ee_es is not None:  # the reproduction's relived best EE-ES individual: claim 4's paths
-        lives["paper", "EE-ES"] = ee_es
-    measured = measure(data, lives, probes, sle_whole_test=sle_whole_test)[name]
-    measured["fresh"] = fresh
-    return measured
+    data = dict(manifest=dict(sizes=dict(generations=SCREEN["generations"])), variants=[name], tests=tests,
+                evolutions={(name, c): run for c, run in evolutions.items()})
+    lives = {} if ee_es is None else {("paper", "EE-ES"): ee_es}
+    return dict(measure_claims(data, lives, probes, sle_whole_test=sle_whole_test)[name], fresh=fresh)
 
 
 def measure_rule(rule: RuleSet, reproduction_summary: dict, out: str = OUT, reproduction: str = REPRODUCTION) -> dict:
@@ -182,7 +139,7 @@ def measure_rule(rule: RuleSet, reproduction_summary: dict, out: str = OUT, repr
 
 
 def config_of(rule: RuleSet, condition: str, num_experts: int | None = None):
-    """The config a rule set's run of ``condition`` has (its learning test's, for SLE; claim 8's with ``num_experts``)."""
+    """The config of a rule set's run of ``condition`` (its learning test's for SLE; claim 8's with ``num_experts``)."""
     from imrl_jax.cli import parse_sets
     from imrl_jax.config import make_config
 
@@ -190,93 +147,57 @@ def config_of(rule: RuleSet, condition: str, num_experts: int | None = None):
     if num_experts is not None:
         overrides["num_experts"] = num_experts
     if not conditions.get(condition).evolved:  # SLE: its noise's horizon is the rule set's
-        noise = SCREEN["task_steps"] if rule.sle_noise_steps is None else rule.sle_noise_steps
-        overrides["sle_noise_steps"] = noise
+        overrides["sle_noise_steps"] = SCREEN["task_steps"] if rule.sle_noise_steps is None else rule.sle_noise_steps
     return make_config(rule.preset, condition=condition, **overrides)
-
-
-def sizes(rule: RuleSet, condition: str) -> str:
-    """Seeds x generations of an evolution, or runs x best x tests of a learning test, of a rule set's row."""
-    scale = SCALES["paper"] if condition in rule.full else SCREEN
-    if not conditions.get(condition).evolved:  # tested from scratch: runs x best x tests
-        return f"{scale['seeds']}x{scale['best']}x{scale['tests']}"
-    return f"{scale['seeds']}x{scale['generations']}"
-
-
-#: Where the table goes in docs/CLAIMS.md (the text around it is written by hand).
-TABLE_START, TABLE_END = "<!-- claims table: python -m experiments report claims-screen -->", "<!-- end of table -->"
-
-
-#: A verdict in one word, as the map's table and figure show it.
-SHORT = {HOLDS: "holds", PARTLY: "partly", DOES_NOT: "no", NOT_AVAILABLE: "n/a"}
 
 
 def table_markdown(measured: dict, names) -> str:
     """The claims map as markdown: rule sets as rows, the seven claims as columns (verdict, then the numbers)."""
-    lines = head("rule set", "runs (LE-LS, SLE)", *(f"claim {k}" for k in range(1, 8)))
-    for name in names:
-        found = measured.get(name, {}).get("claims")
-        cells = [f"{'**holds**' if c['verdict'] == HOLDS else SHORT[c['verdict']]}: {c['measured'].split(';')[0]}"
-                 for c in (found[k] for k in range(1, 8))] if found else ["-"] * 7
-        rule = BY_NAME[name]
-        lines.append(line(f"`{name}`", f"{sizes(rule, 'LE-LS')}, {sizes(rule, 'SLE')}" if found else "not finished",
-                          *cells))
-    return "\n".join(lines)
+    def cells(name: str) -> tuple:
+        """A measured rule set's sizes (LE-LS's seeds x generations, SLE's runs x best x tests), then each claim's
+        verdict in one word and its first number."""
+        le_ls, sle = (SCALES["paper"] if c in BY_NAME[name].full else SCREEN for c in ("LE-LS", "SLE"))
+        return (f"{le_ls['seeds']}x{le_ls['generations']}, {sle['seeds']}x{sle['best']}x{sle['tests']}", *(
+            f"{'**holds**' if c['verdict'] == HOLDS else SHORT[c['verdict']]}: {c['measured'].split(';')[0]}"
+            for c in (measured[name]["claims"][k] for k in range(1, 8))))
 
-
-#: The resolution the claims map's figures are drawn at.
-DPI = 120
+    return table(("rule set", "runs (LE-LS, SLE)", *(f"claim {k}" for k in range(1, 8))), [
+        (f"`{name}`", *(cells(name) if name in measured else ("not finished", *["-"] * 7))) for name in names])
 
 
 def figure(measured: dict, names, path: str) -> str:
     """The claims map as a grid: rule sets as rows, claims as columns, coloured by verdict; written to ``path``."""
     from matplotlib.patches import Rectangle
 
-    shades = {HOLDS: "#2e7d32", PARTLY: "#f9a825", DOES_NOT: "#c62828", NOT_AVAILABLE: "#bdbdbd"}
     fig = new_figure(8.5, 0.45 * len(names) + 1.6)
     ax = fig.add_subplot()
     for row, name in enumerate(names):
         for k in range(1, 8):
             verdict = measured[name]["claims"][k]["verdict"] if name in measured else None
-            ax.add_patch(Rectangle((k - 1, row), 0.95, 0.9, color=shades.get(verdict, "white"), ec="0.6", lw=0.5))
+            ax.add_patch(Rectangle((k - 1, row), 0.95, 0.9, color=SHADES.get(verdict, "white"), ec="0.6", lw=0.5))
             ax.text(k - 0.53, row + 0.45, SHORT.get(verdict, "not run"), ha="center", va="center", fontsize=8,
                     color="white" if verdict in (HOLDS, DOES_NOT) else "black")
-    ax.set_xlim(0, 7)
-    ax.set_ylim(len(names), 0)
+    ax.set(xlim=(0, 7), ylim=(len(names), 0))
     ax.set_xticks([k - 0.53 for k in range(1, 8)], [f"claim {k}" for k in range(1, 8)], fontsize=9)
     ax.set_yticks([r + 0.45 for r in range(len(names))], names, fontsize=9)
     ax.tick_params(length=0)
-    for side in ax.spines.values():
-        side.set_visible(False)
+    ax.spines[:].set_visible(False)
     ax.set_title("The paper's seven claims under each rule set (the report's verdict rules; paper lengths)",
                  fontsize=10)
     fig.tight_layout()
     return save(fig, path, DPI)
 
 
-#: The rows that differ from ``skills`` only in the learned actors' initial speed bias (``skills`` is bias 4).
-DIAL_ROWS = ("skills-bias0", "skills-bias1", "skills-bias2", "skills")
-
-
-class DialPoint(NamedTuple):
-    """One speed bias's LE-LS against the shared EE-LS: final best (recorded and fresh) and learning-test level."""
-
-    bias: float
-    speed: float  # the learned actors' initial speed, sigmoid(bias), as a fraction of full speed
-    le_ls_recorded: float
-    le_ls_fresh: float
-    le_ls_fresh_sd: float
-    le_ls_steady: float
-    ee_ls_recorded: float
-    ee_ls_steady: float
+#: One speed bias's LE-LS against the shared EE-LS: final best (recorded and fresh) and learning-test level, and
+#: ``speed``, the learned actors' initial speed, sigmoid(bias), as a fraction of full speed.
+DialPoint = collections.namedtuple("DialPoint", ("bias", "speed", "le_ls_recorded", "le_ls_fresh", "le_ls_fresh_sd",
+                                                 "le_ls_steady", "ee_ls_recorded", "ee_ls_steady"))
 
 
 def speed_dial(claims: dict, rows=DIAL_ROWS) -> list[DialPoint]:
-    """Claim 3's two sides against the initial speed bias, from claims.json's ``claims`` (rows not measured are left out)."""
+    """Claim 3's two sides against the initial speed bias, from claims.json's ``claims`` (unmeasured rows left out)."""
     points = []
-    for name in rows:
-        if name not in claims or "LE-LS" not in claims[name]["fresh"]:  # measured, or its fresh lives not lived
-            continue
+    for name in (n for n in rows if n in claims and "LE-LS" in claims[n]["fresh"]):  # measured, its fresh lives lived
         bias = float(config_of(BY_NAME[name], "LE-LS").initial_speed_bias)
         three, fresh = claims[name]["3"]["numbers"], claims[name]["fresh"]["LE-LS"]
         levels = claims[name]["6"]["numbers"]["mean"]  # the learning tests' steady states, per condition
@@ -291,13 +212,12 @@ def dial_figure(points: list[DialPoint], path: str) -> str:
     speed = [100 * p.speed for p in points]
     fig = new_figure(9, 3.6)
     axes = fig.subplots(1, 2, sharey=True)
-    ax = axes[0]
-    ax.plot(speed, [p.le_ls_recorded for p in points], "o-", color="C0", label="LE-LS, recorded best")
-    ax.errorbar(speed, [p.le_ls_fresh for p in points], [p.le_ls_fresh_sd for p in points], fmt="s--", color="C0",
-                alpha=0.6, capsize=3, label="LE-LS, fresh lives (sd over seeds)")
-    ax.axhline(points[0].ee_ls_recorded, color="C1", label="EE-LS, recorded best (shared)")
-    ax.set_title("a. final best fitness (claim 3)", fontsize=10)
-    ax.set_ylabel("fitness")
+    axes[0].plot(speed, [p.le_ls_recorded for p in points], "o-", color="C0", label="LE-LS, recorded best")
+    axes[0].errorbar(speed, [p.le_ls_fresh for p in points], [p.le_ls_fresh_sd for p in points], fmt="s--",
+                     color="C0", alpha=0.6, capsize=3, label="LE-LS, fresh lives (sd over seeds)")
+    axes[0].axhline(points[0].ee_ls_recorded, color="C1", label="EE-LS, recorded best (shared)")
+    axes[0].set_title("a. final best fitness (claim 3)", fontsize=10)
+    axes[0].set_ylabel("fitness")
     axes[1].plot(speed, [p.le_ls_steady for p in points], "o-", color="C0", label="LE-LS")
     axes[1].axhline(points[0].ee_ls_steady, color="C1", label="EE-LS (shared)")
     axes[1].set_title("b. learning tests' steady state", fontsize=10)
@@ -310,150 +230,109 @@ def dial_figure(points: list[DialPoint], path: str) -> str:
     return save(fig, path, DPI)
 
 
-#: Where the fresh-life table goes in docs/CLAIMS.md.
-FRESH_START = "<!-- fresh-life table: python -m experiments report claims-screen -->"
-FRESH_END = "<!-- end of fresh-life table -->"
-
-
 def fresh_table(measured: dict, names) -> str:
     """Recorded final best fitness (claims 1-4's measure) beside the fresh-life fitness of each seed's best genome."""
-    lines = head("rule set", *(f"{c} recorded / fresh" for c in EVOLVED))
-    for name in (name for name in names if name in measured):
-        fresh = [measured[name].get("fresh", {}).get(c) for c in EVOLVED]
-        lines.append(line(f"`{name}`", *("-" if f is None else f"{f['recorded']:.3f} / {f['fresh']:.3f} (sd "
-                                          f"{f['fresh_sd_over_seeds']:.3f}, {f['seeds']} seeds)" for f in fresh)))
-    return "\n".join(lines)
+    return table(("rule set", *(f"{c} recorded / fresh" for c in EVOLVED)), [(f"`{name}`", *(
+        "-" if f is None else f"{f['recorded']:.3f} / {f['fresh']:.3f} (sd {f['fresh_sd_over_seeds']:.3f}, "
+        f"{f['seeds']} seeds)" for f in (measured[name].get("fresh", {}).get(c) for c in EVOLVED)))
+        for name in names if name in measured])
 
 
-#: Where claim 8's table goes in docs/CLAIMS.md.
-EXPERTS_START = "<!-- claim 8 table: python -m experiments report claims-experts -->"
-EXPERTS_END = "<!-- end of claim 8 table -->"
-
-
-def experts_runs(table: ClaimsTable) -> dict[tuple[str, str, int], tuple[str, str, str]]:
-    """Claim 8's runs and their 3-expert ones: (rule set, condition, experts) -> (evolution, learning test, owner: the
-    first rule set of :data:`EXPERT_RULE_SETS` whose run it is, as a shared run is named)."""
+def experts_runs(table: Table) -> dict[tuple[str, str, int], tuple[str, str, str]]:
+    """Claim 8's runs and their 3-expert ones: (rule set, condition, experts) -> (evolution, learning test, owner)."""
     rows = {(name, row.condition, k): row for name in EXPERT_RULE_SETS for k in (3, *EXPERT_COUNTS)
             for row in rule_rows(BY_NAME[name], None if k == 3 else k) if row.condition in EXPERT_CONDITIONS}
     table = dataclasses.replace(table, rows=tuple(dict.fromkeys((*table.rows, *rows.values()))))
-    evolutions, tests, owners = table.evolutions(), table.tests(), {}
+    evolutions, tests, owners = table.evolutions(), table.tests(), {}  # owner: the first rule set whose run it is
     for (name, _, _), row in rows.items():
         owners.setdefault(evolutions[row.name], name)
     return {at: (evolutions[row.name], tests[row.name], owners[evolutions[row.name]]) for at, row in rows.items()}
 
 
 def measure_experts(rule: RuleSet, found: dict, summary: dict | None = None, reproduction: str = REPRODUCTION) -> dict:
-    """Claim 8 for a rule set: its finished 4- and 6-expert runs against its own 3-expert ones (``found``:
-    :func:`experts_runs`), and what each run's best individuals do (:func:`probed`; ``summary``: the
-    reproduction report's, for its runs)."""
-    from experiments.claims import claim_experts, final_best
-    from experiments.loading import read_evolution, read_test
-
-    final, steady, sizes_, runs = {}, {}, {}, []
-    for condition in EXPERT_CONDITIONS:
-        for k in (3, *EXPERT_COUNTS):
-            evolved, tested, owner = found[rule.name, condition, k]
-            run, test = read_evolution(evolved), read_test(tested)
-            done = run is not None and run["config"] and len(run["best"]) >= run["config"]["num_generations"]
-            if done:
-                final[condition, k] = final_best(run["best"]).tolist()
-                sizes_[f"{condition} {k}"] = f"{len(run['seeds'])}x{len(run['best'])}"
-            if test is not None:
-                steady[condition, k] = test["steady"]["steady_per_run"]
-            if done:
-                variant = reproduction_variant(evolved, reproduction)
-                colours, idle, fresh = probed(evolved, run["config"], summary if variant else None, variant or "",
-                                              condition)
-                runs.append(dict(rule=owner, condition=condition, num_experts=k, size=sizes_[f"{condition} {k}"],
-                                 fresh=fresh and fresh["mean"], fresh_sd=fresh and fresh["sd_over_seeds"],
-                                 colours=None if colours is None else [colours.count(c) for c in range(4)],
-                                 idle_experts=None if idle is None else float(np.mean(idle))))
-    claim = claim_experts(final, steady)
-    expected = [(m, c, k) for m in ("final", "steady") for c in EXPERT_CONDITIONS for k in (3, *EXPERT_COUNTS)]
+    """Claim 8 for a rule set: its 4- and 6-expert runs (:func:`experts_runs`) against its 3-expert ones, probed."""
+    final, steady, sizes, runs = {}, {}, {}, []
+    for condition, k in ((c, k) for c in EXPERT_CONDITIONS for k in (3, *EXPERT_COUNTS)):
+        evolved, tested, owner = found[rule.name, condition, k]
+        run, test = read_evolution(evolved), read_test(tested)
+        if test is not None:
+            steady[condition, k] = test["steady"]["steady_per_run"]
+        if run is None or not run["config"] or len(run["best"]) < run["config"]["num_generations"]:
+            continue  # not finished
+        final[condition, k] = final_best(run["best"]).tolist()
+        size = sizes[f"{condition} {k}"] = f"{len(run['seeds'])}x{len(run['best'])}"
+        variant = reproduction_variant(evolved, reproduction)  # its probe the reproduction report's (``summary``)
+        colours, idle, fresh = probed(evolved, run["config"], summary if variant else None, variant or "", condition)
+        runs.append(dict(rule=owner, condition=condition, num_experts=k, size=size,
+                         fresh=fresh and fresh["mean"], fresh_sd=fresh and fresh["sd_over_seeds"],
+                         colours=None if colours is None else [colours.count(c) for c in range(4)],
+                         idle_experts=None if idle is None else float(np.mean(idle))))
     have = {"final": final, "steady": steady}
-    missing = [f"{c} {m} {k}" for m, c, k in expected if (c, k) not in have[m]]
+    missing = [f"{c} {m} {k}" for m in have for c in EXPERT_CONDITIONS for k in (3, *EXPERT_COUNTS)
+               if (c, k) not in have[m]]
     # a point of claim 8's figure: "final", the final best per seed, or "steady", the steady state per run (sd ddof 1)
     levels = [dict(rule=rule.name, condition=c, measure=m, num_experts=k, mean=float(np.mean(v)),
                    sd=float(np.std(v, ddof=1)) if len(v) > 1 else 0.0, count=len(v))
               for m, values in have.items() for (c, k), v in sorted(values.items())]
-    return dict(claim, sizes=sizes_, missing=missing, levels=levels, runs=runs)
+    return dict(claim_experts(final, steady), sizes=sizes, missing=missing, levels=levels, runs=runs)
 
 
 def experts_table(measured: dict) -> str:
-    """Claim 8 as markdown: one row per rule set, the verdict and the comparisons (``so far`` while runs are missing)."""
-    lines = head("rule set", "runs (seeds x generations)", "claim 8")
-    for name, claim in measured.items():
-        missing = claim.get("missing") or []
-        verdict = f"{claim['verdict']} so far (not finished: {', '.join(missing)})" if missing else claim["verdict"]
-        lines.append(line(f"`{name}`", ", ".join(f"{k}: {v}" for k, v in claim["sizes"].items()) or "none finished",
-                          f"{verdict}: {claim['measured']}"))
-    return "\n".join(lines)
+    """Claim 8 as markdown: a row per rule set, the verdict and the comparisons (``so far`` while runs are missing)."""
+    return table(("rule set", "runs (seeds x generations)", "claim 8"), [
+        (f"`{name}`", ", ".join(f"{k}: {v}" for k, v in claim["sizes"].items()) or "none finished", claim["verdict"]
+         + (f" so far (not finished: {', '.join(claim['missing'])})" if claim.get("missing") else "")
+         + f": {claim['measured']}") for name, claim in measured.items()])
 
 
 def experts_runs_table(measured: dict) -> str:
     """Claim 8's runs as markdown, each once (a shared run under its owner): fitness, and what the best do."""
     levels = {(p["rule"], p["condition"], p["measure"], p["num_experts"]): p
               for claim in measured.values() for p in claim.get("levels", [])}
-    lines = head("run", "experts", "seeds x generations", "final best (recorded)", "fresh lives (sd over seeds)",
-                 "steady state (sd over runs)", "best individuals following 0/1/2/3 colours",
-                 "experts following none (mean)")
-    seen = set()
+    runs = {}  # each run once, with the rule set it was first measured under
     for name, claim in measured.items():
         for run in claim.get("runs", []):
-            if (run["rule"], run["condition"], run["num_experts"]) in seen:
-                continue
-            seen.add((run["rule"], run["condition"], run["num_experts"]))
-            final = levels.get((name, run["condition"], "final", run["num_experts"]))
-            steady = levels.get((name, run["condition"], "steady", run["num_experts"]))
-            cells = [f"{final['mean']:.3f}" if final else "-",
+            runs.setdefault((run["rule"], run["condition"], run["num_experts"]), (name, run))
+    rows = []
+    for name, run in runs.values():
+        final, steady = (levels.get((name, run["condition"], m, run["num_experts"])) for m in ("final", "steady"))
+        rows.append((f"{run['rule']} {run['condition']}", run["num_experts"], run["size"],
+                     f"{final['mean']:.3f}" if final else "-",
                      "-" if run["fresh"] is None else f"{run['fresh']:.3f} ({run['fresh_sd']:.3f})",
                      f"{steady['mean']:.3f} ({steady['sd']:.3f})" if steady else "-",
                      "-" if run["colours"] is None else "/".join(map(str, run["colours"])),
-                     "-" if run["idle_experts"] is None else f"{run['idle_experts']:.1f}"]
-            lines.append(line(f"{run['rule']} {run['condition']}", run["num_experts"], run["size"], *cells))
-    return "\n".join(lines)
-
-
-#: Where claim 8's runs table goes in docs/CLAIMS.md.
-EXPERTS_RUNS_START = "<!-- claim 8 runs: python -m experiments report claims-experts -->"
-EXPERTS_RUNS_END = "<!-- end of claim 8 runs -->"
-
-
-#: Claim 8's figure.
-EXPERTS_FIGURE = os.path.join("docs", "claims", "experts.png")
+                     "-" if run["idle_experts"] is None else f"{run['idle_experts']:.1f}"))
+    return table(("run", "experts", "seeds x generations", "final best (recorded)", "fresh lives (sd over seeds)",
+                  "steady state (sd over runs)", "best individuals following 0/1/2/3 colours",
+                  "experts following none (mean)"), rows)
 
 
 def experts_figure(measured: dict, path: str = EXPERTS_FIGURE) -> str:
     """Final best fitness and steady state against the number of experts, a line per rule set and condition."""
-    from experiments.claims import ABOUT
-
     fig = new_figure(9, 3.8)
     axes = fig.subplots(1, 2, sharey=True)
     titles = {"final": "a. final best fitness (recorded best; sd over seeds)",
               "steady": "b. learning tests' steady state (sd over runs)"}
-    markers = {"LE-LS": "o", "EE-LS": "s"}
     colours: dict = {}  # one colour per run, the same in both panels
-    for ax, measure in zip(axes, ("final", "steady")):
+    for ax, measure in zip(axes, titles):
         drawn = set()
-        for name, claim in measured.items():
-            for condition in EXPERT_CONDITIONS:
-                points = sorted((p["num_experts"], p["mean"], p["sd"]) for p in claim.get("levels", [])
-                                if p["measure"] == measure and p["condition"] == condition)
-                owner = next((r["rule"] for r in claim.get("runs", []) if r["condition"] == condition), name)
-                shared = (owner, condition, measure)
-                if not points or shared in drawn:
-                    continue  # a shared run (paper-selector's EE-LS is skills') is drawn once
-                drawn.add(shared)
-                colour, style = colours.setdefault(shared[:2], f"C{len(colours)}"), "-" if name == EXPERT_RULE_SETS[0] else "--"
-                k, mean, sd = (np.array(v) for v in zip(*points))
-                ax.errorbar(k + (0.05 if style == "--" else 0), mean, sd, fmt=markers[condition] + style, color=colour,
-                            capsize=3, label=f"{condition}, {shared[0]}")
-                base = dict(zip(k, mean)).get(3)
-                if base is not None:  # the rule's band: within [0.8, 1.25] of 3 experts is "unchanged"
-                    ax.fill_between([2.8, 6.2], ABOUT[0] * base, min(ABOUT[1] * base, 1), color=colour, alpha=0.06)
+        for name, condition in ((n, c) for n in measured for c in EXPERT_CONDITIONS):
+            claim = measured[name]
+            points = sorted((p["num_experts"], p["mean"], p["sd"]) for p in claim.get("levels", [])
+                            if p["measure"] == measure and p["condition"] == condition)
+            owner = next((r["rule"] for r in claim.get("runs", []) if r["condition"] == condition), name)
+            if not points or (owner, condition) in drawn:
+                continue  # a shared run (paper-selector's EE-LS is skills') is drawn once
+            drawn.add((owner, condition))
+            colour, dashed = colours.setdefault((owner, condition), f"C{len(colours)}"), name != EXPERT_RULE_SETS[0]
+            k, mean, sd = (np.array(v) for v in zip(*points))
+            ax.errorbar(k + (0.05 if dashed else 0), mean, sd, fmt={"LE-LS": "o", "EE-LS": "s"}[condition] +
+                        ("--" if dashed else "-"), color=colour, capsize=3, label=f"{condition}, {owner}")
+            base = dict(zip(k, mean)).get(3)
+            if base is not None:  # the rule's band: within [0.8, 1.25] of 3 experts is "unchanged"
+                ax.fill_between([2.8, 6.2], ABOUT[0] * base, min(ABOUT[1] * base, 1), color=colour, alpha=0.06)
         ax.set_title(titles[measure], fontsize=10)
-        ax.set_xticks([3, *EXPERT_COUNTS])
-        ax.set_xlabel("number of experts")
+        ax.set(xticks=[3, *EXPERT_COUNTS], xlabel="number of experts")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="upper right")
     axes[0].set_ylabel("fitness")
@@ -464,17 +343,13 @@ def experts_figure(measured: dict, path: str = EXPERTS_FIGURE) -> str:
 
 def reproduction_summary(document: str) -> dict | None:
     """The reproduction report's summary beside ``document`` (reproduction/summary.json), or None."""
-    from experiments.loading import read_json
-
     return read_json(os.path.join(os.path.dirname(document), "reproduction", "summary.json"))
 
 
-def write_experts(table: ClaimsTable) -> dict:
-    """Claim 8 of every rule set that runs it: claim8.json, the document's tables and the figure (a run's fresh
-    lives and probe are computed once, about a minute, then kept beside it)."""
-    summary, found = reproduction_summary(table.document), experts_runs(table)
-    reproduction = table.reproduction
-    claim8 = {name: measure_experts(BY_NAME[name], found, summary, reproduction) for name in EXPERT_RULE_SETS}
+def write_experts(table: Table) -> dict:
+    """Claim 8 of every rule set that runs it: claim8.json, the document's tables and the figure."""
+    summary, found = reproduction_summary(table.document), experts_runs(table)  # a run's fresh lives, probe: kept
+    claim8 = {name: measure_experts(BY_NAME[name], found, summary, table.reproduction) for name in EXPERT_RULE_SETS}
     os.makedirs(table.out, exist_ok=True)
     with open(os.path.join(table.out, "claim8.json"), "w") as f:
         json.dump(claim8, f, indent=2, default=str)
@@ -485,27 +360,23 @@ def write_experts(table: ClaimsTable) -> dict:
     return claim8
 
 
-class ScreenTable(ClaimsTable):
+class ScreenTable(Table):
     """The claims map: every rule set's runs; its report, the map's tables and figures (and claim 8's)."""
 
     def report(self) -> int:
         """Measure every finished rule set; write claims.json, the document's tables and figures, and claim 8's."""
-        summary, measured = reproduction_summary(self.document) or {}, {}
-        reproduction = self.reproduction
-        names = [rule.name for rule in RULE_SETS]
-        for name in names:
-            rule = BY_NAME[name]
-            if self.finished(rule):
-                print(f"measuring {name}", flush=True)
-                measured[name] = measure_runs(name, self.runs_of(rule), summary,
-                                              sle_whole_test=rule.sle_noise_steps == 0)
-        os.makedirs(self.out, exist_ok=True)
+        summary, measured, names = reproduction_summary(self.document) or {}, {}, [rule.name for rule in RULE_SETS]
+        for rule in RULE_SETS:
+            if all("steady_mean" in m and ("final_mean" in m or m["dir"] is None)  # every run of its row finished
+                   for m in dataclasses.replace(self, rows=rule_rows(rule)).measure()):
+                print(f"measuring {rule.name}", flush=True)
+                measured[rule.name] = measure_rule(rule, summary, self.out, self.reproduction)
         numbers = {name: {**{str(k): v for k, v in m["claims"].items()}, "fresh": m.get("fresh", {})}
                    for name, m in measured.items()}
+        os.makedirs(self.out, exist_ok=True)
         with open(os.path.join(self.out, "claims.json"), "w") as f:
-            rule_sets = {r.name: r._asdict() for r in RULE_SETS}
-            json.dump(dict(sizes=dict(screen=SCREEN, full=SCALES["paper"]), rule_sets=rule_sets, claims=numbers), f,
-                      indent=2, default=str)
+            json.dump(dict(sizes=dict(screen=SCREEN, full=SCALES["paper"]), rule_sets={
+                r.name: r._asdict() for r in RULE_SETS}, claims=numbers), f, indent=2, default=str)
         write_table(self.document, table_markdown(measured, names), TABLE_START, TABLE_END)
         write_table(self.document, fresh_table(measured, names), FRESH_START, FRESH_END)
         figures = os.path.join(os.path.dirname(self.document), "claims")
@@ -515,11 +386,11 @@ class ScreenTable(ClaimsTable):
             dial_figure(points, os.path.join(figures, "speed_dial.png"))
         write_experts(dataclasses.replace(EXPERTS_TABLE, results=self.results, out=self.out, document=self.document))
         print(f"wrote {self.document}'s tables and {os.path.join(self.out, 'claims.json')}: {len(measured)} of "
-              f"{len(names)} rule sets finished ({reproduction})")
+              f"{len(names)} rule sets finished ({self.reproduction})")
         return 0
 
 
-class ExpertsTable(ClaimsTable):
+class ExpertsTable(Table):
     """Claim 8's runs: skills and paper-selector with 4 and 6 experts; its report, claim 8's tables and figure."""
 
     def report(self) -> int:
@@ -537,8 +408,6 @@ EXPERTS_TABLE = ExpertsTable("claims-experts", "docs/CLAIMS.md", 5, scale=SCREEN
     row for name in EXPERT_RULE_SETS for k in EXPERT_COUNTS for row in rule_rows(BY_NAME[name], k)))
 #: The module's tables by the name its command line takes first (``screen`` when none is given).
 TABLES = {"screen": SCREEN_TABLE, "experts": EXPERTS_TABLE}
-
-
 #: The studies of this module (python -m experiments finds them).
 STUDIES = studies_of("claims_study", TABLES)
 main = functools.partial(dispatch, TABLES)
