@@ -6,6 +6,7 @@ import sys
 
 import numpy as np
 import pytest
+from helpers import write_evolution, write_learning_test
 
 from experiments import claims, claims_study as study
 from experiments import study as S
@@ -193,17 +194,10 @@ def test_speed_dial_reads_claim_3_fresh_lives_and_claim_6_levels_per_bias():
 
 def _hand_made_run(folder, best_per_generation, steady_per_run):
     """An evolution (history.csv, config.json) with ``best_per_generation`` (generations, seeds) and its test."""
-    import json
-
     evolve, test = folder / "evolve", folder / "test"
-    evolve.mkdir(parents=True)
     best = np.asarray(best_per_generation, float)
-    rows = ["generation,seed,best"] + [f"{g},{s},{best[g, s]}" for g in range(best.shape[0]) for s in range(best.shape[1])]
-    (evolve / "history.csv").write_text("\n".join(rows) + "\n")
-    (evolve / "config.json").write_text(json.dumps({"config": {"num_generations": best.shape[0]}}))
-    test.mkdir(parents=True)
-    (test / "steady.json").write_text(json.dumps({"steady_per_run": list(steady_per_run)}))
-    (test / "curve.csv").write_text("bin,end_step,mean,sd_over_runs\n0,10,0.5,0.1\n")
+    write_evolution(evolve, best.tolist(), {"config": {"num_generations": best.shape[0]}})
+    write_learning_test(test, steady_per_run, (0.5,), 10)
     return str(evolve), str(test)
 
 
@@ -306,15 +300,10 @@ def test_run_probe_keeps_its_probe_until_the_population_moves_on(tmp_path, monke
 def test_a_rows_own_run_is_probed_once_for_claim_7_and_kept(tmp_path, monkeypatch):
     """measure_runs probes a row's own LE-LS (claim 7's 10 best per seed, key 0) through run_probe: kept in
     probe.json, so a second table probes nothing."""
-    import json
-
     from experiments import relive
 
     folder = tmp_path / "evolve" / "LE-LS"
-    folder.mkdir(parents=True)
-    rows = ["generation,seed,best"] + [f"{g},{s},0.4" for g in range(2) for s in range(2)]
-    (folder / "history.csv").write_text("\n".join(rows) + "\n")
-    (folder / "config.json").write_text(json.dumps({"config": {"num_generations": 2}}))
+    write_evolution(folder, [[0.4, 0.4]] * 2, {"config": {"num_generations": 2}})
     np.savez(folder / "final_population.npz", evaluated=np.zeros((2, 12, 3), np.float32),
              fitness=np.tile(np.linspace(0, 1, 12), (2, 1)), generation=2, seeds=np.asarray([0, 1]))
     calls = []
