@@ -26,6 +26,8 @@ from imrl_jax import reference as numpy_reference
 from imrl_jax.config import Task, make_config
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+#: The committed results of every study.
+RESULTS = os.path.join(ROOT, "experiments", "results")
 #: Seconds any one run may take before every process of the test is killed.
 TIMEOUT = 240
 

@@ -5,13 +5,12 @@ import os
 import shutil
 
 import pytest
-from helpers import ROOT
+from helpers import RESULTS
 
 from imrl_jax import conditions, runspec
 from imrl_jax.config import PRESETS, make_config
 from imrl_jax.runspec import DuplicateRunError, RunSpec
 
-RESULTS = os.path.join(ROOT, "experiments", "results")
 
 
 def test_every_committed_run_keeps_its_recorded_key_and_no_two_share_one():
@@ -87,10 +86,7 @@ def test_two_directories_of_one_run_are_refused_naming_both(tmp_path, capsys):
 def test_tests_from_scratch_are_indexed_by_what_they_compute(tmp_path):
     """Each committed SLE or EXT-LS test has a key of its own; a copy elsewhere is the same test, refused as a run
     is; a test of evolved genomes is not indexed (its run is)."""
-    import shutil
-
-    results = os.path.join(ROOT, "experiments", "results")
-    known = runspec.test_index(results)
+    known = runspec.test_index(RESULTS)
     assert os.path.join("claims", "skills-bias0", "test", "SLE") in known.values()
     assert len(set(known.values())) == len(known) >= 18
     assert not any("goals" in folder for folder in known.values())  # EE-LS-T's tests are of evolved genomes

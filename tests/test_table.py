@@ -4,14 +4,13 @@ import os
 
 import pytest
 
-from helpers import ROOT
+from helpers import RESULTS
 
 from experiments.study import SCREEN
 from experiments.reproduce import stage_done
 from experiments.table import Measure, Row, Table, evolution_spec, learning_test_dir
 from imrl_jax import runspec
 
-RESULTS = os.path.join(ROOT, "experiments", "results")
 
 
 def test_a_row_is_exactly_what_its_command_computes():

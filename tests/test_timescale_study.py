@@ -3,13 +3,12 @@
 import json
 import os
 
-from helpers import ROOT, write_evolution, write_learning_test
+from helpers import RESULTS, write_evolution, write_learning_test
 
 from experiments import reproduce
 from experiments import timescale as study
 from experiments.table import evolution_spec
 
-RESULTS = os.path.join(ROOT, "experiments", "results")
 
 
 def _write(out, name, rows):
