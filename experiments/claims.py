@@ -159,10 +159,8 @@ def specialisation_score(shares, steps, min_share: float = MIN_CONTROL_SHARE,
     """
     shares, steps = np.nan_to_num(np.asarray(shares, float)), np.asarray(steps, float)
     total = max(steps.sum(), 1.0)
-    followed = []
-    for row, n in zip(shares, steps):
-        colour = int(np.argmax(row[:3]))
-        followed.append(SEEN[colour] if n / total >= min_share and row[colour] > specialised else None)
+    followed = [SEEN[colour] if n / total >= min_share and row[colour] > specialised else None
+                for row, n, colour in zip(shares, steps, (int(np.argmax(row[:3])) for row in shares))]
     return len({c for c in followed if c is not None}), followed
 
 
@@ -279,13 +277,11 @@ def claim_learning_speed(curves: dict, steady: dict, sle_noise_steps: int | None
                f"the whole test of {end:,} cycles, the paper's length")
     measured = "; ".join(texts) + f" (SLE's noise over {horizon})" if texts else "-"
     never = {c: r is None for c, r in ratios.items()}
-    numbers = dict(ratio=ratios, sle_never=never, cycles=cycles, sle_noise_steps=sle_noise_steps)
-    if len(ratios) < 2:
-        return _claim(NOT_AVAILABLE, measured, **numbers)
     measured_ratios = [r for r in ratios.values() if r is not None]
     much = sum(r >= MUCH_FASTER for r in measured_ratios)
-    return _claim(_verdict(much == 2, much == 1 or any(never.values()) or all(r > 1 for r in measured_ratios)),
-                  measured, **numbers)
+    verdict = _verdict(much == 2, much == 1 or any(never.values()) or all(r > 1 for r in measured_ratios))
+    return _claim(NOT_AVAILABLE if len(ratios) < 2 else verdict, measured, ratio=ratios, sle_never=never,
+                  cycles=cycles, sle_noise_steps=sle_noise_steps)
 
 
 def pair_order(a, b, num_se: float = ORDER_SE) -> str:
@@ -324,13 +320,12 @@ def claim_specialisation(colours: dict, pairs: dict | None = None) -> dict:
     if pairs:
         measured += "; task pairs solved both ways: " + ", ".join(f"{c} {_fmt(v, 2)}" for c, v in pairs.items())
     numbers = dict(counts=counts, specialised=specialised, mean_colours=mean, pairs=pairs)
-    if not probed:
-        return _claim(NOT_AVAILABLE, measured, **numbers)
     composed = [pairs[c] for c in ("LE-LS", "EE-LS") if pairs.get(c) is not None]
     composes = bool(composed) and max(composed) >= PAIRS_COMPOSED
     majority = [specialised[c] >= SPECIALISED_MAJORITY for c in probed]
-    return _claim(_verdict(len(probed) == 2 and all(majority) and composes,
-                           any(majority) or any(m >= 2 for m in mean.values()) or composes), measured, **numbers)
+    verdict = _verdict(len(probed) == 2 and all(majority) and composes,
+                       any(majority) or any(m >= 2 for m in mean.values()) or composes)
+    return _claim(verdict if probed else NOT_AVAILABLE, measured, **numbers)
 
 
 def evolved_claims(done: dict, per_run: dict, path: dict | None) -> dict:
@@ -500,10 +495,6 @@ def _difference(a, b) -> tuple[float, float]:
     return float(a.mean() - b.mean()), _standard_error(a, b)
 
 
-def _easier(faster: bool, higher: bool) -> str:
-    return "easier" if faster and higher else "faster" if faster else "higher" if higher else "not easier"
-
-
 def claim_criteria_easier(criteria: dict, actors: dict | None) -> dict:
     """(a) from each criterion row's and EE-LS's evolution: ``dict(plateau, final_per_seed, fresh, genes)`` each."""
     if actors is None or not criteria:
@@ -517,7 +508,8 @@ def claim_criteria_easier(criteria: dict, actors: dict | None) -> dict:
         faster = p is not None and q is not None and MUCH_FASTER * p <= q
         higher = d > ORDER_SE * se
         compared[name] = dict(difference=d, standard_error=se, much_faster=faster, higher=higher)
-        parts.append(said(name, row) + f"; d = {d:+.3f} +- {se:.3f} ({_easier(faster, higher)})")
+        easier = ("easier" if higher else "faster") if faster else "higher" if higher else "not easier"
+        parts.append(said(name, row) + f"; d = {d:+.3f} +- {se:.3f} ({easier})")
     measured = "; ".join(parts)
     return _claim(_verdict(all(c["much_faster"] and c["higher"] for c in compared.values()),
                            any(c["much_faster"] or c["higher"] for c in compared.values())), measured,

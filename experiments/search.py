@@ -134,8 +134,8 @@ def claims_figure(measured: dict, path: str) -> str:
     style_axis(ax_steady, "claim 6: learning tests", "", "steady state (mean +- sd over runs)")
     for strategy, life in measured["paths"].items():
         if life is not None:
-            tasks = np.arange(1, len(life["stereotypy_per_task"]) + 1)
-            ax_path.plot(tasks, life["stereotypy_per_task"], marker="o", label=strategy, **STRATEGY_STYLES[strategy])
+            ax_path.plot(np.arange(1, len(life["stereotypy_per_task"]) + 1), life["stereotypy_per_task"], marker="o",
+                         label=strategy, **STRATEGY_STYLES[strategy])
     ax_path.axhline(STEREOTYPED_TURNS, color="0.4", lw=1, ls="--", label="circular from here")
     ax_path.set_ylim(0, 1)
     style_axis(ax_path, "claim 4: the best EE-ES's path", "task", "stereotypy (turns the same way)")
