@@ -206,7 +206,7 @@ def _fmt(value, digits: int = 3) -> str:
 def claim_evolvability(plateau: dict) -> dict:
     """Claim 1 from each evolved condition's plateau generation."""
     le, others, measured = _le_ls_against_ee(plateau, "plateau generation")
-    if le is None or any(o is None for o in others):
+    if None in (le, *others):
         return _claim(NOT_AVAILABLE, measured, plateau=plateau)
     return _claim(_verdict(all(le < o and MUCH_FASTER * le <= o for o in others), any(le < o for o in others)),
                   measured, plateau=plateau)
@@ -215,7 +215,7 @@ def claim_evolvability(plateau: dict) -> dict:
 def claim_reliability(spread: dict) -> dict:
     """Claim 2 from each evolved condition's sd over seeds of the final best fitness."""
     le, others, measured = _le_ls_against_ee(spread, "sd over seeds")
-    if le is None or any(o is None for o in others):
+    if None in (le, *others):
         return _claim(NOT_AVAILABLE, measured, spread=spread)
     much = sum(le <= MUCH_SMALLER * o for o in others)
     measured += f"; LE-LS's sd is at most {MUCH_SMALLER:g}x that of {much} of the 2 EE conditions"
@@ -442,8 +442,7 @@ def claim_unseen(seen: dict, unseen: dict, num_se: float = ORDER_SE) -> dict:
         s, u = seen[name], unseen[name]
         difference = u["advantage"] - s["advantage"]
         error = math.hypot(s["standard_error"], u["standard_error"])
-        stronger = difference > num_se * error
-        compared[name] = dict(difference=difference, standard_error=error, stronger=stronger)
+        compared[name] = dict(difference=difference, standard_error=error, stronger=difference > num_se * error)
         parts.append(f"{name}: {u['advantage']:+.3f} unseen vs {s['advantage']:+.3f} seen "
                      f"({difference:+.3f} +- {error:.3f})")
     if not compared:
@@ -560,9 +559,8 @@ def claim_hand_values(best_values: dict, skills: dict, paper: dict) -> dict:
 
     if not best_values:
         return _claim(NOT_AVAILABLE, "-")
-    differing = [n for n in EVOLVED_FIELDS if n in best_values and skills[n] != paper[n]]
     nearer, parts = {}, []
-    for name in differing:
+    for name in (n for n in EVOLVED_FIELDS if n in best_values and skills[n] != paper[n]):  # the values they differ on
         u = float(np.mean([map_position(name, v) for v in best_values[name]]))
         us, up = map_position(name, skills[name]), map_position(name, paper[name])
         nearer[name] = "skills" if abs(u - us) < abs(u - up) else "paper"
