@@ -148,8 +148,9 @@ class SearchTable(Table):
     """The search study's table: its rows measured per strategy, the claims judged per strategy, its figures."""
 
     def measure_search(self) -> dict:
-        """Per strategy and condition the evolution's and learning test's numbers, and claims 1-4 and 6 per strategy;
-        the GA's fresh lives, junction probes and relived best EE-ES (claim 4's path) are the reproduction's report's."""
+        """Per strategy and condition the evolution's and learning test's numbers, and claims 1-4 and 6 per
+        strategy; the GA's fresh lives, junction probes and relived best EE-ES (claim 4's path) are the reproduction's
+        report's."""
         from experiments.claims import final_best
         from experiments.claims_study import probed, reproduction_summary, reproduction_variant
         from experiments.relive import reproduction_fresh, run_fresh, run_path
@@ -161,9 +162,7 @@ class SearchTable(Table):
             if not m["generations"] and "steady_mean" not in m:
                 continue  # not started: no row
             entry = dict(strategy=strategy, condition=condition, generations=m["generations"],
-                         finished="final_mean" in m)
-            if m["generations"]:
-                entry["seeds"] = m["seeds"]
+                         finished="final_mean" in m, **({"seeds": m["seeds"]} if m["generations"] else {}))
             if entry["finished"]:  # a running evolution is drawn but not measured: its last generations are to come
                 entry.update(final_best_mean=m["final_mean"], final_best_sd=m["final_sd"],
                              final_best_per_seed=final_best(m["best"]).tolist(), plateau_generation=m["plateau"])
@@ -225,9 +224,7 @@ class SearchTable(Table):
         code = super().report()
         measured = self.measure_search()
         with open(os.path.join(self.out, "report.json"), "w") as f:
-            json.dump(dict(rows=measured["rows"], sle=measured["sle"],
-                           claims={s: {str(n): c for n, c in claims.items()}
-                                   for s, claims in measured["claims"].items()}), f, indent=2)
+            json.dump({k: measured[k] for k in ("rows", "sle", "claims")}, f, indent=2)  # claim numbers as keys: "1"
         drawn = claims_figure(measured, os.path.join(self.out, "claims.png"))
         write_table(self.document, table(measured), "<!-- search tables: python -m experiments report search -->",
                     "<!-- end of search tables -->")
