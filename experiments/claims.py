@@ -29,7 +29,6 @@ LAST_GENERATIONS = 5  # the final best fitness is the mean of this many last gen
 PLATEAU_FRACTION = 0.9  # a curve has reached its plateau at this fraction of its final value
 MUCH_FASTER = 2.0  # "much faster": at most half the generations or cycles
 ABOUT = (0.8, 1.25)  # "about the same": a ratio in this range
-NEARLY_ABOUT = (0.5, 2.0)
 STEREOTYPED_TURNS = 0.75  # share of turning steps that turn the same way for a "circular" path
 TURN_THRESHOLD_DEG = 1.0  # smaller heading changes are not turns
 SPECIALISED_SHARE = 0.5  # an expert follows a colour: it sees it on more than half its readings
@@ -160,10 +159,8 @@ def specialisation_score(shares, steps, min_share: float = MIN_CONTROL_SHARE,
     """
     shares, steps = np.nan_to_num(np.asarray(shares, float)), np.asarray(steps, float)
     total = max(steps.sum(), 1.0)
-    followed = []
-    for row, n in zip(shares, steps):
-        colour = int(np.argmax(row[:3]))
-        followed.append(SEEN[colour] if n / total >= min_share and row[colour] > specialised else None)
+    followed = [SEEN[colour] if n / total >= min_share and row[colour] > specialised else None
+                for row, n, colour in zip(shares, steps, (int(np.argmax(row[:3])) for row in shares))]
     return len({c for c in followed if c is not None}), followed
 
 
@@ -172,6 +169,24 @@ def specialisation_score(shares, steps, min_share: float = MIN_CONTROL_SHARE,
 
 def _claim(verdict: str, measured: str, **numbers) -> dict:
     return dict(verdict=verdict, measured=measured, numbers=numbers)
+
+
+def _verdict(holds, partly) -> str:
+    """**holds** if ``holds``, else **partly** if ``partly``, else **does not hold**."""
+    return HOLDS if holds else PARTLY if partly else DOES_NOT
+
+
+def _tally(kept: dict, parts: list, what: str, **numbers) -> dict:
+    """A claim over several comparisons, ``kept[name]`` whether each keeps to it: holds if all do, partly if some."""
+    held = sum(kept.values())
+    return _claim(NOT_AVAILABLE if not kept else _verdict(held == len(kept), held),
+                  "; ".join(parts) + f" ({held} of {len(kept)} {what})", **numbers)
+
+
+def _le_ls_against_ee(values: dict, what: str):
+    """LE-LS's value, EE-LS's and EE-ES's, and the measured text of every evolved condition's (``what`` it is)."""
+    return (values.get("LE-LS"), [values.get(c) for c in ("EE-LS", "EE-ES")],
+            ", ".join(f"{c} {_fmt(values.get(c))}" for c in EVOLVED) + f" ({what})")
 
 
 def _standard_error(a: np.ndarray, b: np.ndarray) -> float:
@@ -190,38 +205,32 @@ def _fmt(value, digits: int = 3) -> str:
 
 def claim_evolvability(plateau: dict) -> dict:
     """Claim 1 from each evolved condition's plateau generation."""
-    le, others = plateau.get("LE-LS"), [plateau.get(c) for c in ("EE-LS", "EE-ES")]
-    measured = ", ".join(f"{c} {_fmt(plateau.get(c))}" for c in EVOLVED) + " (plateau generation)"
-    if le is None or any(o is None for o in others):
+    le, others, measured = _le_ls_against_ee(plateau, "plateau generation")
+    if None in (le, *others):
         return _claim(NOT_AVAILABLE, measured, plateau=plateau)
-    faster = [le < o for o in others]
-    much = [f and MUCH_FASTER * le <= o for f, o in zip(faster, others)]
-    verdict = HOLDS if all(much) else PARTLY if any(faster) else DOES_NOT
-    return _claim(verdict, measured, plateau=plateau)
+    return _claim(_verdict(all(le < o and MUCH_FASTER * le <= o for o in others), any(le < o for o in others)),
+                  measured, plateau=plateau)
 
 
 def claim_reliability(spread: dict) -> dict:
     """Claim 2 from each evolved condition's sd over seeds of the final best fitness."""
-    measured = ", ".join(f"{c} {_fmt(spread.get(c))}" for c in EVOLVED) + " (sd over seeds)"
-    le, others = spread.get("LE-LS"), [spread.get(c) for c in ("EE-LS", "EE-ES")]
-    if le is None or any(o is None for o in others):
+    le, others, measured = _le_ls_against_ee(spread, "sd over seeds")
+    if None in (le, *others):
         return _claim(NOT_AVAILABLE, measured, spread=spread)
     much = sum(le <= MUCH_SMALLER * o for o in others)
     measured += f"; LE-LS's sd is at most {MUCH_SMALLER:g}x that of {much} of the 2 EE conditions"
-    verdict = HOLDS if much == 2 else PARTLY if much == 1 or all(le < o for o in others) else DOES_NOT
-    return _claim(verdict, measured, spread=spread, much_smaller=much)
+    return _claim(_verdict(much == 2, much == 1 or all(le < o for o in others)), measured, spread=spread,
+                  much_smaller=much)
 
 
 def claim_ee_ls_higher(ee_ls, le_ls) -> dict:
     """Claim 3 from the per-seed final best fitness of EE-LS and LE-LS."""
     if ee_ls is None or le_ls is None or not len(ee_ls) or not len(le_ls):
         return _claim(NOT_AVAILABLE, "-")
-    ee_ls, le_ls = np.asarray(ee_ls, float), np.asarray(le_ls, float)
-    d = float(ee_ls.mean() - le_ls.mean())
-    se = _standard_error(ee_ls, le_ls)
-    verdict = HOLDS if d > 2 * se else PARTLY if d > 0 else DOES_NOT
-    return _claim(verdict, f"EE-LS {ee_ls.mean():.3f} vs LE-LS {le_ls.mean():.3f}: d = {d:+.3f}, se = {se:.3f}",
-                  difference=d, standard_error=se, ee_ls=float(ee_ls.mean()), le_ls=float(le_ls.mean()))
+    d, se = _difference(ee_ls, le_ls)
+    ee_ls, le_ls = float(np.mean(ee_ls)), float(np.mean(le_ls))
+    return _claim(_verdict(d > 2 * se, d > 0), f"EE-LS {ee_ls:.3f} vs LE-LS {le_ls:.3f}: d = {d:+.3f}, se = {se:.3f}",
+                  difference=d, standard_error=se, ee_ls=ee_ls, le_ls=le_ls)
 
 
 def claim_ee_es_about(ee_es: float | None, le_ls: float | None, stereotypy, speed: float | None = None) -> dict:
@@ -236,11 +245,9 @@ def claim_ee_es_about(ee_es: float | None, le_ls: float | None, stereotypy, spee
     measured = (f"EE-ES / LE-LS final best fitness {_fmt(ee_es)} / {_fmt(le_ls)} = {_fmt(ratio, 2)}; "
                 f"stereotypy per task {per_task}" + (f" ({circular} of {len(stereotypy)} circular)" if known else "")
                 + ("" if speed is None else f", speed {speed:.2f} cm/step"))
-    parts = [p for p in (None if ratio is None else ABOUT[0] <= ratio <= ABOUT[1],
-                         circular >= 1 if known else None) if p is not None]
-    if ratio is None:  # the path alone cannot say whether EE-ES is at LE-LS's level
-        return _claim(NOT_AVAILABLE, measured, ratio=ratio, stereotypy=stereotypy, circular_tasks=circular)
-    verdict = HOLDS if len(parts) == 2 and all(parts) else PARTLY if any(parts) else DOES_NOT
+    about = ratio is not None and ABOUT[0] <= ratio <= ABOUT[1]
+    # without a ratio, n/a: the path alone cannot say whether EE-ES is at LE-LS's level
+    verdict = NOT_AVAILABLE if ratio is None else _verdict(about and circular >= 1, about or circular >= 1)
     return _claim(verdict, measured, ratio=ratio, stereotypy=stereotypy, circular_tasks=circular)
 
 
@@ -254,6 +261,7 @@ def claim_learning_speed(curves: dict, steady: dict, sle_noise_steps: int | None
     if not sle_noise_steps and not whole_test:
         return _claim(NOT_AVAILABLE, "not comparable: SLE's noise anneals over the whole test (sle_noise_steps 0), "
                                      "so when SLE gets good depends on the test's length", sle_noise_steps=0)
+    end = int(np.asarray(curves["SLE"][0])[-1])
     for c in ("LE-LS", "EE-LS"):
         if c not in curves or steady.get(c) is None or not steady[c] > 0:
             continue
@@ -263,25 +271,17 @@ def claim_learning_speed(curves: dict, steady: dict, sle_noise_steps: int | None
             continue
         ratio = None if sle is None else sle / own
         ratios[c], cycles[c] = ratio, dict(level=level, cycles=own, sle_cycles=sle)
-        end = int(np.asarray(curves["SLE"][0])[-1])
         texts.append(f"{c} {own:,} vs SLE {sle:,} cycles to {level:.3f} (x{ratio:.1f})" if sle is not None else
                      f"{c} {own:,} cycles to {level:.3f}, SLE never reached it in {end:,} (x > {end / own:.1f})")
     horizon = (f"{sle_noise_steps:,} cycles" if sle_noise_steps else
-               f"the whole test of {int(np.asarray(curves['SLE'][0])[-1]):,} cycles, the paper's length")
+               f"the whole test of {end:,} cycles, the paper's length")
     measured = "; ".join(texts) + f" (SLE's noise over {horizon})" if texts else "-"
     never = {c: r is None for c, r in ratios.items()}
-    numbers = dict(ratio=ratios, sle_never=never, cycles=cycles, sle_noise_steps=sle_noise_steps)
-    if len(ratios) < 2:
-        return _claim(NOT_AVAILABLE, measured, **numbers)
     measured_ratios = [r for r in ratios.values() if r is not None]
     much = sum(r >= MUCH_FASTER for r in measured_ratios)
-    if much == 2:
-        verdict = HOLDS
-    elif much == 1 or any(never.values()) or all(r > 1 for r in measured_ratios):
-        verdict = PARTLY
-    else:
-        verdict = DOES_NOT
-    return _claim(verdict, measured, **numbers)
+    verdict = _verdict(much == 2, much == 1 or any(never.values()) or all(r > 1 for r in measured_ratios))
+    return _claim(NOT_AVAILABLE if len(ratios) < 2 else verdict, measured, ratio=ratios, sle_never=never,
+                  cycles=cycles, sle_noise_steps=sle_noise_steps)
 
 
 def pair_order(a, b, num_se: float = ORDER_SE) -> str:
@@ -301,13 +301,10 @@ def claim_ordering(per_run: dict, order=STEADY_ORDER) -> dict:
     held = sum(pairs.values())
     ranked = sorted(order, key=lambda c: -mean[c])
     ranked = ranked[0] + "".join(f" {'=' if mean[a] == mean[b] else '>'} {b}" for a, b in zip(ranked, ranked[1:]))
-    tied = [p for p, o in outcome.items() if o == "tied"]
-    reversed_ = [p for p, o in outcome.items() if o == "reversed"]
+    listed = {said: [p for p, o in outcome.items() if o == said] for said in ("tied", "reversed")}
     measured = (f"{ranked} (" + ", ".join(f"{c} {mean[c]:.3f}" for c in order) + f"); {held}/6 pairs in order "
-                f"(> {ORDER_SE:g} se)" + (f"; tied: {', '.join(tied)}" if tied else "")
-                + (f"; reversed: {', '.join(reversed_)}" if reversed_ else ""))
-    verdict = HOLDS if held == 6 else PARTLY if held >= 4 else DOES_NOT
-    return _claim(verdict, measured, pairs=pairs, outcome=outcome, pairs_held=held, mean=mean)
+                f"(> {ORDER_SE:g} se)" + "".join(f"; {said}: {', '.join(p)}" for said, p in listed.items() if p))
+    return _claim(_verdict(held == 6, held >= 4), measured, pairs=pairs, outcome=outcome, pairs_held=held, mean=mean)
 
 
 def claim_specialisation(colours: dict, pairs: dict | None = None) -> dict:
@@ -323,18 +320,12 @@ def claim_specialisation(colours: dict, pairs: dict | None = None) -> dict:
     if pairs:
         measured += "; task pairs solved both ways: " + ", ".join(f"{c} {_fmt(v, 2)}" for c, v in pairs.items())
     numbers = dict(counts=counts, specialised=specialised, mean_colours=mean, pairs=pairs)
-    if not probed:
-        return _claim(NOT_AVAILABLE, measured, **numbers)
     composed = [pairs[c] for c in ("LE-LS", "EE-LS") if pairs.get(c) is not None]
     composes = bool(composed) and max(composed) >= PAIRS_COMPOSED
     majority = [specialised[c] >= SPECIALISED_MAJORITY for c in probed]
-    if len(probed) == 2 and all(majority) and composes:
-        verdict = HOLDS
-    elif any(majority) or any(m >= 2 for m in mean.values()) or composes:
-        verdict = PARTLY
-    else:
-        verdict = DOES_NOT
-    return _claim(verdict, measured, **numbers)
+    verdict = _verdict(len(probed) == 2 and all(majority) and composes,
+                       any(majority) or any(m >= 2 for m in mean.values()) or composes)
+    return _claim(verdict if probed else NOT_AVAILABLE, measured, **numbers)
 
 
 def evolved_claims(done: dict, per_run: dict, path: dict | None) -> dict:
@@ -363,50 +354,38 @@ def measure(data: dict, lives: dict, probes: dict | None = None, sle_whole_test=
     for variant in data["variants"]:
         evolution = {}
         for condition in EVOLVED:
-            run = data["evolutions"].get((variant, condition))
-            if run is None:
+            if (run := data["evolutions"].get((variant, condition))) is None:
                 continue
-            final = final_best(run["best"])
-            evolution[condition] = dict(finished=planned is None or len(run["best"]) >= planned,
-                final_best_mean=float(final.mean()), final_best_sd=float(final.std()),
-                final_best_per_seed=[float(v) for v in final], seeds=run["seeds"], generations=len(run["best"]),
-                last_generations_averaged=min(LAST_GENERATIONS, len(run["best"])),
-                plateau_generation=plateau_generation(run["best"].mean(1)),
-                best_per_generation_mean=[float(v) for v in run["best"].mean(1)],
-                best_per_generation_sd=[float(v) for v in run["best"].std(1)])
-        tests = {}
-        for condition in TESTED:
-            test = data["tests"].get((variant, condition))
-            if test is None:
-                continue
-            s = test["steady"]
-            tests[condition] = {k: s.get(k) for k in ("steady_mean", "steady_sd", "steady_best_run", "best_run",
-                                                      "steady_per_run", "steady_per_task", "whole_test_mean",
-                                                      "num_runs", "num_best", "num_tests", "task_steps",
-                                                      "steady_steps", "num_bins")}
-            tests[condition]["pairs_both_ways"] = test.get("pairs_both_ways")
+            best, final = run["best"], final_best(run["best"])
+            evolution[condition] = dict(
+                finished=planned is None or len(best) >= planned, final_best_mean=float(final.mean()),
+                final_best_sd=float(final.std()), final_best_per_seed=final.tolist(), seeds=run["seeds"],
+                generations=len(best), last_generations_averaged=min(LAST_GENERATIONS, len(best)),
+                plateau_generation=plateau_generation(best.mean(1)), best_per_generation_mean=best.mean(1).tolist(),
+                best_per_generation_sd=best.std(1).tolist())
+        found = {c: t for c in TESTED if (t := data["tests"].get((variant, c))) is not None}
+        tests = {c: {**{k: t["steady"].get(k) for k in ("steady_mean", "steady_sd", "steady_best_run", "best_run",
+                                                         "steady_per_run", "steady_per_task", "whole_test_mean",
+                                                         "num_runs", "num_best", "num_tests", "task_steps",
+                                                         "steady_steps", "num_bins")},
+                     "pairs_both_ways": t.get("pairs_both_ways")} for c, t in found.items()}
         done = {c: e for c, e in evolution.items() if e["finished"]}  # claims judge finished evolutions only
-        steady = {c: tests[c]["steady_mean"] if c in tests else None for c in TESTED}
-        sle = data["tests"].get((variant, "SLE"))
-        sle_noise = (sle["steady"].get("config") or {}).get("sle_noise_steps", 0) if sle else None
-        claims = dict(sorted({**evolved_claims(done, {c: tests[c]["steady_per_run"] if c in tests else None
-                                                      for c in TESTED}, lives.get(("paper", "EE-ES"))),
-            5: claim_learning_speed({c: (data["tests"][variant, c]["steps"], data["tests"][variant, c]["mean"])
-                                     for c in TESTED if (variant, c) in data["tests"]}, steady, sle_noise,
-                                    sle_whole_test if isinstance(sle_whole_test, bool) else
-                                    variant in sle_whole_test),
-            7: claim_specialisation({c: probes.get((variant, c)) for c in ("LE-LS", "EE-LS")},
-                                    {c: data["tests"][variant, c]["pairs_both_ways"] for c in EVOLVED
-                                     if data["tests"].get((variant, c), {}).get("pairs_both_ways") is not None}),
-        }.items()))
-        out[variant] = dict(evolution=evolution, learning_tests=tests, claims=claims)
+        of_tests = lambda key: {c: tests[c][key] if c in tests else None for c in TESTED}  # noqa: E731
+        claims = evolved_claims(done, of_tests("steady_per_run"), lives.get(("paper", "EE-ES")))
+        claims[5] = claim_learning_speed(
+            {c: (t["steps"], t["mean"]) for c, t in found.items()}, of_tests("steady_mean"),
+            (found["SLE"]["steady"].get("config") or {}).get("sle_noise_steps", 0) if "SLE" in found else None,
+            sle_whole_test if isinstance(sle_whole_test, bool) else variant in sle_whole_test)
+        claims[7] = claim_specialisation({c: probes.get((variant, c)) for c in ("LE-LS", "EE-LS")},
+                                         {c: tests[c]["pairs_both_ways"] for c in EVOLVED
+                                          if tests.get(c, {}).get("pairs_both_ways") is not None})
+        out[variant] = dict(evolution=evolution, learning_tests=tests, claims=dict(sorted(claims.items())))
     return out
 
 
 # ----------------------------------------------------------------------------- claim 8
 
-#: The paper's remark on the number of experts (section 2), checked beside the seven claims (docs/CLAIMS.md).
-EXPERTS_CLAIM = "The quality of results did not change in tests with a higher number of experts (4 and 6 against 3)."
+#: The rule for the paper's remark on the number of experts (section 2), checked beside the seven claims.
 EXPERTS_RULE = (f"For LE-LS and EE-LS, each with 4 and 6 experts against 3 (the same rule set): final best fitness "
                 f"of a seed as in claim 2, and the steady state of each learning-test run as in claim 6. A comparison "
                 f"is *unchanged* when the mean with more experts is within [{ABOUT[0]}, {ABOUT[1]}] of the mean with 3 "
@@ -426,23 +405,19 @@ def claim_experts(final: dict, steady: dict | None = None) -> dict:
                 continue
             a, b = np.asarray(base, float), np.asarray(numbers, float)
             ratio = float(b.mean() / a.mean()) if a.mean() > 0 else None
+            d, se = _difference(b, a)
             unchanged = ratio is not None and ABOUT[0] <= ratio <= ABOUT[1]
-            compared[f"{condition} {measure} {k} vs 3"] = dict(ratio=ratio, difference=float(b.mean() - a.mean()),
-                                                              standard_error=_standard_error(a, b),
+            compared[f"{condition} {measure} {k} vs 3"] = dict(ratio=ratio, difference=d, standard_error=se,
                                                               unchanged=unchanged)
             parts.append(f"{condition} {measure} {k}/3 experts {b.mean():.3f}/{a.mean():.3f} = {_fmt(ratio, 2)}")
     if not compared:
         return _claim(NOT_AVAILABLE, "-", compared=compared)
-    held = sum(c["unchanged"] for c in compared.values())
-    verdict = HOLDS if held == len(compared) else PARTLY if held else DOES_NOT
-    return _claim(verdict, "; ".join(parts) + f" ({held} of {len(compared)} unchanged)", compared=compared)
+    return _tally({n: c["unchanged"] for n, c in compared.items()}, parts, "unchanged", compared=compared)
 
 
 # ----------------------------------------------------------------------------- tasks never met in evolution
 
-#: The paper's Discussion on tasks never met in evolution (docs/NOVEL_TASKS.md).
-UNSEEN_CLAIM = ("The advantages provided by learning would surely be much stronger if the systems were tested with "
-                "tasks which have never been encountered during evolution.")
+#: The rule for the paper's Discussion on tasks never met in evolution (docs/NOVEL_TASKS.md).
 UNSEEN_RULE = (f"Learning's advantage of a condition on a set of tasks is its steady state minus EE-ES's on the same "
                f"tasks (EE-ES learns nothing), from the steady state of each learning-test run, with the standard "
                f"error of that difference as in claim 3. A condition's advantage is *stronger on unseen tasks* when "
@@ -467,15 +442,12 @@ def claim_unseen(seen: dict, unseen: dict, num_se: float = ORDER_SE) -> dict:
         s, u = seen[name], unseen[name]
         difference = u["advantage"] - s["advantage"]
         error = math.hypot(s["standard_error"], u["standard_error"])
-        stronger = difference > num_se * error
-        compared[name] = dict(difference=difference, standard_error=error, stronger=stronger)
+        compared[name] = dict(difference=difference, standard_error=error, stronger=difference > num_se * error)
         parts.append(f"{name}: {u['advantage']:+.3f} unseen vs {s['advantage']:+.3f} seen "
                      f"({difference:+.3f} +- {error:.3f})")
     if not compared:
         return _claim(NOT_AVAILABLE, "-", compared=compared)
-    held = sum(c["stronger"] for c in compared.values())
-    verdict = HOLDS if held == len(compared) else PARTLY if held else DOES_NOT
-    return _claim(verdict, "; ".join(parts) + f" ({held} of {len(compared)} stronger unseen)", compared=compared)
+    return _tally({n: c["stronger"] for n, c in compared.items()}, parts, "stronger unseen", compared=compared)
 
 
 # ----------------------------------------------------------------------------- the paper's future work
@@ -504,11 +476,11 @@ FUTURE_RULES = {
          f"1/{MUCH_FASTER:g} of EXT-LS's cycles (or EXT-LS never reaches it). **holds** if both; **partly** "
          f"if one; **does not hold** (the hierarchy on the task's reward is enough) if neither. EXT-LS against SLE "
          "(the hierarchy against a flat learner, the same noise) is shown as claim 6's pairs are.",
-    "c": f"For each learning value on which `skills` and the paper differ: its position in its gene's range (the "
-         f"decoding map of MODEL.md, log scale for rates and for 1 - discount; 0-1) for each seed's best individual "
-         f"of the last generation, mean over seeds; *nearer skills* when that is nearer `skills`' position than the "
-         f"paper's. **holds** if every such value is nearer skills; **partly** if some; **does not hold** if none. "
-         f"The values on which they agree and the evolved childhood length are shown, not judged.",
+    "c": "For each learning value on which `skills` and the paper differ: its position in its gene's range (the "
+         "decoding map of MODEL.md, log scale for rates and for 1 - discount; 0-1) for each seed's best individual "
+         "of the last generation, mean over seeds; *nearer skills* when that is nearer `skills`' position than the "
+         "paper's. **holds** if every such value is nearer skills; **partly** if some; **does not hold** if none. "
+         "The values on which they agree and the evolved childhood length are shown, not judged.",
     "d": f"*Keeps about three* = each seed's best individual of the last generation expresses at most "
          f"{FEWEST_KEPT:g} experts on average over seeds; *more do not pay* = the evolved-number row's final best "
          f"fitness is not above LE-LS's with 3 experts by more than {ORDER_SE:g} standard errors. **holds** if both; "
@@ -522,40 +494,34 @@ def _difference(a, b) -> tuple[float, float]:
     return float(a.mean() - b.mean()), _standard_error(a, b)
 
 
-def _easier(faster: bool, higher: bool) -> str:
-    return "easier" if faster and higher else "faster" if faster else "higher" if higher else "not easier"
-
-
 def claim_criteria_easier(criteria: dict, actors: dict | None) -> dict:
     """(a) from each criterion row's and EE-LS's evolution: ``dict(plateau, final_per_seed, fresh, genes)`` each."""
     if actors is None or not criteria:
         return _claim(NOT_AVAILABLE, "-")
-    compared, parts = {}, []
+    said = lambda name, row: (f"{name} ({row['genes']} genes): plateau {_fmt(row['plateau'])}, final "  # noqa: E731
+                              f"{np.mean(row['final_per_seed']):.3f}, fresh {_fmt(row.get('fresh'))}")
+    compared, parts = {}, [said("EE-LS", actors)]
     for name, row in criteria.items():
         d, se = _difference(row["final_per_seed"], actors["final_per_seed"])
         p, q = row["plateau"], actors["plateau"]
         faster = p is not None and q is not None and MUCH_FASTER * p <= q
         higher = d > ORDER_SE * se
         compared[name] = dict(difference=d, standard_error=se, much_faster=faster, higher=higher)
-        parts.append(f"{name} ({row['genes']} genes): plateau {_fmt(p)}, final {np.mean(row['final_per_seed']):.3f}, "
-                     f"fresh {_fmt(row.get('fresh'))}; d = {d:+.3f} +- {se:.3f}"
-                     f" ({_easier(faster, higher)})")
-    measured = (f"EE-LS ({actors['genes']} genes): plateau {_fmt(actors['plateau'])}, final "
-                f"{np.mean(actors['final_per_seed']):.3f}, fresh {_fmt(actors.get('fresh'))}; " + "; ".join(parts))
-    easier = [c["much_faster"] and c["higher"] for c in compared.values()]
-    some = any(c["much_faster"] or c["higher"] for c in compared.values())
-    verdict = HOLDS if all(easier) else PARTLY if some else DOES_NOT
-    return _claim(verdict, measured, compared=compared)
+        easier = ("easier" if higher else "faster") if faster else "higher" if higher else "not easier"
+        parts.append(said(name, row) + f"; d = {d:+.3f} +- {se:.3f} ({easier})")
+    measured = "; ".join(parts)
+    return _claim(_verdict(all(c["much_faster"] and c["higher"] for c in compared.values()),
+                           any(c["much_faster"] or c["higher"] for c in compared.values())), measured,
+                  compared=compared)
 
 
 def claim_motivation_needed(extrinsic: dict | None, skilled: dict | None, flat: dict | None = None) -> dict:
     """(b) from EXT-LS's, LE-LS's and SLE's learning tests: ``dict(steps, mean, per_run)`` each (the mean curve)."""
     if extrinsic is None or skilled is None:
         return _claim(NOT_AVAILABLE, "-")
-    ext, le = np.asarray(extrinsic["per_run"], float), np.asarray(skilled["per_run"], float)
-    order = pair_order(le, ext)
     curves = {"LE-LS": skilled, "EXT-LS": extrinsic}
-    steady = {"LE-LS": float(le.mean()), "EXT-LS": float(ext.mean())}
+    steady = {n: float(np.asarray(t["per_run"], float).mean()) for n, t in curves.items()}
+    order = pair_order(skilled["per_run"], extrinsic["per_run"])
     # Timed from where both start, so that a level both curves are at in their first bin times nothing; a row
     # whose steady state is not above that start has learned nothing above it and never reaches a level.
     start = max(float(np.asarray(t["mean"], float)[0]) for t in curves.values())
@@ -565,16 +531,15 @@ def claim_motivation_needed(extrinsic: dict | None, skilled: dict | None, flat: 
     own, theirs = cycles["LE-LS"], cycles["EXT-LS"]
     faster = own is not None and (theirs is None or MUCH_FASTER * own <= theirs)
     reach = f"cycles to {level:.3f}" if level is not None else f"neither learns above {start:.3f}"
-    measured = (f"steady LE-LS {le.mean():.3f} vs EXT-LS {ext.mean():.3f} ({order}); start {start:.3f}, {reach}: "
-                f"LE-LS {cycles['LE-LS'] or 'never'}, EXT-LS {cycles['EXT-LS'] or 'never'}")
+    measured = (f"steady LE-LS {steady['LE-LS']:.3f} vs EXT-LS {steady['EXT-LS']:.3f} ({order}); start {start:.3f}, "
+                f"{reach}: LE-LS {cycles['LE-LS'] or 'never'}, EXT-LS {cycles['EXT-LS'] or 'never'}")
     numbers = dict(order=order, start=start, level=level, cycles=cycles, much_faster=faster)
     if flat is not None:
-        numbers["against_flat"] = pair_order(ext, flat["per_run"])
+        numbers["against_flat"] = pair_order(extrinsic["per_run"], flat["per_run"])
         said = {"in order": "EXT-LS higher", "reversed": "SLE higher"}.get(numbers["against_flat"], "tied")
         measured += f"; EXT-LS vs SLE {np.mean(flat['per_run']):.3f}: {said}"
     higher = order == "in order"
-    verdict = HOLDS if faster and higher else PARTLY if faster or higher else DOES_NOT
-    return _claim(verdict, measured, **numbers)
+    return _claim(_verdict(faster and higher, faster or higher), measured, **numbers)
 
 
 def map_position(name: str, value: float) -> float:
@@ -594,9 +559,8 @@ def claim_hand_values(best_values: dict, skills: dict, paper: dict) -> dict:
 
     if not best_values:
         return _claim(NOT_AVAILABLE, "-")
-    differing = [n for n in EVOLVED_FIELDS if n in best_values and skills[n] != paper[n]]
     nearer, parts = {}, []
-    for name in differing:
+    for name in (n for n in EVOLVED_FIELDS if n in best_values and skills[n] != paper[n]):  # the values they differ on
         u = float(np.mean([map_position(name, v) for v in best_values[name]]))
         us, up = map_position(name, skills[name]), map_position(name, paper[name])
         nearer[name] = "skills" if abs(u - us) < abs(u - up) else "paper"
@@ -605,9 +569,7 @@ def claim_hand_values(best_values: dict, skills: dict, paper: dict) -> dict:
     if "childhood_length" in best_values:
         parts.append(f"childhood length {np.mean(best_values['childhood_length']):,.0f} of "
                      f"{skills['childhood_length']:,.0f}")
-    held = sum(v == "skills" for v in nearer.values())
-    verdict = NOT_AVAILABLE if not nearer else HOLDS if held == len(nearer) else PARTLY if held else DOES_NOT
-    return _claim(verdict, "; ".join(parts) + f" ({held} of {len(nearer)} nearer skills)", nearer=nearer)
+    return _tally({n: v == "skills" for n, v in nearer.items()}, parts, "nearer skills", nearer=nearer)
 
 
 def claim_three_enough(kept, evolved_final, three_final, six_final=None) -> dict:
@@ -626,5 +588,4 @@ def claim_three_enough(kept, evolved_final, three_final, six_final=None) -> dict
         d6, se6 = _difference(evolved_final, six_final)
         numbers.update(difference_six=d6, standard_error_six=se6)
         measured += f"; vs 6 all expressed {np.mean(six_final):.3f}: d = {d6:+.3f} +- {se6:.3f}"
-    verdict = HOLDS if about_three and no_gain else PARTLY if about_three or no_gain else DOES_NOT
-    return _claim(verdict, measured, **numbers)
+    return _claim(_verdict(about_three and no_gain, about_three or no_gain), measured, **numbers)

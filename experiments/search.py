@@ -27,7 +27,6 @@ from experiments.markdown import head, line, mean_sd
 from imrl_jax import conditions
 from imrl_jax.strategies import GA_NAME
 
-OUT = os.path.join(RESULTS, "search")
 PRESET = "skills"
 CONDITIONS = ("EE-LS", "EE-ES", "LE-LS")
 #: Sep-CMA-ES (diagonal covariance: 111-333 genes, 50 lives) and SNES (separable natural ES), at evosax's
@@ -46,8 +45,7 @@ CLAIM_NUMBERS = (1, 2, 3, 4, 6)
 
 def strategy_of(row: Row) -> str:
     """The search a row evolves with: its ``--strategy`` option, or the paper's GA."""
-    options = dict(zip(row.options[::2], row.options[1::2]))
-    return options.get("--strategy", GA_NAME)
+    return dict(zip(row.options[::2], row.options[1::2])).get("--strategy", GA_NAME)
 
 
 def judge(strategies, rows: list[dict], sle_per_run: list[float] | None, paths: dict) -> dict:
@@ -64,8 +62,12 @@ def judge(strategies, rows: list[dict], sle_per_run: list[float] | None, paths: 
     return claims
 
 
-def steady(test: dict) -> dict:
-    """A finished learning test's steady state: mean and sd over runs (ddof 0, as learning_test writes them)."""
+def steady(tested: str) -> dict | None:
+    """A learning test's steady state: mean and sd over runs (ddof 0, as learning_test writes them); None: not run."""
+    from experiments.loading import read_test
+
+    if (test := read_test(tested)) is None:
+        return None
     per_run = [float(v) for v in test["steady"]["steady_per_run"]]
     return dict(steady_mean=float(test["steady"]["steady_mean"]), steady_sd=float(test["steady"]["steady_sd"]),
                 test_runs=len(per_run), steady_per_run=per_run)
@@ -89,9 +91,9 @@ def table(measured: dict) -> str:
     for number in CLAIM_NUMBERS:
         for i, strategy in enumerate(shown):
             claim = measured["claims"][strategy][number]
-            note = "" if number != 4 else "; path: " + ("not measured" if not claim["path_probe"] else
-                                                         "the GA's relived best EE-ES" if strategy == GA_NAME else
-                                                         "its relived best EE-ES")
+            whose = "the GA's" if strategy == GA_NAME else "its"
+            note = "" if number != 4 else "; path: " + (f"{whose} relived best EE-ES" if claim["path_probe"] else
+                                                         "not measured")
             lines.append(line("" if i else f"{number}: {CLAIMS[number]}", strategy, f"**{claim['verdict']}**",
                               claim["measured"] + note))
     lines += ["", "Claim 4's path: for the GA, the path is that of the reproduction's relived best EE-ES individual "
@@ -100,35 +102,6 @@ def table(measured: dict) -> str:
               "`experiments.claims.RULES`, as in [REPRODUCTION.md](REPRODUCTION.md); the claims judge finished "
               "evolutions only (n/a: a condition not finished), and a strategy with nothing run yet is left out."]
     return "\n".join(lines)
-
-
-def figure(curves: dict, path: str) -> str:
-    """Fig. 3a-style curves: best fitness per generation (mean over seeds +- sd), a panel per condition, a line per
-    strategy; ``curves``: {(strategy, condition): (best per generation and seed, finished)}."""
-    from matplotlib.ticker import MaxNLocator
-
-    from experiments.figures import _band, _fitness_series
-    from imrl_jax.plotting import new_figure, save, style_axis
-
-    fig = new_figure(13.0, 3.8)
-    axes = fig.subplots(1, len(CONDITIONS), sharey=True)  # one y-axis: the conditions' levels compare across panels
-    for i, (ax, condition) in enumerate(zip(axes, CONDITIONS)):
-        title = f"{condition} under {PRESET}, by search strategy"
-        series = _fitness_series({s: best for (s, c), (best, _) in curves.items() if c == condition})
-        style_axis(ax, title, "generation", "" if i else "best fitness (best of a generation's lives)")
-        if not series:  # an unfinished stage: say so rather than leave a blank panel
-            ax.text(0.5, 0.5, "not run yet", transform=ax.transAxes, ha="center", va="center", color="0.4")
-            continue
-        banded = set()
-        for strategy, (x, mean, sd, label) in series.items():
-            label += "" if curves[strategy, condition][1] else ", running"
-            ax.plot(x, mean, label=label, **STRATEGY_STYLES[strategy])
-            _band(ax, x, mean, sd, STRATEGY_STYLES[strategy], banded)
-        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-        ax.legend(fontsize=7)
-    axes[0].set_ylim(bottom=0)  # once, after every panel is drawn: the shared top must still scale to all of them
-    fig.tight_layout()
-    return save(fig, path)
 
 
 def claims_figure(measured: dict, path: str) -> str:
@@ -161,8 +134,8 @@ def claims_figure(measured: dict, path: str) -> str:
     style_axis(ax_steady, "claim 6: learning tests", "", "steady state (mean +- sd over runs)")
     for strategy, life in measured["paths"].items():
         if life is not None:
-            tasks = np.arange(1, len(life["stereotypy_per_task"]) + 1)
-            ax_path.plot(tasks, life["stereotypy_per_task"], marker="o", label=strategy, **STRATEGY_STYLES[strategy])
+            ax_path.plot(np.arange(1, len(life["stereotypy_per_task"]) + 1), life["stereotypy_per_task"], marker="o",
+                         label=strategy, **STRATEGY_STYLES[strategy])
     ax_path.axhline(STEREOTYPED_TURNS, color="0.4", lw=1, ls="--", label="circular from here")
     ax_path.set_ylim(0, 1)
     style_axis(ax_path, "claim 4: the best EE-ES's path", "task", "stereotypy (turns the same way)")
@@ -175,57 +148,74 @@ class SearchTable(Table):
     """The search study's table: its rows measured per strategy, the claims judged per strategy, its figures."""
 
     def measure_search(self) -> dict:
-        """Per strategy and condition the evolution's and learning test's numbers, and claims 1-4 and 6 per strategy;
-        the GA's fresh lives, junction probes and relived best EE-ES (claim 4's path) are the reproduction's report's."""
+        """Per strategy and condition the evolution's and learning test's numbers, and claims 1-4 and 6 per
+        strategy; the GA's fresh lives, junction probes and relived best EE-ES (claim 4's path) are the reproduction's
+        report's."""
         from experiments.claims import final_best
-        from experiments.claims_study import reproduction_summary, reproduction_variant
-        from experiments.loading import read_test
-        from experiments.relive import colours_followed, reproduction_fresh, run_fresh, run_path, run_probe
+        from experiments.claims_study import probed, reproduction_summary, reproduction_variant
+        from experiments.relive import reproduction_fresh, run_fresh, run_path
 
         summary = reproduction_summary(self.document) or {}
-        reproduction = self.reproduction
         rows, paths = [], {}
         for row, m, tested in zip(self.rows, self.measure(), self.tests().values()):
             strategy, condition = strategy_of(row), row.condition
             if not m["generations"] and "steady_mean" not in m:
                 continue  # not started: no row
             entry = dict(strategy=strategy, condition=condition, generations=m["generations"],
-                         finished="final_mean" in m)
-            if m["generations"]:
-                entry["seeds"] = m["seeds"]
-            learns = conditions.get(condition).learns
+                         finished="final_mean" in m, **({"seeds": m["seeds"]} if m["generations"] else {}))
             if entry["finished"]:  # a running evolution is drawn but not measured: its last generations are to come
                 entry.update(final_best_mean=m["final_mean"], final_best_sd=m["final_sd"],
-                             final_best_per_seed=[float(v) for v in final_best(m["best"])],
-                             plateau_generation=m["plateau"])
+                             final_best_per_seed=final_best(m["best"]).tolist(), plateau_generation=m["plateau"])
                 # the GA's runs kept no population: their fresh lives, probes and path are the reproduction's
-                ga, variant = strategy == GA_NAME, reproduction_variant(m["dir"], reproduction)
-                fresh = reproduction_fresh(summary, variant, condition) if ga else run_fresh(m["dir"])
-                if fresh is not None:
-                    entry.update(fresh_mean=fresh["mean"], fresh_sd=fresh["sd_over_seeds"])
-                if learns:  # claim 7's probe of each seed's 10 best: what it learns with
-                    probe = None if ga else run_probe(m["dir"])
-                    colours = ((summary.get("colours_followed") or {}).get(f"{variant}/{condition}") if ga else
-                               None if probe is None else colours_followed(probe["followed"]))
-                    if colours:
-                        entry.update(colours_mean=float(np.mean(colours)),
-                                     specialised_share=float(np.mean(np.asarray(colours) == 3)), probed=len(colours))
+                ga, variant = strategy == GA_NAME, reproduction_variant(m["dir"], self.reproduction)
+                if conditions.get(condition).learns:  # claim 7's probe of each seed's 10 best: what it learns with
+                    colours, _, fresh = probed(m["dir"], None, summary if ga else None, variant, condition)
                 else:  # claim 4's path: the best individual that learns nothing
+                    fresh = reproduction_fresh(summary, variant, condition) if ga else run_fresh(m["dir"])
                     life = (summary.get("best_individuals") or {}).get(f"{variant}/{condition}")
                     paths[strategy] = run_path(m["dir"]) if not ga else None if life is None else dict(
                         stereotypy_per_task=life["stereotypy_per_task"], speed=life["speed"])
-            if "steady_mean" in m:
-                entry.update(steady(read_test(tested)))
+                    colours = None
+                if fresh is not None:
+                    entry.update(fresh_mean=fresh["mean"], fresh_sd=fresh["sd_over_seeds"])
+                if colours:
+                    entry.update(colours_mean=float(np.mean(colours)),
+                                 specialised_share=float(np.mean(np.asarray(colours) == 3)), probed=len(colours))
+            entry.update(steady(tested) or {})
             rows.append(entry)
-        sle_test = read_test(dataclasses.replace(self, rows=(SLE,)).tests()[SLE.name])  # the reproduction's, by key
-        sle = None if sle_test is None else steady(sle_test)
-        claims = judge(COMPARED, rows, sle["steady_per_run"] if sle else None, paths)
-        return dict(rows=rows, claims=claims, sle=sle, paths=paths)
+        sle = steady(dataclasses.replace(self, rows=(SLE,)).tests()[SLE.name])  # the reproduction's, by key
+        return dict(rows=rows, claims=judge(COMPARED, rows, sle["steady_per_run"] if sle else None, paths), sle=sle,
+                    paths=paths)
 
     def figure(self, measured: list[dict], path: str) -> str:
-        """The rows' curves, a panel per condition and a line per strategy."""
-        return figure({(strategy_of(row), row.condition): (m["best"], "final_mean" in m)
-                       for row, m in zip(self.rows, measured) if m["generations"]}, path)
+        """Fig. 3a-style curves: best fitness per generation (mean over seeds +- sd), a panel per condition, a line
+        per strategy."""
+        from matplotlib.ticker import MaxNLocator
+
+        from experiments.figures import _band
+        from imrl_jax.plotting import new_figure, save, style_axis
+
+        fig = new_figure(13.0, 3.8)
+        axes = fig.subplots(1, len(CONDITIONS), sharey=True)  # one y-axis: the conditions' levels compare across panels
+        for i, (ax, condition) in enumerate(zip(axes, CONDITIONS)):
+            drawn = [(strategy_of(r), m) for r, m in zip(self.rows, measured) if r.condition == condition
+                     and m["generations"]]
+            style_axis(ax, f"{condition} under {PRESET}, by search strategy", "generation",
+                       "" if i else "best fitness (best of a generation's lives)")
+            if not drawn:  # an unfinished stage: say so rather than leave a blank panel
+                ax.text(0.5, 0.5, "not run yet", transform=ax.transAxes, ha="center", va="center", color="0.4")
+                continue
+            banded = set()
+            for strategy, m in drawn:
+                x, mean, sd = np.arange(m["generations"]), m["best"].mean(1), m["best"].std(1)
+                ax.plot(x, mean, label=f"{strategy} ({m['seeds']} seeds)" + ("" if "final_mean" in m else ", running"),
+                        **STRATEGY_STYLES[strategy])
+                _band(ax, x, mean, sd, STRATEGY_STYLES[strategy], banded)
+            ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+            ax.legend(fontsize=7)
+        axes[0].set_ylim(bottom=0)  # once, after every panel is drawn: the shared top must still scale to all of them
+        fig.tight_layout()
+        return save(fig, path)
 
     def report(self) -> int:
         """The rows' table and curves; then report.json, the claims' figure and the study's tables."""
@@ -234,9 +224,7 @@ class SearchTable(Table):
         code = super().report()
         measured = self.measure_search()
         with open(os.path.join(self.out, "report.json"), "w") as f:
-            json.dump(dict(rows=measured["rows"], sle=measured["sle"],
-                           claims={s: {str(n): c for n, c in claims.items()}
-                                   for s, claims in measured["claims"].items()}), f, indent=2)
+            json.dump({k: measured[k] for k in ("rows", "sle", "claims")}, f, indent=2)  # claim numbers as keys: "1"
         drawn = claims_figure(measured, os.path.join(self.out, "claims.png"))
         write_table(self.document, table(measured), "<!-- search tables: python -m experiments report search -->",
                     "<!-- end of search tables -->")
@@ -244,7 +232,7 @@ class SearchTable(Table):
         return code
 
 
-TABLE = SearchTable("search", "docs/SEARCH.md", 6, out=OUT, scale=SCREEN, rows=(
+TABLE = SearchTable("search", "docs/SEARCH.md", 6, out=os.path.join(RESULTS, "search"), scale=SCREEN, rows=(
     *(Row(f"{GA_NAME}-{c}", c, PRESET, scale=SCALES["paper"]) for c in CONDITIONS),  # the reproduction's runs
     *(Row(f"{s}-{c}", c, PRESET, options=("--strategy", s)) for s in STRATEGIES for c in CONDITIONS)))
 all_stages, main = TABLE.all_stages, TABLE.main
