@@ -1,15 +1,17 @@
 """The search study as a table: each strategy evolves each condition under skills, then its best are tested; the
 GA's rows are the reproduction's runs; the claims are judged per strategy."""
 
+import json
 import os
 
 import numpy as np
 import pytest
-from helpers import ROOT
+from helpers import ROOT, relocated, write_evolution, write_learning_test
 
 from experiments import search as study
 from experiments.claims import final_best, plateau_generation
 from experiments.reproduce import stage_done
+from experiments.table import evolution_spec
 
 RESULTS = os.path.join("experiments", "results")
 
@@ -136,3 +138,30 @@ def test_run_path_relives_the_fittest_once_until_the_population_moves_on(tmp_pat
     assert relive.run_path(str(tmp_path), {"c": 1}) == first and len(calls) == 1
     save(6)
     assert relive.run_path(str(tmp_path), {"c": 1})["generations"] == 6 and len(calls) == 2
+
+
+def test_a_running_evolution_is_drawn_but_not_measured_and_its_claims_wait(tmp_path):
+    """Made-up runs for every row, SNES's EE-ES stopped at 40 of 100 generations: it is a row of the report without
+    a final best or a test, SNES's claims that need it are n/a, the finished strategies' are judged."""
+    table = relocated(study.TABLE, tmp_path)
+    for row in table.rows:
+        sizes, spec = table.scale_of(row), evolution_spec(row, table.scale_of(row))
+        generations = 40 if row.name == "snes-EE-ES" else sizes["generations"]
+        write_evolution(table.evolutions()[row.name], [[0.5 + 0.01 * s for s in range(len(spec.seeds))]] * generations,
+                        dict(config=spec.config.to_dict(), seeds=list(spec.seeds), search=json.loads(spec.search)),
+                        seeds=spec.seeds)
+        if generations == sizes["generations"]:
+            write_learning_test(table.tests()[row.name], [0.4, 0.5])
+    measured = table.measure_search()
+    rows = {(r["strategy"], r["condition"]): r for r in measured["rows"]}
+    running, finished = rows["snes", "EE-ES"], rows["snes", "EE-LS"]
+    assert (running["generations"], running["seeds"], running["finished"]) == (40, 5, False)
+    assert "final_best_mean" not in running and "steady_mean" not in running
+    assert finished["finished"] and finished["final_best_mean"] == pytest.approx(0.52)  # seeds 0.50 to 0.54
+    assert finished["steady_mean"] == pytest.approx(0.45) and rows["ga", "EE-LS"]["seeds"] == 10
+    claims = measured["claims"]
+    assert [claims["snes"][n]["verdict"] for n in (1, 2, 4)] == ["n/a"] * 3  # each needs the running EE-ES
+    assert claims["sep_cma_es"][1]["verdict"] != "n/a" and claims["snes"][3]["verdict"] == "does not hold"  # d = 0
+    assert measured["sle"] is None and claims["ga"][6]["verdict"] == "n/a"  # SLE's test not made here
+    assert table.report() == 0
+    assert "| snes-EE-ES | EE-ES | skills | 5 | 40 of 100 | running | - | - |" in open(table.document).read()
