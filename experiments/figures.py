@@ -84,10 +84,7 @@ FIG3B = ("LE-LS", "EE-LS", "SLE")
 
 
 def fig3(evolutions: dict, tests: dict, steady: dict, variant: str, title: str):
-    """The paper's Fig. 3 for one variant, its three panels side by side: (a) fitness, (b) learning, (c) steady state.
-
-    As in the paper, (b) shows LE-LS, EE-LS and SLE (EE-ES learns nothing) and (c) all four conditions.
-    """
+    """The paper's Fig. 3 for one variant, side by side: (a) fitness, (b) learning (no EE-ES), (c) steady state."""
     fig = new_figure(14.0, 3.8)
     a, b, c = fig.subplots(1, 3, gridspec_kw=dict(width_ratios=[1.0, 1.0, 0.8]))
     _panel(a, "a", evolutions, "(a) best fitness, mean +-1 sd over seeds")
@@ -168,18 +165,14 @@ BASELINE_COLOURS = {"ppo": "tab:red", "es": "tab:green"}
 def baseline_label(entry: dict) -> str:
     """'PPO, 1M cycles (5 seeds)'."""
     summary = entry["summary"]
-    steps = summary["steps"]
-    budget = f"{steps / 1e6:g}M" if steps >= 1e6 else f"{steps / 1e3:g}k"
+    budget = f"{summary['steps'] / 1e6:g}M" if summary["steps"] >= 1e6 else f"{summary['steps'] / 1e3:g}k"
     return f"{summary['agent'].upper()}, {budget} cycles ({len(summary['seeds'])} seeds)"
 
 
 def fig_baselines(baselines: dict, tests: dict, title: str):
-    """The brax baselines beside the paper's architecture: learning curves (log cycles) and performance per task.
-
-    ``baselines``: :func:`experiments.loading.read_baselines`; ``tests``: ``{(variant, condition): test}``
-    of the report's learning tests (their curves, and steady states per task), drawn thin, a run shared by
-    several variants once (``variant`` is then the label, e.g. "every variant").
-    """
+    """The brax baselines (:func:`experiments.loading.read_baselines`) beside ``tests``: curves and per task."""
+    # tests: {(variant, condition): test} of the report's learning tests, drawn thin; a run several variants share
+    # comes once, ``variant`` then the label ("every variant")
     fig = new_figure(11.0, 5.0)
     curves, bars = fig.subplots(1, 2, gridspec_kw=dict(width_ratios=[1.0, 1.25]))
     budgets = sorted({b["summary"]["steps"] for b in baselines.values()})

@@ -3,25 +3,20 @@
     python -m experiments report reproduction       # docs/REPRODUCTION.md, docs/reproduction/
     python -m experiments report reproduction-cpu   # docs/REPRODUCTION_CPU.md, docs/reproduction_cpu/
 
-The pieces: ``loading`` reads the results, ``claims`` holds the verdict rules (pure functions),
-``relive`` lives the best individuals again, ``figures`` draws and ``document`` writes the
-markdown; this module runs them in order. It writes, beside the table's document (its figures
-folder, named after it): Fig. 1 (arena and tasks), Fig. 3a and 3b per variant, Fig. 3c, the paths
-of the best evolved individuals coloured by the expert in control, ``summary.json``,
-``specialisation.csv`` and ``claims.json``; into the table's folder, ``best_genomes.npz``, the 10
-best genomes of each seed's last generation of every evolution, so that the paths can be drawn
-again without ``final_population.npz`` (not kept for the finished paper- and cpu-scale runs);
-and the document, every number labelled with the run's scale, the claims table with the rule
-that gave each verdict, and a "Discussion" section read from the table's ``discussion.md``
-(written by hand) when it exists.
+``loading`` reads the results, ``claims`` holds the verdict rules (pure functions), ``relive`` lives the best
+individuals again, ``figures`` draws and ``document`` writes the markdown; this module runs them in order. Into the
+document's figures folder (beside it, named after it): Fig. 1 (arena and tasks), Fig. 3a and 3b per variant, Fig. 3c,
+the best evolved individuals' paths coloured by the expert in control, ``summary.json``, ``specialisation.csv`` and
+``claims.json``; into the table's folder, ``best_genomes.npz``, each seed's 10 best genomes of every evolution's last
+generation, so that the paths can be drawn again without ``final_population.npz`` (not kept for the finished paper-
+and cpu-scale runs). The document labels every number with the run's scale, gives the rule behind each verdict and
+ends with the table's hand-written ``discussion.md`` when it exists.
 
-The best individual of an evolution (the fittest of the last generation over all seeds)
-lives again the very life that earned its fitness (:func:`imrl_jax.render.life_key`), then
-drives each task for a while from the weights it ended that task with: those paths give
-the trajectory figures, the expert-specialisation table and the stereotypy of EE-ES per
-task (claim 4). Claim 7 probes the experts of the 10 best LE-LS and EE-LS individuals of
-every seed (:func:`imrl_jax.behaviour.specialisation`; LE-LS after a fresh childhood).
-``behaviour=False`` skips both.
+The best individual of an evolution (the fittest of the last generation over all seeds) lives again the very life
+that earned its fitness (:func:`imrl_jax.render.life_key`), then drives each task for a while from the weights it
+ended that task with: the trajectory figures, the expert-specialisation table and EE-ES's stereotypy per task (claim
+4). Claim 7 probes the experts of the 10 best LE-LS and EE-LS individuals of every seed
+(:func:`imrl_jax.behaviour.specialisation`; LE-LS after a fresh childhood). ``behaviour=False`` skips both.
 """
 
 from __future__ import annotations
