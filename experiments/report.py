@@ -101,8 +101,7 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
                  f"steps driven after each task's learning period, coloured by the expert in control")
         written["paths"][variant, condition] = save(fig_paths(life, title), at(
             f"paths_{condition}.png" if one_for_all else f"paths_{variant}_{condition}.png"))
-    for (variant, condition), entry in relived.items():
-        if conditions.get(condition).learns:
+        if not one_for_all:
             print(f"probing the experts of the {entry['genomes'].shape[1]} best {condition} individuals of "
                   f"every seed ({variant})", flush=True)
             probes[variant, condition] = probe_best(entry["config"], entry)
