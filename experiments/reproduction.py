@@ -70,10 +70,9 @@ class ReproductionTable(Table):
             first.setdefault(folder, row.preset)
             holder = reproduction_variant(folder, self.out)  # the committed layout: OUT/VARIANT/evolve/CONDITION
             data["owners"][at] = holder if holder in PRESETS else first[folder]
-            run, test = (evolved and read_evolution(evolved)), read_test(tested)
-            if run is not None:
+            if evolved and (run := read_evolution(evolved)) is not None:
                 data["evolutions"][at] = run
-            if test is not None:
+            if (test := read_test(tested)) is not None:
                 data["tests"][at] = test
         return data
 
