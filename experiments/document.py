@@ -287,7 +287,7 @@ def baselines_section(baselines: dict, data: dict, written: dict, rel, label: st
     # each baseline's curve at the tests' length, interpolated between its evaluations (None: it stopped before)
     same = {name: float(np.interp(test_steps, b["steps"], b["mean"])) if test_steps and test_steps <= b["steps"][-1]
             else None for name, b in baselines.items()}
-    at_tests = lambda cell: [cell] if test_steps else []  # noqa: E731  (the column is there when tests are)
+    at_tests = lambda cell: [cell] if test_steps else []  # noqa: E731  (a column there when tests are; its cells made anyway)
     per_task = lambda values: ", ".join(f"{v:.2f}" for v in values)  # noqa: E731
     performance = lambda b: b["summary"]["performance_mean"]  # noqa: E731
     rows = [[baseline_label(b), mean_sd(performance(b), b["summary"]["performance_sd_over_seeds"]),
@@ -297,7 +297,7 @@ def baselines_section(baselines: dict, data: dict, written: dict, rel, label: st
               mean_sd(t["steady"]["steady_mean"], t["steady"]["steady_sd"]), per_task(t["steady"]["steady_per_task"]),
               *at_tests(f"{t['steady']['steady_mean']:.3f}"), "-"] for (variant, condition), t in data["tests"].items()]
     out += ["", table(["learner", "performance (mean +- sd over seeds or runs)", "per task 1-6",
-                       *at_tests(f"at {test_steps:,} cycles (this report's test length; interpolated)"),
+                       *at_tests(f"at {test_steps or 0:,} cycles (this report's test length; interpolated)"),
                        "deterministic (mode)"], rows)]
     best = max(baselines.values(), key=performance)
     lines = [f"Best baseline: {baseline_label(best)} at {performance(best):.3f}."]
