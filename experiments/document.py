@@ -287,7 +287,7 @@ def baselines_section(baselines: dict, data: dict, written: dict, rel, label: st
     # each baseline's curve at the tests' length, interpolated between its evaluations (None: it stopped before)
     same = {name: float(np.interp(test_steps, b["steps"], b["mean"])) if test_steps and test_steps <= b["steps"][-1]
             else None for name, b in baselines.items()}
-    at_tests = lambda cell: [cell] if test_steps else []  # noqa: E731  (a column there when tests are; its cells made anyway)
+    at_tests = lambda cell: [cell] if test_steps else []  # noqa: E731  (a column when tests are; cells made anyway)
     per_task = lambda values: ", ".join(f"{v:.2f}" for v in values)  # noqa: E731
     performance = lambda b: b["summary"]["performance_mean"]  # noqa: E731
     rows = [[baseline_label(b), mean_sd(performance(b), b["summary"]["performance_sd_over_seeds"]),
