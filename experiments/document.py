@@ -2,15 +2,15 @@
 
 from __future__ import annotations
 
-import json
 import os
+import subprocess
 
 import numpy as np
 
 from experiments.markdown import mean_sd, table
 from experiments.study import SCALES
-from experiments.claims import (CLAIMS, EVOLVED, LAST_GENERATIONS, PAPER, PLATEAU_FRACTION, RULES, SEEN,
-                                _fmt, specialisation_score)
+from experiments.claims import CLAIMS, EVOLVED, LAST_GENERATIONS, PAPER, PLATEAU_FRACTION, RULES, SEEN, _fmt
+from experiments.loading import read_json
 from experiments.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEPS, FRESH_LIVES, PATH_STEPS
 from imrl_jax import conditions
 
@@ -27,17 +27,14 @@ def report_name(scale: str) -> str:
     return "REPRODUCTION.md" if scale == "paper" else f"REPRODUCTION_{scale.upper()}.md"
 
 
-def other_scale_section(doc_dir: str, scale: str) -> list[str]:
-    """A labelled section on each other scale's report found beside this one (``scale``'s): its verdicts, a link."""
+def other_scale_section(doc_dir: str) -> list[str]:
+    """A labelled section on each reduced scale's report found beside the paper scale's: its verdicts, a link."""
     out = []
-    for other in [s for s in SCALES if s != scale]:
+    for other in [s for s in SCALES if s != "paper"]:
         doc = report_name(other)
-        figures = os.path.basename(figures_of(doc))
-        claims_path = os.path.join(doc_dir, figures, "claims.json")
-        if not (os.path.isfile(os.path.join(doc_dir, doc)) and os.path.isfile(claims_path)):
+        claims = read_json(os.path.join(doc_dir, os.path.basename(figures_of(doc)), "claims.json"))
+        if claims is None or not os.path.isfile(os.path.join(doc_dir, doc)):
             continue
-        with open(claims_path) as f:
-            claims = json.load(f)
         variants = list(next(iter(claims["claims"].values()))["variants"])
         out += ["", f"## The same claims at the {other} scale", "",
                 f"**Another run, at the {claims.get('scale_label', other + ' scale')}.** Its figures, numbers and "
@@ -48,45 +45,36 @@ def other_scale_section(doc_dir: str, scale: str) -> list[str]:
     return out
 
 
-def scale_label(manifest: dict | None) -> str:
+def scale_label(manifest: dict) -> str:
     """The sizes the numbers were measured at, in one short line (every table and figure names it)."""
-    if not manifest:
-        return "unknown scale (no manifest.json)"
-    sizes = manifest.get("sizes", {})
-    number = lambda name: f"{sizes[name]:,}" if isinstance(sizes.get(name), int) else "?"  # noqa: E731
-    return (f"{manifest.get('scale', '?')} scale: {number('seeds')} seeds x {number('generations')} generations, "
-            f"lives of {number('childhood_steps')} + 6 x {number('task_steps')} steps, learning tests of "
-            f"{number('test_steps')} cycles per task")
+    sizes = manifest["sizes"]
+    return (f"{manifest['scale']} scale: {sizes['seeds']:,} seeds x {sizes['generations']:,} generations, lives of "
+            f"{sizes['childhood_steps']:,} + 6 x {sizes['task_steps']:,} steps, learning tests of "
+            f"{sizes['test_steps']:,} cycles per task")
 
 
 def sizes_table(data: dict) -> str:
     """The run's sizes beside the paper's, with the fraction of the paper's where they differ."""
-    manifest = data["manifest"] or {}
-    sizes, paper = manifest.get("sizes", {}), SCALES["paper"]
-    config = next((run["config"] for run in data["evolutions"].values() if run.get("config")), None) or {}
+    sizes, paper = data["manifest"]["sizes"], SCALES["paper"]
+    config = next((run["config"] for run in data["evolutions"].values() if run.get("config")), {})
+    # the population as the evolutions ran it (none finished yet: the scale's, if it names one)
     population = (config.get("population_size", sizes.get("population")),
                   config.get("num_parents", sizes.get("parents")))
-
-    def cell(value, reference):
-        if value is None:
-            return "?"
-        if isinstance(value, tuple):
-            return ", ".join("?" if v is None else f"{v:,}" for v in value)
-        ratio = value / reference
-        return f"{value:,}" + ("" if ratio == 1 else f" ({_fraction(ratio)})")
-
-    rows = [("seeds (runs)", "seeds"), ("generations", "generations"), ("childhood steps", "childhood_steps"),
-            ("steps per adult task (6 tasks)", "task_steps"), ("learning test: best individuals per run", "best"),
-            ("learning test: tests per individual", "tests"), ("learning test: cycles per task", "test_steps"),
-            ("steady state: last cycles", "steady_steps")]
-    body = [[name, cell(sizes.get(key), paper[key]), f"{paper[key]:,}"] for name, key in rows]
-    body.insert(2, ["population, parents", cell(population, None), "50, 10"])
-    return table(["", f"this run ({manifest.get('scale', 'unknown')} scale)", "paper"], body)
+    body = [[name, f"{sizes[key]:,}" + _fraction(sizes[key] / paper[key]), f"{paper[key]:,}"] for name, key in (
+        ("seeds (runs)", "seeds"), ("generations", "generations"), ("childhood steps", "childhood_steps"),
+        ("steps per adult task (6 tasks)", "task_steps"), ("learning test: best individuals per run", "best"),
+        ("learning test: tests per individual", "tests"), ("learning test: cycles per task", "test_steps"),
+        ("steady state: last cycles", "steady_steps"))]
+    body.insert(2, ["population, parents", ", ".join("?" if v is None else f"{v:,}" for v in population), "50, 10"])
+    return table(["", f"this run ({data['manifest']['scale']} scale)", "paper"], body)
 
 
 def _fraction(ratio: float) -> str:
+    """After a size that differs from the paper's, its fraction of the paper's: " (1/5)", " (x0.4)"."""
     inverse = 1 / ratio
-    return f"1/{inverse:g}" if ratio < 1 and abs(inverse - round(inverse)) < 1e-9 else f"x{ratio:.3g}"
+    if ratio == 1:
+        return ""
+    return f" (1/{inverse:g})" if ratio < 1 and abs(inverse - round(inverse)) < 1e-9 else f" (x{ratio:.3g})"
 
 
 #: What each variant of the learning rules is, for the report's header.
@@ -116,28 +104,18 @@ def specialisation_rows(lives: dict) -> list[dict]:
     """One row per expert of each best individual and phase (adult tasks; LE-LS also the end of childhood)."""
     rows = []
     for (variant, condition), life in lives.items():
+        followed = [SEEN[int(c)] if c >= 0 else "" for c in life["probe"].followed]
         phases = [("adult tasks", life["shares"], life["steps"])]
         if life.get("childhood_shares") is not None:
             phases.append((f"childhood, last {CHILDHOOD_TAIL:.0%}", life["childhood_shares"], life["childhood_steps"]))
-        probe = life.get("probe")
         for phase, shares, steps in phases:
-            followed = ([SEEN[int(c)] if c >= 0 else None for c in probe.followed] if probe is not None
-                        else specialisation_score(shares, steps)[1])
             total = max(int(np.sum(steps)), 1)
-            for e, (row, n) in enumerate(zip(shares, steps)):
-                rows.append(dict(variant="both" if not conditions.get(condition).learns else variant, condition=condition, phase=phase,
-                                 seed=life["seed"], generation=life["generation"], expert=e + 1, steps=int(n),
-                                 control_share=round(int(n) / total, 4),
-                                 **{name: (None if not np.isfinite(v) else round(float(v), 4))
-                                    for name, v in zip(SEEN, row)},
-                                 follows=followed[e] or ""))
+            rows += [dict(variant=variant if conditions.get(condition).learns else "both", condition=condition,
+                          phase=phase, seed=life["seed"], generation=life["generation"], expert=e + 1, steps=int(n),
+                          control_share=round(int(n) / total, 4),
+                          **{name: None if not np.isfinite(v) else round(float(v), 4) for name, v in zip(SEEN, row)},
+                          follows=followed[e]) for e, (row, n) in enumerate(zip(shares, steps))]
     return rows
-
-
-def panels(figures: dict, variants: list[str], what: str, rel) -> list[str]:
-    """A figure of each variant that has one (``figures``: variant -> path), under the variant's name."""
-    return [text for v in variants if v in figures
-            for text in ("", f"**{v}**", "", f"![{what}, {v}]({rel(figures[v])})")]
 
 
 def write_document(path: str, figures: str, data: dict, numbers: dict, lives: dict, spec_rows: list[dict],
@@ -145,17 +123,17 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
     """The markdown report (with a section on the brax baselines when ``baselines`` has any)."""
     from imrl_jax.checkpoint import git_commit
 
-    manifest, results = data["manifest"], data["results"]
-    label = scale_label(manifest)
-    reduced = not manifest or manifest.get("scale") != "paper"
-    doc_dir = os.path.dirname(os.path.abspath(path))
+    manifest, results, owners, variants = data["manifest"], data["results"], data["owners"], data["variants"]
+    label, scale, doc_dir = scale_label(manifest), manifest["scale"], os.path.dirname(os.path.abspath(path))
     rel = lambda name: os.path.relpath(os.path.join(figures, name), doc_dir)  # noqa: E731
-    title = "# Reproduction of Schembri, Mirolli & Baldassarre (2007): Fig. 3 and the seven claims"
-    out = [title + ("" if not reduced else f", at the {(manifest or {}).get('scale', 'unknown')} scale (reduced)"), ""]
+    panels = lambda key: [text for v in variants if v in written[key]  # noqa: E731  (a figure per variant: Fig. 3a)
+                          for text in ("", f"**{v}**", "", f"![Fig. {key[3:]}, {v}]({rel(written[key][v])})")]
+    out = ["# Reproduction of Schembri, Mirolli & Baldassarre (2007): Fig. 3 and the seven claims"
+           + ("" if scale == "paper" else f", at the {scale} scale (reduced)"), ""]
     inside = os.path.abspath(results).startswith(ROOT + os.sep)
     out += [f"Written by `experiments/report.py` from `{os.path.relpath(results, ROOT) if inside else results}`. "
             f"**All numbers below are at the {label}.**", "", sizes_table(data)]
-    if reduced:
+    if scale != "paper":
         out += ["", "This is a **reduced-scale** reproduction: fewer seeds and generations and shorter lives and "
                     "learning tests than the paper's (10 seeds, 100 generations, 150,000 childhood steps, 100,000 "
                     "steps per task, tests of 10 best x 10 tests x 1,000,000 cycles). Its numbers are not the "
@@ -165,42 +143,37 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
                    os.path.basename(path) != "REPRODUCTION.md" else "")]
     commits = sorted({c for c in [run.get("git_commit") for run in data["evolutions"].values()]
                       + [t["steady"].get("git_commit") for t in data["tests"].values()] if c})
-    about = "; ".join(VARIANT_TEXT.get(v, f"`{v}`: a row of docs/CLAIMS.md") for v in data["variants"])
-    owners = data["owners"]
+    about = "; ".join(VARIANT_TEXT.get(v, f"`{v}`: a row of docs/CLAIMS.md") for v in variants)
     out += ["", f"- Command: {pipeline_command(study)}",
-            f"- Results made at commit `{(manifest or {}).get('git_commit', 'unknown')}`"
+            f"- Results made at commit `{manifest.get('git_commit', 'unknown')}`"
             + (f" (stages ran at {', '.join(f'`{c[:10]}`' for c in commits)})" if len(commits) > 1 else ""),
             f"- Report written at commit `{git_commit()}`" + (" (with uncommitted changes)" if _dirty() else ""),
-            f"- Variants: {', '.join(data['variants'])} ({about}). "
-            f"EE-ES learns nothing, so its one evolution serves every variant"
-            + "".join(f"; {v}'s {c} is the {owners[v, c]} run (the same rules for it)" for v in data["variants"]
-                      for c in EVOLVED if conditions.get(c).learns and owners.get((v, c), v) != v) + "."]
-    missing = data["missing"]
-    if missing:
-        out += ["", f"**Unfinished run: {len(missing)} stage(s) not done yet** ({', '.join(missing)}). What they "
-                    f"would measure is shown as not available; run the command again to go on."]
-    if manifest and manifest.get("stages"):
+            f"- Variants: {', '.join(variants)} ({about}). EE-ES learns nothing, so its one evolution serves every "
+            f"variant" + "".join(f"; {v}'s {c} is the {owners[v, c]} run (the same rules for it)" for v in variants
+                                 for c in EVOLVED if conditions.get(c).learns and owners.get((v, c), v) != v) + "."]
+    if data["missing"]:
+        out += ["", f"**Unfinished run: {len(data['missing'])} stage(s) not done yet** "
+                    f"({', '.join(data['missing'])}). What they would measure is shown as not available; run the "
+                    f"command again to go on."]
+    if manifest.get("stages"):
         out += ["", "<details><summary>Stages (commands and seconds)</summary>", "",
                 table(["stage", "command", "seconds"],
                       [[name, f"`{s['command']}`", s.get("seconds", "")] for name, s in manifest["stages"].items()]),
                 "", "</details>"]
 
     out += ["", "## The arena and the tasks (Fig. 1)", "", f"![arena and tasks]({rel(written['arena'])})"]
-
-    if written.get("fig3"):
+    if written["fig3"]:
         out += ["", "## Fig. 3 in the paper's layout", "",
                 "The paper's three panels side by side for each variant: (a) the best fitness per generation of "
                 "the evolved conditions, (b) the learning tests of the conditions that learn (LE-LS, EE-LS, SLE; "
                 "EE-ES learns nothing and appears in (c) only, as in the paper), (c) the steady state of all four "
                 f"(dark: mean over runs, +-1 sd; light: the best run). The sections below show each panel with "
-                f"its numbers ({label})."] + panels(written["fig3"], data["variants"], "Fig. 3", rel)
+                f"its numbers ({label})."] + panels("fig3")
 
     out += ["", "## Fig. 3a: evolution of the best fitness", "",
-            f"Best fitness per generation, mean over seeds with a band of +-1 sd ({label})."]
-    out += panels(written["fig3a"], data["variants"], "Fig. 3a", rel)
-    rows = []
-    expected = ((manifest or {}).get("sizes") or {}).get("generations")
-    for variant in data["variants"]:
+            f"Best fitness per generation, mean over seeds with a band of +-1 sd ({label})."] + panels("fig3a")
+    rows, expected = [], manifest["sizes"]["generations"]
+    for variant in variants:
         for condition, e in numbers[variant]["evolution"].items():
             life = lives.get((owners[variant, condition], condition))
             rows.append([variant, condition, mean_sd(e["final_best_mean"], e["final_best_sd"]),
@@ -208,7 +181,7 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
                          e["generations"] if e["generations"] == expected else f"{e['generations']} of {expected}",
                          "-" if life is None else f"seed {life['seed']}, gen {life['generation']}: "
                                                   f"{life['fitness']:.3f} (relived {life['relived_fitness']:.3f})",
-                         "-" if life is None or "fresh" not in life else
+                         "-" if life is None else
                          f"{np.mean(life['fresh']['mean']):.3f} (seeds {np.min(life['fresh']['mean']):.3f}-"
                          f"{np.max(life['fresh']['mean']):.3f}; sd of a genome's lives "
                          f"{np.mean(life['fresh']['sd']):.3f})"])
@@ -217,7 +190,7 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
                 f"({label})", "",
             table(["variant", "condition", "final best fitness", "per seed", "plateau generation", "generations",
                    "best individual (fitness)", f"fresh lives of each seed's best ({FRESH_LIVES} each)"], rows)]
-    if any(life is not None for life in lives.values()):
+    if lives:
         out += ["", "\"Final best fitness\" is the recorded best of each generation: the best of its 50 noisy lives, "
                     "as in the paper's Fig. 3a; claims 1 to 4 use it. \"Relived\": the best individual lives its "
                     "evaluated life again with the same keys; it equals the recorded fitness (the same life: same "
@@ -230,22 +203,18 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
     out += ["", "## Fig. 3b: learning tests", "",
             f"Performance per bin (reaches / the bin's theoretical maximum), mean over all tests and tasks, band "
             f"+-1 sd over runs ({label}). LE-LS tests start with a fresh childhood; EE-ES does not learn; SLE "
-            f"learns from scratch."] + panels(written["fig3b"], data["variants"], "Fig. 3b", rel)
+            f"learns from scratch."] + panels("fig3b")
 
-    out += ["", "## Fig. 3c: steady state", ""]
-    if written.get("fig3c"):
-        out += [f"![Fig. 3c]({rel(written['fig3c'])})", ""]
-    rows = []
-    for variant in data["variants"]:
-        for condition, t in numbers[variant]["learning_tests"].items():
-            rows.append([variant, condition, mean_sd(t["steady_mean"], t["steady_sd"]),
-                         f"{t['steady_best_run']:.3f} (run {t['best_run']})",
-                         ", ".join(f"{v:.2f}" for v in t["steady_per_task"]), f"{t['whole_test_mean']:.3f}",
-                         f"{t['num_runs']} x {t['num_best']} x {t['num_tests']}"])
+    out += ["", "## Fig. 3c: steady state", ""] + ([f"![Fig. 3c]({rel(written['fig3c'])})", ""]
+                                                  if written.get("fig3c") else [])
     out += [f"Steady state = mean performance over the last cycles of each test (see the scale); mean +- sd over "
             f"runs, best run, per task (mean over runs). ({label})", "",
             table(["variant", "condition", "steady state (mean +- sd over runs)", "best run", "per task 1-6",
-                   "whole test", "runs x best x tests"], rows)]
+                   "whole test", "runs x best x tests"],
+                  [[v, c, mean_sd(t["steady_mean"], t["steady_sd"]), f"{t['steady_best_run']:.3f} (run "
+                    f"{t['best_run']})", ", ".join(f"{x:.2f}" for x in t["steady_per_task"]),
+                    f"{t['whole_test_mean']:.3f}", f"{t['num_runs']} x {t['num_best']} x {t['num_tests']}"]
+                   for v in variants for c, t in numbers[v]["learning_tests"].items()])]
 
     out += ["", "## Behaviour of the best evolved individuals", "",
             f"The fittest individual of the last generation over all seeds of each evolution relives the life that "
@@ -275,56 +244,36 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
             f"junction probe; \"-\": none). The other columns are what the retina's central receptors see on each "
             f"expert's control steps during the drawn paths (`colour_shares`): on this floor no colour runs "
             f"straight for long, so those shares stay mixed even for an expert that follows a colour, and they are "
-            f"not the claim's measure. Also in `{os.path.basename(written['specialisation'])}`. ({label})", ""]
-    if spec_rows:
-        out.append(table(["variant", "condition", "phase", "expert", "control", *(f"sees {n}" for n in SEEN),
-                          "follows (probe)"],
-                         [[r["variant"], r["condition"], r["phase"], r["expert"], f"{r['control_share']:.0%}",
-                           *(_fmt(r[name], 2) for name in SEEN), r["follows"] or "-"] for r in spec_rows]))
-    else:
-        out.append("(no individual was simulated)")
+            f"not the claim's measure. Also in `{os.path.basename(written['specialisation'])}`. ({label})", "",
+            table(["variant", "condition", "phase", "expert", "control", *(f"sees {n}" for n in SEEN),
+                   "follows (probe)"],
+                  [[r["variant"], r["condition"], r["phase"], r["expert"], f"{r['control_share']:.0%}",
+                    *(_fmt(r[name], 2) for name in SEEN), r["follows"] or "-"] for r in spec_rows])
+            if spec_rows else "(no individual was simulated)"]
 
     out += ["", "## The seven claims", "", f"Measured at the {label}. The verdicts follow the rules below, "
                                            "computed by `experiments/report.py` (also in `claims.json`); claims "
-                                           "1 to 4 judge finished evolutions only.", ""]
-    rows = []
-    for n, text in CLAIMS.items():
-        for variant in data["variants"]:
-            c = numbers[variant]["claims"][n]
-            rows.append([n, text if variant == data["variants"][0] else "", variant, c["measured"], PAPER[n],
-                         f"**{c['verdict']}**"])
-    out.append(table(["#", "claim", "variant", "measured", "paper", "verdict"], rows))
-    out += ["", "### Rules", ""] + [f"{n}. {rule}" for n, rule in RULES.items()]
-
+                                           "1 to 4 judge finished evolutions only.", "",
+            table(["#", "claim", "variant", "measured", "paper", "verdict"],
+                  [[n, text if v == variants[0] else "", v, numbers[v]["claims"][n]["measured"], PAPER[n],
+                    f"**{numbers[v]['claims'][n]['verdict']}**"] for n, text in CLAIMS.items() for v in variants]),
+            "", "### Rules", ""] + [f"{n}. {rule}" for n, rule in RULES.items()]
     if baselines:
         out += baselines_section(baselines, data, written, rel, label)
-    if not reduced:  # the reduced scales' verdicts, labelled; a reduced report only links the paper's (above)
-        out += other_scale_section(doc_dir, "paper")
-
+    if scale == "paper":  # the reduced scales' verdicts, labelled; a reduced report only links the paper's (above)
+        out += other_scale_section(doc_dir)
     discussion = os.path.join(results, "discussion.md")
-    out += ["", "## Discussion", ""]
-    if os.path.isfile(discussion):
-        with open(discussion) as f:
-            out.append(f.read().strip())
-    else:
-        out.append("(no discussion written yet)")
-    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    with open(discussion if os.path.isfile(discussion) else os.devnull) as f:
+        out += ["", "## Discussion", "", f.read().strip() or "(no discussion written yet)"]
+    os.makedirs(doc_dir, exist_ok=True)
     with open(path, "w") as f:
         f.write("\n".join(out) + "\n")
-
-
-def _at(steps, values, target: int) -> float | None:
-    """The curve's value at ``target`` cycles, interpolated between evaluations (None past its last)."""
-    if target > steps[-1]:
-        return None
-    return float(np.interp(target, steps, values))
 
 
 def baselines_section(baselines: dict, data: dict, written: dict, rel, label: str) -> list[str]:
     """Modern deep RL from brax.training on the same tasks, beside this report's learning tests."""
     from experiments.figures import baseline_label
 
-    test_steps = max((int(t["steps"][-1]) for t in data["tests"].values()), default=None)
     out = ["", "## Modern deep RL baselines (brax.training)", "",
            "Each task learned from scratch by brax's PPO or ES on the arena's brax environments "
            "(`imrl_jax.brax_env`), measured as the learning tests are: reaches / theoretical maximum, here of the "
@@ -332,49 +281,38 @@ def baselines_section(baselines: dict, data: dict, written: dict, rel, label: st
            "from the task's start, replayed by the project's own step; the policy's mode in the last column. The "
            "baselines' own scale is their budget of cycles per task, not this report's: the paper's learning "
            "test gives 1,000,000. Made by `python -m experiments run baselines`; what, how and why in "
-           "[BASELINES.md](BASELINES.md)."]
-    if written.get("baselines"):
-        out += ["", f"![baselines]({rel(written['baselines'])})"]
-    header = ["learner", "performance (mean +- sd over seeds or runs)", "per task 1-6"]
-    if test_steps:
-        header.append(f"at {test_steps:,} cycles (this report's test length; interpolated)")
-    header.append("deterministic (mode)")
-    rows = []
-    for b in baselines.values():
-        summary = b["summary"]
-        row = [baseline_label(b), mean_sd(summary["performance_mean"], summary["performance_sd_over_seeds"]),
-               ", ".join(f"{v:.2f}" for v in b["per_task"])]
-        if test_steps:
-            value = _at(b["steps"], b["mean"], test_steps)
-            row.append("-" if value is None else f"{value:.3f}")
-        row.append(f"{summary['performance_deterministic_mean']:.3f}")
-        rows.append(row)
-    for (variant, condition), t in data["tests"].items():
-        steady = t["steady"]
-        row = [f"{condition}, {variant} rules: steady state ({label.split(':')[0]})",
-               mean_sd(steady["steady_mean"], steady["steady_sd"]),
-               ", ".join(f"{v:.2f}" for v in steady["steady_per_task"])]
-        if test_steps:
-            row.append(f"{steady['steady_mean']:.3f}")
-        rows.append(row + ["-"])
-    out += ["", table(header, rows)]
-    best = max(baselines.values(), key=lambda b: b["summary"]["performance_mean"])
-    at_paper = [b for b in baselines.values() if b["summary"]["steps"] <= 1_100_000]
-    lines = [f"Best baseline: {baseline_label(best)} at {best['summary']['performance_mean']:.3f}."]
-    if at_paper:
-        top = max(at_paper, key=lambda b: b["summary"]["performance_mean"])
-        lines.append(f"With the paper's learning-test budget, {baseline_label(top)} reaches "
-                     f"{top['summary']['performance_mean']:.3f}.")
+           "[BASELINES.md](BASELINES.md)."] + (["", f"![baselines]({rel(written['baselines'])})"]
+                                               if written.get("baselines") else [])
+    test_steps = max((int(t["steps"][-1]) for t in data["tests"].values()), default=None)
+    # each baseline's curve at the tests' length, interpolated between its evaluations (None: it stopped before)
+    same = {name: float(np.interp(test_steps, b["steps"], b["mean"])) if test_steps and test_steps <= b["steps"][-1]
+            else None for name, b in baselines.items()}
+    at_tests = lambda cell: [cell] if test_steps else []  # noqa: E731  (a column when tests are; cells made anyway)
+    per_task = lambda values: ", ".join(f"{v:.2f}" for v in values)  # noqa: E731
+    performance = lambda b: b["summary"]["performance_mean"]  # noqa: E731
+    rows = [[baseline_label(b), mean_sd(performance(b), b["summary"]["performance_sd_over_seeds"]),
+             per_task(b["per_task"]), *at_tests("-" if same[name] is None else f"{same[name]:.3f}"),
+             f"{b['summary']['performance_deterministic_mean']:.3f}"] for name, b in baselines.items()]
+    rows += [[f"{condition}, {variant} rules: steady state ({label.split(':')[0]})",
+              mean_sd(t["steady"]["steady_mean"], t["steady"]["steady_sd"]), per_task(t["steady"]["steady_per_task"]),
+              *at_tests(f"{t['steady']['steady_mean']:.3f}"), "-"] for (variant, condition), t in data["tests"].items()]
+    out += ["", table(["learner", "performance (mean +- sd over seeds or runs)", "per task 1-6",
+                       *at_tests(f"at {test_steps or 0:,} cycles (this report's test length; interpolated)"),
+                       "deterministic (mode)"], rows)]
+    best = max(baselines.values(), key=performance)
+    lines = [f"Best baseline: {baseline_label(best)} at {performance(best):.3f}."]
+    top = max((b for b in baselines.values() if b["summary"]["steps"] <= 1_100_000), key=performance, default=None)
+    if top is not None:
+        lines.append(f"With the paper's learning-test budget, {baseline_label(top)} reaches {performance(top):.3f}.")
     if data["tests"]:
         (variant, condition), t = max(data["tests"].items(), key=lambda item: item[1]["steady"]["steady_mean"])
         lines.append(f"The paper's architecture here ({label}): best steady state {condition} under the {variant} "
                      f"rules, {t['steady']['steady_mean']:.3f}.")
-        same = [(_at(b["steps"], b["mean"], test_steps), b) for b in baselines.values()] if test_steps else []
-        same = [(value, b) for value, b in same if value is not None]
-        if same:
-            value, b = max(same, key=lambda item: item[0])
+        name = max((name for name, value in same.items() if value is not None), key=same.get, default=None)
+        if name is not None:
             lines.append(f"With the same experience as those tests ({test_steps:,} cycles per task), the best "
-                         f"baseline is at {value:.3f} ({baseline_label(b)}, interpolated between its evaluations).")
+                         f"baseline is at {same[name]:.3f} ({baseline_label(baselines[name])}, interpolated between "
+                         f"its evaluations).")
     sps = [f"{baseline_label(b).split(' (')[0]}: {b['summary']['steps_per_s_median']:,.0f}"
            for b in baselines.values() if b["summary"].get("steps_per_s_median")]
     out += ["", " ".join(lines)]
@@ -385,13 +323,9 @@ def baselines_section(baselines: dict, data: dict, written: dict, rel, label: st
 
 
 def _dirty() -> bool:
-    """Whether the code that makes the report differs from its commit (the commit alone would not remake it).
-
-    Only the package and the experiment scripts count: the report's own outputs and the
-    results it reads are tracked files too, and rewriting them must not flag the report.
-    """
-    import subprocess
-
+    """Whether the code that makes the report differs from its commit (the commit alone would not remake it)."""
+    # only the package and the experiment scripts count: the report's own outputs and the results it reads are
+    # tracked files too, and rewriting them must not flag the report
     try:
         out = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", "imrl_jax",
                               "experiments/*.py"], cwd=ROOT, capture_output=True, text=True, timeout=10)

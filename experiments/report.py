@@ -3,25 +3,20 @@
     python -m experiments report reproduction       # docs/REPRODUCTION.md, docs/reproduction/
     python -m experiments report reproduction-cpu   # docs/REPRODUCTION_CPU.md, docs/reproduction_cpu/
 
-The pieces: ``loading`` reads the results, ``claims`` holds the verdict rules (pure functions),
-``relive`` lives the best individuals again, ``figures`` draws and ``document`` writes the
-markdown; this module runs them in order. It writes, beside the table's document (its figures
-folder, named after it): Fig. 1 (arena and tasks), Fig. 3a and 3b per variant, Fig. 3c, the paths
-of the best evolved individuals coloured by the expert in control, ``summary.json``,
-``specialisation.csv`` and ``claims.json``; into the table's folder, ``best_genomes.npz``, the 10
-best genomes of each seed's last generation of every evolution, so that the paths can be drawn
-again without ``final_population.npz`` (not kept for the finished paper- and cpu-scale runs);
-and the document, every number labelled with the run's scale, the claims table with the rule
-that gave each verdict, and a "Discussion" section read from the table's ``discussion.md``
-(written by hand) when it exists.
+``loading`` reads the results, ``claims`` holds the verdict rules (pure functions), ``relive`` lives the best
+individuals again, ``figures`` draws and ``document`` writes the markdown; this module runs them in order. Into the
+document's figures folder (beside it, named after it): Fig. 1 (arena and tasks), Fig. 3a and 3b per variant, Fig. 3c,
+the best evolved individuals' paths coloured by the expert in control, ``summary.json``, ``specialisation.csv`` and
+``claims.json``; into the table's folder, ``best_genomes.npz``, each seed's 10 best genomes of every evolution's last
+generation, so that the paths can be drawn again without ``final_population.npz`` (not kept for the finished paper-
+and cpu-scale runs). The document labels every number with the run's scale, gives the rule behind each verdict and
+ends with the table's hand-written ``discussion.md`` when it exists.
 
-The best individual of an evolution (the fittest of the last generation over all seeds)
-lives again the very life that earned its fitness (:func:`imrl_jax.render.life_key`), then
-drives each task for a while from the weights it ended that task with: those paths give
-the trajectory figures, the expert-specialisation table and the stereotypy of EE-ES per
-task (claim 4). Claim 7 probes the experts of the 10 best LE-LS and EE-LS individuals of
-every seed (:func:`imrl_jax.behaviour.specialisation`; LE-LS after a fresh childhood).
-``behaviour=False`` skips both.
+The best individual of an evolution (the fittest of the last generation over all seeds) lives again the very life
+that earned its fitness (:func:`imrl_jax.render.life_key`), then drives each task for a while from the weights it
+ended that task with: the trajectory figures, the expert-specialisation table and EE-ES's stereotypy per task (claim
+4). Claim 7 probes the experts of the 10 best LE-LS and EE-LS individuals of every seed
+(:func:`imrl_jax.behaviour.specialisation`; LE-LS after a fresh childhood). ``behaviour=False`` skips both.
 """
 
 from __future__ import annotations
@@ -37,22 +32,20 @@ from experiments.study import RESULTS
 from experiments.claims import CLAIMS, EVOLVED, PAPER, RULES, SEEN, TESTED, measure
 from experiments.document import (ROOT, figures_of, pipeline_command, scale_label, sharers, specialisation_rows,
                                   write_document)
-from experiments.figures import fig3, fig_baselines, fig_fitness, fig_learning, fig_paths, fig_steady
+from experiments.figures import fig3, fig_baselines, fig_curves, fig_paths, fig_steady
 from experiments.loading import read_baselines, update_best_genomes
 from experiments.relive import DRAWN_STEPS, FRESH_LIVES, PATH_STEPS, fresh_fitness, probe_best, relive_best
 from imrl_jax import conditions
 
 
 def _jsonable(value):
+    """``value`` as JSON takes it: numpy's numbers and arrays as Python's, a number that is not finite as null."""
     if isinstance(value, dict):
         return {str(k): _jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple, np.ndarray)):
         return [_jsonable(v) for v in value]
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
+    value = value.item() if isinstance(value, np.generic) else value
+    return None if isinstance(value, float) and not math.isfinite(value) else value
 
 
 #: Where the baselines study (experiments/baselines.py) writes the brax baselines (the report shows them when present).
@@ -61,14 +54,13 @@ BASELINES = os.path.join(ROOT, RESULTS, "baselines")
 
 def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
     """Write a reproduction table's figures, summaries and document from what has finished; the paths written."""
+    from imrl_jax.checkpoint import git_commit
     from imrl_jax.config import make_config
     from imrl_jax.plotting import plot_arena, save
 
     data, doc = table.data(), os.path.abspath(table.document)
-    figures = figures_of(doc)
-    os.makedirs(figures, exist_ok=True)
-    label = scale_label(data["manifest"])
-    short = (data["manifest"] or {}).get("scale", "unknown") + " scale"
+    manifest, figures, label = data["manifest"], figures_of(doc), scale_label(data["manifest"])
+    short = manifest["scale"] + " scale"
     written = dict(fig3={}, fig3a={}, fig3b={}, paths={})
     at = lambda name: os.path.join(figures, name)  # noqa: E731
 
@@ -77,12 +69,11 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
     for variant in data["variants"]:
         evolutions = {c: data["evolutions"][variant, c]["best"] for c in EVOLVED if (variant, c) in data["evolutions"]}
         tests = {c: data["tests"][variant, c] for c in TESTED if (variant, c) in data["tests"]}
-        if evolutions:
-            written["fig3a"][variant] = save(fig_fitness(evolutions, f"Fig. 3a, {variant} rules ({short})"),
-                                             at(f"fig3a_{variant}.png"))
-        if tests:
-            written["fig3b"][variant] = save(fig_learning(tests, f"Fig. 3b, {variant} rules ({short})"),
-                                             at(f"fig3b_{variant}.png"))
+        for panel, runs in (("a", evolutions), ("b", tests)):  # Fig. 3a and 3b alone, each beside its numbers
+            if runs:
+                title = f"Fig. 3{panel}, {variant} rules ({short})"
+                written[f"fig3{panel}"][variant] = save(fig_curves(panel, runs, title),
+                                                        at(f"fig3{panel}_{variant}.png"))
         if evolutions or tests:  # the three panels side by side, as the paper draws them
             written["fig3"][variant] = save(fig3(evolutions, tests, steady, variant,
                                                  f"Fig. 3, {variant} rules ({short})"), at(f"fig3_{variant}.png"))
@@ -95,28 +86,25 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
                                                   f"brax.training baselines beside the learning tests ({short})"),
                                     at("baselines.png"))
 
-    best = update_best_genomes(data)
+    best = update_best_genomes(data)  # kept whether or not the individuals are relived
+    relived = {key: entry for key, entry in best.items() if behaviour and entry["config"] is not None}
     lives, probes = {}, {}
-    if behaviour:
-        for (variant, condition), entry in best.items():
-            if entry["config"] is None:
-                continue
-            print(f"reliving the best {condition} individual ({variant})", flush=True)
-            life = lives[variant, condition] = relive_best(entry["config"], entry)
-            print(f"{FRESH_LIVES} fresh lives of each seed's best {condition} genome ({variant})", flush=True)
-            life["fresh"] = fresh_fitness(entry["config"], entry)
-            one_for_all = not conditions.get(condition).learns
-            name = f"paths_{condition}.png" if one_for_all else f"paths_{variant}_{condition}.png"
-            title = (f"{condition}{'' if one_for_all else f', {variant} rules'}: best individual (seed "
-                     f"{life['seed']}, generation {life['generation']}, fitness {life['fitness']:.3f}, relived "
-                     f"{life['relived_fitness']:.3f}); {short}\npaths: the last {DRAWN_STEPS} of {PATH_STEPS:,} "
-                     f"steps driven after each task's learning period, coloured by the expert in control")
-            written["paths"][variant, condition] = save(fig_paths(life, title), at(name))
-        for (variant, condition), entry in best.items():
-            if entry["config"] is not None and conditions.get(condition).learns:
-                print(f"probing the experts of the {entry['genomes'].shape[1]} best {condition} individuals of "
-                      f"every seed ({variant})", flush=True)
-                probes[variant, condition] = probe_best(entry["config"], entry)
+    for (variant, condition), entry in relived.items():
+        print(f"reliving the best {condition} individual ({variant})", flush=True)
+        life = lives[variant, condition] = relive_best(entry["config"], entry)
+        print(f"{FRESH_LIVES} fresh lives of each seed's best {condition} genome ({variant})", flush=True)
+        life["fresh"] = fresh_fitness(entry["config"], entry)
+        one_for_all = not conditions.get(condition).learns
+        title = (f"{condition}{'' if one_for_all else f', {variant} rules'}: best individual (seed "
+                 f"{life['seed']}, generation {life['generation']}, fitness {life['fitness']:.3f}, relived "
+                 f"{life['relived_fitness']:.3f}); {short}\npaths: the last {DRAWN_STEPS} of {PATH_STEPS:,} "
+                 f"steps driven after each task's learning period, coloured by the expert in control")
+        written["paths"][variant, condition] = save(fig_paths(life, title), at(
+            f"paths_{condition}.png" if one_for_all else f"paths_{variant}_{condition}.png"))
+        if not one_for_all:
+            print(f"probing the experts of the {entry['genomes'].shape[1]} best {condition} individuals of "
+                  f"every seed ({variant})", flush=True)
+            probes[variant, condition] = probe_best(entry["config"], entry)
 
     probes = share_probes(probes, data)
     # a variant whose SLE explores the whole test by definition (faithful) has claim 5 measured at the test's length
@@ -124,16 +112,12 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
     spec_rows = specialisation_rows(lives)
     written["specialisation"] = at("specialisation.csv")
     with open(written["specialisation"], "w", newline="") as f:
-        fields = ["variant", "condition", "phase", "seed", "generation", "expert", "steps", "control_share", *SEEN,
-                  "follows"]
-        writer = csv.DictWriter(f, fields)
+        writer = csv.DictWriter(f, ["variant", "condition", "phase", "seed", "generation", "expert", "steps",
+                                    "control_share", *SEEN, "follows"])
         writer.writeheader()
         writer.writerows(spec_rows)
 
-    manifest = data["manifest"] or {}
-    from imrl_jax.checkpoint import git_commit
-
-    summary = dict(scale=manifest.get("scale", "unknown"), scale_label=label, sizes=manifest.get("sizes"),
+    summary = dict(scale=manifest["scale"], scale_label=label, sizes=manifest.get("sizes"),
                    variants=data["variants"], command=pipeline_command(table.name).replace("`", ""),
                    results_commit=manifest.get("git_commit"), report_commit=git_commit(),
                    stages=manifest.get("stages", {}),
@@ -149,35 +133,27 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
         written[name] = at(name)
         text = json.dumps(_jsonable(content), indent=2)  # all of it first: a failure leaves the old file whole
         with open(written[name], "w") as f:
-            f.write(text)
-            f.write("\n")
+            f.write(text + "\n")
     write_document(doc, figures, data, numbers, lives, spec_rows, written, baselines, table.name)
     written["doc"] = doc
     return written
 
 
-#: What summary.json keeps of a relived best individual, each under the name it has in the life.
-LIFE_FIELDS = ("seed", "index", "generation", "fitness", "relived_fitness", "performance", "stereotypy",
-               "stereotypy_per_task", "speed")
-
-
 def best_individual(life: dict) -> dict:
     """A relived best individual as summary.json keeps it: the life's numbers, the colours its experts follow, its
     fresh lives."""
-    return dict({name: life[name] for name in LIFE_FIELDS}, dominant_expert_share=life["dominant_expert"],
-                follows=[int(c) for c in life["probe"].followed], fresh_mean_per_seed=life["fresh"]["mean"],
-                fresh_sd_per_seed=life["fresh"]["sd"], fresh_lives=life["fresh"]["num_lives"])
+    return dict({name: life[name] for name in ("seed", "index", "generation", "fitness", "relived_fitness",
+                                               "performance", "stereotypy", "stereotypy_per_task", "speed")},
+                dominant_expert_share=life["dominant_expert"], follows=[int(c) for c in life["probe"].followed],
+                fresh_mean_per_seed=life["fresh"]["mean"], fresh_sd_per_seed=life["fresh"]["sd"],
+                fresh_lives=life["fresh"]["num_lives"])
 
 
 def shared_once(runs: dict, data: dict) -> dict:
     """``{(variant, condition): run}`` with a run that several variants share once, labelled by them all."""
-    out = {}
-    for (variant, condition), run in runs.items():
-        if data["owners"][variant, condition] != variant:
-            continue
-        label = "every variant" if not conditions.get(condition).learns else ", ".join(sharers(data, variant, condition))
-        out[label, condition] = run
-    return out
+    return {("every variant" if not conditions.get(condition).learns else ", ".join(sharers(data, variant, condition)),
+             condition): run for (variant, condition), run in runs.items()
+            if data["owners"][variant, condition] == variant}
 
 
 def share_probes(probes: dict, data: dict) -> dict:

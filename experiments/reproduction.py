@@ -15,19 +15,10 @@ share one run: EE-ES learns nothing (one run for every variant), faithful's EE-L
 The report (``experiments.report``) draws Fig. 1 and Fig. 3, relives the best individuals and
 judges the seven claims.
 
-Scales (what ``cpu`` shrinks, and by how much, is the whole difference):
-
-| | paper | cpu |
-|---|---|---|
-| variants | skills, paper, faithful | paper, extension |
-| seeds (runs) | 10 | 5 |
-| generations | 100 | 40 |
-| population, parents | 50, 10 | 50, 10 |
-| childhood steps | 150,000 | 30,000 (1/5) |
-| steps per adult task | 100,000 | 20,000 (1/5) |
-| learning test: best x tests | 10 x 10 | 10 x 2 |
-| learning test: cycles per task | 1,000,000 | 200,000 (1/5) |
-| steady state: last cycles | 100,000 | 20,000 (1/5) |
+Scales (``experiments.study.SCALES``; what ``cpu`` shrinks is the whole difference): the paper's, with the
+variants skills, paper and faithful; ``cpu``, paper and extension with 5 seeds x 40 generations, lives, tests and
+their steady state a fifth of the paper's, 2 tests per best individual. Each document opens with its sizes beside the
+paper's.
 """
 
 from __future__ import annotations
@@ -79,10 +70,9 @@ class ReproductionTable(Table):
             first.setdefault(folder, row.preset)
             holder = reproduction_variant(folder, self.out)  # the committed layout: OUT/VARIANT/evolve/CONDITION
             data["owners"][at] = holder if holder in PRESETS else first[folder]
-            run, test = (evolved and read_evolution(evolved)), read_test(tested)
-            if run is not None:
+            if evolved and (run := read_evolution(evolved)) is not None:
                 data["evolutions"][at] = run
-            if test is not None:
+            if (test := read_test(tested)) is not None:
                 data["tests"][at] = test
         return data
 
