@@ -369,13 +369,18 @@ class Table:
         return "\n".join(lines)
 
     def figure(self, measured: list[dict], path: str) -> str:
-        """Each row's best fitness per generation (mean over seeds, +-1 sd): solid under skills, dashed otherwise."""
+        """Each row's best fitness per generation (mean over seeds, +-1 sd): its condition's colour, solid under skills,
+        dashed otherwise (a row that would look like one drawn before takes a colour of its own)."""
         from imrl_jax.plotting import CONDITION_STYLES, new_figure, save, style_axis
 
         fig = new_figure(6.4, 3.8)
         ax = fig.add_subplot()
+        drawn, spare = set(), iter(("tab:purple", "tab:cyan", "tab:pink", "tab:olive", "tab:brown", "tab:orange"))
         for m in (m for m in measured if m["generations"]):
             style = {**CONDITION_STYLES.get(m["condition"], {}), "ls": "-" if m["preset"] == "skills" else "--"}
+            if (style.get("color"), style["ls"]) in drawn:  # EE-LS-T beside EE-LS: both grey and solid under skills
+                style["color"] = next(spare, "0.3")
+            drawn.add((style.get("color"), style["ls"]))
             x, mean, sd = np.arange(m["generations"]), m["best"].mean(1), m["best"].std(1)
             ax.plot(x, mean, label=f"{m['row']} ({m['seeds']} seeds{'' if 'final_mean' in m else ', running'})",
                     **style)

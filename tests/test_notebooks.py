@@ -14,7 +14,7 @@ from jupyter_client.manager import KernelManager  # noqa: E402  (a dependency of
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 NOTEBOOKS = os.path.join(ROOT, "notebooks")
-NAMES = ["01_tour.ipynb", "02_sweeps.ipynb"]
+NAMES = ["01_tour.ipynb", "02_sweeps.ipynb", "03_studies.ipynb"]
 #: Seconds a cell may take at the tiny scale before the test fails.
 TIMEOUT = 120
 
@@ -39,7 +39,8 @@ def test_stored_without_outputs(name):
 
 
 @pytest.mark.parametrize("name, task_set", [(NAMES[0], "paper"), pytest.param(NAMES[1], "novel",
-                                                                               marks=pytest.mark.slow)])
+                                                                               marks=pytest.mark.slow),
+                                            (NAMES[2], "paper")])
 def test_runs_at_tiny_scale(name, task_set, monkeypatch):
     monkeypatch.setenv("IMRL_NOTEBOOK_SCALE", "tiny")
     monkeypatch.setenv("IMRL_TASK_SET", task_set)
