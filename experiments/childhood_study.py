@@ -455,8 +455,10 @@ def measure_main(argv) -> int:
     p.add_argument("--preset", default="skills", help="speed, random: the preset")
     p.add_argument("--best", type=int, default=10, help="evolved, heritability: best genomes of each seed")
     p.add_argument("--individuals", type=int, default=30, help="random: genomes")
-    p.add_argument("--lives", type=int, help="ceiling, heritability, speed: lives of each (default: the stage's)")
-    p.add_argument("--key", type=int, help="the random key (default: the stage's, as in STAGES)")
+    p.add_argument("--lives", type=int, help="ceiling, heritability, speed: lives of each (default: " + ", ".join(
+        f"{name} {lives}" for name, (_, _, lives) in STAGES.items() if lives) + ")")
+    p.add_argument("--key", type=int, help="the random key (default: " + ", ".join(
+        f"{name} {key}" for name, (_, key, _) in STAGES.items()) + ")")
     args = p.parse_intermixed_args(argv)
     stages = [w for w in args.words if w in STAGES]
     if len(stages) != 1:

@@ -164,8 +164,8 @@ def run_fanned(stages, scale: dict, manifest_path: str, command_for, jobs: int, 
     if unknown:
         log(f"error: stage {unknown[0][0].name} needs {unknown[0][1]!r}, which is not a stage of this study")
         return 2
-    # A measure or report is done or due by what ran before it (a report is due again after they ran): it is
-    # judged when it could start, as the sequential runner judges it.
+    # A measure is done or due by what ran before it: it is judged when it could start, as the sequential runner
+    # judges it.
     done = {s.name for s in stages if s.kind not in BARRIERS and stage_done(s, scale)}
     for s in stages:
         if s.name in done:

@@ -236,11 +236,13 @@ def judge(measured: dict) -> list[dict]:
         return None if t is None else dict(steps=t["curve_steps"], mean=t["curve_mean"], per_run=t["steady_per_run"])
 
     def hand_values(row):
+        """(c) of a row: its seeds' best's evolved values against the presets'."""
         evolved = values["evolved"].get(row) or {}
         return claims.claim_hand_values({n: v["best_per_seed"] for n, v in evolved.items()}, values["hand"]["skills"],
                                         values["hand"]["paper"])
 
     def three_enough(row, *others):
+        """(d) of a row: its best's expressed experts, its final best against 3 experts' and 6 all expressed."""
         kept = experts.get(row)
         return claims.claim_three_enough(kept[-1]["best_per_seed"] if kept else None, final(row), *map(final, others))
 

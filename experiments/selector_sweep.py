@@ -145,6 +145,7 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     return sweep(argv) if "sweep" in argv else SWEEP.main(argv)
 
+
 #: The studies of this module (python -m experiments finds them); its stage draws its figure, so no report of its own.
 STUDIES = (dataclasses.replace(SWEEP.study(__name__.rsplit(".", 1)[-1]), report_argv=None),)
 

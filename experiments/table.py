@@ -102,8 +102,8 @@ class Measure:
     """A measure: ``python -m MODULE RUN --out OUT ARGS`` (RUN a row's evolution, the run a Row of the measure's own
     finds by its key (a run another study made, not a row of this table), a folder, or none: ``run=""``); OUT is
     ``out``, or ``TABLE_OUT/measures/NAME``. An argument ``{ROW}`` is the evolution folder of the table's row ROW:
-    a measure of several runs names them so, and waits for each. Done as its ``kind`` of stage is done:
-    a "measure" when OUT holds result.json, a "test" (``imrl_jax.learning_test`` with options of its own, such
+    a measure of several runs names them so, and waits for each (an argument in braces must name an evolved row).
+    Done as its ``kind`` of stage is done: a "measure" when OUT holds result.json, a "test" (``imrl_jax.learning_test`` with options of its own, such
     as another task set) its steady.json, a "baseline" (``imrl_jax.baselines``) its summary.json."""
 
     name: str
@@ -314,7 +314,8 @@ class Table:
         measure = next((m for m in self.measures if stage.name == f"{m.kind} {m.name}"), None)
         if measure is not None:
             run, evolutions = self.measured_run(measure), self.evolutions()
-            args = [evolutions[a[1:-1]] if a[1:-1] in measure.rows_named() else a for a in measure.args]
+            named = set(measure.rows_named())
+            args = [evolutions[a[1:-1]] if a[:1] + a[-1:] == "{}" and a[1:-1] in named else a for a in measure.args]
             return [sys.executable, "-m", measure.module, *([run] if run else []), "--out", stage.out_dir,
                     *args], None
         row = next(r for r in self.rows if r.name == stage.variant)

@@ -73,6 +73,9 @@ def read_measure(out: str, name: str) -> list[dict] | None:
 def best_rates(rows: list[dict], option: str, trace_lambda: float | None = None) -> dict:
     """The swept row of ``option`` with the highest mean fitness (at ``trace_lambda`` only, if given)."""
     mine = [r for r in rows if r["option"] == option and (trace_lambda is None or r["trace_lambda"] == trace_lambda)]
+    if not mine:
+        raise UsageError(f"rates: no swept point of option {option}" + (f" at trace_lambda {trace_lambda}"
+                                                                         if trace_lambda is not None else ""))
     return max(mine, key=lambda r: r["fitness"])
 
 
@@ -228,6 +231,7 @@ def report_table(rows: dict) -> str:
                                          f"{short[c[k]['verdict']]}: {c[k]['measured'].split(';')[0]}" for c in claims))
               for k in range(1, 8)]
     return "\n".join(lines)
+
 
 # ----------------------------------------------------------------------------- the measurements
 

@@ -196,7 +196,6 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
                           command, evolved, log)
 
 
-
 def _test_runs(config: Config, genomes: np.ndarray, out_dir: str, num_tests: int, steady_steps: int, num_chunks: int,
                seed: int, quiet: bool, source: str, command: str, evolved: dict | None, log: str | None) -> dict:
     """:func:`run` once the directory is checked and locked."""
@@ -261,7 +260,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         def test(run_dir: str, out_dir: str) -> dict:  # a run directory, or a sweep's point, into out_dir
             return _test(args, *evolved_genomes(args, run_dir, sets), sets, command, out_dir)
 
-        def config_of(run_dir: str) -> Config:  # what a point's test computes (a test made before is checked)
+        def config_of(run_dir: str) -> Config:
+            """What a point's test computes (a test of it made before is checked against it)."""
             base, _, source, _, _ = evolved_genomes(args, run_dir, sets)
             return tested_config(args, base, source)[0]
 

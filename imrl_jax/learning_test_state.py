@@ -86,8 +86,8 @@ def start_partial(partial: str, stamp: str, command: str, key: str | None = None
     """Make ``partial`` and record in its ``spec.json`` the fingerprint (and command) of the runs it will keep, and
     a test from scratch's key (``runspec.test_key``: the studies find it by that while it runs)."""
     os.makedirs(partial, exist_ok=True)
-    write_atomic(os.path.join(partial, "spec.json"),
-                 json.dumps(dict(fingerprint=stamp, command=command, **({} if key is None else dict(key=key)))).encode())
+    spec = dict(fingerprint=stamp, command=command, **({} if key is None else dict(key=key)))
+    write_atomic(os.path.join(partial, "spec.json"), json.dumps(spec).encode())
 
 
 def keep_run(partial: str, run: int, reaches: np.ndarray, selections: np.ndarray) -> None:

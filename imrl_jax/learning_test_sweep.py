@@ -4,7 +4,8 @@ A sweep's directory (``evolve --sweep``: each point a run directory ``SWEEP/KEY`
 point into ``OUT/KEY``, each point as the test of its run directory alone would be (the points share one
 program: they differ only in dynamic values). A point tested before (its ``steady.json``) is checked against
 the settings and the model asked (``--set`` included) and passed over, so that the same command after an
-interruption goes on with the next point; once every point is tested, ``OUT/sweep_tests.json`` holds each point's settings and steady state.
+interruption goes on with the next point; once every point is tested, ``OUT/sweep_tests.json`` holds each
+point's settings and steady state.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import os
 from typing import Callable
 
 from imrl_jax.cli import UsageError
-from imrl_jax.config import Config
+from imrl_jax.config import Config, ConfigError
 from imrl_jax.rundir import load_run, read_json, recorded_points, write_atomic
 
 #: What the test of a sweep writes beside its points' tests once all are done.
@@ -46,10 +47,14 @@ def check_tested_before(args, run_dir: str, out_dir: str, config: Config) -> Non
     steady = read_json(os.path.join(out_dir, "steady.json"), "")
     asked = dict(num_best=args.best, num_tests=args.tests, task_steps=args.task_steps, steady_steps=args.steady_steps,
                  seed=args.seed, generations_done=load_run(run_dir).generation)
-    differ = [f"{name} {steady.get(name)} (asked {value})" for name, value in asked.items() if steady.get(name) != value]
-    tested = Config.from_dict(steady["config"]) if steady.get("config") else None
-    differ += [f"{name} {getattr(tested, name)} (asked {getattr(config, name)})"
-               for name in ([] if tested is None else tested.model_differences(config))]
+    differ = [f"{name} {steady.get(name)} (asked {value})" for name, value in asked.items()
+              if steady.get(name) != value]
+    try:
+        tested = Config.from_dict(steady["config"]) if steady.get("config") else None
+    except ConfigError as error:
+        raise UsageError(f"--out: {os.path.join(out_dir, 'steady.json')} is unreadable ({error})") from None
+    differ += [f"{name} {getattr(tested, name)} (asked {getattr(config, name)})"  # a size said once, above
+               for name in ([] if tested is None else tested.model_differences(config)) if name not in asked]
     if differ:
         raise UsageError(f"--out: {out_dir} holds a test of other settings: {', '.join(differ)}; choose another --out")
 

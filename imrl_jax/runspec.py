@@ -142,8 +142,8 @@ def test_key(config: Config, sizes: dict) -> str:
 def test_index(root: str) -> dict[str, str]:
     """``{key: directory relative to root}`` of every learning test from scratch under ``root``: finished (a
     ``steady.json`` of a condition that is not evolved) or begun (its ``partial/spec.json`` records its key, so
-    that a second study asking for it goes on with it); two directories of one test, or an unreadable one, are
-    an error (RunDirError naming the file)."""
+    that a second study asking for it goes on with it, once the process testing it, which holds its lock, has
+    stopped); two directories of one test, or an unreadable one, are an error (RunDirError naming the file)."""
     from imrl_jax import conditions
 
     keys: dict[str, str] = {}
@@ -163,7 +163,8 @@ def test_index(root: str) -> dict[str, str]:
                                     f"{key})")
         keys[key] = os.path.relpath(folder, root)
     for folder in _walk(root, os.path.join("partial", "spec.json")):
-        key = read_json(os.path.join(folder, "partial", "spec.json"), "").get("key")
+        spec = read_json(os.path.join(folder, "partial", "spec.json"), "")
+        key = spec.get("key") if isinstance(spec, dict) else None  # begun before tests recorded their key: not found
         if key is not None and os.path.relpath(folder, root) not in keys.values():
             if key in keys:
                 raise DuplicateRunError(f"{folder} and {os.path.join(root, keys[key])} hold the same learning test "

@@ -293,14 +293,14 @@ def reference_life(config, key, genome) -> dict:
     return reference.live_with(config, genome, lifetime.life_draws(key, config, np.float64))
 
 
-# ----------------------------------------------------------------------------- made-up results, as the reports read them
+# ------------------------------------------------------------------------ made-up results, as the reports read them
 
 
 def write_evolution(folder, best, config: dict | None = None, columns: dict | None = None, seeds=None) -> None:
     """An evolution as the reports read it: history.csv with ``best[generation][seed]`` (of ``seeds``, else 0, 1, ...)
     and ``columns`` (name: one value, or [generation][seed]), and config.json holding ``config`` (its whole JSON) if
     given."""
-    os.makedirs(folder, exist_ok=True)
+    os.makedirs(folder)  # a folder written twice is a mistake of the test
     columns = columns or {}
     cell = lambda v, g, s: v if np.ndim(v) == 0 else v[g][s]  # noqa: E731
     with open(os.path.join(folder, "history.csv"), "w") as f:
@@ -316,7 +316,7 @@ def write_evolution(folder, best, config: dict | None = None, columns: dict | No
 def write_learning_test(folder, per_run, curve=(0.1, 0.3), bin_steps: int = 1000, **fields) -> None:
     """A finished learning test as the reports read it: steady.json (the steady state ``per_run``, its mean and sd
     over runs, ``fields``) and curve.csv (the mean curve ``curve``, a bin of ``bin_steps`` each)."""
-    os.makedirs(folder, exist_ok=True)
+    os.makedirs(folder)  # a folder written twice is a mistake of the test
     with open(os.path.join(folder, "steady.json"), "w") as f:
         json.dump(dict(dict(steady_per_run=list(per_run), steady_mean=float(np.mean(per_run)),
                             steady_sd=float(np.std(per_run)), num_runs=len(per_run)), **fields), f)

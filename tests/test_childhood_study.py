@@ -34,6 +34,17 @@ def test_every_committed_run_and_measure_is_found(in_root):
                                                          ("paper", "EE-LS"), ("extension", "EE-LS"))]
     rows = study.read_rows(measures["evolved_cpu"].out_dir)  # the committed CSV its result.json names
     assert len(rows) == 200 and rows[0]["run"] == "LE-LS" and rows[0]["fitness"] == pytest.approx(0.2068)
+    # the heritability measure names four of the study's rows ({ROW}): it waits for them and reads their runs
+    heritable = ("LE-LS-skills", "LE-LS-extension", "LE-LS-skills-no-speed-bias", "LE-LS-skills-2lives")
+    assert measures["heritability"].needs == tuple(f"evolve {name}" for name in heritable)
+    command = study.TABLE.stage_command(measures["heritability"])[0]
+    assert command[command.index("heritability") + 1:] == [evolutions[name] for name in heritable]
+    # the committed measure's rows are each run's best, seed by seed and rank by rank, as best_of_run gives them
+    committed = [r for r in study.read_rows(measures["heritability"].out_dir) if r["run"] == "LE-LS-skills"]
+    _, genomes, best = study.best_of_run(evolutions["LE-LS-skills"], 10)
+    assert len(genomes) == len(best) == len(committed) == 30
+    assert [(b["seed"], b["rank"]) for b in best] == [(s, k) for s in range(3) for k in range(1, 11)]
+    assert [b["fitness"] for b in best] == pytest.approx([r["fitness"] for r in committed], abs=5e-5)
 
 
 def test_the_report_regenerates_the_evolutions_table(in_root, tmp_path):

@@ -95,12 +95,13 @@ def test_what_waits_for_what():
     stages = [Stage("circles", "measure", "", "EE-ES", "c", 1.0), Stage("evolve a LE-LS", "evolve", "a", "LE-LS", "e1", 1),
               Stage("evolve a EE-LS", "evolve", "a", "EE-LS", "e2", 1), Stage("test b LE-LS", "test", "b", "LE-LS", "t", 1),
               Stage("test SLE", "test", "a", "SLE", "s", 1), Stage("baseline", "baseline", "", "PPO", "b", 1),
-              Stage("report", "measure", "", "", "r", 1), Stage("odd", "test", "a", "EE-LS", "o", 1, needs=("circles",))]
+              Stage("probe", "measure", "", "", "r", 1),
+              Stage("odd", "test", "a", "EE-LS", "o", 1, needs=("circles",))]
     assert X.needs(stages) == {
         "circles": (), "evolve a LE-LS": ("circles",), "evolve a EE-LS": ("circles",),
         # a test waits for the evolutions of its condition planned before it, whatever their variant
         "test b LE-LS": ("circles", "evolve a LE-LS"), "test SLE": ("circles",), "baseline": ("circles",),
-        "report": ("circles", "evolve a LE-LS", "evolve a EE-LS", "test b LE-LS", "test SLE", "baseline"),
+        "probe": ("circles", "evolve a LE-LS", "evolve a EE-LS", "test b LE-LS", "test SLE", "baseline"),
         "odd": ("circles",)}
 
 
@@ -202,10 +203,11 @@ def test_a_submitit_job_gives_its_commands_exit_code_and_logs_as_it_runs(tmp_pat
 
 
 def test_a_measure_is_judged_when_it_could_start(tmp_path):
-    """A measure done before is due again once a stage it follows has run and undone it."""
+    """A measure is judged done or due when it could start, after the stages before it ran, not when the fanned
+    runner begins (here the stand-in done-ness undoes it once a stage before it runs)."""
     stages = [Stage("evolve a", "evolve", "v", "LE-LS", str(tmp_path / "a"), 1.0),
-              Stage("report", "measure", "", "", str(tmp_path), 1.0)]
-    finished = {"report"}  # the measure was done; the evolution was not
+              Stage("probe", "measure", "", "", str(tmp_path), 1.0)]
+    finished = {"probe"}  # the measure was done; the evolution was not
     ran = []
 
     def command_for(stage):
@@ -214,12 +216,12 @@ def test_a_measure_is_judged_when_it_could_start(tmp_path):
 
     def record(stage, command, seconds):
         finished.add(stage.name)
-        if stage.name != "report":
-            finished.discard("report")  # a stage it follows ran again: it is due
+        if stage.name != "probe":
+            finished.discard("probe")  # what it measured changed: it is due
 
     code = X.run_fanned(stages, {}, str(tmp_path / "manifest.json"), command_for, 2, X.Local(),
                         lambda s, scale: s.name in finished, record, poll_s=0.05, log=lambda line: None)
-    assert code == 0 and ran == ["evolve a", "report"]
+    assert code == 0 and ran == ["evolve a", "probe"]
     ran.clear()
     assert X.run_fanned(stages, {}, str(tmp_path / "manifest.json"), command_for, 2, X.Local(),
                         lambda s, scale: s.name in finished, record, poll_s=0.05, log=lambda line: None) == 0

@@ -12,7 +12,6 @@ from imrl_jax.config import PRESETS, make_config
 from imrl_jax.runspec import DuplicateRunError, RunSpec
 
 
-
 def test_every_committed_run_keeps_its_recorded_key_and_no_two_share_one():
     """Each recorded evolution keeps its key (run_keys.json), and every run under the results, recorded or newer,
     maps to one key: index() refuses two directories of one run."""

@@ -12,7 +12,6 @@ from experiments.table import Measure, Row, Table, evolution_spec, learning_test
 from imrl_jax import runspec
 
 
-
 def test_a_row_is_exactly_what_its_command_computes():
     """The goals study's EE-LS-T row has the key of the run its command made (config.json as written)."""
     committed = runspec.RunSpec.from_run_dir(os.path.join(RESULTS, "goals", "EE-LS-T", "evolve"))

@@ -10,7 +10,6 @@ from experiments import timescale as study
 from experiments.table import evolution_spec
 
 
-
 def _write(out, name, rows):
     os.makedirs(os.path.join(out, name))
     with open(os.path.join(out, name, "result.json"), "w") as f:
