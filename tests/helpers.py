@@ -334,3 +334,18 @@ def relocated(table, tmp_path, document: str | None = None):
     copy.write_text(open(os.path.join(ROOT, table.document)).read() if document is None else document)
     results = tmp_path / "results"
     return dataclasses.replace(table, results=str(results), out=str(results / table.name), document=str(copy))
+
+
+def stop_after_first(monkeypatch, module, name: str):
+    """``module.name`` patched to run once, then raise KeyboardInterrupt (a kill between two runs of a test): the
+    real function and the list its calls are counted in."""
+    real, calls = getattr(module, name), []
+
+    def stopped_after_one(*args, **kwargs):
+        if calls:
+            raise KeyboardInterrupt
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(module, name, stopped_after_one)
+    return real, calls

@@ -7,6 +7,7 @@ import socket
 import jax
 import numpy as np
 import pytest
+from helpers import stop_after_first
 
 from imrl_jax import cli, conditions, learning_test, learning_test_state, plotting, rundir, steady_state
 from imrl_jax.ga import init_population
@@ -128,15 +129,7 @@ def test_an_interrupted_test_goes_on_from_its_first_unfinished_run(tiny_run, tmp
     assert learning_test.main([*argv, "--out", str(whole)]) == 0
     num_runs = len(learning_test.load_run(tiny_run, 2)[1])
     assert num_runs >= 2
-    real, calls = learning_test.run_tests, []
-
-    def stopped_after_one(*args, **kwargs):
-        if calls:
-            raise KeyboardInterrupt
-        calls.append(1)
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(learning_test, "run_tests", stopped_after_one)
+    real, calls = stop_after_first(monkeypatch, learning_test, "run_tests")
     with pytest.raises(KeyboardInterrupt):
         learning_test.main([*argv, "--out", str(cut)])
     assert sorted(os.listdir(cut / learning_test.PARTIAL)) == ["run_000.npz", "spec.json"]

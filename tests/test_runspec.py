@@ -5,7 +5,7 @@ import os
 import shutil
 
 import pytest
-from helpers import RESULTS
+from helpers import RESULTS, stop_after_first
 
 from imrl_jax import conditions, runspec
 from imrl_jax.config import PRESETS, make_config
@@ -126,15 +126,7 @@ def test_a_test_from_scratch_is_found_by_its_key_while_it_runs(tmp_path, monkeyp
 
     argv = ["--cond", "SLE", "--runs", "2", "--best", "1", "--tests", "1", "--task-steps", "200", "--bins", "2",
             "--steady-steps", "100", "--chunks", "1", "--quiet", "--out", str(tmp_path / "results" / "sle")]
-    real, calls = learning_test.run_tests, []
-
-    def stopped_after_one(*args, **kwargs):
-        if calls:
-            raise KeyboardInterrupt
-        calls.append(1)
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(learning_test, "run_tests", stopped_after_one)
+    real, calls = stop_after_first(monkeypatch, learning_test, "run_tests")
     with pytest.raises(KeyboardInterrupt):
         learning_test.main(argv)
     begun = runspec.test_index(str(tmp_path / "results"))
