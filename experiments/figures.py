@@ -94,7 +94,7 @@ def fig3(evolutions: dict, tests: dict, steady: dict, variant: str, title: str):
     for ax, missing in ((a, not evolutions), (b, not any(k in FIG3B for k in tests)),
                         (c, not any((variant, k) in steady for k in TESTED))):
         if missing:  # an unfinished run: say so rather than leave a blank panel
-            ax.text(0.5, 0.5, "not run yet", transform=ax.transAxes, ha="center", va="center", color="0.4")
+            not_run(ax)
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     return fig
@@ -212,3 +212,18 @@ def fig_baselines(baselines: dict, tests: dict, title: str):
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
     return fig
+
+
+def not_run(ax) -> None:
+    """Say "not run yet" on a panel whose stage has not finished, rather than leave it blank."""
+    ax.text(0.5, 0.5, "not run yet", transform=ax.transAxes, ha="center", va="center", color="0.4")
+
+
+def finish(fig, path: str) -> str:
+    """Mark each empty panel as not run yet (:func:`not_run`), lay the figure out and save it."""
+    from imrl_jax.plotting import save
+
+    for ax in (ax for ax in fig.axes if not ax.lines and not ax.patches):
+        not_run(ax)
+    fig.tight_layout()
+    return save(fig, path)

@@ -22,6 +22,7 @@ import numpy as np
 # NUM_BEST: the junction probe drives claim 7's number of each seed's fittest genomes, so that a run shared with
 # the claims study (LE-LS-6) keeps one probe.json
 from experiments.claims import NUM_BEST
+from experiments.figures import not_run
 from experiments.markdown import head, line, mean_sd
 from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN
 from experiments.table import Row, Table
@@ -445,7 +446,7 @@ def figure(measured: dict, question: str, path: str) -> str:
         if drawn and ax.get_legend() is None:
             ax.legend(fontsize=6.5)
         elif not drawn:  # an unfinished study: say so rather than leave a blank panel
-            ax.text(0.5, 0.5, NOT_RUN, transform=ax.transAxes, ha="center", va="center", color="0.4")
+            not_run(ax)
     fig.suptitle(textwrap.fill(f"({question}) {FUTURE[question]} (dashed or hollow: under faithful)",
                                int(14 * fig.get_figwidth())), fontsize=9)
     fig.tight_layout()

@@ -18,6 +18,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from experiments.figures import finish
 from experiments.reproduce import test_command, test_cost
 from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN
 from experiments.table import Measure, Row, Table
@@ -250,17 +251,6 @@ TABLE = NovelTasksTable("novel-tasks", "docs/NOVEL_TASKS.md", 2, out=OUT, scale=
 all_stages, main = TABLE.all_stages, TABLE.main
 #: The studies of this module (python -m experiments finds them).
 STUDIES = (TABLE.study(__name__.rsplit(".", 1)[-1]),)
-
-
-# shared candidate: the studies' figures mark a panel whose stage has not finished alike (figures.py, search.py).
-def finish(fig, path: str) -> str:
-    """Say "not run yet" on each empty panel (an unfinished stage) rather than leave it blank; lay out and save."""
-    from imrl_jax.plotting import save
-
-    for ax in (ax for ax in fig.axes if not ax.lines and not ax.patches):
-        ax.text(0.5, 0.5, "not run yet", transform=ax.transAxes, ha="center", va="center", color="0.4")
-    fig.tight_layout()
-    return save(fig, path)
 
 
 if __name__ == "__main__":

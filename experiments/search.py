@@ -21,6 +21,7 @@ import sys
 
 import numpy as np
 
+from experiments.figures import not_run
 from experiments.study import RESULTS, SCALES, SCREEN
 from experiments.table import Row, Table
 from experiments.markdown import head, line, mean_sd
@@ -203,7 +204,7 @@ class SearchTable(Table):
             style_axis(ax, f"{condition} under {PRESET}, by search strategy", "generation",
                        "" if i else "best fitness (best of a generation's lives)")
             if not drawn:  # an unfinished stage: say so rather than leave a blank panel
-                ax.text(0.5, 0.5, "not run yet", transform=ax.transAxes, ha="center", va="center", color="0.4")
+                not_run(ax)
                 continue
             banded = set()
             for strategy, m in drawn:
