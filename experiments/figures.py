@@ -24,7 +24,8 @@ def _draw_curves(ax, series: dict, title: str, xlabel: str, ylabel: str, integer
     else:
         ax.set_xlim(left=0)
     style_axis(ax, title, xlabel, ylabel)
-    ax.legend(fontsize=7)
+    if ax.lines:  # an empty panel (a stage not run yet) has nothing to name
+        ax.legend(fontsize=7)
 
 
 def _fitness_series(evolutions: dict) -> dict:
