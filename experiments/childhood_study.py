@@ -26,7 +26,7 @@ import time
 
 import numpy as np
 
-from experiments.study import REPRODUCTION, RESULTS, SCALES
+from experiments.study import RESULTS, SCALES
 from experiments.table import Measure, Row, Table
 from imrl_jax.cli import HelpFormatter, Parser, UsageError, exit_codes
 from imrl_jax.config import ADULT_SELECTOR, CHILDHOOD_SELECTOR_REWARDS, CHILDHOOD_WALLS
@@ -408,8 +408,8 @@ TABLE = ChildhoodTable("childhood", "docs/CHILDHOOD.md", 10, out=OUT, scale=EVOL
     Measure("hand_fast", "", ("hand", "--lengths", "150000", "--walls", "respawn,clamp", "--rewards", "surprise",
                               "--rules", "paper", "--speed-bias", "4"), MODULE),
     Measure("speed", "", ("speed", "--biases", "0,1,2,3,4,6", "--lives", "6"), MODULE),
-    # the best of the cpu reproduction's runs
-    Measure("evolved_cpu", "", ("evolved", *(os.path.join(RESULTS, "cpu", variant, "evolve", condition)
+    # the best of the cpu reproduction's runs, found by their keys
+    Measure("evolved_cpu", "", ("evolved", *(Row(f"cpu {variant} {condition}", condition, variant, scale=SCALES["cpu"])
                                             for condition in ("LE-LS", "EE-LS") for variant in ("paper", "extension"))),
             MODULE),
     *(Measure(probed, row, ("evolved",), MODULE) for row, (*_, probed, _) in EVOLUTIONS.items()),
@@ -417,7 +417,8 @@ TABLE = ChildhoodTable("childhood", "docs/CHILDHOOD.md", 10, out=OUT, scale=EVOL
     # the study's own runs, named as rows: the measure waits for their evolutions
     Measure("heritability", "", ("heritability", *(f"{{{row}}}" for row in (
         "LE-LS-skills", "LE-LS-extension", "LE-LS-skills-no-speed-bias", "LE-LS-skills-2lives"))), MODULE),
-    Measure("evolved_paper_scale", "", ("evolved", os.path.join(REPRODUCTION, "skills", "evolve", "LE-LS")), MODULE),
+    Measure("evolved_paper_scale", "", ("evolved", Row("skills LE-LS", "LE-LS", "skills", scale=SCALES["paper"])),
+            MODULE),
 ))
 all_stages = TABLE.all_stages
 #: The studies of this module (python -m experiments finds them).

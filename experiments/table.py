@@ -102,13 +102,14 @@ class Measure:
     """A measure: ``python -m MODULE RUN --out OUT ARGS`` (RUN a row's evolution, the run a Row of the measure's own
     finds by its key (a run another study made, not a row of this table), a folder, or none: ``run=""``); OUT is
     ``out``, or ``TABLE_OUT/measures/NAME``. An argument ``{ROW}`` is the evolution folder of the table's row ROW:
-    a measure of several runs names them so, and waits for each (an argument in braces must name an evolved row).
+    a measure of several runs names them so, and waits for each (an argument in braces must name an evolved row);
+    an argument that is a Row of the measure's own is the run its key finds (another study's runs, read by key).
     Done as its ``kind`` of stage is done: a "measure" when OUT holds result.json, a "test" (``imrl_jax.learning_test`` with options of its own, such
     as another task set) its steady.json, a "baseline" (``imrl_jax.baselines``) its summary.json."""
 
     name: str
     run: "str | Row"  # a row's name, a Row of its own (its run found by key), a run directory, or "" (none)
-    args: tuple[str, ...] = ()
+    args: tuple["str | Row", ...] = ()
     module: str = "imrl_jax.landscape_run"
     cost: float = 0.0  # lane-steps, estimated
     out: str | None = None  # its folder within the table's (None: measures/NAME)
@@ -116,7 +117,7 @@ class Measure:
 
     def rows_named(self) -> list[str]:
         """The rows its arguments name as ``{ROW}``."""
-        return [a[1:-1] for a in self.args if len(a) > 2 and a[0] == "{" and a[-1] == "}"]
+        return [a[1:-1] for a in self.args if isinstance(a, str) and len(a) > 2 and a[0] == "{" and a[-1] == "}"]
 
 
 class Sweep(NamedTuple):
@@ -193,9 +194,12 @@ class Table:
 
     def measured_run(self, measure: Measure) -> str:
         """The folder a measure reads: its row's run, or its own Row's found by key, or the folder it names."""
-        if isinstance(measure.run, Row):
-            return dataclasses.replace(self, rows=(measure.run,), measures=()).evolutions()[measure.run.name] or ""
-        return self.evolutions().get(measure.run) or measure.run
+        return self.found_run(measure.run) if isinstance(measure.run, Row) else (
+            self.evolutions().get(measure.run) or measure.run)
+
+    def found_run(self, row: Row) -> str:
+        """The evolution folder a row that is not the table's finds by its key (or where it would be made)."""
+        return dataclasses.replace(self, rows=(row,), measures=()).evolutions()[row.name] or ""
 
     def scale_of(self, row: Row) -> dict:
         """The row's sizes: its own, or the table's."""
@@ -315,7 +319,8 @@ class Table:
         if measure is not None:
             run, evolutions = self.measured_run(measure), self.evolutions()
             named = set(measure.rows_named())
-            args = [evolutions[a[1:-1]] if a[:1] + a[-1:] == "{}" and a[1:-1] in named else a for a in measure.args]
+            args = [self.found_run(a) if isinstance(a, Row) else evolutions[a[1:-1]] if a[:1] + a[-1:] == "{}"
+                    and a[1:-1] in named else a for a in measure.args]
             return [sys.executable, "-m", measure.module, *([run] if run else []), "--out", stage.out_dir,
                     *args], None
         row = next(r for r in self.rows if r.name == stage.variant)

@@ -6,7 +6,7 @@ import pytest
 
 from helpers import RESULTS
 
-from experiments.study import SCREEN
+from experiments.study import SCALES, SCREEN
 from experiments.reproduce import stage_done
 from experiments.table import Measure, Row, Table, evolution_spec, learning_test_dir
 from imrl_jax import runspec
@@ -226,13 +226,20 @@ def test_two_folders_of_one_run_are_one_line_and_exit_2(tmp_path, capsys):
 
 def test_a_measure_of_a_run_of_its_own_finds_it_by_key(tmp_path):
     """A measure on a run that is no row of the table (the future-work study's EV-LS) finds it by its key and waits
-    for nothing; a folder given by hand is read as it is."""
+    for nothing, as an argument that is such a Row does (the childhood study's probes of the reproductions' runs); a
+    folder given by hand is read as it is."""
     table = Table("t", "docs/T.md", 99, scale=SCREEN, out=str(tmp_path), results=RESULTS, rows=(),
-                  measures=(Measure("ev", Row("EV-LS", "EV-LS", "skills")), Measure("there", "some/folder")))
+                  measures=(Measure("ev", Row("EV-LS", "EV-LS", "skills")), Measure("there", "some/folder"),
+                            Measure("args", "", ("evolved", Row("EV-LS", "EV-LS", "skills"),
+                                                 Row("cpu", "EE-LS", "paper", scale=SCALES["cpu"]), "--best", "2"))))
     stages, _ = table.all_stages()
-    assert [(s.name, s.condition, s.needs) for s in stages] == [("measure ev", "EV-LS", ()), ("measure there", "", ())]
+    assert [(s.name, s.condition, s.needs) for s in stages] == [("measure ev", "EV-LS", ()), ("measure there", "", ()),
+                                                                ("measure args", "", ())]
     assert table.stage_command(stages[0])[0][3] == os.path.join(RESULTS, "future_work", "EV-LS", "evolve")
     assert table.stage_command(stages[1])[0][3] == "some/folder"
+    assert table.stage_command(stages[2])[0][5:] == ["evolved", os.path.join(RESULTS, "future_work", "EV-LS", "evolve"),
+                                                     os.path.join(RESULTS, "cpu", "paper", "evolve", "EE-LS"), "--best",
+                                                     "2"]
 
 
 def test_a_measure_of_several_rows_runs_names_them_and_waits_for_each(tmp_path):
