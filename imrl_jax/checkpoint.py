@@ -129,14 +129,36 @@ def _closed_loop(error: BaseException | None) -> bool:
     return isinstance(error, RuntimeError) and str(error) == "Event loop is closed"
 
 
-def _orbax_read(unraisable) -> bool:
-    """Whether an unraisable error is one of orbax's reads of a checkpoint that failed (a coroutine left unawaited)."""
-    trace = unraisable.exc_traceback
+def _through_orbax(trace) -> bool:
+    """Whether a traceback passes through orbax's code."""
     while trace is not None:
         if f"{os.sep}orbax{os.sep}" in trace.tb_frame.f_code.co_filename:
             return True
         trace = trace.tb_next
     return False
+
+
+def _orbax_read(unraisable) -> bool:
+    """Whether an unraisable error is one of orbax's reads of a checkpoint that failed (a coroutine left unawaited)."""
+    return _through_orbax(unraisable.exc_traceback)
+
+
+class _UnretrievedReads(logging.Filter):
+    """asyncio's report of a task of orbax's whose error no one retrieved (a read of a damaged checkpoint, whose
+    restore failed and was reported in one line): dropped, not printed as a traceback of some 80 lines."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        error = record.exc_info[1] if record.exc_info else None
+        return not (str(record.msg).startswith("Task exception was never retrieved") and error is not None
+                    and _through_orbax(error.__traceback__))
+
+
+def _drop_unretrieved_reads() -> None:
+    """From now on, asyncio's logger drops the unretrieved errors of orbax's tasks (:class:`_UnretrievedReads`): such
+    a task is collected whenever the garbage collector comes to it, during the restore or long after."""
+    logger = logging.getLogger("asyncio")
+    if not any(isinstance(f, _UnretrievedReads) for f in logger.filters):
+        logger.addFilter(_UnretrievedReads())
 
 
 def _silence_failed_reads() -> None:
@@ -254,6 +276,7 @@ class Checkpointer:
         """
         ocp = _ocp()
         failed = []
+        _drop_unretrieved_reads()
         with _quiet_absl(), _quiet_closed_loops(reads=True):
             found = self._restore_latest(ocp, template, lambda text: (failed.append(text), warn(text)), at_most)
         if failed:  # after the block, which puts back the hook it found

@@ -146,6 +146,41 @@ def test_a_fall_back_says_one_line_and_no_traceback(finished_run, tmp_path, dama
     _assert_same_outputs(out, finished_run)
 
 
+def test_asyncio_drops_the_unretrieved_errors_of_orbax_reads_and_no_other(caplog):
+    """A read of a damaged checkpoint leaves an orbax task whose error no one retrieves; when it is collected, asyncio
+    logged it as an 80-line traceback beside the one-line warning (seen in the test above, now and then). The filter
+    drops exactly those: an error raised in orbax's code, not one of ours; it is installed once."""
+    import logging
+
+    from imrl_jax import checkpoint
+
+    namespace = {}
+    exec(compile("def read():\n    raise ValueError('truncated shard')\n",
+                 os.path.join(os.sep, "site-packages", "orbax", "checkpoint", "serialization.py"), "exec"), namespace)
+    errors = []
+    for raising in (namespace["read"], lambda: int("not a number")):
+        try:
+            raising()
+        except ValueError as error:
+            errors.append(error)
+    logger = logging.getLogger("asyncio")
+    checkpoint._drop_unretrieved_reads()
+    checkpoint._drop_unretrieved_reads()
+    installed = [f for f in logger.filters if isinstance(f, checkpoint._UnretrievedReads)]
+    try:
+        assert len(installed) == 1
+        with caplog.at_level(logging.ERROR, logger="asyncio"):
+            for error in errors:
+                logger.error("Task exception was never retrieved\nfuture: <Task finished>",
+                             exc_info=(type(error), error, error.__traceback__))
+            logger.error("another asyncio error", exc_info=(type(errors[0]), errors[0], errors[0].__traceback__))
+        assert [(r.getMessage().split("\n")[0], r.exc_info[1]) for r in caplog.records] == [
+            ("Task exception was never retrieved", errors[1]), ("another asyncio error", errors[0])]
+    finally:
+        for f in installed:
+            logger.removeFilter(f)
+
+
 @pytest.mark.slow  # 50 s; the default suite extends a finished run in tests/test_strategies.py (the same path)
 def test_finished_run_extended_is_bitwise_an_uninterrupted_longer_run(tmp_path, capsys):
     import json
