@@ -76,6 +76,8 @@ DEFAULT_RATE = 1.2e6
 PUBLISHED = "resume_checkpoint"
 #: How often the runner reads a running stage's events.
 POLL_SECONDS = 0.5
+#: How often the runner looks again at a stage's folder that another command is writing.
+LOCK_POLL_SECONDS = 10.0
 
 
 class Stage(NamedTuple):
@@ -140,6 +142,22 @@ def stage_done(stage: Stage, scale: dict) -> bool:
     if stage.kind == "baseline":  # python -m imrl_jax.baselines writes its summary last
         return os.path.exists(os.path.join(stage.out_dir, "summary.json"))
     return False
+
+
+def wait_unlocked(stage: Stage, scale: dict, say=print) -> bool:
+    """Wait while another process of this host writes the stage's folder (another study's command running the same
+    run or test: its lock); whether the stage is done by then. A holder on another host is left to the stage's
+    command, which refuses in one line."""
+    from imrl_jax.rundir import LOCK, holder_alive, read_lock
+
+    told = False
+    while (holder := read_lock(os.path.join(stage.out_dir, LOCK))) is not None and holder_alive(holder):
+        if not told:
+            say(f"== {stage.name}: {stage.out_dir} is being written by pid {holder.pid} (another command): waiting "
+                f"for it to end", flush=True)
+            told = True
+        time.sleep(LOCK_POLL_SECONDS)
+    return stage_done(stage, scale)
 
 
 def fraction_done(stage: Stage, scale: dict) -> float:
@@ -340,6 +358,9 @@ def run_stages(stages: list[Stage], scale: dict, manifest: dict, manifest_path: 
                 print(f"== [{index + 1}/{len(stages)}] {stage.name}: done ({stage.out_dir})")
                 if stage.kind == "evolve":  # its last checkpoint stays published: a clone can extend the run
                     publish_checkpoint(stage.out_dir)
+                continue
+            if wait_unlocked(stage, scale):
+                print(f"== [{index + 1}/{len(stages)}] {stage.name}: done by another command ({stage.out_dir})")
                 continue
             if stage.kind == "evolve":
                 restored = restore_published(stage.out_dir)

@@ -8,7 +8,7 @@ import shutil
 import sys
 
 import pytest
-from helpers import evolve_args, outputs
+from helpers import evolve_args, outputs, write_lock
 
 from experiments import reproduce
 from experiments.reproduction import TABLES, ReproductionTable, variant_rows
@@ -210,3 +210,32 @@ def test_a_resumed_test_stage_counts_its_own_runs(tmp_path, capsys):
         assert json.load(f)["stages"]["a test of 10 runs"]["cost"] == 100
     # a cost recorded wrongly before (negative) is no measurement
     assert reproduce.measured_rate({"stages": {"a": dict(cost=300, seconds=3), "bad": dict(cost=-900, seconds=1)}}) == 100
+
+
+def test_a_stage_another_command_is_writing_is_waited_for(tmp_path, monkeypatch, capsys):
+    """Two studies' commands sharing a run: the second waits while the first's process holds the folder's lock, then
+    skips the stage it finished; a holder that died without finishing leaves the stage to run."""
+    import subprocess
+
+    monkeypatch.setattr(reproduce, "LOCK_POLL_SECONDS", 0.05)
+    out = tmp_path / "measure"
+    out.mkdir()
+    stage = reproduce.Stage("measure shared", "measure", "", "", str(out), 1.0)
+    manifest, path = {"stages": {}, "sizes": {}}, str(tmp_path / "manifest.json")
+    ran = []
+
+    def command_for(s):
+        ran.append(s.name)
+        return [sys.executable, "-c", "pass"], None
+
+    other = subprocess.Popen([sys.executable, "-c", "import os, time; time.sleep(1.0); "
+                              f"open({str(out / 'result.json')!r}, 'w').write('{{}}'); os.remove({str(out / '.lock')!r})"])
+    write_lock(str(out), other.pid)
+    assert reproduce.run_stages([stage], {}, manifest, path, command_for) == 0
+    other.wait()
+    printed = capsys.readouterr().out
+    assert ran == [] and f"is being written by pid {other.pid} (another command): waiting" in printed
+    assert "measure shared: done by another command" in printed
+    os.remove(out / "result.json")
+    write_lock(str(out), other.pid)  # its process has ended: the lock is stale and the stage runs
+    assert reproduce.run_stages([stage], {}, manifest, path, command_for) == 0 and ran == ["measure shared"]
