@@ -144,21 +144,32 @@ def _orbax_read(unraisable) -> bool:
 
 
 class _UnretrievedReads(logging.Filter):
-    """asyncio's report of a task of orbax's whose error no one retrieved (a read of a damaged checkpoint, whose
-    restore failed and was reported in one line): dropped, not printed as a traceback of some 80 lines."""
+    """asyncio's report of a task or future of orbax's whose error no one retrieved (a read of a damaged checkpoint,
+    whose restore failed and was reported in one line): dropped, not printed as a traceback of some 80 lines."""
 
     def filter(self, record: logging.LogRecord) -> bool:
         error = record.exc_info[1] if record.exc_info else None
-        return not (str(record.msg).startswith("Task exception was never retrieved") and error is not None
+        return not ("exception was never retrieved" in str(record.msg).split("\n", 1)[0] and error is not None
                     and _through_orbax(error.__traceback__))
 
 
 def _drop_unretrieved_reads() -> None:
-    """From now on, asyncio's logger drops the unretrieved errors of orbax's tasks (:class:`_UnretrievedReads`): such
-    a task is collected whenever the garbage collector comes to it, during the restore or long after."""
+    """From now on, drop the unretrieved errors of orbax's tasks and futures that asyncio's logger reports
+    (:class:`_UnretrievedReads`), and the errors raised in orbax's code that end a thread of its own: such a task is
+    collected whenever the garbage collector comes to it, during the restore or long after."""
     logger = logging.getLogger("asyncio")
     if not any(isinstance(f, _UnretrievedReads) for f in logger.filters):
         logger.addFilter(_UnretrievedReads())
+    hook = threading.excepthook
+    if getattr(hook, "drops_failed_reads", False):
+        return
+
+    def drop_failed_reads(args):
+        if not _through_orbax(args.exc_traceback):
+            hook(args)
+
+    drop_failed_reads.drops_failed_reads = True
+    threading.excepthook = drop_failed_reads
 
 
 def _silence_failed_reads() -> None:

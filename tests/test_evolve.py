@@ -142,15 +142,18 @@ def test_a_fall_back_says_one_line_and_no_traceback(finished_run, tmp_path, dama
     assert done.returncode == 0, done.stderr
     lines = done.stderr.splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"warning: checkpoint {os.path.join(out, 'checkpoints', '6')} is "
-                                                   f"unreadable (") and lines[0].endswith("trying an older one"), lines
+                                                   f"unreadable (") and lines[0].endswith("trying an older one"), \
+        "\n".join(lines[:6] + ["..."] + lines[-4:])  # in full: which channel printed a traceback, if one did
     _assert_same_outputs(out, finished_run)
 
 
 def test_asyncio_drops_the_unretrieved_errors_of_orbax_reads_and_no_other(caplog):
     """A read of a damaged checkpoint leaves an orbax task whose error no one retrieves; when it is collected, asyncio
     logged it as an 80-line traceback beside the one-line warning (seen in the test above, now and then). The filter
-    drops exactly those: an error raised in orbax's code, not one of ours; it is installed once."""
+    drops exactly those, of a task or a future: an error raised in orbax's code, not one of ours; so does the hook of
+    a thread's end; each is installed once."""
     import logging
+    import threading
 
     from imrl_jax import checkpoint
 
@@ -163,22 +166,31 @@ def test_asyncio_drops_the_unretrieved_errors_of_orbax_reads_and_no_other(caplog
             raising()
         except ValueError as error:
             errors.append(error)
-    logger = logging.getLogger("asyncio")
+    logger, thread_hook, ended = logging.getLogger("asyncio"), threading.excepthook, []
+    threading.excepthook = lambda args: ended.append(args.exc_value)  # what reaches the hook it wraps
     checkpoint._drop_unretrieved_reads()
     checkpoint._drop_unretrieved_reads()
     installed = [f for f in logger.filters if isinstance(f, checkpoint._UnretrievedReads)]
     try:
-        assert len(installed) == 1
+        assert len(installed) == 1 and threading.excepthook.drops_failed_reads
         with caplog.at_level(logging.ERROR, logger="asyncio"):
-            for error in errors:
-                logger.error("Task exception was never retrieved\nfuture: <Task finished>",
-                             exc_info=(type(error), error, error.__traceback__))
+            for what in ("Task", "Future"):
+                for error in errors:
+                    logger.error(f"{what} exception was never retrieved\nfuture: <{what} finished>",
+                                 exc_info=(type(error), error, error.__traceback__))
             logger.error("another asyncio error", exc_info=(type(errors[0]), errors[0], errors[0].__traceback__))
         assert [(r.getMessage().split("\n")[0], r.exc_info[1]) for r in caplog.records] == [
-            ("Task exception was never retrieved", errors[1]), ("another asyncio error", errors[0])]
+            ("Task exception was never retrieved", errors[1]), ("Future exception was never retrieved", errors[1]),
+            ("another asyncio error", errors[0])]
+        for target in (namespace["read"], lambda: int("not a number")):
+            thread = threading.Thread(target=target, name="reader")
+            thread.start()
+            thread.join()
+        assert [str(e) for e in ended] == ["invalid literal for int() with base 10: 'not a number'"]
     finally:
         for f in installed:
             logger.removeFilter(f)
+        threading.excepthook = thread_hook
 
 
 @pytest.mark.slow  # 50 s; the default suite extends a finished run in tests/test_strategies.py (the same path)
