@@ -87,7 +87,10 @@ class RunSpec:
 
     def key(self) -> str:
         """The run's content key: a hash of :meth:`identity` in canonical JSON (:func:`canonical`)."""
-        return _hash(self.identity())
+        # Kept on the instance: a study's plan asks a row's (memoised) spec for its key many times.
+        if "_key" not in self.__dict__:
+            object.__setattr__(self, "_key", _hash(self.identity()))
+        return self.__dict__["_key"]
 
 
 def _walk(root: str, name: str):

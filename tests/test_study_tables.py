@@ -64,20 +64,20 @@ def test_a_table_study_plans_lists_and_reports_what_was_made_by_hand(name, tmp_p
     assert table.main(["--report"]) == 0
     assert generic_table(table) is None or "not started" in generic_table(table)
 
-    made = {}
+    made, evolutions, tests = {}, table.evolutions(), table.tests()  # where each row's run and test will be found
     for i, row in enumerate(table.rows):
         made[row.name] = round(0.1 + 0.01 * i, 3), round(0.5 + 0.01 * i, 3)
         sizes = table.scale_of(row)
-        evolved = table.evolutions()[row.name]
+        evolved = evolutions[row.name]
         if evolved is not None and not os.path.isdir(evolved):  # a run two rows share is written once
             spec, best = evolution_spec(row, sizes), made[row.name][0]
             write_evolution(evolved, [[best] * len(spec.seeds)] * sizes["generations"], seeds=spec.seeds,
                             config=dict(config=spec.config.to_dict(), seeds=list(spec.seeds),
                                         search=json.loads(spec.search)),
                             columns=dict(mean=best / 2, std=0.0, **{f"best_task{t}": best for t in range(1, 7)}))
-        if (row.test or evolved is None) and not os.path.isdir(table.tests()[row.name]):
+        if (row.test or evolved is None) and not os.path.isdir(tests[row.name]):
             steady = made[row.name][1]
-            write_learning_test(table.tests()[row.name], [steady] * sizes["seeds"], (steady / 2, steady), 10,
+            write_learning_test(tests[row.name], [steady] * sizes["seeds"], (steady / 2, steady), 10,
                                 steady_sd=0.0, pairs_both_ways=0.0, steady_best_run=steady, best_run=0,
                                 steady_per_task=[steady] * 6,
                                 whole_test_mean=steady / 2, num_best=1, num_tests=1)
@@ -87,9 +87,10 @@ def test_a_table_study_plans_lists_and_reports_what_was_made_by_hand(name, tmp_p
     assert table.main(["--report"]) == 0
     measured, text = {m["row"]: m for m in table.measure()}, generic_table(table)
     assert (text is None) == (name not in WRITE_ROWS_TABLE)
+    assert (table.evolutions(), table.tests()) == (evolutions, tests)  # found where they were planned
     for row in table.rows:
-        first = next(r for r in table.rows if table.evolutions()[r.name] == table.evolutions()[row.name]
-                     and table.tests()[r.name] == table.tests()[row.name])  # whose numbers a shared run holds
+        first = next(r for r in table.rows if evolutions[r.name] == evolutions[row.name]
+                     and tests[r.name] == tests[row.name])  # whose numbers a shared run holds
         m = measured[row.name]
         if row.evolved:
             assert (m["final_mean"], m["final_sd"], m["plateau"]) == (pytest.approx(made[first.name][0]),
