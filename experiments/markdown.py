@@ -21,8 +21,3 @@ def table(names, rows) -> str:
 def mean_sd(mean: float, sd: float, digits: int = 3) -> str:
     """"mean +- sd", each to ``digits`` decimals."""
     return f"{mean:.{digits}f} +- {sd:.{digits}f}"
-
-
-def columns(spec, entries) -> list[str]:
-    """A table declared as data: ``spec`` a sequence of (header, cell), ``cell(entry)`` giving an entry's cell."""
-    return head(*(name for name, _ in spec)) + [line(*(cell(e) for _, cell in spec)) for e in entries]

@@ -60,7 +60,8 @@ def test_command(scale: dict, variant: str, condition: str, run_dir: str, out_di
         # SLE's noise anneals over an adult task's length, not the whole test (claim 5 compares speeds);
         # sle_noise_steps=0 anneals it over the whole test instead.
         noise_steps = scale["task_steps"] if sle_noise_steps is None else sle_noise_steps
-        command += ["--cond", condition, "--preset", variant, "--runs", str(scale["seeds"]), *_set_options(sets), "--set", f"sle_noise_steps={noise_steps}"]
+        command += ["--cond", condition, "--preset", variant, "--runs", str(scale["seeds"]), *_set_options(sets),
+                    "--set", f"sle_noise_steps={noise_steps}"]
     else:  # the test runs with its evolution's config, step kernel included
         command += [run_dir]
     return command + ["--best", str(scale["best"]), "--tests", str(scale["tests"]),

@@ -104,8 +104,9 @@ class Measure:
     ``out``, or ``TABLE_OUT/measures/NAME``. An argument ``{ROW}`` is the evolution folder of the table's row ROW:
     a measure of several runs names them so, and waits for each (an argument in braces must name an evolved row);
     an argument that is a Row of the measure's own is the run its key finds (another study's runs, read by key).
-    Done as its ``kind`` of stage is done: a "measure" when OUT holds result.json, a "test" (``imrl_jax.learning_test`` with options of its own, such
-    as another task set) its steady.json, a "baseline" (``imrl_jax.baselines``) its summary.json."""
+    Done as its ``kind`` of stage is done: a "measure" when OUT holds result.json, a "test"
+    (``imrl_jax.learning_test`` with options of its own, such as another task set) its steady.json, a "baseline"
+    (``imrl_jax.baselines``) its summary.json."""
 
     name: str
     run: "str | Row"  # a row's name, a Row of its own (its run found by key), a run directory, or "" (none)

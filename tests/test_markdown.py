@@ -14,12 +14,6 @@ def test_markdown_rows_and_mean_sd():
     assert markdown.mean_sd(0.8456, 0.0125) == "0.846 +- 0.013" and markdown.mean_sd(2, 0.5, 1) == "2.0 +- 0.5"
 
 
-def test_a_table_declared_as_columns():
-    spec = (("row", lambda e: e["name"]), ("twice", lambda e: 2 * e["n"]))
-    assert markdown.columns(spec, [dict(name="a", n=1), dict(name="b", n=0.5)]) == [
-        "| row | twice |", "|---|---|", "| a | 2 |", "| b | 1.0 |"]
-    assert markdown.columns(spec, []) == ["| row | twice |", "|---|---|"]
-
 
 def test_history_columns_by_generation_and_seed(tmp_path):
     assert loading.history_columns(str(tmp_path), ["best"]) is None and loading.history_columns(None, ["best"]) is None
