@@ -138,14 +138,8 @@ def _through_orbax(trace) -> bool:
     return False
 
 
-def _orbax_read(unraisable) -> bool:
-    """Whether an unraisable error is one of orbax's reads of a checkpoint that failed (a coroutine left unawaited)."""
-    return _through_orbax(unraisable.exc_traceback)
-
-
 class _UnretrievedReads(logging.Filter):
-    """asyncio's report of a task or future of orbax's whose error no one retrieved (a read of a damaged checkpoint,
-    whose restore failed and was reported in one line): dropped, not printed as a traceback of some 80 lines."""
+    """asyncio's report of a task or future of orbax's whose error no one retrieved: dropped."""
 
     def filter(self, record: logging.LogRecord) -> bool:
         error = record.exc_info[1] if record.exc_info else None
@@ -153,51 +147,42 @@ class _UnretrievedReads(logging.Filter):
                     and _through_orbax(error.__traceback__))
 
 
-def _drop_unretrieved_reads() -> None:
-    """From now on, drop the unretrieved errors of orbax's tasks and futures that asyncio's logger reports
-    (:class:`_UnretrievedReads`), and the errors raised in orbax's code that end a thread of its own: such a task is
-    collected whenever the garbage collector comes to it, during the restore or long after."""
+def _silence_failed_reads() -> None:
+    """From now on, drop the errors of orbax's reads of a checkpoint that could not be restored (its restore reports
+    the failure in one line). A failed read is left unawaited, and whenever the garbage collector reaches it (during
+    the restore or long after) its error of some 80 lines was printed: as unraisable, by asyncio's logger (a task's or
+    future's exception never retrieved), or as the end of one of orbax's threads. Installed once, for each channel."""
     logger = logging.getLogger("asyncio")
     if not any(isinstance(f, _UnretrievedReads) for f in logger.filters):
         logger.addFilter(_UnretrievedReads())
-    hook = threading.excepthook
-    if getattr(hook, "drops_failed_reads", False):
-        return
+    unraisable_hook, thread_hook = sys.unraisablehook, threading.excepthook
+    if not getattr(unraisable_hook, "drops_failed_reads", False):
+        def drop_unraisable(unraisable):
+            if not (_through_orbax(unraisable.exc_traceback) or _closed_loop(unraisable.exc_value)):
+                unraisable_hook(unraisable)
 
-    def drop_failed_reads(args):
-        if not _through_orbax(args.exc_traceback):
-            hook(args)
+        drop_unraisable.drops_failed_reads = True
+        sys.unraisablehook = drop_unraisable
+        # Those still referenced at exit would be collected as the interpreter shuts down, by its default hook: now.
+        atexit.register(gc.collect)
+    if not getattr(thread_hook, "drops_failed_reads", False):
+        def drop_thread_end(args):
+            if not _through_orbax(args.exc_traceback):
+                thread_hook(args)
 
-    drop_failed_reads.drops_failed_reads = True
-    threading.excepthook = drop_failed_reads
-
-
-def _silence_failed_reads() -> None:
-    """From now on, drop the errors of orbax's reads of a checkpoint that could not be restored (it was reported in one
-    line): their coroutines are left unawaited and printed as unraisable whenever they are collected, to the end."""
-    hook = sys.unraisablehook
-    if getattr(hook, "drops_failed_reads", False):
-        return
-
-    def drop_failed_reads(unraisable):
-        if not (_orbax_read(unraisable) or _closed_loop(unraisable.exc_value)):
-            hook(unraisable)
-
-    drop_failed_reads.drops_failed_reads = True
-    sys.unraisablehook = drop_failed_reads
-    # Those still referenced at exit would be collected as the interpreter shuts down, by its default hook: now.
-    atexit.register(gc.collect)
+        drop_thread_end.drops_failed_reads = True
+        threading.excepthook = drop_thread_end
 
 
 @contextlib.contextmanager
-def _quiet_closed_loops(reads: bool = False):
+def _quiet_closed_loops():
     """tensorstore calls back into the event loop of a save or restore that failed, which orbax has closed: not worth
     a traceback. Such a callback's error is printed as unraisable, or (from tensorstore's own threads) through
-    sys.excepthook; with ``reads``, so are orbax's failed reads (the restore's caller reports the failure)."""
+    sys.excepthook."""
     unraisable_hook, except_hook = sys.unraisablehook, sys.excepthook
 
     def drop_unraisable(unraisable):
-        if not (_closed_loop(unraisable.exc_value) or (reads and _orbax_read(unraisable))):
+        if not _closed_loop(unraisable.exc_value):
             unraisable_hook(unraisable)
 
     def drop_excepthook(kind, error, trace):
@@ -285,14 +270,9 @@ class Checkpointer:
         generations): it is read at its own length, from the checkpoint's config, and padded
         with NaN rows. An unreadable newer step is reported through ``warn`` and skipped.
         """
-        ocp = _ocp()
-        failed = []
-        _drop_unretrieved_reads()
-        with _quiet_absl(), _quiet_closed_loops(reads=True):
-            found = self._restore_latest(ocp, template, lambda text: (failed.append(text), warn(text)), at_most)
-        if failed:  # after the block, which puts back the hook it found
-            _silence_failed_reads()
-        return found
+        _silence_failed_reads()
+        with _quiet_absl(), _quiet_closed_loops():
+            return self._restore_latest(_ocp(), template, warn, at_most)
 
     def _restore_latest(self, ocp, template: RunState, warn, at_most: int | None) -> tuple[RunState, dict] | None:
         """:meth:`restore_latest` with orbax's logs and its failed reads' tracebacks silenced."""

@@ -6,6 +6,7 @@ import shutil
 import signal
 import socket
 import subprocess
+import sys
 import time
 
 import numpy as np
@@ -151,7 +152,7 @@ def test_asyncio_drops_the_unretrieved_errors_of_orbax_reads_and_no_other(caplog
     """A read of a damaged checkpoint leaves an orbax task whose error no one retrieves; when it is collected, asyncio
     logged it as an 80-line traceback beside the one-line warning (seen in the test above, now and then). The filter
     drops exactly those, of a task or a future: an error raised in orbax's code, not one of ours; so does the hook of
-    a thread's end; each is installed once."""
+    a thread's end; each is installed once (with the unraisable hook, in _silence_failed_reads)."""
     import logging
     import threading
 
@@ -166,10 +167,11 @@ def test_asyncio_drops_the_unretrieved_errors_of_orbax_reads_and_no_other(caplog
             raising()
         except ValueError as error:
             errors.append(error)
-    logger, thread_hook, ended = logging.getLogger("asyncio"), threading.excepthook, []
+    logger, ended = logging.getLogger("asyncio"), []
+    thread_hook, unraisable_hook = threading.excepthook, sys.unraisablehook
     threading.excepthook = lambda args: ended.append(args.exc_value)  # what reaches the hook it wraps
-    checkpoint._drop_unretrieved_reads()
-    checkpoint._drop_unretrieved_reads()
+    checkpoint._silence_failed_reads()
+    checkpoint._silence_failed_reads()
     installed = [f for f in logger.filters if isinstance(f, checkpoint._UnretrievedReads)]
     try:
         assert len(installed) == 1 and threading.excepthook.drops_failed_reads
@@ -190,7 +192,7 @@ def test_asyncio_drops_the_unretrieved_errors_of_orbax_reads_and_no_other(caplog
     finally:
         for f in installed:
             logger.removeFilter(f)
-        threading.excepthook = thread_hook
+        threading.excepthook, sys.unraisablehook = thread_hook, unraisable_hook
 
 
 @pytest.mark.slow  # 50 s; the default suite extends a finished run in tests/test_strategies.py (the same path)
