@@ -28,7 +28,7 @@ import numpy as np
 
 from experiments.study import RESULTS, SCALES
 from experiments.table import Measure, Row, Table
-from imrl_jax.cli import HelpFormatter, Parser, UsageError, exit_codes
+from imrl_jax.cli import HelpFormatter, Parser, UsageError, check_at_least, exit_codes
 from imrl_jax.config import ADULT_SELECTOR, CHILDHOOD_SELECTOR_REWARDS, CHILDHOOD_WALLS
 
 #: The study's results: its evolutions (evolve/NAME), its measures' folders (measures/NAME) and figures.
@@ -468,6 +468,8 @@ def measure_main(argv) -> int:
     stage, key, lives = STAGES[args.stage]
     args.key = key if args.key is None else args.key
     args.lives = lives if args.lives is None else args.lives
+    for flag in ("lives", "seeds", "best", "individuals", "respawn_steps"):
+        check_at_least(f"--{flag.replace('_', '-')}", getattr(args, flag))
     unknown = [r for r in args.rules.split(",") if r not in RULES]
     if unknown:
         raise UsageError(f"--rules: unknown rules {unknown[0]!r} (choose from {', '.join(RULES)})")

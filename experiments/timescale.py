@@ -30,7 +30,7 @@ from experiments.rule_sets import BY_NAME
 from experiments.study import MEASURED, REPRODUCTION, RESULTS, SCREEN, Study, write_measure, write_table
 from experiments.table import Measure, Row, Table
 from imrl_jax import sweeps
-from imrl_jax.cli import Parser, UsageError, exit_codes
+from imrl_jax.cli import Parser, UsageError, check_at_least, exit_codes
 from imrl_jax.config import ADULT_SELECTOR, make_config
 from imrl_jax.controllers import composition_ceiling, perceptron_followers
 from imrl_jax.plotting import new_figure, save, style_axis, wrap_title
@@ -358,6 +358,8 @@ def main(argv=None) -> int:
             p.add_argument(option, type=int)
         p.add_argument("--task-steps", type=int, default=TASK_STEPS)
         options = {k: v for k, v in vars(p.parse_args(argv)).items() if v is not None}
+        for flag in ("lives", "task_steps"):
+            check_at_least(f"--{flag.replace('_', '-')}", options.get(flag))
         MEASUREMENTS[options.pop("measurement")](**options)
         return 0
     planned = timescale_table()

@@ -231,6 +231,12 @@ def check_at_most(flag: str, value: int | None, limit: int) -> None:
         raise UsageError(f"{flag}: {value:,} is above the limit of {limit:,}")
 
 
+def check_at_least(flag: str, value: int | None, least: int = 1) -> None:
+    """Raise UsageError naming ``flag`` if ``value`` (None: not given) is below ``least``."""
+    if value is not None and value < least:
+        raise UsageError(f"{flag}: must be at least {least} (got {value})")
+
+
 def ignored_notes(config, sets: Mapping[str, object]) -> list[str]:
     """A note for each ``--set`` of a field that ``config``'s condition never reads."""
     ignored = config.spec.ignored_fields()

@@ -81,6 +81,8 @@ def test_a_measure_writes_its_csv_then_its_result(tmp_path):
     (["hand", "evolved"], "stage"),
     (["evolved", "/nonexistent/run"], "not a run directory"),
     (["evolved"], "runs"),
+    (["ceiling", "--lives", "0"], "--lives: must be at least 1"),  # wrote nan fitness before, exit 0
+    (["hand", "--seeds", "0"], "--seeds: must be at least 1"),
 ])
 def test_bad_input_exits_2_naming_it(tmp_path, capsys, monkeypatch, argv, field):
     monkeypatch.setattr("imrl_jax.devices.use_host_cores", lambda count=None: None)  # leave the suite's devices

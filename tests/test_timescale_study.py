@@ -3,6 +3,8 @@
 import json
 import os
 
+import pytest
+
 from helpers import RESULTS, write_evolution, write_learning_test
 
 from experiments import reproduce
@@ -245,3 +247,13 @@ def test_confirm_before_the_rate_sweep_exits_2(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.startswith("error: ") and "the rate sweep has not run" in err and "\n" not in err
     assert not os.path.exists(os.path.join(out, "result.json"))
+
+
+@pytest.mark.parametrize("argv, field", [(["rates", "--lives", "-1"], "--lives"), (["ceiling", "--task-steps", "0"],
+                                                                                     "--task-steps")])
+def test_a_measurement_of_no_lives_or_steps_exits_2_naming_it(tmp_path, capsys, argv, field):
+    """A traceback from deep in the ceiling's program before; now one line naming the option, nothing written."""
+    out = tmp_path / "measure"
+    assert study.main(["--out", str(out), *argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0] == f"error: {field}: must be at least 1 (got {argv[-1]})" and not out.exists()
