@@ -4,7 +4,6 @@ import json
 import os
 
 import pytest
-
 from helpers import RESULTS, write_evolution, write_learning_test
 
 from experiments import reproduce
