@@ -49,13 +49,15 @@ from imrl_jax.lifetime import grow_up, lifetime_keys, run_phase, task_spec, task
 from imrl_jax.state import State
 from imrl_jax.events import check_log, log_for
 from imrl_jax.learning_test_options import (OPTION_FIELDS, check_condition, check_sizes, evolved_genomes, from_scratch,
-                                            parser, scratch_genomes, tested_config)
-from imrl_jax.learning_test_state import (PARTIAL, fingerprint, finished_runs, keep_run, locked_out_dir, start_partial,
-                                          write_errors, write_outputs)
-from imrl_jax.learning_test_sweep import run_points
+                                            parser, scratch_genomes, test_lengths, tested_config)
+from imrl_jax.learning_test_state import (PARTIAL, check_out_before, fingerprint, finished_runs, keep_run,
+                                          locked_out_dir, start_partial, write_errors, write_outputs)
+from imrl_jax.learning_test_sweep import (check_generations, check_keys, check_out_root, check_record,
+                                          check_tested_before, sweep_summary)
 from imrl_jax.progress import Progress
-from imrl_jax.rundir import best_genomes, load_run as read_run, sweep_points
+from imrl_jax.rundir import best_genomes, load_run as read_run, lock_run_dir, make_dir, recorded_points
 from imrl_jax.steady_state import performance_curve, steady_bins, summarise
+from imrl_jax.sweeps import static_part
 
 
 class TestState(NamedTuple):
@@ -110,8 +112,6 @@ def make_learning_test(config: Config, num_chunks: int):
     Tests of configs that differ only in dynamic values (``sweeps.DYNAMIC_FIELDS``: they are ``params``) share
     one program, so the points of a sweep compile once.
     """
-    from imrl_jax.sweeps import static_part
-
     return _make_learning_test(static_part(config), num_chunks)
 
 
@@ -171,6 +171,55 @@ def test_keys(seed: int, num_runs: int, num_best: int, num_tests: int) -> jax.Ar
     return jax.random.split(jax.random.key(seed), num_runs * num_best * num_tests)
 
 
+class PointTest(NamedTuple):
+    """One test, checked: what it tests, under which config, into which ``--out``, at which sizes."""
+
+    config: Config
+    genomes: np.ndarray  # (runs, best, genes)
+    out_dir: str
+    num_tests: int
+    steady_steps: int
+    num_chunks: int
+    seed: int = 0
+    quiet: bool = False
+    source: str = ""
+    command: str = ""
+    warnings: Sequence[str] = ()
+    notes: Sequence[str] = ()
+    evolved: dict | None = None
+    log: str | None = None
+
+    def lanes(self) -> int:
+        """The lanes of the whole test: runs x best x tests x tasks."""
+        return int(np.prod(self.genomes.shape[:2])) * self.num_tests * self.config.num_tasks
+
+    def check(self) -> None:
+        """Every check of the test before it writes: lengths, chunks, memory, ``--log``, ``--out`` (a user error)."""
+        config = self.config
+        steady_bins(config, self.steady_steps)
+        if config.num_bins % self.num_chunks:
+            raise UsageError(f"--chunks: {config.num_bins} bins cannot be split into {self.num_chunks} chunks")
+        num_runs, num_best = self.genomes.shape[:2]
+        if self.genomes.shape[-1] != config.num_genes:
+            raise UsageError(f"genomes: {self.genomes.shape[-1]} genes, the config's {config.num_genes}")
+        kept = num_runs * num_best * self.num_tests * config.num_tasks * config.num_bins * (config.num_experts + 1) * 12
+        check_memory(config, num_best * self.num_tests * config.num_tasks,  # a run's tests at once; all runs' curves
+                     f"testing {num_best} x {self.num_tests} test(s) of {config.num_tasks} tasks a run", host_bytes=kept)
+        try:
+            check_log(self.log)
+        except ValueError as error:
+            raise UsageError(str(error)) from None
+        check_out_before(self.out_dir, self.log)
+
+    def test(self) -> dict:
+        """Lock ``--out``, check it again, run the tests run by run (resuming from ``partial/``), write; the summary."""
+        with locked_out_dir(self.out_dir), write_errors(self.out_dir):  # a full disk: one line, the finished runs kept
+            for line in [*self.warnings, *([] if self.quiet else self.notes)]:
+                print(line, file=sys.stderr, flush=True)
+            return _test_runs(self.config, self.genomes, self.out_dir, self.num_tests, self.steady_steps,
+                              self.num_chunks, self.seed, self.quiet, self.source, self.command, self.evolved, self.log)
+
+
 def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, steady_steps: int, num_chunks: int,
         seed: int = 0, quiet: bool = False, source: str = "", command: str = "", warnings: Sequence[str] = (),
         notes: Sequence[str] = (), evolved: dict | None = None, log: str | None = None) -> dict:
@@ -180,20 +229,14 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
     printed once the checks pass, ``notes`` too unless ``quiet``. ``evolved``: which generation of how many the
     genomes come from (recorded in steady.json).
     """
-    steady_bins(config, steady_steps)
-    num_runs, num_best = genomes.shape[:2]
-    kept = num_runs * num_best * num_tests * config.num_tasks * config.num_bins * (config.num_experts + 1) * 4 * 3
-    check_memory(config, num_best * num_tests * config.num_tasks,  # a run's tests at once; every run's curves kept
-                 f"testing {num_best} x {num_tests} test(s) of {config.num_tasks} tasks a run", host_bytes=kept)
-    try:
-        check_log(log)
-    except ValueError as error:
-        raise UsageError(str(error)) from None
-    with locked_out_dir(out_dir), write_errors(out_dir):  # a full disk: one line, the finished runs kept
-        for line in [*warnings, *([] if quiet else notes)]:
-            print(line, file=sys.stderr, flush=True)
-        return _test_runs(config, genomes, out_dir, num_tests, steady_steps, num_chunks, seed, quiet, source,
-                          command, evolved, log)
+    test = PointTest(config, genomes, out_dir, num_tests, steady_steps, num_chunks, seed, quiet, source, command,
+                     tuple(warnings), tuple(notes), evolved, log)
+    test.check()
+    return test.test()
+
+
+#: The test programs this process has compiled (config's static part, chunks, lanes): "compiling" is said once each.
+_COMPILED: set = set()
 
 
 def _test_runs(config: Config, genomes: np.ndarray, out_dir: str, num_tests: int, steady_steps: int, num_chunks: int,
@@ -220,6 +263,11 @@ def _test_runs(config: Config, genomes: np.ndarray, out_dir: str, num_tests: int
         if r in done:
             continue
         lanes = np.repeat(genomes[r], num_tests, axis=0).astype(np.float32)
+        program = (static_part(config), num_chunks, lanes.shape)
+        if program not in _COMPILED:  # the first run of a program in this process compiles it (a minute or more)
+            progress.note(f"compiling the test's program ({num_best * num_tests} x {config.num_tasks} lanes of "
+                          f"{config.task_steps // num_chunks} cycles a chunk) ...")
+            _COMPILED.add(program)
         done[r] = run_tests(keys[r], config, params, lanes, num_chunks, progress, done_before=r * num_chunks)
         keep_run(partial, r, *done[r])
     seconds = time.perf_counter() - start
@@ -237,10 +285,67 @@ def _test_runs(config: Config, genomes: np.ndarray, out_dir: str, num_tests: int
     return summary
 
 
+class CommandPlan(NamedTuple):
+    """What the command will do, every check done: the tests to run (one, or a sweep's points not tested before),
+    the sweep's points tested before, and (a sweep) what its sweep_tests.json records."""
+
+    tests: list[PointTest]
+    tested_before: list[str]  # a sweep's points' --out tested before (checked against the settings asked)
+    sweep: SweepRecord | None = None
+
+    def execute(self) -> int:
+        """Run the tests (a sweep's under its ``--out``'s lock, its record written last); print each one's line."""
+        if self.sweep is None:
+            return _report([(test.out_dir, test.test()) for test in self.tests], self.tests[0].steady_steps)
+        sweep = self.sweep
+        make_dir(sweep.out)
+        with lock_run_dir(sweep.out):
+            check_out_root(sweep.out, sweep.keys)  # again, locked: another process may have written there since
+            check_record(sweep.out, sweep.keys)
+            done = {test.out_dir: test.test() for test in self.tests}
+            with write_errors(sweep.out):
+                sweep_summary(sweep.run_dir, sweep.out, sweep.recorded, sweep.generation, sweep.sizes)
+        return _report([(out_dir, done.get(out_dir)) for out_dir in sweep.out_dirs()], sweep.sizes["steady_steps"])
+
+
+class SweepRecord(NamedTuple):
+    """A sweep's test: its run directory, ``--out``, points (key and settings), common generation and sizes."""
+
+    run_dir: str
+    out: str
+    recorded: list[tuple[str, dict]]
+    generation: int | None
+    sizes: dict
+
+    @property
+    def keys(self) -> list[str]:
+        return [key for key, _ in self.recorded]
+
+    def out_dirs(self) -> list[str]:
+        return [os.path.join(self.out, key) for key in self.keys]
+
+
+def _report(summaries: list[tuple[str, dict | None]], steady_steps: int) -> int:
+    """Print each test's line (None: a point tested before); exit code 0."""
+    for out_dir, summary in summaries:
+        if summary is None:
+            print(f"{out_dir}: tested before (steady.json)")
+            continue
+        print(f"{summary['condition']}: steady state (last {steady_steps} cycles) {summary['steady_mean']:.4f} "
+              f"mean over {summary['num_runs']} run(s), best run {summary['steady_best_run']:.4f}; whole test "
+              f"{summary['whole_test_mean']:.4f}; outputs in {out_dir}")
+    return 0
+
+
 @exit_codes
 def main(argv: Sequence[str] | None = None) -> int:
     command = "python -m imrl_jax.learning_test " + " ".join(sys.argv[1:] if argv is None else argv)
     args = parser().parse_args(argv)
+    return cli.execute(plan(args, command))
+
+
+def plan(args, command: str) -> CommandPlan:
+    """Everything the command line asks, checked (a user error at the first thing wrong); nothing written."""
     check_sizes(args)
     cli.register(args.register)
     check_condition(args)
@@ -250,42 +355,56 @@ def main(argv: Sequence[str] | None = None) -> int:
     cli.refuse_option_fields(args.set, OPTION_FIELDS)
     sets = parse_sets(args.set)
     if args.cond in from_scratch():
-        summaries = [(args.out, _test(args, *scratch_genomes(args, sets), sets, command, args.out))]
-    else:
-        if not args.run_dir:
-            raise UsageError(f"run_dir: give an evolution's run directory, or --cond "
-                             f"{' or '.join(from_scratch())} to test learning from scratch")
-        points = sweep_points(args.run_dir)
+        return CommandPlan([_point_test(args, *scratch_genomes(args, sets), sets, command, args.out)], [])
+    if not args.run_dir:
+        raise UsageError(f"run_dir: give an evolution's run directory, or --cond "
+                         f"{' or '.join(from_scratch())} to test learning from scratch")
+    recorded = recorded_points(args.run_dir)
+    if recorded is None:
+        return CommandPlan([_point_test(args, *evolved_genomes(args, args.run_dir, sets), sets, command, args.out)], [])
+    return _plan_sweep(args, recorded, sets, command)
 
-        def test(run_dir: str, out_dir: str) -> dict:  # a run directory, or a sweep's point, into out_dir
-            return _test(args, *evolved_genomes(args, run_dir, sets), sets, command, out_dir)
 
-        def config_of(run_dir: str) -> Config:
-            """What a point's test computes (a test of it made before is checked against it)."""
-            base, _, source, _, _ = evolved_genomes(args, run_dir, sets)
-            return tested_config(args, base, source)[0]
-
-        summaries = ([(args.out, test(args.run_dir, args.out))] if points is None else
-                     run_points(args, points, test, config_of))
-    for out_dir, summary in summaries:
-        if summary is None:
-            print(f"{out_dir}: tested before (steady.json)")
+def _plan_sweep(args, recorded: list[tuple[str, dict]], sets: dict, command: str) -> CommandPlan:
+    """The test of every point of the sweep in ``args.run_dir``: each checked, the sweep's ``--out`` too."""
+    if args.best_genomes:
+        raise UsageError(f"--best-genomes: {args.run_dir} is a sweep: its points' populations are kept")
+    keys = check_keys(args.run_dir, recorded)
+    check_out_root(args.out, keys)
+    check_record(args.out, keys)
+    found = {key: evolved_genomes(args, os.path.join(args.run_dir, key), sets) for key in keys}
+    generation = check_generations(args, args.run_dir, {key: point[3] for key, point in found.items()})
+    mixed = [] if generation is not None else [
+        f"warning: the points of {args.run_dir} are tested each at its own last generation "
+        f"(--allow-mixed-generations; sweep_tests.json records which)"]
+    tests, before, sizes = [], [], None
+    for key, (base, genomes, source, evolved, warnings) in found.items():
+        out_dir = os.path.join(args.out, key)
+        test = _point_test(args, base, genomes, source, evolved, [*mixed, *warnings], sets, command, out_dir,
+                           check=False)
+        mixed = []  # said once
+        sizes = dict(num_best=args.best, num_tests=test.num_tests, task_steps=test.config.task_steps,
+                     num_bins=test.config.num_bins, steady_steps=test.steady_steps, seed=test.seed)
+        if os.path.isfile(os.path.join(out_dir, "steady.json")):
+            check_tested_before(args, out_dir, test.config, evolved, sizes)
+            before.append(out_dir)
             continue
-        print(f"{summary['condition']}: steady state (last {args.steady_steps} cycles) {summary['steady_mean']:.4f} "
-              f"mean over {summary['num_runs']} run(s), best run {summary['steady_best_run']:.4f}; whole test "
-              f"{summary['whole_test_mean']:.4f}; outputs in {out_dir}")
-    return 0
+        test.check()
+        tests.append(test)
+    return CommandPlan(tests, before, SweepRecord(args.run_dir, args.out, recorded, generation, sizes))
 
 
-def _test(args, base: Config, genomes: np.ndarray, source: str, evolved: dict | None, warnings: list[str],
-          sets: dict, command: str, out_dir: str) -> dict:
-    """The learning test of ``genomes`` under ``base`` at the command line's lengths, into ``out_dir``."""
+def _point_test(args, base: Config, genomes: np.ndarray, source: str, evolved: dict | None, warnings: list[str],
+                sets: dict, command: str, out_dir: str, check: bool = True) -> PointTest:
+    """The learning test of ``genomes`` under ``base`` at the command line's lengths, into ``out_dir``, checked."""
     config, source = tested_config(args, base, source)
-    steady_bins(config, args.steady_steps)
-    return run(config, genomes, out_dir, num_tests=args.tests, steady_steps=args.steady_steps,
-               num_chunks=args.chunks, seed=args.seed, quiet=args.quiet, source=source, command=command,
-               warnings=[*warnings, *cli.device_warnings(config, args.cpu_devices)],
-               notes=cli.ignored_notes(config, sets), evolved=evolved, log=args.log)
+    lengths = test_lengths(args, base)
+    test = PointTest(config, genomes, out_dir, args.tests, lengths.steady_steps, lengths.chunks, args.seed, args.quiet,
+                     source, command, (*warnings, *cli.device_warnings(config, args.cpu_devices)),
+                     tuple(cli.ignored_notes(config, sets)), evolved, args.log)
+    if check:
+        test.check()
+    return test
 
 
 if __name__ == "__main__":

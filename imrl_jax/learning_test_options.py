@@ -9,14 +9,16 @@ from __future__ import annotations
 
 import argparse
 import os
+from typing import NamedTuple
 
 import numpy as np
 
 from imrl_jax import cli
 from imrl_jax.cli import HelpFormatter, UsageError
 from imrl_jax.conditions import CONDITIONS as TABLE
-from imrl_jax.config import CONDITIONS, PRESETS, Config, make_config
+from imrl_jax.config import CONDITIONS, PRESETS, Config, ConfigError, make_config
 from imrl_jax.rundir import best_genomes, load_kept_best, load_run, unfinished
+from imrl_jax.steady_state import steady_bins
 
 #: Conditions that are not evolved: tested from scratch (``--cond``), without a run directory (the table's at import;
 #: :func:`from_scratch` also has the rows registered since).
@@ -49,13 +51,22 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--allow-unfinished", action="store_true",
                    help="test a run whose evolution has not reached its last generation (killed, or still running): "
                         "its last evaluated generation, with a warning (steady.json records which)")
+    p.add_argument("--allow-mixed-generations", action="store_true",
+                   help="test a sweep whose points are at different generations (one extended alone) each at its own "
+                        "last generation (sweep_tests.json records which); without it such a sweep is refused")
     p.add_argument("--best", type=int, default=10, help="best individuals of each run's last generation")
     p.add_argument("--tests", type=int, default=10, help="tests per individual")
-    p.add_argument("--task-steps", type=int, default=1_000_000, help="cycles per task")
-    p.add_argument("--bins", type=int, default=100, help="bins of the learning curve")
-    p.add_argument("--steady-steps", type=int, default=100_000, help="final cycles averaged for the steady state")
-    p.add_argument("--chunks", type=int, default=10, help="pieces the test runs in (progress lines)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the tests' keys")
+    p.add_argument("--task-steps", type=int,
+                   help=f"cycles per task (default: {TEST_SCALE} x the run's, or --preset's, task_steps, as the "
+                        f"paper's test is 10 x its evolution's tasks: 1,000,000 for the paper's)")
+    p.add_argument("--bins", type=int, help="bins of the learning curve (default: the run's, or --preset's, "
+                                            "num_bins: 100 for the paper's)")
+    p.add_argument("--steady-steps", type=int,
+                   help="final cycles averaged for the steady state (default: the test's last tenth, in whole bins: "
+                        "100,000 for the paper's)")
+    p.add_argument("--chunks", type=int, help="pieces the test runs in (progress lines; default: the most of 10 or "
+                                              "fewer that divide the bins: 10 for the paper's)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the tests' keys (0 to 2^32 - 1)")
     p.add_argument("--out", required=True,
                    help="output directory: new, empty, or an unfinished test of the same command to go on with")
     p.add_argument("--quiet", action="store_true", help="no progress lines (for logs)")
@@ -69,16 +80,56 @@ def parser() -> argparse.ArgumentParser:
 OPTION_FIELDS = {"condition": "--cond", "task_steps": "--task-steps", "num_bins": "--bins"}
 
 
+#: The paper's test tasks are this many times its evolution's (1,000,000 cycles against 100,000).
+TEST_SCALE = 10
+#: The steady state is this share of the test's last cycles (the paper's last 100,000 of 1,000,000).
+STEADY_SHARE = 10
+#: The most chunks a test runs in by default (progress lines).
+DEFAULT_CHUNKS = 10
+
+
+class Lengths(NamedTuple):
+    """A test's lengths: cycles per task, bins, steady-state cycles and chunks."""
+
+    task_steps: int
+    bins: int
+    steady_steps: int
+    chunks: int
+
+
 def check_sizes(args) -> None:
     """Refuse absurd sizes before anything is allocated (raises UsageError naming the option and its limit)."""
-    for name in ("best", "tests", "task_steps", "bins", "chunks", "runs"):
-        if getattr(args, name) < 1:
-            raise UsageError(f"--{name.replace('_', '-')}: must be at least 1")
-    for flag, value, limit in (("--task-steps", args.task_steps, cli.MAX_STEPS), ("--runs", args.runs, cli.MAX_SEEDS),
-                               ("--best", args.best, cli.MAX_SEEDS), ("--tests", args.tests, cli.MAX_SEEDS),
-                               ("--bins", args.bins, cli.MAX_BINS)):
+    for flag, value, limit in (("--best", args.best, cli.MAX_SEEDS), ("--tests", args.tests, cli.MAX_SEEDS),
+                               ("--runs", args.runs, cli.MAX_SEEDS), ("--task-steps", args.task_steps, cli.MAX_STEPS),
+                               ("--bins", args.bins, cli.MAX_BINS), ("--steady-steps", args.steady_steps, cli.MAX_STEPS),
+                               ("--chunks", args.chunks, cli.MAX_BINS)):
+        cli.check_at_least(flag, value)
         cli.check_at_most(flag, value, limit)
+    cli.check_at_least("--seed", args.seed, 0)
+    cli.check_at_most("--seed", args.seed, 2**32 - 1)  # a uint32 key
     cli.check_at_most("--best x --tests", args.best * args.tests, cli.MAX_LANES)
+    for flag, texts in (("--set", args.set or []), ("--task-set", [args.task_set or ""]), ("--out", [args.out or ""]),
+                        ("--best-genomes", [args.best_genomes or ""]), ("run_dir", [args.run_dir or ""])):
+        for text in texts:
+            if not text.isprintable():  # a control character would break the one line of a refusal naming it
+                raise UsageError(f"{flag}: {text!r} holds a control character")
+
+
+def test_lengths(args, base: Config) -> Lengths:
+    """The lengths a test of ``base`` (a run's config, or the preset's) runs at: the options given, the others
+    following ``base`` as the paper's test follows its evolution (10 x the tasks, their bins, the last tenth)."""
+    task_steps = args.task_steps if args.task_steps is not None else TEST_SCALE * base.task_steps
+    if args.task_steps is None and task_steps > cli.MAX_STEPS:
+        raise UsageError(f"--task-steps: the default, {TEST_SCALE} x the run's {base.task_steps:,}, is above the limit "
+                         f"of {cli.MAX_STEPS:,}; give --task-steps")
+    bins = args.bins if args.bins is not None else base.num_bins
+    steady = args.steady_steps
+    if steady is None:
+        steady = task_steps // bins * max(1, round(bins / STEADY_SHARE))
+    chunks = args.chunks
+    if chunks is None:
+        chunks = max(c for c in range(1, DEFAULT_CHUNKS + 1) if bins % c == 0)
+    return Lengths(task_steps, bins, steady, chunks)
 
 
 def check_condition(args) -> None:
@@ -90,14 +141,24 @@ def check_condition(args) -> None:
 
 
 def tested_config(args, base: Config, source: str) -> tuple[Config, str]:
-    """The config of a test of ``base`` at the command line's lengths and tasks, and the source's words with them."""
-    # Evolved genomes may be tested on other tasks (they encode none).
-    config = cli.apply_task_set(
-        lambda **tasks: base.replace(task_steps=args.task_steps, num_bins=args.bins, **tasks), args)
+    """The config of a test of ``base`` at the command line's lengths (:func:`test_lengths`) and tasks, and the
+    source's words with them."""
+    lengths = test_lengths(args, base)
+    try:  # evolved genomes may be tested on other tasks (they encode none)
+        config = cli.apply_task_set(
+            lambda **tasks: base.replace(task_steps=lengths.task_steps, num_bins=lengths.bins, **tasks), args)
+    except ConfigError as error:
+        if error.field in ("task_steps", "num_bins"):  # the options' values, named by the options
+            raise ConfigError(f"--task-steps, --bins: {error}", error.field) from None
+        raise
     if args.task_set is not None:
         source += f", task set {args.task_set}"
-    if config.num_bins % args.chunks:
-        raise UsageError(f"--chunks: {args.bins} bins cannot be split into {args.chunks} chunks")
+    if config.num_bins % lengths.chunks:
+        raise UsageError(f"--chunks: {lengths.bins} bins cannot be split into {lengths.chunks} chunks")
+    try:
+        steady_bins(config, lengths.steady_steps)
+    except ConfigError as error:
+        raise UsageError(f"--steady-steps: {error}") from None
     return config, source
 
 
@@ -123,6 +184,12 @@ def evolved_genomes(args, run_dir: str, sets: dict) -> tuple[Config, np.ndarray,
     else:
         found = load_run(run_dir)
         base, genomes = found.config, best_genomes(found, args.best)
+        path = os.path.join(run_dir, "final_population.npz")
+        if genomes.shape[-1] != base.num_genes:  # the program is built for the config's genome
+            raise UsageError(f"{path}: its genomes have {genomes.shape[-1]} genes, its config.json's "
+                             f"{base.num_genes}")
+        if not np.isfinite(genomes).all():
+            raise UsageError(f"{path}: the best genomes hold genes that are not finite numbers")
         evolved = dict(generation=found.generation - 1, generations_done=found.generation,
                        num_generations=found.config.num_generations)
         why = unfinished(run_dir, found)

@@ -104,28 +104,51 @@ def _curves_npz(reaches: np.ndarray, selections: np.ndarray) -> bytes:
 # ----------------------------------------------------------------------------- --out
 
 
+#: What else an unfinished test's ``--out`` may hold: its progress for TensorBoard (``--log tensorboard``).
+TEST_FOLDERS = ("tensorboard",)
+
+
+def _kept_run(name: str) -> bool:
+    """Whether an entry of ``partial/`` is one a test keeps there (or a temporary file of one)."""
+    stem = name.split(".tmp-")[0]
+    return is_output(name, ("spec.json",)) or (stem.startswith("run_") and stem.endswith(".npz")
+                                                  and stem[4:-4].isdigit())
+
+
 def check_out_dir(out_dir: str) -> None:
     """Refuse an ``--out`` that is neither new, nor empty, nor an unfinished learning test (raises a user error)."""
+    if os.path.exists(out_dir) and not os.path.isdir(out_dir):
+        raise UsageError(f"--out: {out_dir} is not a directory")
     if os.path.exists(os.path.join(out_dir, "steady.json")):
         raise UsageError(f"--out: {out_dir} already holds a learning test; choose another directory")
     found = entries(out_dir)
     if not found:
         return
     partial = os.path.join(out_dir, PARTIAL)
-    unfinished = os.path.isdir(partial) and (os.path.exists(os.path.join(partial, "spec.json"))
-                                             or not os.listdir(partial))
+    kept = os.listdir(partial) if os.path.isdir(partial) and not os.path.islink(partial) else None
+    unfinished = kept is not None and ("spec.json" in kept or not kept)
     # An interrupted test may also have written some outputs (and a temporary file) before steady.json.
-    others = [name for name in found if name != PARTIAL and not is_output(name, OUTPUTS)]
+    others = [name for name in found if name != PARTIAL and not is_output(name, OUTPUTS)
+              and not (name in TEST_FOLDERS and os.path.isdir(os.path.join(out_dir, name)))]
+    others += [os.path.join(PARTIAL, name) for name in kept or [] if not _kept_run(name)]
     if not unfinished or others:
         raise not_empty(out_dir, "unfinished learning test", others or found)
+
+
+def check_out_before(out_dir: str, log: str | None = None) -> None:
+    """Every check of ``--out`` before the test is carried out: writable, unlocked, new, empty or an unfinished test
+    (``--log tensorboard``: its folder writable too); nothing is written."""
+    check_writable(out_dir)
+    check_unlocked(out_dir)
+    check_out_dir(out_dir)
+    if log == "tensorboard":
+        check_writable(os.path.join(out_dir, "tensorboard"), "--log")
 
 
 @contextlib.contextmanager
 def locked_out_dir(out_dir: str) -> Iterator[None]:
     """Hold ``out_dir`` (:func:`imrl_jax.rundir.lock_run_dir`) once it is checked and made; the checks raise user errors."""
-    check_writable(out_dir)
-    check_unlocked(out_dir)
-    check_out_dir(out_dir)  # before the directory is made or locked: nothing is written into another's
+    check_out_before(out_dir)  # before the directory is made or locked: nothing is written into another's
     make_dir(out_dir)
     with lock_run_dir(out_dir):
         check_out_dir(out_dir)  # again, locked: another test may have written there in between

@@ -388,26 +388,20 @@ def test_a_test_smaller_or_shorter_than_the_papers_is_labelled_reduced_scale(tin
             == ", reduced scale (20 cycles)")
 
 
-def test_set_with_a_run_directory_tests_the_evolved_genomes_under_the_values_set(tiny_run, tmp_path, monkeypatch,
-                                                                                  capsys):
-    import collections
+def test_set_with_a_run_directory_tests_the_evolved_genomes_under_the_values_set(tiny_run, tmp_path, capsys):
+    from attack import assert_refused, attack
 
-    seen = {}
-
-    def run(config, genomes, out_dir, **options):
-        seen.update(config=config, source=options["source"])
-        return collections.defaultdict(float, condition=config.condition)
-
-    monkeypatch.setattr(learning_test, "run", run)
     argv = [tiny_run, "--best", "1", "--tests", "1", "--task-steps", "400", "--bins", "4", "--steady-steps", "200",
             "--chunks", "1", "--quiet"]
-    assert learning_test.main([*argv, "--set", "eta_selector_actor=0.05", "--out", str(tmp_path / "a")]) == 0
+    planned = attack(learning_test.main, [*argv, "--set", "eta_selector_actor=0.05", "--out", str(tmp_path / "a")],
+                     str(tmp_path))
+    test = planned.plan.tests[0]
     evolved, _ = learning_test.load_run(tiny_run, 1)[:2]
-    assert seen["config"] == evolved.replace(task_steps=400, num_bins=4, eta_selector_actor=0.05)
-    assert seen["source"].endswith(", eta_selector_actor=0.05")
-    capsys.readouterr()
-    assert learning_test.main([*argv, "--set", "num_experts=2", "--out", str(tmp_path / "b")]) == 2
-    assert capsys.readouterr().err == "error: --set: num_experts changes the genome (222 genes evolved, 148 asked)\n"
+    assert test.config == evolved.replace(task_steps=400, num_bins=4, eta_selector_actor=0.05)
+    assert test.source.endswith(", eta_selector_actor=0.05")
+    refused = attack(learning_test.main, [*argv, "--set", "num_experts=2", "--out", str(tmp_path / "b")], str(tmp_path))
+    assert_refused(refused, "--set")
+    assert refused.stderr == "error: --set: num_experts changes the genome (222 genes evolved, 148 asked)\n"
 
 
 def test_the_best_genomes_a_report_kept_stand_in_for_a_lost_final_population(tiny_run, tmp_path, capsys):
