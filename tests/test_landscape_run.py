@@ -2,12 +2,16 @@
 
 import json
 import os
+import shutil
+import sys
 
 import numpy as np
 import pytest
+from attack import HOSTILE_FILE_BYTES, HOSTILE_INTS, HOSTILE_TEXTS, assert_contract, assert_refused, attack, damage, \
+    edit_json
 from helpers import evolve_args
 
-from imrl_jax import evolve, landscape_run
+from imrl_jax import cli, conditions, evolve, landscape_run
 from imrl_jax.rundir import best_genomes, load_run
 
 SIZES = dict(seeds=2, population=6, parents=2, task_steps=1000, bins=2)
@@ -100,3 +104,248 @@ def test_measures_of_other_settings_are_not_mixed(run_dir, tmp_path, capsys):
     assert landscape_run.main([run_dir, "--out", str(out), "--parents", "4", "--walks", "2", "--generations", "0"]) == 2
     assert "holds measures of other settings" in capsys.readouterr().err
     assert sorted(os.listdir(out)) == ["landscape.json"]
+
+
+# ----------------------------------------------------------------------------- attacks: nothing compiled, nothing written
+
+#: A module of one's own with a row of the condition table (as tests/test_conditions.py's).
+ROWS_MODULE = """
+import dataclasses
+
+from imrl_jax import conditions
+
+ROW = dataclasses.replace(conditions.get("EE-LS"), name="EE-LS-mine", description="EE-LS, registered from a module")
+"""
+#: Sizes the tiny run (2 seeds of 4, 1 generation) takes.
+TINY = ["--parents", "2", "--walks", "1", "--generations", "0,last"]
+
+
+@pytest.fixture
+def copied(tiny_run, tmp_path):
+    """A copy of the tiny finished run at ``tmp_path/v/evolve/EE-LS`` (variant ``v`` for --best-genomes), and
+    an --out beside it."""
+    run = str(tmp_path / "v" / "evolve" / "EE-LS")
+    shutil.copytree(tiny_run, run)
+    return run, str(tmp_path / "m")
+
+
+def _planned(run, out, root, *args):
+    outcome = attack(landscape_run.main, [run, "--out", out, *TINY, *args], root)
+    assert assert_contract(outcome) == "planned", outcome.stderr
+    return outcome.plan
+
+
+def _rewrite_population(run, change):
+    path = os.path.join(run, "final_population.npz")
+    with np.load(path) as data:
+        arrays = {name: data[name] for name in data.files}
+    change(arrays)
+    np.savez(path, **arrays)
+
+
+def _unfinished(run, generations=3):
+    """The run as if killed after its first generation of ``generations`` (its config asks for more)."""
+    edit_json(os.path.join(run, "config.json"), lambda info: info["config"].update(num_generations=generations))
+
+
+def test_an_unfinished_run_is_refused_unless_allowed_and_a_generation_never_reached_always(copied, tmp_path):
+    run, out = copied
+    _unfinished(run)
+    assert_refused(attack(landscape_run.main, [run, "--out", out, *TINY], str(tmp_path)), "--allow-unfinished")
+    for generations in ("1", "0,2", "2"):  # reached by the config, never by the run
+        outcome = attack(landscape_run.main, [run, "--out", out, *TINY, "--allow-unfinished", "--generations",
+                                              generations], str(tmp_path))
+        assert_refused(outcome, "--generations")
+        assert "past the 1 generation(s) the run has evaluated" in outcome.stderr
+    outcome = attack(landscape_run.main, [run, "--out", out, *TINY, "--allow-unfinished"], str(tmp_path))
+    assert assert_contract(outcome) == "planned"
+    assert "warning: " in outcome.stderr and "1 of its 3 generations" in outcome.stderr
+    assert outcome.plan.generations == [0] and outcome.plan.done == 1  # last: the last the run evaluated
+
+
+def test_the_records_state_the_generations_measured_and_the_runs_done(copied, tmp_path):
+    """Every piece already measured: execute only writes the records (nothing compiled), which say what was."""
+    run, out = copied
+    _unfinished(run)
+    plan = _planned(run, out, str(tmp_path), "--allow-unfinished")
+    os.makedirs(out)
+    pieces = {"random genomes, learning": {"mean": 0.0}, "generation 0, learning": {"generation": 0}}
+    with open(os.path.join(out, "landscape.json"), "w") as f:
+        json.dump({"identity": plan.identity, "pieces": pieces}, f)
+    assert cli.execute(plan) == 0
+    for name in ("landscape.json", "result.json"):
+        with open(os.path.join(out, name)) as f:
+            record = json.load(f)
+        assert record["generations"] == [0] and record["generations_done"] == 1 and record["num_generations"] == 3
+        assert "1 of its 3 generations" in record["unfinished"] and record["pieces"] == pieces
+    assert sorted(os.listdir(out)) == ["landscape.json", "result.json"]  # the lock gone
+
+
+@pytest.mark.parametrize("damage_it", ["NaN fitness", "inf genomes", "wrong width", "wrong population"])
+def test_a_damaged_final_population_is_refused(copied, tmp_path, damage_it):
+    run, out = copied
+
+    def change(arrays):
+        if damage_it == "NaN fitness":
+            arrays["fitness"][0, 1] = np.nan
+        elif damage_it == "inf genomes":
+            arrays["evaluated"][1, 0, 3] = np.inf
+        elif damage_it == "wrong width":
+            arrays["evaluated"] = arrays["evaluated"][:, :, :-1]
+        else:
+            arrays["evaluated"], arrays["fitness"] = arrays["evaluated"][:, :3], arrays["fitness"][:, :3]
+
+    _rewrite_population(run, change)
+    assert_refused(attack(landscape_run.main, [run, "--out", out, *TINY], str(tmp_path)), "final_population.npz")
+
+
+@pytest.mark.parametrize("damage_it", [None, "NaN genomes", "inf fitness", "wrong width", "other seeds", "2 kept"])
+def test_damaged_best_genomes_are_refused(copied, tmp_path, damage_it):
+    run, out = copied
+    kept = str(tmp_path / "best_genomes.npz")
+    genomes = np.random.default_rng(0).uniform(-1, 1, (2, 3, 222)).astype(np.float32)
+    seeds, fitness = np.array([0, 1]), np.zeros((2, 3), np.float32)
+    if damage_it == "NaN genomes":
+        genomes[0, 0, 0] = np.nan
+    elif damage_it == "inf fitness":
+        fitness[1, 2] = -np.inf
+    elif damage_it == "wrong width":
+        genomes = genomes[..., :111]
+    elif damage_it == "other seeds":
+        seeds = np.array([5, 6])
+    elif damage_it == "2 kept":
+        genomes, fitness = genomes[:, :2], fitness[:, :2]
+    np.savez(kept, **{"v__EE-LS__genomes": genomes, "v__EE-LS__seeds": seeds, "v__EE-LS__fitness": fitness})
+    outcome = attack(landscape_run.main, [run, "--out", out, *TINY, "--parents", "3", "--best-genomes", kept],
+                     str(tmp_path))
+    if damage_it is None:
+        assert assert_contract(outcome) == "planned"
+    else:
+        assert_refused(outcome, "--parents" if damage_it == "2 kept" else "--best-genomes")
+
+
+@pytest.mark.parametrize("where", ["the run", "inside the run", "around the run", "other files", "a file"])
+def test_an_out_of_the_run_or_of_other_files_is_refused(copied, tmp_path, where):
+    run, out = copied
+    out = {"the run": run, "inside the run": os.path.join(run, "measures"), "around the run": str(tmp_path / "v"),
+           "other files": out, "a file": out}[where]
+    if where == "other files":
+        os.makedirs(out)
+        (tmp_path / "m" / "notes.txt").write_text("mine")
+    elif where == "a file":
+        (tmp_path / "m").write_text("mine")
+    assert_refused(attack(landscape_run.main, [run, "--out", out, *TINY], str(tmp_path)), "--out")
+
+
+def test_an_out_of_this_commands_own_files_is_gone_on_from(copied, tmp_path):
+    run, out = copied
+    plan = _planned(run, out, str(tmp_path))
+    os.makedirs(os.path.join(out, "landscape_replay-3"))
+    with open(os.path.join(out, "landscape.json"), "w") as f:
+        json.dump({"identity": plan.identity, "pieces": {}}, f)
+    _planned(run, out, str(tmp_path))
+
+
+@pytest.mark.parametrize("options, differs", [
+    (["--seed", "1"], "seed 0 there, 1 here"), (["--key", "7"], "key 0 there, 7 here"),
+    (["--lives", "3"], "lives 4 there, 3 here"), (["--mutants", "5"], "mutants 9 there, 5 here"),
+])
+def test_measures_of_other_options_are_refused_naming_what_differs(copied, tmp_path, options, differs):
+    run, out = copied
+    plan = _planned(run, out, str(tmp_path))
+    os.makedirs(out)
+    with open(os.path.join(out, "landscape.json"), "w") as f:
+        json.dump({"identity": plan.identity, "pieces": {}}, f)
+    outcome = attack(landscape_run.main, [run, "--out", out, *TINY, *options], str(tmp_path))
+    assert_refused(outcome, "landscape.json")
+    assert differs in outcome.stderr
+
+
+def test_measures_of_another_run_are_refused(copied, tmp_path):
+    run, out = copied
+    plan = _planned(run, out, str(tmp_path))
+    os.makedirs(out)
+    with open(os.path.join(out, "landscape.json"), "w") as f:
+        json.dump({"identity": {**plan.identity, "run_key": "0123456789abcdef"}, "pieces": {}}, f)
+    outcome = attack(landscape_run.main, [run, "--out", out, *TINY], str(tmp_path))
+    assert_refused(outcome, "landscape.json")
+    assert "run_key '0123456789abcdef' there" in outcome.stderr
+
+
+@pytest.mark.parametrize("name", ["landscape.json", "result.json"])
+@pytest.mark.parametrize("how", sorted(HOSTILE_FILE_BYTES))
+def test_a_damaged_record_in_out_is_one_line_naming_it(copied, tmp_path, name, how):
+    run, out = copied
+    plan = _planned(run, out, str(tmp_path))
+    os.makedirs(out)
+    with open(os.path.join(out, name), "w") as f:
+        json.dump({"identity": plan.identity, "pieces": {"random genomes, learning": {"mean": 0.5}}}, f)
+    damage(os.path.join(out, name), how)
+    assert_refused(attack(landscape_run.main, [run, "--out", out, *TINY], str(tmp_path)), name)
+
+
+def test_progress_is_written_atomically(copied, tmp_path, monkeypatch):
+    """landscape.json and result.json go through rundir.write_atomic: a kill leaves the old or the new record."""
+    run, out = copied
+    plan = _planned(run, out, str(tmp_path))
+    os.makedirs(out)
+    with open(os.path.join(out, "landscape.json"), "w") as f:
+        json.dump({"identity": plan.identity, "pieces": {"random genomes, learning": {}, "generation 0, learning": {}}},
+                  f)
+    written = []
+    monkeypatch.setattr(landscape_run, "write_atomic", lambda path, data: written.append(os.path.basename(path)))
+    assert plan.measure()["generations"] == [0]
+    assert written == ["landscape.json", "result.json"]
+
+
+@pytest.mark.parametrize("argv, names", [
+    (["--random", "1e8"], ["--random"]), (["--random", "100000000"], ["--random"]),
+    (["--chunk", "100000000"], ["--chunk"]), (["--lives", "100000000"], ["--lives"]),
+    (["--mutants", "100000000"], ["--mutants"]), (["--walk-length", "100000000"], ["--walk-length"]),
+    (["--walks", "100000000"], ["--walks"]), (["--parents", "100000000"], ["--parents"]),
+    (["--chunk", "200000"], ["--chunk"]),  # 800,000 lives at once: within the lanes, not the memory
+    (["--key", "-1"], ["--key"]), (["--key", "4294967296"], ["--key"]), (["--key", "18446744073709551616"], ["--key"]),
+    (["--seed", "-1"], ["--seed"]), (["--seed", "18446744073709551616"], ["--seed"]),
+    (["--cut", "nan"], ["--cut"]), (["--cut", "1.5"], ["--cut"]), (["--cut", "0,,1"], ["--cut"]),
+    (["--cut", ","], ["--cut"]), (["--cut=-0.5"], ["--cut"]), (["--cut", "inf"], ["--cut"]),
+])
+def test_every_size_and_value_is_bounded(copied, tmp_path, argv, names):
+    run, out = copied
+    assert_refused(attack(landscape_run.main, [run, "--out", out, *TINY, *argv], str(tmp_path)), *names)
+
+
+def test_a_registered_row_is_measured_with_register(copied, tmp_path, monkeypatch):
+    run, out = copied
+    (tmp_path / "my_rows.py").write_text(ROWS_MODULE)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    edit_json(os.path.join(run, "config.json"), lambda info: info["config"].update(condition="EE-LS-mine"))
+    try:
+        outcome = attack(landscape_run.main, [run, "--out", out, *TINY], str(tmp_path))
+        assert_refused(outcome, "--register")
+        outcome = attack(landscape_run.main, [run, "--out", out, *TINY, "--register", "my_rows:ROW"], str(tmp_path))
+        assert assert_contract(outcome) == "planned" and outcome.plan.config.condition == "EE-LS-mine"
+    finally:
+        conditions.CONDITIONS.pop("EE-LS-mine", None)
+        sys.modules.pop("my_rows", None)
+
+
+def _hostile_cases():
+    for action in landscape_run.parser()._actions:
+        if action.nargs == 0:  # --help, --allow-unfinished: no value to attack
+            continue
+        flag = action.option_strings[0] if action.option_strings else None
+        for value in HOSTILE_INTS if action.type is int else HOSTILE_TEXTS:
+            yield pytest.param(flag, value, id=f"{flag or action.dest}={value[:12]!r}")
+
+
+@pytest.mark.parametrize("flag, value", list(_hostile_cases()))
+def test_hostile_values_of_every_option_keep_the_contract(copied, tmp_path, flag, value):
+    run, out = copied
+    try:
+        if flag is None:  # the run itself
+            argv, names = [value, "--out", out, *TINY], ("run", value) if value.strip() else ("run",)
+        else:
+            argv, names = [run, "--out", out, *TINY, flag, value], (flag,)
+        assert_contract(attack(landscape_run.main, argv, str(tmp_path)), *names, argv=argv)
+    finally:
+        conditions.CONDITIONS.pop("EE-LS-mine", None)
