@@ -146,8 +146,13 @@ def accelerator_memory() -> int | None:
         return None
 
 
+#: Host bytes (of the records a run keeps) from which a refusal names them.
+RECORD_SHOWN = 2**26
+
+
 def check_memory(config, lanes: int, what: str, host_bytes: int = 0) -> None:
-    """Raise UsageError in one line, with the estimate and the memory there is, if ``lanes`` lives cannot fit."""
+    """Raise UsageError in one line, with the estimate and the memory there is, if ``lanes`` lives (and ``host_bytes``
+    of the host's own: the records every generation adds) cannot fit."""
     from imrl_jax.cli import UsageError
 
     devices = jax.device_count()
@@ -160,10 +165,13 @@ def check_memory(config, lanes: int, what: str, host_bytes: int = 0) -> None:
     else:
         needed, have, where = memory_needed(config, lanes, devices, host_bytes), available_memory(), "this machine"
     if have is not None and needed > have:
-        raise UsageError(f"memory: {what} needs about {needed / 2**30:.1f} GiB ({lanes:,} lives at once of "
+        # The record of every generation, when it weighs: it grows with generations and seeds, not lanes.
+        record = f"{host_bytes / 2**30:.1f} GiB of per-generation records, " if host_bytes >= RECORD_SHOWN else ""
+        fewer = "fewer generations or seeds" if host_bytes >= needed // 2 else \
+            "fewer seeds, a smaller population, fewer bins or experts"
+        raise UsageError(f"memory: {what} needs about {needed / 2**30:.1f} GiB ({record}{lanes:,} lives at once of "
                          f"{lane_bytes(config) / 2**20:.2f} MiB each, {config.num_experts} experts, {devices} devices; "
-                         f"an estimate) but {where} has {have / 2**30:.1f} GiB available; use fewer seeds, a smaller "
-                         f"population, fewer bins or experts")
+                         f"an estimate) but {where} has {have / 2**30:.1f} GiB available; use {fewer}")
 
 
 def init_distributed(coordinator: str | None, num_processes: int | None, process_id: int | None) -> None:

@@ -49,12 +49,14 @@ class JsonLines:
 class TensorBoard:
     """Progress events as TensorBoard scalars (tensorboardX), one step per unit."""
 
-    def __init__(self, log_dir: str):
+    def __init__(self, log_dir: str, first_step: int = 0):
         try:
             from tensorboardX import SummaryWriter
         except ImportError:
             raise ImportError("--log tensorboard needs tensorboardX: pip install tensorboardX") from None
-        self.writer = SummaryWriter(log_dir)
+        # A resumed run writes again the steps from ``first_step`` on (those after its checkpoint): TensorBoard is told
+        # to drop what earlier processes wrote from there, so that each step is shown once.
+        self.writer = SummaryWriter(log_dir, purge_step=first_step or None)
 
     def write(self, event: dict) -> None:
         if event["kind"] != "progress":
@@ -131,8 +133,9 @@ class Reader:
 LOGS = ("tensorboard",)
 
 
-def check_log(name: str | None) -> None:
-    """Refuse a ``--log`` that cannot be written (before anything is): ValueError naming the option."""
+def check_log(name: str | None, out_dir: str | None = None) -> None:
+    """Refuse a ``--log`` that cannot be written (before anything is): ValueError naming the option; with
+    ``out_dir``, its folder there (``OUT/tensorboard``) must be a folder one can make or write in (nothing is made)."""
     if name is None:
         return
     if name not in LOGS:
@@ -141,8 +144,26 @@ def check_log(name: str | None) -> None:
         import tensorboardX  # noqa: F401
     except ImportError:
         raise ValueError("--log tensorboard: needs tensorboardX (pip install tensorboardX)") from None
+    if out_dir is not None:
+        from imrl_jax.rundir import check_writable
+
+        check_writable(log_folder(name, out_dir), f"--log {name}")
 
 
-def log_for(name: str | None, out_dir: str) -> EventLog:
-    """The event log of a command given ``--log NAME`` (None: the runner's file only) writing under ``out_dir``."""
-    return make_log(os.path.join(out_dir, "tensorboard") if name == "tensorboard" else None)
+def log_folder(name: str, out_dir: str) -> str:
+    """The folder ``--log NAME`` writes under ``out_dir``."""
+    return os.path.join(out_dir, name)
+
+
+def log_for(name: str | None, out_dir: str, first_step: int = 0) -> EventLog:
+    """The event log of a command given ``--log NAME`` (None: the runner's file only) writing under ``out_dir``;
+    ``first_step``: the first unit a resumed command reports (what earlier processes wrote from there is dropped)."""
+    log = make_log()
+    add_log(log, name, out_dir, first_step)
+    return log
+
+
+def add_log(log: EventLog, name: str | None, out_dir: str, first_step: int = 0) -> None:
+    """Add the sink of ``--log NAME`` (None: none) to ``log``: once a resumed command knows its ``first_step``."""
+    if name == "tensorboard":
+        log.sinks.append(TensorBoard(log_folder(name, out_dir), first_step))

@@ -24,13 +24,13 @@ import json
 import os
 import sys
 import time
-from typing import Sequence
+from typing import NamedTuple, Sequence
 
 import jax
 import numpy as np
 
 import imrl_jax
-from imrl_jax.checkpoint import Checkpointer, RunState, git_commit
+from imrl_jax.checkpoint import Checkpointer, RunState, _silence_failed_reads, git_commit
 from imrl_jax import cli, evolve_sweep
 from imrl_jax.cli import UsageError, exit_codes, parse_sets, user_errors
 from imrl_jax.devices import (check_memory, init_distributed, make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
@@ -40,7 +40,7 @@ from imrl_jax import search
 from imrl_jax.ga import GA, make_generation
 from imrl_jax.lifetime import live
 from imrl_jax.networks import trait_names, traits
-from imrl_jax.events import log_for
+from imrl_jax.events import add_log, log_for
 # parser, build_config and build_strategy: evolve's names for them (the study tables build runs' keys with them).
 from imrl_jax.evolve_options import build_config, build_strategy, check_condition, check_sizes, parser
 from imrl_jax.progress import Progress
@@ -48,13 +48,14 @@ from imrl_jax.rundir import (RunDirError, check_unlocked, check_writable, lock_r
                              read_config, write_atomic, write_errno)
 # history_csv, initial_state, seed_keys, evolution_keys and record_traits: evolve's names for them (notebooks use them).
 from imrl_jax.run_state import (RunInterrupted, check_run_dir, check_run_options, evolution_keys,  # noqa: F401
-                                 extend_config_json, generations_recorded, history_csv, initial_state, read_search,
+                                 extend_config_json, generations_recorded, history_bytes, history_csv, initial_state,
+                                 read_search,
                                  record, record_traits, resume_command, seed_keys, write_failed, write_outputs)
 from imrl_jax.strategies import GA_RECORD, describe
 
 __all__ = ["UsageError", "parse_sets", "write_atomic", "parser", "build_config", "build_strategy",  # re-exported
            "history_csv", "initial_state", "seed_keys", "evolution_keys", "record_traits",  # re-exported
-           "run", "make_step", "main"]
+           "run", "plan", "RunPlan", "plan_from_args", "make_step", "main"]
 
 # ----------------------------------------------------------------------------- run
 
@@ -68,107 +69,162 @@ def run(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=N
     locked for the whole run (:func:`imrl_jax.rundir.lock_run_dir`). ``warnings`` are printed once the
     checks pass, ``notes`` too unless ``quiet``. ``registered``: the ``--register`` rows, recorded in config.json.
     ``log="tensorboard"``: the progress is also written for TensorBoard under ``out_dir/tensorboard``.
+    Every check is done first (:func:`plan`), then the run.
     """
+    return plan(config, out_dir, seeds, strategy=strategy, resume=resume, checkpoint_every=checkpoint_every, keep=keep,
+                quiet=quiet, warnings=warnings, notes=notes, registered=registered, log=log).run()
+
+
+def plan(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=None, resume: bool = False,
+         checkpoint_every: int = 1, keep: int = 3, quiet: bool = False, warnings: Sequence[str] = (),
+         notes: Sequence[str] = (), registered: Sequence[str] = (), log: str | None = None) -> "RunPlan":
+    """Every check of :func:`run` (options, the run directory, the memory), nothing written: its plan."""
     strategy = GA(config) if strategy is None else strategy
-    seeds = check_run_options(config, seeds, checkpoint_every, keep, log)
+    seeds = check_run_options(config, seeds, checkpoint_every, keep, log, out_dir)
     check_writable(out_dir)
     check_unlocked(out_dir)  # a live writer is named before anything about what it is writing
     check_run_dir(out_dir, config, seeds, resume, describe(strategy))
     check_memory(config, len(seeds) * config.population_size * config.lives_per_fitness // jax.process_count(),
-                 f"evolving {len(seeds)} seed(s) x {config.population_size} individuals")
-    multihost = jax.process_count() > 1
-    if multihost:  # every process checks before the leader writes
-        from jax.experimental import multihost_utils
+                 f"evolving {len(seeds)} seed(s) x {config.population_size} individuals",
+                 host_bytes=history_bytes(config, len(seeds)))
+    return RunPlan(config, out_dir, seeds, strategy, resume, checkpoint_every, keep, quiet, tuple(warnings),
+                   tuple(notes), tuple(registered), log)
 
-        multihost_utils.sync_global_devices("imrl_jax.evolve: run directory checked")
-    leader = jax.process_index() == 0
 
-    mesh = make_mesh()
-    sharding = population_sharding(mesh, len(seeds), config.population_size)
-    with contextlib.ExitStack() as stack:
-        failure = None
-        if leader:
-            try:
-                make_dir(out_dir)
-                stack.enter_context(lock_run_dir(out_dir))
-                check_run_dir(out_dir, config, seeds, resume, describe(strategy))  # again, locked: another writer may have begun
-                if not resume:  # first, so that the directory is this run's from the start
-                    info = {"config": config.to_dict(), "seeds": seeds, "search": describe(strategy),
-                            **({"register": list(registered)} if registered else {}),
-                            "version": imrl_jax.__version__,
-                            "git_commit": git_commit(), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-                            "devices": len(jax.devices()), "processes": jax.process_count(),
-                            "sharded_axis": sharded_axis(sharding)}
-                    write_atomic(os.path.join(out_dir, "config.json"), json.dumps(info, indent=2).encode())
-            except user_errors() as error:
-                failure = error
-            except OSError as error:
-                if write_errno(error) is None:
-                    raise
-                failure = RunDirError(f"--out: cannot write {error.filename or out_dir} ({error.strerror})")
-        if multihost:  # the others stop with the leader (else they would wait for it in a collective)
+class RunPlan(NamedTuple):
+    """A checked evolution (:func:`plan`); :meth:`execute` carries it out."""
+
+    config: Config
+    out_dir: str
+    seeds: list[int]
+    strategy: object
+    resume: bool
+    checkpoint_every: int
+    keep: int
+    quiet: bool
+    warnings: tuple
+    notes: tuple
+    registered: tuple
+    log: str | None
+
+    def execute(self) -> int:
+        """Run, then say where the outputs are; the exit code."""
+        state = self.run()
+        if jax.process_index() == 0:
+            done = int(state.generation)
+            best = state.history.best[done - 1]
+            print(f"{self.config.condition}: generations 0-{done - 1} x {len(self.seeds)} seed(s) done; best fitness "
+                  f"of generation {done - 1}: max over seeds {float(best.max()):.4f}, mean over seeds "
+                  f"{float(best.mean()):.4f} (per seed {', '.join(f'{b:.3f}' for b in best)}); outputs in "
+                  f"{self.out_dir}")
+        return 0
+
+    def run(self) -> RunState:
+        """Lock, check again, restore a resumed run (read only), then write and evolve; the final state."""
+        config, out_dir, seeds, strategy, resume = self.config, self.out_dir, self.seeds, self.strategy, self.resume
+        multihost = jax.process_count() > 1
+        if multihost:  # every process checks before the leader writes
             from jax.experimental import multihost_utils
 
-            ok = multihost_utils.broadcast_one_to_all(np.asarray(failure is None, np.int32))
-            if not leader and not int(ok):
-                raise RunDirError(f"--out: process 0 could not take {out_dir} (its error says why)")
-            if not leader:
-                make_dir(out_dir)
-        if failure is not None:
-            raise failure
-        for line in [*warnings, *([] if quiet else notes)] if leader else []:
-            print(line, file=sys.stderr, flush=True)
-        state = initial_state(config, seeds, sharding, strategy, mesh)
-        checkpointer = stack.enter_context(contextlib.closing(
-            Checkpointer(os.path.join(out_dir, "checkpoints"), keep=keep)))
-        events = stack.enter_context(contextlib.closing(log_for(log if leader else None, out_dir)))
-        return _evolve(config, out_dir, seeds, state, sharding, mesh, checkpointer, strategy, resume=resume,
-                       checkpoint_every=checkpoint_every, quiet=quiet or not leader, leader=leader, events=events)
+            multihost_utils.sync_global_devices("imrl_jax.evolve: run directory checked")
+        leader = jax.process_index() == 0
+        quiet = self.quiet or not leader
+        mesh = make_mesh()
+        sharding = population_sharding(mesh, len(seeds), config.population_size)
+        with contextlib.ExitStack() as stack:
+            failure = None
+            if leader:
+                try:
+                    make_dir(out_dir)
+                    stack.enter_context(lock_run_dir(out_dir))
+                    check_run_dir(out_dir, config, seeds, resume, describe(strategy))  # again, locked
+                    if not resume:  # first, so that the directory is this run's from the start
+                        info = {"config": config.to_dict(), "seeds": seeds, "search": describe(strategy),
+                                **({"register": list(self.registered)} if self.registered else {}),
+                                "version": imrl_jax.__version__,
+                                "git_commit": git_commit(), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+                                "devices": len(jax.devices()), "processes": jax.process_count(),
+                                "sharded_axis": sharded_axis(sharding)}
+                        write_atomic(os.path.join(out_dir, "config.json"), json.dumps(info, indent=2).encode())
+                except user_errors() as error:
+                    failure = error
+                except OSError as error:
+                    if write_errno(error) is None:
+                        raise
+                    failure = RunDirError(f"--out: cannot write {error.filename or out_dir} ({error.strerror})")
+            if multihost:  # the others stop with the leader (else they would wait for it in a collective)
+                from jax.experimental import multihost_utils
+
+                ok = multihost_utils.broadcast_one_to_all(np.asarray(failure is None, np.int32))
+                if not leader and not int(ok):
+                    raise RunDirError(f"--out: process 0 could not take {out_dir} (its error says why)")
+                if not leader:
+                    make_dir(out_dir)
+            if failure is not None:
+                raise failure
+            for line in [*self.warnings, *([] if self.quiet else self.notes)] if leader else []:
+                print(line, file=sys.stderr, flush=True)
+            _silence_failed_reads()  # Ctrl-C in a save: orbax's threads end without their tracebacks
+            events = stack.enter_context(contextlib.closing(log_for(None, out_dir)))
+            progress = Progress(config.num_generations, quiet=quiet, first_index=0, log=events)
+            state = initial_state(config, seeds, sharding, strategy, mesh)
+            checkpointer = stack.enter_context(contextlib.closing(
+                Checkpointer(os.path.join(out_dir, "checkpoints"), keep=self.keep)))
+            first = 0
+            if resume:  # read only: a refusal here leaves every file as it was
+                state, progress = _restore(config, out_dir, seeds, strategy, state, checkpointer, progress, events,
+                                           quiet)
+                first = int(state.generation)
+                if leader and first:
+                    extend_config_json(out_dir, config)
+            add_log(events, self.log if leader else None, out_dir, first)
+            return _evolve(config, out_dir, seeds, state, sharding, mesh, checkpointer, strategy, progress,
+                           checkpoint_every=self.checkpoint_every, leader=leader)
+
+
+def _restore(config: Config, out_dir: str, seeds: list[int], strategy, state: RunState, checkpointer: Checkpointer,
+             progress: Progress, events, quiet: bool) -> tuple[RunState, Progress]:
+    """A resumed run's state from its latest good checkpoint (generation 0 if it has none) and its progress line;
+    nothing written (raises UsageError if no checkpoint can be read or it is another run's)."""
+    restored = checkpointer.restore_latest(state, warn=lambda text: progress.message(f"warning: {text}"))
+    if restored is None:
+        if checkpointer.steps():
+            raise UsageError(f"--resume: no readable checkpoint in {checkpointer.directory}")
+        recorded = generations_recorded(out_dir)
+        if recorded:  # its checkpoints were removed: said even with --quiet, the generations are redone
+            progress.message(f"warning: {checkpointer.directory} holds no checkpoint, but {out_dir} records "
+                             f"{recorded} generation(s) done: starting again from generation 0 (the same "
+                             f"generations again, bitwise)")
+        else:
+            progress.note(f"no checkpoint in {checkpointer.directory} yet: starting from generation 0")
+        return state, progress
+    state, saved_meta = restored
+    made_by = saved_meta.get("search", GA_RECORD)
+    if made_by != describe(strategy):
+        raise UsageError(f"--strategy: the checkpoint was made by {made_by}, not {describe(strategy)}")
+    if not np.array_equal(state.key_data, np.asarray(jax.random.key_data(seed_keys(seeds)))):
+        raise UsageError("--resume: the checkpoint's keys do not match the seeds")
+    if int(state.generation) > config.num_generations:  # only if config.json was edited by hand
+        raise UsageError(f"--resume: config field num_generations is {config.num_generations} but "
+                         f"{int(state.generation)} generations are done")
+    progress = Progress(config.num_generations, done=int(state.generation), quiet=quiet, first_index=0, log=events,
+                        elapsed=float(saved_meta.get("elapsed_seconds", 0.0)))
+    progress.note(f"resuming {out_dir} after generation {int(state.generation) - 1} "
+                  f"({int(state.generation)} of {config.num_generations} done; checkpoint of commit "
+                  f"{saved_meta.get('git_commit', 'unknown')[:12]})")
+    return state, progress
 
 
 def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sharding, mesh,
-            checkpointer: Checkpointer, strategy, *, resume: bool, checkpoint_every: int, quiet: bool,
-            leader: bool, events=None) -> RunState:
-    """The generations of :func:`run` after its checks (resuming from the latest good checkpoint).
+            checkpointer: Checkpointer, strategy, progress: Progress, *, checkpoint_every: int,
+            leader: bool) -> RunState:
+    """The generations of :func:`run` after its checks and restore, from ``state``'s generation.
 
     Ctrl-C raises :class:`RunInterrupted`; a write the user can fix, :class:`RunWriteError`.
     """
-    progress = Progress(config.num_generations, quiet=quiet, first_index=0, log=events)  # --quiet: no notes
     meta = {"config": config.to_dict(), "seeds": seeds, "search": describe(strategy)}
-    checkpointed = 0
+    checkpointed = int(state.generation)
     try:
-        if resume:
-            restored = checkpointer.restore_latest(state, warn=lambda text: progress.message(f"warning: {text}"))
-            if restored is None:
-                if checkpointer.steps():
-                    raise UsageError(f"--resume: no readable checkpoint in {checkpointer.directory}")
-                recorded = generations_recorded(out_dir)
-                if recorded:  # its checkpoints were removed: said even with --quiet, the generations are redone
-                    progress.message(f"warning: {checkpointer.directory} holds no checkpoint, but {out_dir} records "
-                                     f"{recorded} generation(s) done: starting again from generation 0 (the same "
-                                     f"generations again, bitwise)")
-                else:
-                    progress.note(f"no checkpoint in {checkpointer.directory} yet: starting from generation 0")
-            else:
-                state, saved_meta = restored
-                made_by = saved_meta.get("search", GA_RECORD)
-                if made_by != describe(strategy):
-                    raise UsageError(f"--strategy: the checkpoint was made by {made_by}, not {describe(strategy)}")
-                if not np.array_equal(state.key_data, np.asarray(jax.random.key_data(seed_keys(seeds)))):
-                    raise UsageError("--resume: the checkpoint's keys do not match the seeds")
-                if int(state.generation) > config.num_generations:  # only if config.json was edited by hand
-                    raise UsageError(f"--resume: config field num_generations is {config.num_generations} but "
-                                     f"{int(state.generation)} generations are done")
-                checkpointed = int(state.generation)
-                if leader:
-                    extend_config_json(out_dir, config)
-                progress = Progress(config.num_generations, done=int(state.generation), quiet=quiet, first_index=0,
-                                    log=events,
-                                    elapsed=float(saved_meta.get("elapsed_seconds", 0.0)))
-                progress.note(f"resuming {out_dir} after generation {int(state.generation) - 1} "
-                              f"({int(state.generation)} of {config.num_generations} done; checkpoint of commit "
-                              f"{saved_meta.get('git_commit', 'unknown')[:12]})")
-
         generation = make_step(config, strategy, sharding)
         keys = to_global(evolution_keys(state.key_data), replicated(mesh))
         params = config.learning_params()
@@ -244,54 +300,56 @@ def _write_outputs_from_leader(out_dir: str, config: Config, seeds: Sequence[int
             raise write_failed(error, out_dir, out_dir, int(state.generation), checkpointed) from None
 
 
+def plan_from_args(args) -> RunPlan | evolve_sweep.SweepPlan:
+    """The plan of a parsed command line: a run or a sweep, every check done, nothing written (raises a user error)."""
+    check_sizes(args)
+    registered = cli.register(args.register)
+    check_condition(args)
+    cli.check_cpu_devices(args.cpu_devices)
+    cli.check_out(args.out)
+    # Before anything starts JAX (the task set's checks, a strategy's arrays): later, neither takes effect.
+    use_host_cores(args.cpu_devices or None)
+    init_distributed(args.coordinator, args.num_processes, args.process_id)
+    out_dir = args.out or os.path.join("runs", args.cond + ("-sweep" if args.sweep else ""))
+    if args.sweep or (args.resume and evolve_sweep.is_sweep(out_dir)):
+        return evolve_sweep.plan_from_args(args, out_dir, registered, build_config)
+    if args.zip:
+        raise UsageError("--zip: only with --sweep")
+    saved = None
+    if args.resume:
+        if not os.path.exists(os.path.join(out_dir, "config.json")):
+            raise UsageError(f"--resume: {out_dir} holds no run to resume (no config.json)")
+        saved = read_config(out_dir)
+    config, seeds = build_config(args, saved)
+    strategy = build_strategy(args, config, read_search(out_dir) if args.resume else None)
+    notes = cli.ignored_notes(config, parse_sets(args.set))
+    return plan(config, out_dir, seeds, strategy=strategy, resume=args.resume, checkpoint_every=args.checkpoint_every,
+                keep=args.keep, quiet=args.quiet, warnings=cli.device_warnings(config, args.cpu_devices), notes=notes,
+                registered=registered, log=args.log)
+
+
+def interrupted(stop: KeyboardInterrupt, out_dir: str | None) -> int:
+    """Ctrl-C in one line: how far the run got and how to resume it; exit code 130."""
+    if isinstance(stop, RunInterrupted):
+        where = (f"in generation {stop.done} ({stop.done} of {stop.total} done, {stop.checkpointed} checkpointed)"
+                 if stop.done < stop.total else "after the last generation")
+    else:
+        where = "before the first generation"
+    started = out_dir is not None and any(os.path.exists(os.path.join(out_dir, name))
+                                          for name in ("config.json", evolve_sweep.SWEEP_FILE))
+    print(f"interrupted {where}; " + (f"resume with: {resume_command(out_dir)}" if started else "nothing to resume"),
+          file=sys.stderr)
+    return 130
+
+
 @exit_codes
 def main(argv=None) -> int:
-    out_dir = None
+    checked = None
     try:
-        args = parser().parse_args(argv)
-        check_sizes(args)
-        registered = cli.register(args.register)
-        check_condition(args)
-        cli.check_cpu_devices(args.cpu_devices)
-        cli.check_out(args.out)
-        # Before anything starts JAX (the task set's checks, a strategy's arrays): later, neither takes effect.
-        use_host_cores(args.cpu_devices or None)
-        init_distributed(args.coordinator, args.num_processes, args.process_id)
-        out_dir = args.out or os.path.join("runs", args.cond + ("-sweep" if args.sweep else ""))
-        if args.sweep or (args.resume and evolve_sweep.is_sweep(out_dir)):
-            return evolve_sweep.main(args, out_dir, registered, build_config)
-        if args.zip:
-            raise UsageError("--zip: only with --sweep")
-        saved = None
-        if args.resume:
-            if not os.path.exists(os.path.join(out_dir, "config.json")):
-                raise UsageError(f"--resume: {out_dir} holds no run to resume (no config.json)")
-            saved = read_config(out_dir)
-        config, seeds = build_config(args, saved)
-        strategy = build_strategy(args, config, read_search(out_dir) if args.resume else None)
-        notes = cli.ignored_notes(config, parse_sets(args.set))
-        state = run(config, out_dir, seeds, strategy=strategy, resume=args.resume,
-                    checkpoint_every=args.checkpoint_every,
-                    keep=args.keep, quiet=args.quiet, warnings=cli.device_warnings(config, args.cpu_devices),
-                    notes=notes, registered=registered, log=args.log)
+        checked = plan_from_args(parser().parse_args(argv))
+        return cli.execute(checked)
     except KeyboardInterrupt as stop:
-        if isinstance(stop, RunInterrupted):
-            where = (f"in generation {stop.done} ({stop.done} of {stop.total} done, {stop.checkpointed} checkpointed)"
-                     if stop.done < stop.total else "after the last generation")
-        else:
-            where = "before the first generation"
-        started = out_dir is not None and any(os.path.exists(os.path.join(out_dir, name))
-                                              for name in ("config.json", evolve_sweep.SWEEP_FILE))
-        print(f"interrupted {where}; " + (f"resume with: {resume_command(out_dir)}" if started else
-                                          "nothing to resume"), file=sys.stderr)
-        return 130
-    if jax.process_index() == 0:
-        done = int(state.generation)
-        best = state.history.best[done - 1]
-        print(f"{config.condition}: generations 0-{done - 1} x {len(seeds)} seed(s) done; best fitness of "
-              f"generation {done - 1}: max over seeds {float(best.max()):.4f}, mean over seeds "
-              f"{float(best.mean()):.4f} (per seed {', '.join(f'{b:.3f}' for b in best)}); outputs in {out_dir}")
-    return 0
+        return interrupted(stop, None if checked is None else checked.out_dir)
 
 
 if __name__ == "__main__":

@@ -23,10 +23,9 @@ from __future__ import annotations
 
 import contextlib
 import csv
-import dataclasses
 import io
-import itertools
 import json
+import math
 import os
 import sys
 import time
@@ -36,12 +35,12 @@ import jax
 import numpy as np
 
 import imrl_jax
-from imrl_jax import sweeps
-from imrl_jax.checkpoint import Checkpointer, RunState, git_commit
+from imrl_jax import cli, sweeps
+from imrl_jax.checkpoint import Checkpointer, RunState, _silence_failed_reads, git_commit
 from imrl_jax.cli import UsageError, device_warnings, ignored_notes, parse_sets
 from imrl_jax.config import Config, ConfigError
 from imrl_jax.devices import check_memory, make_mesh, population_sharding, replicated, to_global, to_host
-from imrl_jax.events import log_for
+from imrl_jax.events import add_log, log_for
 from imrl_jax.ga import GAParams, evolve_step
 from imrl_jax.networks import trait_names, traits
 from imrl_jax.progress import Progress
@@ -49,13 +48,12 @@ from imrl_jax.rundir import (RunDirError, check_unlocked, check_writable, entrie
                              read_json, recorded_points, saved_steps, write_atomic, write_errno)
 from imrl_jax.rundir import SWEEP_FILE, is_sweep  # noqa: F401 - the sweep's names for them
 from imrl_jax.run_state import (RunInterrupted, check_run_dir, check_run_options, evolution_keys, extend_config_json,
-                                 initial_state, record, record_traits, write_failed, write_outputs)
+                                 history_bytes, initial_state, record, record_traits, write_failed, write_outputs)
 from imrl_jax.runspec import RunSpec
 from imrl_jax.search import over_seeds
+from imrl_jax.sweeps import MAX_POINTS, parse, swept_fields, swept_value  # noqa: F401 - the sweep's names
 from imrl_jax.strategies import GA_NAME, GA_RECORD
 
-#: At most this many points (each is a run directory and a checkpoint per generation).
-MAX_POINTS = 1000
 
 
 class Point(NamedTuple):
@@ -64,43 +62,6 @@ class Point(NamedTuple):
     settings: dict
     config: Config
     key: str
-
-
-def parse(items: Sequence[str], zipped: bool = False) -> list[dict]:
-    """The points of ``--sweep FIELD=V1,V2,...`` options: their product, or with ``zipped`` their values in step.
-
-    Raises UsageError naming the option and the field (unknown, static, repeated, unreadable value).
-    """
-    values: dict[str, list[float]] = {}
-    for item in items:
-        field, sep, text = item.partition("=")
-        field = field.strip()
-        if not sep or not text.strip():
-            raise UsageError(f"--sweep: expected FIELD=V1,V2,... (got {item!r})")
-        if field not in sweeps.DYNAMIC_FIELDS:
-            if field in {f.name for f in dataclasses.fields(Config)}:
-                raise UsageError(f"--sweep: {field} is static (it changes the program's shapes or loop lengths): "
-                                 f"evolve once per value; sweepable: {', '.join(sweeps.DYNAMIC_FIELDS)}")
-            raise UsageError(f"--sweep: unknown field {field!r} (sweepable: {', '.join(sweeps.DYNAMIC_FIELDS)})")
-        if field in values:
-            raise UsageError(f"--sweep: {field} is given twice (give its values once, comma-separated)")
-        try:
-            values[field] = [float(v) for v in text.split(",")]
-        except ValueError:
-            raise UsageError(f"--sweep: {field}: expected numbers separated by commas (got {text!r})") from None
-    if not values:
-        raise UsageError("--sweep: give at least one FIELD=V1,V2,...")
-    names = list(values)
-    if zipped:
-        counts = {len(v) for v in values.values()}
-        if len(counts) > 1:
-            raise UsageError(f"--zip: every --sweep needs as many values ({', '.join(f'{n}: {len(values[n])}' for n in names)})")
-        combos = list(zip(*values.values()))
-    else:
-        combos = list(itertools.product(*values.values()))
-    if len(combos) > MAX_POINTS:
-        raise UsageError(f"--sweep: {len(combos):,} points; at most {MAX_POINTS:,}")
-    return [dict(zip(names, combo)) for combo in combos]
 
 
 def make_points(config: Config, seeds: Sequence[int], settings: Sequence[dict]) -> list[Point]:
@@ -122,8 +83,8 @@ def make_points(config: Config, seeds: Sequence[int], settings: Sequence[dict]) 
 
 
 def label(values: dict) -> str:
-    """A point's settings in words: ``trace_lambda=0.9, eta=0.3``."""
-    return ", ".join(f"{k}={v:g}" for k, v in values.items())
+    """A point's settings in words: ``trace_lambda=0.9, eta=0.3`` (float32's 9 digits: distinct values read apart)."""
+    return ", ".join(f"{k}={v:.9g}" for k, v in values.items())
 
 
 def sweep_record(config: Config, seeds: Sequence[int], points: Sequence[Point]) -> dict:
@@ -137,10 +98,19 @@ def read_sweep(out_dir: str) -> tuple[Config, list[int], list[dict]]:
     path = os.path.join(out_dir, SWEEP_FILE)
     saved = read_json(path, "")
     try:
-        return (Config.from_dict(saved["config"]), [int(s) for s in saved["seeds"]],
-                [dict(p["settings"]) for p in saved["points"]])
-    except (ConfigError, ValueError, KeyError, TypeError) as error:
+        found = (Config.from_dict(saved["config"]), [int(s) for s in saved["seeds"]],
+                 [dict(p["settings"]) for p in saved["points"]])
+    except (ConfigError, ValueError, KeyError, TypeError, AttributeError) as error:
         raise RunDirError(f"{path} is unreadable ({error})") from None
+    if not found[2]:
+        raise RunDirError(f"{path} records no points (a sweep of none); it is no sweep to resume")
+    for settings in found[2]:
+        for name, value in settings.items():
+            if name not in sweeps.DYNAMIC_FIELDS or isinstance(value, bool) or not isinstance(value, (int, float)) \
+                    or not math.isfinite(value):
+                raise RunDirError(f"{path} is unreadable (a point sets {name!r} to {value!r}: not a swept field's "
+                                  f"finite number)")
+    return found
 
 
 def check_sweep_dir(out_dir: str, config: Config, seeds: Sequence[int], points: Sequence[Point], resume: bool) -> None:
@@ -195,11 +165,21 @@ def run(config: Config, out_dir: str, seeds: Sequence[int], settings: Sequence[d
         checkpoint_every: int = 1, keep: int = 3, quiet: bool = False, log: str | None = None,
         registered: Sequence[str] = ()) -> dict[str, RunState]:
     """Evolve ``config`` at every point of ``settings`` for every seed into ``out_dir``; return each point's final
-    state by key (each point's directory is ``out_dir/KEY``)."""
-    seeds = check_run_options(config, seeds, checkpoint_every, keep, log)
+    state by key (each point's directory is ``out_dir/KEY``). Checked first (:func:`plan`), then run."""
+    return plan(config, out_dir, seeds, settings, resume=resume, checkpoint_every=checkpoint_every, keep=keep,
+                quiet=quiet, log=log, registered=registered).run()
+
+
+def plan(config: Config, out_dir: str, seeds: Sequence[int], settings: Sequence[dict], *, resume: bool = False,
+         checkpoint_every: int = 1, keep: int = 3, quiet: bool = False, log: str | None = None,
+         registered: Sequence[str] = (), lines: Sequence[str] = ()) -> "SweepPlan":
+    """Every check of a sweep, nothing written: the plan :meth:`SweepPlan.run` carries out (raises a user error)."""
+    seeds = check_run_options(config, seeds, checkpoint_every, keep, log, out_dir)
     if keep < 2:
         raise UsageError("--keep: a sweep keeps at least 2 checkpoints a point (killed while saving, its points can be "
                          "a generation apart: each needs the one before to go on together)")
+    if not settings:
+        raise UsageError("--sweep: a sweep needs at least one point")
     if jax.process_count() > 1:
         raise UsageError("--sweep: a sweep runs in one process (its points are its batch); start it without "
                          "--coordinator")
@@ -209,46 +189,116 @@ def run(config: Config, out_dir: str, seeds: Sequence[int], settings: Sequence[d
     for p in points:
         check_unlocked(os.path.join(out_dir, p.key))
     check_sweep_dir(out_dir, config, seeds, points, resume)
-    if resume:
-        check_resumable(out_dir, points)
+    common = resumable_from(out_dir, points) if resume else 0
     lanes = len(points) * len(seeds) * config.population_size * config.lives_per_fitness
     check_memory(config, lanes, f"a sweep of {len(points)} point(s) x {len(seeds)} seed(s) x "
-                                f"{config.population_size} individuals")
-    mesh = make_mesh()
-    sharding = population_sharding(mesh, len(points) * len(seeds), config.population_size)
-    with contextlib.ExitStack() as stack:
-        try:
-            make_dir(out_dir)
-            stack.enter_context(lock_run_dir(out_dir))
-            check_sweep_dir(out_dir, config, seeds, points, resume)  # again, locked
-            info = {**sweep_record(config, seeds, points), "version": imrl_jax.__version__, "git_commit": git_commit(),
-                    "created": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
-            if resume:
-                saved = read_json(os.path.join(out_dir, SWEEP_FILE), "")
-                info = {**saved, "config": config.to_dict()}  # a grown num_generations
-            write_atomic(os.path.join(out_dir, SWEEP_FILE), json.dumps(info, indent=2).encode())
-            for p in points:
-                point_dir = os.path.join(out_dir, p.key)
+                                f"{config.population_size} individuals",
+                 host_bytes=len(points) * history_bytes(config, len(seeds)))
+    return SweepPlan(config, out_dir, seeds, points, resume, checkpoint_every, keep, quiet, log, tuple(registered),
+                     common, tuple(lines))
+
+
+class SweepPlan(NamedTuple):
+    """A checked sweep: its base config, seeds and points, and what the folders said (``common``: the generation
+    a resume goes on from, as the checkpoints' folders tell); :meth:`execute` carries it out."""
+
+    config: Config
+    out_dir: str
+    seeds: list[int]
+    points: list[Point]
+    resume: bool
+    checkpoint_every: int
+    keep: int
+    quiet: bool
+    log: str | None
+    registered: tuple
+    common: int
+    lines: tuple  # warnings and notes, printed once it starts
+
+    def execute(self) -> int:
+        """Run the sweep and say where its points are; the exit code."""
+        states = self.run()
+        done = min(int(s.generation) for s in states.values())
+        print(f"{self.config.condition}: sweep of {len(states)} point(s) x {len(self.seeds)} seed(s), generations "
+              f"0-{done - 1} done; per point in {os.path.join(self.out_dir, 'sweep.csv')}, each point's run in "
+              f"{self.out_dir}/KEY")
+        return 0
+
+    def run(self) -> dict[str, RunState]:
+        """Lock, check again, restore every point (read only), then write the records and evolve."""
+        config, out_dir, seeds, points = self.config, self.out_dir, self.seeds, self.points
+        for line in self.lines:
+            print(line, file=sys.stderr, flush=True)
+        _silence_failed_reads()  # Ctrl-C in a save: orbax's threads end without their tracebacks
+        mesh = make_mesh()
+        sharding = population_sharding(mesh, len(points) * len(seeds), config.population_size)
+        dirs = [os.path.join(out_dir, p.key) for p in points]
+        with contextlib.ExitStack() as stack:
+            try:
+                make_dir(out_dir)
+                stack.enter_context(lock_run_dir(out_dir))
+                for existing in [d for d in dirs if os.path.isdir(d)]:  # a point may be resumed alone meanwhile
+                    stack.enter_context(lock_run_dir(existing))
+                check_sweep_dir(out_dir, config, seeds, points, self.resume)  # again, locked
+                if self.resume and resumable_from(out_dir, points) != self.common:
+                    raise RunDirError(f"--resume: {out_dir} changed while the sweep was being checked; run it again")
+            except OSError as error:
+                raise RunDirError(f"--out: cannot write {error.filename or out_dir} ({error.strerror})") from None
+            events = stack.enter_context(contextlib.closing(log_for(None, out_dir)))
+            progress = Progress(config.num_generations, quiet=self.quiet, first_index=0, log=events)
+            one = population_sharding(mesh, len(seeds), config.population_size)
+            states = [initial_state(p.config, seeds, one) for p in points]
+            checkpointers, first, elapsed = None, 0, 0.0
+            if self.common:  # read only, before anything is written: a refusal here leaves every file as it was
+                checkpointers = [stack.enter_context(contextlib.closing(Checkpointer(os.path.join(d, "checkpoints"),
+                                                                                     keep=self.keep))) for d in dirs]
+                states, first, elapsed = restore(points, states, checkpointers, progress)
+            try:
+                self._write_records(stack)
+            except OSError as error:
+                raise RunDirError(f"--out: cannot write {error.filename or out_dir} ({error.strerror})") from None
+            if checkpointers is None:
+                checkpointers = [stack.enter_context(contextlib.closing(Checkpointer(os.path.join(d, "checkpoints"),
+                                                                                     keep=self.keep))) for d in dirs]
+            add_log(events, self.log, out_dir, first)
+            if first:
+                progress = Progress(config.num_generations, done=first, quiet=self.quiet, first_index=0, log=events,
+                                    elapsed=elapsed)
+                progress.note(f"resuming the sweep in {out_dir} after generation {first - 1} ({first} of "
+                              f"{config.num_generations} done, {len(points)} points)")
+            elif self.resume:
+                progress.note(f"no checkpoint common to the sweep's {len(points)} points yet: starting from "
+                              f"generation 0")
+            return _evolve(config, out_dir, seeds, points, states, checkpointers, sharding, mesh, first=first,
+                           progress=progress, checkpoint_every=self.checkpoint_every)
+
+    def _write_records(self, stack: contextlib.ExitStack) -> None:
+        """sweep.json first (a grown num_generations), then each point's config.json (new, or extended), each point
+        locked (those that were not: new folders) as it is made."""
+        config, out_dir, seeds = self.config, self.out_dir, self.seeds
+        info = {**sweep_record(config, seeds, self.points), "version": imrl_jax.__version__,
+                "git_commit": git_commit(), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+        if self.resume:
+            info = {**read_json(os.path.join(out_dir, SWEEP_FILE), ""), "config": config.to_dict()}
+        write_atomic(os.path.join(out_dir, SWEEP_FILE), json.dumps(info, indent=2).encode())
+        for p in self.points:
+            point_dir = os.path.join(out_dir, p.key)
+            if not os.path.isdir(point_dir):
                 make_dir(point_dir)
                 stack.enter_context(lock_run_dir(point_dir))
-                if not os.path.isfile(os.path.join(point_dir, "config.json")):
-                    info = {"config": p.config.to_dict(), "seeds": seeds, "search": GA_RECORD,
-                            "sweep": {"root": "..", "settings": p.settings},
-                            **({"register": list(registered)} if registered else {}), "version": imrl_jax.__version__,
-                            "git_commit": git_commit(), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
-                    write_atomic(os.path.join(point_dir, "config.json"), json.dumps(info, indent=2).encode())
-                elif resume:
-                    extend_config_json(point_dir, p.config)
-        except OSError as error:
-            raise RunDirError(f"--out: cannot write {error.filename or out_dir} ({error.strerror})") from None
-        one = population_sharding(mesh, len(seeds), config.population_size)
-        states = [initial_state(p.config, seeds, one) for p in points]
-        checkpointers = [stack.enter_context(contextlib.closing(Checkpointer(os.path.join(out_dir, p.key,
-                                                                                          "checkpoints"), keep=keep)))
-                         for p in points]
-        events = stack.enter_context(contextlib.closing(log_for(log, out_dir)))
-        return _evolve(config, out_dir, seeds, points, states, checkpointers, sharding, mesh, resume=resume,
-                       checkpoint_every=checkpoint_every, quiet=quiet, events=events)
+            if not os.path.isfile(os.path.join(point_dir, "config.json")):
+                write_atomic(os.path.join(point_dir, "config.json"),
+                             json.dumps(point_record(p, seeds, self.registered), indent=2).encode())
+            elif self.resume:
+                extend_config_json(point_dir, p.config)
+
+
+def point_record(point: Point, seeds: Sequence[int], registered: Sequence[str] = ()) -> dict:
+    """What a point's config.json holds: its config and seeds, the GA, where its sweep is and what it sets."""
+    return {"config": point.config.to_dict(), "seeds": list(seeds), "search": GA_RECORD,
+            "sweep": {"root": "..", "settings": point.settings},
+            **({"register": list(registered)} if registered else {}), "version": imrl_jax.__version__,
+            "git_commit": git_commit(), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
 
 
 def no_checkpoint(point: Point, steps: list[int], common: int | None = None) -> UsageError:
@@ -259,12 +309,28 @@ def no_checkpoint(point: Point, steps: list[int], common: int | None = None) -> 
                         f"one; resume the points alone (evolve --resume --out {os.path.join('OUT', 'KEY')})")
 
 
-def check_resumable(out_dir: str, points: Sequence[Point]) -> None:
-    """Before anything is written: refuse a sweep some of whose points have checkpoints and some none."""
+def resumable_from(out_dir: str, points: Sequence[Point]) -> int:
+    """The generation a resumed sweep goes on from, as its points' checkpoint folders tell (0: none has any), read
+    before anything is written; refused if a point has none there (raises UsageError saying what to do).
+
+    A sweep goes on from the newest generation every point holds: a point resumed alone past the others goes back
+    there (its later generations are redone in the sweep, bitwise the same), which needs a checkpoint of it there.
+    """
     steps = [saved_steps(os.path.join(out_dir, p.key, "checkpoints")) for p in points]
-    if any(steps) and not all(steps):
-        i = steps.index([])
-        raise no_checkpoint(points[i], [])
+    if not any(steps):
+        return 0
+    if not all(steps):  # starting every point again would throw the others' generations away
+        raise no_checkpoint(points[steps.index([])], [])
+    common = min(s[-1] for s in steps)
+    for p, saved in zip(points, steps):
+        if saved[0] > common:
+            raise UsageError(
+                f"--resume: point {p.key} ({label(p.settings)}) was resumed alone to generation {saved[-1]}: it keeps "
+                f"checkpoints of {', '.join(map(str, saved))} generations, none of {common} or fewer where the other "
+                f"points are, and a sweep goes on from the generation every point holds; extend the others alone "
+                f"first (evolve --resume --out {os.path.join(out_dir, 'KEY')} --generations {saved[-1]}), then resume "
+                f"the sweep")
+    return common
 
 
 def restore(points: Sequence[Point], states: list[RunState], checkpointers: Sequence[Checkpointer],
@@ -294,21 +360,10 @@ def restore(points: Sequence[Point], states: list[RunState], checkpointers: Sequ
 
 
 def _evolve(config: Config, out_dir: str, seeds: list[int], points: Sequence[Point], states: list[RunState],
-            checkpointers: Sequence[Checkpointer], sharding, mesh, *, resume: bool, checkpoint_every: int,
-            quiet: bool, events) -> dict[str, RunState]:
-    """The generations of :func:`run` after its checks (resuming from the newest generation every point has)."""
+            checkpointers: Sequence[Checkpointer], sharding, mesh, *, first: int, progress: Progress,
+            checkpoint_every: int) -> dict[str, RunState]:
+    """The generations of :func:`run` after its checks and restore, from generation ``first``."""
     num_seeds = len(seeds)
-    progress = Progress(config.num_generations, quiet=quiet, first_index=0, log=events)
-    first, elapsed = 0, 0.0
-    if resume:
-        states, first, elapsed = restore(points, states, checkpointers, progress)
-        if first:
-            progress = Progress(config.num_generations, done=first, quiet=quiet, first_index=0, log=events,
-                                elapsed=elapsed)
-            progress.note(f"resuming the sweep in {out_dir} after generation {first - 1} ({first} of "
-                          f"{config.num_generations} done, {len(points)} points)")
-        else:
-            progress.note(f"no checkpoint common to the sweep's {len(points)} points yet: starting from generation 0")
     progress.note(f"sweep of {len(points)} point(s) x {num_seeds} seed(s) of {config.condition} in one program: "
                   + "; ".join(f"{p.key} {label(p.settings)}" for p in points))
     step = make_sweep_step(config, sharding)
@@ -382,7 +437,7 @@ def summary_csv(points: Sequence[Point], states: Sequence[RunState], last: int =
     for p, state in zip(points, states):
         done = int(state.generation)
         per_seed = np.asarray(state.history.best[max(done - last, 0):done]).mean(0) if done else np.full(1, np.nan)
-        writer.writerow([f"{p.settings.get(f, float('nan')):g}" for f in fields]
+        writer.writerow([repr(float(p.settings.get(f, float("nan")))) for f in fields]  # round-trip exact
                         + [p.key, done, f"{per_seed.mean():.6f}", f"{per_seed.std():.6f}"])
     return out.getvalue()
 
@@ -401,9 +456,9 @@ def write_summary(out_dir: str, config: Config, points: Sequence[Point], states:
              os.path.join(out_dir, "sweep.png"))
 
 
-def main(args, out_dir: str, registered: Sequence[str], build_config) -> int:
-    """The evolve command for a sweep (``--sweep``, or ``--resume`` of a sweep's directory); ``build_config``: the
-    command's, from its parsed arguments."""
+def plan_from_args(args, out_dir: str, registered: Sequence[str], build_config) -> SweepPlan:
+    """The evolve command's plan for a sweep (``--sweep``, or ``--resume`` of a sweep's directory), every check
+    done and nothing written; ``build_config``: the command's, from its parsed arguments."""
     if args.strategy not in (None, GA_NAME) or args.strategy_set:
         raise UsageError("--strategy: a sweep evolves with the paper's GA (its mutation values may be swept)")
     saved = None
@@ -412,18 +467,24 @@ def main(args, out_dir: str, registered: Sequence[str], build_config) -> int:
             raise UsageError(f"--resume: {out_dir} holds no sweep to resume (no {SWEEP_FILE})")
         base, seeds, settings = read_sweep(out_dir)
         saved = (base, seeds)
-    config, seeds = build_config(args, saved)
     if args.sweep:
         settings = parse(args.sweep, args.zip)
-    for line in device_warnings(config, args.cpu_devices) + ignored_notes(config, parse_sets(args.set)):
-        print(line, file=sys.stderr, flush=True)
-    states = run(config, out_dir, seeds, settings, resume=args.resume,
-                              checkpoint_every=args.checkpoint_every, keep=args.keep, quiet=args.quiet, log=args.log,
-                              registered=registered)
-    done = min(int(s.generation) for s in states.values())
-    print(f"{config.condition}: sweep of {len(states)} point(s) x {len(seeds)} seed(s), generations 0-{done - 1} "
-          f"done; per point in {os.path.join(out_dir, 'sweep.csv')}, each point's run in {out_dir}/KEY")
-    return 0
+    sets = parse_sets(args.set)
+    swept = swept_fields(settings)
+    for name, value in sets.items():  # the point's value would silently win
+        if name in swept:
+            raise UsageError(f"--set {name}={value}: {name} is swept (--sweep {swept[name]}=...); give its values "
+                             f"there")
+    config, seeds = build_config(args, saved)
+    lines = device_warnings(config, args.cpu_devices) + ([] if args.quiet else ignored_notes(config, sets))
+    return plan(config, out_dir, seeds, settings, resume=args.resume, checkpoint_every=args.checkpoint_every,
+                keep=args.keep, quiet=args.quiet, log=args.log, registered=registered, lines=lines)
 
 
-__all__ = ["Point", "parse", "make_points", "read_sweep", "is_sweep", "recorded_points", "run", "summary_csv", "main"]
+def main(args, out_dir: str, registered: Sequence[str], build_config) -> int:
+    """The evolve command for a sweep: its plan (:func:`plan_from_args`) carried out."""
+    return cli.execute(plan_from_args(args, out_dir, registered, build_config))
+
+
+__all__ = ["Point", "parse", "make_points", "read_sweep", "is_sweep", "recorded_points", "run", "plan", "SweepPlan",
+           "plan_from_args", "summary_csv", "main"]

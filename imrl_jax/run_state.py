@@ -245,23 +245,39 @@ def resume_command(out_dir: str) -> str:
 
 
 def check_run_options(config: Config, seeds: Sequence[int], checkpoint_every: int, keep: int,
-                      log: str | None) -> list[int]:
-    """The seeds as a list, once the options of a run are good (raises UsageError naming the option)."""
+                      log: str | None, out_dir: str | None = None) -> list[int]:
+    """The seeds as a list, once the options of a run are good (raises UsageError naming the option; with ``out_dir``,
+    a ``--log`` whose folder there cannot be made or written too)."""
     if not config.spec.evolved:
         raise UsageError(f"--cond: {config.condition} is not evolved (it learns each task from scratch); "
                          f"test it with: python -m imrl_jax.learning_test --cond {config.condition} --out DIR")
     seeds = [int(s) for s in seeds]
     if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
         raise UsageError("--seeds: need at least one seed, all distinct and non-negative")
+    if max(seeds) >= 2**32:  # a seed is a uint32 key
+        raise UsageError(f"--seeds: every seed must be below 2^32 (a uint32 key; got {max(seeds):,})")
     if checkpoint_every < 1:
         raise UsageError("--checkpoint-every: must be at least 1")
     if keep < 1:
         raise UsageError("--keep: must be at least 1 (a run keeps its latest checkpoint to resume from)")
     try:
-        check_log(log)
+        check_log(log, out_dir)
     except ValueError as error:
         raise UsageError(str(error)) from None
     return seeds
+
+
+#: Characters of history.csv a number takes (its digits and comma), and bytes of memory each character takes while
+#: the text is made (io.StringIO's buffer of 4-byte characters, the text, its encoding).
+CSV_CHARACTERS, CSV_BYTES = 12, 6
+
+
+def history_bytes(config: Config, num_seeds: int) -> int:
+    """Bytes of host memory a run's record of every generation takes: its history and traits (RunState.history,
+    .traits: float32, held about three times while recorded and saved) and history.csv's text made from them."""
+    numbers = 3 + config.num_tasks + 2 * len(trait_names(config))  # best, mean, std, each task's, each trait's two
+    row = 3 * 4 * numbers + CSV_BYTES * CSV_CHARACTERS * (2 + numbers)  # and the generation's and seed's columns
+    return config.num_generations * num_seeds * row
 
 
 def generations_recorded(out_dir: str) -> int:

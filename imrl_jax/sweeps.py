@@ -28,12 +28,14 @@ from __future__ import annotations
 import dataclasses
 import functools
 import itertools
+import math
 from typing import Callable, NamedTuple, Sequence
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from imrl_jax.cli import UsageError
 from imrl_jax.config import Config, LearningParams
 from imrl_jax import search
 from imrl_jax.ga import GA, GAParams
@@ -75,6 +77,76 @@ class EvolutionCurves(NamedTuple):
 
 
 DYNAMIC_FIELDS = LearningParams._fields + GAParams._fields + ("eta",)
+
+
+#: At most this many points in a sweep of the evolve command (each is a run directory and a checkpoint per generation).
+MAX_POINTS = 1000
+
+
+def parse(items: Sequence[str], zipped: bool = False) -> list[dict]:
+    """The points of ``--sweep FIELD=V1,V2,...`` options: their product, or with ``zipped`` their values in step.
+
+    Raises UsageError naming the option and the field (unknown, static, repeated, unreadable value).
+    """
+    values: dict[str, list[float]] = {}
+    for item in items:
+        field, sep, text = item.partition("=")
+        field = field.strip()
+        if not sep or not text.strip():
+            raise UsageError(f"--sweep: expected FIELD=V1,V2,... (got {item!r})")
+        if field not in DYNAMIC_FIELDS:
+            if field in {f.name for f in dataclasses.fields(Config)}:
+                raise UsageError(f"--sweep: {field} is static (it changes the program's shapes or loop lengths): "
+                                 f"evolve once per value; sweepable: {', '.join(DYNAMIC_FIELDS)}")
+            raise UsageError(f"--sweep: unknown field {field!r} (sweepable: {', '.join(DYNAMIC_FIELDS)})")
+        if field in values:
+            raise UsageError(f"--sweep: {field} is given twice (give its values once, comma-separated)")
+        texts = [v.strip() for v in text.split(",")]
+        values[field] = [swept_value(field, v, text) for v in texts]
+        if not zipped:  # in step, a value may come again beside others
+            for i, value in enumerate(values[field]):
+                if value in values[field][:i]:
+                    raise UsageError(f"--sweep: {field}: {texts[values[field].index(value)]} and {texts[i]} are one "
+                                     f"value in float32 ({value!r}), one point: give it once")
+    if not values:
+        raise UsageError("--sweep: give at least one FIELD=V1,V2,...")
+    names = list(values)
+    if zipped:
+        counts = {len(v) for v in values.values()}
+        if len(counts) > 1:
+            raise UsageError(f"--zip: every --sweep needs as many values ({', '.join(f'{n}: {len(values[n])}' for n in names)})")
+        combos = list(zip(*values.values()))
+    else:
+        combos = list(itertools.product(*values.values()))
+    if len(combos) > MAX_POINTS:
+        raise UsageError(f"--sweep: {len(combos):,} points; at most {MAX_POINTS:,}")
+    return [dict(zip(names, combo)) for combo in combos]
+
+
+def swept_value(field: str, text: str, given: str = "") -> float:
+    """The value a swept number means: the float32 the program computes with, as the shortest decimal that gives it
+    (so that ``0.9`` stays ``0.9``, the key of ``--set field=0.9``; ``-0`` and ``1e-320`` are ``0``), refused in one
+    line if it is no finite number or beyond float32's range."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise UsageError(f"--sweep: {field}: expected numbers separated by commas (got {given or text!r})") from None
+    if not math.isfinite(value):
+        raise UsageError(f"--sweep: {field}: {text.strip()} is not a finite number")
+    with np.errstate(over="ignore", under="ignore"):
+        single = np.float32(value)
+    if not np.isfinite(single):
+        raise UsageError(f"--sweep: {field}: {text.strip()} is beyond the range of float32 (the program's numbers)")
+    return float(str(single)) + 0.0  # + 0.0: -0.0 is 0.0
+
+
+def swept_fields(settings: Sequence[dict]) -> dict[str, str]:
+    """Every config field the points set: field -> the swept name that sets it (``eta`` sets every rate)."""
+    found = {}
+    for values in settings:
+        for name in values:
+            found.update({field: name for field in (ETA_FIELDS if name == "eta" else (name,))})
+    return found
 
 
 def changed(config: Config, **values) -> Config:

@@ -94,3 +94,40 @@ def test_a_log_that_cannot_be_written_is_refused_before_anything_is(tmp_path, ca
     assert evolve.main([*evolve_args(generations=1), "--out", str(out), "--log", "wandb"]) == 2
     assert capsys.readouterr().err == "error: --log: unknown log 'wandb' (choose from tensorboard)\n"
     assert not out.exists()
+
+
+def _shown(folder, tag="fitness/best") -> list[int]:
+    """The steps of ``tag`` TensorBoard shows from the event files in ``folder``: a writer's purge (a session START at
+    step s) hides what earlier writers wrote from step s on."""
+    from tensorboardX.proto import event_pb2
+
+    events_seen = []
+    for name in os.listdir(folder):
+        data = open(os.path.join(folder, name), "rb").read()
+        at = 0
+        while at < len(data):
+            length = struct.unpack("<Q", data[at:at + 8])[0]
+            events_seen.append(event_pb2.Event.FromString(data[at + 12:at + 12 + length]))
+            at += 12 + length + 4
+    steps = []
+    for event in sorted(events_seen, key=lambda e: e.wall_time):
+        if event.HasField("session_log") and event.session_log.status == event_pb2.SessionLog.START:
+            steps = [s for s in steps if s < event.step]
+        steps += [event.step for value in event.summary.value if value.tag == tag]
+    return steps
+
+
+def test_a_resumed_run_does_not_show_its_redone_generations_twice_in_tensorboard(tmp_path):
+    """Resumed from an older checkpoint, a run wrote again the steps of the generations it redid."""
+    pytest.importorskip("tensorboardX")
+    import shutil
+
+    from imrl_jax import evolve
+
+    out = tmp_path / "run"
+    args = evolve_args(seeds=1, population=4, parents=2, generations=2, task_steps=200, bins=1)
+    assert evolve.main([*args, "--out", str(out), "--log", "tensorboard"]) == 0
+    assert _shown(out / "tensorboard") == [0, 1]
+    shutil.rmtree(out / "checkpoints" / "2")  # killed while saving generation 1: it is redone
+    assert evolve.main(["--resume", "--out", str(out), "--log", "tensorboard", "--quiet"]) == 0
+    assert len(os.listdir(out / "tensorboard")) == 2 and _shown(out / "tensorboard") == [0, 1]

@@ -638,3 +638,67 @@ def test_the_condition_check_names_the_option(argv, message):
     with pytest.raises(evolve.UsageError) as error:
         evolve_options.check_condition(evolve_options.parser().parse_args(argv))
     assert str(error.value).startswith(message)
+
+
+# ----------------------------------------------------------------------------- refusals, planned before anything is written
+
+def _made_run(root, seeds=(0, 1)):
+    """A run's folder as a run that never reached its first checkpoint leaves it (config.json), made without running."""
+    import json
+
+    config = make_config("small", condition="EE-LS", population_size=4, num_parents=2, task_steps=200, num_bins=1)
+    os.makedirs(root)
+    with open(os.path.join(root, "config.json"), "w") as f:
+        json.dump({"config": config.to_dict(), "seeds": list(seeds)}, f)
+
+
+def test_the_main_plans_then_executes_and_writes_nothing_before(tmp_path):
+    from attack import attack
+
+    out = str(tmp_path / "run")
+    outcome = attack(evolve.main, [*TINY, "--generations", "2", "--out", out], str(tmp_path))
+    assert outcome.planned and outcome.code == 0 and not outcome.changed and not os.path.exists(out)
+    assert isinstance(outcome.plan, evolve.RunPlan) and outcome.plan.seeds == [0, 1]
+
+
+@pytest.mark.parametrize("args", [["--first-seed", "18446744073709551616"], ["--first-seed", "4294967295", "--seeds", "2"],
+                                  ["--seeds", "18446744073709551616"], ["--first-seed", "-1"]])
+def test_seeds_past_32_bits_are_refused_in_one_line(tmp_path, args):
+    from attack import assert_refused, attack
+
+    assert_refused(attack(evolve.main, [*TINY, *args, "--out", str(tmp_path / "run")], str(tmp_path)), "--seeds",
+                   "--first-seed")
+
+
+def test_a_run_recording_seeds_past_32_bits_is_refused_in_one_line(tmp_path):
+    from attack import assert_refused, attack
+
+    root = str(tmp_path / "run")
+    for seeds in ([2**64], [2**32]):
+        shutil.rmtree(root, ignore_errors=True)
+        _made_run(root, seeds)
+        assert_refused(attack(evolve.main, ["--resume", "--out", root], root), "--seeds")
+
+
+def test_a_run_whose_records_outgrow_the_memory_is_refused(tmp_path):
+    """--generations 1000000 --seeds 1000 passed the estimate and failed at 36 GB after writing config.json."""
+    from attack import assert_refused, attack
+
+    outcome = attack(evolve.main, ["--cond", "EE-LS", "--preset", "small", "--generations", "1000000", "--seeds", "1000",
+                                   "--out", str(tmp_path / "run")], str(tmp_path))
+    assert_refused(outcome, "memory")
+    assert "GiB of per-generation records" in outcome.stderr
+
+
+def test_a_resume_with_an_unwritable_tensorboard_folder_is_refused_and_nothing_is_written(tmp_path):
+    pytest.importorskip("tensorboardX")
+    from attack import assert_refused, attack
+
+    root = str(tmp_path / "run")
+    _made_run(root)
+    with open(os.path.join(root, "tensorboard"), "w") as f:
+        f.write("a file where the folder goes")
+    assert_refused(attack(evolve.main, ["--resume", "--out", root, "--log", "tensorboard"], root), "--log tensorboard")
+    new = str(tmp_path / "new" / "run")  # a new run: its folder would be made, nothing is made to check it
+    outcome = attack(evolve.main, [*TINY, "--out", new, "--log", "tensorboard"], str(tmp_path))
+    assert outcome.planned and not outcome.changed

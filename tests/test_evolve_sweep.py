@@ -192,3 +192,144 @@ def test_a_sweep_that_cannot_go_on_together_or_differs_is_refused_and_nothing_ch
     assert capsys.readouterr().err.startswith("error: --keep: a sweep keeps at least 2 checkpoints a point")
     after = {os.path.join(d, f): os.path.getmtime(os.path.join(d, f)) for d, _, fs in os.walk(copy) for f in fs}
     assert after == before and not (tmp_path / "new").exists()
+
+
+# ----------------------------------------------------------------------------- refusals, planned before anything is written
+
+def _made_sweep(root, settings=(dict(gamma=0.5), dict(gamma=0.9)), generations=8, steps=((6, 7, 8), (6, 7, 8)),
+                extended=None):
+    """A sweep's folder as a sweep leaves it (sweep.json, each point's config.json, checkpoint folders of ``steps``),
+    made without running it; ``extended``: (point index, generations) of a point resumed alone that far."""
+    from imrl_jax.config import make_config
+
+    config = make_config("small", condition="EE-LS", num_generations=generations, population_size=4, num_parents=2,
+                         task_steps=200, childhood_steps=200, num_bins=1)
+    seeds = [0, 1]
+    points = evolve_sweep.make_points(config, seeds, list(settings))
+    os.makedirs(root)
+    with open(os.path.join(root, "sweep.json"), "w") as f:
+        json.dump(evolve_sweep.sweep_record(config, seeds, points), f)
+    for i, (p, saved) in enumerate(zip(points, steps)):
+        if extended is not None and extended[0] == i:
+            p = p._replace(config=p.config.replace(num_generations=extended[1]))
+        for step in saved:
+            os.makedirs(os.path.join(root, p.key, "checkpoints", str(step), "state"))
+        with open(os.path.join(root, p.key, "config.json"), "w") as f:
+            json.dump(evolve_sweep.point_record(p, seeds), f)
+    return points
+
+
+def test_a_sweep_resume_past_a_point_resumed_alone_is_refused_in_one_line_and_nothing_is_written(tmp_path):
+    """Refused after it had rewritten sweep.json to 16 generations and added "extended" to every point's config.json."""
+    from attack import assert_refused, attack
+
+    root = str(tmp_path / "sweep")
+    points = _made_sweep(root, steps=((6, 7, 8), (12, 13, 14)), extended=(1, 14))
+    outcome = attack(evolve.main, ["--resume", "--out", root, "--generations", "16"], root)
+    assert_refused(outcome, points[1].key)
+    assert "was resumed alone to generation 14" in outcome.stderr and "none of 8 or fewer" in outcome.stderr
+    assert f"--out {os.path.join(root, 'KEY')} --generations 14" in outcome.stderr
+    # the same sweep whose points all hold generation 8 goes on from there
+    other = str(tmp_path / "together")
+    _made_sweep(other, steps=((6, 7, 8), (8,)))
+    outcome = attack(evolve.main, ["--resume", "--out", other, "--generations", "16"], other)
+    assert outcome.planned and outcome.plan.common == 8 and not outcome.changed
+
+
+def test_a_sweep_resume_with_an_unwritable_tensorboard_folder_is_refused_and_nothing_is_written(tmp_path):
+    pytest.importorskip("tensorboardX")
+    from attack import assert_refused, attack
+
+    root = str(tmp_path / "sweep")
+    _made_sweep(root)
+    with open(os.path.join(root, "tensorboard"), "w") as f:
+        f.write("a file where the folder goes")
+    outcome = attack(evolve.main, ["--resume", "--out", root, "--generations", "16", "--log", "tensorboard"], root)
+    assert_refused(outcome, "--log tensorboard")
+
+
+def test_values_equal_in_float32_are_one_point_and_minus_0_is_0_in_its_key(tmp_path):
+    from attack import assert_refused, attack
+
+    from imrl_jax.config import make_config
+
+    base = [*BASE, "--generations", "2", "--out", str(tmp_path / "s")]
+    for values in ("-0,0", "1e-320,0", "0.9,0.900000001"):
+        outcome = attack(evolve.main, [*base, "--sweep", f"gamma={values}"], str(tmp_path))
+        assert_refused(outcome, "gamma")
+        assert f"--sweep: gamma: {values.replace(',', ' and ')} are one value in float32" in outcome.stderr
+    for value in ("nan", "inf", "-inf", "1e39"):
+        assert_refused(attack(evolve.main, [*base, "--sweep", f"gamma=0.5,{value}"], str(tmp_path)), "gamma")
+    outcome = attack(evolve.main, [*base, "--sweep", "gamma=-0,0.900000001"], str(tmp_path))
+    assert outcome.planned and not outcome.changed
+    zero, point = outcome.plan.points
+    assert zero.settings == {"gamma": 0.0} and np.copysign(1.0, zero.settings["gamma"]) == 1.0
+    assert point.settings == {"gamma": 0.9}  # the float32 0.900000001 is, as the shortest decimal that gives it
+    config = make_config("small", condition="EE-LS", population_size=6, num_parents=2, task_steps=1000, num_bins=2,
+                         target_radius=40.0, num_generations=2)
+    assert zero.key == RunSpec.make(config.replace(gamma=0.0), [0, 1]).key()  # what a study asking for 0 looks up
+    assert point.key == RunSpec.make(config.replace(gamma=0.9), [0, 1]).key()
+
+
+def test_set_of_a_swept_field_is_refused_not_dropped(tmp_path):
+    from attack import assert_refused, attack
+
+    base = [*BASE, "--generations", "2", "--out", str(tmp_path / "s")]
+    assert_refused(attack(evolve.main, [*base, "--sweep", "gamma=0.5,0.9", "--set", "gamma=0.3"], str(tmp_path)),
+                   "--set gamma=0.3")
+    assert_refused(attack(evolve.main, [*base, "--sweep", "eta=0.1,0.2", "--set", "eta_actor=0.3"], str(tmp_path)),
+                   "--set eta_actor=0.3")
+    root = str(tmp_path / "made")
+    _made_sweep(root)
+    assert_refused(attack(evolve.main, ["--resume", "--out", root, "--set", "gamma=0.3"], root), "--set gamma=0.3")
+
+
+def test_sweep_csv_prints_values_round_trip_exact():
+    from imrl_jax.checkpoint import RunState, empty_history
+    from imrl_jax.config import make_config
+
+    config = make_config("small", condition="EE-LS")
+    settings = [dict(gamma=float(np.float32(0.1))), dict(gamma=float(np.nextafter(np.float32(0.1), np.float32(1))))]
+    points = evolve_sweep.make_points(config, [0], settings)
+    state = RunState(np.asarray(0), None, None, None, None, empty_history(config.num_generations, 1, 6))
+    rows = list(csv.DictReader(evolve_sweep.summary_csv(points, [state, state]).splitlines()))
+    assert [float(r["gamma"]) for r in rows] == [s["gamma"] for s in settings]  # were both "0.1"
+
+
+def test_a_sweep_of_no_points_is_refused_in_one_line(tmp_path):
+    from attack import assert_refused, attack, edit_json
+
+    root = str(tmp_path / "sweep")
+    _made_sweep(root)
+    edit_json(os.path.join(root, "sweep.json"), lambda saved: saved.update(points=[]))
+    assert_refused(attack(evolve.main, ["--resume", "--out", root], root), "sweep.json")
+    for hostile in ([{"settings": {"gamma": "x"}, "key": "k"}], [{"settings": {"bogus": 1}, "key": "k"}], [1]):
+        edit_json(os.path.join(root, "sweep.json"), lambda saved: saved.update(points=hostile))
+        assert_refused(attack(evolve.main, ["--resume", "--out", root], root), "sweep.json")
+    from imrl_jax.config import make_config
+
+    with pytest.raises(evolve_sweep.UsageError, match="at least one point"):  # a sweep.json of none, or run()'s
+        evolve_sweep.plan(make_config("small", condition="EE-LS"), str(tmp_path / "new"), [0], [])
+
+
+def test_a_sweep_whose_records_outgrow_the_memory_is_refused_before_any_folder(tmp_path):
+    """--generations 1000000 --seeds 1000 passed the estimate and failed at 36 GB, after writing 1,000 point folders."""
+    from attack import assert_refused, attack
+
+    outcome = attack(evolve.main, ["--cond", "EE-LS", "--preset", "small", "--generations", "1000000", "--seeds", "1000",
+                                   "--sweep", "gamma=0.5,0.9", "--out", str(tmp_path / "s")], str(tmp_path))
+    assert_refused(outcome, "memory")
+    assert "GiB of per-generation records" in outcome.stderr and "use fewer generations or seeds" in outcome.stderr
+
+
+def test_a_resume_whose_checkpoints_cannot_be_read_is_refused_before_anything_is_written(tmp_path, capsys):
+    """The restore runs after the lock and before any write: sweep.json and the points' config.json as they were."""
+    from attack import tree
+
+    root = str(tmp_path / "sweep")
+    _made_sweep(root)  # checkpoint folders orbax cannot read
+    before = tree(root)
+    assert evolve.main(["--resume", "--out", root, "--generations", "16", "--quiet"]) == 2
+    err = [line for line in capsys.readouterr().err.splitlines() if not line.startswith("warning: ")]
+    assert len(err) == 1 and err[0].startswith("error: --resume: point ") and "has no readable checkpoint" in err[0]
+    assert tree(root) == before
