@@ -43,7 +43,7 @@ from imrl_jax.networks import trait_names, traits
 from imrl_jax.events import add_log, log_for
 # parser, build_config and build_strategy: evolve's names for them (the study tables build runs' keys with them).
 from imrl_jax.evolve_options import build_config, build_strategy, check_condition, check_sizes, parser
-from imrl_jax.progress import Progress
+from imrl_jax.progress import Progress, cost_line
 from imrl_jax.rundir import (RunDirError, check_unlocked, check_writable, lock_run_dir, make_dir,
                              read_config, write_atomic, write_errno)
 # history_csv, initial_state, seed_keys, evolution_keys and record_traits: evolve's names for them (notebooks use them).
@@ -230,6 +230,12 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
         params = config.learning_params()
         lane_steps = len(seeds) * config.population_size * config.lives_per_fitness * config.lifetime_steps
         first = int(state.generation)
+        if first < config.num_generations:  # what it will cost, before the compilation it waits for
+            progress.note(cost_line(f"evolving {config.condition}: {len(seeds)} seed(s) x {config.population_size} "
+                                    f"individuals x {config.num_generations - first} generation(s)",
+                                    len(seeds) * config.population_size * config.lives_per_fitness, lane_steps,
+                                    config.num_generations - first, jax.default_backend()))
+            progress.note("compiling the generation (its first line comes once it is compiled and run) ...")
         if trait_names(config):
             trait_values = jax.jit(jax.vmap(jax.vmap(lambda genome: traits(config, genome))))
         for g in range(first, config.num_generations):

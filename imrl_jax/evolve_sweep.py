@@ -43,7 +43,7 @@ from imrl_jax.devices import check_memory, make_mesh, population_sharding, repli
 from imrl_jax.events import add_log, log_for
 from imrl_jax.ga import GAParams, evolve_step
 from imrl_jax.networks import trait_names, traits
-from imrl_jax.progress import Progress
+from imrl_jax.progress import Progress, cost_line
 from imrl_jax.rundir import (RunDirError, check_unlocked, check_writable, entries, lock_run_dir, make_dir, not_empty,
                              read_json, recorded_points, saved_steps, write_atomic, write_errno)
 from imrl_jax.rundir import SWEEP_FILE, is_sweep  # noqa: F401 - the sweep's names for them
@@ -373,6 +373,12 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], points: Sequence[Poi
     params, ga = (jax.tree.map(lambda x: to_global(x, replicated(mesh)), tree) for tree in (params, ga))
     populations = to_global(np.concatenate([to_host(s.populations) for s in states]), sharding)
     lane_steps = len(points) * num_seeds * config.population_size * config.lives_per_fitness * config.lifetime_steps
+    if first < config.num_generations:  # what it will cost, before the compilation it waits for
+        progress.note(cost_line(f"evolving {len(points)} point(s) x {num_seeds} seed(s) x {config.population_size} "
+                                f"individuals x {config.num_generations - first} generation(s)",
+                                len(points) * num_seeds * config.population_size * config.lives_per_fitness, lane_steps,
+                                config.num_generations - first, jax.default_backend()))
+        progress.note("compiling the generation of every point (its first line comes once it is compiled and run) ...")
     names = trait_names(config)
     trait_values = jax.jit(jax.vmap(jax.vmap(lambda genome: traits(config, genome)))) if names else None
     done = first

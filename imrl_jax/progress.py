@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import json
+import math
+import os
 import sys
 import time
 
@@ -87,3 +90,50 @@ class Progress:
             self.stream.write("\n")
         self.stream.write(text + "\n")
         self.stream.flush()
+
+
+#: Where the benchmark's measured speeds are committed (``python -m imrl_jax.bench --json docs/bench/NAME.json``).
+BENCH_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "docs", "bench")
+
+
+def measured_speed(backend: str, individuals: int, folder: str | None = None) -> tuple[float, str] | None:
+    """The speed of whole lives (lane-steps per second) the benchmark measured on ``backend`` with the number of
+    individuals nearest ``individuals``, and the file that says so; None if no file of ``folder`` does."""
+    found, folder = None, folder or BENCH_DIR
+    for name in sorted(os.listdir(folder)) if os.path.isdir(folder) else []:
+        try:
+            with open(os.path.join(folder, name), "rb") as f:
+                data = json.loads(f.read(2**20)) if name.endswith(".json") else None
+        except (OSError, ValueError):
+            continue
+        if not isinstance(data, dict) or data.get("backend") != backend or not isinstance(data.get("lifetimes"), list):
+            continue
+        for life in data["lifetimes"]:
+            try:
+                rate, measured = float(life["lane_steps_per_s"]), int(life["individuals"])
+            except (KeyError, TypeError, ValueError):
+                continue
+            if math.isfinite(rate) and rate > 0 and measured > 0:
+                distance = abs(math.log(measured / max(individuals, 1)))
+                if found is None or distance < found[0]:
+                    found = (distance, rate, os.path.join("docs", "bench", name))
+    return None if found is None else found[1:]
+
+
+def _amount(count: int) -> str:
+    """A count in words a reader takes in at a glance: 19,200, 7.2 M, 1.25 G."""
+    return f"{count:,}" if count < 10**6 else f"{count / 1e6:,.1f} M" if count < 10**9 else f"{count / 1e9:,.2f} G"
+
+
+def cost_line(what: str, individuals: int, lane_steps: int, generations: int, backend: str) -> str:
+    """What a run will cost, in one line: its lives and lane-steps, and its time at the speed the benchmark measured
+    on ``backend`` (if it did), compilation aside."""
+    total = lane_steps * generations
+    line = f"{what}: {individuals:,} lives a generation, {_amount(lane_steps)} lane-steps a generation, " \
+           f"{_amount(total)} in all"
+    speed = measured_speed(backend, individuals)
+    if speed is None:
+        return line + f"; no speed measured on {backend} in docs/bench to estimate its time"
+    rate, source = speed
+    return line + (f"; about {_clock(total / rate)} at the {rate / 1e6:.1f} M lane-steps/s {source} measured on "
+                   f"{backend}, compilation aside")

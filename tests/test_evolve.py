@@ -119,6 +119,12 @@ def test_corrupt_checkpoint_falls_back_to_the_previous_one(finished_run, tmp_pat
     err = capsys.readouterr().err
     assert "checkpoints/6 is unreadable" in err and "resuming" in err and "(5 of 6 done" in err
     _assert_same_outputs(out, finished_run)
+    lines = err.splitlines()  # what the generation left will cost, then its compilation, before its line
+    cost = [i for i, line in enumerate(lines) if line.startswith("evolving EE-LS: 2 seed(s) x 6 individuals x 1 "
+                                                                  "generation(s): 12 lives a generation, ")]
+    assert len(cost) == 1 and "lane-steps a generation" in lines[cost[0]]
+    assert "about 0:00:0" in lines[cost[0]] and os.path.join("docs", "bench", "cpu-2core.json") in lines[cost[0]]
+    assert lines[cost[0] + 1].startswith("compiling the generation") and lines[cost[0] + 2].startswith("gen 5 (6/6)")
 
 
 @pytest.mark.parametrize("damage", ["array metadata", "largest data file"])
@@ -702,3 +708,26 @@ def test_a_resume_with_an_unwritable_tensorboard_folder_is_refused_and_nothing_i
     new = str(tmp_path / "new" / "run")  # a new run: its folder would be made, nothing is made to check it
     outcome = attack(evolve.main, [*TINY, "--out", new, "--log", "tensorboard"], str(tmp_path))
     assert outcome.planned and not outcome.changed
+
+
+def test_the_time_a_run_will_take_is_read_from_the_benchmarks_speeds(tmp_path):
+    """The speed measured nearest the run's lives on this backend; none measured there: said, no time made up."""
+    import json
+
+    from imrl_jax import progress
+
+    folder = tmp_path / "bench"
+    folder.mkdir()
+    (folder / "cpu.json").write_text(json.dumps({"backend": "cpu", "lifetimes": [
+        {"individuals": 50, "lane_steps_per_s": 2e6}, {"individuals": 500, "lane_steps_per_s": 8e6},
+        {"individuals": 40, "lane_steps_per_s": float("nan")}]}))
+    (folder / "broken.json").write_text("{not json")
+    (folder / "gpu.json").write_text(json.dumps({"backend": "gpu", "lifetimes": [{"individuals": 40}]}))
+    assert progress.measured_speed("cpu", 40, str(folder)) == (2e6, os.path.join("docs", "bench", "cpu.json"))
+    assert progress.measured_speed("cpu", 400, str(folder))[0] == 8e6
+    assert progress.measured_speed("gpu", 40, str(folder)) is None
+    assert progress.measured_speed("cpu", 40, str(tmp_path / "none")) is None
+    assert progress.cost_line("x", 50, 10**7, 20, "tpu").endswith("; no speed measured on tpu in docs/bench to "
+                                                                  "estimate its time")
+    line = progress.cost_line("x", 50, 10**7, 20, "cpu")
+    assert line.startswith("x: 50 lives a generation, 10.0 M lane-steps a generation, 200.0 M in all; about 0:00:")

@@ -333,3 +333,34 @@ def test_a_resume_whose_checkpoints_cannot_be_read_is_refused_before_anything_is
     err = [line for line in capsys.readouterr().err.splitlines() if not line.startswith("warning: ")]
     assert len(err) == 1 and err[0].startswith("error: --resume: point ") and "has no readable checkpoint" in err[0]
     assert tree(root) == before
+
+
+def test_ctrl_c_in_a_sweeps_checkpoint_ends_in_one_line_without_orbaxs_thread_traceback(tmp_path, monkeypatch,
+                                                                                        capsys):
+    """Ctrl-C while a sweep saved a point: one of orbax's threads ended with its traceback after the one line."""
+    import threading
+
+    from imrl_jax import checkpoint
+
+    real, saves, hooks = checkpoint.Checkpointer.save, [], []
+    orbax_code = compile("def work():\n    raise RuntimeError('a write of orbax cut short')\n",
+                         os.path.join(os.sep, "site-packages", "orbax", "checkpoint", "write.py"), "exec")
+
+    def save(self, state, meta):
+        saves.append(self.directory)
+        if len(saves) < 2:
+            return real(self, state, meta)
+        hooks.append(getattr(threading.excepthook, "drops_failed_reads", False))  # orbax's thread ends silenced
+        namespace = {}
+        exec(orbax_code, namespace)
+        thread = threading.Thread(target=namespace["work"])
+        thread.start()
+        thread.join()
+        raise KeyboardInterrupt  # in the second point's save of generation 0
+
+    monkeypatch.setattr(checkpoint.Checkpointer, "save", save)
+    out = str(tmp_path / "stopped")
+    assert evolve.main([*BASE, *SWEEP, "--generations", "2", "--out", out]) == 130
+    assert hooks == [True]
+    assert capsys.readouterr().err == (f"interrupted in generation 1 (1 of 2 done, 0 checkpointed); resume with: "
+                                       f"python -m imrl_jax.evolve --resume --out {out}\n")
