@@ -14,43 +14,42 @@ code. ``all`` runs them in the order their results are needed (whole questions e
 
 from __future__ import annotations
 
-import argparse
+import os
 import subprocess
 import sys
+from typing import NamedTuple
 
-from experiments.executor import add_options, options_argv
-from experiments.reproduce import cost_left, stage_done
+from experiments.executor import add_options, dying_with_runner, options_argv
+from experiments.reproduce import MANIFEST, cost_left, read_manifest, stage_done
 from experiments.study import environment, studies
+from imrl_jax import cli
 
 #: Lane-steps per second of the estimates: the claims study's paper-length evolutions on 2 cores, as its
 #: manifest measured them (7 evolutions, 7.9 h, 2026-12-03; learning tests ran at about the same rate).
 RATE = 2.9e6
 
 
-def remaining(study, rate: float = RATE) -> tuple[int, int, float]:
-    """Stages left, stages in all, and the hours what is left costs at ``rate`` (a started stage counts its part left)."""
-    stages, scale = study.stages()
+def remaining(study, rate: float = RATE, planned=None) -> tuple[int, int, float]:
+    """Stages left, stages in all, and the hours what is left costs at ``rate`` (a started stage counts its part left);
+    ``planned``: the study's stages and scale, if already planned."""
+    stages, scale = planned or study.stages()
     left = [s for s in stages if not stage_done(s, scale)]
     return len(left), len(stages), sum(cost_left(s, scale) for s in stages) / rate / 3600
 
 
-def list_studies(chosen) -> int:
-    """Each chosen study's stages left and hours; one study's stages and commands."""
+def listing(chosen, planned) -> list[str]:
+    """Each chosen study's stages left and hours; one study's stages and commands (the lines of ``list``)."""
     if len(chosen) == 1:
-        study = chosen[0]
-        stages, scale = study.stages()
-        print(f"{study.name} ({study.document}): python {' '.join(study.command()[1:])}")
-        for stage in stages:
-            print(f"  {stage.name}: {'done' if stage_done(stage, scale) else 'to run'} ({stage.out_dir})")
-        return 0
-    total = 0.0
-    for study in chosen:
-        left, count, hours = remaining(study)
+        study, (stages, scale) = chosen[0], planned[0]
+        return [f"{study.name} ({study.document}): python {' '.join(study.command()[1:])}"] + [
+            f"  {stage.name}: {'done' if stage_done(stage, scale) else 'to run'} ({stage.out_dir})" for stage in stages]
+    lines, total = [], 0.0
+    for study, plan in zip(chosen, planned):
+        left, count, hours = remaining(study, planned=plan)
         total += hours
-        print(f"{study.name:>16}: {left:>2} of {count:>2} stages left, about {hours:5.1f} h ({study.document})")
-    print(f"{'in all':>16}: about {total:.0f} h at {RATE / 1e6:.1f} million lane-steps a second (the claims "
-          f"study's evolutions on 2 cores)")
-    return 0
+        lines.append(f"{study.name:>16}: {left:>2} of {count:>2} stages left, about {hours:5.1f} h ({study.document})")
+    return lines + [f"{'in all':>16}: about {total:.0f} h at {RATE / 1e6:.1f} million lane-steps a second (the claims "
+                    f"study's evolutions on 2 cores)"]
 
 
 def run_studies(chosen, report: bool = False, options: tuple[str, ...] = ()) -> int:
@@ -62,7 +61,8 @@ def run_studies(chosen, report: bool = False, options: tuple[str, ...] = ()) -> 
                   flush=True)
             continue
         print(f"\n=== {what} {study.name}", flush=True)
-        process = subprocess.Popen(study.command(report, options), env=environment())
+        # the study's runner dies with this one (a killed command leaves no study, and so no stage, running)
+        process = subprocess.Popen(dying_with_runner(study.command(report, options)), env=environment())
         try:
             code = process.wait()
         except KeyboardInterrupt:
@@ -76,6 +76,9 @@ def run_studies(chosen, report: bool = False, options: tuple[str, ...] = ()) -> 
                 process.wait()
             print(f"\ninterrupted in {what} {study.name}: run the same command again to go on", file=sys.stderr)
             return 130
+        if code == 2:  # refused: its own line said why, and the same command would be refused again
+            print(f"error: {what} {study.name} refused (exit code 2; its error above says why)", file=sys.stderr)
+            return code
         if code:
             print(f"error: {what} {study.name} stopped with exit code {code}; run the same command again to go on",
                   file=sys.stderr)
@@ -83,27 +86,61 @@ def run_studies(chosen, report: bool = False, options: tuple[str, ...] = ()) -> 
     return 0
 
 
-def main(argv=None) -> int:
-    """The command line: list, run or report one study or all of them."""
-    found = studies()
-    p = argparse.ArgumentParser(prog="python -m experiments", description=__doc__.split("\n\n")[0])
+class Listing(NamedTuple):
+    """``list``: the lines to print, every study planned."""
+
+    lines: list[str]
+
+    def execute(self) -> int:
+        print("\n".join(self.lines))
+        return 0
+
+
+class Running(NamedTuple):
+    """``run`` or ``report``: the studies, each planned and checked, and the runner's options for their commands."""
+
+    studies: tuple
+    report: bool
+    options: tuple[str, ...]
+
+    def execute(self) -> int:
+        return run_studies(self.studies, report=self.report, options=self.options)
+
+
+def parser(found) -> cli.Parser:
+    """The command line's parser, with the studies ``found``."""
+    p = cli.Parser(prog="python -m experiments", description=__doc__.split("\n\n")[0])
     p.add_argument("action", choices=("list", "run", "report"))
     p.add_argument("study", nargs="?", default="all", help=f"a study or all (default): {', '.join(found)}")
     add_options(p)
-    args = p.parse_args(argv)
-    if args.study != "all" and args.study not in found:
-        print(f"error: study: unknown study {args.study!r} (choose from all, {', '.join(found)})", file=sys.stderr)
-        return 2
-    chosen = list(found.values()) if args.study == "all" else [found[args.study]]
-    if args.action == "list":
-        from imrl_jax.rundir import RunDirError
+    return p
 
-        try:
-            return list_studies(chosen)
-        except RunDirError as error:  # two folders of one run (runspec.DuplicateRunError), an unreadable config.json
-            print(f"error: {error}", file=sys.stderr)
-            return 2
-    return run_studies(chosen, report=args.action == "report", options=tuple(options_argv(args)))
+
+def plan(args, found) -> Listing | Running:
+    """What the command will do: the studies chosen, their stages planned, their manifests read and checked, none
+    held by another runner (``run``); raises a user error, writes nothing."""
+    if args.study != "all" and args.study not in found:
+        raise cli.UsageError(f"study: unknown study {args.study[:100]!r} (choose from all, {', '.join(found)})")
+    chosen = list(found.values()) if args.study == "all" else [found[args.study]]
+    planned = [study.stages() for study in chosen]  # a run of two folders (DuplicateRunError), an unreadable config
+    for study in chosen:
+        folder = study.folder()
+        if folder is not None:
+            read_manifest(os.path.join(folder, MANIFEST))
+            if args.action == "run":
+                from experiments.runner import check_free
+
+                check_free(study.name, folder)
+    if args.action == "list":
+        return Listing(listing(chosen, planned))
+    return Running(tuple(chosen), args.action == "report", tuple(options_argv(args)))
+
+
+@cli.exit_codes
+def main(argv=None) -> int:
+    """The command line: list, run or report one study or all of them (parse, plan, ``cli.execute``)."""
+    found = studies()
+    return cli.execute(plan(parser(found).parse_args(argv), found))
 
 
 if __name__ == "__main__":

@@ -18,13 +18,31 @@ evolve command's own (``--coordinator``), and stay as they are.
 from __future__ import annotations
 
 import os
+import re
+import shutil
 import signal
 import subprocess
 import sys
 import time
-from typing import Protocol
+from typing import Callable, Protocol
 
 BARRIERS = ("measure",)
+#: What a stage's command is started through on Linux: it asks the kernel to SIGKILL it when its parent (the runner)
+#: ends, however that ends (prctl's PR_SET_PDEATHSIG, 1, kept across exec), then becomes the command. A launcher and
+#: not a preexec_fn: a fork of a process with threads (JAX's) may deadlock before the child execs.
+_LAUNCHER = ("import ctypes, os, signal, sys\n"
+             "try:\n    ctypes.CDLL(None).prctl(1, signal.SIGKILL, 0, 0, 0)\nexcept (OSError, AttributeError):\n    pass\n"
+             "if os.getppid() != int(sys.argv[1]):\n    sys.exit(137)  # the runner ended before: no signal would come\n"
+             "os.execv(sys.argv[2], sys.argv[2:])\n")
+
+
+def dying_with_runner(command: list[str]) -> list[str]:
+    """``command`` started so that it is killed when this process (its runner) ends, even by SIGKILL (Linux; as it is
+    elsewhere): a runner killed leaves no stage running unwatched, to race the next runner."""
+    if not sys.platform.startswith("linux") or not command:
+        return list(command)
+    executable = command[0] if os.sep in command[0] else (shutil.which(command[0]) or command[0])
+    return [sys.executable, "-c", _LAUNCHER, str(os.getpid()), executable, *command[1:]]
 
 
 def needs(stages) -> dict[str, tuple[str, ...]]:
@@ -58,7 +76,8 @@ class LocalJob:
     def __init__(self, command: list[str], env: dict | None, log_path: str):
         os.makedirs(os.path.dirname(log_path), exist_ok=True)
         self.log = open(log_path, "a")
-        self.process = subprocess.Popen(command, env=env, stdout=self.log, stderr=subprocess.STDOUT)
+        self.process = subprocess.Popen(dying_with_runner(command), env=env, stdout=self.log,
+                                        stderr=subprocess.STDOUT)
         self.id = str(self.process.pid)
 
     def poll(self) -> int | None:
@@ -239,25 +258,48 @@ def log_name(name: str) -> str:
 
 
 EXECUTORS = ("local", "slurm", "submitit-local")
+#: The most stages at once (local processes or SLURM jobs), GPUs of a job and minutes of a job's time limit (30 days).
+MAX_JOBS = 1000
+MAX_GPUS_PER_JOB = 64
+MAX_TIMEOUT_MIN = 30 * 24 * 60
+#: A SLURM partition's name (a list of them: comma-separated), as sbatch takes it.
+PARTITION = re.compile(r"[A-Za-z0-9_.][A-Za-z0-9_.-]{0,63}(,[A-Za-z0-9_.][A-Za-z0-9_.-]{0,63}){0,15}")
 
 
-def _jobs(text: str) -> int:
+def _bounded(least: int, most: int, what: str) -> Callable[[str], int]:
+    """An option's type: a whole number from ``least`` to ``most`` (argparse names the option in its error)."""
+    def parse(text: str) -> int:
+        import argparse
+
+        try:
+            value = int(text)
+        except ValueError:  # 1.5, 1e8, nan, a number of more digits than int() takes
+            value = None
+        if value is None or not least <= value <= most:
+            raise argparse.ArgumentTypeError(f"must be a whole number of {what} from {least} to {most:,}, "
+                                             f"got {text[:80]!r}")
+        return value
+
+    return parse
+
+
+_jobs = _bounded(1, MAX_JOBS, "stages at once")
+
+
+def _partition(text: str) -> str:
     import argparse
 
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be a whole number of at least 1, got {text!r}")
-    return value
+    if not PARTITION.fullmatch(text):
+        raise argparse.ArgumentTypeError(f"not a SLURM partition name (letters, digits, '_.-', at most 64, "
+                                         f"comma-separated), got {text[:80]!r}")
+    return text
 
 
 def _executor(name: str) -> str:
     import argparse
 
     if name not in EXECUTORS:
-        raise argparse.ArgumentTypeError(f"unknown executor {name!r} (choose from {', '.join(EXECUTORS)})")
+        raise argparse.ArgumentTypeError(f"unknown executor {name[:80]!r} (choose from {', '.join(EXECUTORS)})")
     if name != "local":
         try:
             import submitit  # noqa: F401
@@ -267,13 +309,16 @@ def _executor(name: str) -> str:
 
 
 def add_options(parser) -> None:
-    """The fan-out options of a study's command line (checked as they are parsed: nothing is written first)."""
-    parser.add_argument("--jobs", type=_jobs, default=1, help="stages run at once (default 1: one after another)")
+    """The fan-out options of a study's command line, each bounded as it is parsed (nothing is written first)."""
+    parser.add_argument("--jobs", type=_jobs, default=1,
+                        help=f"stages run at once, 1 to {MAX_JOBS:,} (default 1: one after another)")
     parser.add_argument("--executor", type=_executor, default="local",
                         help=f"where stages run: {', '.join(EXECUTORS)} (slurm and submitit-local: submitit)")
-    parser.add_argument("--slurm-partition", help="the SLURM partition of each job (--executor slurm)")
-    parser.add_argument("--gpus-per-job", type=int, default=0, help="GPUs of each SLURM job (--executor slurm)")
-    parser.add_argument("--timeout-min", type=int, default=24 * 60, help="each SLURM job's time limit in minutes")
+    parser.add_argument("--slurm-partition", type=_partition, help="the SLURM partition of each job (--executor slurm)")
+    parser.add_argument("--gpus-per-job", type=_bounded(0, MAX_GPUS_PER_JOB, "GPUs"), default=0,
+                        help="GPUs of each SLURM job (--executor slurm)")
+    parser.add_argument("--timeout-min", type=_bounded(1, MAX_TIMEOUT_MIN, "minutes"), default=24 * 60,
+                        help="each SLURM job's time limit in minutes")
 
 
 def from_options(args, out: str) -> dict:

@@ -16,6 +16,7 @@ shared runs (``experiments.table``); the paper's Fig. 3 is ``experiments.reprodu
 from __future__ import annotations
 
 import json
+import math
 import os
 import shutil
 import subprocess
@@ -25,7 +26,7 @@ from typing import NamedTuple
 
 from experiments.study import MEASURED
 from imrl_jax import conditions  # the condition table (no JAX)
-from imrl_jax.rundir import saved_steps, sweep_points
+from imrl_jax.rundir import RunDirError, read_json, saved_steps, sweep_points, write_atomic
 
 #: The paper's conditions (rows of imrl_jax.conditions): those evolved, and those learning-tested.
 EVOLVED = conditions.PAPER_EVOLVED
@@ -79,6 +80,8 @@ PUBLISHED = "resume_checkpoint"
 POLL_SECONDS = 0.5
 #: How often the runner looks again at a stage's folder that another command is writing.
 LOCK_POLL_SECONDS = 10.0
+#: A study's record of its stages (in its folder): each one's command, and once done its time and cost.
+MANIFEST = "manifest.json"
 
 
 class Stage(NamedTuple):
@@ -272,7 +275,7 @@ def run_stage(stage: Stage, index: int, command: list[str], overall: Overall, ma
               done_before: float = 0.0, env: dict | None = None) -> None:
     """Run one stage, its progress (read from its events, imrl_jax.events) shown after the whole pipeline's;
     record its command, time and cost. Its other output passes straight through."""
-    from experiments.executor import log_name
+    from experiments.executor import dying_with_runner, log_name
     from imrl_jax.events import ENV, READER, Reader
 
     manifest = overall.manifest
@@ -283,8 +286,9 @@ def run_stage(stage: Stage, index: int, command: list[str], overall: Overall, ma
     if os.path.exists(events):
         os.remove(events)  # this attempt's events alone
     reader = Reader(events)
+    record_start(manifest, manifest_path, stage, command)
     start = time.perf_counter()
-    process = subprocess.Popen(command, env={**(env or os.environ), ENV: events, READER: "1"})
+    process = subprocess.Popen(dying_with_runner(command), env={**(env or os.environ), ENV: events, READER: "1"})
     first = None  # (fraction, time) at the first progress event: the stage's own rate is measured from there
     try:
         while True:
@@ -315,14 +319,80 @@ def run_stage(stage: Stage, index: int, command: list[str], overall: Overall, ma
     record_stage(manifest, manifest_path, stage, command, time.perf_counter() - start, done_before)
 
 
+def manifest_problem(manifest) -> str:
+    """What makes a parsed manifest unusable ("" if nothing): its shape, and each stage's entry."""
+    if not isinstance(manifest, dict):
+        return "is not a JSON object"
+    if not isinstance(manifest.get("stages"), dict):
+        return "has no \"stages\" object"
+    for name, entry in manifest["stages"].items():
+        if not isinstance(entry, dict) or not isinstance(entry.get("command", ""), str):
+            return f"records stage {name[:80]!r} as no object with a command"
+        for key in ("seconds", "cost"):
+            value = entry.get(key)
+            if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))
+                                      or not math.isfinite(value)):
+                return f"records stage {name[:80]!r} with {key} {str(value)[:40]!r}, not a number"
+        if not isinstance(entry.get("done", True), bool):
+            return f"records stage {name[:80]!r} with done neither true nor false"
+    return ""
+
+
+def read_manifest(path: str) -> dict:
+    """A study's manifest read and checked ({} where there is none yet); a damaged one is a RunDirError in one line
+    naming it and its repair."""
+    if not os.path.lexists(path):
+        return {}
+    repair = (f"remove {path} to start a new one (the stages' own folders say what is done; only the commands and "
+              f"times it recorded are lost)")
+    try:
+        manifest = read_json(path, "manifest")
+    except RunDirError as error:
+        raise RunDirError(f"{error}; {repair}") from None
+    problem = manifest_problem(manifest)
+    if problem:
+        raise RunDirError(f"manifest: {path} {problem}; {repair}")
+    return manifest
+
+
+def recorded_done(entry: dict) -> bool:
+    """Whether a manifest entry records its stage as finished (an entry written before ``done`` was recorded is)."""
+    return entry.get("done", True)
+
+
+def write_entry(manifest: dict, manifest_path: str, name: str, entry: dict) -> None:
+    """Record one stage's entry: read the manifest again, change that entry alone, write it atomically (the runner
+    holds the study's lock, so no other runner's entry is lost; a kill leaves the old or the new file)."""
+    stored = read_manifest(manifest_path)
+    stages = {**manifest.get("stages", {}), **stored.get("stages", {})}
+    stages[name] = entry
+    manifest["stages"] = stages
+    write_atomic(manifest_path, (json.dumps({**stored, **manifest}, indent=2) + "\n").encode())
+
+
+def record_start(manifest: dict, manifest_path: str, stage: Stage, command: list[str]) -> None:
+    """Record a stage as started: should the runner be killed before it records the end, the next one knows."""
+    write_entry(manifest, manifest_path, stage.name, dict(command=" ".join(["python"] + command[1:]), done=False,
+                                                          started=time.strftime("%Y-%m-%dT%H:%M:%S%z")))
+
+
 def record_stage(manifest: dict, manifest_path: str, stage: Stage, command: list[str], seconds: float,
                  done_before: float = 0.0) -> None:
     """Write a finished stage into the manifest: its command, time and cost."""
-    entry = dict(command=" ".join(["python"] + command[1:]), seconds=round(seconds, 1),
-                 cost=round(stage.cost * (1.0 - done_before)))
-    manifest["stages"][stage.name] = entry
-    with open(manifest_path, "w") as f:
-        json.dump(manifest, f, indent=2)
+    write_entry(manifest, manifest_path, stage.name, dict(
+        command=" ".join(["python"] + command[1:]), seconds=round(seconds, 1),
+        cost=round(stage.cost * (1.0 - done_before)), done=True))
+
+
+def record_found_done(stages: list[Stage], scale: dict, manifest: dict, manifest_path: str) -> None:
+    """Record as done each stage the manifest has as started that has finished since (its runner was killed between
+    the stage's end and its record): the manifest then ends as an uninterrupted run's would, its time unknown."""
+    for stage in stages:
+        entry = manifest["stages"].get(stage.name)
+        if entry is not None and not recorded_done(entry) and stage_done(stage, scale):
+            write_entry(manifest, manifest_path, stage.name, dict(
+                {k: v for k, v in entry.items() if k != "started"}, done=True,
+                note="found finished after its runner stopped (its time unknown)"))
 
 
 def run_stages(stages: list[Stage], scale: dict, manifest: dict, manifest_path: str, command_for, jobs: int = 1,
@@ -333,6 +403,7 @@ def run_stages(stages: list[Stage], scale: dict, manifest: dict, manifest_path: 
     ``command_for(stage)`` gives a stage's command line and environment (None: this one's).
     Returns the exit code: 0 when every stage is done, a failed stage's code, or 130 on Ctrl-C.
     """
+    record_found_done(stages, scale, manifest, manifest_path)
     if jobs > 1 or executor is not None:
         from experiments.executor import Local, run_fanned
 
@@ -350,7 +421,12 @@ def run_stages(stages: list[Stage], scale: dict, manifest: dict, manifest_path: 
             if stage.kind == "evolve":
                 publish_checkpoint(stage.out_dir)
 
-        return run_fanned(stages, scale, manifest_path, command_for, jobs, executor or Local(), stage_done, record,
+        def started(stage):  # each stage recorded as started as it is submitted
+            command, env = command_for(stage)
+            record_start(manifest, manifest_path, stage, command)
+            return command, env
+
+        return run_fanned(stages, scale, manifest_path, started, jobs, executor or Local(), stage_done, record,
                           prepare, finish, log=lambda line: print(line, flush=True))
     overall = Overall(stages, manifest)
     try:
@@ -381,13 +457,11 @@ def run_stages(stages: list[Stage], scale: dict, manifest: dict, manifest_path: 
 
 
 def load_manifest(out: str, **fields) -> tuple[dict, str]:
-    """A results directory's manifest (its stages kept from earlier sittings) and its path."""
+    """A results directory's manifest (its stages kept from earlier sittings; a damaged one refused: RunDirError) and
+    its path; the directory made if need be (the runner's execution calls it, under the study's lock)."""
     os.makedirs(out, exist_ok=True)
-    manifest_path = os.path.join(out, "manifest.json")
-    manifest = dict(fields, stages={})
-    if os.path.exists(manifest_path):
-        with open(manifest_path) as f:
-            manifest["stages"] = json.load(f).get("stages", {})
+    manifest_path = os.path.join(out, MANIFEST)
+    manifest = dict(fields, stages=dict(read_manifest(manifest_path).get("stages", {})))
     from imrl_jax.checkpoint import git_commit
 
     manifest["git_commit"] = git_commit()

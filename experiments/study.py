@@ -60,6 +60,13 @@ class Study:
     order: float  # its place in ``all`` (whole questions early)
     argv: tuple[str, ...] = ()  # its module's options for its stages ((): the module's default stages)
     report_argv: tuple[str, ...] | None = ("--report",)  # the options that write its report (None: a stage does)
+    out: str | None = None  # its folder: manifest, logs (None: its module's OUT)
+
+    def folder(self) -> str | None:
+        """Where its manifest and its runner's lock lie: its ``out``, else its module's ``OUT`` (None: neither)."""
+        if self.out is not None:
+            return self.out
+        return getattr(importlib.import_module(f"experiments.{self.module}"), "OUT", None)
 
     def stages(self):
         """Its stages (``reproduce.Stage``) and their scale, as its run would plan them now."""
@@ -77,17 +84,31 @@ class Study:
 
 
 def studies() -> dict[str, Study]:
-    """Every study the package's modules declare, by name, in order; two of one name are an error."""
+    """Every study the package's modules declare, by name, in order; a module that cannot be imported, or two studies
+    of one name, is a UsageError naming the module."""
     import experiments
+    from imrl_jax.cli import UsageError
 
     found: dict[str, Study] = {}
+    declaring: dict[str, str] = {}  # each study's name -> the module that declares it
     for info in sorted(pkgutil.iter_modules(experiments.__path__), key=lambda m: m.name):
         if info.name.startswith("_"):
             continue
-        for study in getattr(importlib.import_module(f"experiments.{info.name}"), "STUDIES", ()):
+        name = f"experiments.{info.name}"
+        try:
+            module = importlib.import_module(name)
+        except (Exception, SystemExit) as error:  # noqa: BLE001 - whatever a study module does on import: one line
+            text = str(error).splitlines()[0] if str(error) else ""
+            raise UsageError(f"study module {name}: cannot be imported ({type(error).__name__}: {text[:200]}); "
+                             f"fix or remove it") from None
+        declared = getattr(module, "STUDIES", ())
+        if not isinstance(declared, (tuple, list)) or not all(isinstance(s, Study) for s in declared):
+            raise UsageError(f"study module {name}: STUDIES is not a tuple of experiments.study.Study")
+        for study in declared:
             if study.name in found:
-                raise ValueError(f"two studies are named {study.name!r} ({found[study.name].module}, {study.module})")
-            found[study.name] = study
+                raise UsageError(f"study module {name}: declares the study {study.name!r}, which "
+                                 f"{declaring[study.name]} declares too (two studies of one name)")
+            found[study.name], declaring[study.name] = study, name
     return dict(sorted(found.items(), key=lambda item: item[1].order))
 
 

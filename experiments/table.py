@@ -11,7 +11,6 @@ evolution (the last ``evolve`` of the path replaced by ``test``); a condition th
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import functools
 import hashlib
@@ -23,15 +22,11 @@ from typing import NamedTuple
 import numpy as np
 
 from experiments.claims import final_best, plateau_generation
-from experiments.executor import add_options, from_options
 from experiments.loading import read_evolution, read_test
 from experiments.markdown import head, line, mean_sd
-from experiments.reproduce import (Stage, evolution_cost, evolve_command, load_manifest, run_stages, test_command,
-                                   test_cost)
+from experiments.reproduce import Stage, evolution_cost, evolve_command, test_command, test_cost
 from experiments.study import REPRODUCTION, RESULTS, Study, write_table
 from imrl_jax import conditions, runspec
-from imrl_jax.rundir import RunDirError
-
 
 
 @dataclasses.dataclass(frozen=True)
@@ -412,29 +407,19 @@ class Table:
         return 0
 
     def main(self, argv=None) -> int:
-        """The study's command line: run (or go on with) its stages, or ``--report``."""
-        p = argparse.ArgumentParser(prog=f"python -m experiments run {self.name}")
-        p.add_argument("--report", action="store_true", help="the table and figure of what has finished (runs nothing)")
-        add_options(p)
-        args = p.parse_args(argv)
-        try:
-            if args.report:
-                return self.report()
-            stages, scale = self.all_stages()
-        except RunDirError as error:  # two folders of one run (DuplicateRunError), an unreadable config.json
-            print(f"error: {error}", file=sys.stderr)
-            return 2
-        manifest, manifest_path = load_manifest(self.out, study=self.name, sizes=scale)
-        return run_stages(stages, scale, manifest, manifest_path, self.stage_command, **from_options(args, self.out))
+        """The study's command line: run (or go on with) its stages, or ``--report`` (``experiments.runner``)."""
+        from experiments.runner import study_main
+
+        return study_main(argv, self.name, self.out, self.all_stages, self.stage_command, self.report)
 
     def study(self, module: str) -> Study:
         """Its entry for ``python -m experiments``."""
-        return Study(self.name, module, self.document, self.order)
+        return Study(self.name, module, self.document, self.order, out=self.out)
 
 
 def studies_of(module: str, tables: dict[str, Table]) -> tuple[Study, ...]:
     """The studies of a module of several tables (``TABLES``), each run as ``python -m experiments.MODULE NAME``."""
-    return tuple(Study(table.name, module, table.document, table.order, (name,), (name, "--report"))
+    return tuple(Study(table.name, module, table.document, table.order, (name,), (name, "--report"), table.out)
                  for name, table in tables.items())
 
 

@@ -178,7 +178,7 @@ def test_fan_out_options(tmp_path, capsys):
 
     p = argparse.ArgumentParser()
     X.add_options(p)
-    for bad, message in ((["--jobs", "0"], "--jobs: must be a whole number of at least 1, got '0'"),
+    for bad, message in ((["--jobs", "0"], "--jobs: must be a whole number of stages at once from 1 to 1,000, got '0'"),
                          (["--executor", "k8s"], "--executor: unknown executor 'k8s'")):
         with pytest.raises(SystemExit):
             p.parse_args(bad)

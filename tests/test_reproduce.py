@@ -5,10 +5,13 @@ import io
 import json
 import os
 import shutil
+import signal
+import subprocess
 import sys
+import time
 
 import pytest
-from helpers import evolve_args, outputs, write_lock
+from helpers import ROOT, evolve_args, outputs, write_lock
 
 from experiments import reproduce
 from experiments.reproduction import TABLES, ReproductionTable, variant_rows
@@ -239,3 +242,141 @@ def test_a_stage_another_command_is_writing_is_waited_for(tmp_path, monkeypatch,
     os.remove(out / "result.json")
     write_lock(str(out), other.pid)  # its process has ended: the lock is stale and the stage runs
     assert reproduce.run_stages([stage], {}, manifest, path, command_for) == 0 and ran == ["measure shared"]
+
+
+#: A made-up study on the runner (experiments.runner.study_main): ``python TINY OUT PAUSE [runner options]``, three
+#: measures, each a small python script that writes its pid, sleeps PAUSE seconds and writes its result.json.
+TINY_STUDY = f"""
+import os, sys
+sys.path[:0] = [{ROOT!r}]
+from experiments.reproduce import Stage
+from experiments.runner import study_main
+out, pause = sys.argv[1], sys.argv[2]
+stages = [Stage(f"measure {{i}}", "measure", "", "", os.path.join(out, f"m{{i}}"), 1.0, needs=()) for i in range(3)]
+STAGE = ("import os, sys, time\\nos.makedirs(sys.argv[1], exist_ok=True)\\n"
+         "open(os.path.join(sys.argv[1], 'pid'), 'w').write(str(os.getpid()))\\ntime.sleep(float(sys.argv[2]))\\n"
+         "open(os.path.join(sys.argv[1], 'r.tmp'), 'w').write('{{}}')\\n"
+         "os.replace(os.path.join(sys.argv[1], 'r.tmp'), os.path.join(sys.argv[1], 'result.json'))\\n")
+command_for = lambda stage: ([sys.executable, "-c", STAGE, stage.out_dir, pause], None)
+sys.exit(study_main(sys.argv[3:], "tiny", out, lambda: (stages, {{}}), command_for))
+"""
+
+
+def _tiny(tmp_path, out, pause, *options, **popen) -> subprocess.Popen:
+    script = tmp_path / "tiny_study.py"
+    script.write_text(TINY_STUDY)
+    return subprocess.Popen([sys.executable, str(script), str(out), str(pause), *options], text=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, **popen)
+
+
+def _wait_for(path, seconds: float = 60.0) -> None:
+    deadline = time.time() + seconds
+    while not os.path.exists(path):
+        assert time.time() < deadline, f"{path} never appeared"
+        time.sleep(0.02)
+
+
+def _gone(pid: int) -> bool:
+    from imrl_jax.rundir import _proc_stat
+
+    stat = _proc_stat(pid)
+    return stat is None or stat.state == "Z"  # ended (a zombie until whoever adopted it reaps it)
+
+
+def _states(out) -> dict:
+    """Each stage the manifest records, and whether it records it done."""
+    return {name: reproduce.recorded_done(entry)
+            for name, entry in reproduce.read_manifest(str(out / "manifest.json"))["stages"].items()}
+
+
+def test_a_second_runner_of_a_study_refuses_while_the_first_runs(tmp_path):
+    """Two runners of one study at once: the second refuses in one line, exit 2; no manifest entry is lost."""
+    out = tmp_path / "tiny"
+    first = _tiny(tmp_path, out, 0.8)
+    _wait_for(out / "m0" / "pid")
+    second = _tiny(tmp_path, out, 0.0)
+    err = second.communicate(timeout=60)[1]
+    assert second.returncode == 2, err
+    assert err.splitlines() == [f"error: study tiny: {out} is being run by pid {first.pid} on "
+                                f"{__import__('socket').gethostname()} (another runner; its lock "
+                                f"{out / 'logs' / '.lock'}): wait for it to end or stop it"]
+    assert first.wait(timeout=60) == 0
+    assert _states(out) == {"measure 0": True, "measure 1": True, "measure 2": True}
+    assert not (out / "logs" / ".lock").exists()  # released
+
+
+@pytest.mark.parametrize("options", [(), ("--jobs", "2")])
+def test_a_killed_runner_leaves_no_stage_running(tmp_path, options):
+    """A runner SIGKILLed: its stage (started through the launcher that ties it to the runner) is gone within
+    seconds, and the next runner takes over its lock and finishes the study."""
+    out = tmp_path / "tiny"
+    runner = _tiny(tmp_path, out, 60, *options)
+    _wait_for(out / "m0" / "pid")
+    stage = int((out / "m0" / "pid").read_text())
+    os.kill(runner.pid, signal.SIGKILL)  # the runner alone, not its process group
+    runner.wait()
+    deadline = time.time() + 5
+    while not _gone(stage) and time.time() < deadline:
+        time.sleep(0.05)
+    assert _gone(stage), f"the stage {stage} outlived its runner"
+    again = _tiny(tmp_path, out, 0.0, *options)
+    err = again.communicate(timeout=60)[1]
+    assert again.returncode == 0, err
+    assert "took over the stale lock" in err and set(_states(out).values()) == {True}
+
+
+def test_a_runner_killed_at_a_random_point_resumes_to_an_uninterrupted_runs_manifest(tmp_path):
+    """Killed at a random moment (the seed in the message), run again: the manifest records the same stages, each
+    done, as a run never killed; killed, it is always readable (written atomically)."""
+    import random
+
+    seed = random.randrange(2**32)
+    moment = random.Random(seed).uniform(0.0, 2.5)
+    whole, cut = tmp_path / "whole", tmp_path / "cut"
+    assert _tiny(tmp_path, whole, 0.2).wait(timeout=60) == 0
+    runner = _tiny(tmp_path, cut, 0.2)
+    time.sleep(moment)
+    os.kill(runner.pid, signal.SIGKILL)
+    runner.wait()
+    if (cut / "manifest.json").exists():
+        reproduce.read_manifest(str(cut / "manifest.json"))  # whole: the old or the new file, never half
+    again = _tiny(tmp_path, cut, 0.2)
+    err = again.communicate(timeout=60)[1]
+    assert again.returncode == 0, f"seed {seed}: {err}"
+    assert _states(cut) == _states(whole) == {f"measure {i}": True for i in range(3)}, f"seed {seed}"
+
+
+def test_a_stage_that_ended_while_no_runner_watched_is_recorded_done(tmp_path):
+    """The runner killed between a stage's end and its record: the next one records it done (its time unknown)."""
+    out = tmp_path / "m"
+    out.mkdir()
+    (out / "result.json").write_text("{}")
+    stage = reproduce.Stage("measure m", "measure", "", "", str(out), 1.0)
+    path = str(tmp_path / "manifest.json")
+    manifest = dict(sizes={}, stages={})
+    reproduce.record_start(manifest, path, stage, [sys.executable, "-m", "x"])
+    assert _states(tmp_path) == {"measure m": False}
+    assert reproduce.run_stages([stage], {}, manifest, path, None) == 0
+    entry = reproduce.read_manifest(path)["stages"]["measure m"]
+    assert entry["done"] is True and entry["command"] == "python -m x" and "seconds" not in entry
+
+
+def test_a_manifest_entry_is_written_into_the_manifest_on_disk(tmp_path, monkeypatch):
+    """An entry is read-modify-written: what another sitting recorded meanwhile is kept; a write cut before its
+    rename leaves the old manifest whole."""
+    path = str(tmp_path / "manifest.json")
+    stage = reproduce.Stage("b", "measure", "", "", str(tmp_path), 1.0)
+    mine = dict(sizes={}, stages={})
+    reproduce.write_entry(dict(sizes={}, stages={}), path, "a", dict(command="python a", done=True))
+    reproduce.record_stage(mine, path, stage, [sys.executable, "b"], 2.0)
+    assert _states(tmp_path) == {"a": True, "b": True} and mine["stages"].keys() == {"a", "b"}
+    before = (tmp_path / "manifest.json").read_bytes()
+
+    def cut(*args):
+        raise KeyboardInterrupt  # killed between the write and the rename
+
+    monkeypatch.setattr(os, "replace", cut)
+    with pytest.raises(KeyboardInterrupt):
+        reproduce.write_entry(mine, path, "c", dict(command="python c", done=True))
+    monkeypatch.undo()
+    assert (tmp_path / "manifest.json").read_bytes() == before
