@@ -5,7 +5,10 @@
 
 From an evolution's run directory, the ``--best`` best individuals of each seed's last
 generation each live ``--tests`` fresh lives whose tasks last ``--task-steps`` cycles
-(paper: 10 best x 10 tests x 6 tasks x 1,000,000 cycles). A test is an ordinary life of
+(paper: 10 best x 10 tests x 6 tasks x 1,000,000 cycles). The lengths not given follow the
+run's (or, from scratch, ``--preset``'s) as the paper's test follows its evolution: tasks 10 x
+its ``task_steps``, its ``num_bins`` bins, the steady state over the last tenth (the paper's
+1,000,000 / 100 / 100,000; a ``small`` run's 50,000 / 10 / 5,000). A test is an ordinary life of
 the run's condition with longer tasks: LE-LS first lives a fresh childhood of the run's
 length, EE-ES does not learn, EE-LS's selector learns each task from zero. SLE is not
 evolved: its ``--runs`` x ``--best`` x ``--tests`` tests all start from scratch (the
@@ -18,7 +21,9 @@ length) so that progress can be shown. Each finished run is kept in ``--out/part
 that the same command after an interruption goes on from the first unfinished run (with
 the same results as an uninterrupted test); ``partial/`` is removed once the test is done.
 A run whose evolution is unfinished (killed before its last generation, or still running) is
-refused unless ``--allow-unfinished``. ``--out`` must be new, empty or such an unfinished
+refused unless ``--allow-unfinished``. The command is built as every command is (``imrl_jax/cli.py``):
+:func:`plan` reads and checks everything (sizes, runs, every point of a sweep, ``--out``, memory,
+``--log``) and writes nothing; :func:`cli.execute` then locks and writes. ``--out`` must be new, empty or such an unfinished
 test, and one process writes it at a time (``.lock``). Writes to ``--out``: ``curve.csv``
 (performance per bin: mean over all tests and per run), ``steady.json`` (performance over
 the last ``--steady-steps`` cycles: mean over runs, best run, per run, per task; the
@@ -296,13 +301,13 @@ class CommandPlan(NamedTuple):
     def execute(self) -> int:
         """Run the tests (a sweep's under its ``--out``'s lock, its record written last); print each one's line."""
         if self.sweep is None:
-            return _report([(test.out_dir, test.test()) for test in self.tests], self.tests[0].steady_steps)
+            return _report([(test.out_dir, run(**test._asdict())) for test in self.tests], self.tests[0].steady_steps)
         sweep = self.sweep
         make_dir(sweep.out)
         with lock_run_dir(sweep.out):
             check_out_root(sweep.out, sweep.keys)  # again, locked: another process may have written there since
             check_record(sweep.out, sweep.keys)
-            done = {test.out_dir: test.test() for test in self.tests}
+            done = {test.out_dir: run(**test._asdict()) for test in self.tests}  # each checked again, locked
             with write_errors(sweep.out):
                 sweep_summary(sweep.run_dir, sweep.out, sweep.recorded, sweep.generation, sweep.sizes)
         return _report([(out_dir, done.get(out_dir)) for out_dir in sweep.out_dirs()], sweep.sizes["steady_steps"])

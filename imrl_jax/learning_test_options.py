@@ -108,10 +108,10 @@ def check_sizes(args) -> None:
     cli.check_at_least("--seed", args.seed, 0)
     cli.check_at_most("--seed", args.seed, 2**32 - 1)  # a uint32 key
     cli.check_at_most("--best x --tests", args.best * args.tests, cli.MAX_LANES)
-    for flag, texts in (("--set", args.set or []), ("--task-set", [args.task_set or ""]), ("--out", [args.out or ""]),
-                        ("--best-genomes", [args.best_genomes or ""]), ("run_dir", [args.run_dir or ""])):
-        for text in texts:
-            if not text.isprintable():  # a control character would break the one line of a refusal naming it
+    for name, value in vars(args).items():
+        for text in value if isinstance(value, list) else [value]:
+            if isinstance(text, str) and not text.isprintable():  # it would break the one line of a refusal naming it
+                flag = "run_dir" if name == "run_dir" else "--" + name.replace("_", "-")
                 raise UsageError(f"{flag}: {text!r} holds a control character")
 
 

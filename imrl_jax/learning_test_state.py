@@ -104,6 +104,8 @@ def _curves_npz(reaches: np.ndarray, selections: np.ndarray) -> bytes:
 # ----------------------------------------------------------------------------- --out
 
 
+#: The longest name of a file or folder (Linux's NAME_MAX): a longer --out could not be made.
+NAME_MAX = 255
 #: What else an unfinished test's ``--out`` may hold: its progress for TensorBoard (``--log tensorboard``).
 TEST_FOLDERS = ("tensorboard",)
 
@@ -138,6 +140,9 @@ def check_out_dir(out_dir: str) -> None:
 def check_out_before(out_dir: str, log: str | None = None) -> None:
     """Every check of ``--out`` before the test is carried out: writable, unlocked, new, empty or an unfinished test
     (``--log tensorboard``: its folder writable too); nothing is written."""
+    too_long = [part for part in out_dir.split(os.sep) if len(part.encode()) > NAME_MAX]
+    if too_long:
+        raise UsageError(f"--out: the name {too_long[0][:40]}... is longer than {NAME_MAX} bytes")
     check_writable(out_dir)
     check_unlocked(out_dir)
     check_out_dir(out_dir)

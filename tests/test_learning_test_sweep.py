@@ -234,12 +234,15 @@ def test_hostile_values_of_every_size_are_refused_or_planned_and_nothing_is_writ
         assert seen == "refused" or value not in ("-1", "18446744073709551616", "1.5", "nan", ""), argv
 
 
-@pytest.mark.parametrize("option", ["--set", "--task-set"])
-def test_hostile_texts_of_set_and_task_set_are_refused_or_planned_and_nothing_is_written(tmp_path, option):
+@pytest.mark.parametrize("option", ["--set", "--task-set", "--out", "--log", "--cond", "--register"])
+def test_hostile_texts_of_every_text_option_are_refused_or_planned_and_nothing_is_written(tmp_path, option):
     run = write_run(tmp_path / "run", tiny_config("EE-LS", num_generations=2))
     for value in HOSTILE_TEXTS:
-        argv = [run, *LENGTHS, f"{option}={value}", "--out", str(tmp_path / "test")]
-        assert_contract(attack(learning_test.main, argv, str(tmp_path)), option, argv=argv)
+        out = [] if option == "--out" else ["--out", str(tmp_path / "test")]
+        argv = [run, *LENGTHS, f"{option}={value}", *out]
+        outcome = attack(learning_test.main, argv, str(tmp_path))
+        if assert_contract(outcome, option, "run_dir", argv=argv) == "planned" and option == "--out":
+            assert outcome.plan.tests[0].out_dir == value, argv
 
 
 @pytest.mark.parametrize("how", list(HOSTILE_FILE_BYTES))
