@@ -259,3 +259,23 @@ def test_run_plans_every_study_it_will_run_and_refuses_one_another_runner_holds(
     write_lock(str(root / "mine" / "logs"), os.getppid())  # a live process: as another runner would
     assert_refused(_attack(["run", "mine"], root), "is being run by", argv=["run", "mine"])
     assert _attack(["list", "mine"], root).planned  # list is no runner: it reads alone
+
+
+def test_a_studys_own_command_takes_hostile_values_in_one_line_or_plans(tmp_path):
+    """``python -m experiments.MODULE``'s options (experiments.runner) given each hostile value: refused in one line
+    naming the option, or planned; nothing written (its folder, lock and manifest included)."""
+    def own(argv):
+        return runner.study_main(argv, "mine", "mine", lambda: ([], {}), None, lambda: 0)
+
+    planned = []
+    for action in runner.parser("mine")._actions:
+        if not action.option_strings or action.nargs == 0:  # --help, --report
+            continue
+        flag = action.option_strings[-1]
+        for value in HOSTILE_INTS if isinstance(action.default, int) else HOSTILE_TEXTS:
+            if assert_contract(attack(own, [flag, value], str(tmp_path)), flag, argv=[flag, value]) == "planned":
+                planned.append([flag, value])
+    assert planned == [["--slurm-partition", "nan"], ["--slurm-partition", "1e8"], ["--slurm-partition", "0,0"],
+                       ["--gpus-per-job", "0"], ["--gpus-per-job", "-0"]]
+    assert_contract(attack(own, ["--report", "--jobs", "2"], str(tmp_path)))
+    assert not os.listdir(tmp_path)
