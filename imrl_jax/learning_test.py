@@ -303,6 +303,11 @@ class CommandPlan(NamedTuple):
         if self.sweep is None:
             return _report([(test.out_dir, run(**test._asdict())) for test in self.tests], self.tests[0].steady_steps)
         sweep = self.sweep
+        if not sweep.quiet:
+            at = "each at its own last generation" if sweep.generation is None else f"at generation {sweep.generation}"
+            print(f"learning test of the {len(sweep.keys)} point(s) of {sweep.run_dir} {at}: {len(self.tests)} to test "
+                  f"one after the other into {sweep.out}, {len(self.tested_before)} tested before", file=sys.stderr,
+                  flush=True)
         make_dir(sweep.out)
         with lock_run_dir(sweep.out):
             check_out_root(sweep.out, sweep.keys)  # again, locked: another process may have written there since
@@ -321,6 +326,7 @@ class SweepRecord(NamedTuple):
     recorded: list[tuple[str, dict]]
     generation: int | None
     sizes: dict
+    quiet: bool = False
 
     @property
     def keys(self) -> list[str]:
@@ -396,7 +402,7 @@ def _plan_sweep(args, recorded: list[tuple[str, dict]], sets: dict, command: str
             continue
         test.check()
         tests.append(test)
-    return CommandPlan(tests, before, SweepRecord(args.run_dir, args.out, recorded, generation, sizes))
+    return CommandPlan(tests, before, SweepRecord(args.run_dir, args.out, recorded, generation, sizes, args.quiet))
 
 
 def _point_test(args, base: Config, genomes: np.ndarray, source: str, evolved: dict | None, warnings: list[str],
