@@ -16,7 +16,8 @@ for any condition and population, with the GA's own generation-0 draw and mutati
 
 The fitness is an argument, ``fitness_fn(key, genomes (N, genes)) -> Estimate``: the mean of fresh
 lives per genome and its standard error. :func:`from_lives` makes one from any per-life function
-(hand-made landscapes), :func:`lives_fitness` from the model's lives. Every measure is pure and
+(hand-made landscapes), :func:`lives_fitness` from the model's lives, :func:`fitness_in_chunks` any number
+of genomes through one program of a fixed batch (host-side). Every measure is pure and
 jittable with ``fitness_fn``, ``config`` and the sizes static. docs/GOALS.md "Measures".
 """
 
@@ -26,6 +27,7 @@ from typing import Callable, NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from imrl_jax import ga
 from imrl_jax.config import Config, LearningParams
@@ -78,6 +80,20 @@ def lives_fitness(config: Config, params: LearningParams | None, num_lives: int)
     evaluate = make_evaluate(config)
     params = config.learning_params() if params is None else params
     return jax.jit(from_lives(lambda key, genomes: evaluate(key, params, genomes).fitness, num_lives))
+
+
+def fitness_in_chunks(fitness_fn: FitnessFn, size: int) -> FitnessFn:
+    """``fitness_fn`` applied on the host to at most ``size`` genomes at a time (padded), so that one program serves
+    every batch of a measure (chunk ``i`` lives from ``fold_in(key, i)``)."""
+    def fn(key, genomes):
+        genomes = np.asarray(genomes)
+        n = len(genomes)
+        padded = np.concatenate([genomes, np.repeat(genomes[-1:], (-n) % size, 0)])
+        parts = [fitness_fn(jax.random.fold_in(key, i), padded[i * size:(i + 1) * size])
+                 for i in range(len(padded) // size)]
+        return Estimate(*(jnp.concatenate(x)[:n] for x in zip(*parts)))
+
+    return fn
 
 
 def random_genomes(key: jax.Array, config: Config, num_genomes: int) -> jnp.ndarray:
@@ -271,3 +287,19 @@ def learning_cut(config: Config, fraction: float = 0.0, adult: bool | None = Non
         changes.update(eta_actor=fraction * changes.get("eta_actor", config.eta_actor),
                        eta_evaluator=fraction * changes.get("eta_evaluator", config.eta_evaluator))
     return config.replace(**changes)
+
+
+def summary(effects: MutationEffects, rugged: Ruggedness) -> dict:
+    """The numbers of one measure around a population (a piece of ``landscape_run``): mutation effects,
+    evolvability and ruggedness, None where not finite."""
+    evo = evolvability(effects)
+    value = lambda x: None if not np.isfinite(float(x)) else round(float(x), 6)  # noqa: E731
+    return dict(parent_mean=value(effects.parent.mean()), mutant_mean=value(effects.mutant.mean()),
+                share_neutral=value(effects.share_neutral), share_deleterious=value(effects.share_deleterious),
+                share_beneficial=value(effects.share_beneficial), effect_mean=value(effects.mean),
+                effect_variance=value(effects.variance), effect_noise_variance=value(effects.noise_variance),
+                mutational_variance=value(evo.mean_mutational_variance), share_better=value(evo.mean_share_better),
+                rho=[value(r) for r in rugged.rho], rho_noise_corrected=[value(r) for r in rugged.rho_noise_corrected],
+                correlation_length=value(rugged.correlation_length),
+                correlation_length_noise_corrected=value(rugged.correlation_length_noise_corrected),
+                walk_variance=value(rugged.variance), walk_noise_variance=value(rugged.noise_variance))

@@ -28,7 +28,6 @@ import argparse
 import dataclasses
 import functools
 import json
-import math
 import os
 import sys
 import time
@@ -64,20 +63,6 @@ HOST_COPIES = 4
 MAX_HISTORY_BYTES = 2**28
 #: The longest name of a path's part (most file systems').
 MAX_NAME_BYTES = 255
-
-
-def fitness_in_chunks(fitness_fn: ls.FitnessFn, size: int) -> ls.FitnessFn:
-    """``fitness_fn`` applied to at most ``size`` genomes at a time (padded), so that one program serves every
-    batch of a measure (chunk ``i`` lives from ``fold_in(key, i)``)."""
-    def fn(key, genomes):
-        genomes = np.asarray(genomes)
-        n = len(genomes)
-        padded = np.concatenate([genomes, np.repeat(genomes[-1:], (-n) % size, 0)])
-        parts = [fitness_fn(jax.random.fold_in(key, i), padded[i * size:(i + 1) * size])
-                 for i in range(len(padded) // size)]
-        return ls.Estimate(*(jnp.concatenate(x)[:n] for x in zip(*parts)))
-
-    return fn
 
 
 def check_path(value: str | None, flag: str) -> None:
@@ -118,7 +103,8 @@ def parse_generations(text: str, num_generations: int, done: int | None = None) 
         try:
             g = done - 1 if item == "last" else int(item)
         except ValueError:
-            raise UsageError(f"--generations: expected integers or 'last', separated by commas (got {text!r})") from None
+            raise UsageError(f"--generations: expected integers or 'last', separated by commas "
+                             f"(got {text!r})") from None
         if not 0 <= g < num_generations:
             raise UsageError(f"--generations: {g} is not a generation of the run (0..{num_generations - 1})")
         if g >= done:
@@ -241,21 +227,6 @@ def parents_at(run_dir: str, config: Config, seeds: list[int], seed: int, genera
     return run.evaluated[0, order], {"source": f"replayed in {replay}", "replay_matches_run": matches}
 
 
-def summary(effects: ls.MutationEffects, rugged: ls.Ruggedness) -> dict:
-    """The numbers of one piece: mutation effects, evolvability and ruggedness."""
-    evo = ls.evolvability(effects)
-    value = lambda x: None if not np.isfinite(float(x)) else round(float(x), 6)  # noqa: E731
-    return dict(parent_mean=value(effects.parent.mean()), mutant_mean=value(effects.mutant.mean()),
-                share_neutral=value(effects.share_neutral), share_deleterious=value(effects.share_deleterious),
-                share_beneficial=value(effects.share_beneficial), effect_mean=value(effects.mean),
-                effect_variance=value(effects.variance), effect_noise_variance=value(effects.noise_variance),
-                mutational_variance=value(evo.mean_mutational_variance), share_better=value(evo.mean_share_better),
-                rho=[value(r) for r in rugged.rho], rho_noise_corrected=[value(r) for r in rugged.rho_noise_corrected],
-                correlation_length=value(rugged.correlation_length),
-                correlation_length_noise_corrected=value(rugged.correlation_length_noise_corrected),
-                walk_variance=value(rugged.variance), walk_noise_variance=value(rugged.noise_variance))
-
-
 def _is_ours(name: str) -> bool:
     """Whether an entry of ``--out`` is this command's: its two records, a replay, a lock's leftovers."""
     return is_output(name, (PROGRESS, RESULT)) or name == REPLAY or name.startswith(f"{LOCK}.stale-") or \
@@ -364,8 +335,8 @@ class Measures:
         done = {"identity": self.identity, "run": self.run_dir, "condition": config.condition,
                 "generations": sorted(before | set(self.generations)), "generations_done": self.done,
                 "num_generations": config.num_generations, "unfinished": self.why_unfinished, "pieces": pieces}
-        fitness = {"learning": fitness_in_chunks(ls.lives_fitness(config, None, s["lives"]), s["chunk"])}
-        fitness.update({name: fitness_in_chunks(ls.lives_fitness(cut, None, s["lives"]), s["chunk"])
+        fitness = {"learning": ls.fitness_in_chunks(ls.lives_fitness(config, None, s["lives"]), s["chunk"])}
+        fitness.update({name: ls.fitness_in_chunks(ls.lives_fitness(cut, None, s["lives"]), s["chunk"])
                         for name, cut in self.cut_configs.items()})
         root = jax.random.key(s["key"])
 
@@ -398,7 +369,7 @@ class Measures:
                 effects = ls.mutation_effects(k_effects, fn, config, jnp.asarray(parents), s["num_mutants"])
                 walks = ls.random_walks(k_walks, fn, config, jnp.asarray(parents[:s["num_walks"]]), s["walk_length"])
                 rugged = ls.ruggedness(walks, max_lag=min(5, s["walk_length"]))
-                piece = dict(generation=g, learning=learning, **source, **summary(effects, rugged),
+                piece = dict(generation=g, learning=learning, **source, **ls.summary(effects, rugged),
                              seconds=round(time.perf_counter() - start, 1))
                 save(name, piece)
                 self.log(f"{config.condition} {name}: parents {piece['parent_mean']:.4f}, mutants neutral "
@@ -436,8 +407,6 @@ def plan(run_dir: str, out_dir: str, *, generations: str = "0,10,last", seed: in
     check_sizes(config, 1, 0, **sizes)  # each size alone first, so that a wrong one is named before any file
     cut_configs = {}
     for fraction in cuts:
-        if not math.isfinite(fraction):
-            raise UsageError(f"--cut: {fraction} is not a fraction in [0, 1]")
         try:
             cut_configs[f"cut {fraction + 0.0:g}"] = ls.learning_cut(config, fraction)
         except ValueError as error:
@@ -507,7 +476,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--key", type=int, default=0, help=f"the measures' random key (0..{MAX_KEY})")
     p.add_argument("--chunk", type=int, default=50, help="genomes lived at once (one compiled program)")
     p.add_argument("--best-genomes", metavar="FILE", help="the last generation's best from a report's "
-                                                          "best_genomes.npz (a run whose final population was not kept)")
+                   "best_genomes.npz (a run whose final population was not kept)")
     cli.add_register(p)
     return p
 

@@ -3,6 +3,7 @@
 import json
 import os
 import shutil
+import socket
 import sys
 
 import numpy as np
@@ -56,10 +57,15 @@ def test_parents_are_the_runs_own_generations(run_dir, tmp_path):
             f.write(text)
 
 
-def test_every_piece_is_measured_once_and_a_second_call_goes_on_from_them(run_dir, tmp_path):
+def test_every_piece_is_measured_once_and_a_second_call_goes_on_from_them(run_dir, tmp_path, monkeypatch):
     out = str(tmp_path / "m")
-    said = []
+    said, written = [], []
+    atomic = landscape_run.write_atomic
+    monkeypatch.setattr(landscape_run, "write_atomic", lambda path, data: (written.append(path), atomic(path, data)))
     result = landscape_run.run(run_dir, out, generations="0,last", cuts=(0.0,), log=said.append, **SMALL)
+    # landscape.json after each of the 6 pieces and once more, then result.json, each atomically: a kill leaves
+    # a whole record
+    assert [os.path.basename(p) for p in written] == ["landscape.json"] * 7 + ["result.json"]
     assert sorted(result["pieces"]) == sorted(f"{what}, {learning}" for what in ("random genomes", "generation 0",
                                                                                    "generation 2")
                                               for learning in ("learning", "cut 0"))
@@ -91,7 +97,8 @@ def test_every_piece_is_measured_once_and_a_second_call_goes_on_from_them(run_di
 ])
 def test_bad_input_exits_2_in_one_line_and_writes_nothing(run_dir, tmp_path, capsys, args, message):
     out = tmp_path / "m"
-    assert landscape_run.main([run_dir, "--out", str(out), "--parents", "4", "--walks", "2", "--generations", "0,last", *args]) == 2
+    assert landscape_run.main([run_dir, "--out", str(out), "--parents", "4", "--walks", "2", "--generations", "0,last",
+                               *args]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith(f"error: {message}") and "\n" not in err, err
     assert not out.exists()
@@ -106,7 +113,7 @@ def test_measures_of_other_settings_are_not_mixed(run_dir, tmp_path, capsys):
     assert sorted(os.listdir(out)) == ["landscape.json"]
 
 
-# ----------------------------------------------------------------------------- attacks: nothing compiled, nothing written
+# ------------------------------------------------------------------------ attacks: nothing compiled, nothing written
 
 #: A module of one's own with a row of the condition table (as tests/test_conditions.py's).
 ROWS_MODULE = """
@@ -161,6 +168,15 @@ def test_an_unfinished_run_is_refused_unless_allowed_and_a_generation_never_reac
     assert assert_contract(outcome) == "planned"
     assert "warning: " in outcome.stderr and "1 of its 3 generations" in outcome.stderr
     assert outcome.plan.generations == [0] and outcome.plan.done == 1  # last: the last the run evaluated
+
+
+def test_a_run_still_being_written_is_unfinished(copied, tmp_path):
+    run, out = copied
+    with open(os.path.join(run, ".lock"), "w") as f:  # this process: alive
+        json.dump({"pid": os.getpid(), "host": socket.gethostname(), "start": 0}, f)
+    outcome = attack(landscape_run.main, [run, "--out", out, *TINY], str(tmp_path))
+    assert_refused(outcome, "--allow-unfinished")
+    assert f"is being written by pid {os.getpid()}" in outcome.stderr
 
 
 def test_the_records_state_the_generations_measured_and_the_runs_done(copied, tmp_path):
@@ -224,8 +240,10 @@ def test_damaged_best_genomes_are_refused(copied, tmp_path, damage_it):
         assert_refused(outcome, "--parents" if damage_it == "2 kept" else "--best-genomes")
 
 
-@pytest.mark.parametrize("where", ["the run", "inside the run", "around the run", "other files", "a file"])
-def test_an_out_of_the_run_or_of_other_files_is_refused(copied, tmp_path, where):
+@pytest.mark.parametrize("where, says", [
+    ("the run", "is the run's own folder"), ("inside the run", "is inside the run"),
+    ("around the run", "holds the run"), ("other files", "holds notes.txt"), ("a file", "is not a directory")])
+def test_an_out_of_the_run_or_of_other_files_is_refused(copied, tmp_path, where, says):
     run, out = copied
     out = {"the run": run, "inside the run": os.path.join(run, "measures"), "around the run": str(tmp_path / "v"),
            "other files": out, "a file": out}[where]
@@ -234,7 +252,9 @@ def test_an_out_of_the_run_or_of_other_files_is_refused(copied, tmp_path, where)
         (tmp_path / "m" / "notes.txt").write_text("mine")
     elif where == "a file":
         (tmp_path / "m").write_text("mine")
-    assert_refused(attack(landscape_run.main, [run, "--out", out, *TINY], str(tmp_path)), "--out")
+    outcome = attack(landscape_run.main, [run, "--out", out, *TINY], str(tmp_path))
+    assert_refused(outcome, "--out")
+    assert says in outcome.stderr
 
 
 def test_an_out_of_this_commands_own_files_is_gone_on_from(copied, tmp_path):
@@ -298,20 +318,27 @@ def test_progress_is_written_atomically(copied, tmp_path, monkeypatch):
     assert written == ["landscape.json", "result.json"]
 
 
-@pytest.mark.parametrize("argv, names", [
-    (["--random", "1e8"], ["--random"]), (["--random", "100000000"], ["--random"]),
-    (["--chunk", "100000000"], ["--chunk"]), (["--lives", "100000000"], ["--lives"]),
-    (["--mutants", "100000000"], ["--mutants"]), (["--walk-length", "100000000"], ["--walk-length"]),
-    (["--walks", "100000000"], ["--walks"]), (["--parents", "100000000"], ["--parents"]),
-    (["--chunk", "200000"], ["--chunk"]),  # 800,000 lives at once: within the lanes, not the memory
-    (["--key", "-1"], ["--key"]), (["--key", "4294967296"], ["--key"]), (["--key", "18446744073709551616"], ["--key"]),
-    (["--seed", "-1"], ["--seed"]), (["--seed", "18446744073709551616"], ["--seed"]),
-    (["--cut", "nan"], ["--cut"]), (["--cut", "1.5"], ["--cut"]), (["--cut", "0,,1"], ["--cut"]),
-    (["--cut", ","], ["--cut"]), (["--cut=-0.5"], ["--cut"]), (["--cut", "inf"], ["--cut"]),
+LANES, TOTAL = "lives at once, above the limit", "lives in all, above the limit"
+
+
+@pytest.mark.parametrize("argv, says", [
+    (["--random", "1e8"], "argument --random: invalid int value"), (["--random", "100000000"], TOTAL),
+    (["--chunk", "100000000"], LANES), (["--lives", "100000000"], LANES), (["--lives", "1"], "--lives: must be at"),
+    (["--mutants", "100000000"], TOTAL), (["--walk-length", "100000000"], TOTAL),
+    (["--walks", "100000000"], "--walks: at most --parents"), (["--parents", "100000000"], "--parents: at most"),
+    (["--chunk", "200000"], "memory: the landscape measures needs"),  # 800,000 lives at once: lanes, not memory
+    (["--key", "-1"], "--key: must be at least 0"), (["--key", "4294967296"], "--key: 4,294,967,296 is above"),
+    (["--key", "18446744073709551616"], "--key"), (["--seed", "-1"], "--seed: -1 is not a seed"),
+    (["--seed", "18446744073709551616"], "is not a seed"), (["--cut", "nan"], "--cut: fraction: must be in [0, 1]"),
+    (["--cut", "1.5"], "--cut: fraction"), (["--cut", "0,,1"], "--cut: an empty item"),
+    (["--cut", ","], "--cut: an empty item"), (["--cut=-0.5"], "--cut: fraction"),
+    (["--cut", "inf"], "--cut: fraction"),
 ])
-def test_every_size_and_value_is_bounded(copied, tmp_path, argv, names):
+def test_every_size_and_value_is_bounded(copied, tmp_path, argv, says):
     run, out = copied
-    assert_refused(attack(landscape_run.main, [run, "--out", out, *TINY, *argv], str(tmp_path)), *names)
+    outcome = attack(landscape_run.main, [run, "--out", out, *TINY, *argv], str(tmp_path))
+    assert_refused(outcome, argv[0].split("=")[0], "memory")
+    assert says in outcome.stderr
 
 
 def test_a_registered_row_is_measured_with_register(copied, tmp_path, monkeypatch):
