@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 import pytest
-from helpers import devices_seen, evolve_args, evolve_command, interruptible_command, read_population, snapshot
+from helpers import evolve_args, evolve_command, interruptible_command, read_population, snapshot
 
 from imrl_jax import evolve, tasks
 from imrl_jax.config import make_config
@@ -561,34 +561,47 @@ def test_a_full_disk_mid_run_is_one_line_exit_1_and_resumable(tmp_path, monkeypa
 def test_cpu_devices_are_set_up_before_the_task_set_starts_jax(tmp_path):
     """The task set's checks run JAX: the devices asked for after them would be ignored (and --coordinator refused)."""
     args = [*evolve_args(seeds=2), "--task-set", "paper", "--cpu-devices", "2", "--out", str(tmp_path / "run")]
-    assert devices_seen("imrl_jax.evolve", args) == 2
+    assert _devices_planned(args) == 2
+
+
+def _devices_planned(args) -> int:
+    """The devices the evolve command has once its plan is made (its execution stubbed: nothing runs), in a fresh
+    interpreter on CPU with no device count forced (the command asks for its own)."""
+    from helpers import ROOT, TIMEOUT, environment
+
+    code = ("import sys, jax\nfrom imrl_jax import cli, evolve\n"
+            "def execute(plan):\n    print(len(jax.devices()))\n    return 0\n"
+            f"cli.execute = execute\nsys.exit(evolve.main({list(args)!r}))\n")
+    env = environment()
+    env["XLA_FLAGS"] = " ".join(f for f in env["XLA_FLAGS"].split()
+                                if not f.startswith("--xla_force_host_platform_device_count"))
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True,
+                          timeout=TIMEOUT)
+    assert done.returncode == 0 and done.stdout.strip(), done.stderr[-2000:]
+    return int(done.stdout.split()[-1])
 
 
 def test_the_task_set_is_checked_against_the_geometry_the_command_line_sets(tmp_path, capsys, monkeypatch):
     """Paper tasks 3 and 6 have their targets 69.3 cm from their starts: within a 70 cm target radius. A set of
     longer tasks takes that radius (it is checked against the tasks the run will have, not the ones they replace)."""
-    monkeypatch.setattr(evolve, "run", lambda *a, **k: pytest.fail("the task set passed a check of another config"))
+    from attack import assert_refused, attack
+
     out = tmp_path / "run"
     args = [*evolve_args(seeds=1), "--task-set", "paper", "--set", "target_radius=70", "--out", str(out)]
-    assert evolve.main(args) == 2
-    assert capsys.readouterr().err == ("error: --task-set: paper: target_radius: must be below every task's "
-                                       "start-to-target distance (task 6: 69.3 cm) (got 70.0)\n")
-    assert not out.exists()
-    class Ran(Exception):
-        pass
-
-    def run(config, *args, **kwargs):
-        raise Ran(config)
-
-    monkeypatch.setattr(evolve, "run", run)
-    with pytest.raises(Ran) as ran:
-        evolve.main([*evolve_args(seeds=1), "--task-set", "novel", "--set", "target_radius=70", "--out", str(out)])
-    assert ran.value.args[0].target_radius == 70 and ran.value.args[0].tasks == tasks.novel_tasks()
+    refused = attack(evolve.main, args, str(tmp_path))
+    assert_refused(refused, "--task-set")
+    assert refused.stderr == ("error: --task-set: paper: target_radius: must be below every task's "
+                              "start-to-target distance (task 6: 69.3 cm) (got 70.0)\n")
+    planned = attack(evolve.main, [*evolve_args(seeds=1), "--task-set", "novel", "--set", "target_radius=70", "--out",
+                                   str(out)], str(tmp_path))
+    assert planned.planned and not planned.changed
+    assert planned.plan.config.target_radius == 70 and planned.plan.config.tasks == tasks.novel_tasks()
 
 
 def test_a_checkpoint_that_records_no_strategy_is_taken_for_the_gas(tmp_path):
     """Checkpoints made before --strategy existed hold no "search": resuming one with another strategy is refused."""
     from imrl_jax.config import make_config
+    from imrl_jax.progress import Progress
     from imrl_jax.strategies import Evosax
 
     class Restores:  # a checkpoint of such a run (its state does not matter before the strategy is checked)
@@ -600,8 +613,7 @@ def test_a_checkpoint_that_records_no_strategy_is_taken_for_the_gas(tmp_path):
     config = make_config("small", condition="EE-LS")
     strategy = Evosax("snes", config.population_size, config.num_genes)
     with pytest.raises(evolve.UsageError) as error:
-        evolve._evolve(config, str(tmp_path), [0], None, None, None, Restores(), strategy, resume=True,
-                       checkpoint_every=1, quiet=True, leader=True)
+        evolve._restore(config, str(tmp_path), [0], strategy, None, Restores(), Progress(1, quiet=True), None, True)
     assert str(error.value) == ("--strategy: the checkpoint was made by {'strategy': 'ga', 'settings': {}}, not "
                                 "{'strategy': 'snes', 'settings': {}}")
 
