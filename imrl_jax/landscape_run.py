@@ -178,13 +178,17 @@ def read_history(run_dir: str) -> np.ndarray:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # numpy's "no data" warning: an empty history is refused below
-            rows = np.loadtxt(path, delimiter=",", skiprows=1, usecols=(0, 1, 2), ndmin=2)
+            rows = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)  # every column: a row cut short is refused
     except (OSError, ValueError, IndexError, UnicodeDecodeError) as error:
         reason = str(error).splitlines()[0] if str(error) else type(error).__name__
         raise RunDirError(f"{path} is unreadable ({reason})") from None
-    if rows.ndim != 2 or rows.shape[1] != 3 or not np.isfinite(rows[:, :2]).all():
-        raise RunDirError(f"{path} is unreadable (no rows of generation, seed, best)")
-    return rows
+    with open(path, "rb") as f:
+        header = f.readline(1 << 16).decode("utf-8", "replace").strip().split(",")
+    if header[:3] != ["generation", "seed", "best"] or rows.ndim != 2 or rows.shape[1] != len(header) or \
+            not np.isfinite(rows[:, :2]).all():  # a row cut short, too (a history written as it ran, then damaged)
+        raise RunDirError(f"{path} is unreadable (not rows of its header's {len(header)} columns, generation, seed, "
+                          f"best first)")
+    return rows[:, :3]
 
 
 def generations_in_history(run_dir: str, seed: int) -> int:

@@ -376,3 +376,15 @@ def test_hostile_values_of_every_option_keep_the_contract(copied, tmp_path, flag
         assert_contract(attack(landscape_run.main, argv, str(tmp_path)), *names, argv=argv)
     finally:
         conditions.CONDITIONS.pop("EE-LS-mine", None)
+
+
+@pytest.mark.parametrize("name", ["config.json", "history.csv", "final_population.npz"])
+@pytest.mark.parametrize("how", sorted(HOSTILE_FILE_BYTES))
+def test_a_damaged_file_of_the_run_is_one_line_naming_it(copied, tmp_path, name, how):
+    """history.csv is read where the run kept no final population (its generations done) or a generation is
+    replayed (its best checked): here the first."""
+    run, out = copied
+    if name == "history.csv":
+        os.remove(os.path.join(run, "final_population.npz"))
+    damage(os.path.join(run, name), how)
+    assert_refused(attack(landscape_run.main, [run, "--out", out, *TINY], str(tmp_path)), name)
