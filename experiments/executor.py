@@ -31,8 +31,10 @@ BARRIERS = ("measure",)
 #: ends, however that ends (prctl's PR_SET_PDEATHSIG, 1, kept across exec), then becomes the command. A launcher and
 #: not a preexec_fn: a fork of a process with threads (JAX's) may deadlock before the child execs.
 _LAUNCHER = ("import ctypes, os, signal, sys\n"
-             "try:\n    ctypes.CDLL(None).prctl(1, signal.SIGKILL, 0, 0, 0)\nexcept (OSError, AttributeError):\n    pass\n"
-             "if os.getppid() != int(sys.argv[1]):\n    sys.exit(137)  # the runner ended before: no signal would come\n"
+             "try:\n    ctypes.CDLL(None).prctl(1, signal.SIGKILL, 0, 0, 0)\n"
+             "except (OSError, AttributeError):\n    pass\n"
+             "if os.getppid() != int(sys.argv[1]):\n"
+             "    sys.exit(137)  # the runner ended before: no signal would come\n"
              "os.execv(sys.argv[2], sys.argv[2:])\n")
 
 
