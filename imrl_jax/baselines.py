@@ -24,6 +24,7 @@ from typing import Sequence
 import jax
 import numpy as np
 
+from imrl_jax import cli
 from imrl_jax.brax_agents import AGENTS, Baseline, final_performance, steps_per_update, steps_trained
 from imrl_jax.cli import (HelpFormatter, Parser, UsageError, add_task_set, apply_task_set, check_out, parse_sets,
                           exit_codes)
@@ -166,6 +167,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         from imrl_jax import brax_env  # noqa: F401
     except ImportError as error:
         raise UsageError(str(error)) from None
+    return cli.execute(cli.Call(lambda: report(settings, args, config, command), settings=settings, out=args.out))
+
+
+def report(settings: Baseline, args, config: Config, command: str) -> int:
+    """Train the baseline the command line checked and print what it measured."""
     summary = run(settings, args.out, config=config, quiet=args.quiet, command=command)
     print(f"{summary['agent'].upper()}, {summary['steps']:,} cycles per task: performance "
           f"{summary['performance_mean']:.4f} (mean over tasks and seeds; sd over seeds "

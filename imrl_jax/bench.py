@@ -18,7 +18,6 @@ interpreted, which measures nothing useful.
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import json
 import os
@@ -312,10 +311,20 @@ def sweep_benchmark(num_points: int, num_seeds: int = 2, task_steps: int = 500, 
 
 
 def main(argv=None) -> int:
-    from imrl_jax.cli import HelpFormatter
+    from imrl_jax import cli
 
-    parser = argparse.ArgumentParser(prog="python -m imrl_jax.bench", description=__doc__.split("\n")[0],
-                                     formatter_class=HelpFormatter)
+    return cli.exit_codes(_main)(argv)
+
+
+def _main(argv=None) -> int:
+    """The command: parse, check every option (nothing written), then measure through ``cli.execute``."""
+    from imrl_jax import cli
+    from imrl_jax.cli import UsageError
+    from imrl_jax.config import STEP_KERNELS
+    from imrl_jax.rundir import check_writable
+
+    parser = cli.Parser(prog="python -m imrl_jax.bench", description=__doc__.split("\n")[0],
+                        formatter_class=cli.HelpFormatter)
     parser.add_argument("--lanes", default="1,50,300,3000", help="comma-separated lane counts")
     parser.add_argument("--steps", type=int, default=1000, help="steps per timed phase run")
     parser.add_argument("--repeats", type=int, default=5, help="timed runs after compilation (median)")
@@ -331,15 +340,10 @@ def main(argv=None) -> int:
     parser.add_argument("--json", help="also write the results to this JSON file")
     args = parser.parse_args(argv)
     if args.sweep_points < 0 or args.sweep_points > 1000:
-        print("error: --sweep-points: must be in 0..1000", file=sys.stderr)
-        return 2
-    from imrl_jax.config import STEP_KERNELS
-
+        raise UsageError("--sweep-points: must be in 0..1000")
     kernels = args.kernel.split(",")
     if not all(k in STEP_KERNELS for k in kernels):
-        print(f"error: --kernel: expected {' or '.join(STEP_KERNELS)}, separated by commas, got {args.kernel!r}",
-              file=sys.stderr)
-        return 2
+        raise UsageError(f"--kernel: expected {' or '.join(STEP_KERNELS)}, separated by commas, got {args.kernel!r}")
     counts = {}
     for name in ("lanes", "lifetime_lanes"):
         text = getattr(args, name)
@@ -348,32 +352,25 @@ def main(argv=None) -> int:
         except ValueError:
             counts[name] = []
         if not counts[name] or min(counts[name]) < 1:
-            print(f"error: --{name.replace('_', '-')}: expected positive integers separated by commas, got {text!r}",
-                  file=sys.stderr)
-            return 2
+            raise UsageError(f"--{name.replace('_', '-')}: expected positive integers separated by commas, "
+                             f"got {text!r}")
+        cli.check_at_most(f"--{name.replace('_', '-')}", max(counts[name]), cli.MAX_LANES)
     for name in ("steps", "repeats", "reference_steps", "lifetime_task_steps"):
-        if getattr(args, name) < 1:
-            print(f"error: --{name.replace('_', '-')}: must be at least 1", file=sys.stderr)
-            return 2
+        cli.check_at_least(f"--{name.replace('_', '-')}", getattr(args, name))
+        cli.check_at_most(f"--{name.replace('_', '-')}", getattr(args, name), cli.MAX_STEPS)
     if args.lifetime_task_steps % 10:
-        print("error: --lifetime-task-steps: must be a multiple of 10", file=sys.stderr)
-        return 2
-    if args.json:  # checked before the measurements, which take minutes
+        raise UsageError("--lifetime-task-steps: must be a multiple of 10")
+    if args.json is not None:  # checked before the measurements, which take minutes
+        cli.check_out(args.json, "--json")
         if os.path.isdir(args.json):
-            print(f"error: --json: {args.json} is a directory", file=sys.stderr)
-            return 2
-        try:
-            os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-        except OSError as error:
-            print(f"error: --json: cannot create the folder of {args.json}: {error.strerror}", file=sys.stderr)
-            return 2
-    from imrl_jax.cli import UsageError, check_cpu_devices
+            raise UsageError(f"--json: {args.json} is a directory")
+        check_writable(os.path.dirname(os.path.abspath(args.json)), "--json")
+    cli.check_cpu_devices(args.cpu_devices)  # at most 4 per core: each device holds its own runtime
+    return cli.execute(cli.Call(lambda: measure(args, counts, kernels), counts=counts, kernels=kernels))
 
-    try:
-        check_cpu_devices(args.cpu_devices)  # at most 4 per core: each device holds its own runtime
-    except UsageError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+
+def measure(args, counts: dict, kernels: list[str]) -> int:
+    """The benchmark the command line checked; its results written to ``--json`` if given."""
     use_host_cores(args.cpu_devices or None)
     if args.sweep_points:
         result = sweep_benchmark(args.sweep_points, task_steps=args.lifetime_task_steps, pairs=args.repeats)
@@ -383,6 +380,7 @@ def main(argv=None) -> int:
     if args.json:
         from imrl_jax.rundir import write_atomic
 
+        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
         write_atomic(args.json, json.dumps(result, indent=2).encode())
     return 0
 

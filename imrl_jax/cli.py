@@ -1,4 +1,20 @@
-"""What the command lines share: the usage error, the parser and help formatter, ``--set FIELD=VALUE``, size limits."""
+"""What the command lines share: check-then-write, the usage error, the parser and help formatter, ``--set``, size limits.
+
+Every command is built the same way, so that a refusal can never leave a file changed:
+
+1. **parse** its arguments (:class:`Parser`: a bad option is a :class:`UsageError`);
+2. **plan**: build from the arguments and the files it reads everything it will do, every value bounded,
+   every file read safely, the memory of the whole run estimated, and raise a user error
+   (:func:`user_errors`) at the first thing wrong. A plan writes nothing: no folder, no lock, no file;
+3. **execute** the plan through :func:`execute`, the one place where a command may begin to write: it
+   takes its lock, checks again what another process may have changed meanwhile, and only then writes,
+   each file atomically (``rundir.write_atomic``), in an order after which a kill leaves the old or the
+   new record.
+
+``main`` is ``exit_codes``-wrapped, so a user error anywhere is one line and exit code 2. The suite's
+attacks (``tests/attack.py``) stub :func:`execute` and throw hostile values and files at every
+command's plan: whatever they give, nothing may change on disk before :func:`execute`.
+"""
 
 from __future__ import annotations
 
@@ -8,7 +24,7 @@ import difflib
 import functools
 import os
 import sys
-from typing import Callable, Mapping, Sequence
+from typing import Callable, Mapping, Protocol, Sequence
 
 from imrl_jax import config as config_bounds  # imports no JAX
 
@@ -42,6 +58,29 @@ def exit_codes(main: Callable[..., int]) -> Callable[..., int]:
             return 1
 
     return reported
+
+
+class Plan(Protocol):
+    """What a command will do, built and checked from its arguments and files: nothing written yet."""
+
+    def execute(self) -> int:
+        """Take the lock, check again what may have changed, write; the command's exit code."""
+
+
+class Call:
+    """A plan that is one call, for a command whose checks are all made before it (its arguments are the plan)."""
+
+    def __init__(self, run: Callable[[], int], **checked):
+        self.run, self.checked = run, checked  # checked: what the plan was built from, for tests to read
+
+    def execute(self) -> int:
+        """Make the call."""
+        return self.run()
+
+
+def execute(plan: Plan) -> int:
+    """Carry out a checked plan: the one place a command begins to write (the suite's attacks stop here)."""
+    return plan.execute()
 
 
 class Parser(argparse.ArgumentParser):
@@ -177,7 +216,7 @@ def register(specs: Sequence[str] | None) -> list[str]:
             raise UsageError(f"--register {spec}: expected MODULE:ATTRIBUTE, e.g. --register my_rows:ROWS")
         try:
             module = importlib.import_module(module_name)
-        except Exception as error:  # noqa: BLE001 - whatever the module raises, one line
+        except (Exception, SystemExit) as error:  # noqa: BLE001 - whatever the module raises (or exits with), one line
             raise UsageError(f"--register {spec}: cannot import {module_name} ({type(error).__name__}: "
                              f"{str(error).splitlines()[0] if str(error) else ''})") from None
         if not hasattr(module, attribute):

@@ -17,7 +17,6 @@ from each version's modules, through the API every recent revision has (``make_c
 
 from __future__ import annotations
 
-import argparse
 import io
 import os
 import re
@@ -104,7 +103,17 @@ def compare(revision: str, phase: str, lanes: int, steps: int, pairs: int, log=p
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m imrl_jax.compare", description=__doc__.split("\n")[0])
+    from imrl_jax import cli
+
+    return cli.exit_codes(_main)(argv)
+
+
+def _main(argv=None) -> int:
+    """The command: parse, check every option and the revision (nothing written), then time through ``cli.execute``."""
+    from imrl_jax import cli
+    from imrl_jax.cli import UsageError
+
+    parser = cli.Parser(prog="python -m imrl_jax.compare", description=__doc__.split("\n")[0])
     parser.add_argument("revision", metavar="REV", help="git revision to compare this checkout with")
     parser.add_argument("--phase", choices=sorted(PHASES), default="adult",
                         help="adulthood of LE-LS (adult), EE-ES or SLE, LE-LS childhood, or whole LE-LS lives "
@@ -114,25 +123,23 @@ def main(argv=None) -> int:
     parser.add_argument("--pairs", type=int, default=20, help="alternating pairs of timed runs")
     parser.add_argument("--cpu-devices", type=int, default=0, help="CPU devices (0: one per core)")
     args = parser.parse_args(argv)
-    for name in ("lanes", "steps", "pairs"):
-        if getattr(args, name) < 1:
-            print(f"error: --{name}: must be at least 1", file=sys.stderr)
-            return 2
+    for name, limit in (("lanes", cli.MAX_LANES), ("steps", cli.MAX_STEPS), ("pairs", 10_000)):
+        cli.check_at_least(f"--{name}", getattr(args, name))
+        cli.check_at_most(f"--{name}", getattr(args, name), limit)
     if args.phase == "life" and args.steps % 10:
-        print("error: --steps: must be a multiple of 10 for --phase life (10 bins)", file=sys.stderr)
-        return 2
-    from imrl_jax.cli import UsageError, check_cpu_devices
-
-    try:
-        check_cpu_devices(args.cpu_devices)  # at most 4 per core: each device holds its own runtime
-    except UsageError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+        raise UsageError("--steps: must be a multiple of 10 for --phase life (10 bins)")
+    cli.check_cpu_devices(args.cpu_devices)  # at most 4 per core: each device holds its own runtime
+    if not args.revision.strip() or args.revision.startswith("-"):
+        raise UsageError(f"REV: {args.revision!r} is not a revision of {REPO}")
     check = subprocess.run(["git", "-C", REPO, "rev-parse", "--verify", "--quiet", args.revision + "^{commit}"],
                            capture_output=True)
     if check.returncode:
-        print(f"error: REV: {args.revision!r} is not a revision of {REPO}", file=sys.stderr)
-        return 2
+        raise UsageError(f"REV: {args.revision!r} is not a revision of {REPO}")
+    return cli.execute(cli.Call(lambda: timed(args), revision=args.revision))
+
+
+def timed(args) -> int:
+    """The comparison the command line checked, printed."""
     from imrl_jax.devices import use_host_cores
 
     use_host_cores(args.cpu_devices or None)

@@ -13,6 +13,7 @@ This module imports only the genome parts (``imrl_jax.genome``) and no JAX, so t
 from __future__ import annotations
 
 import dataclasses
+import re
 from typing import NamedTuple
 
 from imrl_jax.genome import EVOLVED_FIELDS, EVOLVED_PARAMETERS, PARTS, get_part  # noqa: F401 (the table's names)
@@ -195,10 +196,21 @@ PAPER = ("LE-LS", "EE-LS", "EE-ES", "SLE")
 PAPER_EVOLVED = tuple(name for name in PAPER if CONDITIONS[name].evolved)
 
 
+#: What a condition's name may be.
+NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+-]{0,63}")
+
+
 def register(condition: Condition) -> Condition:
     """Add a row to the table (a condition of your own, e.g. in a notebook); a name in use is a ValueError."""
+    if not isinstance(condition.name, str) or not NAME.fullmatch(condition.name) or ".." in condition.name:
+        # a name is a folder's (runs/NAME) and a key's part: no path tricks, nothing a shell or file system mangles
+        raise ValueError(f"condition: {condition.name!r} is not a name (letters, digits, and - _ . + inside, at most "
+                         f"64 characters)")
     if condition.name in CONDITIONS:
         raise ValueError(f"condition: {condition.name!r} is already a row of the table")
+    if condition.evolved and not condition.genome:  # the GA would evolve nothing, and its run could not be resumed
+        raise ValueError(f"condition {condition.name}: evolved, but its genome encodes no network (give genome "
+                         f"parts, or evolved=False to test it from scratch)")
     unknown = [n for n in condition.genome if n not in PARTS] + [n for n in condition.reset if n not in NETWORKS]
     if unknown:
         raise ValueError(f"condition {condition.name}: {unknown[0]!r} is not a network (choose from "

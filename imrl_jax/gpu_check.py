@@ -28,7 +28,6 @@ machine with no GPU is refused.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import dataclasses
 import json
@@ -685,7 +684,16 @@ def run(out_dir: str, budget_s: float = 480.0, sizes: Sizes = Sizes(), log=print
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m imrl_jax.gpu_check", description=__doc__.split("\n")[0])
+    from imrl_jax import cli
+
+    return cli.exit_codes(_main)(argv)
+
+
+def _main(argv=None) -> int:
+    """The command: parse, check every option (nothing written), then run the check through ``cli.execute``."""
+    from imrl_jax import cli
+
+    parser = cli.Parser(prog="python -m imrl_jax.gpu_check", description=__doc__.split("\n")[0])
     parser.add_argument("--out", required=True, help="folder for gpu_check.json, .txt and .png (new, or without them)")
     parser.add_argument("--budget-min", type=float, default=8.0, help="minutes the check may take")
     parser.add_argument("--dry", action="store_true", help="tiny sizes on any backend (tests the check itself)")
@@ -693,47 +701,45 @@ def main(argv=None) -> int:
     parser.add_argument("--conditions", help="comma-separated conditions whose lives and phases to check (default: all)")
     args = parser.parse_args(argv)
 
-    def fail(message: str) -> int:
-        print(f"error: {message}", file=sys.stderr)
-        return 2
-
     if not args.out.strip():
-        return fail("--out: empty")
-    if not (0 < args.budget_min <= 600):
-        return fail(f"--budget-min: must be above 0 and at most 600, got {args.budget_min:g}")
+        raise cli.UsageError("--out: empty")
+    if not (0 < args.budget_min <= 600):  # NaN too
+        raise cli.UsageError(f"--budget-min: must be above 0 and at most 600, got {args.budget_min:g}")
     names = [n for n, *_ in STEPS]
     only = names if args.only is None else [n.strip() for n in args.only.split(",")]
     unknown = [n for n in only if n not in names]
     if unknown or not only:
-        return fail(f"--only: unknown step {unknown[0] if unknown else ''!r} (choose from {', '.join(names)})")
+        raise cli.UsageError(f"--only: unknown step {unknown[0] if unknown else ''!r} (choose from {', '.join(names)})")
     from imrl_jax.conditions import NAMES
 
     conditions = None if args.conditions is None else tuple(n.strip() for n in args.conditions.split(","))
     if conditions is not None and any(n not in NAMES for n in conditions):
         bad = next(n for n in conditions if n not in NAMES)
-        return fail(f"--conditions: unknown condition {bad!r} (choose from {', '.join(NAMES)})")
+        raise cli.UsageError(f"--conditions: unknown condition {bad!r} (choose from {', '.join(NAMES)})")
     existing = [f for f in FILES if os.path.exists(os.path.join(args.out, f))]
     if existing:
-        return fail(f"--out: {os.path.join(args.out, existing[0])} exists (choose a new folder)")
+        raise cli.UsageError(f"--out: {os.path.join(args.out, existing[0])} exists (choose a new folder)")
     if os.path.exists(args.out) and not os.path.isdir(args.out):
-        return fail(f"--out: {args.out} is not a folder")
-    from imrl_jax.rundir import RunDirError, check_writable
+        raise cli.UsageError(f"--out: {args.out} is not a folder")
+    from imrl_jax.rundir import check_writable
 
-    try:
-        check_writable(args.out)
-    except RunDirError as error:
-        return fail(str(error))
+    check_writable(args.out)
     if not args.dry:
         import jax
 
         if jax.default_backend() != "gpu":
-            return fail(f"no GPU: jax {jax.__version__} sees {jax.default_backend()} devices only "
+            raise cli.UsageError(f"no GPU: jax {jax.__version__} sees {jax.default_backend()} devices only "
                         f"({jax.devices()[0].device_kind}); run where one is, or use --dry")
     sizes = DRY if args.dry else Sizes()
     if conditions is not None:
         sizes = dataclasses.replace(sizes, conditions=conditions)
-    results = run(args.out, args.budget_min * 60, sizes, steps=[s for s in STEPS if s[0] in only])
-    return 1 if results["summary"]["failed"] else 0
+    chosen = [s for s in STEPS if s[0] in only]
+
+    def check() -> int:
+        results = run(args.out, args.budget_min * 60, sizes, steps=chosen)
+        return 1 if results["summary"]["failed"] else 0
+
+    return cli.execute(cli.Call(check, sizes=sizes, steps=only))
 
 
 if __name__ == "__main__":

@@ -30,6 +30,7 @@ from typing import NamedTuple
 import numpy as np
 
 from imrl_jax.cli import HelpFormatter, Parser, UsageError, add_register, exit_codes, register
+from imrl_jax import cli
 from imrl_jax.rundir import check_writable, load_run
 
 FORMATS = (".gif", ".mp4")
@@ -99,15 +100,48 @@ def check_sizes(steps: int, every: int, fps: int) -> None:
         raise UsageError(f"--steps / --every: {frames:,} frames is above the limit of {MAX_FRAMES:,} (raise --every)")
 
 
-def run(run_dir: str, task: int, out_path: str, steps: int = 300, every: int = 2, fps: int = 20,
-        overwrite: bool = False) -> dict:
-    """Animate the best individual of ``run_dir`` on task ``task`` (1-based) into ``out_path``; return a summary."""
+class Plan(NamedTuple):
+    """An animation checked and ready to draw: nothing written yet (``imrl_jax.cli``)."""
+
+    run_dir: str
+    task: int  # 1-based
+    out_path: str
+    steps: int
+    every: int
+    fps: int
+    best: Best
+
+    def execute(self) -> int:
+        """Draw the animation into ``out_path`` (through a temporary file renamed when complete) and say so."""
+        summary = animate(self)
+        print(f"wrote {summary['out']}: {summary['frames']} frames of task {summary['task']} "
+              f"(best individual: seed {summary['seed']}, generation {summary['generation']}, fitness "
+              f"{summary['fitness']:.3f}, relived {summary['relived_fitness']:.3f}; "
+              f"{summary['reaches_in_animation']} reaches shown) in {summary['seconds']:.1f} s")
+        return 0
+
+
+def plan(run_dir: str, task: int, out_path: str, steps: int = 300, every: int = 2, fps: int = 20,
+         overwrite: bool = False) -> Plan:
+    """Every check of an animation (sizes, output, the run, the task), nothing written; raises UsageError."""
     check_sizes(steps, every, fps)
     check_output(out_path, overwrite)
     best = best_individual(run_dir)
+    if not 1 <= task <= best.config.num_tasks:
+        raise UsageError(f"--task: must be in 1..{best.config.num_tasks} (got {task})")
+    return Plan(run_dir, task, out_path, steps, every, fps, best)
+
+
+def run(run_dir: str, task: int, out_path: str, steps: int = 300, every: int = 2, fps: int = 20,
+        overwrite: bool = False) -> dict:
+    """Animate the best individual of ``run_dir`` on task ``task`` (1-based) into ``out_path``; return a summary."""
+    return animate(plan(run_dir, task, out_path, steps, every, fps, overwrite))
+
+
+def animate(checked: Plan) -> dict:
+    """The animation of a checked plan, written; its summary."""
+    run_dir, task, out_path, steps, every, fps, best = checked
     config = best.config
-    if not 1 <= task <= config.num_tasks:
-        raise UsageError(f"--task: must be in 1..{config.num_tasks} (got {task})")
 
     import jax
     import jax.numpy as jnp
@@ -163,12 +197,7 @@ def parser() -> argparse.ArgumentParser:
 def main(argv=None) -> int:
     args = parser().parse_args(argv)
     register(args.register)
-    summary = run(args.run_dir, args.task, args.out, args.steps, args.every, args.fps, args.overwrite)
-    print(f"wrote {summary['out']}: {summary['frames']} frames of task {summary['task']} "
-          f"(best individual: seed {summary['seed']}, generation {summary['generation']}, fitness "
-          f"{summary['fitness']:.3f}, relived {summary['relived_fitness']:.3f}; "
-          f"{summary['reaches_in_animation']} reaches shown) in {summary['seconds']:.1f} s")
-    return 0
+    return cli.execute(plan(args.run_dir, args.task, args.out, args.steps, args.every, args.fps, args.overwrite))
 
 
 if __name__ == "__main__":

@@ -178,6 +178,7 @@ def test_index(root: str) -> dict[str, str]:
 
 def main(argv=None) -> int:
     """``python -m imrl_jax.runspec ROOT [--record PATH]``: every run under ROOT with its key."""
+    from imrl_jax import cli
     from imrl_jax.cli import Parser, UsageError, exit_codes
 
     @exit_codes
@@ -188,14 +189,28 @@ def main(argv=None) -> int:
         args = parser.parse_args(argv)
         if not os.path.isdir(args.root):
             raise UsageError(f"{args.root}: not a folder")
-        known = sorted(index(args.root).items(), key=lambda item: item[1])
-        for key, folder in known:
-            print(f"{key}  {folder}")
-        if args.record:
-            from imrl_jax.rundir import write_atomic
+        if args.record is not None:
+            from imrl_jax.cli import check_out
+            from imrl_jax.rundir import check_writable
 
-            write_atomic(args.record, (json.dumps({folder: key for key, folder in known}, indent=1) + "\n").encode())
-        return 0
+            check_out(args.record, "--record")
+            if os.path.isdir(args.record):
+                raise UsageError(f"--record: {args.record} is a directory")
+            check_writable(os.path.dirname(os.path.abspath(args.record)), "--record")
+        known = sorted(index(args.root).items(), key=lambda item: item[1])
+
+        def record() -> int:
+            for key, folder in known:
+                print(f"{key}  {folder}")
+            if args.record:
+                from imrl_jax.rundir import write_atomic
+
+                os.makedirs(os.path.dirname(os.path.abspath(args.record)), exist_ok=True)
+                write_atomic(args.record, (json.dumps({folder: key for key, folder in known}, indent=1)
+                                           + "\n").encode())
+            return 0
+
+        return cli.execute(cli.Call(record, known=known))
 
     return listed(argv)
 

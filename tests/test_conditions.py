@@ -225,6 +225,14 @@ def test_a_registered_row_works_with_every_command(tmp_path, monkeypatch, capsys
     ("my_rows:NOTHING", "--register my_rows:NOTHING: my_rows has no attribute NOTHING"),
     ("my_rows:NAME", "--register my_rows:NAME: NAME is not a conditions.Condition or a list of them"),
     ("my_rows:TAKEN", "--register my_rows:TAKEN: condition: 'EE-LS' is already a row of the table"),
+    # a name that would put runs outside runs/ (runs/../../x) or in runs/ itself
+    ("my_rows:UP", "--register my_rows:UP: condition: '../../x' is not a name (letters, digits, and - _ . + inside, "
+                   "at most 64 characters)"),
+    ("my_rows:EMPTY", "--register my_rows:EMPTY: condition: '' is not a name (letters, digits, and - _ . + inside, "
+                      "at most 64 characters)"),
+    ("my_rows:NO_GENES", "--register my_rows:NO_GENES: condition EE-NONE: evolved, but its genome encodes no network "
+                         "(give genome parts, or evolved=False to test it from scratch)"),
+    ("exits:ROW", "--register exits:ROW: cannot import exits (SystemExit: 3)"),
 ])
 def test_a_bad_register_is_one_line(tmp_path, monkeypatch, capsys, spec, message):
     import sys
@@ -232,9 +240,15 @@ def test_a_bad_register_is_one_line(tmp_path, monkeypatch, capsys, spec, message
     from imrl_jax import evolve
 
     (tmp_path / "my_rows.py").write_text("import dataclasses\nfrom imrl_jax import conditions\nNAME = 'x'\n"
-                                         "TAKEN = dataclasses.replace(conditions.get('EE-ES'), name='EE-LS')\n")
+                                         "TAKEN = dataclasses.replace(conditions.get('EE-ES'), name='EE-LS')\n"
+                                         "UP = dataclasses.replace(conditions.get('EE-ES'), name='../../x')\n"
+                                         "EMPTY = dataclasses.replace(conditions.get('EE-ES'), name='')\n"
+                                         "NO_GENES = dataclasses.replace(conditions.get('EE-ES'), name='EE-NONE', "
+                                         "genome=())\n")
+    (tmp_path / "exits.py").write_text("raise SystemExit(3)\n")  # a module that exits: one line, not a silent exit
     monkeypatch.chdir(tmp_path)
-    monkeypatch.delitem(sys.modules, "my_rows", raising=False)
+    for module in ("my_rows", "exits"):
+        monkeypatch.delitem(sys.modules, module, raising=False)
     out = tmp_path / "run"
     assert evolve.main(["--register", spec, "--cond", "EE-LS", "--out", str(out)]) == 2
     assert capsys.readouterr().err == f"error: {message}\n"
