@@ -27,7 +27,8 @@ from imrl_jax.devices import make_mesh, replicated, to_global, to_host
 from imrl_jax.events import check_log
 from imrl_jax.ga import GA, init_population
 from imrl_jax.networks import trait_names
-from imrl_jax.rundir import RunWriteError, entries, not_empty, read_config, read_json, write_atomic, write_errno
+from imrl_jax.rundir import (RunDirError, RunWriteError, entries, not_empty, read_config, read_json, write_atomic,
+                             write_errno)
 from imrl_jax.strategies import GA_RECORD
 
 # ----------------------------------------------------------------------------- state
@@ -200,8 +201,15 @@ def _difference(name: str, config: Config, saved: Config) -> str:
 
 
 def read_search(out_dir: str) -> dict:
-    """The search strategy a run records in its config.json (the paper's GA if it records none)."""
-    return read_json(os.path.join(out_dir, "config.json"), "").get("search", GA_RECORD)
+    """The search strategy a run records in its config.json (the paper's GA if it records none; raises RunDirError
+    naming the file if it records something else than a strategy's name and settings)."""
+    path = os.path.join(out_dir, "config.json")
+    saved = read_json(path, "")
+    found = saved.get("search", GA_RECORD) if isinstance(saved, dict) else None
+    if not (isinstance(found, dict) and isinstance(found.get("strategy"), str)
+            and isinstance(found.get("settings"), dict)):
+        raise RunDirError(f"{path} is unreadable (its search is {found!r}, not a strategy and its settings)")
+    return found
 
 
 def _strategy_text(record: dict) -> str:

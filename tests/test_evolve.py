@@ -658,7 +658,7 @@ def test_the_condition_check_names_the_option(argv, message):
     assert str(error.value).startswith(message)
 
 
-# ----------------------------------------------------------------------------- refusals, planned before anything is written
+# ------------------------------------------------------------ refusals, planned before anything is written
 
 def _made_run(root, seeds=(0, 1)):
     """A run's folder as a run that never reached its first checkpoint leaves it (config.json), made without running."""
@@ -679,8 +679,8 @@ def test_the_main_plans_then_executes_and_writes_nothing_before(tmp_path):
     assert isinstance(outcome.plan, evolve.RunPlan) and outcome.plan.seeds == [0, 1]
 
 
-@pytest.mark.parametrize("args", [["--first-seed", "18446744073709551616"], ["--first-seed", "4294967295", "--seeds", "2"],
-                                  ["--seeds", "18446744073709551616"], ["--first-seed", "-1"]])
+@pytest.mark.parametrize("args", [["--first-seed", "18446744073709551616"], ["--first-seed", "4294967295", "--seeds",
+                                  "2"], ["--seeds", "18446744073709551616"], ["--first-seed", "-1"]])
 def test_seeds_past_32_bits_are_refused_in_one_line(tmp_path, args):
     from attack import assert_refused, attack
 
@@ -702,8 +702,8 @@ def test_a_run_whose_records_outgrow_the_memory_is_refused(tmp_path):
     """--generations 1000000 --seeds 1000 passed the estimate and failed at 36 GB after writing config.json."""
     from attack import assert_refused, attack
 
-    outcome = attack(evolve.main, ["--cond", "EE-LS", "--preset", "small", "--generations", "1000000", "--seeds", "1000",
-                                   "--out", str(tmp_path / "run")], str(tmp_path))
+    huge = ["--cond", "EE-LS", "--preset", "small", "--generations", "1000000", "--seeds", "1000"]
+    outcome = attack(evolve.main, [*huge, "--out", str(tmp_path / "run")], str(tmp_path))
     assert_refused(outcome, "memory")
     assert "GiB of per-generation records" in outcome.stderr
 
@@ -743,3 +743,13 @@ def test_the_time_a_run_will_take_is_read_from_the_benchmarks_speeds(tmp_path):
                                                                   "estimate its time")
     line = progress.cost_line("x", 50, 10**7, 20, "cpu")
     assert line.startswith("x: 50 lives a generation, 10.0 M lane-steps a generation, 200.0 M in all; about 0:00:")
+
+
+@pytest.mark.parametrize("search", [[1], "ga", {"strategy": 1, "settings": {}}, {"strategy": "ga"}, None])
+def test_a_run_recording_a_search_of_no_strategy_is_refused_naming_its_config_json(tmp_path, search):
+    from attack import assert_refused, attack, edit_json
+
+    root = str(tmp_path / "run")
+    _made_run(root)
+    edit_json(os.path.join(root, "config.json"), lambda saved: saved.update(search=search))
+    assert_refused(attack(evolve.main, ["--resume", "--out", root], root), "config.json")

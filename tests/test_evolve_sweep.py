@@ -194,7 +194,7 @@ def test_a_sweep_that_cannot_go_on_together_or_differs_is_refused_and_nothing_ch
     assert after == before and not (tmp_path / "new").exists()
 
 
-# ----------------------------------------------------------------------------- refusals, planned before anything is written
+# ------------------------------------------------------------ refusals, planned before anything is written
 
 def _made_sweep(root, settings=(dict(gamma=0.5), dict(gamma=0.9)), generations=8, steps=((6, 7, 8), (6, 7, 8)),
                 extended=None):
@@ -316,8 +316,8 @@ def test_a_sweep_whose_records_outgrow_the_memory_is_refused_before_any_folder(t
     """--generations 1000000 --seeds 1000 passed the estimate and failed at 36 GB, after writing 1,000 point folders."""
     from attack import assert_refused, attack
 
-    outcome = attack(evolve.main, ["--cond", "EE-LS", "--preset", "small", "--generations", "1000000", "--seeds", "1000",
-                                   "--sweep", "gamma=0.5,0.9", "--out", str(tmp_path / "s")], str(tmp_path))
+    huge = ["--cond", "EE-LS", "--preset", "small", "--generations", "1000000", "--seeds", "1000"]
+    outcome = attack(evolve.main, [*huge, "--sweep", "gamma=0.5,0.9", "--out", str(tmp_path / "s")], str(tmp_path))
     assert_refused(outcome, "memory")
     assert "GiB of per-generation records" in outcome.stderr and "use fewer generations or seeds" in outcome.stderr
 
