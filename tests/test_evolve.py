@@ -753,3 +753,18 @@ def test_a_run_recording_a_search_of_no_strategy_is_refused_naming_its_config_js
     _made_run(root)
     edit_json(os.path.join(root, "config.json"), lambda saved: saved.update(search=search))
     assert_refused(attack(evolve.main, ["--resume", "--out", root], root), "config.json")
+
+
+def test_a_resume_whose_checkpoints_cannot_be_read_is_refused_before_anything_is_written(tmp_path, capsys):
+    """The restore runs after the lock and before any write: no TensorBoard folder, config.json as it was."""
+    pytest.importorskip("tensorboardX")
+    from attack import tree
+
+    root = str(tmp_path / "run")
+    _made_run(root)
+    os.makedirs(os.path.join(root, "checkpoints", "3", "state"))  # a checkpoint orbax cannot read
+    before = tree(root)
+    assert evolve.main(["--resume", "--out", root, "--generations", "12", "--log", "tensorboard"]) == 2
+    err = [line for line in capsys.readouterr().err.splitlines() if not line.startswith("warning: ")]
+    assert err == [f"error: --resume: no readable checkpoint in {os.path.join(root, 'checkpoints')}"]
+    assert tree(root) == before
