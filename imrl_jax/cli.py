@@ -51,10 +51,10 @@ def exit_codes(main: Callable[..., int]) -> Callable[..., int]:
         try:
             return main(*args, **kwargs)
         except user_errors() as error:
-            print(f"error: {error}", file=sys.stderr)
+            print(f"error: {one_line(error)}", file=sys.stderr)
             return 2
         except RunWriteError as error:
-            print(f"error: {error}", file=sys.stderr)
+            print(f"error: {one_line(error)}", file=sys.stderr)
             return 1
 
     return reported
@@ -65,6 +65,11 @@ class Plan(Protocol):
 
     def execute(self) -> int:
         """Take the lock, check again what may have changed, write; the command's exit code."""
+
+
+def one_line(error: BaseException) -> str:
+    """An error's message on one line: a value the user typed with a line break in it is shown escaped."""
+    return str(error).replace("\r", "\\r").replace("\n", "\\n")
 
 
 class Call:

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import functools
 import json
 import os
 import sys
@@ -485,24 +484,7 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
-def one_line(main: Callable[..., int]) -> Callable[..., int]:
-    """``main`` whose user errors stay one line: a value with a line break (a path, a --register spec) is shown
-    escaped."""
-    @functools.wraps(main)
-    def escaped(*args, **kwargs) -> int:
-        try:
-            return main(*args, **kwargs)
-        except cli.user_errors() as error:
-            text = str(error)
-            if "\n" not in text and "\r" not in text:
-                raise
-            raise UsageError(text.replace("\r", "\\r").replace("\n", "\\n")) from None
-
-    return escaped
-
-
-@exit_codes
-@one_line
+@exit_codes  # its user errors one line, a line break the user typed shown escaped (cli.one_line)
 def main(argv=None) -> int:
     args = parser().parse_args(argv)
     cli.register(args.register)  # before the run's config.json is read: its row may be one of these
