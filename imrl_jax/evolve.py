@@ -15,6 +15,10 @@ their per-generation mean and best's in ``history.csv`` and ``traits.png``); all
 run goes. It must be
 new or empty (or, with ``--resume``, the run itself), and one process writes it at a time
 (``.lock``). ``--resume --out RUN`` is enough: the run's own config and seeds are used.
+
+As every command (:mod:`imrl_jax.cli`), it plans first (:func:`plan_from_args`: every option, file and the
+memory checked, nothing written), then carries the plan out (``cli.execute``): a resume's checkpoint is read
+after the lock and before anything is written.
 """
 
 from __future__ import annotations

@@ -16,7 +16,8 @@ the files a single run writes (``config.json``, ``history.csv``, ``fitness.png``
 ``evolve --resume --out OUT/KEY`` continues one point alone. ``OUT`` holds ``sweep.json`` (the base
 config, the seeds and the points), ``sweep.csv`` (each point's settings, key and fitness) and
 ``sweep.png``. ``evolve --resume --out OUT`` continues the whole sweep (``--generations N`` extends
-it); what a point equals is in docs/NUMERICS.md ("A point of a sweep").
+it); what a point equals is in docs/NUMERICS.md ("A point of a sweep"). A swept value is the float32 the program
+computes with (:func:`imrl_jax.sweeps.swept_value`): ``-0`` is the point ``0``, in its key too.
 """
 
 from __future__ import annotations
