@@ -5,6 +5,9 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import sys
+import time
+from typing import NamedTuple
 
 import numpy as np
 
@@ -97,11 +100,14 @@ def last_generation(run_dir: str, num_best: int = 1) -> dict | None:
     return best_of_population(population, num_best) if os.path.isfile(population) else None
 
 
-def kept(path: str, key: dict, compute) -> dict:
-    """``compute()``'s numbers with ``key``, kept in ``path``: read back while ``key`` is the same, else computed
-    again and written whole (a killed report leaves no half file)."""
+def kept(path: str, key: dict, compute, stream=None) -> dict:
+    """``compute()``'s numbers with ``key``, kept in ``path``: read back while ``key`` is the same (and said so on
+    ``stream``, stderr by default: nothing to live, nothing to estimate), else computed again and written whole (a
+    killed report leaves no half file)."""
     cached = read_json(path)
     if cached is not None and all(cached.get(k) == v for k, v in key.items()):
+        print(f"kept in {path}: lived by an earlier report for the same generation, genomes and config; not lived "
+              f"again", file=stream or sys.stderr, flush=True)
         return cached
     out = dict(key, **compute())
     with open(path + ".tmp", "w") as f:
@@ -234,3 +240,96 @@ def colours_followed(followed: list[list[int]]) -> list[int]:
 def probe_best(config_dict: dict, best: dict, key: int = 0) -> list[int]:
     """Distinct colours followed (``Specialisation.num_colours``) by each genome of ``best`` (seeds x best, in order)."""
     return colours_followed(followed_best(config_dict, best, key))
+
+
+# ----------------------------------------------------------------------------- what reliving costs, said first
+
+#: Steps a probe drives each expert: :func:`imrl_jax.behaviour.specialisation`'s 3 x 8 starts of 100 steps.
+PROBE_STEPS = 3 * 8 * 100
+
+
+class Part(NamedTuple):
+    """One call of a report's reliving: what it lives, in lives of its run's length, and in lane-steps."""
+
+    what: str
+    lives: int
+    lane_steps: int
+
+
+def relive_parts(variant: str, condition: str, entry: dict) -> list[Part]:
+    """What the reproduction report lives for one evolution's best genomes (``entry``: update_best_genomes's):
+    the best one's life and its tasks driven, each seed's fresh lives, and for a learner the probe of its experts."""
+    from imrl_jax import conditions
+    from imrl_jax.config import Config
+
+    config = Config.from_dict(entry["config"])
+    seeds, num_best = np.asarray(entry["genomes"]).shape[:2]
+    child, life = config.childhood_steps if config.spec.has_childhood else 0, config.lifetime_steps
+    name = f"{condition} ({variant}, lives of {life:,} steps)"
+    parts = [Part(f"{name}: the best individual's life, then {config.num_tasks} tasks driven", 1,
+                  life + config.num_tasks * PATH_STEPS + child),
+             Part(f"{name}: {FRESH_LIVES} fresh lives of each of {seeds} seeds' best", seeds * FRESH_LIVES,
+                  seeds * FRESH_LIVES * life)]
+    if conditions.get(condition).learns:
+        steps = seeds * num_best * (child + config.num_experts * PROBE_STEPS)
+        parts.append(Part(f"{name}: the experts of {seeds * num_best} best individuals probed"
+                          + (" after a fresh childhood each" if child else ""), max(1, round(steps / life)), steps))
+    return parts
+
+
+def compile_seconds(source: str) -> float | None:
+    """The median seconds the benchmark file ``source`` (docs/bench/NAME.json) took to compile a whole life."""
+    from experiments.document import ROOT
+
+    data = read_json(os.path.join(ROOT, source)) if not os.path.isabs(source) else read_json(source)
+    times = sorted(float(life.get("compile_and_first_run_s", 0)) for life in (data or {}).get("lifetimes", ()))
+    return times[len(times) // 2] if times and times[len(times) // 2] > 0 else None
+
+
+def plan_line(parts: list[Part], backend: str, bench_dir: str | None = None) -> str:
+    """What reliving ``parts`` will cost, in one line: lives and lane-steps on ``backend``, and its time at the
+    speed and compile time the benchmark measured there (the largest part's number of lives), if it did."""
+    from imrl_jax.progress import _amount, _clock, measured_speed
+
+    lives, lane_steps = sum(p.lives for p in parts), sum(p.lane_steps for p in parts)
+    line = (f"reliving the best individuals: {len(parts)} part(s), {lives:,} lives' worth, "
+            f"{_amount(lane_steps)} lane-steps on {backend}")
+    speed = measured_speed(backend, max(parts, key=lambda p: p.lane_steps).lives, bench_dir)
+    if speed is None:
+        return line + f"; no speed measured on {backend} in docs/bench to estimate its time (an ETA follows part 2)"
+    rate, source = speed
+    compiled = compile_seconds(os.path.join(bench_dir, os.path.basename(source)) if bench_dir else source)
+    seconds = lane_steps / rate + len(parts) * (compiled or 0)
+    return line + (f"; about {_clock(seconds)} (ETA) at the {rate / 1e6:.1f} M lane-steps/s {source} measured on "
+                   f"{backend}" + (f" and {len(parts)} compilations of {compiled:.0f} s" if compiled else
+                                   ", compilation aside"))
+
+
+class Reliving:
+    """A report's reliving said before it costs: :func:`plan_line` at once, a line as each part starts compiling,
+    a progress line with an ETA as each ends (:class:`imrl_jax.progress.Progress`: on stderr, its unit a life)."""
+
+    def __init__(self, parts: list[Part], stream=None, backend: str | None = None, bench_dir: str | None = None,
+                 log=None):
+        from imrl_jax.progress import Progress
+
+        if backend is None:
+            import jax
+
+            backend = jax.default_backend()
+        self.done, self.count, self.parts = 0, 0, len(parts)
+        self.progress = Progress(max(1, sum(p.lives for p in parts)), unit="life", stream=stream, log=log)
+        self.progress.note(plan_line(parts, backend, bench_dir) if parts else "reliving nobody")
+
+    def run(self, part: Part, fn, *args):
+        """``fn(*args)``, announced as ``part`` and counted when it returns."""
+        self.count += 1
+        self.progress.note(f"part {self.count}/{self.parts}, {part.what}: compiling, then "
+                           f"{part.lane_steps:,} lane-steps")
+        start = time.perf_counter()
+        out = fn(*args)
+        seconds = max(time.perf_counter() - start, 1e-9)
+        self.done += part.lives
+        self.progress.update(self.done, 0.0, 0.0, part.lane_steps / seconds,
+                             scores=f"part {self.count}/{self.parts} done in {seconds:.1f} s")
+        return out

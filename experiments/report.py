@@ -34,7 +34,8 @@ from experiments.document import (ROOT, figures_of, pipeline_command, scale_labe
                                   write_document)
 from experiments.figures import fig3, fig_baselines, fig_curves, fig_paths, fig_steady
 from experiments.loading import read_baselines, update_best_genomes
-from experiments.relive import DRAWN_STEPS, FRESH_LIVES, PATH_STEPS, fresh_fitness, probe_best, relive_best
+from experiments.relive import (DRAWN_STEPS, PATH_STEPS, Reliving, fresh_fitness, probe_best, relive_best,
+                                 relive_parts)
 from imrl_jax import conditions
 
 
@@ -63,6 +64,11 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
     short = manifest["scale"] + " scale"
     written = dict(fig3={}, fig3a={}, fig3b={}, paths={})
     at = lambda name: os.path.join(figures, name)  # noqa: E731
+    best = update_best_genomes(data)  # kept whether or not the individuals are relived
+    relived = {key: entry for key, entry in best.items() if behaviour and entry["config"] is not None}
+    # the long part (minutes at the paper's scale) is said with its estimated time before anything is drawn
+    parts = {key: relive_parts(*key, entry) for key, entry in relived.items()}
+    reliving = Reliving([p for ps in parts.values() for p in ps]) if relived else None
 
     written["arena"] = save(plot_arena(make_config("paper"), "the arena and the six tasks"), at("fig1_arena.png"))
     steady = {k: t["steady"] for k, t in data["tests"].items()}
@@ -86,14 +92,11 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
                                                   f"brax.training baselines beside the learning tests ({short})"),
                                     at("baselines.png"))
 
-    best = update_best_genomes(data)  # kept whether or not the individuals are relived
-    relived = {key: entry for key, entry in best.items() if behaviour and entry["config"] is not None}
     lives, probes = {}, {}
     for (variant, condition), entry in relived.items():
-        print(f"reliving the best {condition} individual ({variant})", flush=True)
-        life = lives[variant, condition] = relive_best(entry["config"], entry)
-        print(f"{FRESH_LIVES} fresh lives of each seed's best {condition} genome ({variant})", flush=True)
-        life["fresh"] = fresh_fitness(entry["config"], entry)
+        own = parts[variant, condition]
+        life = lives[variant, condition] = reliving.run(own[0], relive_best, entry["config"], entry)
+        life["fresh"] = reliving.run(own[1], fresh_fitness, entry["config"], entry)
         one_for_all = not conditions.get(condition).learns
         title = (f"{condition}{'' if one_for_all else f', {variant} rules'}: best individual (seed "
                  f"{life['seed']}, generation {life['generation']}, fitness {life['fitness']:.3f}, relived "
@@ -102,9 +105,7 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
         written["paths"][variant, condition] = save(fig_paths(life, title), at(
             f"paths_{condition}.png" if one_for_all else f"paths_{variant}_{condition}.png"))
         if not one_for_all:
-            print(f"probing the experts of the {entry['genomes'].shape[1]} best {condition} individuals of "
-                  f"every seed ({variant})", flush=True)
-            probes[variant, condition] = probe_best(entry["config"], entry)
+            probes[variant, condition] = reliving.run(own[2], probe_best, entry["config"], entry)
 
     probes = share_probes(probes, data)
     # a variant whose SLE explores the whole test by definition (faithful) has claim 5 measured at the test's length
