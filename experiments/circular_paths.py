@@ -16,7 +16,8 @@ import sys
 
 import numpy as np
 
-from experiments.study import RESULTS, write_measure
+from experiments.study import MEASURED, RESULTS
+from imrl_jax import cli
 from imrl_jax.cli import HelpFormatter, Parser, UsageError, exit_codes
 
 OUT = os.path.join(RESULTS, "claims", "circles")
@@ -91,20 +92,91 @@ def measure(out_dir: str = OUT, task_steps: int = TASK_STEPS) -> dict:
     return summary
 
 
-@exit_codes
-def main(argv=None) -> int:
-    """The measure's command line: the grid at ``--task-steps`` steps per task into ``--out``."""
+def parser() -> Parser:
+    """The measure's command line."""
     p = Parser(prog="python -m experiments.circular_paths", description=__doc__.split("\n\n")[0],
                formatter_class=HelpFormatter)
     p.add_argument("--out", required=True, help="its folder (the claims study's stage gives its own)")
     p.add_argument("--task-steps", type=int, default=TASK_STEPS, help="steps per task")
-    args = p.parse_args(argv)
-    if args.task_steps <= 0:
-        raise UsageError("--task-steps: must be positive")
+    return p
+
+
+def write_measure(out_dir: str, name: str, table: list[dict], command: str, digits: int | None = None,
+                  **recorded) -> None:
+    """A measure's NAME.csv (floats to ``digits`` decimals, if given), then its result.json (done), each written
+    atomically: a kill leaves the stage not done, never a half file (the studies' measures share it)."""
+    import csv
+    import io
+    import json
+
+    from imrl_jax.checkpoint import git_commit
+    from imrl_jax.rundir import make_dir, write_atomic
+
+    make_dir(out_dir)
+    text = io.StringIO()
+    writer = csv.DictWriter(text, fieldnames=list(dict.fromkeys(k for r in table for k in r)), restval="",
+                            lineterminator="\n")
+    writer.writeheader()
+    writer.writerows({k: f"{v:.{digits}f}" if digits is not None and isinstance(v, float) else v
+                      for k, v in r.items()} for r in table)
+    write_atomic(os.path.join(out_dir, f"{name}.csv"), text.getvalue().encode())
+    write_atomic(os.path.join(out_dir, MEASURED),
+                 json.dumps(dict(command=command, git_commit=git_commit(), **recorded), indent=2).encode())
+
+
+def check_out_dir(out: str, outputs: tuple[str, ...], kind: str) -> None:
+    """Refuse (one line naming --out) a measure's folder that is empty, unwritable, or holds anything but
+    ``outputs`` (a measure run again replaces its own files)."""
+    from imrl_jax import rundir
+
+    cli.check_out(out)
+    if any(ord(c) < 32 for c in out):  # a NUL or a line break: no folder can be made of it
+        raise UsageError(f"--out: {out!r} holds a control character")
+    if not os.path.basename(os.path.normpath(os.path.abspath(out))):
+        raise UsageError(f"--out: {out} is the root of the file system; give a folder of its own")
+    rundir.check_writable(out)
+    rundir.check_outputs_dir(out, outputs, kind, overwrite=True)
+
+
+def check_steps(flag: str, value: int) -> None:
+    """Raise UsageError naming ``flag`` unless ``value`` steps are at least 1 and at most cli.MAX_STEPS."""
+    cli.check_at_least(flag, value)
+    cli.check_at_most(flag, value, cli.MAX_STEPS)
+
+
+def check_grid_memory(task_steps: int) -> None:
+    """Refuse (one line) a grid whose steps' records cannot fit: each lane keeps a reach flag per step until summed."""
+    from imrl_jax import devices
+    from imrl_jax.config import make_config
+
+    lanes = len(TURNS) * len(SPEEDS) * make_config("paper").num_tasks
+    needed, have = devices.BASE_BYTES + 2 * lanes * task_steps, devices.available_memory()  # 2: XLA's copies
+    if have is not None and needed > have:
+        raise UsageError(f"memory: {lanes:,} lanes of {task_steps:,} steps need about {needed / 2**30:.1f} GiB but this "
+                         f"machine has {have / 2**30:.1f} GiB available; use fewer --task-steps")
+
+
+def plan(argv) -> cli.Call:
+    """Parse and check: the call that measures the grid (nothing written before it)."""
+    args = parser().parse_args(argv)
+    check_steps("--task-steps", args.task_steps)
+    check_grid_memory(args.task_steps)
+    check_out_dir(args.out, ("circles.png", "circles.csv", MEASURED), "circular-path measure")
+    return cli.Call(lambda: report(args), out=args.out, task_steps=args.task_steps)
+
+
+def report(args) -> int:
+    """Measure and say what it found."""
     summary = measure(args.out, args.task_steps)
     print(f"one action for all six tasks: {summary['one_action']['performance']:.3f}; one per pair: "
           f"{summary['one_action_per_pair']:.3f}; wrote {args.out}")
     return 0
+
+
+@exit_codes
+def main(argv=None) -> int:
+    """The measure's command line: the grid at ``--task-steps`` steps per task into ``--out``."""
+    return cli.execute(plan(argv))
 
 
 if __name__ == "__main__":

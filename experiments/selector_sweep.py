@@ -19,16 +19,20 @@ from __future__ import annotations
 import argparse
 import csv
 import dataclasses
+import io
 import itertools
 import json
+import math
 import os
 import sys
 import time
 
 import numpy as np
 
+from experiments.circular_paths import check_out_dir
 from experiments.study import MEASURED, RESULTS
 from experiments.table import Measure, Table
+from imrl_jax import cli
 
 OUT = os.path.join(RESULTS, "selector_sweep")
 #: The grid's axes (the command line's defaults): trace decay, selector actor rate, selector critic rate.
@@ -48,9 +52,59 @@ def floats(text: str) -> list[float]:
         raise argparse.ArgumentTypeError(f"not a comma-separated list of numbers: {text!r}") from None
 
 
-def sweep(argv: list[str]) -> int:
-    """The sweep's command line (``sweep`` names it, beside the study's own): live every point of the grid; write
-    sweep.csv, sweep.json, sweep.png and result.json last."""
+def parser() -> cli.Parser:
+    """The sweep's command line."""
+    p = cli.Parser(prog="python -m experiments.selector_sweep", description=__doc__.split("\n\n")[0],
+                   formatter_class=cli.HelpFormatter)
+    p.add_argument("sweep", choices=("sweep",))
+    p.add_argument("--out", required=True, help="its folder (the study's stage gives its own)")
+    p.add_argument("--task-steps", type=int, default=SIZES["task_steps"])
+    p.add_argument("--seeds", type=int, default=SIZES["seeds"], help="lanes per task and point (different keys)")
+    for name, default in GRID.items():
+        p.add_argument(f"--{name.replace('_', '-')}", type=floats, default=default)
+    p.add_argument("--turn-gain", type=float, default=0.1, help="the followers' turn weight per cm of offset")
+    return p
+
+
+#: What the sweep's folder may hold: its outputs, and the study runner's manifest and logs (the stage's folder is the
+#: study's own).
+OUTPUTS = ("sweep.csv", "sweep.png", "sweep.json", MEASURED, "manifest.json", "logs")
+#: The followers' turn weight: past it a colour a few cm off turns the robot fully (tanh saturated).
+MAX_TURN_GAIN = 100.0
+
+
+def plan(argv: list[str]) -> cli.Call:
+    """Parse and check every value, the grid's points, the memory and --out: the call that sweeps (nothing written)."""
+    from imrl_jax import devices
+    from imrl_jax.config import ConfigError, make_config
+
+    args = parser().parse_args(argv)
+    cli.check_at_least("--task-steps", args.task_steps)
+    cli.check_at_most("--task-steps", args.task_steps, cli.MAX_STEPS)
+    cli.check_at_least("--seeds", args.seeds)
+    cli.check_at_most("--seeds", args.seeds, cli.MAX_SEEDS)
+    if not math.isfinite(args.turn_gain) or abs(args.turn_gain) > MAX_TURN_GAIN:
+        raise cli.UsageError(f"--turn-gain: {args.turn_gain} is not a number in [-{MAX_TURN_GAIN:g}, {MAX_TURN_GAIN:g}]")
+    config = make_config("paper", condition="EE-LS", task_steps=args.task_steps, num_bins=10)
+    for name, field in zip(GRID, FIELDS):
+        flag = f"--{name.replace('_', '-')}"
+        for value in getattr(args, name):
+            try:  # the config's bounds of the field: a NaN, a rate out of range
+                config.replace(**{field: value})
+            except ConfigError as error:
+                raise cli.UsageError(f"{flag}: {error}") from None
+        if len(set(getattr(args, name))) != len(getattr(args, name)):
+            raise cli.UsageError(f"{flag}: a value given twice ({','.join(map(str, getattr(args, name)))})")
+    grid = [dict(zip(FIELDS, point)) for point in itertools.product(*(getattr(args, name) for name in GRID))]
+    lanes = len(grid) * args.seeds * config.num_tasks
+    cli.check_at_most("lanes (points x --seeds x tasks)", lanes, cli.MAX_LANES)
+    devices.check_memory(config, lanes, f"a sweep of {len(grid)} points x {args.seeds} seeds x {config.num_tasks} tasks")
+    check_out_dir(args.out, OUTPUTS, "selector sweep")
+    return cli.Call(lambda: sweep(args, argv, grid), out=args.out, grid=grid, lanes=lanes)
+
+
+def sweep(args, argv: list[str], grid: list[dict]) -> int:
+    """Live every point of the checked grid; write sweep.csv, sweep.png, sweep.json and result.json last."""
     import jax
     import jax.numpy as jnp
 
@@ -58,17 +112,8 @@ def sweep(argv: list[str]) -> int:
     from imrl_jax.checkpoint import git_commit
     from imrl_jax.config import make_config
     from imrl_jax.controllers import perceptron_followers
+    from imrl_jax.rundir import make_dir, write_atomic
 
-    p = argparse.ArgumentParser(prog="python -m experiments.selector_sweep", description=__doc__.split("\n\n")[0])
-    p.add_argument("sweep", choices=("sweep",))
-    p.add_argument("--out", required=True, help="its folder (the study's stage gives its own)")
-    p.add_argument("--task-steps", type=int, default=SIZES["task_steps"])
-    p.add_argument("--seeds", type=int, default=SIZES["seeds"], help="lanes per task and point (different keys)")
-    for name, default in GRID.items():
-        p.add_argument(f"--{name.replace('_', '-')}", type=floats, default=default)
-    p.add_argument("--turn-gain", type=float, default=0.1)
-    args = p.parse_args(argv)
-    grid = [dict(zip(FIELDS, point)) for point in itertools.product(*(getattr(args, name) for name in GRID))]
     config = make_config("paper", condition="EE-LS", task_steps=args.task_steps, num_bins=10)
     genome = perceptron_followers(config, args.turn_gain).reshape(-1)
     lanes = len(grid) * args.seeds * config.num_tasks
@@ -82,15 +127,16 @@ def sweep(argv: list[str]) -> int:
     seconds = time.perf_counter() - start
     print(f"done in {seconds:.0f} s ({lanes * args.task_steps / seconds / 1e6:.2f} M lane-steps/s)")
 
-    os.makedirs(args.out, exist_ok=True)
+    make_dir(args.out)
     rows = [dict(point, performance=float(performance[i].mean()), performance_sd=float(performance[i].mean(1).std()),
                  last_tenth=float(last[i].mean()), worst_task=float(performance[i].mean(0).min()),
                  **{f"task_{t + 1}": float(performance[i, :, t].mean()) for t in range(config.num_tasks)})
             for i, point in enumerate(grid)]
-    with open(os.path.join(args.out, "sweep.csv"), "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
+    text = io.StringIO()
+    writer = csv.DictWriter(text, fieldnames=list(rows[0]), lineterminator="\n")  # as the committed sweep.csv
+    writer.writeheader()
+    writer.writerows({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
+    write_atomic(os.path.join(args.out, "sweep.csv"), text.getvalue().encode())
     figure(rows, os.path.join(args.out, "sweep.png"), args.task_steps)
     best = max(rows, key=lambda r: r["performance"])
     # the paper's rules, when the grid holds them
@@ -99,8 +145,7 @@ def sweep(argv: list[str]) -> int:
                    seconds=round(seconds, 1), backend=jax.default_backend(),
                    command="python -m experiments.selector_sweep " + " ".join(argv), git_commit=git_commit())
     for name in ("sweep.json", MEASURED):  # result.json last: the stage is done
-        with open(os.path.join(args.out, name), "w") as f:
-            json.dump(summary, f, indent=2)
+        write_atomic(os.path.join(args.out, name), json.dumps(summary, indent=2).encode())
     print(f"best: lambda={best['trace_lambda']:g} selector actor={best['eta_selector_actor']:g} "
           f"critic={best['eta_selector_critic']:g}: {best['performance']:.3f} (last tenth {best['last_tenth']:.3f})")
     if paper:
@@ -143,7 +188,13 @@ all_stages = SWEEP.all_stages
 def main(argv=None) -> int:
     """The sweep (``sweep``), or the study's run of it on the stage runner."""
     argv = sys.argv[1:] if argv is None else list(argv)
-    return sweep(argv) if "sweep" in argv else SWEEP.main(argv)
+    return measure_main(argv) if "sweep" in argv else SWEEP.main(argv)
+
+
+@cli.exit_codes
+def measure_main(argv: list[str]) -> int:
+    """The sweep's command line: parse, plan, execute."""
+    return cli.execute(plan(argv))
 
 
 #: The studies of this module (python -m experiments finds them); its stage draws its figure, so no report of its own.

@@ -1,8 +1,10 @@
 """A robot that repeats one action (claim 4's circular path): hand-computed trips, a loop over the environment, the summary."""
 
 import math
+import os
 
 import numpy as np
+import pytest
 
 from experiments import circular_paths as study
 from imrl_jax import controllers
@@ -56,7 +58,7 @@ def test_summary_on_hand_made_performance():
 
 def test_bad_task_steps_exit_2(capsys, tmp_path):
     assert study.main(["--out", str(tmp_path / "c"), "--task-steps", "0"]) == 2
-    assert capsys.readouterr().err.strip() == "error: --task-steps: must be positive"
+    assert capsys.readouterr().err.strip() == "error: --task-steps: must be at least 1 (got 0)"
     assert not (tmp_path / "c").exists()
 
 
@@ -80,3 +82,43 @@ def test_the_committed_summary_is_what_the_committed_grid_holds():
     assert np.allclose([t["performance"] for t in summary["per_task"]],
                        [t["performance"] for t in committed["per_task"]], atol=1e-4)
     assert abs(committed["per_task"][0]["performance"] - 0.9792) < 1e-4  # the document's 0.979
+
+
+def hostile_cases(parser, skip=()):
+    """(flag, value) for every option of ``parser`` and every hostile value of its type (tests/attack.py)."""
+    from attack import HOSTILE_FLOATS, HOSTILE_INTS, HOSTILE_TEXTS
+
+    kinds = {int: HOSTILE_INTS, float: HOSTILE_FLOATS}
+    return [(action.option_strings[-1], value) for action in parser._actions
+            if action.option_strings and action.option_strings[-1] not in ("--help", *skip)
+            for value in kinds.get(action.type, HOSTILE_TEXTS)]
+
+
+@pytest.mark.parametrize("flag, value", hostile_cases(study.parser()))
+def test_hostile_values_are_refused_or_planned_with_nothing_written(tmp_path, flag, value):
+    """Every option of the measure's parser, every hostile value: one line and exit 2, or a plan; nothing written."""
+    from attack import assert_contract, attack
+
+    argv = ["--out", "circles", f"{flag}={value}"]
+    outcome = attack(study.main, argv, str(tmp_path))
+    if assert_contract(outcome, flag, "memory", argv=argv) == "planned":  # a sane value only
+        assert outcome.plan.checked["task_steps"] >= 1 and outcome.plan.checked["out"].strip()
+
+
+def test_an_out_holding_another_file_is_refused(tmp_path):
+    """The measure's folder may hold its own files (a measure run again), nothing else."""
+    from attack import assert_contract, assert_refused, attack
+
+    (tmp_path / "circles").mkdir()
+    (tmp_path / "circles" / "notes.txt").write_text("mine")
+    assert_refused(attack(study.main, ["--out", "circles"], str(tmp_path)), "--out")
+    os.remove(tmp_path / "circles" / "notes.txt")
+    (tmp_path / "circles" / "circles.csv").write_text("old")
+    assert assert_contract(attack(study.main, ["--out", "circles"], str(tmp_path))) == "planned"
+
+
+def test_a_grid_too_large_for_memory_is_refused(tmp_path):
+    """1e9 steps per task keeps 36 TB of reach flags: refused before a compile (was an allocation failure)."""
+    from attack import assert_refused, attack
+
+    assert_refused(attack(study.main, ["--out", "c", "--task-steps", "1000000000"], str(tmp_path)), "memory")
