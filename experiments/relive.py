@@ -136,7 +136,8 @@ def run_fresh(run_dir: str, config_dict: dict | None = None, num_lives: int = FR
     config_dict = run_config(run_dir, config_dict)
 
     def live():
-        lives = fresh_fitness(config_dict, best, num_lives, seed)
+        part = fresh_part(run_dir, config_dict, len(best["seeds"]), num_lives)
+        lives = relived(part, fresh_fitness, config_dict, best, num_lives, seed)
         means = [float(v) for v in lives["mean"]]
         return dict(mean_per_seed=means, sd_per_seed=[float(v) for v in lives["sd"]], mean=float(np.mean(means)),
                     sd_over_seeds=float(np.std(means, ddof=1)) if len(means) > 1 else 0.0)
@@ -161,8 +162,8 @@ def run_probe(run_dir: str, config_dict: dict | None = None, num_best: int = 10,
     config_dict = run_config(run_dir, config_dict)
 
     def probe():
-        print(f"probing the best individuals of {run_dir}", flush=True)
-        return dict(followed=followed_best(config_dict, best, key))
+        part = probe_part(run_dir, config_dict, int(np.prod(np.asarray(best["genomes"]).shape[:2])))
+        return dict(followed=relived(part, followed_best, config_dict, best, key))
 
     return kept(os.path.join(run_dir, PROBE_FILE), fresh_key(best, config_dict, num_lives=num_best, seed=key), probe)
 
@@ -183,8 +184,7 @@ def run_path(run_dir: str, config_dict: dict | None = None) -> dict | None:
     config_dict = run_config(run_dir, config_dict)
 
     def path():
-        print(f"reliving the best individual of {run_dir} (its path)", flush=True)
-        life = relive_best(config_dict, best)
+        life = relived(life_part(run_dir, config_dict), relive_best, config_dict, best)
         return dict(stereotypy_per_task=[float(v) for v in life["stereotypy_per_task"]], speed=float(life["speed"]),
                     best_seed=life["seed"], fitness=life["fitness"], relived_fitness=life["relived_fitness"])
 
@@ -256,25 +256,60 @@ class Part(NamedTuple):
     lane_steps: int
 
 
+def _config(config_dict: dict):
+    """A run's Config, or None where its dict is none (the made-up configs of tests: nothing to count)."""
+    from imrl_jax.config import Config, ConfigError
+
+    try:
+        return Config.from_dict(config_dict)
+    except (ConfigError, TypeError):
+        return None
+
+
+def life_part(name: str, config_dict: dict) -> Part:
+    """:func:`relive_best` of a run: its best individual's life, each task driven after it, its childhood drawn."""
+    config = _config(config_dict)
+    if config is None:
+        return Part(f"{name}: the best individual's life", 1, 0)
+    child = config.childhood_steps if config.spec.has_childhood else 0
+    return Part(f"{name}: the best individual's life, then {config.num_tasks} tasks driven", 1,
+                config.lifetime_steps + config.num_tasks * PATH_STEPS + child)
+
+
+def fresh_part(name: str, config_dict: dict, seeds: int, num_lives: int = FRESH_LIVES) -> Part:
+    """:func:`fresh_fitness` of a run: ``num_lives`` fresh lives of each of ``seeds`` genomes."""
+    config = _config(config_dict)
+    return Part(f"{name}: {num_lives} fresh lives of each of {seeds} seeds' best", seeds * num_lives,
+                0 if config is None else seeds * num_lives * config.lifetime_steps)
+
+
+def probe_part(name: str, config_dict: dict, individuals: int) -> Part:
+    """:func:`followed_best` of a run's ``individuals`` genomes: a fresh childhood each (LE-LS), each expert driven."""
+    config = _config(config_dict)
+    child = 0 if config is None or not config.spec.has_childhood else config.childhood_steps
+    steps = 0 if config is None else individuals * (child + config.num_experts * PROBE_STEPS)
+    return Part(f"{name}: the experts of {individuals} best individuals probed"
+                + (" after a fresh childhood each" if child else ""),
+                1 if config is None else max(1, round(steps / config.lifetime_steps)), steps)
+
+
 def relive_parts(variant: str, condition: str, entry: dict) -> list[Part]:
     """What the reproduction report lives for one evolution's best genomes (``entry``: update_best_genomes's):
     the best one's life and its tasks driven, each seed's fresh lives, and for a learner the probe of its experts."""
     from imrl_jax import conditions
-    from imrl_jax.config import Config
 
-    config = Config.from_dict(entry["config"])
     seeds, num_best = np.asarray(entry["genomes"]).shape[:2]
-    child, life = config.childhood_steps if config.spec.has_childhood else 0, config.lifetime_steps
-    name = f"{condition} ({variant}, lives of {life:,} steps)"
-    parts = [Part(f"{name}: the best individual's life, then {config.num_tasks} tasks driven", 1,
-                  life + config.num_tasks * PATH_STEPS + child),
-             Part(f"{name}: {FRESH_LIVES} fresh lives of each of {seeds} seeds' best", seeds * FRESH_LIVES,
-                  seeds * FRESH_LIVES * life)]
+    config = _config(entry["config"])
+    name = f"{condition} ({variant}" + ("" if config is None else f", lives of {config.lifetime_steps:,} steps") + ")"
+    parts = [life_part(name, entry["config"]), fresh_part(name, entry["config"], seeds)]
     if conditions.get(condition).learns:
-        steps = seeds * num_best * (child + config.num_experts * PROBE_STEPS)
-        parts.append(Part(f"{name}: the experts of {seeds * num_best} best individuals probed"
-                          + (" after a fresh childhood each" if child else ""), max(1, round(steps / life)), steps))
+        parts.append(probe_part(name, entry["config"], seeds * num_best))
     return parts
+
+
+def relived(part: Part, fn, *args):
+    """``fn(*args)`` as a report's one part of reliving: said with its cost first (:class:`Reliving`)."""
+    return Reliving([part]).run(part, fn, *args)
 
 
 def compile_seconds(source: str) -> float | None:

@@ -574,3 +574,23 @@ def test_a_kept_relived_result_says_so_and_is_not_lived_again(tmp_path, capsys):
     assert kept(path, dict(k=1), compute)["value"] == 1 and "kept in" not in capsys.readouterr().err
     assert kept(path, dict(k=1), compute)["value"] == 1 and len(calls) == 1
     assert f"kept in {path}: lived by an earlier report" in capsys.readouterr().err
+
+
+def test_a_study_reports_fresh_lives_say_their_cost_before_they_are_lived(tmp_path, monkeypatch, capsys):
+    """run_fresh (the claims, future-work and search reports) says its lives and lane-steps before it lives them."""
+    from experiments import relive
+    from tests.helpers import tiny_config
+
+    def fake_fresh(config_dict, best, num_lives, seed):
+        raise RuntimeError(capsys.readouterr().err)
+
+    monkeypatch.setattr(relive, "fresh_fitness", fake_fresh)
+    np.savez(tmp_path / "final_population.npz", evaluated=np.zeros((3, 4, 2), np.float32), fitness=np.zeros((3, 4)),
+             generation=7, seeds=np.asarray([4, 5, 6]))
+    with pytest.raises(RuntimeError) as stopped:
+        relive.run_fresh(str(tmp_path), tiny_config("EE-LS").to_dict(), num_lives=2)
+    lines = str(stopped.value).splitlines()
+    # 3 seeds x 2 lives of 6 x 200 steps
+    assert lines[0].startswith("reliving the best individuals: 1 part(s), 6 lives' worth, 7,200 lane-steps on cpu")
+    assert lines[1] == f"part 1/1, {tmp_path}: 2 fresh lives of each of 3 seeds' best: compiling, then 7,200 lane-steps"
+    assert len(lines) == 2 and not (tmp_path / relive.FRESH_FILE).exists()
