@@ -254,6 +254,7 @@ class Part(NamedTuple):
     what: str
     lives: int
     lane_steps: int
+    compiles: int = 1  # programs it compiles (each several seconds on a CPU)
 
 
 def _config(config_dict: dict):
@@ -273,7 +274,7 @@ def life_part(name: str, config_dict: dict) -> Part:
         return Part(f"{name}: the best individual's life", 1, 0)
     child = config.childhood_steps if config.spec.has_childhood else 0
     return Part(f"{name}: the best individual's life, then {config.num_tasks} tasks driven", 1,
-                config.lifetime_steps + config.num_tasks * PATH_STEPS + child)
+                config.lifetime_steps + config.num_tasks * PATH_STEPS + child, 3 if child else 2)
 
 
 def fresh_part(name: str, config_dict: dict, seeds: int, num_lives: int = FRESH_LIVES) -> Part:
@@ -290,7 +291,7 @@ def probe_part(name: str, config_dict: dict, individuals: int) -> Part:
     steps = 0 if config is None else individuals * (child + config.num_experts * PROBE_STEPS)
     return Part(f"{name}: the experts of {individuals} best individuals probed"
                 + (" after a fresh childhood each" if child else ""),
-                1 if config is None else max(1, round(steps / config.lifetime_steps)), steps)
+                1 if config is None else max(1, round(steps / config.lifetime_steps)), steps, 2 if child else 1)
 
 
 def relive_parts(variant: str, condition: str, entry: dict) -> list[Part]:
@@ -334,9 +335,10 @@ def plan_line(parts: list[Part], backend: str, bench_dir: str | None = None) -> 
         return line + f"; no speed measured on {backend} in docs/bench to estimate its time (an ETA follows part 2)"
     rate, source = speed
     compiled = compile_seconds(os.path.join(bench_dir, os.path.basename(source)) if bench_dir else source)
-    seconds = lane_steps / rate + len(parts) * (compiled or 0)
+    compiles = sum(p.compiles for p in parts)
+    seconds = lane_steps / rate + compiles * (compiled or 0)
     return line + (f"; about {_clock(seconds)} (ETA) at the {rate / 1e6:.1f} M lane-steps/s {source} measured on "
-                   f"{backend}" + (f" and {len(parts)} compilations of {compiled:.0f} s" if compiled else
+                   f"{backend}" + (f" and {compiles} compilations of {compiled:.0f} s" if compiled else
                                    ", compilation aside"))
 
 
