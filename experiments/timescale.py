@@ -27,9 +27,10 @@ from experiments.figures import _band
 from experiments.loading import read_evolution, read_json, read_test
 from experiments.markdown import head, line, mean_sd
 from experiments.rule_sets import BY_NAME
-from experiments.study import MEASURED, REPRODUCTION, RESULTS, SCREEN, Study, write_measure, write_table
+from experiments.circular_paths import write_measure  # atomic: a kill leaves a measurement not done
+from experiments.study import MEASURED, REPRODUCTION, RESULTS, SCREEN, Study, write_table
 from experiments.table import Measure, Row, Table
-from imrl_jax import sweeps
+from imrl_jax import cli, sweeps
 from imrl_jax.cli import Parser, UsageError, check_at_least, exit_codes
 from imrl_jax.config import ADULT_SELECTOR, make_config
 from imrl_jax.controllers import composition_ceiling, perceptron_followers
@@ -345,23 +346,87 @@ def plot_bars(groups, options: list[str], path: str, title: str, threshold: floa
 MEASUREMENTS = dict(ceiling=measure_ceiling, rates=measure_rates, confirm=measure_confirm)
 
 
+def measure_parser() -> Parser:
+    """A measurement's command line: ``--out DIR NAME [--lives N] [--key K] [--task-steps N]``."""
+    p = Parser(prog="python -m experiments.timescale")
+    p.add_argument("measurement", choices=MEASUREMENTS)
+    p.add_argument("--out", dest="out_dir", metavar="OUT", required=True, help="its folder (the study's stage "
+                   "gives its own: a committed one is not written over by hand)")
+    for option in ("--lives", "--key"):  # absent: the measurement's own
+        p.add_argument(option, type=int)
+    p.add_argument("--task-steps", type=int, default=TASK_STEPS)
+    return p
+
+
+#: The largest random key: jax.random.key takes 32 bits here (64 under x64; the same keys either way).
+MAX_KEY = 2**32 - 1
+
+
+def read_rates(out_dir: str) -> list[dict]:
+    """The rate sweep's rows beside the confirmation's folder ``out_dir``, checked (raises a user error naming the
+    file): a point of every option of RATE_OPTIONS, its rates in the config's bounds, its fitness a number."""
+    from imrl_jax.config import ConfigError
+    from imrl_jax.rundir import RunDirError, read_json
+
+    path = os.path.join(os.path.dirname(os.path.normpath(out_dir)), "rates", MEASURED)
+    if not os.path.isfile(path):
+        raise UsageError(f"{out_dir}: the rate sweep has not run (its result.json is missing: {path})")
+    rows = read_json(path, "rates")
+    if not isinstance(rows, dict) or not isinstance(rows.get("rows"), list) or \
+            not all(isinstance(r, dict) for r in rows["rows"]):
+        raise RunDirError(f"rates: {path} holds no list of rows")
+    config = make_config("paper", condition="EE-LS")
+    for row in rows["rows"]:
+        try:
+            fitness = row["fitness"]
+            if row["option"] not in OPTIONS or isinstance(fitness, bool) or not isinstance(fitness, (int, float)) or \
+                    not np.isfinite(fitness):
+                raise ValueError(f"option {row['option']!r}, fitness {fitness!r}")
+            config.replace(**{field: row[field] for field in RATE_GRID})
+        except (KeyError, TypeError, ValueError, ConfigError) as error:
+            raise RunDirError(f"rates: {path}: a row is unreadable ({cli.one_line(error)})") from None
+    for option in RATE_OPTIONS:
+        best_rates(rows["rows"], option)
+    return rows["rows"]
+
+
+def measure_plan(argv: list[str]) -> cli.Call:
+    """Parse and check a measurement: every value bounded, the sweep it reads, its memory and --out (nothing written)."""
+    from experiments.circular_paths import check_out_dir
+    from imrl_jax.devices import check_memory
+
+    options = {k: v for k, v in vars(measure_parser().parse_args(argv)).items() if v is not None}
+    name = options["measurement"]
+    for flag, limit in (("lives", cli.MAX_SEEDS), ("task_steps", cli.MAX_STEPS)):
+        check_at_least(f"--{flag.replace('_', '-')}", options.get(flag))
+        cli.check_at_most(f"--{flag.replace('_', '-')}", options.get(flag), limit)
+    check_at_least("--key", options.get("key"), 0)
+    cli.check_at_most("--key", options.get("key"), MAX_KEY)
+    if name == "confirm":
+        read_rates(options["out_dir"])
+    lives = options.get("lives", MEASUREMENTS[name].__defaults__[0])
+    points = len(list(itertools.product(*RATE_GRID.values()))) if name == "rates" else 1
+    config = make_config("paper", condition="EE-LS", task_steps=options["task_steps"], num_bins=10)
+    lanes = points * lives * config.num_tasks
+    cli.check_at_most(f"--lives ({points} points x {config.num_tasks} tasks at once)", lanes, cli.MAX_LANES)
+    check_memory(config, lanes, f"the {name} measurement")
+    check_out_dir(options["out_dir"], (f"{name}.csv", f"{name}.png", MEASURED), f"{name} measurement")
+    return cli.Call(lambda: measure_run(options), **options)
+
+
+def measure_run(options: dict) -> int:
+    """Carry out a checked measurement."""
+    options = dict(options)
+    MEASUREMENTS[options.pop("measurement")](**options)
+    return 0
+
+
 @exit_codes
 def main(argv=None) -> int:
     """A measurement (``--out DIR NAME [--lives N] [--key K] [--task-steps N]``), or the study's run or report."""
     argv = sys.argv[1:] if argv is None else list(argv)
     if set(argv) & set(MEASUREMENTS):
-        p = Parser(prog="python -m experiments.timescale")
-        p.add_argument("measurement", choices=MEASUREMENTS)
-        p.add_argument("--out", dest="out_dir", metavar="OUT", required=True, help="its folder (the study's stage "
-                       "gives its own: a committed one is not written over by hand)")
-        for option in ("--lives", "--key"):  # absent: the measurement's own
-            p.add_argument(option, type=int)
-        p.add_argument("--task-steps", type=int, default=TASK_STEPS)
-        options = {k: v for k, v in vars(p.parse_args(argv)).items() if v is not None}
-        for flag in ("lives", "task_steps"):
-            check_at_least(f"--{flag.replace('_', '-')}", options.get(flag))
-        MEASUREMENTS[options.pop("measurement")](**options)
-        return 0
+        return cli.execute(measure_plan(argv))
     planned = timescale_table()
     code = planned.main(argv)
     if code or planned.rows or "--report" in argv:

@@ -91,3 +91,109 @@ def test_bad_input_exits_2_naming_it(tmp_path, capsys, monkeypatch, argv, field)
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and field in err[-1] and len(err) == 1
     assert not out.exists()
+
+
+#: The stage each option is read by, and its command line before the option (a run first, where it reads runs).
+STAGE_OF = {"--lengths": "hand", "--walls": "hand", "--rewards": "hand", "--rules": "hand", "--respawn-steps": "hand",
+            "--speed-bias": "hand", "--seeds": "hand", "--task-steps": "ceiling", "--biases": "speed",
+            "--preset": "speed", "--best": "evolved", "--individuals": "random", "--lives": "heritability",
+            "--key": "ceiling", "--out": "ceiling"}
+
+
+def fake_run(folder, seeds=2, population=4, fitness=None):
+    """A finished evolution's config.json and final_population.npz (no lives: written by hand)."""
+    import json
+
+    import numpy as np
+    from helpers import tiny_config
+
+    config = tiny_config(population_size=population)
+    os.makedirs(folder)
+    with open(os.path.join(folder, "config.json"), "w") as f:
+        json.dump(dict(config=config.to_dict(), seeds=list(range(seeds))), f)
+    rng = np.random.default_rng(0)
+    np.savez(os.path.join(folder, "final_population.npz"), generation=np.int64(1),
+             evaluated=rng.uniform(-1, 1, (seeds, population, config.num_genes)).astype(np.float32),
+             fitness=rng.uniform(0, 1, (seeds, population)).astype(np.float32) if fitness is None else fitness)
+    return str(folder)
+
+
+def _attack(tmp_path, *argv):
+    from attack import attack
+
+    return attack(study.main, list(argv), str(tmp_path))
+
+
+def _hostile_cases():
+    from test_circular_paths import hostile_cases
+
+    cases = hostile_cases(study.measure_parser())
+    assert {flag for flag, _ in cases} == set(STAGE_OF)  # a new option is given its stage here
+    from attack import HOSTILE_TEXTS
+
+    return cases + [("RUN", value) for value in HOSTILE_TEXTS]  # the positional: the runs a stage reads
+
+
+@pytest.mark.parametrize("flag, value", _hostile_cases())
+def test_hostile_values_are_refused_or_planned_with_nothing_written(tmp_path, monkeypatch, flag, value):
+    """Every option of the measures' parser under the stage that reads it, every hostile value, and every hostile run
+    word: one line and exit 2, or a plan; nothing written."""
+    from attack import assert_contract
+
+    monkeypatch.setattr("imrl_jax.devices.use_host_cores", lambda count=None: None)  # leave the suite's devices
+    run = fake_run(tmp_path / "run")
+    if flag == "RUN":
+        argv = [value, "--out", "m/evolved", "evolved", "--best", "2"]
+    else:
+        stage = STAGE_OF[flag]
+        argv = ([run] if stage in ("evolved", "heritability") else []) + ["--out", f"m/{stage}", stage,
+                                                                          "--best", "2", f"{flag}={value}"]
+    outcome = _attack(tmp_path, *argv)
+    named = (flag, "runs", "memory", "lives at once") + ((value,) if flag == "RUN" and value.strip() else ())
+    if assert_contract(outcome, *named, argv=argv) == "planned":
+        args = outcome.plan.checked["args"]
+        assert args.lives is None or 1 <= args.lives <= 10_000
+        assert 0 <= args.key < 2**32 and 1 <= args.best <= 4
+        assert all(os.path.isfile(os.path.join(r, "config.json")) for r in args.runs)
+
+
+@pytest.mark.parametrize("name", ["config.json", "final_population.npz"])
+@pytest.mark.parametrize("how", ["empty", "truncated", "not json", "null", "a list", "NaN", "binary", "removed"])
+def test_a_damaged_run_is_one_line_naming_its_file(tmp_path, monkeypatch, name, how):
+    """evolved and heritability read a run's config.json and final_population.npz: damaged, one line names it."""
+    from attack import assert_refused, damage
+
+    monkeypatch.setattr("imrl_jax.devices.use_host_cores", lambda count=None: None)
+    run = fake_run(tmp_path / "run")
+    damage(os.path.join(run, name), how)
+    for stage in ("evolved", "heritability"):
+        assert_refused(_attack(tmp_path, run, "--out", "m/probe", stage, "--best", "2"), name, "config.json",
+                       argv=[name, how, stage])
+
+
+@pytest.mark.parametrize("case", ["nan fitness", "genes of another width", "best above the population"])
+def test_a_run_of_bad_arrays_is_refused(tmp_path, monkeypatch, case):
+    """NaN fitness would rank arbitrary genomes as the best; a genome of another width would be decoded as garbage."""
+    import numpy as np
+    from attack import assert_refused
+
+    monkeypatch.setattr("imrl_jax.devices.use_host_cores", lambda count=None: None)
+    run = fake_run(tmp_path / "run", fitness=np.full((2, 4), np.nan, np.float32) if case == "nan fitness" else None)
+    if case == "genes of another width":
+        path = os.path.join(run, "final_population.npz")
+        with np.load(path) as data:
+            arrays = dict(data)
+        np.savez(path, **dict(arrays, evaluated=arrays["evaluated"][..., :-1]))
+    best = "5" if case == "best above the population" else "2"
+    assert_refused(_attack(tmp_path, run, "--out", "m/probe", "evolved", "--best", best), "run", "--best")
+
+
+def test_a_measure_into_a_folder_of_other_files_is_refused(tmp_path, monkeypatch):
+    from attack import assert_contract, assert_refused
+
+    monkeypatch.setattr("imrl_jax.devices.use_host_cores", lambda count=None: None)
+    (tmp_path / "ceiling").mkdir()
+    (tmp_path / "ceiling" / "ceiling.csv").write_text("old")
+    assert assert_contract(_attack(tmp_path, "--out", "ceiling", "ceiling")) == "planned"
+    (tmp_path / "ceiling" / "notes.txt").write_text("mine")
+    assert_refused(_attack(tmp_path, "--out", "ceiling", "ceiling"), "--out")

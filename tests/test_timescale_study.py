@@ -256,3 +256,86 @@ def test_a_measurement_of_no_lives_or_steps_exits_2_naming_it(tmp_path, capsys, 
     assert study.main(["--out", str(out), *argv]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0] == f"error: {field}: must be at least 1 (got {argv[-1]})" and not out.exists()
+
+
+def _attack(tmp_path, *argv):
+    from attack import attack
+
+    return attack(study.main, list(argv), str(tmp_path))
+
+
+def _hostile_cases():
+    from test_circular_paths import hostile_cases
+
+    return hostile_cases(study.measure_parser())
+
+
+@pytest.mark.parametrize("flag, value", _hostile_cases())
+def test_hostile_values_are_refused_or_planned_with_nothing_written(tmp_path, flag, value):
+    """Every option of a measurement's parser, every hostile value: one line and exit 2, or a plan; nothing written."""
+    from attack import assert_contract
+
+    argv = ["--out", "timescale/ceiling", "ceiling", f"{flag}={value}"]
+    outcome = _attack(tmp_path, *argv)
+    if assert_contract(outcome, flag, "memory", argv=argv) == "planned":  # only with values in bounds
+        checked = outcome.plan.checked
+        assert 1 <= checked.get("lives", 1) <= 10_000 and 0 <= checked.get("key", 0) < 2**32
+        assert 1 <= checked["task_steps"] <= 10**9 and checked["out_dir"].strip()
+
+
+def _rates(tmp_path):
+    """A rate sweep's result.json beside the confirmation's folder: a point of each option."""
+    folder = tmp_path / "timescale" / "rates"
+    folder.mkdir(parents=True)
+    rows = [dict(option=option, trace_lambda=0.9, eta_selector_actor=1.0, eta_selector_critic=0.01, fitness=0.5)
+            for option in study.RATE_OPTIONS]
+    (folder / "result.json").write_text(json.dumps(dict(rows=rows)))
+    return str(folder / "result.json")
+
+
+CONFIRM = ("--out", "timescale/confirm", "confirm")
+
+
+def test_confirm_plans_from_a_sound_rate_sweep(tmp_path):
+    from attack import assert_contract
+
+    _rates(tmp_path)
+    outcome = _attack(tmp_path, *CONFIRM)
+    assert assert_contract(outcome) == "planned" and outcome.plan.checked["out_dir"] == "timescale/confirm"
+
+
+@pytest.mark.parametrize("how", ["empty", "truncated", "not json", "null", "a list", "NaN", "binary", "removed"])
+def test_a_damaged_rate_sweep_is_one_line_naming_it(tmp_path, how):
+    """confirm reads rates/result.json: damaged, it is named in one line (a traceback before, for most)."""
+    from attack import assert_refused, damage
+
+    damage(_rates(tmp_path), how)
+    assert_refused(_attack(tmp_path, *CONFIRM), "rates", argv=[how])
+
+
+@pytest.mark.parametrize("change", [
+    lambda d: d["rows"][0].update(fitness=float("nan")),  # a NaN best: max() then picks arbitrary rates
+    lambda d: d["rows"][0].update(fitness="high"),
+    lambda d: d["rows"][0].update(eta_selector_actor=-3.0),  # a rate the config refuses
+    lambda d: d["rows"][0].pop("trace_lambda"),
+    lambda d: d["rows"][0].update(option="period-7"),
+    lambda d: d.update(rows=[r for r in d["rows"] if r["option"] != "colour-60"]),  # an option never swept
+    lambda d: d.update(rows=[1, 2]),
+    lambda d: d.pop("rows"),
+], ids=["nan fitness", "text fitness", "rate out of bounds", "no lambda", "unknown option", "option missing",
+        "rows not dicts", "no rows"])
+def test_a_rate_sweep_of_bad_rows_is_one_line_naming_it(tmp_path, change):
+    from attack import assert_refused, edit_json
+
+    edit_json(_rates(tmp_path), change)
+    assert_refused(_attack(tmp_path, *CONFIRM), "rates")
+
+
+def test_a_measurement_into_a_folder_of_other_files_is_refused(tmp_path):
+    from attack import assert_contract, assert_refused
+
+    (tmp_path / "m").mkdir()
+    (tmp_path / "m" / "ceiling.csv").write_text("old")
+    assert assert_contract(_attack(tmp_path, "--out", "m", "ceiling")) == "planned"
+    (tmp_path / "m" / "notes.txt").write_text("mine")
+    assert_refused(_attack(tmp_path, "--out", "m", "ceiling"), "--out")
