@@ -316,6 +316,28 @@ def main(argv=None) -> int:
     return cli.exit_codes(_main)(argv)
 
 
+def parser():
+    """The bench command line's parser."""
+    from imrl_jax import cli
+
+    p = cli.Parser(prog="python -m imrl_jax.bench", description=__doc__.split("\n")[0],
+                   formatter_class=cli.HelpFormatter)
+    p.add_argument("--lanes", default="1,50,300,3000", help="comma-separated lane counts")
+    p.add_argument("--steps", type=int, default=1000, help="steps per timed phase run")
+    p.add_argument("--repeats", type=int, default=5, help="timed runs after compilation (median)")
+    p.add_argument("--reference-steps", type=int, default=500, help="steps of the reference per phase")
+    p.add_argument("--lifetime-lanes", default="300,3000",
+                   help="comma-separated adult lane counts of the whole-life benchmark (6 per individual)")
+    p.add_argument("--lifetime-task-steps", type=int, default=2000, help="steps per task of the whole life")
+    p.add_argument("--cpu-devices", type=int, default=0, help="CPU devices (0: one per core)")
+    p.add_argument("--kernel", default="xla", help="comma-separated step kernels: xla, pallas (GPU)")
+    p.add_argument("--sweep-points", type=int, default=0,
+                   help="instead: a generation of a sweep of this many points (evolve --sweep) against as many "
+                        "generations of a single run, alternating (--repeats pairs, --lifetime-task-steps)")
+    p.add_argument("--json", help="also write the results to this JSON file")
+    return p
+
+
 def _main(argv=None) -> int:
     """The command: parse, check every option (nothing written), then measure through ``cli.execute``."""
     from imrl_jax import cli
@@ -323,22 +345,7 @@ def _main(argv=None) -> int:
     from imrl_jax.config import STEP_KERNELS
     from imrl_jax.rundir import check_writable
 
-    parser = cli.Parser(prog="python -m imrl_jax.bench", description=__doc__.split("\n")[0],
-                        formatter_class=cli.HelpFormatter)
-    parser.add_argument("--lanes", default="1,50,300,3000", help="comma-separated lane counts")
-    parser.add_argument("--steps", type=int, default=1000, help="steps per timed phase run")
-    parser.add_argument("--repeats", type=int, default=5, help="timed runs after compilation (median)")
-    parser.add_argument("--reference-steps", type=int, default=500, help="steps of the reference per phase")
-    parser.add_argument("--lifetime-lanes", default="300,3000",
-                        help="comma-separated adult lane counts of the whole-life benchmark (6 per individual)")
-    parser.add_argument("--lifetime-task-steps", type=int, default=2000, help="steps per task of the whole life")
-    parser.add_argument("--cpu-devices", type=int, default=0, help="CPU devices (0: one per core)")
-    parser.add_argument("--kernel", default="xla", help="comma-separated step kernels: xla, pallas (GPU)")
-    parser.add_argument("--sweep-points", type=int, default=0,
-                        help="instead: a generation of a sweep of this many points (evolve --sweep) against as many "
-                             "generations of a single run, alternating (--repeats pairs, --lifetime-task-steps)")
-    parser.add_argument("--json", help="also write the results to this JSON file")
-    args = parser.parse_args(argv)
+    args = parser().parse_args(argv)
     if args.sweep_points < 0 or args.sweep_points > 1000:
         raise UsageError("--sweep-points: must be in 0..1000")
     kernels = args.kernel.split(",")

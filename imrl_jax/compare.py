@@ -108,21 +108,28 @@ def main(argv=None) -> int:
     return cli.exit_codes(_main)(argv)
 
 
+def parser():
+    """The compare command line's parser."""
+    from imrl_jax import cli
+
+    p = cli.Parser(prog="python -m imrl_jax.compare", description=__doc__.split("\n")[0])
+    p.add_argument("revision", metavar="REV", help="git revision to compare this checkout with")
+    p.add_argument("--phase", choices=sorted(PHASES), default="adult",
+                   help="adulthood of LE-LS (adult), EE-ES or SLE, LE-LS childhood, or whole LE-LS lives "
+                        "of lanes / 6 individuals")
+    p.add_argument("--lanes", type=int, default=3000, help="lanes (adult lanes for life)")
+    p.add_argument("--steps", type=int, default=1000, help="steps per timed run (per task for life)")
+    p.add_argument("--pairs", type=int, default=20, help="alternating pairs of timed runs")
+    p.add_argument("--cpu-devices", type=int, default=0, help="CPU devices (0: one per core)")
+    return p
+
+
 def _main(argv=None) -> int:
     """The command: parse, check every option and the revision (nothing written), then time through ``cli.execute``."""
     from imrl_jax import cli
     from imrl_jax.cli import UsageError
 
-    parser = cli.Parser(prog="python -m imrl_jax.compare", description=__doc__.split("\n")[0])
-    parser.add_argument("revision", metavar="REV", help="git revision to compare this checkout with")
-    parser.add_argument("--phase", choices=sorted(PHASES), default="adult",
-                        help="adulthood of LE-LS (adult), EE-ES or SLE, LE-LS childhood, or whole LE-LS lives "
-                             "of lanes / 6 individuals")
-    parser.add_argument("--lanes", type=int, default=3000, help="lanes (adult lanes for life)")
-    parser.add_argument("--steps", type=int, default=1000, help="steps per timed run (per task for life)")
-    parser.add_argument("--pairs", type=int, default=20, help="alternating pairs of timed runs")
-    parser.add_argument("--cpu-devices", type=int, default=0, help="CPU devices (0: one per core)")
-    args = parser.parse_args(argv)
+    args = parser().parse_args(argv)
     for name, limit in (("lanes", cli.MAX_LANES), ("steps", cli.MAX_STEPS), ("pairs", 10_000)):
         cli.check_at_least(f"--{name}", getattr(args, name))
         cli.check_at_most(f"--{name}", getattr(args, name), limit)

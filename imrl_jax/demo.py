@@ -20,8 +20,9 @@ import time
 import jax
 import numpy as np
 
-from imrl_jax.cli import (Call, HelpFormatter, Parser, add_task_set, apply_task_set, check_at_least, check_at_most,
-                          check_out, execute, exit_codes)
+from imrl_jax import cli
+from imrl_jax.cli import (HelpFormatter, Parser, add_task_set, apply_task_set, check_at_least, check_at_most, check_out,
+                          exit_codes)
 from imrl_jax.config import CONDITIONS, PRESETS, Config, make_config
 from imrl_jax.rundir import check_outputs_dir, check_writable, write_atomic
 
@@ -98,24 +99,29 @@ def run(config: Config, out_dir: str, seed: int = 0, overwrite: bool = False) ->
     return summary
 
 
+def parser() -> Parser:
+    """The demo command line's parser."""
+    p = Parser(prog="python -m imrl_jax.demo", description=__doc__.split("\n")[0], formatter_class=HelpFormatter)
+    p.add_argument("--out", default="out/demo", help="output directory")
+    p.add_argument("--condition", default="LE-LS", choices=CONDITIONS, help="condition of the random individual")
+    p.add_argument("--seed", type=int, default=0, help="random seed of the individual and its life")
+    p.add_argument("--preset", default="small", choices=sorted(PRESETS),
+                   help="config preset (small: reduced scale, about a minute on a CPU)")
+    add_task_set(p, "the tasks", default="paper")
+    p.add_argument("--overwrite", action="store_true", help="replace the outputs of an earlier demo in --out")
+    return p
+
+
 @exit_codes
 def main(argv=None) -> int:
-    parser = Parser(prog="python -m imrl_jax.demo", description=__doc__.split("\n")[0], formatter_class=HelpFormatter)
-    parser.add_argument("--out", default="out/demo", help="output directory")
-    parser.add_argument("--condition", default="LE-LS", choices=CONDITIONS, help="condition of the random individual")
-    parser.add_argument("--seed", type=int, default=0, help="random seed of the individual and its life")
-    parser.add_argument("--preset", default="small", choices=sorted(PRESETS),
-                        help="config preset (small: reduced scale, about a minute on a CPU)")
-    add_task_set(parser, "the tasks", default="paper")
-    parser.add_argument("--overwrite", action="store_true", help="replace the outputs of an earlier demo in --out")
-    args = parser.parse_args(argv)
+    args = parser().parse_args(argv)
     check_out(args.out)
     config = apply_task_set(make_config(args.preset, condition=args.condition), args)
     check_at_least("--seed", args.seed, 0)
     check_at_most("--seed", args.seed, 2**32 - 1)  # a uint32 key
     check_writable(args.out)
     check_outputs_dir(args.out, OUTPUTS, "demo output", args.overwrite)
-    return execute(Call(lambda: report(config, args), config=config, out=args.out))
+    return cli.execute(cli.Call(lambda: report(config, args), config=config, out=args.out))
 
 
 def report(config: Config, args) -> int:

@@ -467,7 +467,8 @@ def plan_from_args(args, out_dir: str, registered: Sequence[str], build_config) 
     """The evolve command's plan for a sweep (``--sweep``, or ``--resume`` of a sweep's directory), every check
     done and nothing written; ``build_config``: the command's, from its parsed arguments."""
     if args.strategy not in (None, GA_NAME) or args.strategy_set:
-        raise UsageError("--strategy: a sweep evolves with the paper's GA (its mutation values may be swept)")
+        flag = "--strategy-set" if args.strategy in (None, GA_NAME) else "--strategy"
+        raise UsageError(f"{flag}: a sweep evolves with the paper's GA (its mutation values may be swept)")
     saved = None
     if args.resume:
         if not is_sweep(out_dir):

@@ -689,17 +689,24 @@ def main(argv=None) -> int:
     return cli.exit_codes(_main)(argv)
 
 
+def parser():
+    """The GPU check's command line parser."""
+    from imrl_jax import cli
+
+    p = cli.Parser(prog="python -m imrl_jax.gpu_check", description=__doc__.split("\n")[0])
+    p.add_argument("--out", required=True, help="folder for gpu_check.json, .txt and .png (new, or without them)")
+    p.add_argument("--budget-min", type=float, default=8.0, help="minutes the check may take")
+    p.add_argument("--dry", action="store_true", help="tiny sizes on any backend (tests the check itself)")
+    p.add_argument("--only", help="comma-separated steps (default: all): " + ", ".join(n for n, *_ in STEPS))
+    p.add_argument("--conditions", help="comma-separated conditions whose lives and phases to check (default: all)")
+    return p
+
+
 def _main(argv=None) -> int:
     """The command: parse, check every option (nothing written), then run the check through ``cli.execute``."""
     from imrl_jax import cli
 
-    parser = cli.Parser(prog="python -m imrl_jax.gpu_check", description=__doc__.split("\n")[0])
-    parser.add_argument("--out", required=True, help="folder for gpu_check.json, .txt and .png (new, or without them)")
-    parser.add_argument("--budget-min", type=float, default=8.0, help="minutes the check may take")
-    parser.add_argument("--dry", action="store_true", help="tiny sizes on any backend (tests the check itself)")
-    parser.add_argument("--only", help="comma-separated steps (default: all): " + ", ".join(n for n, *_ in STEPS))
-    parser.add_argument("--conditions", help="comma-separated conditions whose lives and phases to check (default: all)")
-    args = parser.parse_args(argv)
+    args = parser().parse_args(argv)
 
     if not args.out.strip():
         raise cli.UsageError("--out: empty")

@@ -209,7 +209,7 @@ def read_config(run_dir: str) -> tuple[Config, list[int]]:
 def load_run(run_dir: str) -> Run:
     """A run directory's config, seeds and last evaluated generation (raises RunDirError naming the file)."""
     if not os.path.isdir(run_dir):
-        raise RunDirError(f"{run_dir}: not a directory (give an evolution's run directory)")
+        raise RunDirError(f"run_dir: {run_dir!r} is not a directory (give an evolution's run directory)")
     for name in ("config.json", "final_population.npz"):
         if not os.path.isfile(os.path.join(run_dir, name)):
             raise RunDirError(f"{os.path.join(run_dir, name)}: not found (is {run_dir} a run of "
@@ -221,12 +221,17 @@ def load_run(run_dir: str) -> Run:
     try:
         with np.load(path) as data:
             generation, evaluated, fitness = int(data["generation"]), data["evaluated"], data["fitness"]
-    except (OSError, ValueError, KeyError) as error:
+    except (OSError, ValueError, KeyError, TypeError) as error:  # TypeError: a generation that is not one number
         raise RunDirError(f"{path} is unreadable ({error})") from None
     if generation < 1:
         raise RunDirError(f"{path}: no generation has been evaluated yet")
-    if evaluated.shape[:2] != fitness.shape or fitness.shape[0] != len(seeds):
+    if evaluated.shape[:2] != fitness.shape or fitness.shape[0] != len(seeds) or evaluated.ndim != 3:
         raise RunDirError(f"{path}: arrays do not match the {len(seeds)} seed(s) of config.json")
+    if evaluated.shape[1:] != (config.population_size, config.num_genes):
+        raise RunDirError(f"{path}: its population is {evaluated.shape[1]} genomes of {evaluated.shape[2]} genes, "
+                          f"config.json's {config.population_size} of {config.num_genes}")
+    if not (np.isfinite(fitness).all() and np.isfinite(evaluated).all()):  # the best would be arbitrary
+        raise RunDirError(f"{path}: its fitness or genomes hold NaN or infinite values")
     return Run(config, seeds, generation, evaluated, fitness)
 
 
@@ -253,7 +258,15 @@ def read_kept_best(path: str, variant: str, condition: str) -> KeptBest:
         raise RunDirError(f"--best-genomes: {path} holds no {variant}/{condition} (it holds {', '.join(found)})")
     if f"{key}__seeds" not in arrays:
         raise RunDirError(f"--best-genomes: {path} holds no {key}__seeds beside {key}__genomes")
-    return KeptBest(arrays[f"{key}__genomes"], [int(s) for s in arrays[f"{key}__seeds"]], arrays.get(f"{key}__fitness"))
+    genomes, fitness = arrays[f"{key}__genomes"], arrays.get(f"{key}__fitness")
+    try:
+        seeds = [int(s) for s in np.asarray(arrays[f"{key}__seeds"]).reshape(-1)]
+    except (TypeError, ValueError) as error:
+        raise RunDirError(f"--best-genomes: {path}: {key}__seeds are not integers ({error})") from None
+    if genomes.ndim != 3 or genomes.shape[0] != len(seeds) or not np.isfinite(genomes).all():
+        raise RunDirError(f"--best-genomes: {path}: {key}__genomes is not (seeds, best, genes) of finite values for "
+                          f"its {len(seeds)} seed(s)")
+    return KeptBest(genomes, seeds, fitness)
 
 
 def load_kept_best(run_dir: str, path: str, num_best: int) -> tuple[Config, list[int], np.ndarray]:

@@ -35,8 +35,8 @@ PROGRESS_FIELDS = ("num_generations",)
 
 def canonical(value) -> str:
     """``value`` (JSON-like) as canonical JSON: sorted keys, no spaces, every number a float (so 12 and 12.0,
-    one value, are one text)."""
-    plain = json.loads(json.dumps(value), parse_int=float)
+    one value, are one text; -0 is 0)."""
+    plain = json.loads(json.dumps(value), parse_int=float, parse_float=lambda text: float(text) + 0.0)  # -0.0 + 0 is 0.0
     return json.dumps(plain, sort_keys=True, separators=(",", ":"))
 
 
@@ -176,19 +176,26 @@ def test_index(root: str) -> dict[str, str]:
     return keys
 
 
+def parser():
+    """The runspec command line's parser."""
+    from imrl_jax.cli import Parser
+
+    p = Parser(prog="python -m imrl_jax.runspec", description=main.__doc__.split(": ", 1)[1])
+    p.add_argument("root", help="a results folder (for instance experiments/results)")
+    p.add_argument("--record", help="also write {directory: key} to this JSON file")
+    return p
+
+
 def main(argv=None) -> int:
     """``python -m imrl_jax.runspec ROOT [--record PATH]``: every run under ROOT with its key."""
     from imrl_jax import cli
-    from imrl_jax.cli import Parser, UsageError, exit_codes
+    from imrl_jax.cli import UsageError, exit_codes
 
     @exit_codes
     def listed(argv) -> int:
-        parser = Parser(prog="python -m imrl_jax.runspec", description=main.__doc__.split(": ", 1)[1])
-        parser.add_argument("root", help="a results folder (for instance experiments/results)")
-        parser.add_argument("--record", help="also write {directory: key} to this JSON file")
-        args = parser.parse_args(argv)
+        args = parser().parse_args(argv)
         if not os.path.isdir(args.root):
-            raise UsageError(f"{args.root}: not a folder")
+            raise UsageError(f"root: {args.root!r} is not a folder")
         if args.record is not None:
             from imrl_jax.cli import check_out
             from imrl_jax.rundir import check_writable

@@ -123,8 +123,8 @@ def make_strategy(name: str, config: Config, settings: dict | None = None):
     """The search strategy ``name`` for ``config``'s population and genome: ``"ga"`` (the paper's) or an evosax one."""
     if name == GA_NAME:
         if settings:
-            raise ConfigError("strategy ga: its settings are config fields (mutation_prob, mutation_scale, ...); "
-                              "use --set")
+            raise ConfigError("--strategy-set: strategy ga's settings are config fields (mutation_prob, "
+                              "mutation_scale, ...); use --set")
         from imrl_jax.ga import GA
 
         return GA(config)

@@ -137,13 +137,14 @@ def run_python(code: str, devices: int = 1, timeout: float = TIMEOUT) -> subproc
 
 
 def devices_seen(module: str, args) -> int:
-    """The devices ``python -m module args`` has once it calls its ``run`` (replaced: nothing runs), in a fresh
-    interpreter on CPU with no device count forced (the command asks for its own)."""
+    """The devices ``python -m module args`` has once its plan is made (``cli.execute`` replaced: nothing runs), in
+    a fresh interpreter on CPU with no device count forced (the command asks for its own)."""
     code = (f"import sys, jax, {module} as command\n"
-            "def run(*args, **kwargs):\n"
+            "from imrl_jax import cli\n"
+            "def execute(plan):\n"
             "    print(len(jax.devices()))\n"
-            "    raise SystemExit(0)\n"
-            "command.run = run\n"
+            "    return 0\n"
+            "cli.execute = execute\n"
             f"sys.exit(command.main({list(args)!r}))\n")
     env = environment()
     env["XLA_FLAGS"] = " ".join(f for f in env["XLA_FLAGS"].split()

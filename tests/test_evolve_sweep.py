@@ -114,6 +114,7 @@ def test_killed_resumed_and_extended_sweep_equals_the_uninterrupted_one(finished
      "--sweep: childhood_trace_lambda=0.2 and childhood_trace_lambda=0.1 are the same run (childhood_trace_lambda: not "
      "read by EE-LS)"),
     (["--sweep", "gamma=0.9", "--strategy", "snes"], "--strategy: a sweep evolves with the paper's GA"),
+    (["--sweep", "gamma=0.9", "--strategy-set", "std_init=1"], "--strategy-set: a sweep evolves with the paper's GA"),
     (["--zip"], "--zip: only with --sweep"),
 ])
 def test_bad_sweeps_exit_2_in_one_line_and_write_nothing(tmp_path, capsys, args, message):

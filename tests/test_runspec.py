@@ -37,6 +37,14 @@ def test_two_configs_share_a_key_exactly_when_they_are_the_same_model():
     assert pairs == len(conditions.NAMES) * len(PRESETS) ** 2 and len(configs) < same < pairs
 
 
+def test_minus_zero_is_zero_in_a_key():
+    """``--set gamma=-0`` is the run of ``gamma=0`` (a study asking for 0 finds it); -0.0 == 0.0 in the model too."""
+    config = make_config("small", condition="LE-LS")
+    zero, minus = config.replace(gamma=0.0), config.replace(gamma=-0.0)
+    assert not zero.model_differences(minus)
+    assert RunSpec.make(minus, [0]).key() == RunSpec.make(zero, [0]).key() != RunSpec.make(config, [0]).key()
+
+
 def test_what_is_and_is_not_part_of_a_run():
     config = make_config("paper", condition="EE-LS")
     key = RunSpec.make(config, [0, 1]).key()
@@ -79,7 +87,7 @@ def test_two_directories_of_one_run_are_refused_naming_both(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("error: ") and err.count("\n") == 1 and "hold the same run" in err
     assert runspec.main([str(tmp_path / "missing")]) == 2
-    assert capsys.readouterr().err == f"error: {tmp_path / 'missing'}: not a folder\n"
+    assert capsys.readouterr().err == f"error: root: {str(tmp_path / 'missing')!r} is not a folder\n"
 
 
 def test_tests_from_scratch_are_indexed_by_what_they_compute(tmp_path):

@@ -139,7 +139,7 @@ def test_evolve_with_an_evosax_strategy_resumes_and_extends_bitwise(tmp_path, ca
                               "xnes, open_es, pgpe)"),
     (["--strategy", "snes", "--strategy-set", "sigma=1"], "error: strategy snes: sigma is not a parameter"),
     (["--strategy", "snes", "--strategy-set", "std_init"], "error: --strategy-set: expected FIELD=NUMBER, got 'std_init'"),
-    (["--strategy", "ga", "--strategy-set", "std_init=1"], "error: strategy ga: its settings are config fields"),
+    (["--strategy", "ga", "--strategy-set", "std_init=1"], "error: --strategy-set: strategy ga's settings are config fields"),
     (["--strategy", "snes", "--strategy-set", "weights=1"],
      "error: strategy snes: weights is not a scalar parameter (choose from std_init, lr_std_init)"),
     (["--strategy", "snes", "--strategy-set", "std_init=nan"], "error: strategy snes: std_init must be a finite number > 0"),

@@ -1,0 +1,204 @@
+"""Every command attacked as a hostile user would: hostile values for every option, hostile files it reads.
+
+Each command's ``main`` runs in this process through ``tests/attack.attack``: ``cli.execute`` is stubbed, so a
+plan that passes is not carried out (nothing compiles), and the folder it works in is compared byte for byte
+before and after. The contract (``attack.assert_contract``): refused with exit code 2 and one line naming the
+option or file (no traceback), or planned; nothing written either way. Hypothesis draws the attacks with a
+fixed budget per command and a fixed seed (``derandomize``), so the default suite always runs the same
+cases; ``-m slow`` runs a longer profile. The commands' own test files hold the listed regressions.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+from typing import Callable, NamedTuple
+
+import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+from attack import (HOSTILE_FILE_BYTES, HOSTILE_FLOATS, HOSTILE_INTS, HOSTILE_TEXTS, assert_contract, attack, damage,
+                    tree)
+
+#: Cases drawn per command in the default suite, and under ``-m slow``.
+DEFAULT_BUDGET = 30
+SLOW_BUDGET = 400
+
+
+class Command(NamedTuple):
+    """A command to attack: its ``main``, its parser, and a command line it accepts (``RUN``: a finished run)."""
+
+    name: str
+    main: Callable[[list[str]], int]
+    parser: Callable[[], argparse.ArgumentParser]
+    base: tuple[str, ...]
+
+
+def _commands() -> list[Command]:
+    from imrl_jax import (baselines, bench, compare, demo, evolve, gpu_check, landscape_run, learning_test, render,
+                          runspec)
+    from imrl_jax.evolve_options import parser as evolve_parser
+    from imrl_jax.learning_test_options import parser as learning_test_parser
+
+    return [
+        Command("evolve", evolve.main, evolve_parser, ("--cond", "EE-LS", "--preset", "small", "--out", "out")),
+        Command("evolve --sweep", evolve.main, evolve_parser,
+                ("--cond", "EE-LS", "--preset", "small", "--sweep", "eta=0.1,0.2", "--out", "out")),
+        Command("evolve --resume", evolve.main, evolve_parser, ("--resume", "--out", "RUN")),
+        Command("learning_test", learning_test.main, learning_test_parser,
+                ("RUN", "--best", "2", "--tests", "1", "--task-steps", "200", "--bins", "2", "--steady-steps", "100",
+                 "--chunks", "1", "--out", "out")),
+        Command("learning_test --cond SLE", learning_test.main, learning_test_parser,
+                ("--cond", "SLE", "--preset", "small", "--runs", "1", "--best", "1", "--tests", "1", "--task-steps",
+                 "200", "--bins", "2", "--steady-steps", "100", "--chunks", "1", "--out", "out")),
+        Command("render", render.main, render.parser, ("RUN", "--task", "1", "--steps", "4", "--out", "out.gif")),
+        Command("landscape_run", landscape_run.main, landscape_run.parser,
+                ("RUN", "--out", "out", "--generations", "0", "--lives", "2", "--parents", "2", "--mutants", "2",
+                 "--walks", "2", "--walk-length", "2", "--random", "2", "--chunk", "2")),
+        Command("baselines", baselines.main, baselines.parser, ("--steps", "1000", "--seeds", "1", "--out", "out")),
+        Command("demo", demo.main, demo.parser, ("--out", "out")),
+        Command("bench", bench.main, bench.parser, ("--json", "out/bench.json")),
+        Command("compare", compare.main, compare.parser, ("HEAD",)),
+        Command("gpu_check", gpu_check.main, gpu_check.parser, ("--dry", "--out", "out")),
+        Command("runspec", runspec.main, runspec.parser, (".", "--record", "out/keys.json")),
+    ]
+
+
+COMMANDS = {c.name: c for c in _commands()}
+
+
+@pytest.fixture(scope="module")
+def arena(tmp_path_factory, tiny_run):
+    """A folder holding a finished tiny run (``RUN``), in which every attack of a command runs."""
+    root = tmp_path_factory.mktemp("attacks")
+    shutil.copytree(tiny_run, root / "RUN", ignore=shutil.ignore_patterns(".lock"))
+    return str(root)
+
+
+def _options(parser: argparse.ArgumentParser) -> list[argparse.Action]:
+    return [a for a in parser._actions if not isinstance(a, argparse._HelpAction)]
+
+
+def _flag(action: argparse.Action) -> str:
+    return action.option_strings[0] if action.option_strings else (action.metavar or action.dest)
+
+
+@st.composite
+def hostile_value(draw, action: argparse.Action) -> str:
+    """A hostile value for ``action``: chosen by its type, or any of the hostile kinds."""
+    if action.type is int:
+        pool = st.one_of(st.sampled_from(HOSTILE_INTS), st.integers(-2**70, 2**70).map(str))
+    elif action.type is float:
+        pool = st.one_of(st.sampled_from(HOSTILE_FLOATS), st.floats(allow_nan=True, allow_infinity=True).map(repr))
+    else:
+        pool = st.one_of(st.sampled_from(HOSTILE_TEXTS), st.text(min_size=0, max_size=12))
+    if action.dest in ("set", "sweep", "strategy_set"):  # FIELD=VALUE: a real field with a hostile value, or junk
+        from imrl_jax.cli import settable_fields
+
+        field = st.sampled_from(settable_fields() + ["eta", "trace_lambda", "no_such_field"])
+        value = st.one_of(st.sampled_from(HOSTILE_FLOATS + HOSTILE_INTS + HOSTILE_TEXTS), st.text(max_size=8))
+        pool = st.one_of(pool, st.builds(lambda f, v: f"{f}={v}", field, value))
+    return draw(pool)
+
+
+@st.composite
+def hostile_argv(draw, command: Command) -> tuple[list[str], str]:
+    """The command's accepted line with one option (or positional) given a hostile value; the argv and the flag."""
+    action = draw(st.sampled_from(_options(command.parser())))
+    flag = _flag(action)
+    argv = list(command.base)
+    if not action.option_strings:  # a positional: replace the base's value, or add one
+        value = draw(hostile_value(action))
+        positions = [i for i, a in enumerate(argv) if a in ("RUN", ".", "HEAD")]
+        if positions:
+            argv[positions[0]] = value
+        else:
+            argv = [value, *argv]
+        return argv, flag
+    if action.nargs == 0:  # a flag: given (twice, or alone)
+        return argv + [flag] * draw(st.integers(1, 2)), flag
+    if flag in argv:  # the option's own value replaced (its other occurrences kept)
+        i = argv.index(flag)
+        del argv[i:i + 2]
+    value = draw(hostile_value(action))
+    return argv + [f"{flag}={value}"], flag  # --flag=VALUE: a value starting with '-' is still its value
+
+
+def _fields(flag: str) -> tuple[str, ...]:
+    """The config fields an option sets (a refusal of the field's value may name the field)."""
+    from imrl_jax.evolve_options import OPTION_FIELDS
+
+    return (flag.lstrip("-").replace("-", "_"), *(f for f, option in OPTION_FIELDS.items() if option == flag))
+
+
+def _check(command: Command, root: str, argv: list[str], flag: str) -> str:
+    outcome = attack(command.main, argv, root)
+    # FIELD=VALUE options: the field named is the option named; argparse names an argument it does not know itself
+    fields = [a.split("=", 2)[1] for a in argv if a.startswith(f"{flag}=") and a.count("=") >= 2]
+    names = (flag, *_fields(flag), *fields, "RUN", "--out", "run_dir", "config.json", "memory",
+             "unrecognized arguments")
+    return assert_contract(outcome, *names, argv=argv)
+
+
+def _attack_test(budget: int):
+    @pytest.mark.parametrize("name", sorted(COMMANDS))
+    def test(arena, name):
+        command = COMMANDS[name]
+        before = tree(arena)
+        seen = {"refused": 0, "planned": 0}
+
+        @settings(max_examples=budget, deadline=None, derandomize=True, database=None,
+                  suppress_health_check=list(HealthCheck))
+        @given(hostile_argv(command))
+        def attacked(case):
+            argv, flag = case
+            seen[_check(command, arena, argv, flag)] += 1
+
+        attacked()
+        assert tree(arena) == before  # the run it read is as it was
+        assert seen["refused"] > 0, seen  # the attacks reached the checks
+
+    return test
+
+
+test_every_option_of_every_command_keeps_the_contract = _attack_test(DEFAULT_BUDGET)
+test_every_option_of_every_command_keeps_the_contract_long = pytest.mark.slow(_attack_test(SLOW_BUDGET))
+
+
+def test_the_base_command_lines_are_planned(arena):
+    """Each command's accepted line reaches ``execute`` (else the attacks would only test one refusal)."""
+    for command in COMMANDS.values():
+        if command.name in ("baselines",) and not _has("brax"):
+            continue
+        outcome = attack(command.main, list(command.base), arena)
+        assert outcome.planned and not outcome.changed, (command.name, outcome.stderr)
+
+
+def _has(module: str) -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec(module) is not None
+
+
+#: The files of a run, and the commands that read each (a command not listed does not read it).
+RUN_FILES = ("config.json", "final_population.npz", "history.csv")
+READERS = {"config.json": ("evolve --resume", "learning_test", "render", "landscape_run"),
+           "final_population.npz": ("learning_test", "render", "landscape_run"),
+           "history.csv": ()}  # read only where the final population was not kept (tests/test_landscape_run.py)
+
+
+@pytest.mark.parametrize("how", [*HOSTILE_FILE_BYTES, "removed"])
+@pytest.mark.parametrize("name", RUN_FILES)
+def test_every_reader_of_a_damaged_run_file_is_one_line_naming_it(arena, tmp_path, name, how):
+    """A run's file damaged every way: each command that reads it refuses naming it, nothing written."""
+    root = tmp_path / "damaged"
+    shutil.copytree(os.path.join(arena, "RUN"), root / "RUN")
+    damage(str(root / "RUN" / name), how)
+    for reader, command in COMMANDS.items():
+        outcome = attack(command.main, list(command.base), str(root))
+        result = assert_contract(outcome, name, "RUN", argv=[reader, name, how])
+        # landscape_run measures a run whose final population was not kept from its history (generation 0 here)
+        needed = reader in READERS[name] and (reader, name, how) != ("landscape_run", "final_population.npz",
+                                                                      "removed")
+        assert result == "refused" or not needed, (reader, name, how, outcome.stderr)
