@@ -132,8 +132,6 @@ def check_out_dir(out: str, outputs: tuple[str, ...], kind: str) -> None:
     cli.check_out(out)
     if any(ord(c) < 32 for c in out):  # a NUL or a line break: no folder can be made of it
         raise UsageError(f"--out: {out!r} holds a control character")
-    if not os.path.basename(os.path.normpath(os.path.abspath(out))):
-        raise UsageError(f"--out: {out} is the root of the file system; give a folder of its own")
     rundir.check_writable(out)
     rundir.check_outputs_dir(out, outputs, kind, overwrite=True)
 

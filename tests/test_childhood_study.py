@@ -197,3 +197,38 @@ def test_a_measure_into_a_folder_of_other_files_is_refused(tmp_path, monkeypatch
     assert assert_contract(_attack(tmp_path, "--out", "ceiling", "ceiling")) == "planned"
     (tmp_path / "ceiling" / "notes.txt").write_text("mine")
     assert_refused(_attack(tmp_path, "--out", "ceiling", "ceiling"), "--out")
+
+
+def _kept_run(tmp_path, fitness="finite"):
+    """A reproduction's run folder (RESULTS/VARIANT/evolve/COND) with no population: its best in best_genomes.npz."""
+    import json
+
+    import numpy as np
+    from helpers import tiny_config
+
+    config = tiny_config()
+    run = tmp_path / "results" / "paper" / "evolve" / "LE-LS"
+    run.mkdir(parents=True)
+    (run / "config.json").write_text(json.dumps(dict(config=config.to_dict(), seeds=[0, 1])))
+    arrays = dict(paper__LE__genomes=np.zeros((2, 3, config.num_genes), np.float32), paper__LE__seeds=np.arange(2))
+    if fitness != "none":
+        arrays["paper__LE__fitness"] = np.full((2, 3), np.nan if fitness == "nan" else 0.5, np.float32)
+    np.savez(tmp_path / "results" / "best_genomes.npz", **{k.replace("__LE__", "__LE-LS__"): v for k, v in arrays.items()})
+    return str(run)
+
+
+@pytest.mark.parametrize("fitness", ["finite", "nan", "none", "file removed"])
+def test_a_reproductions_kept_best_is_read_checked(tmp_path, monkeypatch, fitness):
+    """A run with no population is measured from its reproduction's best_genomes.npz: a NaN or missing fitness there,
+    or no such file, is one line naming the run (a traceback or arbitrary ranks before)."""
+    from attack import assert_contract, assert_refused
+
+    monkeypatch.setattr("imrl_jax.devices.use_host_cores", lambda count=None: None)
+    run = _kept_run(tmp_path, fitness)
+    if fitness == "file removed":
+        os.remove(tmp_path / "results" / "best_genomes.npz")
+    outcome = _attack(tmp_path, run, "--out", "m/probe", "evolved", "--best", "2")
+    if fitness == "finite":
+        assert assert_contract(outcome) == "planned"
+    else:
+        assert_refused(outcome, run)

@@ -122,3 +122,11 @@ def test_a_grid_too_large_for_memory_is_refused(tmp_path):
     from attack import assert_refused, attack
 
     assert_refused(attack(study.main, ["--out", "c", "--task-steps", "1000000000"], str(tmp_path)), "memory")
+
+
+@pytest.mark.parametrize("out", ["a\x00b", "a\nb", "/", "//"])
+def test_an_out_no_folder_can_be_made_of_is_refused(tmp_path, out):
+    """A NUL (a ValueError when the folder is made, after the lives) or the root: refused before anything is done."""
+    from attack import assert_refused, attack
+
+    assert_refused(attack(study.main, ["--out", out], str(tmp_path)), "--out")

@@ -77,7 +77,7 @@ def test_hostile_values_are_refused_or_planned_with_nothing_written(tmp_path, fl
     (["--lambdas", "1"], "--lambdas"),  # a trace that never decays
     (["--lambdas", "0,0"], "--lambdas"),  # one point twice
     (["--seeds", "0"], "--seeds"),  # an empty mean: NaN rows before
-    (["--seeds", "100000000"], "--seeds"),
+    (["--seeds", "100000000"], "--seeds: 100,000,000 is above the limit"),
     (["--task-steps", "0"], "--task-steps"),
     (["--turn-gain", "inf"], "--turn-gain"),
     (["--seeds", "10000", "--lambdas", ",".join(str(i / 100) for i in range(99))], "lanes"),
