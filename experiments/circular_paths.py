@@ -16,6 +16,7 @@ import sys
 
 import numpy as np
 
+from experiments.measures import check_out_dir, check_steps, write_measure
 from experiments.study import MEASURED, RESULTS
 from imrl_jax import cli
 from imrl_jax.cli import HelpFormatter, Parser, UsageError, exit_codes
@@ -101,47 +102,6 @@ def parser() -> Parser:
     return p
 
 
-def write_measure(out_dir: str, name: str, table: list[dict], command: str, digits: int | None = None,
-                  **recorded) -> None:
-    """A measure's NAME.csv (floats to ``digits`` decimals, if given), then its result.json (done), each written
-    atomically: a kill leaves the stage not done, never a half file (the studies' measures share it)."""
-    import csv
-    import io
-    import json
-
-    from imrl_jax.checkpoint import git_commit
-    from imrl_jax.rundir import make_dir, write_atomic
-
-    make_dir(out_dir)
-    text = io.StringIO()
-    writer = csv.DictWriter(text, fieldnames=list(dict.fromkeys(k for r in table for k in r)), restval="",
-                            lineterminator="\n")
-    writer.writeheader()
-    writer.writerows({k: f"{v:.{digits}f}" if digits is not None and isinstance(v, float) else v
-                      for k, v in r.items()} for r in table)
-    write_atomic(os.path.join(out_dir, f"{name}.csv"), text.getvalue().encode())
-    write_atomic(os.path.join(out_dir, MEASURED),
-                 json.dumps(dict(command=command, git_commit=git_commit(), **recorded), indent=2).encode())
-
-
-def check_out_dir(out: str, outputs: tuple[str, ...], kind: str) -> None:
-    """Refuse (one line naming --out) a measure's folder that is empty, unwritable, or holds anything but
-    ``outputs`` (a measure run again replaces its own files)."""
-    from imrl_jax import rundir
-
-    cli.check_out(out)
-    if any(ord(c) < 32 for c in out):  # a NUL or a line break: no folder can be made of it
-        raise UsageError(f"--out: {out!r} holds a control character")
-    rundir.check_writable(out)
-    rundir.check_outputs_dir(out, outputs, kind, overwrite=True)
-
-
-def check_steps(flag: str, value: int) -> None:
-    """Raise UsageError naming ``flag`` unless ``value`` steps are at least 1 and at most cli.MAX_STEPS."""
-    cli.check_at_least(flag, value)
-    cli.check_at_most(flag, value, cli.MAX_STEPS)
-
-
 def check_grid_memory(task_steps: int) -> None:
     """Refuse (one line) a grid whose steps' records cannot fit: each lane keeps a reach flag per step until summed."""
     from imrl_jax import devices
@@ -150,8 +110,8 @@ def check_grid_memory(task_steps: int) -> None:
     lanes = len(TURNS) * len(SPEEDS) * make_config("paper").num_tasks
     needed, have = devices.BASE_BYTES + 2 * lanes * task_steps, devices.available_memory()  # 2: XLA's copies
     if have is not None and needed > have:
-        raise UsageError(f"memory: {lanes:,} lanes of {task_steps:,} steps need about {needed / 2**30:.1f} GiB but this "
-                         f"machine has {have / 2**30:.1f} GiB available; use fewer --task-steps")
+        raise UsageError(f"memory: {lanes:,} lanes of {task_steps:,} steps need about {needed / 2**30:.1f} GiB but "
+                         f"this machine has {have / 2**30:.1f} GiB available; use fewer --task-steps")
 
 
 def plan(argv) -> cli.Call:

@@ -29,7 +29,7 @@ import time
 
 import numpy as np
 
-from experiments.circular_paths import check_out_dir
+from experiments.measures import check_out_dir
 from experiments.study import MEASURED, RESULTS
 from experiments.table import Measure, Table
 from imrl_jax import cli
@@ -84,7 +84,8 @@ def plan(argv: list[str]) -> cli.Call:
     cli.check_at_least("--seeds", args.seeds)
     cli.check_at_most("--seeds", args.seeds, cli.MAX_SEEDS)
     if not math.isfinite(args.turn_gain) or abs(args.turn_gain) > MAX_TURN_GAIN:
-        raise cli.UsageError(f"--turn-gain: {args.turn_gain} is not a number in [-{MAX_TURN_GAIN:g}, {MAX_TURN_GAIN:g}]")
+        raise cli.UsageError(f"--turn-gain: {args.turn_gain} is not a number in [-{MAX_TURN_GAIN:g}, "
+                             f"{MAX_TURN_GAIN:g}]")
     config = make_config("paper", condition="EE-LS", task_steps=args.task_steps, num_bins=10)
     for name, field in zip(GRID, FIELDS):
         flag = f"--{name.replace('_', '-')}"
@@ -98,7 +99,8 @@ def plan(argv: list[str]) -> cli.Call:
     grid = [dict(zip(FIELDS, point)) for point in itertools.product(*(getattr(args, name) for name in GRID))]
     lanes = len(grid) * args.seeds * config.num_tasks
     cli.check_at_most("lanes (points x --seeds x tasks)", lanes, cli.MAX_LANES)
-    devices.check_memory(config, lanes, f"a sweep of {len(grid)} points x {args.seeds} seeds x {config.num_tasks} tasks")
+    devices.check_memory(config, lanes, f"a sweep of {len(grid)} points x {args.seeds} seeds x {config.num_tasks} "
+                         f"tasks")
     check_out_dir(args.out, OUTPUTS, "selector sweep")
     return cli.Call(lambda: sweep(args, argv, grid), out=args.out, grid=grid, lanes=lanes)
 

@@ -27,7 +27,7 @@ from experiments.figures import _band
 from experiments.loading import read_evolution, read_json, read_test
 from experiments.markdown import head, line, mean_sd
 from experiments.rule_sets import BY_NAME
-from experiments.circular_paths import write_measure  # atomic: a kill leaves a measurement not done
+from experiments.measures import write_measure  # atomic: a kill leaves a measurement not done
 from experiments.study import MEASURED, REPRODUCTION, RESULTS, SCREEN, Study, write_table
 from experiments.table import Measure, Row, Table
 from imrl_jax import cli, sweeps
@@ -391,8 +391,8 @@ def read_rates(out_dir: str) -> list[dict]:
 
 
 def measure_plan(argv: list[str]) -> cli.Call:
-    """Parse and check a measurement: every value bounded, the sweep it reads, its memory and --out (nothing written)."""
-    from experiments.circular_paths import check_out_dir
+    """Parse and check a measurement: every value bounded, the sweep it reads, the memory, --out; nothing written."""
+    from experiments.measures import check_out_dir
     from imrl_jax.devices import check_memory
 
     options = {k: v for k, v in vars(measure_parser().parse_args(argv)).items() if v is not None}

@@ -127,7 +127,9 @@ def _attack(tmp_path, *argv):
 def _hostile_cases():
     from test_circular_paths import hostile_cases
 
-    cases = hostile_cases(study.measure_parser())
+    from experiments.childhood_measures import measure_parser
+
+    cases = hostile_cases(measure_parser())
     assert {flag for flag, _ in cases} == set(STAGE_OF)  # a new option is given its stage here
     from attack import HOSTILE_TEXTS
 

@@ -1,0 +1,78 @@
+"""What the studies' measure commands share: their outputs written atomically, their --out and sizes checked.
+
+A measure (``python -m experiments.MODULE ... --out DIR``) plans first: every value bounded, every file it reads
+checked, its --out able to take its files and holding nothing else; then writes NAME.csv and last result.json, which
+tells the stage runner it is done, each through a temporary file (a kill leaves the stage not done, no half file).
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from experiments.study import MEASURED
+from imrl_jax import cli
+from imrl_jax.cli import UsageError
+
+
+def write_measure(out_dir: str, name: str, table: list[dict], command: str, digits: int | None = None,
+                  **recorded) -> None:
+    """A measure's NAME.csv (floats to ``digits`` decimals, if given), then its result.json (done), each written
+    atomically: a kill leaves the stage not done, never a half file (the studies' measures share it)."""
+    import csv
+    import io
+    import json
+
+    from imrl_jax.checkpoint import git_commit
+    from imrl_jax.rundir import make_dir, write_atomic
+
+    make_dir(out_dir)
+    text = io.StringIO()
+    writer = csv.DictWriter(text, fieldnames=list(dict.fromkeys(k for r in table for k in r)), restval="",
+                            lineterminator="\n")
+    writer.writeheader()
+    writer.writerows({k: f"{v:.{digits}f}" if digits is not None and isinstance(v, float) else v
+                      for k, v in r.items()} for r in table)
+    write_atomic(os.path.join(out_dir, f"{name}.csv"), text.getvalue().encode())
+    write_atomic(os.path.join(out_dir, MEASURED),
+                 json.dumps(dict(command=command, git_commit=git_commit(), **recorded), indent=2).encode())
+
+
+def check_out_dir(out: str, outputs: tuple[str, ...], kind: str) -> None:
+    """Refuse (one line naming --out) a measure's folder that is empty, unwritable, or holds anything but
+    ``outputs`` (a measure run again replaces its own files)."""
+    from imrl_jax import rundir
+
+    cli.check_out(out)
+    if any(ord(c) < 32 for c in out):  # a NUL or a line break: no folder can be made of it
+        raise UsageError(f"--out: {out!r} holds a control character")
+    rundir.check_writable(out)
+    rundir.check_outputs_dir(out, outputs, kind, overwrite=True)
+
+
+def check_steps(flag: str, value: int) -> None:
+    """Raise UsageError naming ``flag`` unless ``value`` steps are at least 1 and at most cli.MAX_STEPS."""
+    cli.check_at_least(flag, value)
+    cli.check_at_most(flag, value, cli.MAX_STEPS)
+
+
+def listed(flag: str, text: str, kind=int) -> list:
+    """A comma-separated option's values of ``kind`` (raises UsageError naming ``flag``): no empty one, no NaN."""
+    try:
+        values = [kind(v) for v in text.split(",")]
+    except ValueError:
+        raise UsageError(f"{flag}: not a comma-separated list of {kind.__name__}s: {text!r}") from None
+    if kind is float and not all(np.isfinite(values)):
+        raise UsageError(f"{flag}: {text!r} holds a value that is not a finite number")
+    return values
+
+
+def checked_config(flag: str, preset: str, **fields):
+    """A config made of a preset and ``fields`` (a ConfigError names ``flag`` and the field)."""
+    from imrl_jax.config import ConfigError, make_config
+
+    try:
+        return make_config(preset, **fields)
+    except ConfigError as error:
+        raise UsageError(f"{flag}: {error}") from None
