@@ -67,9 +67,13 @@ class Plan(Protocol):
         """Take the lock, check again what may have changed, write; the command's exit code."""
 
 
+#: What ends a line for Python (``str.splitlines``) or a terminal, and the NUL byte: shown escaped in a message.
+LINE_BREAKS = "\n\r\v\f\x1c\x1d\x1e\x85\u2028\u2029\x00"
+
+
 def one_line(error: BaseException) -> str:
     """An error's message on one line: a value the user typed with a line break in it is shown escaped."""
-    return str(error).replace("\r", "\\r").replace("\n", "\\n")
+    return str(error).translate({ord(c): repr(c)[1:-1] for c in LINE_BREAKS})
 
 
 class Call:

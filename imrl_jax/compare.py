@@ -136,7 +136,7 @@ def _main(argv=None) -> int:
     if args.phase == "life" and args.steps % 10:
         raise UsageError("--steps: must be a multiple of 10 for --phase life (10 bins)")
     cli.check_cpu_devices(args.cpu_devices)  # at most 4 per core: each device holds its own runtime
-    if not args.revision.strip() or args.revision.startswith("-"):
+    if not args.revision.strip() or args.revision.startswith("-") or not args.revision.isprintable():
         raise UsageError(f"REV: {args.revision!r} is not a revision of {REPO}")
     check = subprocess.run(["git", "-C", REPO, "rev-parse", "--verify", "--quiet", args.revision + "^{commit}"],
                            capture_output=True)

@@ -18,8 +18,8 @@ from typing import Callable, NamedTuple
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from attack import (HOSTILE_FILE_BYTES, HOSTILE_FLOATS, HOSTILE_INTS, HOSTILE_TEXTS, assert_contract, attack, damage,
-                    tree)
+from attack import (HOSTILE_FILE_BYTES, HOSTILE_FLOATS, HOSTILE_INTS, HOSTILE_TEXTS, assert_contract, assert_refused,
+                    attack, damage, tree)
 
 #: Cases drawn per command in the default suite, and under ``-m slow``.
 DEFAULT_BUDGET = 30
@@ -136,7 +136,9 @@ def _check(command: Command, root: str, argv: list[str], flag: str) -> str:
     outcome = attack(command.main, argv, root)
     # FIELD=VALUE options: the field named is the option named; argparse names an argument it does not know itself
     fields = [a.split("=", 2)[1] for a in argv if a.startswith(f"{flag}=") and a.count("=") >= 2]
-    names = (flag, *_fields(flag), *fields, "RUN", "--out", "run_dir", "config.json", "memory",
+    # an option whose value conflicts with another's may be refused naming the other
+    options = [o for a in command.parser()._actions for o in a.option_strings]
+    names = (flag, *_fields(flag), *fields, *options, "RUN", "run_dir", "config.json", "memory",
              "unrecognized arguments")
     return assert_contract(outcome, *names, argv=argv)
 
@@ -175,6 +177,14 @@ def test_the_base_command_lines_are_planned(arena):
         assert outcome.planned and not outcome.changed, (command.name, outcome.stderr)
 
 
+@pytest.mark.parametrize("char", list("\n\r\v\f\x1c\x1d\x1e\x85\u2028\u2029\x00"))
+def test_a_refusal_is_one_line_whatever_the_value_holds(arena, char):
+    """A value holding a line break (for Python or a terminal) or NUL is shown escaped: the refusal stays one line."""
+    for name in ("evolve", "render", "landscape_run", "learning_test"):
+        argv = [*COMMANDS[name].base, f"--register=x{char}y"]
+        assert_refused(attack(COMMANDS[name].main, argv, arena), "--register", argv=argv)
+
+
 def _has(module: str) -> bool:
     import importlib.util
 
@@ -202,3 +212,124 @@ def test_every_reader_of_a_damaged_run_file_is_one_line_naming_it(arena, tmp_pat
         needed = reader in READERS[name] and (reader, name, how) != ("landscape_run", "final_population.npz",
                                                                       "removed")
         assert result == "refused" or not needed, (reader, name, how, outcome.stderr)
+
+
+# ----------------------------------------------------------------------------- kill and resume
+
+#: What a command's outputs may differ in between a killed-and-resumed run and an uninterrupted one: times, the
+#: command line and what the resume itself records (JSON keys at any depth).
+VOLATILE = {"seconds", "elapsed_seconds", "created", "command", "resumed_runs", "git_commit", "sweep", "source",
+            "seconds_with_compile", "started", "finished", "run", "out"}
+#: Files a resume rewrites with times or plots (compared by their numbers elsewhere, or not at all).
+SKIPPED = (".png", ".gif", ".lock", "tensorboard")
+
+
+def _outputs(root: str) -> dict:
+    """Every output under ``root`` as comparable data: arrays of .npz, JSON without :data:`VOLATILE`, other bytes;
+    checkpoints and plots left out (a resume writes its own, equal in what they hold)."""
+    import json
+
+    import numpy as np
+
+    def strip(value):
+        if isinstance(value, dict):
+            return {k: strip(v) for k, v in value.items() if k not in VOLATILE}
+        if isinstance(value, list):
+            return [strip(v) for v in value]
+        return value
+
+    found = {}
+    for path, data in tree(root).items():
+        if data is None or "checkpoints" in path.split(os.sep) or path.endswith(SKIPPED) \
+                or any(part in SKIPPED for part in path.split(os.sep)):
+            continue
+        if path.endswith(".npz"):
+            with np.load(os.path.join(root, path)) as arrays:
+                found[path] = {name: (arrays[name].dtype.str, arrays[name].shape, arrays[name].tobytes())
+                               for name in arrays.files}
+        elif path.endswith(".json"):
+            found[path] = strip(json.loads(data))
+        else:
+            found[path] = data
+    return found
+
+
+def _kill_cases(tiny_run) -> dict[str, tuple[list[str], list[str]]]:
+    """Each resumable command: its command line writing ``OUT``, and the line that goes on with it."""
+    from helpers import evolve_args
+
+    evolution = evolve_args(seeds=2, population=4, parents=2, generations=4, task_steps=200, childhood_steps=200,
+                            bins=1)
+    test = ["--cond", "SLE", "--preset", "small", "--runs", "3", "--best", "1", "--tests", "2", "--task-steps", "400",
+            "--bins", "4", "--steady-steps", "200", "--chunks", "2", "--quiet", "--out", "OUT"]
+    landscape = [tiny_run, "--out", "OUT", "--generations", "0,last", "--lives", "2", "--parents", "2",
+                 "--mutants", "2", "--walks", "2", "--walk-length", "2", "--random", "4", "--chunk", "4"]
+    return {
+        "evolve": (["-m", "imrl_jax.evolve", *evolution, "--out", "OUT"],
+                   ["-m", "imrl_jax.evolve", "--resume", "--out", "OUT", "--quiet"]),
+        "evolve --sweep": (["-m", "imrl_jax.evolve", *evolution, "--sweep", "eta=0.1,0.2", "--out", "OUT"],
+                           ["-m", "imrl_jax.evolve", "--resume", "--out", "OUT", "--quiet"]),
+        "learning_test": (["-m", "imrl_jax.learning_test", *test], ["-m", "imrl_jax.learning_test", *test]),
+        "landscape_run": (["-m", "imrl_jax.landscape_run", *landscape],
+                          ["-m", "imrl_jax.landscape_run", *landscape]),
+    }
+
+
+def _run(argv: list[str], out: str, cwd: str, kill_after: float | None = None) -> tuple[float, bool]:
+    """``python argv`` with ``OUT`` replaced by ``out``: its seconds, and whether it was killed (SIGKILL) on the way."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from helpers import TIMEOUT
+
+    start = time.perf_counter()
+    process = subprocess.Popen([sys.executable, *[out if a == "OUT" else a for a in argv]], cwd=cwd,
+                               env={**os.environ, "JAX_PLATFORMS": "cpu"}, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    try:
+        if kill_after is not None:
+            try:
+                process.wait(timeout=kill_after)
+            except subprocess.TimeoutExpired:
+                process.send_signal(signal.SIGKILL)
+                process.communicate()
+                return time.perf_counter() - start, True
+        _, err = process.communicate(timeout=TIMEOUT)
+    finally:
+        process.kill()
+    assert process.returncode == 0, f"{argv}: exit {process.returncode}\n{err[-3000:]}"
+    return time.perf_counter() - start, False
+
+
+def _kill_and_resume(tiny_run, tmp_path, name: str, points: int, seed: int) -> None:
+    import random
+
+    first, again = _kill_cases(tiny_run)[name]
+    reference = str(tmp_path / "reference")
+    seconds, _ = _run(first, reference, str(tmp_path))
+    draw = random.Random(seed)
+    kills = 0
+    for point in range(points):
+        when = draw.uniform(0.05, 1.0) * seconds  # anywhere in an uninterrupted run's time, its start included
+        out = str(tmp_path / f"killed-{point}")
+        _, killed = _run(first, out, str(tmp_path), kill_after=when)
+        kills += killed
+        if killed and os.path.isdir(out):
+            _run(again, out, str(tmp_path))
+        elif killed:  # killed before it made its folder: the command is started again
+            _run(first, out, str(tmp_path))
+        assert _outputs(out) == _outputs(reference), f"{name}: killed after {when:.2f} s (seed {seed})"
+    assert kills, f"{name}: every run ended before its kill (seed {seed})"
+
+
+KILLED = sorted(("evolve", "evolve --sweep", "learning_test", "landscape_run"))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", KILLED)
+def test_every_resumable_command_killed_anywhere_ends_as_an_uninterrupted_run(tiny_run, tmp_path, name):
+    """SIGKILL at random moments (a seed per command, said on failure), then the resume: the outputs are those of an
+    uninterrupted run, bitwise (the arrays, the CSVs, the JSON less times and command lines)."""
+    _kill_and_resume(tiny_run, tmp_path, name, points=4, seed=KILLED.index(name))
