@@ -17,6 +17,8 @@ that earned its fitness (:func:`imrl_jax.render.life_key`), then drives each tas
 ended that task with: the trajectory figures, the expert-specialisation table and EE-ES's stereotypy per task (claim
 4). Claim 7 probes the experts of the 10 best LE-LS and EE-LS individuals of every seed
 (:func:`imrl_jax.behaviour.specialisation`; LE-LS after a fresh childhood). ``behaviour=False`` skips both.
+Those lives take minutes: before any is drawn or compiled the report says on stderr what it will live and its
+estimated time (``experiments.relive.Reliving``), then a line as each part compiles and a progress line with an ETA.
 """
 
 from __future__ import annotations
