@@ -188,8 +188,6 @@ def evolved_genomes(args, run_dir: str, sets: dict) -> tuple[Config, np.ndarray,
         if genomes.shape[-1] != base.num_genes:  # the program is built for the config's genome
             raise UsageError(f"{path}: its genomes have {genomes.shape[-1]} genes, its config.json's "
                              f"{base.num_genes}")
-        if not np.isfinite(genomes).all():
-            raise UsageError(f"{path}: the best genomes hold genes that are not finite numbers")
         evolved = dict(generation=found.generation - 1, generations_done=found.generation,
                        num_generations=found.config.num_generations)
         why = unfinished(run_dir, found)
@@ -198,6 +196,10 @@ def evolved_genomes(args, run_dir: str, sets: dict) -> tuple[Config, np.ndarray,
                              f"generation {found.generation - 1} anyway)")
         if why:
             warnings.append(f"warning: {why}: testing generation {found.generation - 1} (steady.json records it)")
+    if not np.isfinite(genomes).all():  # NaN genes would be tested as if they were a network
+        where = f"--best-genomes: {args.best_genomes}" if args.best_genomes else \
+            os.path.join(run_dir, "final_population.npz")
+        raise UsageError(f"{where}: the best genomes hold genes that are not finite numbers")
     if args.cond is not None and args.cond != base.condition:
         raise UsageError(f"--cond: {run_dir} is a {base.condition} run, not {args.cond}")
     source = os.path.abspath(run_dir) + "".join(f", {s}" for s in args.set or [])

@@ -140,7 +140,7 @@ def check_out_dir(out_dir: str) -> None:
 def check_out_before(out_dir: str, log: str | None = None) -> None:
     """Every check of ``--out`` before the test is carried out: writable, unlocked, new, empty or an unfinished test
     (``--log tensorboard``: its folder writable too); nothing is written."""
-    too_long = [part for part in out_dir.split(os.sep) if len(part.encode()) > NAME_MAX]
+    too_long = [part for part in out_dir.split(os.sep) if len(os.fsencode(part)) > NAME_MAX]
     if too_long:
         raise UsageError(f"--out: the name {too_long[0][:40]}... is longer than {NAME_MAX} bytes")
     check_writable(out_dir)

@@ -206,6 +206,13 @@ def test_damaged_runs_are_refused_in_one_line(tmp_path):
     wide = write_run(tmp_path / "wide", config, genes=config.num_genes + 1)
     assert_refused(attack(learning_test.main, [wide, *LENGTHS, "--out", str(tmp_path / "t")], str(tmp_path)),
                    "final_population.npz")
+    nan = write_run(tmp_path / "nan", config)
+    with np.load(os.path.join(nan, "final_population.npz")) as data:
+        arrays = dict(data)
+    arrays["evaluated"][..., 0] = np.nan
+    np.savez(os.path.join(nan, "final_population.npz"), **arrays)
+    assert_refused(attack(learning_test.main, [nan, *LENGTHS, "--out", str(tmp_path / "t")], str(tmp_path)),
+                   "final_population.npz")
     for name in ("config.json", "final_population.npz"):
         for how in HOSTILE_FILE_BYTES:
             run = write_run(tmp_path / f"run-{name}-{how.replace(' ', '_')}", config)
