@@ -108,11 +108,6 @@ def check_sizes(args) -> None:
     cli.check_at_least("--seed", args.seed, 0)
     cli.check_at_most("--seed", args.seed, 2**32 - 1)  # a uint32 key
     cli.check_at_most("--best x --tests", args.best * args.tests, cli.MAX_LANES)
-    for name, value in vars(args).items():
-        for text in value if isinstance(value, list) else [value]:
-            if isinstance(text, str) and not text.isprintable():  # it would break the one line of a refusal naming it
-                flag = "run_dir" if name == "run_dir" else "--" + name.replace("_", "-")
-                raise UsageError(f"{flag}: {text!r} holds a control character")
 
 
 def test_lengths(args, base: Config) -> Lengths:
@@ -184,10 +179,6 @@ def evolved_genomes(args, run_dir: str, sets: dict) -> tuple[Config, np.ndarray,
     else:
         found = load_run(run_dir)
         base, genomes = found.config, best_genomes(found, args.best)
-        path = os.path.join(run_dir, "final_population.npz")
-        if genomes.shape[-1] != base.num_genes:  # the program is built for the config's genome
-            raise UsageError(f"{path}: its genomes have {genomes.shape[-1]} genes, its config.json's "
-                             f"{base.num_genes}")
         evolved = dict(generation=found.generation - 1, generations_done=found.generation,
                        num_generations=found.config.num_generations)
         why = unfinished(run_dir, found)
@@ -196,10 +187,6 @@ def evolved_genomes(args, run_dir: str, sets: dict) -> tuple[Config, np.ndarray,
                              f"generation {found.generation - 1} anyway)")
         if why:
             warnings.append(f"warning: {why}: testing generation {found.generation - 1} (steady.json records it)")
-    if not np.isfinite(genomes).all():  # NaN genes would be tested as if they were a network
-        where = f"--best-genomes: {args.best_genomes}" if args.best_genomes else \
-            os.path.join(run_dir, "final_population.npz")
-        raise UsageError(f"{where}: the best genomes hold genes that are not finite numbers")
     if args.cond is not None and args.cond != base.condition:
         raise UsageError(f"--cond: {run_dir} is a {base.condition} run, not {args.cond}")
     source = os.path.abspath(run_dir) + "".join(f", {s}" for s in args.set or [])

@@ -213,6 +213,13 @@ def test_damaged_runs_are_refused_in_one_line(tmp_path):
     np.savez(os.path.join(nan, "final_population.npz"), **arrays)
     assert_refused(attack(learning_test.main, [nan, *LENGTHS, "--out", str(tmp_path / "t")], str(tmp_path)),
                    "final_population.npz")
+    run = tmp_path / "v" / "evolve" / "EE-LS"  # the best genomes a report kept, NaN
+    write_run(run, config)
+    kept = tmp_path / "best_genomes.npz"
+    np.savez(kept, **{"v__EE-LS__genomes": np.full((2, 2, config.num_genes), np.nan, np.float32),
+                      "v__EE-LS__seeds": np.arange(2)})
+    assert_refused(attack(learning_test.main, [str(run), "--best-genomes", str(kept), *LENGTHS, "--out",
+                                               str(tmp_path / "t")], str(tmp_path)), "--best-genomes")
     for name in ("config.json", "final_population.npz"):
         for how in HOSTILE_FILE_BYTES:
             run = write_run(tmp_path / f"run-{name}-{how.replace(' ', '_')}", config)
