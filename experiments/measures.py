@@ -11,32 +11,9 @@ import os
 
 import numpy as np
 
-from experiments.study import MEASURED
+from experiments.study import MEASURED, write_measure  # noqa: F401 - the measures' writer, atomic
 from imrl_jax import cli
 from imrl_jax.cli import UsageError
-
-
-def write_measure(out_dir: str, name: str, table: list[dict], command: str, digits: int | None = None,
-                  **recorded) -> None:
-    """A measure's NAME.csv (floats to ``digits`` decimals, if given), then its result.json (done), each written
-    atomically: a kill leaves the stage not done, never a half file (the studies' measures share it)."""
-    import csv
-    import io
-    import json
-
-    from imrl_jax.checkpoint import git_commit
-    from imrl_jax.rundir import make_dir, write_atomic
-
-    make_dir(out_dir)
-    text = io.StringIO()
-    writer = csv.DictWriter(text, fieldnames=list(dict.fromkeys(k for r in table for k in r)), restval="",
-                            lineterminator="\n")
-    writer.writeheader()
-    writer.writerows({k: f"{v:.{digits}f}" if digits is not None and isinstance(v, float) else v
-                      for k, v in r.items()} for r in table)
-    write_atomic(os.path.join(out_dir, f"{name}.csv"), text.getvalue().encode())
-    write_atomic(os.path.join(out_dir, MEASURED),
-                 json.dumps(dict(command=command, git_commit=git_commit(), **recorded), indent=2).encode())
 
 
 def check_out_dir(out: str, outputs: tuple[str, ...], kind: str) -> None:

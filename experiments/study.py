@@ -121,15 +121,20 @@ def environment() -> dict:
 def write_measure(out_dir: str, name: str, table: list[dict], command: str, digits: int | None = None,
                   **recorded) -> None:
     """A measure's rows (``table``) as ``out_dir/NAME.csv`` (floats to ``digits`` decimals, if given; a row may lack
-    a column), then its result.json, which makes the measure done: its command, commit and ``recorded``."""
-    from imrl_jax.checkpoint import git_commit
+    a column), then its result.json, which makes the measure done: its command, commit and ``recorded``; each
+    written atomically (a kill leaves the measure not done, never a half file)."""
+    import io
 
-    os.makedirs(out_dir, exist_ok=True)
-    with open(os.path.join(out_dir, f"{name}.csv"), "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(dict.fromkeys(k for r in table for k in r)), restval="",
-                                lineterminator="\n")
-        writer.writeheader()
-        writer.writerows({k: f"{v:.{digits}f}" if digits is not None and isinstance(v, float) else v
-                          for k, v in r.items()} for r in table)
-    with open(os.path.join(out_dir, MEASURED), "w") as f:
-        json.dump(dict(command=command, git_commit=git_commit(), **recorded), f, indent=2)
+    from imrl_jax.checkpoint import git_commit
+    from imrl_jax.rundir import make_dir, write_atomic
+
+    make_dir(out_dir)
+    text = io.StringIO()
+    writer = csv.DictWriter(text, fieldnames=list(dict.fromkeys(k for r in table for k in r)), restval="",
+                            lineterminator="\n")
+    writer.writeheader()
+    writer.writerows({k: f"{v:.{digits}f}" if digits is not None and isinstance(v, float) else v
+                      for k, v in r.items()} for r in table)
+    write_atomic(os.path.join(out_dir, f"{name}.csv"), text.getvalue().encode())
+    write_atomic(os.path.join(out_dir, MEASURED),
+                 json.dumps(dict(command=command, git_commit=git_commit(), **recorded), indent=2).encode())
