@@ -29,7 +29,7 @@ CHILDHOOD_WALLS = ("clamp", "respawn")
 #: kept control) or "progress" (that surprise minus a running mean of the expert's surprise).
 CHILDHOOD_SELECTOR_REWARDS = ("surprise", "progress")
 EVOLVED_CONDITIONS = conditions.EVOLVED
-STEP_KERNELS = ("xla", "pallas")
+STEP_KERNELS = ("auto", "xla", "pallas")
 #: When the selector's choice ends (docs/TIMESCALE.md): "period" (after ``selector_period`` steps) or "colour"
 #: (when a colour comes into view that the retina did not see the step before, as at a junction, or after
 #: ``selector_period`` steps at most). A trial's end always ends it. With a period of 1 every choice lasts one step.
@@ -148,8 +148,9 @@ class Config:
     # steps per loop iteration; more than a few dozen only lengthens compilation (100,000 exhausted memory)
     scan_unroll: int = _bounded(1, 1, 64, compute=True)
     # "xla": each step is XLA operations; "pallas": each bin of steps is one GPU kernel
-    # (kernel.py; same results up to rounding, interpreted off a GPU).
-    step_kernel: str = dataclasses.field(default="xla", metadata={"compute": True})
+    # (kernel.py; same results up to rounding, interpreted off a GPU); "auto": pallas on a GPU where the kernel
+    # implements the model, else xla (kernel_choice.py: a command records the choice in the run's config.json).
+    step_kernel: str = dataclasses.field(default="auto", metadata={"compute": True})
 
     # --- arena and floor (fixed here)
     arena_size: float = _bounded(400.0, 0.0, MAX_LENGTH, lo_open=True)
@@ -315,6 +316,8 @@ class Config:
                              ("childhood_eta_selector_critic", "eta_selector_critic")):
             if child not in data and adult in data:
                 data[child] = data[adult]
+        # Runs recorded before the field existed lived the XLA step: a resume keeps it (never "auto").
+        data.setdefault("step_kernel", "xla")
         if "tasks" in data:
             data["tasks"] = tuple(
                 t if isinstance(t, Task) else Task(tuple(t["start"]), t["heading_deg"], tuple(t["target"]))

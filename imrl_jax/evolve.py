@@ -35,7 +35,7 @@ import numpy as np
 
 import imrl_jax
 from imrl_jax.checkpoint import Checkpointer, RunState, _silence_failed_reads, git_commit
-from imrl_jax import cli, evolve_sweep
+from imrl_jax import cli, evolve_sweep, kernel_choice
 from imrl_jax.cli import UsageError, exit_codes, parse_sets, user_errors
 from imrl_jax.devices import (check_memory, init_distributed, make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
                               use_host_cores)
@@ -83,6 +83,8 @@ def plan(config: Config, out_dir: str, seeds: Sequence[int] = (0,), *, strategy=
          checkpoint_every: int = 1, keep: int = 3, quiet: bool = False, warnings: Sequence[str] = (),
          notes: Sequence[str] = (), registered: Sequence[str] = (), log: str | None = None) -> "RunPlan":
     """Every check of :func:`run` (options, the run directory, the memory), nothing written: its plan."""
+    config, kernel_note = kernel_choice.resolve(config)  # "auto" made xla or pallas here: config.json records it
+    notes = (*notes, *filter(None, [kernel_note]))
     strategy = GA(config) if strategy is None else strategy
     seeds = check_run_options(config, seeds, checkpoint_every, keep, log, out_dir)
     check_writable(out_dir)
@@ -238,7 +240,8 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
             progress.note(cost_line(f"evolving {config.condition}: {len(seeds)} seed(s) x {config.population_size} "
                                     f"individuals x {config.num_generations - first} generation(s)",
                                     len(seeds) * config.population_size * config.lives_per_fitness, lane_steps,
-                                    config.num_generations - first, jax.default_backend()))
+                                    config.num_generations - first, jax.default_backend())
+                          + f"; step_kernel={kernel_choice.chosen(config)}")
             progress.note("compiling the generation (its first line comes once it is compiled and run) ...")
         if trait_names(config):
             trait_values = jax.jit(jax.vmap(jax.vmap(lambda genome: traits(config, genome))))

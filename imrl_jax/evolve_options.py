@@ -73,7 +73,8 @@ def build_config(args, saved: tuple[Config, list[int]] | None = None) -> tuple[C
         if args.preset is None:
             make = lambda **tasks: saved_config.replace(**overrides, **tasks)  # noqa: E731
         else:  # the preset's values, on the run's condition and length (only --cond, --generations change those)
-            kept = {"condition": saved_config.condition, "num_generations": saved_config.num_generations}
+            kept = {"condition": saved_config.condition, "num_generations": saved_config.num_generations,
+                    "step_kernel": saved_config.step_kernel}  # a compute choice, not the preset's: the run's own
             make = lambda **tasks: make_config(args.preset, **{**kept, **overrides, **tasks})  # noqa: E731
         if args.first_seed is not None or args.seeds is not None:
             first = seeds[0] if args.first_seed is None else args.first_seed

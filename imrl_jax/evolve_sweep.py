@@ -36,7 +36,7 @@ import jax
 import numpy as np
 
 import imrl_jax
-from imrl_jax import cli, sweeps
+from imrl_jax import cli, kernel_choice, sweeps
 from imrl_jax.checkpoint import Checkpointer, RunState, _silence_failed_reads, git_commit
 from imrl_jax.cli import UsageError, device_warnings, ignored_notes, parse_sets
 from imrl_jax.config import Config, ConfigError
@@ -175,6 +175,8 @@ def plan(config: Config, out_dir: str, seeds: Sequence[int], settings: Sequence[
          checkpoint_every: int = 1, keep: int = 3, quiet: bool = False, log: str | None = None,
          registered: Sequence[str] = (), lines: Sequence[str] = ()) -> "SweepPlan":
     """Every check of a sweep, nothing written: the plan :meth:`SweepPlan.run` carries out (raises a user error)."""
+    config, kernel_note = kernel_choice.resolve_sweep(config, settings)  # sweep.json and each point record it
+    lines = (*lines, *([] if quiet or kernel_note is None else [kernel_note]))
     seeds = check_run_options(config, seeds, checkpoint_every, keep, log, out_dir)
     if keep < 2:
         raise UsageError("--keep: a sweep keeps at least 2 checkpoints a point (killed while saving, its points can be "

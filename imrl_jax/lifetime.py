@@ -20,6 +20,7 @@ import jax.numpy as jnp
 from imrl_jax.arena import Pose, task_arrays
 from imrl_jax.conditions import Phase
 from imrl_jax.config import Config, LearningParams
+from imrl_jax import kernel_choice
 from imrl_jax.genome import EVOLVED_FIELDS
 from imrl_jax.env import EnvState, TaskSpec, childhood_task, make_env, random_pose, task_spec
 from imrl_jax.learning import learn_experts, learn_selector, learn_selector_over_option, pick_row, take_row
@@ -146,10 +147,10 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
 
     A phase may run in pieces: give each piece the whole phase's length as ``phase_steps``
     (the noise anneals to 0 over it, then stays 0) and the carried state; the pieces together are the same
-    computation as one call. With ``config.step_kernel == "pallas"`` each bin is one
-    kernel (:func:`imrl_jax.kernel.run_phase`).
+    computation as one call. With ``config.step_kernel == "pallas"`` (or "auto" resolved to it,
+    :mod:`imrl_jax.kernel_choice`) each bin is one kernel (:func:`imrl_jax.kernel.run_phase`).
     """
-    if config.step_kernel == "pallas":
+    if config.step_kernel == "pallas" or (config.step_kernel == "auto" and kernel_choice.chosen(config) == "pallas"):
         from imrl_jax import kernel  # imports this module
 
         return kernel.run_phase(key, config, phase, params, task, state, num_steps, phase_steps, num_bins)

@@ -1,0 +1,123 @@
+"""step_kernel="auto", the default (issue 57): the Pallas kernel on a GPU where it implements the model, the XLA
+step otherwise; resolved where a run is planned, recorded in config.json, kept by a resume, never part of a key."""
+
+import json
+import os
+
+import jax
+import pytest
+
+from imrl_jax import evolve, kernel_choice
+from imrl_jax.config import Config, make_config
+from imrl_jax.runspec import RunSpec
+from attack import attack
+from helpers import evolve_args, tiny_config
+
+ON_KERNEL = ("LE-LS", "EE-LS", "EE-ES", "SLE", "EE-LS-T", "LE-LS-Z", "EXT-LS")
+OFF_KERNEL = ("EV-LS", "EV-LS-diff", "LE-LS-N", "LE-LS-P", "LE-LS-PC", "LE-LS-2R")
+
+
+def test_auto_is_the_default_and_the_paper_preset_states_no_kernel():
+    assert Config().step_kernel == "auto" and make_config("paper").step_kernel == "auto"
+
+
+@pytest.mark.parametrize("condition", ON_KERNEL)
+def test_auto_is_the_kernel_on_a_gpu_for_a_model_it_implements(condition):
+    config, note = kernel_choice.resolve(make_config("small", condition=condition), "gpu")
+    assert (config.step_kernel, note) == ("pallas", None)
+
+
+@pytest.mark.parametrize("condition", OFF_KERNEL)
+def test_auto_falls_back_to_xla_on_a_gpu_with_a_note_for_a_model_the_kernel_lacks(condition):
+    config, note = kernel_choice.resolve(make_config("small", condition=condition), "gpu")
+    assert config.step_kernel == "xla"
+    assert note.startswith(f"note: step_kernel=auto: the XLA step on this GPU, as the Pallas kernel does not "
+                           f"implement {condition}'s ") and "\n" not in note
+
+
+@pytest.mark.parametrize("termination", ["period", "colour"])
+def test_auto_falls_back_for_the_selector_on_its_own_time_scale(termination):
+    config = make_config("small", condition="LE-LS", selector_period=10, selector_termination=termination)
+    resolved, note = kernel_choice.resolve(config, "gpu")
+    assert resolved.step_kernel == "xla" and "selector's options (selector_period=10)" in note
+
+
+@pytest.mark.parametrize("backend", ["cpu", "tpu"])
+def test_auto_is_xla_off_a_gpu_without_a_note(backend):
+    assert kernel_choice.resolve(make_config("small", condition="LE-LS"), backend) == (
+        make_config("small", condition="LE-LS", step_kernel="xla"), None)
+
+
+@pytest.mark.parametrize("explicit", ["xla", "pallas"])
+def test_an_explicit_kernel_is_kept_on_any_backend(explicit):
+    config = make_config("small", condition="EE-LS", step_kernel=explicit)
+    assert kernel_choice.resolve(config, "gpu") == (config, None) == kernel_choice.resolve(config, "cpu")
+
+
+def test_a_sweep_has_the_kernel_only_where_it_implements_every_point():
+    config = make_config("small", condition="LE-LS")
+    assert kernel_choice.resolve_sweep(config, [{"gamma": 0.9}, {"gamma": 0.99}], "gpu")[0].step_kernel == "pallas"
+    resolved, note = kernel_choice.resolve_sweep(config, [{"selector_period": 1}, {"selector_period": 5}], "gpu")
+    assert resolved.step_kernel == "xla" and "selector_period=5" in note
+
+
+def test_the_kernel_is_not_part_of_a_run_key():
+    config = make_config("paper", condition="LE-LS")
+    keys = {RunSpec.make(config.replace(step_kernel=k), [0, 1]).key() for k in ("auto", "xla", "pallas")}
+    assert len(keys) == 1
+
+
+def test_a_config_recorded_before_the_field_is_the_xla_step():
+    recorded = make_config("small", condition="EE-LS").to_dict()
+    del recorded["step_kernel"]
+    assert Config.from_dict(recorded).step_kernel == "xla"
+    assert Config.from_dict({**recorded, "step_kernel": "pallas"}).step_kernel == "pallas"
+
+
+def test_auto_on_cpu_is_the_xla_program():
+    """Bitwise nothing changes on CPU: a life under "auto" is the same program as under "xla" (no compile)."""
+    from imrl_jax.lifetime import live
+
+    assert jax.default_backend() == "cpu"
+    programs = []
+    for step_kernel in ("auto", "xla"):
+        config = tiny_config("LE-LS", step_kernel=step_kernel)
+        genome = jax.numpy.zeros((config.num_genes,))
+        programs.append(str(jax.make_jaxpr(lambda k, g: live(k, config, config.learning_params(), g))(
+            jax.random.key(0), genome)))
+    assert programs[0] == programs[1]
+
+
+def _plan(tmp_path, monkeypatch, backend, *argv):
+    monkeypatch.setattr(kernel_choice, "default_backend", lambda: backend)
+    outcome = attack(evolve.main, list(argv), str(tmp_path))
+    assert outcome.code == 0 and outcome.planned and not outcome.changed, outcome.stderr
+    return outcome
+
+
+def test_evolve_records_the_resolved_kernel(tmp_path, monkeypatch):
+    args = evolve_args("EE-LS", seeds=1, population=4, parents=2, generations=1, task_steps=200, bins=1)
+    assert _plan(tmp_path, monkeypatch, "cpu", *args, "--out", "a").plan.config.step_kernel == "xla"
+    assert _plan(tmp_path, monkeypatch, "gpu", *args, "--out", "a").plan.config.step_kernel == "pallas"
+    fallback = _plan(tmp_path, monkeypatch, "gpu", *evolve_args("EV-LS", seeds=1, population=4, parents=2,
+                                                                generations=1, task_steps=200, bins=1)[:-1],
+                     "--out", "b")
+    assert fallback.plan.config.step_kernel == "xla"
+    assert any("does not implement EV-LS's" in note for note in fallback.plan.notes)
+
+
+@pytest.mark.parametrize("recorded", ["xla", None])
+def test_a_resumed_run_keeps_its_recorded_kernel(tmp_path, monkeypatch, recorded):
+    """A run recorded with xla (or before the field) resumed on a GPU stays xla, unless --set chooses again."""
+    run = tmp_path / "run"
+    run.mkdir()
+    config = make_config("small", condition="EE-LS", num_generations=2, step_kernel=recorded or "xla").to_dict()
+    if recorded is None:
+        del config["step_kernel"]
+    (run / "config.json").write_text(json.dumps({"config": config, "seeds": [0]}))
+    resume = ["--out", "run", "--resume", "--quiet"]
+    assert _plan(tmp_path, monkeypatch, "gpu", *resume).plan.config.step_kernel == "xla"
+    assert _plan(tmp_path, monkeypatch, "gpu", *resume, "--preset", "small").plan.config.step_kernel == "xla"
+    chosen = _plan(tmp_path, monkeypatch, "gpu", *resume, "--set", "step_kernel=auto").plan.config
+    assert chosen.step_kernel == "pallas"
+    assert os.listdir(run) == ["config.json"]
