@@ -22,7 +22,7 @@ from attack import (HOSTILE_FILE_BYTES, HOSTILE_FLOATS, HOSTILE_INTS, HOSTILE_TE
                     attack, damage, tree)
 
 #: Cases drawn per command in the default suite, and under ``-m slow``.
-DEFAULT_BUDGET = 30
+DEFAULT_BUDGET = 60
 SLOW_BUDGET = 400
 
 
@@ -38,6 +38,8 @@ class Command(NamedTuple):
 def _commands() -> list[Command]:
     from imrl_jax import (baselines, bench, compare, demo, evolve, gpu_check, landscape_run, learning_test, render,
                           runspec)
+    from experiments import __main__ as experiments_main, circular_paths, selector_sweep
+    from experiments.study import studies
     from imrl_jax.evolve_options import parser as evolve_parser
     from imrl_jax.learning_test_options import parser as learning_test_parser
 
@@ -62,6 +64,12 @@ def _commands() -> list[Command]:
         Command("compare", compare.main, compare.parser, ("HEAD",)),
         Command("gpu_check", gpu_check.main, gpu_check.parser, ("--dry", "--out", "out")),
         Command("runspec", runspec.main, runspec.parser, (".", "--record", "out/keys.json")),
+        Command("experiments", experiments_main.main, lambda: experiments_main.parser(studies()),
+                ("list", "selector-sweep")),
+        Command("experiments.circular_paths", circular_paths.main, circular_paths.parser,
+                ("--out", "out", "--task-steps", "20")),
+        Command("experiments.selector_sweep", selector_sweep.main, selector_sweep.parser,
+                ("sweep", "--out", "out", "--task-steps", "20", "--seeds", "1")),
     ]
 
 
@@ -108,12 +116,14 @@ def hostile_argv(draw, command: Command) -> tuple[list[str], str]:
     action = draw(st.sampled_from(_options(command.parser())))
     flag = _flag(action)
     argv = list(command.base)
-    if not action.option_strings:  # a positional: replace the base's value, or add one
+    if not action.option_strings:  # a positional: the base's value replaced
         value = draw(hostile_value(action))
-        positions = [i for i, a in enumerate(argv) if a in ("RUN", ".", "HEAD")]
-        if positions:
-            argv[positions[0]] = value
-        else:
+        positionals = [a.dest for a in command.parser()._actions if not a.option_strings]
+        positions = _positions(command.parser(), argv)
+        k = positionals.index(action.dest)
+        if k < len(positions):
+            argv[positions[k]] = value
+        else:  # the base gives none (learning_test from scratch): given
             argv = [value, *argv]
         return argv, flag
     if action.nargs == 0:  # a flag: given (twice, or alone)
@@ -130,6 +140,20 @@ def _fields(flag: str) -> tuple[str, ...]:
     from imrl_jax.evolve_options import OPTION_FIELDS
 
     return (flag.lstrip("-").replace("-", "_"), *(f for f, option in OPTION_FIELDS.items() if option == flag))
+
+
+def _positions(parser: argparse.ArgumentParser, argv: list[str]) -> list[int]:
+    """Where the positional arguments of ``argv`` stand (an option's value is not one)."""
+    takes_value = {o for a in parser._actions if a.nargs != 0 for o in a.option_strings}
+    found, i = [], 0
+    while i < len(argv):
+        if argv[i] in takes_value:
+            i += 2
+            continue
+        if not argv[i].startswith("-"):
+            found.append(i)
+        i += 1
+    return found
 
 
 def _check(command: Command, root: str, argv: list[str], flag: str) -> str:
