@@ -102,9 +102,10 @@ def _phase(package: str, name: str):
         return getattr(importlib.import_module(f"{package}.lifetime"), name)
 
 
-def _kernel_field(step_kernel: str) -> dict:
-    # Only when not the default, so that revisions from before the field build too.
-    return {} if step_kernel == "xla" else {"step_kernel": step_kernel}
+def _kernel_field(step_kernel: str, config_module) -> dict:
+    # Only where the revision has the field (revisions from before it are the XLA step); always there, as its
+    # default "auto" would be the kernel on a GPU.
+    return {"step_kernel": step_kernel} if hasattr(config_module.Config, "step_kernel") else {}
 
 
 def phase_program(condition: str, phase_name: str, lanes: int, steps: int, package: str = "imrl_jax",
@@ -116,7 +117,7 @@ def phase_program(condition: str, phase_name: str, lanes: int, steps: int, packa
     """
     config_module, L, networks = _modules(package)
     config = config_module.make_config("paper", condition=condition, childhood_steps=steps, task_steps=steps,
-                                       num_bins=1, **_kernel_field(step_kernel))
+                                       num_bins=1, **_kernel_field(step_kernel, config_module))
     phase = _phase(package, phase_name)
     params = config.learning_params()
 
@@ -139,7 +140,7 @@ def lifetime_program(lanes: int, task_steps: int, package: str = "imrl_jax", ste
     """Whole LE-LS lives of ``lanes / 6`` individuals (childhood 1.5 x task steps); ``package`` as above."""
     config_module, L, _ = _modules(package)
     config = config_module.make_config("paper", condition="LE-LS", task_steps=task_steps,
-                                       childhood_steps=task_steps * 3 // 2, num_bins=10, **_kernel_field(step_kernel))
+                                       childhood_steps=task_steps * 3 // 2, num_bins=10, **_kernel_field(step_kernel, config_module))
     individuals = max(1, lanes // config.num_tasks)
     _, genomes = _lane_inputs(config, individuals)
     return Program(L.make_evaluate(config), (jax.random.key(0), config.learning_params(), genomes),
