@@ -7,11 +7,10 @@ tells the stage runner it is done, each through a temporary file (a kill leaves 
 
 from __future__ import annotations
 
-import os
 
 import numpy as np
 
-from experiments.study import MEASURED, write_measure  # noqa: F401 - the measures' writer, atomic
+from experiments.study import write_measure  # noqa: F401 - the measures' writer, atomic
 from imrl_jax import cli
 from imrl_jax.cli import UsageError
 

@@ -561,24 +561,9 @@ def test_a_full_disk_mid_run_is_one_line_exit_1_and_resumable(tmp_path, monkeypa
 def test_cpu_devices_are_set_up_before_the_task_set_starts_jax(tmp_path):
     """The task set's checks run JAX: the devices asked for after them would be ignored (and --coordinator refused)."""
     args = [*evolve_args(seeds=2), "--task-set", "paper", "--cpu-devices", "2", "--out", str(tmp_path / "run")]
-    assert _devices_planned(args) == 2
+    from helpers import devices_seen
 
-
-def _devices_planned(args) -> int:
-    """The devices the evolve command has once its plan is made (its execution stubbed: nothing runs), in a fresh
-    interpreter on CPU with no device count forced (the command asks for its own)."""
-    from helpers import ROOT, TIMEOUT, environment
-
-    code = ("import sys, jax\nfrom imrl_jax import cli, evolve\n"
-            "def execute(plan):\n    print(len(jax.devices()))\n    return 0\n"
-            f"cli.execute = execute\nsys.exit(evolve.main({list(args)!r}))\n")
-    env = environment()
-    env["XLA_FLAGS"] = " ".join(f for f in env["XLA_FLAGS"].split()
-                                if not f.startswith("--xla_force_host_platform_device_count"))
-    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True,
-                          timeout=TIMEOUT)
-    assert done.returncode == 0 and done.stdout.strip(), done.stderr[-2000:]
-    return int(done.stdout.split()[-1])
+    assert devices_seen("imrl_jax.evolve", args) == 2
 
 
 def test_the_task_set_is_checked_against_the_geometry_the_command_line_sets(tmp_path, capsys, monkeypatch):
