@@ -7,7 +7,6 @@ tells the stage runner it is done, each through a temporary file (a kill leaves 
 
 from __future__ import annotations
 
-
 import numpy as np
 
 from experiments.study import write_measure  # noqa: F401 - the measures' writer, atomic
