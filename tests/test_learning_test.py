@@ -162,7 +162,7 @@ TINY_SLE = ["--runs", "1", "--best", "1", "--tests", "1", "--task-steps", "200",
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["/nonexistent/run"], "/nonexistent/run: not a directory"),
+    (["/nonexistent/run"], "/nonexistent/run' is not a directory"),
     (["--cond", "SLE", "--set", "eta_actor=nan"], "eta_actor: must be a finite number"),
     (["--cond", "SLE", "--set", "eta=0.1"], "did you mean eta_actor"),
     (["--cond", "SLE", "--bins", "10", "--chunks", "3"], "--chunks"),
