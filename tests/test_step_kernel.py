@@ -121,3 +121,20 @@ def test_a_resumed_run_keeps_its_recorded_kernel(tmp_path, monkeypatch, recorded
     chosen = _plan(tmp_path, monkeypatch, "gpu", *resume, "--set", "step_kernel=auto").plan.config
     assert chosen.step_kernel == "pallas"
     assert os.listdir(run) == ["config.json"]
+
+
+def test_the_cuda_extra_is_jax_for_cuda_at_a_tested_version():
+    """pip install -e ".[cuda]": JAX's CUDA 12 wheels, pinned, at or above the floor the suite declares."""
+    import re
+    import tomllib
+
+    from packaging.version import Version
+
+    from helpers import ROOT
+
+    with open(os.path.join(ROOT, "pyproject.toml"), "rb") as f:
+        project = tomllib.load(f)["project"]
+    (pin,) = project["optional-dependencies"]["cuda"]
+    version = re.fullmatch(r"jax\[cuda12\]==([\d.]+)", pin).group(1)
+    floor = next(d.split(">=")[1].split()[0] for d in project["dependencies"] if d.startswith("jax>="))
+    assert Version(version) >= Version(floor)
