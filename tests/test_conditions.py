@@ -249,9 +249,11 @@ def test_a_bad_register_is_one_line(tmp_path, monkeypatch, capsys, spec, message
     monkeypatch.chdir(tmp_path)
     for module in ("my_rows", "exits"):
         monkeypatch.delitem(sys.modules, module, raising=False)
-    out = tmp_path / "run"
-    assert evolve.main(["--register", spec, "--cond", "EE-LS", "--out", str(out)]) == 2
-    assert capsys.readouterr().err == f"error: {message}\n"
+    from attack import attack
+
+    out = tmp_path / "run"  # attacked: were the row accepted, its plan would not be carried out
+    outcome = attack(evolve.main, ["--register", spec, "--cond", "EE-LS", "--out", str(out)], str(tmp_path))
+    assert outcome.code == 2 and outcome.stderr == f"error: {message}\n" and not outcome.changed
     assert not out.exists() and conditions.CONDITIONS["EE-LS"].genome == ("actor",)
 
 
