@@ -48,7 +48,7 @@ from jax.sharding import NamedSharding, PartitionSpec
 from imrl_jax.checkpoint import git_commit
 from imrl_jax.devices import check_memory, make_mesh, use_host_cores
 from imrl_jax.config import Config, ConfigError, LearningParams
-from imrl_jax import cli, runspec
+from imrl_jax import cli, kernel_choice, runspec
 from imrl_jax.cli import UsageError, exit_codes, parse_sets
 from imrl_jax.lifetime import grow_up, lifetime_keys, run_phase, task_spec, task_start
 from imrl_jax.state import State
@@ -409,10 +409,12 @@ def _point_test(args, base: Config, genomes: np.ndarray, source: str, evolved: d
                 sets: dict, command: str, out_dir: str, check: bool = True) -> PointTest:
     """The learning test of ``genomes`` under ``base`` at the command line's lengths, into ``out_dir``, checked."""
     config, source = tested_config(args, base, source)
+    # A test is computed anew: its kernel chosen for this machine (the evolution's was for its own), unless --set.
+    config, kernel_note = kernel_choice.resolve(config if "step_kernel" in sets else config.replace(step_kernel="auto"))
     lengths = test_lengths(args, base)
     test = PointTest(config, genomes, out_dir, args.tests, lengths.steady_steps, lengths.chunks, args.seed, args.quiet,
                      source, command, (*warnings, *cli.device_warnings(config, args.cpu_devices)),
-                     tuple(cli.ignored_notes(config, sets)), evolved, args.log)
+                     (*cli.ignored_notes(config, sets), *filter(None, [kernel_note])), evolved, args.log)
     if check:
         test.check()
     return test

@@ -138,3 +138,22 @@ def test_the_cuda_extra_is_jax_for_cuda_at_a_tested_version():
     version = re.fullmatch(r"jax\[cuda12\]==([\d.]+)", pin).group(1)
     floor = next(d.split(">=")[1].split()[0] for d in project["dependencies"] if d.startswith("jax>="))
     assert Version(version) >= Version(floor)
+
+
+def test_a_learning_test_chooses_its_kernel_for_this_machine(tmp_path, monkeypatch):
+    """A test is computed anew: auto on a GPU, the fallback noted, unless --set step_kernel chooses."""
+    from imrl_jax import learning_test
+
+    monkeypatch.setattr(kernel_choice, "default_backend", lambda: "gpu")
+    argv = ["--cond", "SLE", "--tests", "1", "--task-steps", "400", "--bins", "4", "--steady-steps", "200",
+            "--chunks", "1"]
+
+    def planned(*more):
+        outcome = attack(learning_test.main, [*argv, *more, "--out", "t"], str(tmp_path))
+        assert outcome.code == 0 and outcome.planned and not outcome.changed, outcome.stderr
+        return outcome.plan.tests[0]
+
+    assert planned().config.step_kernel == "pallas"
+    assert planned("--set", "step_kernel=xla").config.step_kernel == "xla"
+    options = planned("--set", "selector_period=5")
+    assert options.config.step_kernel == "xla" and any("selector's options" in n for n in options.notes)
