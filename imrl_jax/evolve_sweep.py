@@ -175,7 +175,7 @@ def plan(config: Config, out_dir: str, seeds: Sequence[int], settings: Sequence[
          checkpoint_every: int = 1, keep: int = 3, quiet: bool = False, log: str | None = None,
          registered: Sequence[str] = (), lines: Sequence[str] = ()) -> "SweepPlan":
     """Every check of a sweep, nothing written: the plan :meth:`SweepPlan.run` carries out (raises a user error)."""
-    config, kernel_note = kernel_choice.resolve_sweep(config, settings)  # sweep.json and each point record it
+    config, kernel_note = kernel_choice.resolve(config)  # the points differ in dynamic values only: one program
     lines = (*lines, *([] if quiet or kernel_note is None else [kernel_note]))
     seeds = check_run_options(config, seeds, checkpoint_every, keep, log, out_dir)
     if keep < 2:

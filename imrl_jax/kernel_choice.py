@@ -9,7 +9,7 @@ The step kernel is a compute field: the run's content key is the same whichever 
 
 from __future__ import annotations
 
-from imrl_jax.config import Config, ConfigError
+from imrl_jax.config import Config
 
 
 def unsupported(config: Config) -> str | None:
@@ -51,19 +51,3 @@ def chosen(config: Config) -> str:
     """The step kernel that lives ``config``: "xla" or "pallas"."""
     return resolve(config)[0].step_kernel
 
-
-def resolve_sweep(config: Config, settings, backend: str | None = None) -> tuple[Config, str | None]:
-    """:func:`resolve` for a sweep of ``config`` over ``settings`` (field: value dicts): the kernel only where it
-    implements every point, as the points live in one program."""
-    resolved, note = resolve(config, backend)
-    if resolved.step_kernel == "pallas" and config.step_kernel == "auto":
-        for setting in settings:
-            try:
-                why = unsupported(config.replace(**setting))
-            except ConfigError:  # not a point of a config: the sweep's own checks name it
-                continue
-            if why is not None:
-                return config.replace(step_kernel="xla"), (f"note: step_kernel=auto: the XLA step on this GPU, as "
-                                                           f"the Pallas kernel does not implement the point "
-                                                           f"{setting}'s {why}")
-    return resolved, note

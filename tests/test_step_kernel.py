@@ -54,13 +54,6 @@ def test_an_explicit_kernel_is_kept_on_any_backend(explicit):
     assert kernel_choice.resolve(config, "gpu") == (config, None) == kernel_choice.resolve(config, "cpu")
 
 
-def test_a_sweep_has_the_kernel_only_where_it_implements_every_point():
-    config = make_config("small", condition="LE-LS")
-    assert kernel_choice.resolve_sweep(config, [{"gamma": 0.9}, {"gamma": 0.99}], "gpu")[0].step_kernel == "pallas"
-    resolved, note = kernel_choice.resolve_sweep(config, [{"selector_period": 1}, {"selector_period": 5}], "gpu")
-    assert resolved.step_kernel == "xla" and "selector_period=5" in note
-
-
 def test_the_kernel_is_not_part_of_a_run_key():
     config = make_config("paper", condition="LE-LS")
     keys = {RunSpec.make(config.replace(step_kernel=k), [0, 1]).key() for k in ("auto", "xla", "pallas")}
@@ -157,3 +150,13 @@ def test_a_learning_test_chooses_its_kernel_for_this_machine(tmp_path, monkeypat
     assert planned("--set", "step_kernel=xla").config.step_kernel == "xla"
     options = planned("--set", "selector_period=5")
     assert options.config.step_kernel == "xla" and any("selector's options" in n for n in options.notes)
+
+
+@pytest.mark.parametrize("condition, kernel", [("LE-LS", "pallas"), ("EV-LS", "xla")])
+def test_a_sweep_records_the_resolved_kernel_in_every_point(tmp_path, monkeypatch, condition, kernel):
+    """A sweep's points differ in dynamic values only (one program): the base's choice is every point's."""
+    args = evolve_args(condition, seeds=1, population=4, parents=2, generations=1, task_steps=200, bins=1)[:-1]
+    outcome = _plan(tmp_path, monkeypatch, "gpu", *args, "--sweep", "gamma=0.9,0.99", "--out", "s")
+    assert outcome.plan.config.step_kernel == kernel
+    assert {p.config.step_kernel for p in outcome.plan.points} == {kernel}
+    assert any("does not implement EV-LS's" in line for line in outcome.plan.lines) == (kernel == "xla")
