@@ -333,13 +333,14 @@ def lives(check: Check) -> dict:
     import jax
     import jax.numpy as jnp
 
-    from imrl_jax import lifetime, reference
+    from imrl_jax import kernel_choice, lifetime, reference
     from imrl_jax.config import Config, LearningParams
 
     rows, programs = [], {}
     stop = check.share_left(LIVES_SHARE)
     for name, preset, config, reason in life_cases(check.sizes):
-        row = {"condition": name, "preset": preset, "kernels": list(KERNELS if reason is None else ("xla",))}
+        row = {"condition": name, "preset": preset, "kernels": list(KERNELS if reason is None else ("xla",)),
+               "auto": kernel_choice.chosen(config)}  # what the default lives it with on this machine
         if reason:
             row["pallas"] = reason
         if check.remaining() < stop and check.sizes.scale:

@@ -22,6 +22,7 @@ def test_dry_run_checks_and_times_every_step(tmp_path, capsys):
     lives = steps["lives"]["rows"]
     assert [(r["condition"], r["preset"]) for r in lives] == [("EE-LS", "paper")]
     assert lives[0]["pallas_vs_xla"]["events_equal"] and lives[0]["xla_vs_reference"]["max_weight_diff"] < 1e-10
+    assert lives[0]["auto"] == ("pallas" if jax.default_backend() == "gpu" else "xla")  # step_kernel=auto's choice
     assert {r["kernel"]: r["reaches"] for r in steps["float32"]["rows"]} == {"xla": 2, "pallas": 2}
     assert {(r["kernel"], r["seeds"]) for r in steps["generation"]["rows"]} == {("xla", 2), ("pallas", 2)}
     for row in steps["life"]["rows"] + steps["generation"]["rows"] + steps["phases"]["rows"]:
