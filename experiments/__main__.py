@@ -1,6 +1,7 @@
 """``python -m experiments list|run|report NAME|all``: every study, found by itself (docs/STUDIES.md).
 
-    python -m experiments list                # each study: stages left, estimated hours, its document
+    python -m experiments list                # each study: stages and hours left, its document, its whole hours on
+                                              # this CPU and on a GPU (experiments/gpu_hours.py: docs/gpu speeds)
     python -m experiments list search         # a study's stages and their commands, nothing run
     python -m experiments run all             # run (or go on with) every study in order
     python -m experiments run timescale       # one study
@@ -19,6 +20,7 @@ import subprocess
 import sys
 from typing import NamedTuple
 
+from experiments import gpu_hours
 from experiments.executor import add_options, dying_with_runner, options_argv
 from experiments.reproduce import MANIFEST, cost_left, read_manifest, stage_done
 from experiments.study import environment, studies
@@ -43,13 +45,18 @@ def listing(chosen, planned) -> list[str]:
         study, (stages, scale) = chosen[0], planned[0]
         return [f"{study.name} ({study.document}): python {' '.join(study.command()[1:])}"] + [
             f"  {stage.name}: {'done' if stage_done(stage, scale) else 'to run'} ({stage.out_dir})" for stage in stages]
-    lines, total = [], 0.0
+    lines, total, speed = [], [0.0, 0.0, 0.0], gpu_hours.read_speed()
     for study, plan in zip(chosen, planned):
         left, count, hours = remaining(study, planned=plan)
-        total += hours
-        lines.append(f"{study.name:>16}: {left:>2} of {count:>2} stages left, about {hours:5.1f} h ({study.document})")
-    return lines + [f"{'in all':>16}: about {total:.0f} h at {RATE / 1e6:.1f} million lane-steps a second (the claims "
-                    f"study's evolutions on 2 cores)"]
+        whole = sum(s.cost for s in plan[0]) / RATE / 3600
+        gpu = gpu_hours.study_hours(*plan, speed)
+        total = [total[0] + hours, total[1] + whole, total[2] + (gpu or 0.0)]
+        lines.append(f"{study.name:>16}: {left:>2} of {count:>2} stages left, about {hours:5.1f} h ({study.document}); "
+                     f"whole: {whole:5.1f} h on this CPU" + ("" if gpu is None else f", {gpu:5.2f} h on a GPU"))
+    measured = ("no GPU measured (docs/gpu holds no gpu_check.json)" if speed is None else
+                f"{total[2]:.1f} h on one {speed.device} ({speed.source}: its generations' speeds, step_kernel=auto)")
+    return lines + [f"{'in all':>16}: about {total[0]:.0f} h left at {RATE / 1e6:.1f} million lane-steps a second "
+                    f"(the claims study's evolutions on 2 cores); whole: {total[1]:.0f} h on this CPU, {measured}"]
 
 
 def run_studies(chosen, report: bool = False, options: tuple[str, ...] = ()) -> int:

@@ -1,0 +1,75 @@
+"""``python -m experiments list``: each study's hours on this CPU and on a GPU, from docs/gpu's measured speeds."""
+
+import json
+import math
+import os
+
+import pytest
+
+from experiments import __main__ as experiments_main
+from experiments import gpu_hours
+from experiments.reproduce import Stage
+from helpers import RESULTS
+
+SPEED = gpu_hours.GpuSpeed("GPU X", {"pallas": [(500, 1e9, 6.0), (5000, 2e9, 7.0)], "xla": [(500, 4e7, 5.0)]}, "x")
+
+
+def _stage(condition, kind="evolve", out_dir="nowhere", cost=3.6e12):
+    return Stage(f"{kind} {condition}", kind, condition, condition, out_dir, cost)
+
+
+def test_the_committed_check_gives_both_kernels_speeds():
+    speed = gpu_hours.read_speed()
+    assert speed.device == "NVIDIA H200" and speed.source == os.path.join("docs", "gpu", "gpu_check.json")
+    assert {k: sorted(i for i, *_ in rows) for k, rows in speed.rows.items()} == {"pallas": [500, 5000],
+                                                                                 "xla": [500, 5000]}
+    assert all(rate > 0 and compile_s > 0 for rows in speed.rows.values() for _, rate, compile_s in rows)
+
+
+@pytest.mark.parametrize("content", [None, b"{", b"[]", json.dumps({"dry": True, "steps": [{"step": "generation", "rows": [  # tiny sizes: no speed
+                                         {"kernel": "xla", "individuals": 5, "lane_steps_per_s": 1e6}]}]}).encode(),
+                                     json.dumps({"steps": [{"step": "generation", "rows": [
+                                         {"kernel": "xla", "individuals": 5, "lane_steps_per_s": "nan"}]}]}).encode()])
+def test_no_measured_speed_is_none(tmp_path, content):
+    path = tmp_path / "gpu_check.json"
+    if content is not None:
+        path.write_bytes(content)
+    assert gpu_hours.read_speed(str(path)) is None
+
+
+@pytest.mark.parametrize("condition, kernel", [("LE-LS", "pallas"), ("EE-ES", "pallas"), ("EV-LS", "xla"),
+                                               ("LE-LS-2R", "xla"), ("", "xla")])
+def test_a_stage_runs_the_kernel_auto_would_choose_for_its_condition(condition, kernel):
+    assert gpu_hours.stage_kernel(_stage(condition)) == kernel
+
+
+def test_a_done_stage_runs_the_kernel_auto_would_choose_for_its_recorded_model():
+    """The time-scale study's LE-LS evolution recorded selector_period=10: the kernel lacks it, so the XLA step."""
+    done = os.path.join(RESULTS, "timescale", "skills+period-10", "LE-LS", "evolve")
+    assert gpu_hours.stage_kernel(_stage("LE-LS", out_dir=done)) == "xla"
+    assert gpu_hours.stage_kernel(_stage("LE-LS", out_dir=os.path.join(RESULTS, "paper", "paper", "evolve",
+                                                                       "LE-LS"))) == "pallas"
+
+
+def test_a_stage_takes_its_lane_steps_at_the_nearest_measured_speed_and_one_compilation():
+    scale = {"seeds": 10, "population": 50}  # 500 individuals
+    assert gpu_hours.stage_seconds(_stage("LE-LS"), scale, SPEED) == pytest.approx(3.6e12 / 1e9 + 6.0)
+    assert gpu_hours.stage_seconds(_stage("LE-LS"), {"seeds": 200}, SPEED) == pytest.approx(3.6e12 / 2e9 + 7.0)
+    assert gpu_hours.stage_seconds(_stage("EV-LS"), scale, SPEED) == pytest.approx(3.6e12 / 4e7 + 5.0)
+    assert gpu_hours.stage_seconds(_stage("EV-LS", cost=0.0), scale, SPEED) == 0.0
+    hours = gpu_hours.study_hours([_stage("LE-LS"), _stage("EV-LS")], scale, SPEED)
+    assert hours == pytest.approx((3.6e12 / 1e9 + 6.0 + 3.6e12 / 4e7 + 5.0) / 3600)
+    assert gpu_hours.study_hours([_stage("LE-LS")], scale, None) is None
+
+
+def test_list_shows_each_study_on_this_cpu_and_on_a_gpu(capsys, monkeypatch):
+    assert experiments_main.main(["list"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert all("h on this CPU, " in line and line.endswith(" h on a GPU") for line in lines[:-1])
+    cpu = [float(line.split("whole: ")[1].split(" h")[0]) for line in lines[:-1]]
+    assert abs(float(lines[-1].split("whole: ")[1].split(" h on this CPU, ")[0]) - math.fsum(cpu)) < 1
+    assert "h on one NVIDIA H200 (docs/gpu/gpu_check.json" in lines[-1]
+    monkeypatch.setattr(gpu_hours, "GPU_CHECK", "no-such-file.json")
+    assert experiments_main.main(["list"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert "on a GPU" not in lines[0] and "no GPU measured" in lines[-1]
