@@ -1,24 +1,37 @@
 """The childhood study's measures' command line (``python -m experiments.childhood_study [RUN...] --out OUT STAGE``):
-parse, plan (every value bounded, the runs read and checked, the memory estimated, --out checked), then execute."""
+parse, plan (every value bounded, the runs read and checked, the memory estimated, --out checked), then execute.
+
+It reads the study's stages and rules from a :class:`Study` the study's module gives it (``childhood_study.measures``):
+the study imports this module, not the other way round."""
 
 from __future__ import annotations
 
 import itertools
 import os
+from typing import Callable, NamedTuple
 
 import numpy as np
 
-from experiments import childhood_study
-from experiments.childhood_study import CEILING_RULES, RULES, STAGES, best_of_run
 from experiments.measures import check_out_dir, checked_config, listed
 from imrl_jax import cli
 from imrl_jax.cli import HelpFormatter, Parser, UsageError, check_at_least, exit_codes
 from imrl_jax.config import CHILDHOOD_SELECTOR_REWARDS, CHILDHOOD_WALLS
 
 
-def measure_parser() -> Parser:
+class Study(NamedTuple):
+    """What the measures read of the childhood study: its stages (name -> (function, key, lives)), rules and reader."""
+
+    description: str
+    stages: dict
+    rules: dict
+    ceiling_rules: dict
+    best_of_run: Callable
+
+
+def measure_parser(study: Study) -> Parser:
     """A measure's command line: ``[RUN...] --out OUT STAGE [options]``."""
-    p = Parser(prog="python -m experiments.childhood_study", description=childhood_study.__doc__.split("\n\n")[0],
+    STAGES, RULES = study.stages, study.rules
+    p = Parser(prog="python -m experiments.childhood_study", description=study.description,
                formatter_class=HelpFormatter)
     p.add_argument("words", nargs="+", metavar="RUN|STAGE", help=f"the runs it reads, and one of {', '.join(STAGES)}")
     p.add_argument("--out", required=True, help="the measure's folder (its CSV is named after it)")
@@ -45,7 +58,7 @@ def measure_parser() -> Parser:
 MAX_KEY = 2**32 - 3
 
 
-def checked_runs(args) -> list[tuple]:
+def checked_runs(args, study: Study) -> list[tuple]:
     """Each run's best genomes and rows (:func:`best_of_run`), checked: readable, finite fitness (raises a user
     error naming the file)."""
     from imrl_jax.rundir import RunDirError
@@ -55,7 +68,7 @@ def checked_runs(args) -> list[tuple]:
         if not os.path.isfile(os.path.join(run, "config.json")):
             raise UsageError(f"runs: not a run directory (no config.json): {run}")
         try:
-            config, genomes, best = best_of_run(run, args.best)
+            config, genomes, best = study.best_of_run(run, args.best)
         except (KeyError, TypeError, ValueError, IndexError) as error:  # RunDirError is a ValueError: its own line
             if isinstance(error, RunDirError):
                 raise
@@ -68,7 +81,7 @@ def checked_runs(args) -> list[tuple]:
     return read
 
 
-def lanes_of(args) -> list[tuple]:
+def lanes_of(args, study: Study) -> list[tuple]:
     """(config, lives at once) of each program the stage runs, every config checked (raises a user error)."""
     if args.stage == "hand":
         for flag, field, text, known in (("--walls", "childhood_walls", args.walls, CHILDHOOD_WALLS),
@@ -86,7 +99,7 @@ def lanes_of(args) -> list[tuple]:
     if args.stage == "ceiling":
         return [(checked_config("--task-steps", "paper", condition="EE-LS", task_steps=steps, num_bins=10, **rules),
                  args.lives * 6)
-                for steps in listed("--task-steps", args.task_steps) for rules in CEILING_RULES.values()]
+                for steps in listed("--task-steps", args.task_steps) for rules in study.ceiling_rules.values()]
     if args.stage in ("speed", "random"):
         config = checked_config("--preset", args.preset, condition="LE-LS")
         if args.stage == "random":
@@ -96,14 +109,15 @@ def lanes_of(args) -> list[tuple]:
             checked_config("--biases", args.preset, condition="LE-LS", initial_speed_bias=bias)
         return [(config, len(biases) * args.lives)]
     return [(config, genomes * (args.lives if args.stage == "heritability" else 1))
-            for config, genomes in checked_runs(args)]
+            for config, genomes in checked_runs(args, study)]
 
 
-def measure_plan(argv) -> cli.Call:
+def measure_plan(argv, study: Study) -> cli.Call:
     """Parse and check a measure: every value bounded, the runs it reads, its memory and --out (nothing written)."""
     from imrl_jax.devices import check_memory, use_host_cores
 
-    args = measure_parser().parse_intermixed_args(argv)
+    STAGES, RULES = study.stages, study.rules
+    args = measure_parser(study).parse_intermixed_args(argv)
     stages = [w for w in args.words if w in STAGES]
     if len(stages) != 1:
         raise UsageError(f"stage: name one of {', '.join(STAGES)} (got {' '.join(args.words)})")
@@ -122,7 +136,7 @@ def measure_plan(argv) -> cli.Call:
         raise UsageError(f"--rules: unknown rules {unknown[0]!r} (choose from {', '.join(RULES)})")
     if bool(args.runs) != (args.stage in ("evolved", "heritability")):
         raise UsageError(f"runs: {args.stage} reads {'no run' if args.runs else 'run directories'}")
-    programs = lanes_of(args)
+    programs = lanes_of(args, study)
     use_host_cores(1)  # before the memory estimate starts JAX's backend
     for config, lanes in programs:
         cli.check_at_most(f"lives at once of the {args.stage} measure", lanes, cli.MAX_LANES)
@@ -133,6 +147,6 @@ def measure_plan(argv) -> cli.Call:
 
 
 @exit_codes
-def measure_main(argv) -> int:
+def measure_main(argv, study: Study) -> int:
     """A measure's command line: ``[RUN...] --out OUT STAGE [options]``."""
-    return cli.execute(measure_plan(argv))
+    return cli.execute(measure_plan(argv, study))

@@ -438,8 +438,15 @@ def main(argv=None) -> int:
     if any(a.startswith("--out") for a in argv):
         from experiments.childhood_measures import measure_main
 
-        return measure_main(argv)
+        return measure_main(argv, measures())
     return TABLE.main(argv)
+
+
+def measures():
+    """What the measures' command line reads of this study (``experiments.childhood_measures.Study``)."""
+    from experiments.childhood_measures import Study
+
+    return Study(__doc__.split("\n\n")[0], STAGES, RULES, CEILING_RULES, best_of_run)
 
 
 if __name__ == "__main__":

@@ -315,9 +315,8 @@ def relived(part: Part, fn, *args):
 
 def compile_seconds(source: str) -> float | None:
     """The median seconds the benchmark file ``source`` (docs/bench/NAME.json) took to compile a whole life."""
-    from experiments.document import ROOT
-
-    data = read_json(os.path.join(ROOT, source)) if not os.path.isabs(source) else read_json(source)
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the project's (document.ROOT)
+    data = read_json(os.path.join(root, source)) if not os.path.isabs(source) else read_json(source)
     times = sorted(float(life.get("compile_and_first_run_s", 0)) for life in (data or {}).get("lifetimes", ()))
     return times[len(times) // 2] if times and times[len(times) // 2] > 0 else None
 

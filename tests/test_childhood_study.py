@@ -128,8 +128,9 @@ def _hostile_cases():
     from test_circular_paths import hostile_cases
 
     from experiments.childhood_measures import measure_parser
+    from experiments.childhood_study import measures
 
-    cases = hostile_cases(measure_parser())
+    cases = hostile_cases(measure_parser(measures()))
     assert {flag for flag, _ in cases} == set(STAGE_OF)  # a new option is given its stage here
     from attack import HOSTILE_TEXTS
 
