@@ -79,3 +79,19 @@ def test_the_readmes_library_examples_run():
     exec(compile(code, "README.md", "exec"), namespace)  # noqa: S102 - the project's own README
     assert namespace["result"].fitness.shape == (2,) and namespace["x"].shape == (36,)
     assert not bool(namespace["events"].reached)
+
+
+def test_the_readme_names_every_condition_and_types_commands_one_way():
+    """The README's --cond paragraph names every row of the condition table (evolved or not), and its commands are
+    typed in the environment make creates (.venv/bin/python), never a bare python that only an activated one runs."""
+    from imrl_jax import conditions
+
+    with open(os.path.join(ROOT, "README.md")) as f:
+        readme = f.read()
+    paragraph = readme[readme.index("`--cond` is an evolved condition"):].split("\n\n")[0]
+    missing = [name for name in conditions.CONDITIONS if not re.search(rf"(?<![\w-]){re.escape(name)}(?![\w-])",
+                                                                       paragraph)]
+    assert not missing, f"README's --cond paragraph lacks {missing}"
+    bare = [line for line in readme.splitlines()
+            if re.search(r"(?<![/\w.])python3? -m (imrl_jax|experiments)", line) and "PYTHONPATH=." not in line]
+    assert not bare, bare
