@@ -19,7 +19,6 @@ from __future__ import annotations
 import collections
 import dataclasses
 import functools
-import json
 import os
 import sys
 
@@ -27,7 +26,7 @@ import numpy as np
 
 from experiments.claims import (ABOUT, DOES_NOT, HOLDS, NOT_AVAILABLE, NUM_BEST, PARTLY, claim_experts, final_best,
                                 measure as measure_claims)
-from experiments.loading import read_evolution, read_json, read_test
+from experiments.loading import read_evolution, read_json, read_test, write_json
 from experiments.markdown import table
 from experiments.relive import colours_followed, reproduction_fresh, run_fresh, run_probe
 from experiments.reproduce import EVOLVED, TESTED
@@ -351,8 +350,7 @@ def write_experts(table: Table) -> dict:
     summary, found = reproduction_summary(table.document), experts_runs(table)  # a run's fresh lives, probe: kept
     claim8 = {name: measure_experts(BY_NAME[name], found, summary, table.reproduction) for name in EXPERT_RULE_SETS}
     os.makedirs(table.out, exist_ok=True)
-    with open(os.path.join(table.out, "claim8.json"), "w") as f:
-        json.dump(claim8, f, indent=2, default=str)
+    write_json(os.path.join(table.out, "claim8.json"), claim8, indent=2, default=str)
     write_table(table.document, experts_table(claim8), EXPERTS_START, EXPERTS_END)
     write_table(table.document, experts_runs_table(claim8), EXPERTS_RUNS_START, EXPERTS_RUNS_END)
     if any(claim["levels"] for claim in claim8.values()):
@@ -374,9 +372,8 @@ class ScreenTable(Table):
         numbers = {name: {**{str(k): v for k, v in m["claims"].items()}, "fresh": m.get("fresh", {})}
                    for name, m in measured.items()}
         os.makedirs(self.out, exist_ok=True)
-        with open(os.path.join(self.out, "claims.json"), "w") as f:
-            json.dump(dict(sizes=dict(screen=SCREEN, full=SCALES["paper"]), rule_sets={
-                r.name: r._asdict() for r in RULE_SETS}, claims=numbers), f, indent=2, default=str)
+        write_json(os.path.join(self.out, "claims.json"), dict(sizes=dict(screen=SCREEN, full=SCALES["paper"]),
+                   rule_sets={r.name: r._asdict() for r in RULE_SETS}, claims=numbers), indent=2, default=str)
         write_table(self.document, table_markdown(measured, names), TABLE_START, TABLE_END)
         write_table(self.document, fresh_table(measured, names), FRESH_START, FRESH_END)
         figures = os.path.join(os.path.dirname(self.document), "claims")

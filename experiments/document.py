@@ -266,8 +266,9 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
     with open(discussion if os.path.isfile(discussion) else os.devnull) as f:
         out += ["", "## Discussion", "", f.read().strip() or "(no discussion written yet)"]
     os.makedirs(doc_dir, exist_ok=True)
-    with open(path, "w") as f:
-        f.write("\n".join(out) + "\n")
+    from imrl_jax.rundir import write_atomic
+
+    write_atomic(path, ("\n".join(out) + "\n").encode())
 
 
 def baselines_section(baselines: dict, data: dict, written: dict, rel, label: str) -> list[str]:

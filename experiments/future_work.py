@@ -13,7 +13,6 @@ questions (``claims.FUTURE``) and draws a figure per question.
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 
@@ -23,6 +22,7 @@ import numpy as np
 # the claims study (LE-LS-6) keeps one probe.json
 from experiments.claims import NUM_BEST
 from experiments.figures import not_run
+from experiments.loading import write_json
 from experiments.markdown import head, line, mean_sd
 from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN
 from experiments.table import Row, Table
@@ -464,8 +464,7 @@ class FutureWorkTable(Table):
         measured = measure({row.name: row for row in self.rows}, self.evolutions(), self.tests(),
                            reproduction_summary(self.document) or {}, self.reproduction)
         os.makedirs(self.out, exist_ok=True)
-        with open(os.path.join(self.out, "report.json"), "w") as f:
-            json.dump(measured, f, indent=2)
+        write_json(os.path.join(self.out, "report.json"), measured, indent=2)
         drawn = [figure(measured, q, os.path.join(self.out, f"question_{q}.png")) for q in PANELS]
         write_table(self.document, table(measured), TABLE_START, TABLE_END)
         done = [r["name"] for r in measured["rows"] if (r["evolution"] or {}).get("finished") or r["test"]]

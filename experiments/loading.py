@@ -22,6 +22,13 @@ def read_json(path: str) -> dict | None:
         return json.load(f)
 
 
+def write_json(path: str, data, **dumps) -> None:
+    """``data`` as ``path``'s JSON (``json.dumps``'s options), written atomically: a kill leaves the old file whole."""
+    from imrl_jax.rundir import write_atomic
+
+    write_atomic(path, json.dumps(data, **dumps).encode())
+
+
 def read_curve(path: str) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """A learning test's curve.csv as (end cycle of each bin, mean over all tests, sd over runs)."""
     if not os.path.isfile(path):

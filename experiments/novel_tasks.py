@@ -11,7 +11,6 @@ tested on those and on tasks 2 and 5 (``tasks_unseen.json``), whose partners tur
 advantage is a steady state minus EE-ES's (which learns nothing); ``claims.claim_unseen`` judges it.
 """
 
-import json
 import os
 import sys
 from typing import NamedTuple
@@ -19,6 +18,7 @@ from typing import NamedTuple
 import numpy as np
 
 from experiments.figures import finish
+from experiments.loading import write_json
 from experiments.reproduce import test_command, test_cost
 from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN
 from experiments.table import Measure, Row, Table
@@ -225,8 +225,8 @@ class NovelTasksTable(Table):
 
         measured = self.advantages()
         os.makedirs(self.out, exist_ok=True)
-        with open(os.path.join(self.out, "advantage.json"), "w") as f:
-            json.dump({k: measured[k] for k in ("rows", "verdicts", "scratch", "evolved", "probes")}, f, indent=2)
+        write_json(os.path.join(self.out, "advantage.json"),
+                   {k: measured[k] for k in ("rows", "verdicts", "scratch", "evolved", "probes")}, indent=2)
         drawn = [novel_figure(measured, os.path.join(self.out, "novel.png")),
                  held_out_figure(measured, os.path.join(self.out, "held_out.png"))]
         write_table(self.document, advantage_table(measured, self.table(measured["evolutions"])), f"<!-- advantage "

@@ -12,7 +12,7 @@ from typing import NamedTuple
 import numpy as np
 
 from experiments.claims import mean_speed, turn_consistency
-from experiments.loading import best_of_population, read_json
+from experiments.loading import best_of_population, read_json, write_json
 
 PATH_STEPS = 1000  # steps each task is driven after its learning period (shares, stereotypy)
 DRAWN_STEPS = 300  # of which the last ones are drawn
@@ -110,9 +110,7 @@ def kept(path: str, key: dict, compute, stream=None) -> dict:
               f"again", file=stream or sys.stderr, flush=True)
         return cached
     out = dict(key, **compute())
-    with open(path + ".tmp", "w") as f:
-        json.dump(out, f, indent=2)
-    os.replace(path + ".tmp", path)
+    write_json(path, out, indent=2)
     return out
 
 

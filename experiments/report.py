@@ -36,6 +36,7 @@ from experiments.document import (ROOT, figures_of, pipeline_command, scale_labe
                                   write_document)
 from experiments.figures import fig3, fig_baselines, fig_curves, fig_paths, fig_steady
 from experiments.loading import read_baselines, update_best_genomes
+from imrl_jax.rundir import write_atomic
 from experiments.relive import (DRAWN_STEPS, PATH_STEPS, Reliving, fresh_fitness, probe_best, relive_best,
                                  relive_parts)
 from imrl_jax import conditions
@@ -135,8 +136,7 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
     for name, content in (("summary.json", summary), ("claims.json", claims)):
         written[name] = at(name)
         text = json.dumps(_jsonable(content), indent=2)  # all of it first: a failure leaves the old file whole
-        with open(written[name], "w") as f:
-            f.write(text + "\n")
+        write_atomic(written[name], (text + "\n").encode())
     write_document(doc, figures, data, numbers, lives, spec_rows, written, baselines, table.name)
     written["doc"] = doc
     return written

@@ -15,13 +15,13 @@ learning tests behind them.
 from __future__ import annotations
 
 import dataclasses
-import json
 import os
 import sys
 
 import numpy as np
 
 from experiments.figures import not_run
+from experiments.loading import write_json
 from experiments.study import RESULTS, SCALES, SCREEN
 from experiments.table import Row, Table
 from experiments.markdown import head, line, mean_sd
@@ -224,8 +224,8 @@ class SearchTable(Table):
 
         code = super().report()
         measured = self.measure_search()
-        with open(os.path.join(self.out, "report.json"), "w") as f:
-            json.dump({k: measured[k] for k in ("rows", "sle", "claims")}, f, indent=2)  # claim numbers as keys: "1"
+        write_json(os.path.join(self.out, "report.json"),
+                   {k: measured[k] for k in ("rows", "sle", "claims")}, indent=2)  # claim numbers as keys: "1"
         drawn = claims_figure(measured, os.path.join(self.out, "claims.png"))
         write_table(self.document, table(measured), "<!-- search tables: python -m experiments report search -->",
                     "<!-- end of search tables -->")

@@ -46,8 +46,9 @@ def write_table(path: str, text: str, start_marker: str, end_marker: str) -> Non
     with open(path) as f:
         document = f.read()
     start, end = document.index(start_marker), document.index(end_marker)
-    with open(path, "w") as f:
-        f.write(document[:start + len(start_marker)] + "\n" + text + "\n" + document[end:])
+    from imrl_jax.rundir import write_atomic
+
+    write_atomic(path, (document[:start + len(start_marker)] + "\n" + text + "\n" + document[end:]).encode())
 
 
 @dataclasses.dataclass(frozen=True)
