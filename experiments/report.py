@@ -24,6 +24,7 @@ estimated time (``experiments.relive.Reliving``), then a line as each part compi
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 import os
@@ -115,11 +116,12 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
     numbers = measure(data, lives, probes, sle_whole_test=set(table.whole_test))
     spec_rows = specialisation_rows(lives)
     written["specialisation"] = at("specialisation.csv")
-    with open(written["specialisation"], "w", newline="") as f:
-        writer = csv.DictWriter(f, ["variant", "condition", "phase", "seed", "generation", "expert", "steps",
-                                    "control_share", *SEEN, "follows"])
-        writer.writeheader()
-        writer.writerows(spec_rows)
+    text = io.StringIO(newline="")
+    writer = csv.DictWriter(text, ["variant", "condition", "phase", "seed", "generation", "expert", "steps",
+                                   "control_share", *SEEN, "follows"])
+    writer.writeheader()
+    writer.writerows(spec_rows)
+    write_atomic(written["specialisation"], text.getvalue().encode())
 
     summary = dict(scale=manifest["scale"], scale_label=label, sizes=manifest.get("sizes"),
                    variants=data["variants"], command=pipeline_command(table.name).replace("`", ""),

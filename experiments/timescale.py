@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import json
 import os
 import sys
 
@@ -24,7 +23,7 @@ import numpy as np
 from experiments import claims_study
 from experiments.claims import CLAIMS
 from experiments.figures import _band
-from experiments.loading import read_evolution, read_json, read_test
+from experiments.loading import read_evolution, read_json, read_test, write_json
 from experiments.markdown import head, line, mean_sd
 from experiments.rule_sets import BY_NAME
 from experiments.measures import write_measure  # atomic: a kill leaves a measurement not done
@@ -185,10 +184,10 @@ class TimescaleTable(Table):
             print(f"error: {self.out}: the measurements have not run, so no evolution is planned yet", file=sys.stderr)
             return 2
         rows = self.claims()
-        with open(os.path.join(self.out, "evolutions.json"), "w") as f:  # json writes the claims' numbers as keys
-            json.dump({variant: dict(label=row["label"], progress=row["progress"],
-                                     **{k: (row["measured"] or {}).get(k) for k in ("claims", "fresh")})
-                       for variant, row in rows.items()}, f, indent=2, default=str)
+        write_json(os.path.join(self.out, "evolutions.json"),  # json writes the claims' numbers as keys
+                   {variant: dict(label=row["label"], progress=row["progress"],
+                                  **{k: (row["measured"] or {}).get(k) for k in ("claims", "fresh")})
+                    for variant, row in rows.items()}, indent=2, default=str)
         drawn = self.figure(os.path.join(self.out, "evolutions.png"))
         write_table(self.document, report_table(rows), REPORT_START, REPORT_END)
         print(f"wrote {os.path.join(self.out, 'evolutions.json')}, {drawn} and the tables of {self.document}")
