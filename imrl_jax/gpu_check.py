@@ -16,7 +16,9 @@ numbers), and the check goes on to the next. The steps, most important first:
    lanes, both kernels: lane-steps per second, compile time, memory;
 3. ``generation``: one paper-scale LE-LS generation of 10 seeds (both kernels) and of 100;
 4. ``sweep``: one paper-scale generation of ``evolve --sweep``'s program (6 points x 10 seeds), against the single run's;
-5. ``phases``: every phase of ``imrl_jax.bench``, both kernels, at the same lane counts.
+5. ``study``: one generation of each distinct program of the claims map and each kind of its learning tests,
+   and the whole map's hours extrapolated against the one-hour target (:mod:`imrl_jax.gpu_study`);
+6. ``phases``: every phase of ``imrl_jax.bench``, both kernels, at the same lane counts.
 
 Within a time budget (``--budget-min``, default 8), checked before each piece of work: what
 would not fit is skipped and said so. ``gpu_check.json`` (every figure, the device and the
@@ -39,6 +41,8 @@ import traceback
 from typing import Callable
 
 import numpy as np
+
+from imrl_jax.gpu_study import program_key, study
 
 #: The stages a piece of work goes through; a failure is named by the one it had reached.
 STAGES = ("import", "api", "lowering", "compile", "run", "numbers")
@@ -71,6 +75,10 @@ class Sizes:
     sweep: tuple = (("trace_lambda", (0.0, 0.9, 0.98)), ("eta_selector_actor", (0.01, 0.3)))
     sweep_seeds: int = 10
     scale: float = 1.0  # of the time estimates that the budget is checked against
+    study_limit: int | None = None  # the study's programs (and kinds of test) timed (None: all)
+    study_seeds: int | None = None  # at most this many seeds of each program timed (None: its own)
+    study_test_steps: int = 2000  # the steps a learning test's phase is timed for
+    study_test_lanes: int | None = None  # at most this many lanes of a test timed (None: its own)
 
 
 DRY = Sizes(life_steps=(60, 30, 3), presets=("paper",), conditions=("EE-LS",), float32_steps=200,
@@ -78,7 +86,8 @@ DRY = Sizes(life_steps=(60, 30, 3), presets=("paper",), conditions=("EE-LS",), f
             generation_condition="EE-LS",
             generation_sizes=(("childhood_steps", 40), ("task_steps", 20), ("num_bins", 2), ("population_size", 4),
                               ("num_parents", 2)),
-            sweep=(("trace_lambda", (0.0, 0.9)),), sweep_seeds=2, scale=0.0)
+            sweep=(("trace_lambda", (0.0, 0.9)),), sweep_seeds=2, scale=0.0, study_limit=1, study_seeds=2,
+            study_test_steps=20, study_test_lanes=6)
 
 
 class Check:
@@ -90,6 +99,7 @@ class Check:
         self.stage = "import"
         self.results: dict = {"budget_s": budget_s, "dry": sizes.scale == 0.0, "steps": []}
         self.lines: list[str] = []
+        self.compiled: dict = {}  # programs compiled so far, by what they are made of (steps share them)
 
     def remaining(self) -> float:
         """Seconds left of the budget."""
@@ -205,6 +215,15 @@ def compile_program(check: Check, fn, *args):
     executable = lowered.compile()
     check.stage = "run"
     return executable, time.perf_counter() - start
+
+
+def compile_once(check: Check, key: tuple, fn, *args):
+    """:func:`compile_program`, or the program compiled before under ``key`` (what it is made of, its inputs'
+    shapes): steps that time the same program compile it once (the seconds are its first compilation's)."""
+    if key not in check.compiled:
+        check.compiled[key] = compile_program(check, fn, *args)
+    check.stage = "run"
+    return check.compiled[key]
 
 
 def program_bytes(executable) -> int | None:
@@ -513,6 +532,14 @@ def fastest_kernel(check: Check) -> str:
     return min((r for r in rows if r["seeds"] == fewest), key=lambda r: r["seconds"])["kernel"]
 
 
+def fastest_rate(check: Check) -> float | None:
+    """The lane-steps per second of the fastest kernel's generation of the fewest seeds (None if none ran)."""
+    kernel = fastest_kernel(check)
+    rows = [r for s in check.results["steps"] if s["step"] == "generation" and s["status"] == "ok"
+            for r in s["rows"] if r.get("status") == "ok" and r["kernel"] == kernel]
+    return min(rows, key=lambda r: r["seeds"])["lane_steps_per_s"] if rows else None
+
+
 def sweep(check: Check) -> dict:
     """One generation of ``evolve --sweep``'s program (every point and seed in one batch), with the fastest kernel,
     against the generation of as many seeds of a single run timed before it (the ratio: at most the points)."""
@@ -540,7 +567,8 @@ def sweep(check: Check) -> dict:
     params, ga = evolve_sweep.batched_values(points, len(seeds))
     populations = to_global(np.tile(np.asarray(state.populations), (len(points), 1, 1)), sharding)
     step = evolve_sweep.make_sweep_step(config, sharding)
-    executable, compile_s = compile_program(check, step, keys, params, ga, populations, 0)
+    key = ("sweep", program_key(config), kernel, len(points), len(seeds))
+    executable, compile_s = compile_once(check, key, step, keys, params, ga, populations, 0)
     start = time.perf_counter()
     _, stats = jax.block_until_ready(executable(keys, params, ga, populations, 0))
     seconds = time.perf_counter() - start
@@ -574,7 +602,8 @@ def phases(check: Check) -> dict:
                     check.stage = "api"
                     program = bench.phase_program(condition, phase, lanes, check.sizes.phase_steps,
                                                   step_kernel=kernel)
-                    executable, compile_s = compile_program(check, program.fn, *program.args)
+                    key = ("phase", condition, phase, lanes, check.sizes.phase_steps, kernel)
+                    executable, compile_s = compile_once(check, key, program.fn, *program.args)
                     seconds, shortest = timed(executable, program.args, check.sizes.repeats)
                     row.update(steps=check.sizes.phase_steps, compile_s=compile_s,
                                lane_steps_per_s=program.lane_steps / seconds,
@@ -587,7 +616,8 @@ def phases(check: Check) -> dict:
 
 #: (name, function, seconds it needs at the real sizes before it is worth starting)
 STEPS = (("environment", environment, 0), ("lives", lives, 30), ("float32", float32_phase, 20),
-         ("life", whole_lives, 30), ("generation", generations, 60), ("sweep", sweep, 60), ("phases", phases, 20))
+         ("life", whole_lives, 30), ("generation", generations, 60), ("sweep", sweep, 60), ("study", study, 60),
+         ("phases", phases, 20))
 
 
 def figure(results: dict, path: str, cpu_bench: str | None = None) -> bool:

@@ -31,8 +31,19 @@ def test_dry_run_checks_and_times_every_step(tmp_path, capsys):
     assert {(r["phase"], r["kernel"]) for r in steps["phases"]["rows"]} == {
         ("LE-LS/EE-LS adulthood", "xla"), ("LE-LS/EE-LS adulthood", "pallas")}
     assert steps["sweep"]["points"] == 2 and len(steps["sweep"]["best_fitness"]) == 2
+    # The study: every distinct program of the claims map counted, --dry times the first (a sweep of two runs) and
+    # the first kind of learning test; the estimate is then incomplete and the target not judged.
+    study = steps["study"]
+    programs = [r for r in study["rows"] if r["part"] == "evolution"]
+    assert study["programs"] == len(programs) == len({(r["program"], r["seeds"]) for r in programs}) > 1
+    assert study["runs"] == sum(len(r["runs"]) for r in programs) and len(programs[0]["runs"]) == 2
+    timed = [r for r in study["rows"] if r["status"] == "ok"]
+    assert [r["part"] for r in timed] == ["evolution", "test"] and timed[0]["timed_points"] == 2
+    assert all(r["status"] == "skipped (dry)" for r in study["rows"] if r not in timed)
+    assert timed[0]["generation_s"] > 0 and timed[1]["lane_steps_per_s"] > 0
+    assert study["complete"] is False and study["meets_target"] is None and study["hours"] > 0
     text = (out / "gpu_check.txt").read_text()
-    assert "done: 7 steps ok, failed: none, skipped: none" in text
+    assert "done: 8 steps ok, failed: none, skipped: none" in text
     assert (out / "gpu_check.png").stat().st_size > 10_000
 
 
@@ -149,3 +160,68 @@ def test_an_earlier_check_is_not_overwritten(tmp_path, capsys):
     assert "gpu_check.json exists" in capsys.readouterr().err
     assert (tmp_path / "gpu_check.json").read_text() == "{}" and len(os.listdir(tmp_path)) == 1
     assert G.main(["--out", "", "--dry"]) == 2
+
+
+def test_the_study_counts_each_distinct_program_of_the_claims_map():
+    """Every evolved row of the map in one run, rows of one run together, runs of one static part (and seed count)
+    in one program: the programs' static parts differ, and a program's runs differ only in dynamic values."""
+    from experiments.claims_study import SCREEN_TABLE
+    from experiments.table import evolution_spec
+    from imrl_jax import gpu_study, runspec, sweeps
+
+    programs = gpu_study.claims_programs()
+    names = [name for p in programs for names, _ in p.runs for name in names]
+    assert sorted(names) == sorted(row.name for row in SCREEN_TABLE.rows if row.evolved)
+    assert len({(p.key, p.seeds) for p in programs}) == len(programs)
+    spec = {row.name: evolution_spec(row, SCREEN_TABLE.scale_of(row)) for row in SCREEN_TABLE.rows if row.evolved}
+    for p in programs:
+        configs = [spec[names[0]].config for names, _ in p.runs]
+        assert {gpu_study.program_key(c) for c in configs} == {p.key} and len({spec[n[0]].key() for n, _ in p.runs}) \
+            == len(p.runs)
+        first = runspec.model(configs[0])
+        assert all({f for f, v in runspec.model(c).items() if first.get(f) != v} <= set(sweeps.DYNAMIC_FIELDS)
+                   for c in configs)
+        assert all(len(spec[n].seeds) == p.seeds and spec[n].key() == spec[names[0]].key() for names, _ in p.runs
+                   for n in names)
+    which = {name: p.key for p in programs for names, _ in p.runs for name in names}
+    # the learned experts' initial speed is compiled in: each bias its own program; the extension's rules differ from
+    # paper-selector's only in learning values: one sweep
+    assert len({which[f"skills-bias{b} LE-LS"] for b in range(3)}) == 3
+    assert which["extension LE-LS"] == which["paper-selector LE-LS"]
+    assert len(programs[0].runs) > 1  # sweeps first
+
+
+def test_the_map_hours_are_generations_times_a_generation_plus_tests_at_their_speed():
+    """Made-up timings, the hours by hand: 100 x 2 s + 10 s and 50 x 0.5 s + 5 s of evolution; 6e9 lane-steps at
+    1e9/s + 2 s of tests."""
+    from imrl_jax.gpu_study import extrapolate
+
+    programs = [{"generations": 100, "generation_s": 2.0, "compile_s": 10.0},
+                {"generations": 50, "generation_s": 0.5, "compile_s": 5.0}]
+    tests = [{"lane_steps": 6e9, "lane_steps_per_s": 1e9, "compile_s": 2.0}]
+    got = extrapolate(programs, tests)
+    assert got["evolution_hours"] == pytest.approx((210 + 30) / 3600) and got["test_hours"] == pytest.approx(8 / 3600)
+    assert got["hours"] == pytest.approx(248 / 3600) and got["complete"] and got["meets_target"] is True
+    slow = extrapolate([{"generations": 100, "generation_s": 40.0, "compile_s": 0.0}], tests)
+    assert slow["hours"] == pytest.approx((4000 + 8) / 3600) and slow["meets_target"] is False
+    untimed = extrapolate(programs + [{"generations": 100, "status": "skipped (budget)"}], tests)
+    assert untimed["hours"] == pytest.approx(got["hours"]) and not untimed["complete"]
+    assert untimed["meets_target"] is None
+
+
+def test_a_program_is_timed_at_a_fraction_when_a_whole_generation_would_not_fit(tmp_path, monkeypatch):
+    """At 1e6 lane-steps/s a generation of 2 runs x 10 seeds x 50 of 750,000 steps takes 750 s; with 100 s left of
+    the step's share for 2 programs, each may take 25 s timed (half for compiling): 1/30 of its lives."""
+    from imrl_jax import gpu_study
+    from imrl_jax.config import make_config
+
+    check = G.Check(str(tmp_path), 1000.0, G.Sizes(), log=lambda line: None)
+    monkeypatch.setattr(check, "remaining", lambda: 300.0)
+    program = gpu_study.Program("k", "LE-LS", make_config("paper", condition="LE-LS"), ((("a",), {}), (("b",), {})),
+                                10, 100)
+    assert gpu_study.fraction_for(check, program, 1e6, 200.0, 2) == pytest.approx(25 / 750)
+    assert gpu_study.fraction_for(check, program, 3e7, 200.0, 2) == 1.0  # 25 s: whole
+    assert gpu_study.fraction_for(check, program, None, 200.0, 2) == 1.0  # no speed yet: whole
+    assert gpu_study.fraction_for(check, program, 1e4, 200.0, 2) == gpu_study.MIN_FRACTION
+    config = gpu_study.sized(check, program.config, 25 / 750)
+    assert (config.childhood_steps, config.task_steps) == (5000, 3300)  # whole bins of 100 steps

@@ -73,3 +73,45 @@ def test_list_shows_each_study_on_this_cpu_and_on_a_gpu(capsys, monkeypatch):
     assert experiments_main.main(["list"]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert "on a GPU" not in lines[0] and "no GPU measured" in lines[-1]
+
+
+def _study_check(tmp_path, key, status="ok"):
+    """A made-up gpu_check.json: a generation step and a study step that timed one program and two test sizes."""
+    data = {"machine": {"device": "GPU Y"}, "steps": [
+        {"step": "generation", "rows": [{"kernel": "pallas", "individuals": 500, "lane_steps_per_s": 1e9,
+                                         "compile_s": 6.0}]},
+        {"step": "study", "rows": [
+            {"part": "evolution", "program": key, "lane_steps_per_s": 2e9, "compile_s": 9.0, "status": status},
+            {"part": "evolution", "program": "0" * 12, "status": "skipped (budget)"},
+            {"part": "test", "condition": "LE-LS", "lanes": 600, "lane_steps_per_s": 1e8, "compile_s": 3.0,
+             "status": "ok"},
+            {"part": "test", "condition": "LE-LS", "lanes": 6000, "lane_steps_per_s": 5e8, "compile_s": 4.0,
+             "status": "ok"}]}]}
+    path = tmp_path / "gpu_check.json"
+    path.write_text(json.dumps(data))
+    return gpu_hours.read_speed(str(path))
+
+
+def test_a_stage_whose_program_the_study_step_timed_takes_that_speed(tmp_path):
+    """The claims map's skills-bias0 LE-LS run (done: its recorded model) at its program's measured speed; a run of
+    another program at the generation step's; a learning test at its condition's phase speed, nearest lanes."""
+    from experiments.study import SCREEN
+    from imrl_jax.gpu_study import program_key
+    from imrl_jax.rundir import read_config
+
+    done = os.path.join(RESULTS, "claims", "skills-bias0", "evolve", "LE-LS")
+    speed = _study_check(tmp_path, program_key(read_config(done)[0]))
+    assert speed.programs == {program_key(read_config(done)[0]): (2e9, 9.0)}  # the skipped program has no speed
+    assert speed.tests == {"LE-LS": [(600, 1e8, 3.0), (6000, 5e8, 4.0)]}
+    scale = dict(SCREEN, population=50)
+    assert gpu_hours.stage_seconds(_stage("LE-LS", out_dir=done), scale, speed) == pytest.approx(3.6e12 / 2e9 + 9.0)
+    other = os.path.join(RESULTS, "claims", "skills-bias1", "evolve", "LE-LS")
+    assert gpu_hours.stage_seconds(_stage("LE-LS", out_dir=other), scale, speed) == pytest.approx(3.6e12 / 1e9 + 6.0)
+    # a screen test: 5 runs x 5 best x 4 tests = 100 individuals of 150,000 + 6 x 1,000,000 steps, 600 lanes
+    test = _stage("LE-LS", kind="test", cost=100 * 6_150_000.0)
+    assert gpu_hours.stage_seconds(test, scale, speed) == pytest.approx(6.15e8 / 1e8 + 3.0)
+    paper_test = _stage("LE-LS", kind="test", cost=1000 * 6_150_000.0)  # 6,000 lanes
+    assert gpu_hours.stage_seconds(paper_test, scale, speed) == pytest.approx(6.15e9 / 5e8 + 4.0)
+    failed = _study_check(tmp_path, program_key(read_config(done)[0]), status="failed")
+    assert failed.programs == {} and gpu_hours.stage_seconds(_stage("LE-LS", out_dir=done), scale, failed) == \
+        pytest.approx(3.6e12 / 1e9 + 6.0)
