@@ -13,6 +13,8 @@ import jax
 import numpy as np
 
 HOST_DEVICE_FLAG = "--xla_force_host_platform_device_count"
+#: The mesh's one axis: the lanes (seeds x population) divided over the devices.
+AXIS = "lanes"
 
 
 def use_host_cores(count: int | None = None) -> int | None:
@@ -37,7 +39,7 @@ def make_mesh():
     """A 1-D mesh over every device of every process."""
     from jax.sharding import Mesh
 
-    return Mesh(np.asarray(jax.devices()), ("lanes",))
+    return Mesh(np.asarray(jax.devices()), (AXIS,))
 
 
 def population_sharding(mesh, num_seeds: int, population_size: int):
@@ -46,9 +48,9 @@ def population_sharding(mesh, num_seeds: int, population_size: int):
 
     n = mesh.devices.size
     if num_seeds % n == 0:
-        spec = PartitionSpec("lanes")
+        spec = PartitionSpec(AXIS)
     elif population_size % n == 0:
-        spec = PartitionSpec(None, "lanes")
+        spec = PartitionSpec(None, AXIS)
     else:
         spec = PartitionSpec()
     return NamedSharding(mesh, spec)

@@ -5,6 +5,7 @@
 final_population.npz, bit for bit, as on one device, whichever axis it shards.
 """
 
+import numpy as np
 import pytest
 
 from helpers import SHARDED_CASES as CASES
@@ -59,3 +60,71 @@ def test_next_populations_keep_their_sharding():
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.split("\n")[:4] == ["2 0 True 2", "2 1 True 2", "1 0 True 2", "1 1 True 2"], done.stdout
+
+
+#: Two generations with the Pallas kernel (interpreted off a GPU) on one device and on 2 forced devices.
+KERNEL_LANES = """
+import json, re, jax, numpy as np
+from jax.sharding import Mesh
+from imrl_jax.config import make_config
+from imrl_jax.devices import make_mesh, population_sharding, replicated, to_global
+from imrl_jax.run_state import evolution_keys, initial_state
+from imrl_jax.ga import make_generation
+from imrl_jax import kernel as K
+# A 40 cm target: reaches (and so resets) in 100 steps; one bin: the fewest kernel calls.
+config = make_config("small", condition="EE-LS", task_steps=100, num_bins=1, population_size=4, num_parents=2,
+                     target_radius=40, step_kernel="pallas")
+def run(mesh, seeds):
+    sharding = population_sharding(mesh, seeds, config.population_size)
+    state = initial_state(config, list(range(seeds)), sharding)
+    keys = to_global(evolution_keys(state.key_data), replicated(mesh))
+    step = make_generation(config, sharding)
+    populations, outputs = state.populations, []
+    lowered = step.lower(keys, config.learning_params(), populations, 0)
+    compiled = lowered.compile().as_text()
+    for g in range(2):
+        populations, stats = step(keys, config.learning_params(), populations, g)
+        outputs += [np.asarray(x).tolist() for x in (populations, *stats)]
+    text = lowered.as_text()
+    # The Triton kernel a GPU would run (lowered for CUDA here): its grid is each device's lanes.
+    K._interpret = lambda: False
+    cuda = make_generation(config, sharding).trace(keys, config.learning_params(), state.populations, 0)
+    cuda = cuda.lower(lowering_platforms=("cuda",))
+    K._interpret = interpret
+    grids = re.findall(r"grid_x = (\\d+) : i32, grid_y = (\\d+) : i32, grid_z = (\\d+)", cuda.as_text())
+    return dict(outputs=outputs, shard_map="sdy.manual_computation" in text or "SPMDFullToShardShape" in text,
+                gathered=re.findall(r"= \\w+\\[([\\d,]*)\\]\\S* all-gather\\(", compiled),
+                kernel_lanes=[int(x) * int(y) * int(z) for x, y, z in grids])
+interpret = K._interpret
+print(json.dumps({str(seeds): [run(Mesh(np.asarray(jax.devices()[:1]), ("lanes",)), seeds), run(make_mesh(), seeds)]
+                  for seeds in (2, 1)}))
+"""
+
+
+def test_kernel_lanes_shard_over_devices():
+    """With step_kernel=pallas each of 2 devices lives its own lanes (a shard_map), with the values of one device;
+    the kernel lowered for CUDA is called on each device with half the lanes.
+
+    Under plain jit XLA cannot split the kernel's call: it gathered every lane's state (draws, weights:
+    arrays of rank 4 and more) to both devices, each living every lane. Now 2 seeds (the seeds axis
+    sharded) gather nothing, and 1 seed of 4 (the population axis) gathers only its fitness,
+    performance and genomes (rank 3 at most) to select and reproduce.
+    """
+    import json
+    import subprocess
+    import sys
+
+    from helpers import ROOT, environment
+
+    done = subprocess.run([sys.executable, "-c", KERNEL_LANES], cwd=ROOT, env=environment(devices=2),
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    cases = json.loads(done.stdout.strip().splitlines()[-1])
+    for seeds, (one, two) in cases.items():
+        assert two["outputs"] == one["outputs"], f"{seeds} seed(s): 2 devices differ from one"
+        assert any(np.any(fitness) for fitness in (two["outputs"][1], two["outputs"][5])), "no reach: a weak check"
+        assert not one["shard_map"] and two["shard_map"], seeds
+        assert one["gathered"] == [] and all(shape.count(",") < 3 for shape in two["gathered"]), two["gathered"]
+    assert cases["2"][1]["gathered"] == [] and len(cases["1"][1]["gathered"]) == 3
+    for seeds, (one, two) in cases.items():  # seeds x 4 individuals x 6 tasks, in one call on one device
+        assert one["kernel_lanes"] == [int(seeds) * 4 * 6] and two["kernel_lanes"] == [int(seeds) * 4 * 6 // 2]
