@@ -37,8 +37,8 @@ import imrl_jax
 from imrl_jax.checkpoint import Checkpointer, RunState, _silence_failed_reads, git_commit
 from imrl_jax import cli, evolve_sweep, kernel_choice
 from imrl_jax.cli import UsageError, exit_codes, parse_sets, user_errors
-from imrl_jax.devices import (check_memory, init_distributed, make_mesh, population_sharding, replicated, sharded_axis, to_global, to_host,
-                              use_host_cores)
+from imrl_jax.devices import (check_memory, init_distributed, make_mesh, memory_needed, population_sharding, replicated,
+                              sharded_axis, to_global, to_host, use_host_cores)
 from imrl_jax.config import Config
 from imrl_jax import search
 from imrl_jax.ga import GA, make_generation
@@ -240,7 +240,9 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
             progress.note(cost_line(f"evolving {config.condition}: {len(seeds)} seed(s) x {config.population_size} "
                                     f"individuals x {config.num_generations - first} generation(s)",
                                     len(seeds) * config.population_size * config.lives_per_fitness, lane_steps,
-                                    config.num_generations - first, jax.default_backend())
+                                    config.num_generations - first, jax.default_backend(),
+                                    memory_needed(config, len(seeds) * config.population_size * config.lives_per_fitness,
+                                                  jax.device_count(), history_bytes(config, len(seeds))))
                           + f"; step_kernel={kernel_choice.chosen(config)}")
             progress.note("compiling the generation (its first line comes once it is compiled and run) ...")
         if trait_names(config):

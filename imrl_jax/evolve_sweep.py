@@ -40,7 +40,7 @@ from imrl_jax import cli, kernel_choice, sweeps
 from imrl_jax.checkpoint import Checkpointer, RunState, _silence_failed_reads, git_commit
 from imrl_jax.cli import UsageError, device_warnings, ignored_notes, parse_sets
 from imrl_jax.config import Config, ConfigError
-from imrl_jax.devices import check_memory, make_mesh, population_sharding, replicated, to_global, to_host
+from imrl_jax.devices import check_memory, make_mesh, memory_needed, population_sharding, replicated, to_global, to_host
 from imrl_jax.events import add_log, log_for
 from imrl_jax.ga import GAParams, evolve_step
 from imrl_jax.networks import trait_names, traits
@@ -375,12 +375,14 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], points: Sequence[Poi
     params, ga = batched_values(points, num_seeds)
     params, ga = (jax.tree.map(lambda x: to_global(x, replicated(mesh)), tree) for tree in (params, ga))
     populations = to_global(np.concatenate([to_host(s.populations) for s in states]), sharding)
-    lane_steps = len(points) * num_seeds * config.population_size * config.lives_per_fitness * config.lifetime_steps
+    lives = len(points) * num_seeds * config.population_size * config.lives_per_fitness
+    lane_steps = lives * config.lifetime_steps
     if first < config.num_generations:  # what it will cost, before the compilation it waits for
         progress.note(cost_line(f"evolving {len(points)} point(s) x {num_seeds} seed(s) x {config.population_size} "
-                                f"individuals x {config.num_generations - first} generation(s)",
-                                len(points) * num_seeds * config.population_size * config.lives_per_fitness, lane_steps,
-                                config.num_generations - first, jax.default_backend()))
+                                f"individuals x {config.num_generations - first} generation(s)", lives, lane_steps,
+                                config.num_generations - first, jax.default_backend(),
+                                memory_needed(config, lives, jax.device_count(),
+                                              len(points) * history_bytes(config, num_seeds))))
         progress.note("compiling the generation of every point (its first line comes once it is compiled and run) ...")
     names = trait_names(config)
     trait_values = jax.jit(jax.vmap(jax.vmap(lambda genome: traits(config, genome)))) if names else None

@@ -46,7 +46,7 @@ import numpy as np
 from jax.sharding import NamedSharding, PartitionSpec
 
 from imrl_jax.checkpoint import git_commit
-from imrl_jax.devices import check_memory, make_mesh, use_host_cores
+from imrl_jax.devices import check_memory, make_mesh, memory_needed, use_host_cores
 from imrl_jax.config import Config, ConfigError, LearningParams
 from imrl_jax import cli, kernel_choice, runspec
 from imrl_jax.cli import UsageError, exit_codes, parse_sets
@@ -59,7 +59,7 @@ from imrl_jax.learning_test_state import (PARTIAL, check_out_before, fingerprint
                                           locked_out_dir, start_partial, write_errors, write_outputs)
 from imrl_jax.learning_test_sweep import (check_generations, check_keys, check_out_root, check_record,
                                           check_tested_before, sweep_summary)
-from imrl_jax.progress import Progress
+from imrl_jax.progress import Progress, cost_line
 from imrl_jax.rundir import best_genomes, load_run as read_run, lock_run_dir, make_dir, recorded_points
 from imrl_jax.steady_state import performance_curve, steady_bins, summarise
 from imrl_jax.sweeps import static_part
@@ -207,9 +207,9 @@ class PointTest(NamedTuple):
         num_runs, num_best = self.genomes.shape[:2]
         if self.genomes.shape[-1] != config.num_genes:
             raise UsageError(f"genomes: {self.genomes.shape[-1]} genes, the config's {config.num_genes}")
-        kept = num_runs * num_best * self.num_tests * config.num_tasks * config.num_bins * (config.num_experts + 1) * 12
         check_memory(config, num_best * self.num_tests * config.num_tasks,  # a run's tests at once; all runs' curves
-                     f"testing {num_best} x {self.num_tests} test(s) of {config.num_tasks} tasks a run", host_bytes=kept)
+                     f"testing {num_best} x {self.num_tests} test(s) of {config.num_tasks} tasks a run",
+                     host_bytes=curves_bytes(config, num_runs * num_best * self.num_tests))
         try:
             check_log(self.log)
         except ValueError as error:
@@ -240,6 +240,11 @@ def run(config: Config, genomes: np.ndarray, out_dir: str, *, num_tests: int, st
     return test.test()
 
 
+def curves_bytes(config: Config, num_tests: int) -> int:
+    """The host memory every test's curves take, kept until the outputs are written (with their copies)."""
+    return num_tests * config.num_tasks * config.num_bins * (config.num_experts + 1) * 12
+
+
 #: The test programs this process has compiled (config's static part, chunks, lanes): "compiling" is said once each.
 _COMPILED: set = set()
 
@@ -260,6 +265,11 @@ def _test_runs(config: Config, genomes: np.ndarray, out_dir: str, num_tests: int
                      f"{config.task_steps} cycles"
                      + (f" after a {config.childhood_steps}-step childhood" if config.spec.has_childhood else "")
                      + ", run by run" + (f"; {len(done)} run(s) done before, kept in {partial}" if done else ""))
+    if len(done) < num_runs:  # what the runs left will cost, before the compilation they wait for
+        progress.note(cost_line(f"testing {num_runs - len(done)} run(s)", num_best * num_tests,
+                                num_best * num_tests * config.lifetime_steps, num_runs - len(done),
+                                jax.default_backend(), memory_needed(config, num_best * num_tests * config.num_tasks,
+                                jax.device_count(), curves_bytes(config, num_runs * num_best * num_tests)), unit="run"))
     start = time.perf_counter()
     params = config.learning_params()
     sizes = dict(num_runs=num_runs, num_best=num_best, num_tests=num_tests, steady_steps=steady_steps, seed=seed)

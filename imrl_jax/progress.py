@@ -125,15 +125,17 @@ def _amount(count: int) -> str:
     return f"{count:,}" if count < 10**6 else f"{count / 1e6:,.1f} M" if count < 10**9 else f"{count / 1e9:,.2f} G"
 
 
-def cost_line(what: str, individuals: int, lane_steps: int, generations: int, backend: str) -> str:
-    """What a run will cost, in one line: its lives and lane-steps, and its time at the speed the benchmark measured
-    on ``backend`` (if it did), compilation aside."""
+def cost_line(what: str, individuals: int, lane_steps: int, generations: int, backend: str,
+              memory: int | None = None, unit: str = "generation") -> str:
+    """What a run will cost, in one line: its lives and lane-steps, its time at the speed the benchmark measured on
+    ``backend`` (if it did), compilation aside, and the ``memory`` (bytes) its check estimated, if given."""
     total = lane_steps * generations
-    line = f"{what}: {individuals:,} lives a generation, {_amount(lane_steps)} lane-steps a generation, " \
-           f"{_amount(total)} in all"
+    line = f"{what}: {individuals:,} lives a {unit}, {_amount(lane_steps)} lane-steps a {unit}, {_amount(total)} in all"
     speed = measured_speed(backend, individuals)
     if speed is None:
-        return line + f"; no speed measured on {backend} in docs/bench to estimate its time"
-    rate, source = speed
-    return line + (f"; about {_clock(total / rate)} at the {rate / 1e6:.1f} M lane-steps/s {source} measured on "
-                   f"{backend}, compilation aside")
+        line += f"; no speed measured on {backend} in docs/bench to estimate its time"
+    else:
+        rate, source = speed
+        line += (f"; about {_clock(total / rate)} at the {rate / 1e6:.1f} M lane-steps/s {source} measured on "
+                 f"{backend}, compilation aside")
+    return line + (f"; at most about {memory / 2**30:.1f} GiB of memory (an estimate)" if memory is not None else "")

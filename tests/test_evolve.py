@@ -125,6 +125,14 @@ def test_corrupt_checkpoint_falls_back_to_the_previous_one(finished_run, tmp_pat
     assert len(cost) == 1 and "lane-steps a generation" in lines[cost[0]]
     assert "about 0:00:0" in lines[cost[0]] and os.path.join("docs", "bench", "cpu-2core.json") in lines[cost[0]]
     assert lines[cost[0] + 1].startswith("compiling the generation") and lines[cost[0] + 2].startswith("gen 5 (6/6)")
+    import jax
+
+    from imrl_jax.devices import memory_needed  # the memory the plan's check estimated: lanes and the records
+    from imrl_jax.run_state import history_bytes
+
+    config = evolve.read_config(out)[0]
+    gib = memory_needed(config, 12, jax.device_count(), history_bytes(config, 2)) / 2**30
+    assert f"; at most about {gib:.1f} GiB of memory (an estimate); step_kernel=xla" in lines[cost[0]]
 
 
 @pytest.mark.parametrize("damage", ["array metadata", "largest data file"])
@@ -728,6 +736,8 @@ def test_the_time_a_run_will_take_is_read_from_the_benchmarks_speeds(tmp_path):
                                                                   "estimate its time")
     line = progress.cost_line("x", 50, 10**7, 20, "cpu")
     assert line.startswith("x: 50 lives a generation, 10.0 M lane-steps a generation, 200.0 M in all; about 0:00:")
+    assert progress.cost_line("x", 50, 10**7, 20, "tpu", memory=3 * 2**30).endswith(
+        "; at most about 3.0 GiB of memory (an estimate)")
 
 
 @pytest.mark.parametrize("search", [[1], "ga", {"strategy": 1, "settings": {}}, {"strategy": "ga"}, None])

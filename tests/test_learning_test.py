@@ -145,8 +145,15 @@ def test_an_interrupted_test_goes_on_from_its_first_unfinished_run(tiny_run, tmp
 
     calls.clear()
     monkeypatch.setattr(learning_test, "run_tests", lambda *a, **k: calls.append(1) or real(*a, **k))
-    assert learning_test.main([*argv, "--out", str(cut)]) == 0
+    capsys.readouterr()
+    assert learning_test.main([*argv[:-1], "--out", str(cut)]) == 0  # its progress shown
     assert len(calls) == num_runs - 1  # run 0 was not tested again
+    lines = capsys.readouterr().err.splitlines()  # what the runs left cost, said before anything compiles
+    config = learning_test.load_run(tiny_run, 2)[0].replace(task_steps=400, num_bins=4)
+    lives, steps = 2 * 1, 2 * 1 * config.lifetime_steps  # best x tests; a test lives a whole life
+    cost = f"testing {num_runs - 1} run(s): {lives} lives a run, {steps:,} lane-steps a run, "
+    assert lines[1].startswith(cost) and lines[1].endswith(" GiB of memory (an estimate)"), lines[:3]
+    assert lines[0].startswith("EE-LS learning test: ") and "1 run(s) done before" in lines[0]
     with np.load(whole / "curves.npz") as a, np.load(cut / "curves.npz") as b:
         np.testing.assert_array_equal(a["reaches"], b["reaches"])
         np.testing.assert_array_equal(a["selections"], b["selections"])
