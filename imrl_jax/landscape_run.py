@@ -318,6 +318,7 @@ class Measures:
     sizes: dict  # lives, num_parents, num_mutants, num_walks, walk_length, num_random, key, chunk
     best_genomes: str | None
     log: Callable[[str], None]
+    cost: str = ""  # what the measures cost (lives, lane-steps, time at the benchmark's speed, memory), said first
 
     def execute(self) -> int:
         """Measure (:meth:`measure`); the exit code."""
@@ -333,6 +334,7 @@ class Measures:
 
     def _measure(self, pieces: dict) -> dict:
         config, s = self.config, self.sizes
+        self.log(self.cost + ("; the pieces measured before are not measured again" if pieces else ""))
         progress_path = os.path.join(self.out_dir, PROGRESS)
         before = {p["generation"] for p in pieces.values() if isinstance(p.get("generation"), int)}
         done = {"identity": self.identity, "run": self.run_dir, "condition": config.condition,
@@ -388,7 +390,8 @@ def plan(run_dir: str, out_dir: str, *, generations: str = "0,10,last", seed: in
          cuts: tuple[float, ...] = (), key: int = 0, chunk: int = 50, best_genomes: str | None = None,
          allow_unfinished: bool = False, log=print) -> Measures:
     """Everything a call will measure, read and checked, nothing written (raises a user error at the first wrong)."""
-    from imrl_jax.devices import check_memory
+    from imrl_jax.devices import check_memory, memory_needed
+    from imrl_jax.progress import cost_line
     from imrl_jax.run_state import read_search
     from imrl_jax.runspec import RunSpec
     from imrl_jax.strategies import GA_RECORD
@@ -429,9 +432,12 @@ def plan(run_dir: str, out_dir: str, *, generations: str = "0,10,last", seed: in
     genomes, lanes = check_sizes(config, len(wanted), len(cut_configs), **sizes)
     if any(0 < g < done - 1 or (g == done - 1 and not last_kept) for g in wanted):
         lanes = max(lanes, config.population_size * config.lives_per_fitness)  # a replay's generation
+    host = HOST_COPIES * genomes * 4 * (config.num_genes + 2) * (1 + len(cut_configs))
+    cost = cost_line(f"measuring generation(s) {', '.join(map(str, wanted))} of seed {seed}", lives * genomes
+                     * (1 + len(cut_configs)), lives * genomes * (1 + len(cut_configs)) * config.lifetime_steps, 1,
+                     jax.default_backend(), memory_needed(config, lanes, jax.device_count(), host), unit="call")
     try:
-        check_memory(config, lanes, "the landscape measures",
-                     host_bytes=HOST_COPIES * genomes * 4 * (config.num_genes + 2) * (1 + len(cut_configs)))
+        check_memory(config, lanes, "the landscape measures", host_bytes=host)
     except UsageError as error:  # its advice is an evolution's: say this command's sizes instead
         raise UsageError(f"{str(error).split('; use ')[0]}; use a smaller --chunk, fewer --lives or fewer genomes "
                          f"(--parents, --mutants, --walks, --walk-length, --random)") from None
@@ -444,7 +450,7 @@ def plan(run_dir: str, out_dir: str, *, generations: str = "0,10,last", seed: in
         print(f"warning: {why}: measuring generation(s) {', '.join(map(str, wanted))} of the {done} it has evaluated "
               f"(landscape.json records it)", file=sys.stderr, flush=True)
     return Measures(run_dir, out_dir, config, seeds, seed, wanted, done, why, cut_configs, identity, sizes,
-                    best_genomes, log)
+                    best_genomes, log, cost)
 
 
 def run(run_dir: str, out_dir: str, *, generations: str = "0,10,last", seed: int | None = None, lives: int = 4,

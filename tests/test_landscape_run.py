@@ -69,7 +69,7 @@ def test_every_piece_is_measured_once_and_a_second_call_goes_on_from_them(run_di
     assert sorted(result["pieces"]) == sorted(f"{what}, {learning}" for what in ("random genomes", "generation 0",
                                                                                    "generation 2")
                                               for learning in ("learning", "cut 0"))
-    assert len(said) == 6
+    assert len(said) == 1 + 6 and said[0].startswith("measuring generation(s) 0, 2 of seed 0: ")  # its cost first
     for name, piece in result["pieces"].items():
         if name.startswith("generation"):
             shares = piece["share_neutral"] + piece["share_deleterious"] + piece["share_beneficial"]
@@ -80,7 +80,8 @@ def test_every_piece_is_measured_once_and_a_second_call_goes_on_from_them(run_di
     assert result["pieces"]["generation 2, learning"] != result["pieces"]["generation 2, cut 0"]
     said.clear()
     again = landscape_run.run(run_dir, out, generations="0,last", cuts=(0.0,), log=said.append, **SMALL)
-    assert said == [] and again == result
+    assert len(said) == 1 and said[0].endswith("; the pieces measured before are not measured again")
+    assert again == result
     with open(os.path.join(out, "result.json")) as f:
         assert json.load(f) == result
 
@@ -264,6 +265,18 @@ def test_an_out_of_this_commands_own_files_is_gone_on_from(copied, tmp_path):
     with open(os.path.join(out, "landscape.json"), "w") as f:
         json.dump({"identity": plan.identity, "pieces": {}}, f)
     _planned(run, out, str(tmp_path))
+
+
+def test_what_the_measures_cost_is_said_first(copied, tmp_path):
+    """The plan says its lives (counted by hand: --random, then per generation the parents and their mutants, the
+    walks and their steps, every genome --lives times), lane-steps, time and memory, before any piece."""
+    run, out = copied
+    plan = _planned(run, out, str(tmp_path), "--lives", "2", "--mutants", "3", "--walk-length", "4", "--random", "6")
+    assert plan.generations == [0]  # 0 and last: the run's one generation
+    lives = 2 * (6 + 1 * (2 * (1 + 3) + 1 * (1 + 4)))
+    assert plan.cost.startswith(f"measuring generation(s) 0 of seed 0: {lives} lives a call, "
+                                f"{lives * plan.config.lifetime_steps:,} lane-steps a call")
+    assert plan.cost.endswith(" GiB of memory (an estimate)")
 
 
 @pytest.mark.parametrize("options, differs", [
