@@ -225,3 +225,33 @@ def test_a_program_is_timed_at_a_fraction_when_a_whole_generation_would_not_fit(
     assert gpu_study.fraction_for(check, program, 1e4, 200.0, 2) == gpu_study.MIN_FRACTION
     config = gpu_study.sized(check, program.config, 25 / 750)
     assert (config.childhood_steps, config.task_steps) == (5000, 3300)  # whole bins of 100 steps
+
+
+def test_the_kernels_work_per_step_is_counted_from_its_code_and_the_sizes():
+    """The networks' multiply-adds of LE-LS's childhood at K = 3, n + 1 = 37, by hand: forward selector 111, actor
+    222, reinforcer 111, evaluator 222; expert traces 111, updates 333; critic 74, selector traces 148, updates
+    148. The traced loop body makes as many matrix-vector products (reductions of a Kp x N matrix's rows) as the
+    count's forward terms, and reads the draws alone from global memory each step (float32 u, and z when noisy)."""
+    from imrl_jax import conditions as C
+    from imrl_jax import kernel_work as W
+    from imrl_jax.config import make_config
+    from imrl_jax.state import childhood_phase
+
+    config = make_config("paper", condition="LE-LS")
+    childhood = childhood_phase(config)
+    assert sum(W.network_macs(config, childhood).values()) == 1480
+    assert sum(W.network_macs(config, C.ADULT_LEARNING_SELECTOR).values()) == 111 + 222 + 74 + 148 + 148
+    assert sum(W.network_macs(config, C.ADULT_EVOLVED_SELECTOR).values()) == 333
+    assert sum(W.network_macs(config, childhood, padded=True).values()) == 6 * 256 + 3 * 64 + 3 * 256 + 128 + 2 * 320
+    four = config.replace(num_experts=4)  # 11 K x (n+1) terms and 7 of n+1: 1480 = 11 x 111 + 7 x 37 at K = 3
+    assert sum(W.network_macs(four, childhood).values()) == 11 * 4 * 37 + 7 * 37  # 11 matrix terms, 7 vector ones
+    for phase, products, dots, read in ((childhood, 6, 2, 12), (C.ADULT_LEARNING_SELECTOR, 3, 2, 4),
+                                        (C.ADULT_EVOLVED_SELECTOR, 3, 0, 4)):
+        work = W.loop_work(config, phase)
+        forward = [m for name, m in W.network_macs(config, phase).items() if "forward" in name or "V(" in name]
+        assert sum(forward) == (products * 3 + dots) * 37
+        assert work["global_read_bytes"] == read and work["flops"] > 2 * sum(W.network_macs(config, phase,
+                                                                                             padded=True).values())
+        assert work["warp_instructions"] > 0
+    assert W.loop_work(config, childhood)["warp_instructions"] > W.loop_work(config, C.ADULT_EVOLVED_SELECTOR)[
+        "warp_instructions"]
