@@ -35,11 +35,11 @@ def use_host_cores(count: int | None = None) -> int | None:
     return count
 
 
-def make_mesh():
-    """A 1-D mesh over every device of every process."""
+def make_mesh(count: int | None = None):
+    """A 1-D mesh over every device of every process (or the first ``count``: one GPU against all, timed)."""
     from jax.sharding import Mesh
 
-    return Mesh(np.asarray(jax.devices()), (AXIS,))
+    return Mesh(np.asarray(jax.devices()[:count]), (AXIS,))
 
 
 def population_sharding(mesh, num_seeds: int, population_size: int):

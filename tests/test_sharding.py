@@ -65,7 +65,6 @@ def test_next_populations_keep_their_sharding():
 #: Two generations with the Pallas kernel (interpreted off a GPU) on one device and on 2 forced devices.
 KERNEL_LANES = """
 import json, re, jax, numpy as np
-from jax.sharding import Mesh
 from imrl_jax.config import make_config
 from imrl_jax.devices import make_mesh, population_sharding, replicated, to_global
 from imrl_jax.run_state import evolution_keys, initial_state
@@ -96,7 +95,7 @@ def run(mesh, seeds):
                 gathered=re.findall(r"= \\w+\\[([\\d,]*)\\]\\S* all-gather\\(", compiled),
                 kernel_lanes=[int(x) * int(y) * int(z) for x, y, z in grids])
 interpret = K._interpret
-print(json.dumps({str(seeds): [run(Mesh(np.asarray(jax.devices()[:1]), ("lanes",)), seeds), run(make_mesh(), seeds)]
+print(json.dumps({str(seeds): [run(make_mesh(1), seeds), run(make_mesh(), seeds)]
                   for seeds in (2, 1)}))
 """
 
