@@ -110,11 +110,12 @@ def state_bytes(config, phase) -> int:
     return sum(_size(e.outvars[0].aval) * e.outvars[0].aval.dtype.itemsize for e in outside)
 
 
-def network_macs(config, phase, padded: bool = False) -> dict:
+def network_macs(config, phase, padded: bool = False, num_experts: int | None = None) -> dict:
     """Multiply-adds of the networks per step at the config's sizes, by term (kernel.py's ``one_step``: a matrix
     K x (n+1) times x~ is K(n+1); a trace or a weight update of a vector n+1, of a matrix K(n+1)); ``padded``: at
-    Triton's sizes (K to a power of two Kp, n + 1 to one N), what runs."""
-    k, n1 = config.num_experts, config.num_inputs + 1
+    Triton's sizes (K to a power of two Kp, n + 1 to one N), what runs; ``num_experts``: the agent's K where it is
+    not the config's (SLE's adult agent has one expert)."""
+    k, n1 = num_experts or config.num_experts, config.num_inputs + 1
     if padded:
         k, n1 = 1 << (k - 1).bit_length(), 1 << (n1 - 1).bit_length()
     terms = {"selector forward (K sigmoid units)": k * n1, "actor forward (2 units of each expert)": 2 * k * n1}
