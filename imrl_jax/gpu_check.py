@@ -586,9 +586,9 @@ def sweep(check: Check) -> dict:
 
 def phases(check: Check) -> dict:
     """Every phase of the benchmark, both kernels, at every lane count."""
-    from imrl_jax import bench
+    from imrl_jax import bench, conditions, kernel_work
 
-    rows = []
+    rows, counted = [], {}
     for name, condition, phase, _ in bench.PHASES:
         if check.sizes.conditions and condition not in check.sizes.conditions:
             continue
@@ -609,6 +609,12 @@ def phases(check: Check) -> dict:
                                lane_steps_per_s=program.lane_steps / seconds,
                                best_lane_steps_per_s=program.lane_steps / shortest,
                                program_bytes=program_bytes(executable), status="ok")
+                    if kernel == "pallas":  # the issue rate it reaches (PERFORMANCE.md "How far from the hardware")
+                        if (condition, phase) not in counted:
+                            counted[condition, phase] = kernel_work.loop_work(
+                                program.config, getattr(conditions, phase))["warp_instructions"]
+                        row.update(warp_instructions=counted[condition, phase],
+                                   warp_instructions_per_s=row["lane_steps_per_s"] * counted[condition, phase])
                     check.say(f"  {name:22s} {kernel:6s} {lanes:8,d} lanes: {row['lane_steps_per_s']:14,.0f} "
                               f"lane-steps/s, compile {compile_s:5.1f} s")
     return {"rows": rows}

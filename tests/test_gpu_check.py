@@ -30,6 +30,10 @@ def test_dry_run_checks_and_times_every_step(tmp_path, capsys):
     # Only the phases of the checked conditions (EE-LS: the learning selector's adulthood), both kernels.
     assert {(r["phase"], r["kernel"]) for r in steps["phases"]["rows"]} == {
         ("LE-LS/EE-LS adulthood", "xla"), ("LE-LS/EE-LS adulthood", "pallas")}
+    kernel_row = next(r for r in steps["phases"]["rows"] if r["kernel"] == "pallas")  # its counted instructions
+    assert kernel_row["warp_instructions_per_s"] == pytest.approx(kernel_row["lane_steps_per_s"]
+                                                                  * kernel_row["warp_instructions"])
+    assert kernel_row["warp_instructions"] > 500
     assert steps["sweep"]["points"] == 2 and len(steps["sweep"]["best_fitness"]) == 2
     # The study: every distinct program of the claims map counted, --dry times the first (a sweep of two runs) and
     # the first kind of learning test; the estimate is then incomplete and the target not judged.
