@@ -114,8 +114,8 @@ def sized(check, config, fraction: float):
     if fraction >= 1.0:
         return config
     bins = config.num_bins
-    task = max(bins, int(config.task_steps * fraction) // bins * bins)  # whole bins
-    return config.replace(task_steps=task, childhood_steps=int(config.childhood_steps * fraction))
+    whole = lambda steps: max(bins, int(steps * fraction) // bins * bins) if steps else 0  # noqa: E731 - whole bins
+    return config.replace(task_steps=whole(config.task_steps), childhood_steps=whole(config.childhood_steps))
 
 
 def time_program(check, program: Program, fraction: float) -> dict:

@@ -229,6 +229,8 @@ def test_a_program_is_timed_at_a_fraction_when_a_whole_generation_would_not_fit(
     assert gpu_study.fraction_for(check, program, 1e4, 200.0, 2) == gpu_study.MIN_FRACTION
     config = gpu_study.sized(check, program.config, 25 / 750)
     assert (config.childhood_steps, config.task_steps) == (5000, 3300)  # whole bins of 100 steps
+    config = gpu_study.sized(check, program.config, 0.0123)
+    assert (config.childhood_steps, config.task_steps) == (1800, 1200)  # 1,845 and 1,230 to whole bins
 
 
 def test_the_kernels_work_per_step_is_counted_from_its_code_and_the_sizes():
