@@ -102,6 +102,30 @@ def loop_work(config, phase) -> collections.Counter:
     return count(loop.params["jaxpr"].jaxpr)
 
 
+def observe_work(config, points: bool = False) -> collections.Counter:
+    """The work of the kernel's ``observe`` (x~ from the pose): as it is, each of the N padded entries computing its
+    point's position and colour; ``points``: the variant PERFORMANCE.md plans, once per retina point (padded to a
+    power of two) and the colours broadcast colour-major to the N entries."""
+    import jax
+    import jax.numpy as jnp
+
+    from imrl_jax.arena import floor_colour_xy
+    from imrl_jax.kernel import round_even
+
+    big_n = 1 << config.num_inputs.bit_length()  # n + 1 entries to a power of two, as kernel._pow2
+    width = 1 << (config.num_inputs // 3 - 1).bit_length() if points else big_n
+
+    def observe(x, y, c, s, forward, lateral, colours, bias):
+        colour = floor_colour_xy(config, x + forward * c - lateral * s, y + forward * s + lateral * c, round_even)
+        colour = colour.astype(jnp.float32)
+        if points:
+            colour = jnp.broadcast_to(colour[None, :], (big_n // width, width)).reshape(big_n)
+        return (colour == colours).astype(jnp.float32) + bias
+
+    scalar, vector, wide = jnp.zeros(()), jnp.zeros((width,)), jnp.zeros((big_n,))
+    return count(jax.make_jaxpr(observe)(scalar, scalar, scalar, scalar, vector, vector, wide, wide).jaxpr)
+
+
 def state_bytes(config, phase) -> int:
     """Bytes the kernel reads and writes from global memory once a bin (the lane's state in and out, its counts)."""
     kernel = kernel_jaxpr(config, phase)

@@ -261,3 +261,18 @@ def test_the_kernels_work_per_step_is_counted_from_its_code_and_the_sizes():
         assert work["warp_instructions"] > 0
     assert W.loop_work(config, childhood)["warp_instructions"] > W.loop_work(config, C.ADULT_EVOLVED_SELECTOR)[
         "warp_instructions"]
+
+
+def test_the_retina_per_point_would_spare_most_of_observes_instructions():
+    """The planned variant's count: observe on 16 points and broadcast to the 64 entries takes about half the warp
+    instructions of today's 64 entries, and today's is most of an EE-ES step's (PERFORMANCE.md's 392 of 688)."""
+    from imrl_jax import conditions as C
+    from imrl_jax import kernel_work as W
+    from imrl_jax.config import make_config
+
+    config = make_config("paper", condition="LE-LS")
+    today, planned = W.observe_work(config), W.observe_work(config, points=True)
+    # the same arithmetic on 64 entries rather than 16 points, the bias added to the 64 entries in both
+    assert today["flops"] - 64 == 4 * (planned["flops"] - 64)
+    assert today["warp_instructions"] > 1.8 * planned["warp_instructions"]
+    assert today["warp_instructions"] > W.loop_work(config, C.ADULT_EVOLVED_SELECTOR)["warp_instructions"] / 2
