@@ -147,9 +147,9 @@ def check_sweep_dir(out_dir: str, config: Config, seeds: Sequence[int], points: 
 
 
 def make_sweep_step(config: Config, sharding):
-    """The jitted generation ``step(keys, params, ga_params, populations, index)`` of every entry (point x seed),
-    each with its own learning and mutation values (leading axis B on keys, params, ga_params and populations)."""
-    return over_seeds(lambda k, p, ga, pop, i: evolve_step(k, config, p, pop, i, ga), (0, 0, 0, 0, None), sharding)
+    """The jitted generation ``step(keys, params, ga_params, populations, index)`` of every entry (leading axis B)."""
+    return over_seeds(lambda k, p, ga, pop, i: evolve_step(k, config, p, pop, i, ga), (0, 0, 0, 0, None), sharding,
+                      genomes=3, kernel=kernel_choice.chosen(config) == "pallas")
 
 
 def batched_values(points: Sequence[Point], num_seeds: int):

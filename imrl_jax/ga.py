@@ -19,7 +19,6 @@ import jax.numpy as jnp
 
 from imrl_jax import kernel_choice, search
 from imrl_jax.config import Config, LearningParams
-from imrl_jax.devices import AXIS, sharded_axis
 from imrl_jax.lifetime import LifetimeResult, live
 
 
@@ -124,7 +123,7 @@ def evolve_step(key: jax.Array, config: Config, params: LearningParams, populati
     state, result = search.generation(key, strategy, lambda k, g: live(k, config, params, g),
                                       GAState(population), ga_params, generation,
                                       config.lives_per_fitness)
-    return state.population, GenerationStats(result.fitness, result.lives.performance.mean(1), result.info)
+    return state.population, GenerationStats(result.fitness, search.performance(result), result.info)
 
 
 def evaluate(key: jax.Array, config: Config, params: LearningParams,
@@ -143,48 +142,7 @@ def make_generation(config: Config, sharding=None):
     ``keys`` (seeds,) are the seeds' own keys; ``populations`` (seeds, P, genes). Returns
     the next populations and each seed's :class:`GenerationStats`. With ``sharding`` (of
     the populations), the next populations keep it (:func:`imrl_jax.search.over_seeds`);
-    when the Pallas kernel lives them, each device lives its own lanes (:func:`shard_lanes`).
+    when the Pallas kernel lives them, each device lives its own lanes (:func:`imrl_jax.search.shard_lanes`).
     """
-    if sharding is not None and sharded_axis(sharding) != "none" and kernel_choice.chosen(config) == "pallas":
-        return shard_lanes(config, sharding)
-    return search.over_seeds(lambda k, p, g, i: evolve_step(k, config, p, g, i), (0, None, 0, None), sharding)
-
-
-def shard_lanes(config: Config, sharding):
-    """:func:`make_generation` under ``jax.shard_map``: each device calls the kernel on its share of the lanes.
-
-    XLA's partitioner cannot split a ``pallas_call`` (a custom call on a GPU, a loop over the
-    grid in the interpreter): under plain jit it gathers every lane's state to every device,
-    each living all the lanes. Sharded seeds need nothing else; a sharded population lives its
-    share, then gathers the fitness (and genomes) so that every device selects and reproduces
-    the whole population alike, the same values as on one device, and keeps its share.
-    """
-    from jax.sharding import PartitionSpec as P
-
-    strategy = GA(config)
-    ga_params = strategy.default_params()
-    population = config.population_size
-
-    def one_seed(key, params, genomes, index):
-        """One seed's generation from this device's ``genomes`` (its share of the population)."""
-        key_life, key_search = search.generation_keys(key, index)
-        share = genomes.shape[0]
-        start = jax.lax.axis_index(AXIS) * share
-        keys = search.life_keys(key_life, population, config.lives_per_fitness)  # the whole population's, as ever
-        keys = jax.lax.dynamic_slice_in_dim(keys, start, share)
-        lives = jax.vmap(jax.vmap(lambda k, g: live(k, config, params, g), (0, None)))(keys, genomes)
-        gather = lambda x: jax.lax.all_gather(x, AXIS, tiled=True)  # noqa: E731
-        fitness, performance = gather(lives.fitness.mean(1)), gather(lives.performance.mean(1))
-        genomes, state = strategy.ask(key_search, GAState(gather(genomes)), ga_params)
-        state, parents = strategy.tell(key_search, genomes, fitness, state, ga_params)
-        return jax.lax.dynamic_slice_in_dim(state.population, start, share), GenerationStats(fitness, performance,
-                                                                                               parents)
-
-    if sharded_axis(sharding) == "seeds":  # each device its seeds: evolve_step as on one device
-        local = jax.vmap(lambda k, p, g, i: evolve_step(k, config, p, g, i), (0, None, 0, None))
-        specs, out = (P(AXIS), P(), P(AXIS), P()), P(AXIS)
-    else:
-        local = jax.vmap(one_seed, (0, None, 0, None))
-        specs, out = (P(), P(), P(None, AXIS), P()), (P(None, AXIS), P())
-    # check_vma off: pallas_call's outputs would each need to declare how they vary over the mesh.
-    return jax.jit(jax.shard_map(local, mesh=sharding.mesh, in_specs=specs, out_specs=out, check_vma=False))
+    return search.over_seeds(lambda k, p, g, i: evolve_step(k, config, p, g, i), (0, None, 0, None), sharding,
+                             kernel=kernel_choice.chosen(config) == "pallas")

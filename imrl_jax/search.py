@@ -18,10 +18,16 @@ come from (``render`` relives the key the GA used with it).
 
 from __future__ import annotations
 
+import contextvars
 from typing import Any, Callable, NamedTuple, Protocol
 
 import jax
 import jax.numpy as jnp
+
+from imrl_jax.devices import AXIS, sharded_axis
+
+#: True while :func:`shard_lanes` traces a population split over the devices: each lives its share.
+_SHARE = contextvars.ContextVar("share", default=False)
 
 
 class Strategy(Protocol):
@@ -43,6 +49,13 @@ class Generation(NamedTuple):
     fitness: jnp.ndarray  # (P,): the mean of each one's lives
     lives: Any  # the lives' LifetimeResult, axes (P, lives_per_fitness, ...)
     info: Any  # what the strategy's tell reported (the GA: the parents, best first)
+    performance: Any  # (P, tasks) gathered when ``lives`` are this device's share (under a split), else None
+
+
+def performance(result: Generation) -> jnp.ndarray:
+    """(P, tasks): each individual's mean performance over its lives (taken from the lives where it was not gathered)."""
+    # Taken where the caller asks, as ever: the XLA step's program stays what it was.
+    return result.lives.performance.mean(1) if result.performance is None else result.performance
 
 
 def generation_keys(key: jax.Array, generation) -> tuple[jax.Array, jax.Array]:
@@ -72,10 +85,18 @@ def evaluate_and_tell(key: jax.Array, strategy: Strategy, live: Callable, genome
     """Live generation ``index``'s ``genomes`` ``lives_per_fitness`` times each and tell the strategy their mean fitness."""
     key_life, key_search = generation_keys(key, index)
     keys = life_keys(key_life, genomes.shape[0], lives_per_fitness)
-    lives = jax.vmap(jax.vmap(live, (0, None)))(keys, genomes)
-    fitness = lives.fitness.mean(1)
+    if _SHARE.get():  # this device's lives only (the whole population's keys sliced), their means gathered
+        share = genomes.shape[0] // jax.lax.psum(1, AXIS)
+        start = jax.lax.axis_index(AXIS) * share
+        lives = jax.vmap(jax.vmap(live, (0, None)))(*(jax.lax.dynamic_slice_in_dim(x, start, share)
+                                                      for x in (keys, genomes)))
+        gather = lambda x: jax.lax.all_gather(x, AXIS, tiled=True)  # noqa: E731
+        fitness, performed = gather(lives.fitness.mean(1)), gather(lives.performance.mean(1))
+    else:
+        lives = jax.vmap(jax.vmap(live, (0, None)))(keys, genomes)
+        fitness, performed = lives.fitness.mean(1), None  # None: :func:`performance` takes it from the lives
     state, info = strategy.tell(key_search, genomes, fitness, state, params)
-    return state, Generation(genomes, fitness, lives, info)
+    return state, Generation(genomes, fitness, lives, info, performed)
 
 
 def generation(key: jax.Array, strategy: Strategy, live: Callable, state, params, index,
@@ -95,7 +116,8 @@ class Evaluated(NamedTuple):
     performance: jnp.ndarray  # (P, tasks) likewise
 
 
-def make_generation(strategy: Strategy, live: Callable, lives_per_fitness: int = 1, sharding=None):
+def make_generation(strategy: Strategy, live: Callable, lives_per_fitness: int = 1, sharding=None,
+                    kernel: bool | None = None):
     """A jitted ``generation(keys, params, populations, states, search_params, index)`` vmapped over seeds.
 
     ``populations`` (seeds, P, genes) are generation ``index``'s genomes (asked for before), ``states``
@@ -103,29 +125,85 @@ def make_generation(strategy: Strategy, live: Callable, lives_per_fitness: int =
     generation ``index``, then asks for generation ``index + 1``: it returns the next populations (kept
     in ``sharding``, so that the next lives are divided over the devices as these were), the states
     and each seed's :class:`Evaluated`. The same draws as :func:`generation` run generation by generation.
+    ``kernel``: whether the Pallas kernel lives them (None: found in the traced program; :func:`over_seeds`).
     """
 
     def one(key, params, genomes, state, search_params, index):
         state, result = evaluate_and_tell(key, strategy, lambda k, g: live(k, params, g), genomes, state,
                                           search_params, index, lives_per_fitness)
         following, state = ask(key, strategy, state, search_params, index + 1)
-        return following, state, Evaluated(result.fitness, result.lives.performance.mean(1))
+        return following, state, Evaluated(result.fitness, performance(result))
 
-    return over_seeds(one, (0, None, 0, 0, None, None), sharding)
+    return over_seeds(one, (0, None, 0, 0, None, None), sharding, kernel=kernel)
 
 
-def over_seeds(one: Callable, in_axes: tuple, sharding=None):
+def over_seeds(one: Callable, in_axes: tuple, sharding=None, *, genomes: int = 2, kernel: bool | None = None):
     """``one`` generation of one seed, vmapped over the seeds (``in_axes``) and jitted.
 
     Its first output, the next populations, is kept in ``sharding``: otherwise XLA returns them
     replicated (reproduction gathers genomes across the population axis), and every later
-    generation would run unsharded, each device living every life.
+    generation would run unsharded, each device living every life. When the Pallas kernel lives
+    them (``kernel``; None: whether its call is in the traced program) and ``sharding`` splits an
+    axis, it runs under :func:`shard_lanes` (``genomes``: which argument is the populations).
     """
 
     def step(*args):
+        split = sharding is not None and sharded_axis(sharding) != "none"
+        if split and (kernel if kernel is not None else calls(jax.make_jaxpr(jax.vmap(one, in_axes))(*args).jaxpr)):
+            return shard_lanes(one, in_axes, sharding, genomes)(*args)
         following, *rest = jax.vmap(one, in_axes)(*args)
         if sharding is not None:
             following = jax.lax.with_sharding_constraint(following, sharding)
         return (following, *rest)
 
     return jax.jit(step)
+
+
+def calls(jaxpr, name: str = "pallas_call") -> bool:
+    """Whether ``jaxpr`` (or any program inside it: a scan's, a cond's branches) calls the primitive ``name``."""
+    for eqn in jaxpr.eqns:
+        if eqn.primitive.name == name:
+            return True
+        for value in eqn.params.values():
+            for inner in value if isinstance(value, (tuple, list)) else (value,):
+                inner = getattr(inner, "jaxpr", inner)  # a ClosedJaxpr's Jaxpr
+                if hasattr(inner, "eqns") and calls(inner, name):
+                    return True
+    return False
+
+
+def shard_lanes(one: Callable, in_axes: tuple, sharding, genomes: int):
+    """``one`` vmapped over the seeds under ``jax.shard_map``: each device calls the kernel on its share of the lanes.
+
+    XLA's partitioner cannot split a ``pallas_call`` (a custom call on a GPU, a loop over the
+    grid in the interpreter): under plain jit it gathers every lane's state to every device,
+    each living all the lanes. Sharded seeds need nothing else; a sharded population (argument
+    ``genomes``) is gathered, each device lives its share (:func:`evaluate_and_tell`) and gathers
+    the fitness and performance, so that every device tells and asks for the whole population
+    alike, the same values as on one device, and keeps its share of the next populations.
+    """
+    from jax.sharding import PartitionSpec as P
+
+    if sharded_axis(sharding) == "seeds":  # each device its seeds: one as on one device
+        specs = tuple(P() if axis is None else P(AXIS) for axis in in_axes)
+        local, out = jax.vmap(one, in_axes), P(AXIS)
+    else:
+        specs = tuple(P(None, AXIS) if i == genomes else P() for i in range(len(in_axes)))
+        out = (P(None, AXIS), P())
+
+        def local(*args):
+            args = list(args)
+            args[genomes] = jax.lax.all_gather(args[genomes], AXIS, axis=1, tiled=True)
+            token = _SHARE.set(True)
+            try:
+                following, *rest = jax.vmap(one, in_axes)(*args)
+            finally:
+                _SHARE.reset(token)
+            share = following.shape[1] // jax.lax.psum(1, AXIS)
+            return jax.lax.dynamic_slice_in_dim(following, jax.lax.axis_index(AXIS) * share, share, 1), tuple(rest)
+
+    # check_vma off: pallas_call's outputs would each need to declare how they vary over the mesh.
+    mapped = jax.shard_map(local, mesh=sharding.mesh, in_specs=specs, out_specs=out, check_vma=False)
+    if sharded_axis(sharding) == "seeds":
+        return mapped
+    return lambda *args: (lambda following, rest: (following, *rest))(*mapped(*args))

@@ -64,39 +64,62 @@ def test_next_populations_keep_their_sharding():
 
 #: Two generations with the Pallas kernel (interpreted off a GPU) on one device and on 2 forced devices.
 KERNEL_LANES = """
-import json, re, jax, numpy as np
+import importlib.util, json, re, jax, numpy as np
 from imrl_jax.config import make_config
 from imrl_jax.devices import make_mesh, population_sharding, replicated, to_global
 from imrl_jax.run_state import evolution_keys, initial_state
 from imrl_jax.ga import make_generation
+from imrl_jax.evolve_sweep import batched_values, make_points, make_sweep_step
 from imrl_jax import kernel as K
 # A 40 cm target: reaches (and so resets) in 100 steps; one bin: the fewest kernel calls.
 config = make_config("small", condition="EE-LS", task_steps=100, num_bins=1, population_size=4, num_parents=2,
                      target_radius=40, step_kernel="pallas")
-def run(mesh, seeds):
+def run(mesh, seeds, how="ga"):
     sharding = population_sharding(mesh, seeds, config.population_size)
-    state = initial_state(config, list(range(seeds)), sharding)
+    state = initial_state(config, list(range(seeds)), sharding, strategy if how == "snes" else None, mesh)
     keys = to_global(evolution_keys(state.key_data), replicated(mesh))
-    step = make_generation(config, sharding)
-    populations, outputs = state.populations, []
-    lowered = step.lower(keys, config.learning_params(), populations, 0)
+    args, populations = [keys, config.learning_params()], state.populations
+    if how == "ga":  # step(keys, params, populations, index) -> (populations, stats)
+        make = lambda: make_generation(config, sharding)
+    elif how == "sweep":  # 2 points of 1 seed: B = 2 entries, each with its mutation size
+        make, args = lambda: make_sweep_step(config, sharding), [keys, *sweep_values]
+    else:  # search.make_generation with evosax's SNES: populations and strategies' states carried
+        make = lambda: search.make_generation(strategy, lambda k, p, g: live(k, config, p, g), 1, sharding)
+        populations = (populations, state.search)
+    step, outputs, fitness = make(), [], []
+    def call(step, populations, g):
+        if how == "snes":
+            return step(*args, *populations, strategy.default_params(), g)
+        return step(*args, populations, g)
+    lowered = call(lambda *a: (step.lower(*a), None), populations, 0)[0]
     compiled = lowered.compile().as_text()
     for g in range(2):
-        populations, stats = step(keys, config.learning_params(), populations, g)
-        outputs += [np.asarray(x).tolist() for x in (populations, *stats)]
+        out = call(step, populations, g)
+        populations = out[:2] if how == "snes" else out[0]
+        outputs += [np.asarray(x).tolist() for x in jax.tree.leaves(out)]
+        fitness += np.asarray(out[-1].fitness).ravel().tolist()
     text = lowered.as_text()
     # The Triton kernel a GPU would run (lowered for CUDA here): its grid is each device's lanes.
     K._interpret = lambda: False
-    cuda = make_generation(config, sharding).trace(keys, config.learning_params(), state.populations, 0)
+    first = (state.populations, state.search) if how == "snes" else state.populations
+    cuda = call(lambda *a: (make().trace(*a), None), first, 0)[0]
     cuda = cuda.lower(lowering_platforms=("cuda",))
     K._interpret = interpret
     grids = re.findall(r"grid_x = (\\d+) : i32, grid_y = (\\d+) : i32, grid_z = (\\d+)", cuda.as_text())
-    return dict(outputs=outputs, shard_map="sdy.manual_computation" in text or "SPMDFullToShardShape" in text,
+    return dict(outputs=outputs, fitness=fitness, shard_map="sdy.manual_computation" in text or "SPMDFullToShardShape" in text,
                 gathered=re.findall(r"= \\w+\\[([\\d,]*)\\]\\S* all-gather\\(", compiled),
                 kernel_lanes=[int(x) * int(y) * int(z) for x, y, z in grids])
 interpret = K._interpret
-print(json.dumps({str(seeds): [run(make_mesh(1), seeds), run(make_mesh(), seeds)]
-                  for seeds in (2, 1)}))
+cases = {str(seeds): [run(make_mesh(1), seeds), run(make_mesh(), seeds)] for seeds in (2, 1)}
+points = make_points(config, [0], [dict(mutation_scale=1.0), dict(mutation_scale=0.5)])
+sweep_values = list(batched_values(points, 1))
+cases["sweep"] = [run(make_mesh(1), 2, "sweep"), run(make_mesh(), 2, "sweep")]
+if importlib.util.find_spec("evosax"):  # the evosax extra installed: SNES, 1 seed of 4 (the population axis)
+    from imrl_jax import search, strategies
+    from imrl_jax.lifetime import live
+    strategy = strategies.make_strategy("snes", config)
+    cases["snes"] = [run(make_mesh(1), 1, "snes"), run(make_mesh(), 1, "snes")]
+print(json.dumps(cases))
 """
 
 
@@ -109,6 +132,7 @@ def test_kernel_lanes_shard_over_devices():
     sharded) gather nothing, and 1 seed of 4 (the population axis) gathers only its fitness,
     performance and genomes (rank 3 at most) to select and reproduce.
     """
+    import importlib.util
     import json
     import subprocess
     import sys
@@ -119,11 +143,14 @@ def test_kernel_lanes_shard_over_devices():
                           capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-2000:]
     cases = json.loads(done.stdout.strip().splitlines()[-1])
-    for seeds, (one, two) in cases.items():
-        assert two["outputs"] == one["outputs"], f"{seeds} seed(s): 2 devices differ from one"
-        assert any(np.any(fitness) for fitness in (two["outputs"][1], two["outputs"][5])), "no reach: a weak check"
-        assert not one["shard_map"] and two["shard_map"], seeds
+    assert ("snes" in cases) == bool(importlib.util.find_spec("evosax")), list(cases)
+    for case, (one, two) in cases.items():
+        assert two["outputs"] == one["outputs"], f"{case}: 2 devices differ from one"
+        assert np.any(two["fitness"]), f"{case}: no reach, a weak check"
+        assert not one["shard_map"] and two["shard_map"], case
         assert one["gathered"] == [] and all(shape.count(",") < 3 for shape in two["gathered"]), two["gathered"]
-    assert cases["2"][1]["gathered"] == [] and len(cases["1"][1]["gathered"]) == 3
-    for seeds, (one, two) in cases.items():  # seeds x 4 individuals x 6 tasks, in one call on one device
-        assert one["kernel_lanes"] == [int(seeds) * 4 * 6] and two["kernel_lanes"] == [int(seeds) * 4 * 6 // 2]
+    assert cases["2"][1]["gathered"] == cases["sweep"][1]["gathered"] == [] and len(cases["1"][1]["gathered"]) == 3
+    assert "snes" not in cases or len(cases["snes"][1]["gathered"]) == 3, cases["snes"][1]["gathered"]
+    lanes = {"2": 2 * 4 * 6, "1": 4 * 6, "sweep": 2 * 4 * 6, "snes": 4 * 6}  # entries x 4 individuals x 6 tasks
+    for case, (one, two) in cases.items():  # in one call on one device, half of them on each of two
+        assert one["kernel_lanes"] == [lanes[case]] and two["kernel_lanes"] == [lanes[case] // 2], case
