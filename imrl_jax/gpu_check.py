@@ -105,6 +105,19 @@ class Check:
         """Seconds left of the budget."""
         return self.deadline - time.monotonic()
 
+    # What a step in a module of its own uses (imrl_jax.gpu_study): through the check, not an import of this module.
+    def compile_once(self, key: tuple, fn, *args):
+        """:func:`compile_once` of this check."""
+        return compile_once(self, key, fn, *args)
+
+    def timed(self, executable, args, repeats: int) -> tuple[float, float]:
+        """:func:`timed`."""
+        return timed(executable, args, repeats)
+
+    def fastest_rate(self) -> float | None:
+        """:func:`fastest_rate` of this check."""
+        return fastest_rate(self)
+
     def share_left(self, share: float) -> float:
         """The budget's remaining seconds at which a step that may use ``share`` of the budget from now must stop."""
         return self.remaining() - share * self.results["budget_s"]

@@ -124,7 +124,6 @@ def time_program(check, program: Program, fraction: float) -> dict:
 
     from imrl_jax import evolve_sweep, kernel_choice
     from imrl_jax.devices import make_mesh, population_sharding, replicated, to_global
-    from imrl_jax.gpu_check import compile_once
     from imrl_jax.run_state import evolution_keys, initial_state
 
     check.stage = "api"
@@ -139,7 +138,7 @@ def time_program(check, program: Program, fraction: float) -> dict:
     populations = to_global(np.tile(np.asarray(state.populations), (len(points), 1, 1)), sharding)
     kernel = kernel_choice.chosen(config)
     key = ("sweep", program_key(config), kernel, len(points), len(seeds))  # the sweep step's, if it is the same
-    executable, compile_s = compile_once(check, key, evolve_sweep.make_sweep_step(config, sharding), keys, params,
+    executable, compile_s = check.compile_once(key, evolve_sweep.make_sweep_step(config, sharding), keys, params,
                                          ga, populations, 0)
     start = time.perf_counter()
     jax.block_until_ready(executable(keys, params, ga, populations, 0))
@@ -156,15 +155,14 @@ def time_test(check, condition: str, lanes: int) -> dict:
     """The learning test's adult phase of ``condition`` on ``lanes`` lanes (the kernel ``auto`` picks for it)."""
     from imrl_jax import bench, kernel_choice
     from imrl_jax.config import make_config
-    from imrl_jax.gpu_check import compile_once, timed
 
     check.stage = "api"
     bench_condition, phase = TEST_PHASES[condition]
     kernel = kernel_choice.chosen(make_config("paper", condition=bench_condition))
     program = bench.phase_program(bench_condition, phase, lanes, check.sizes.study_test_steps, step_kernel=kernel)
     key = ("phase", bench_condition, phase, lanes, check.sizes.study_test_steps, kernel)  # the phases step's too
-    executable, compile_s = compile_once(check, key, program.fn, *program.args)
-    seconds, _ = timed(executable, program.args, check.sizes.repeats)
+    executable, compile_s = check.compile_once(key, program.fn, *program.args)
+    seconds, _ = check.timed(executable, program.args, check.sizes.repeats)
     return {"kernel": kernel, "steps": check.sizes.study_test_steps, "compile_s": compile_s,
             "lane_steps_per_s": program.lane_steps / seconds, "status": "ok"}
 
@@ -182,12 +180,10 @@ def fraction_for(check, program: Program, rate: float | None, stop: float, left:
 def study(check) -> dict:
     """The ``study`` step: each distinct program of the claims map and each kind of learning test timed, and the
     map's hours extrapolated (the figures of the programs not timed are missing, and the estimate incomplete)."""
-    from imrl_jax.gpu_check import fastest_rate
-
     check.stage = "api"
     programs, tests = claims_programs(), claims_tests()
     stop, limit = check.share_left(STUDY_SHARE), check.sizes.study_limit
-    rows, rate = [], fastest_rate(check)
+    rows, rate = [], check.fastest_rate()
     for i, program in enumerate(programs):
         row = {"part": "evolution", "program": program.key, "condition": program.condition,
                "runs": [list(names) for names, _ in program.runs], "seeds": program.seeds,
