@@ -295,7 +295,8 @@ def make_step(config: Config, strategy, sharding):
             return children, search_state, stats
 
         return step_ga
-    step = search.make_generation(strategy, lambda k, p, g: live(k, config, p, g), config.lives_per_fitness, sharding)
+    step = search.make_generation(strategy, lambda k, p, g: live(k, config, p, g), config.lives_per_fitness, sharding,
+                                  kernel=kernel_choice.chosen(config) == "pallas")  # said: not found by tracing
     search_params = strategy.default_params()
     return lambda keys, params, populations, search_state, index: step(keys, params, populations, search_state,
                                                                         search_params, index)
