@@ -280,14 +280,17 @@ def _outputs(root: str) -> dict:
     return found
 
 
-def _kill_cases(tiny_run) -> dict[str, tuple[list[str], list[str]]]:
-    """Each resumable command: its command line writing ``OUT``, and the line that goes on with it."""
+def _kill_cases(tiny_run, sweep: str = "SWEEP") -> dict[str, tuple[list[str], list[str]]]:
+    """Each resumable command: its command line writing ``OUT``, and the line that goes on with it (``sweep``: a
+    finished sweep, whose points a sweep's learning test tests)."""
     from helpers import evolve_args
 
     evolution = evolve_args(seeds=2, population=4, parents=2, generations=4, task_steps=200, childhood_steps=200,
                             bins=1)
     test = ["--cond", "SLE", "--preset", "small", "--runs", "3", "--best", "1", "--tests", "2", "--task-steps", "400",
             "--bins", "4", "--steady-steps", "200", "--chunks", "2", "--quiet", "--out", "OUT"]
+    sweep_test = [sweep, "--best", "1", "--tests", "2", "--task-steps", "400", "--bins", "4", "--steady-steps", "200",
+                  "--chunks", "2", "--quiet", "--out", "OUT"]
     landscape = [tiny_run, "--out", "OUT", "--generations", "0,last", "--lives", "2", "--parents", "2",
                  "--mutants", "2", "--walks", "2", "--walk-length", "2", "--random", "4", "--chunk", "4"]
     return {
@@ -296,6 +299,8 @@ def _kill_cases(tiny_run) -> dict[str, tuple[list[str], list[str]]]:
         "evolve --sweep": (["-m", "imrl_jax.evolve", *evolution, "--sweep", "eta=0.1,0.2", "--out", "OUT"],
                            ["-m", "imrl_jax.evolve", "--resume", "--out", "OUT", "--quiet"]),
         "learning_test": (["-m", "imrl_jax.learning_test", *test], ["-m", "imrl_jax.learning_test", *test]),
+        "learning_test SWEEP": (["-m", "imrl_jax.learning_test", *sweep_test],
+                                ["-m", "imrl_jax.learning_test", *sweep_test]),
         "landscape_run": (["-m", "imrl_jax.landscape_run", *landscape],
                           ["-m", "imrl_jax.landscape_run", *landscape]),
     }
@@ -329,10 +334,10 @@ def _run(argv: list[str], out: str, cwd: str, kill_after: float | None = None) -
     return time.perf_counter() - start, False
 
 
-def _kill_and_resume(tiny_run, tmp_path, name: str, points: int, seed: int) -> None:
+def _kill_and_resume(tiny_run, tmp_path, name: str, points: int, seed: int, sweep: str = "SWEEP") -> None:
     import random
 
-    first, again = _kill_cases(tiny_run)[name]
+    first, again = _kill_cases(tiny_run, sweep)[name]
     reference = str(tmp_path / "reference")
     seconds, _ = _run(first, reference, str(tmp_path))
     draw = random.Random(seed)
@@ -350,7 +355,7 @@ def _kill_and_resume(tiny_run, tmp_path, name: str, points: int, seed: int) -> N
     assert kills, f"{name}: every run ended before its kill (seed {seed})"
 
 
-KILLED = sorted(("evolve", "evolve --sweep", "learning_test", "landscape_run"))
+KILLED = sorted(("evolve", "evolve --sweep", "learning_test", "learning_test SWEEP", "landscape_run"))
 
 
 @pytest.mark.slow
@@ -358,4 +363,12 @@ KILLED = sorted(("evolve", "evolve --sweep", "learning_test", "landscape_run"))
 def test_every_resumable_command_killed_anywhere_ends_as_an_uninterrupted_run(tiny_run, tmp_path, name):
     """SIGKILL at random moments (a seed per command, said on failure), then the resume: the outputs are those of an
     uninterrupted run, bitwise (the arrays, the CSVs, the JSON less times and command lines)."""
-    _kill_and_resume(tiny_run, tmp_path, name, points=4, seed=KILLED.index(name))
+    sweep = str(tmp_path / "sweep")
+    if name == "learning_test SWEEP":  # a finished sweep of 2 points to test
+        from helpers import evolve_args
+
+        from imrl_jax import evolve
+
+        assert evolve.main([*evolve_args(seeds=2, population=4, parents=2, generations=1, task_steps=200, bins=1),
+                            "--sweep", "eta=0.1,0.2", "--out", sweep]) == 0
+    _kill_and_resume(tiny_run, tmp_path, name, points=4, seed=KILLED.index(name), sweep=sweep)
