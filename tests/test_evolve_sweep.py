@@ -365,3 +365,21 @@ def test_ctrl_c_in_a_sweeps_checkpoint_ends_in_one_line_without_orbaxs_thread_tr
     assert hooks == [True]
     assert capsys.readouterr().err == (f"interrupted in generation 1 (1 of 2 done, 0 checkpointed); resume with: "
                                        f"python -m imrl_jax.evolve --resume --out {out}\n")
+
+
+@pytest.mark.parametrize("how", ["empty", "truncated", "not json", "null", "a list", "NaN", "binary"])
+def test_a_damaged_sweep_json_is_one_line_naming_it_for_every_command_that_reads_it(tmp_path, how):
+    """sweep.json damaged every way: a resume of the sweep and a learning test of it refuse naming it, nothing
+    written (the points' own files as they were)."""
+    from attack import assert_refused, attack, damage
+
+    from imrl_jax import learning_test
+
+    root = str(tmp_path / "sweep")
+    _made_sweep(root)
+    damage(os.path.join(root, "sweep.json"), how)
+    assert_refused(attack(evolve.main, ["--resume", "--out", root], str(tmp_path)), "sweep.json",
+                   argv=["evolve --resume", how])
+    tests = ["--best", "1", "--tests", "1", "--task-steps", "400", "--bins", "2", "--steady-steps", "200", "--chunks",
+             "1", "--out", str(tmp_path / "tests")]
+    assert_refused(attack(learning_test.main, [root, *tests], str(tmp_path)), "sweep.json", argv=["learning_test", how])
