@@ -129,8 +129,7 @@ def measure_plan(argv, study: Study) -> cli.Call:
                         ("individuals", cli.MAX_LANES), ("respawn_steps", cli.MAX_STEPS)):
         check_at_least(f"--{flag.replace('_', '-')}", getattr(args, flag))
         cli.check_at_most(f"--{flag.replace('_', '-')}", getattr(args, flag), limit)
-    check_at_least("--key", args.key, 0)
-    cli.check_at_most("--key", args.key, MAX_KEY)
+    cli.check_key("--key", args.key, MAX_KEY)
     unknown = [r for r in args.rules.split(",") if r not in RULES]
     if unknown:
         raise UsageError(f"--rules: unknown rules {unknown[0]!r} (choose from {', '.join(RULES)})")

@@ -358,7 +358,6 @@ def measure_parser() -> Parser:
 
 
 #: The largest random key: jax.random.key takes 32 bits here (64 under x64; the same keys either way).
-MAX_KEY = 2**32 - 1
 
 
 def read_rates(out_dir: str) -> list[dict]:
@@ -399,8 +398,7 @@ def measure_plan(argv: list[str]) -> cli.Call:
     for flag, limit in (("lives", cli.MAX_SEEDS), ("task_steps", cli.MAX_STEPS)):
         check_at_least(f"--{flag.replace('_', '-')}", options.get(flag))
         cli.check_at_most(f"--{flag.replace('_', '-')}", options.get(flag), limit)
-    check_at_least("--key", options.get("key"), 0)
-    cli.check_at_most("--key", options.get("key"), MAX_KEY)
+    cli.check_key("--key", options.get("key"))
     if name == "confirm":
         read_rates(options["out_dir"])
     lives = options.get("lives", MEASUREMENTS[name].__defaults__[0])

@@ -149,6 +149,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     command = "python -m imrl_jax.baselines " + " ".join(sys.argv[1:] if argv is None else argv)
     args = parser().parse_args(argv)
     check_out(args.out)
+    for flag, value, limit in (("--steps", args.steps, cli.MAX_STEPS), ("--seeds", args.seeds, cli.MAX_SEEDS),
+                               ("--evals", args.evals, cli.MAX_BINS), ("--eval-steps", args.eval_steps, cli.MAX_STEPS)):
+        cli.check_at_most(flag, value, limit)  # before anything is allocated; the lower bounds: Baseline's
+    cli.check_key("--first-seed", args.first_seed, cli.MAX_KEY - args.seeds + 1 if args.seeds >= 1 else cli.MAX_KEY)
     config = apply_task_set(Config(), args)
     try:
         hidden = _ints(args.hidden)

@@ -279,6 +279,16 @@ def check_at_most(flag: str, value: int | None, limit: int) -> None:
         raise UsageError(f"{flag}: {value:,} is above the limit of {limit:,}")
 
 
+#: The largest seed or key: jax.random.key takes a uint32 (a larger one wraps round without a word).
+MAX_KEY = 2**32 - 1
+
+
+def check_key(flag: str, value: int | None, most: int = MAX_KEY) -> None:
+    """Raise UsageError naming ``flag`` unless ``value`` (None: not given) is a key from 0 to ``most``."""
+    check_at_least(flag, value, 0)
+    check_at_most(flag, value, most)
+
+
 def check_at_least(flag: str, value: int | None, least: int = 1) -> None:
     """Raise UsageError naming ``flag`` if ``value`` (None: not given) is below ``least``."""
     if value is not None and value < least:

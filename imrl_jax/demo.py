@@ -21,8 +21,7 @@ import jax
 import numpy as np
 
 from imrl_jax import cli
-from imrl_jax.cli import (HelpFormatter, Parser, add_task_set, apply_task_set, check_at_least, check_at_most, check_out,
-                          exit_codes)
+from imrl_jax.cli import HelpFormatter, Parser, add_task_set, apply_task_set, check_out, exit_codes
 from imrl_jax.config import CONDITIONS, PRESETS, Config, make_config
 from imrl_jax.rundir import check_outputs_dir, check_writable, write_atomic
 
@@ -117,8 +116,7 @@ def main(argv=None) -> int:
     args = parser().parse_args(argv)
     check_out(args.out)
     config = apply_task_set(make_config(args.preset, condition=args.condition), args)
-    check_at_least("--seed", args.seed, 0)
-    check_at_most("--seed", args.seed, 2**32 - 1)  # a uint32 key
+    cli.check_key("--seed", args.seed)
     check_writable(args.out)
     check_outputs_dir(args.out, OUTPUTS, "demo output", args.overwrite)
     return cli.execute(cli.Call(lambda: report(config, args), config=config, out=args.out))

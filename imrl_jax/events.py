@@ -155,11 +155,10 @@ def log_folder(name: str, out_dir: str) -> str:
     return os.path.join(out_dir, name)
 
 
-def log_for(name: str | None, out_dir: str, first_step: int = 0) -> EventLog:
-    """The event log of a command given ``--log NAME`` (None: the runner's file only) writing under ``out_dir``;
-    ``first_step``: the first unit a resumed command reports (what earlier processes wrote from there is dropped)."""
+def log_for(name: str | None, out_dir: str) -> EventLog:
+    """The event log of a command given ``--log NAME`` (None: the runner's file only) writing under ``out_dir``."""
     log = make_log()
-    add_log(log, name, out_dir, first_step)
+    add_log(log, name, out_dir)
     return log
 
 

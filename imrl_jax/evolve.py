@@ -44,7 +44,7 @@ from imrl_jax import search
 from imrl_jax.ga import GA, make_generation
 from imrl_jax.lifetime import live
 from imrl_jax.networks import trait_names, traits
-from imrl_jax.events import add_log, log_for
+from imrl_jax.events import add_log, make_log
 # parser, build_config and build_strategy: evolve's names for them (the study tables build runs' keys with them).
 from imrl_jax.evolve_options import build_config, build_strategy, check_condition, check_sizes, parser
 from imrl_jax.progress import Progress, cost_line
@@ -171,7 +171,7 @@ class RunPlan(NamedTuple):
             for line in [*self.warnings, *([] if self.quiet else self.notes)] if leader else []:
                 print(line, file=sys.stderr, flush=True)
             _silence_failed_reads()  # Ctrl-C in a save: orbax's threads end without their tracebacks
-            events = stack.enter_context(contextlib.closing(log_for(None, out_dir)))
+            events = stack.enter_context(contextlib.closing(make_log()))  # its --log sink added once restored
             progress = Progress(config.num_generations, quiet=quiet, first_index=0, log=events)
             state = initial_state(config, seeds, sharding, strategy, mesh)
             checkpointer = stack.enter_context(contextlib.closing(
@@ -234,15 +234,14 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
         generation = make_step(config, strategy, sharding)
         keys = to_global(evolution_keys(state.key_data), replicated(mesh))
         params = config.learning_params()
-        lane_steps = len(seeds) * config.population_size * config.lives_per_fitness * config.lifetime_steps
+        lives = len(seeds) * config.population_size * config.lives_per_fitness
+        lane_steps = lives * config.lifetime_steps
         first = int(state.generation)
         if first < config.num_generations:  # what it will cost, before the compilation it waits for
             progress.note(cost_line(f"evolving {config.condition}: {len(seeds)} seed(s) x {config.population_size} "
-                                    f"individuals x {config.num_generations - first} generation(s)",
-                                    len(seeds) * config.population_size * config.lives_per_fitness, lane_steps,
+                                    f"individuals x {config.num_generations - first} generation(s)", lives, lane_steps,
                                     config.num_generations - first, jax.default_backend(),
-                                    memory_needed(config, len(seeds) * config.population_size * config.lives_per_fitness,
-                                                  jax.device_count(), history_bytes(config, len(seeds))))
+                                    memory_needed(config, lives, jax.device_count(), history_bytes(config, len(seeds))))
                           + f"; step_kernel={kernel_choice.chosen(config)}")
             progress.note("compiling the generation (its first line comes once it is compiled and run) ...")
         if trait_names(config):

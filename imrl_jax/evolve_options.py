@@ -34,11 +34,16 @@ def check_sizes(args) -> None:
         raise UsageError("--seeds: must be at least 1")
     if args.first_seed is not None and args.first_seed < 0:
         raise UsageError(f"--first-seed: must be 0 or more (got {args.first_seed})")
-    if args.first_seed is not None and args.first_seed + (args.seeds or 1) > 2**32:  # a seed is a uint32 key
+    if args.first_seed is not None and args.first_seed + (args.seeds or 1) > cli.MAX_KEY + 1:
         raise UsageError(f"--first-seed: the seeds must stay below 2^32 (got {args.first_seed:,} and on)")
     if args.seeds is not None and args.population is not None:
         cli.check_at_most("--seeds x --population", args.seeds * args.population, cli.MAX_LANES)
-
+    for flag, value in (("--checkpoint-every", args.checkpoint_every), ("--keep", args.keep)):
+        cli.check_at_most(flag, value, cli.MAX_GENERATIONS)
+    cli.check_at_least("--num-processes", args.num_processes)  # None (not given) passes both
+    cli.check_at_most("--num-processes", args.num_processes, cli.MAX_SEEDS)
+    cli.check_at_least("--process-id", args.process_id, 0)
+    cli.check_at_most("--process-id", args.process_id, cli.MAX_SEEDS)
 
 
 def check_condition(args) -> None:

@@ -41,7 +41,7 @@ from imrl_jax.checkpoint import Checkpointer, RunState, _silence_failed_reads, g
 from imrl_jax.cli import UsageError, device_warnings, ignored_notes, parse_sets
 from imrl_jax.config import Config, ConfigError
 from imrl_jax.devices import check_memory, make_mesh, memory_needed, population_sharding, replicated, to_global, to_host
-from imrl_jax.events import add_log, log_for
+from imrl_jax.events import add_log, make_log
 from imrl_jax.ga import GAParams, evolve_step
 from imrl_jax.networks import trait_names, traits
 from imrl_jax.progress import Progress, cost_line
@@ -247,7 +247,7 @@ class SweepPlan(NamedTuple):
                     raise RunDirError(f"--resume: {out_dir} changed while the sweep was being checked; run it again")
             except OSError as error:
                 raise RunDirError(f"--out: cannot write {error.filename or out_dir} ({error.strerror})") from None
-            events = stack.enter_context(contextlib.closing(log_for(None, out_dir)))
+            events = stack.enter_context(contextlib.closing(make_log()))  # its --log sink added once restored
             progress = Progress(config.num_generations, quiet=self.quiet, first_index=0, log=events)
             one = population_sharding(mesh, len(seeds), config.population_size)
             states = [initial_state(p.config, seeds, one) for p in points]

@@ -43,7 +43,7 @@ from imrl_jax.cli import HelpFormatter, Parser, UsageError, exit_codes
 from imrl_jax.config import Config
 from imrl_jax.ga import init_population
 from imrl_jax.run_state import generations_recorded
-from imrl_jax.rundir import (LOCK, Run, RunDirError, best_genomes as best_of, check_unlocked, check_writable, entries,
+from imrl_jax.rundir import (Run, RunDirError, best_genomes as best_of, check_unlocked, check_writable, entries,
                              is_output, load_run, lock_run_dir, make_dir, not_empty, read_config, read_json,
                              read_kept_best, unfinished, write_atomic)
 
@@ -55,7 +55,6 @@ REPLAY = "landscape_replay"
 #: The lives of one call at most (every measure, cut and generation): far past any measure that ends this decade.
 MAX_TOTAL_LIVES = 10**8
 #: The measures' key is 32 bits: ``jax.random.key`` wraps a larger one onto a smaller without a word.
-MAX_KEY = 2**32 - 1
 #: Host copies of each genome measured (the padded chunks, the device's copy, the mutants kept): the estimate's factor.
 HOST_COPIES = 4
 #: The largest history.csv read (a million generation-seed rows is about 100 MB).
@@ -231,8 +230,8 @@ def parents_at(run_dir: str, config: Config, seeds: list[int], seed: int, genera
 
 
 def _is_ours(name: str) -> bool:
-    """Whether an entry of ``--out`` is this command's: its two records, a replay, a lock's leftovers."""
-    return is_output(name, (PROGRESS, RESULT)) or name == REPLAY or name.startswith(f"{LOCK}.stale-") or \
+    """Whether an entry of ``--out`` is this command's: its two records, a replay."""
+    return is_output(name, (PROGRESS, RESULT)) or name == REPLAY or \
         (name.startswith(f"{REPLAY}-") and name[len(REPLAY) + 1:].isdigit())
 
 
@@ -283,7 +282,7 @@ def check_sizes(config: Config, generations: int, cuts: int, *, lives: int, num_
                              ("--chunk", chunk, 1), ("--key", key, 0)):
         if value < low:
             raise UsageError(f"{name}: must be at least {low} (got {value})")
-    cli.check_at_most("--key", key, MAX_KEY)
+    cli.check_key("--key", key)
     if num_parents > config.population_size:
         raise UsageError(f"--parents: at most the population size ({config.population_size}; got {num_parents})")
     if num_walks > num_parents:
@@ -482,7 +481,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--walk-length", type=int, default=9, help="steps of each walk")
     p.add_argument("--random", type=int, default=50, help="random genomes (generation 0's draw)")
     p.add_argument("--cut", default="", help="learning cut to these fractions too (comma-separated; H3)")
-    p.add_argument("--key", type=int, default=0, help=f"the measures' random key (0..{MAX_KEY})")
+    p.add_argument("--key", type=int, default=0, help=f"the measures' random key (0..{cli.MAX_KEY})")
     p.add_argument("--chunk", type=int, default=50, help="genomes lived at once (one compiled program)")
     p.add_argument("--best-genomes", metavar="FILE", help="the last generation's best from a report's "
                    "best_genomes.npz (a run whose final population was not kept)")

@@ -211,10 +211,10 @@ class PointTest(NamedTuple):
                      f"testing {num_best} x {self.num_tests} test(s) of {config.num_tasks} tasks a run",
                      host_bytes=curves_bytes(config, num_runs * num_best * self.num_tests))
         try:
-            check_log(self.log)
+            check_log(self.log, self.out_dir)  # OUT/tensorboard too
         except ValueError as error:
             raise UsageError(str(error)) from None
-        check_out_before(self.out_dir, self.log)
+        check_out_before(self.out_dir)
 
     def test(self) -> dict:
         """Lock ``--out``, check it again, run the tests run by run (resuming from ``partial/``), write; the summary."""

@@ -105,8 +105,7 @@ def check_sizes(args) -> None:
                                ("--chunks", args.chunks, cli.MAX_BINS)):
         cli.check_at_least(flag, value)
         cli.check_at_most(flag, value, limit)
-    cli.check_at_least("--seed", args.seed, 0)
-    cli.check_at_most("--seed", args.seed, 2**32 - 1)  # a uint32 key
+    cli.check_key("--seed", args.seed)
     cli.check_at_most("--best x --tests", args.best * args.tests, cli.MAX_LANES)
 
 

@@ -137,17 +137,15 @@ def check_out_dir(out_dir: str) -> None:
         raise not_empty(out_dir, "unfinished learning test", others or found)
 
 
-def check_out_before(out_dir: str, log: str | None = None) -> None:
-    """Every check of ``--out`` before the test is carried out: writable, unlocked, new, empty or an unfinished test
-    (``--log tensorboard``: its folder writable too); nothing is written."""
+def check_out_before(out_dir: str) -> None:
+    """Every check of ``--out`` before the test is carried out: writable, unlocked, new, empty or an unfinished test;
+    nothing is written (``--log``'s folder: ``events.check_log``)."""
     too_long = [part for part in out_dir.split(os.sep) if len(os.fsencode(part)) > NAME_MAX]
     if too_long:
         raise UsageError(f"--out: the name {too_long[0][:40]}... is longer than {NAME_MAX} bytes")
     check_writable(out_dir)
     check_unlocked(out_dir)
     check_out_dir(out_dir)
-    if log == "tensorboard":
-        check_writable(os.path.join(out_dir, "tensorboard"), "--log")
 
 
 @contextlib.contextmanager

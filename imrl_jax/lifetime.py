@@ -150,7 +150,7 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
     computation as one call. With ``config.step_kernel == "pallas"`` (or "auto" resolved to it,
     :mod:`imrl_jax.kernel_choice`) each bin is one kernel (:func:`imrl_jax.kernel.run_phase`).
     """
-    if config.step_kernel == "pallas" or (config.step_kernel == "auto" and kernel_choice.chosen(config) == "pallas"):
+    if kernel_choice.chosen(config) == "pallas":  # an explicit choice as it is; "auto" resolved
         from imrl_jax import kernel  # imports this module
 
         return kernel.run_phase(key, config, phase, params, task, state, num_steps, phase_steps, num_bins)

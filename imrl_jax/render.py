@@ -92,7 +92,7 @@ def check_sizes(steps: int, every: int, fps: int) -> None:
     """Refuse sizes that would run for hours or overflow (raises UsageError naming the option and its limit)."""
     if steps < 1 or every < 1 or fps < 1:
         raise UsageError("--steps, --every and --fps must be at least 1")
-    for flag, value, limit in (("--steps", steps, MAX_STEPS), ("--fps", fps, MAX_FPS)):
+    for flag, value, limit in (("--steps", steps, MAX_STEPS), ("--every", every, MAX_STEPS), ("--fps", fps, MAX_FPS)):
         if value > limit:
             raise UsageError(f"{flag}: {value:,} is above the limit of {limit:,}")
     frames = -(-steps // every)

@@ -21,7 +21,7 @@ import numpy as np
 
 from imrl_jax import search
 from imrl_jax.checkpoint import History, RunState, empty_history, git_commit
-from imrl_jax.cli import UsageError
+from imrl_jax.cli import MAX_KEY, UsageError
 from imrl_jax.config import Config, make_config
 from imrl_jax.devices import make_mesh, replicated, to_global, to_host
 from imrl_jax.events import check_log
@@ -262,7 +262,7 @@ def check_run_options(config: Config, seeds: Sequence[int], checkpoint_every: in
     seeds = [int(s) for s in seeds]
     if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
         raise UsageError("--seeds: need at least one seed, all distinct and non-negative")
-    if max(seeds) >= 2**32:  # a seed is a uint32 key
+    if max(seeds) > MAX_KEY:
         raise UsageError(f"--seeds: every seed must be below 2^32 (a uint32 key; got {max(seeds):,})")
     if checkpoint_every < 1:
         raise UsageError("--checkpoint-every: must be at least 1")

@@ -467,7 +467,7 @@ def saved_steps(directory: str) -> list[int]:
 
 
 def entries(path: str) -> list[str]:
-    """What a directory holds besides its lock (nothing if it does not exist)."""
+    """What a directory holds besides its lock and a stale lock set aside (nothing if it does not exist)."""
     if not os.path.isdir(path):
         return []
-    return sorted(name for name in os.listdir(path) if name != LOCK)
+    return sorted(name for name in os.listdir(path) if name != LOCK and not name.startswith(f"{LOCK}.stale-"))

@@ -157,15 +157,25 @@ def _positions(parser: argparse.ArgumentParser, argv: list[str]) -> list[int]:
     return found
 
 
+#: Values no whole-number option may take: not a number, a fraction, nothing, past 64 bits.
+NOT_COUNTS = ("nan", "1.5", "", "x", "18446744073709551616")
+
+
 def _check(command: Command, root: str, argv: list[str], flag: str) -> str:
     outcome = attack(command.main, argv, root)
     # FIELD=VALUE options: the field named is the option named; argparse names an argument it does not know itself
     fields = [a.split("=", 2)[1] for a in argv if a.startswith(f"{flag}=") and a.count("=") >= 2]
-    # an option whose value conflicts with another's may be refused naming the other
-    options = [o for a in command.parser()._actions for o in a.option_strings]
-    names = (flag, *_fields(flag), *fields, *options, "RUN", "run_dir", "config.json", "memory",
-             "unrecognized arguments")
-    return assert_contract(outcome, *names, argv=argv)
+    # an option whose value conflicts with another given may be refused naming the other
+    given = {a.split("=")[0] for a in argv if a.startswith("--")}
+    runs = ("RUN", "run_dir", "config.json") if "RUN" in argv else ()
+    # a positional attacked: the refusal may name the path given (a file it lacks) or the argument
+    positional = [a for a in argv if not a.startswith("-") and a not in command.base][:1] if flag[0] != "-" else []
+    names = (flag, *_fields(flag), *fields, *given, *runs, *positional, "run_dir", "memory", "unrecognized arguments")
+    result = assert_contract(outcome, *names, argv=argv)
+    action = next((a for a in command.parser()._actions if flag in a.option_strings), None)
+    if action is not None and action.type is int and argv[-1] in (f"{flag}={v}" for v in NOT_COUNTS):
+        assert result == "refused", f"{argv[-1]} was planned"
+    return result
 
 
 def _attack_test(budget: int):
