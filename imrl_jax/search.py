@@ -117,7 +117,7 @@ class Evaluated(NamedTuple):
 
 
 def make_generation(strategy: Strategy, live: Callable, lives_per_fitness: int = 1, sharding=None,
-                    kernel: bool | None = None):
+                    kernel: bool = False):
     """A jitted ``generation(keys, params, populations, states, search_params, index)`` vmapped over seeds.
 
     ``populations`` (seeds, P, genes) are generation ``index``'s genomes (asked for before), ``states``
@@ -125,7 +125,7 @@ def make_generation(strategy: Strategy, live: Callable, lives_per_fitness: int =
     generation ``index``, then asks for generation ``index + 1``: it returns the next populations (kept
     in ``sharding``, so that the next lives are divided over the devices as these were), the states
     and each seed's :class:`Evaluated`. The same draws as :func:`generation` run generation by generation.
-    ``kernel``: whether the Pallas kernel lives them (None: found in the traced program; :func:`over_seeds`).
+    ``kernel``: whether the Pallas kernel lives them (:func:`over_seeds`).
     """
 
     def one(key, params, genomes, state, search_params, index):
@@ -137,19 +137,19 @@ def make_generation(strategy: Strategy, live: Callable, lives_per_fitness: int =
     return over_seeds(one, (0, None, 0, 0, None, None), sharding, kernel=kernel)
 
 
-def over_seeds(one: Callable, in_axes: tuple, sharding=None, *, genomes: int = 2, kernel: bool | None = None):
+def over_seeds(one: Callable, in_axes: tuple, sharding=None, *, genomes: int = 2, kernel: bool = False):
     """``one`` generation of one seed, vmapped over the seeds (``in_axes``) and jitted.
 
     Its first output, the next populations, is kept in ``sharding``: otherwise XLA returns them
     replicated (reproduction gathers genomes across the population axis), and every later
     generation would run unsharded, each device living every life. When the Pallas kernel lives
-    them (``kernel``; None: whether its call is in the traced program) and ``sharding`` splits an
-    axis, it runs under :func:`shard_lanes` (``genomes``: which argument is the populations).
+    them (``kernel``) and ``sharding`` splits an axis, it runs under :func:`shard_lanes` (``genomes``:
+    which argument is the populations).
     """
 
     def step(*args):
         split = sharding is not None and sharded_axis(sharding) != "none"
-        if split and (kernel if kernel is not None else calls(jax.make_jaxpr(jax.vmap(one, in_axes))(*args).jaxpr)):
+        if split and kernel:
             return shard_lanes(one, in_axes, sharding, genomes)(*args)
         following, *rest = jax.vmap(one, in_axes)(*args)
         if sharding is not None:
@@ -157,19 +157,6 @@ def over_seeds(one: Callable, in_axes: tuple, sharding=None, *, genomes: int = 2
         return (following, *rest)
 
     return jax.jit(step)
-
-
-def calls(jaxpr, name: str = "pallas_call") -> bool:
-    """Whether ``jaxpr`` (or any program inside it: a scan's, a cond's branches) calls the primitive ``name``."""
-    for eqn in jaxpr.eqns:
-        if eqn.primitive.name == name:
-            return True
-        for value in eqn.params.values():
-            for inner in value if isinstance(value, (tuple, list)) else (value,):
-                inner = getattr(inner, "jaxpr", inner)  # a ClosedJaxpr's Jaxpr
-                if hasattr(inner, "eqns") and calls(inner, name):
-                    return True
-    return False
 
 
 def shard_lanes(one: Callable, in_axes: tuple, sharding, genomes: int):

@@ -84,7 +84,8 @@ def run(mesh, seeds, how="ga"):
     elif how == "sweep":  # 2 points of 1 seed: B = 2 entries, each with its mutation size
         make, args = lambda: make_sweep_step(config, sharding), [keys, *sweep_values]
     else:  # search.make_generation with evosax's SNES: populations and strategies' states carried
-        make = lambda: search.make_generation(strategy, lambda k, p, g: live(k, config, p, g), 1, sharding)
+        make = lambda: search.make_generation(strategy, lambda k, p, g: live(k, config, p, g), 1, sharding,
+                                              kernel=True)
         populations = (populations, state.search)
     step, outputs, fitness = make(), [], []
     def call(step, populations, g):
