@@ -17,9 +17,7 @@ which tells the runner the sweep is done.
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
-import io
 import itertools
 import json
 import math
@@ -114,7 +112,7 @@ def sweep(args, argv: list[str], grid: list[dict]) -> int:
     from imrl_jax.checkpoint import git_commit
     from imrl_jax.config import make_config
     from imrl_jax.controllers import perceptron_followers
-    from imrl_jax.rundir import make_dir, write_atomic
+    from imrl_jax.rundir import csv_bytes, make_dir, write_atomic
 
     config = make_config("paper", condition="EE-LS", task_steps=args.task_steps, num_bins=10)
     genome = perceptron_followers(config, args.turn_gain).reshape(-1)
@@ -134,11 +132,8 @@ def sweep(args, argv: list[str], grid: list[dict]) -> int:
                  last_tenth=float(last[i].mean()), worst_task=float(performance[i].mean(0).min()),
                  **{f"task_{t + 1}": float(performance[i, :, t].mean()) for t in range(config.num_tasks)})
             for i, point in enumerate(grid)]
-    text = io.StringIO()
-    writer = csv.DictWriter(text, fieldnames=list(rows[0]), lineterminator="\n")  # as the committed sweep.csv
-    writer.writeheader()
-    writer.writerows({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
-    write_atomic(os.path.join(args.out, "sweep.csv"), text.getvalue().encode())
+    write_atomic(os.path.join(args.out, "sweep.csv"),  # LF lines, as the committed sweep.csv
+                 csv_bytes([{k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows]))
     figure(rows, os.path.join(args.out, "sweep.png"), args.task_steps)
     best = max(rows, key=lambda r: r["performance"])
     # the paper's rules, when the grid holds them
