@@ -1,7 +1,7 @@
 """``python -m experiments list|run|report NAME|all``: every study, found by itself (docs/STUDIES.md).
 
     python -m experiments list                # each study: stages and hours left, its document, its whole hours on
-                                              # this CPU and on a GPU (experiments/gpu_hours.py: docs/gpu speeds)
+                                              # this CPU and on a GPU (experiments/harness/gpu_hours.py: docs/gpu speeds)
     python -m experiments list search         # a study's stages and their commands, nothing run
     python -m experiments run all             # run (or go on with) every study in order
     python -m experiments run timescale       # one study
@@ -20,11 +20,11 @@ import subprocess
 import sys
 from typing import NamedTuple
 
-from experiments import gpu_hours
-from experiments.executor import add_options, dying_with_runner, options_argv
-from experiments.reproduce import MANIFEST, cost_left, read_manifest, stage_done
-from experiments.study import environment, studies
-from imrl_jax import cli
+from experiments.harness import gpu_hours
+from experiments.harness.executor import add_options, dying_with_runner, options_argv
+from experiments.harness.reproduce import MANIFEST, cost_left, read_manifest, stage_done
+from experiments.harness.study import environment, studies
+from imrl_jax.runs import cli
 
 #: Lane-steps per second of the estimates: the claims study's paper-length evolutions on 2 cores, as its
 #: manifest measured them (7 evolutions, 7.9 h, 2026-12-03; learning tests ran at about the same rate).
@@ -135,7 +135,7 @@ def plan(args, found) -> Listing | Running:
         if folder is not None:
             read_manifest(os.path.join(folder, MANIFEST))
             if args.action == "run":
-                from experiments.runner import check_free
+                from experiments.harness.runner import check_free
 
                 check_free(study.name, folder)
     if args.action == "list":

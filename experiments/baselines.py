@@ -12,8 +12,8 @@ when they have any, else the cpu scale's, labelled with that scale.
 import os
 import sys
 
-from experiments.study import RESULTS, SCALES
-from experiments.table import Measure, Table
+from experiments.harness.study import RESULTS, SCALES
+from experiments.harness.table import Measure, Table
 from imrl_jax import conditions
 
 #: The study's folder: each stage's (one per agent and budget) and comparison.png.
@@ -37,10 +37,10 @@ class BaselinesTable(Table):
     def report(self) -> int:
         """comparison.png: the finished baselines beside the learning tests of :meth:`tests_dir`."""
         from experiments.document import scale_label
-        from experiments.figures import fig_baselines
-        from experiments.loading import read_baselines
+        from experiments.harness.figures import fig_baselines
+        from experiments.harness.loading import read_baselines
         from experiments.reproduction import TABLES
-        from imrl_jax.plotting import save
+        from imrl_jax.analysis.plotting import save
 
         if not (found := read_baselines(self.out)):
             print(f"no baseline has finished in {self.out}: nothing to draw")

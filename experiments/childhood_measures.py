@@ -12,9 +12,9 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from experiments.measures import check_out_dir, checked_config, listed
-from imrl_jax import cli
-from imrl_jax.cli import HelpFormatter, Parser, UsageError, check_at_least, exit_codes
+from experiments.harness.measures import check_out_dir, checked_config, listed
+from imrl_jax.runs import cli
+from imrl_jax.runs.cli import HelpFormatter, Parser, UsageError, check_at_least, exit_codes
 from imrl_jax.config import CHILDHOOD_SELECTOR_REWARDS, CHILDHOOD_WALLS
 
 
@@ -61,7 +61,7 @@ MAX_KEY = 2**32 - 3
 def checked_runs(args, study: Study) -> list[tuple]:
     """Each run's best genomes and rows (:func:`best_of_run`), checked: readable, finite fitness (raises a user
     error naming the file)."""
-    from imrl_jax.rundir import RunDirError
+    from imrl_jax.runs.rundir import RunDirError
 
     read = []
     for run in args.runs:
@@ -114,7 +114,7 @@ def lanes_of(args, study: Study) -> list[tuple]:
 
 def measure_plan(argv, study: Study) -> cli.Call:
     """Parse and check a measure: every value bounded, the runs it reads, its memory and --out (nothing written)."""
-    from imrl_jax.devices import check_memory, use_host_cores
+    from imrl_jax.evolution.devices import check_memory, use_host_cores
 
     STAGES, RULES = study.stages, study.rules
     args = measure_parser(study).parse_intermixed_args(argv)

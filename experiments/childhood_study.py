@@ -26,8 +26,8 @@ import time
 
 import numpy as np
 
-from experiments.study import RESULTS, SCALES
-from experiments.table import Measure, Row, Table
+from experiments.harness.study import RESULTS, SCALES
+from experiments.harness.table import Measure, Row, Table
 from imrl_jax.config import ADULT_SELECTOR, CHILDHOOD_SELECTOR_REWARDS, CHILDHOOD_WALLS
 
 #: The study's results: its evolutions (evolve/NAME), its measures' folders (measures/NAME) and figures.
@@ -50,8 +50,8 @@ CEILING_RULES = {
 
 def measure(config, agent, records=None) -> dict:
     """The probes of an agent's experts and, given its childhood's ``records`` (selections,
-    on-wall samples, respawns per piece; see :func:`imrl_jax.behaviour.make_childhoods`), control shares and walls."""
-    from imrl_jax.behaviour import specialisation
+    on-wall samples, respawns per piece; see :func:`imrl_jax.analysis.behaviour.make_childhoods`), control shares and walls."""
+    from imrl_jax.analysis.behaviour import specialisation
 
     spec = specialisation(config, agent)
     own = np.diag(spec.takes)
@@ -72,7 +72,7 @@ def measure(config, agent, records=None) -> dict:
 
 def finish(out: str, rows: list[dict], **summary) -> int:
     """A measure's rows into OUT/NAME.csv (floats with 4 decimals), then its result.json naming the CSV."""
-    from experiments.measures import write_measure  # atomic: a kill leaves the measure not done
+    from experiments.harness.measures import write_measure  # atomic: a kill leaves the measure not done
 
     name = os.path.basename(os.path.normpath(out))
     write_measure(out, name, rows, "python -m experiments.childhood_study " + " ".join(sys.argv[1:]), 4,
@@ -97,7 +97,8 @@ def stage_hand(args) -> int:
     """Childhood alone with hand-made colour reinforcers, over the factors."""
     import jax
 
-    from imrl_jax import behaviour, sweeps
+    from imrl_jax.analysis import behaviour
+    from imrl_jax.evolution import sweeps
     from imrl_jax.config import make_config
 
     rows, start = [], time.perf_counter()
@@ -140,7 +141,7 @@ def stage_ceiling(args) -> int:
     import jax
 
     from imrl_jax.config import make_config
-    from imrl_jax.controllers import composition_ceiling
+    from imrl_jax.analysis.controllers import composition_ceiling
 
     rows = []
     for task_steps, (name, rules) in itertools.product([int(v) for v in args.task_steps.split(",")],
@@ -158,7 +159,7 @@ def stage_ceiling(args) -> int:
 def best_of_run(run_dir: str, num_best: int):
     """A run's config, the ``num_best`` best genomes of each seed's last evaluated generation (one after the other,
     seed by seed) and a row for each: its run, seed, rank and fitness."""
-    from imrl_jax.rundir import RunDirError, best_genomes, load_run, read_config, read_kept_best
+    from imrl_jax.runs.rundir import RunDirError, best_genomes, load_run, read_config, read_kept_best
 
     if os.path.isfile(os.path.join(run_dir, "final_population.npz")):
         run = load_run(run_dir)
@@ -183,7 +184,7 @@ def probes(config, genomes, key: int) -> list[dict]:
     """Each genome's :func:`measure`: of the experts it ends childhood with (LE-LS: a fresh one, keys from ``key``)."""
     import jax
 
-    from imrl_jax.behaviour import grown_agents
+    from imrl_jax.analysis.behaviour import grown_agents
 
     agents, records = grown_agents(config, genomes, key)
     return [measure(config, jax.tree.map(lambda x: x[i], agents),
@@ -207,7 +208,7 @@ def stage_random(args) -> int:
     import jax
 
     from imrl_jax.config import make_config
-    from imrl_jax.lifetime import make_evaluate
+    from imrl_jax.agent.lifetime import make_evaluate
 
     config = make_config(args.preset, condition="LE-LS")
     genomes = jax.random.uniform(jax.random.key(args.key), (args.individuals, config.num_genes), minval=-1.0,
@@ -222,7 +223,7 @@ def stage_heritability(args) -> int:
     """The best individuals of a run relived with fresh keys: how much of their fitness was luck."""
     import jax
 
-    from imrl_jax.lifetime import make_evaluate
+    from imrl_jax.agent.lifetime import make_evaluate
 
     rows = []
     for run_dir in args.runs:
@@ -242,12 +243,12 @@ def stage_speed(args) -> int:
     import jax
     import jax.numpy as jnp
 
-    from imrl_jax.arena import task_arrays
-    from imrl_jax.behaviour import colour_reinforcers
+    from imrl_jax.world.arena import task_arrays
+    from imrl_jax.analysis.behaviour import colour_reinforcers
     from imrl_jax.config import make_config
-    from imrl_jax.lifetime import childhood_task, lifetime_keys, random_pose, run_phase, task_spec, task_start
-    from imrl_jax.networks import decode
-    from imrl_jax.state import childhood_phase, for_phase, init_state
+    from imrl_jax.agent.lifetime import childhood_task, lifetime_keys, random_pose, run_phase, task_spec, task_start
+    from imrl_jax.agent.networks import decode
+    from imrl_jax.agent.state import childhood_phase, for_phase, init_state
 
     config = make_config(args.preset, condition="LE-LS")
     params = config.learning_params()
@@ -285,7 +286,7 @@ def stage_speed(args) -> int:
 
 def plot_hand(rows, path: str) -> str:
     """Own colour taken, largest control share and time on walls of every setting (mean bars, seed dots)."""
-    from imrl_jax.plotting import new_figure, save
+    from imrl_jax.analysis.plotting import new_figure, save
 
     walls, rewards, rules = ([v for v in known if any(r[name] == v for r in rows)] for name, known in (
         ("walls", CHILDHOOD_WALLS), ("reward", CHILDHOOD_SELECTOR_REWARDS), ("rules", RULES)))
@@ -345,11 +346,11 @@ class ChildhoodTable(Table):
     """The study's table: its evolutions' final best, tasks and probes, evolve.png and the hand-made childhoods."""
 
     def report(self) -> int:
-        from experiments.loading import history_columns, read_evolution
-        from experiments.markdown import head, line
-        from experiments.study import write_table
+        from experiments.harness.loading import history_columns, read_evolution
+        from experiments.harness.markdown import head, line
+        from experiments.harness.study import write_table
         from imrl_jax import conditions
-        from imrl_jax.plotting import new_figure, save, style_axis
+        from imrl_jax.analysis.plotting import new_figure, save, style_axis
 
         folders = {m.name: self.measure_folder(m) for m in self.measures}
         lines = head("run", "final best (per seed)", "every task of the best",

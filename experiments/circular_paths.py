@@ -16,10 +16,10 @@ import sys
 
 import numpy as np
 
-from experiments.measures import check_out_dir, check_steps, write_measure
-from experiments.study import MEASURED, RESULTS
-from imrl_jax import cli
-from imrl_jax.cli import HelpFormatter, Parser, UsageError, exit_codes
+from experiments.harness.measures import check_out_dir, check_steps, write_measure
+from experiments.harness.study import MEASURED, RESULTS
+from imrl_jax.runs import cli
+from imrl_jax.runs.cli import HelpFormatter, Parser, UsageError, exit_codes
 
 OUT = os.path.join(RESULTS, "claims", "circles")
 #: The action grid: turn in [0, 1] (0.5 straight; 0 and 1 the 30 deg turns; steps of 0.06 deg), speed up to full.
@@ -60,7 +60,7 @@ def summarise(grid: np.ndarray, performance: np.ndarray, pairs=PAIRS) -> dict:
 
 def figure(grid: np.ndarray, performance: np.ndarray, path: str) -> str:
     """Performance per task against the turn, at full speed; the mean over tasks in black."""
-    from imrl_jax.plotting import new_figure, save, style_axis
+    from imrl_jax.analysis.plotting import new_figure, save, style_axis
 
     full = np.isclose(grid[:, 1], 1.0)
     fig = new_figure(6.4, 3.6)
@@ -79,7 +79,7 @@ def figure(grid: np.ndarray, performance: np.ndarray, path: str) -> str:
 
 def measure(out_dir: str = OUT, task_steps: int = TASK_STEPS) -> dict:
     """Every action of the grid on the six tasks; writes circles.png, circles.csv, then result.json (done)."""
-    from imrl_jax import controllers
+    from imrl_jax.analysis import controllers
     from imrl_jax.config import make_config
 
     config, grid = make_config("paper"), actions()
@@ -104,7 +104,7 @@ def parser() -> Parser:
 
 def check_grid_memory(task_steps: int) -> None:
     """Refuse (one line) a grid whose steps' records cannot fit: each lane keeps a reach flag per step until summed."""
-    from imrl_jax import devices
+    from imrl_jax.evolution import devices
     from imrl_jax.config import make_config
 
     lanes = len(TURNS) * len(SPEEDS) * make_config("paper").num_tasks

@@ -9,7 +9,7 @@ of values the paper does not state; its runs are the rows of a table (:func:`rul
 the paper's conditions at the paper's life lengths (150,000 + 6 x 100,000 steps; learning tests of
 1,000,000 cycles per task), at the screen's sizes (5 seeds x 100 generations, 5 best x 4 tests:
 ``SCREEN``) or, for the conditions of ``RuleSet.full``, the paper's (the reproduction's runs). Each
-run is found by what it computes (``imrl_jax.runspec``), so rule sets whose lives are the same share
+run is found by what it computes (``imrl_jax.runs.runspec``), so rule sets whose lives are the same share
 it: EE-ES's one run, EE-LS's under ``skills``' or ``paper``'s adult selector, SLE's tests of equal
 adult values, bias and noise schedule. Claim 8's table adds 4 and 6 experts to two rule sets.
 """
@@ -24,17 +24,17 @@ import sys
 
 import numpy as np
 
-from experiments.claims import (ABOUT, DOES_NOT, HOLDS, NOT_AVAILABLE, NUM_BEST, PARTLY, claim_experts, final_best,
+from experiments.harness.claims import (ABOUT, DOES_NOT, HOLDS, NOT_AVAILABLE, NUM_BEST, PARTLY, claim_experts, final_best,
                                 measure as measure_claims)
-from experiments.loading import read_evolution, read_json, read_test, write_json
-from experiments.markdown import table
-from experiments.relive import colours_followed, reproduction_fresh, run_fresh, run_probe
-from experiments.reproduce import EVOLVED, TESTED
+from experiments.harness.loading import read_evolution, read_json, read_test, write_json
+from experiments.harness.markdown import table
+from experiments.harness.relive import colours_followed, reproduction_fresh, run_fresh, run_probe
+from experiments.harness.reproduce import EVOLVED, TESTED
 from experiments.rule_sets import BY_NAME, RULE_SETS, RuleSet
-from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN, write_table
-from experiments.table import Measure, Row, Table, dispatch, studies_of
+from experiments.harness.study import REPRODUCTION, RESULTS, SCALES, SCREEN, write_table
+from experiments.harness.table import Measure, Row, Table, dispatch, studies_of
 from imrl_jax import conditions
-from imrl_jax.plotting import new_figure, save
+from imrl_jax.analysis.plotting import new_figure, save
 
 OUT = os.path.join(RESULTS, "claims")
 #: The order the screen runs its rule sets in: the cheap SLE tests first, then the evolutions that matter most (bias 1:
@@ -139,7 +139,7 @@ def measure_rule(rule: RuleSet, reproduction_summary: dict, out: str = OUT, repr
 
 def config_of(rule: RuleSet, condition: str, num_experts: int | None = None):
     """The config of a rule set's run of ``condition`` (its learning test's for SLE; claim 8's with ``num_experts``)."""
-    from imrl_jax.cli import parse_sets
+    from imrl_jax.runs.cli import parse_sets
     from imrl_jax.config import make_config
 
     overrides = parse_sets(list(rule.sets))

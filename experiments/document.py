@@ -7,11 +7,11 @@ import subprocess
 
 import numpy as np
 
-from experiments.markdown import mean_sd, table
-from experiments.study import SCALES
-from experiments.claims import CLAIMS, EVOLVED, LAST_GENERATIONS, PAPER, PLATEAU_FRACTION, RULES, SEEN, _fmt
-from experiments.loading import read_json
-from experiments.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEPS, FRESH_LIVES, PATH_STEPS
+from experiments.harness.markdown import mean_sd, table
+from experiments.harness.study import SCALES
+from experiments.harness.claims import CLAIMS, EVOLVED, LAST_GENERATIONS, PAPER, PLATEAU_FRACTION, RULES, SEEN, _fmt
+from experiments.harness.loading import read_json
+from experiments.harness.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEPS, FRESH_LIVES, PATH_STEPS
 from imrl_jax import conditions
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -121,7 +121,7 @@ def specialisation_rows(lives: dict) -> list[dict]:
 def write_document(path: str, figures: str, data: dict, numbers: dict, lives: dict, spec_rows: list[dict],
                    written: dict, baselines: dict | None = None, study: str = "reproduction") -> None:
     """The markdown report (with a section on the brax baselines when ``baselines`` has any)."""
-    from imrl_jax.checkpoint import git_commit
+    from imrl_jax.runs.checkpoint import git_commit
 
     manifest, results, owners, variants = data["manifest"], data["results"], data["owners"], data["variants"]
     label, scale, doc_dir = scale_label(manifest), manifest["scale"], os.path.dirname(os.path.abspath(path))
@@ -240,7 +240,7 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
 
     out += ["", "### Expert specialisation", "",
             f"*follows* is claim 7's definition: the colour each expert of the best individual takes at >= 75 % of "
-            f"the junctions when it drives alone from fixed starts (`imrl_jax.behaviour.specialisation`, the "
+            f"the junctions when it drives alone from fixed starts (`imrl_jax.analysis.behaviour.specialisation`, the "
             f"junction probe; \"-\": none). The other columns are what the retina's central receptors see on each "
             f"expert's control steps during the drawn paths (`colour_shares`): on this floor no colour runs "
             f"straight for long, so those shares stay mixed even for an expert that follows a colour, and they are "
@@ -266,18 +266,18 @@ def write_document(path: str, figures: str, data: dict, numbers: dict, lives: di
     with open(discussion if os.path.isfile(discussion) else os.devnull) as f:
         out += ["", "## Discussion", "", f.read().strip() or "(no discussion written yet)"]
     os.makedirs(doc_dir, exist_ok=True)
-    from imrl_jax.rundir import write_atomic
+    from imrl_jax.runs.rundir import write_atomic
 
     write_atomic(path, ("\n".join(out) + "\n").encode())
 
 
 def baselines_section(baselines: dict, data: dict, written: dict, rel, label: str) -> list[str]:
     """Modern deep RL from brax.training on the same tasks, beside this report's learning tests."""
-    from experiments.figures import baseline_label
+    from experiments.harness.figures import baseline_label
 
     out = ["", "## Modern deep RL baselines (brax.training)", "",
            "Each task learned from scratch by brax's PPO or ES on the arena's brax environments "
-           "(`imrl_jax.brax_env`), measured as the learning tests are: reaches / theoretical maximum, here of the "
+           "(`imrl_jax.agent.brax_env`), measured as the learning tests are: reaches / theoretical maximum, here of the "
            "trained policy acting (sampling its actions, as the paper's learners are measured while they act) "
            "from the task's start, replayed by the project's own step; the policy's mode in the last column. The "
            "baselines' own scale is their budget of cycles per task, not this report's: the paper's learning "

@@ -20,12 +20,12 @@ import numpy as np
 
 # NUM_BEST: the junction probe drives claim 7's number of each seed's fittest genomes, so that a run shared with
 # the claims study (LE-LS-6) keeps one probe.json
-from experiments.claims import NUM_BEST
-from experiments.figures import not_run
-from experiments.loading import write_json
-from experiments.markdown import head, line, mean_sd
-from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN
-from experiments.table import Row, Table
+from experiments.harness.claims import NUM_BEST
+from experiments.harness.figures import not_run
+from experiments.harness.loading import write_json
+from experiments.harness.markdown import head, line, mean_sd
+from experiments.harness.study import REPRODUCTION, RESULTS, SCALES, SCREEN
+from experiments.harness.table import Row, Table
 
 OUT = os.path.join(RESULTS, "future_work")
 DOCUMENT = os.path.join("docs", "FUTURE_WORK.md")
@@ -88,7 +88,7 @@ STYLES = {"LE-LS-6": dict(color="0.3", lw=1.2, ls="-."), "EXT-LS-whole": dict(co
 
 def read_traits(run_dir: str | None) -> dict | None:
     """An evolution's evolved values from history.csv: names, (generations, seeds, values, 2) (mean, the best's)."""
-    from experiments.loading import history_columns
+    from experiments.harness.loading import history_columns
 
     path = os.path.join(run_dir or "", "history.csv")
     if not os.path.isfile(path):
@@ -102,8 +102,8 @@ def read_traits(run_dir: str | None) -> dict | None:
 
 def _evolution(run_dir: str | None) -> dict | None:
     """A row's evolution as the report shows it: its size and, once finished, its final best, spread and plateau."""
-    from experiments.claims import final_best, plateau_generation
-    from experiments.loading import read_evolution
+    from experiments.harness.claims import final_best, plateau_generation
+    from experiments.harness.loading import read_evolution
 
     run = read_evolution(run_dir)
     if run is None:
@@ -122,7 +122,7 @@ def _evolution(run_dir: str | None) -> dict | None:
 
 def _test(out_dir: str) -> dict | None:
     """A finished learning test's steady state per run, its mean and sd (ddof 0, as steady.json's) and best run."""
-    from experiments.loading import read_test
+    from experiments.harness.loading import read_test
 
     test = read_test(out_dir)
     if test is None:
@@ -153,8 +153,8 @@ def colour_sets(followed: list[list[int]] | None) -> dict | None:
     (``"blue + red"``, ``"none"``), the mean number of experts following one and of colours followed (claim 7's)."""
     from collections import Counter
 
-    from experiments.relive import colours_followed
-    from imrl_jax.behaviour import SEEN
+    from experiments.harness.relive import colours_followed
+    from imrl_jax.analysis.behaviour import SEEN
 
     if not followed:
         return None
@@ -167,10 +167,10 @@ def colour_sets(followed: list[list[int]] | None) -> dict | None:
 def measure(rows: dict[str, Row], evolutions: dict, tests: dict, summary: dict,
             reproduction: str = REPRODUCTION) -> dict:
     """Every row of :data:`ABOUT`, (c)'s values and (d)'s experts; ``summary``: the reproduction's report."""
-    from experiments.claims import _difference
+    from experiments.harness.claims import _difference
     from experiments.claims_study import reproduction_variant
-    from experiments.relive import reproduction_fresh, run_fresh, run_probe
-    from imrl_jax import networks
+    from experiments.harness.relive import reproduction_fresh, run_fresh, run_probe
+    from imrl_jax.agent import networks
     from imrl_jax.config import make_config
 
     measured_rows, references = [], {row.name for row, _ in REFERENCES}
@@ -220,7 +220,7 @@ def measure(rows: dict[str, Row], evolutions: dict, tests: dict, summary: dict,
 
 def judge(measured: dict) -> list[dict]:
     """The verdicts of :data:`JUDGED` from :func:`measure`'s rows, (c)'s evolved values and (d)'s experts."""
-    from experiments import claims
+    from experiments.harness import claims
     from imrl_jax.config import make_config
 
     rows, values = {r["name"]: r for r in measured["rows"]}, measured["learning_values"]
@@ -257,7 +257,7 @@ def judge(measured: dict) -> list[dict]:
 
 def table(measured: dict) -> str:
     """The report's markdown: every row's fitness and steady state, (c)'s evolved learning values, (d)'s experts."""
-    from experiments.claims import FUTURE, FUTURE_RULES, LAST_GENERATIONS, PLATEAU_FRACTION
+    from experiments.harness.claims import FUTURE, FUTURE_RULES, LAST_GENERATIONS, PLATEAU_FRACTION
 
     lines = head("row", "condition", "what", "seeds x generations",
                  "final best fitness (best of a generation's noisy lives)", "sd over seeds",
@@ -324,7 +324,7 @@ def table(measured: dict) -> str:
 
 def _colour_lines(rows: list[dict]) -> list[str]:
     """What the experts of the study's finished evolutions do: the colours they follow, as a table."""
-    from imrl_jax.behaviour import FOLLOW_CHOICE
+    from imrl_jax.analysis.behaviour import FOLLOW_CHOICE
 
     probed = [(r["name"], r["colours"]) for r in rows if r.get("colours")]
     if not probed:
@@ -340,7 +340,7 @@ def _colour_lines(rows: list[dict]) -> list[str]:
 
 def _style(row: dict) -> dict:
     """A row's line style: its own, else its condition's; dashed under ``faithful`` (the same condition twice)."""
-    from imrl_jax.plotting import CONDITION_STYLES
+    from imrl_jax.analysis.plotting import CONDITION_STYLES
 
     style = STYLES.get(row["name"], CONDITION_STYLES[row["condition"]])
     return dict(style, ls="--") if row.get("preset") == "faithful" and row["name"] not in STYLES else style
@@ -348,7 +348,7 @@ def _style(row: dict) -> dict:
 
 def _fitness(ax, rows: list[dict], measured: dict) -> bool:
     """Best fitness per generation of the rows' finished evolutions, mean +-1 sd over seeds (the paper's Fig. 3a)."""
-    from experiments.figures import _band
+    from experiments.harness.figures import _band
 
     drawn, banded = [r for r in rows if (r["evolution"] or {}).get("finished")], set()
     for row in drawn:
@@ -388,7 +388,7 @@ def _steady(ax, rows: list[dict], measured: dict) -> bool:
 
 def _values(ax, rows: list[dict], measured: dict) -> bool:
     """(c): each seed's best's evolved values (dots; their mean, a bar) in their genes' ranges, beside the hand-set."""
-    from experiments.claims import map_position
+    from experiments.harness.claims import map_position
     from imrl_jax.conditions import EVOLVED_FIELDS
 
     values = measured["learning_values"]
@@ -434,8 +434,8 @@ def figure(measured: dict, question: str, path: str) -> str:
     """The figure of one of the paper's questions (:data:`PANELS`), written to ``path``."""
     import textwrap
 
-    from experiments.claims import FUTURE
-    from imrl_jax.plotting import new_figure, save, style_axis
+    from experiments.harness.claims import FUTURE
+    from imrl_jax.analysis.plotting import new_figure, save, style_axis
 
     rows = [r for r in measured["rows"] if any(r["name"] in names for q, _, names in JUDGED if q == question)]
     fig = new_figure(6.4 * len(PANELS[question]), 4.6)
@@ -458,7 +458,7 @@ class FutureWorkTable(Table):
 
     def report(self) -> int:
         from experiments.claims_study import reproduction_summary
-        from experiments.study import write_table
+        from experiments.harness.study import write_table
 
         # the reproduction's report beside the study's document: its runs' fresh lives, which the reference rows show
         measured = measure({row.name: row for row in self.rows}, self.evolutions(), self.tests(),

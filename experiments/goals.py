@@ -17,8 +17,8 @@ import sys
 
 import numpy as np
 
-from experiments.study import RESULTS, SCALES, SCREEN
-from experiments.table import Measure, Row, Table
+from experiments.harness.study import RESULTS, SCALES, SCREEN
+from experiments.harness.table import Measure, Row, Table
 
 #: The study's manifest, logs and measures (its runs lie wherever their keys find them).
 OUT = os.path.join(RESULTS, "goals")
@@ -47,7 +47,7 @@ KINDS = {"EE-ES": ("behaviours + selector, 333", "#8c2d04"), "EE-LS": ("behaviou
 def read_landscapes(out: str) -> dict[str, dict]:
     """Each condition's landscape measures as far as they have come (landscape.json, result.json once done): its
     random genomes by learning ("learning" or its cut) and its generations' mutations, in the order measured."""
-    from experiments.loading import read_json
+    from experiments.harness.loading import read_json
 
     found = {}
     for name in KINDS:
@@ -62,7 +62,7 @@ def read_landscapes(out: str) -> dict[str, dict]:
 
 def landscape_tables(found: dict[str, dict]) -> str:
     """H4's table (random genomes) and H3's (mutations and ruggedness around each generation's parents)."""
-    from experiments.markdown import table
+    from experiments.harness.markdown import table
 
     random = table(("condition", "evolves, genes", "learning", "mean", "sd", "median", "best", "share at 0"), [
         (name, KINDS[name][0], learning, *(f"{v:.4f}" for v in (r["mean"], r["std"], *r["quantiles"][2::2])),
@@ -91,7 +91,7 @@ def landscape_figure(found: dict[str, dict], path: str) -> str:
     """H4: random genomes' fitness per condition; H3: a mutation's mean effect relative to its parents, the share
     of deleterious mutations and rho(1) at generations 0, 10 and the last, with learning (solid) and cut (dashed:
     the cut the condition's row names; dotted: a second, smaller one)."""
-    from imrl_jax.plotting import new_figure, save, style_axis
+    from imrl_jax.analysis.plotting import new_figure, save, style_axis
 
     fig = new_figure(13.0, 3.5)
     ax_random, ax_effect, ax_bad, ax_rho = fig.subplots(1, 4, gridspec_kw=dict(width_ratios=[1.3, 1, 1, 1]))
@@ -137,7 +137,7 @@ class GoalsTable(Table):
     """The goals study's table, whose report also writes the landscape measures' tables and figure."""
 
     def report(self) -> int:
-        from experiments.study import write_table
+        from experiments.harness.study import write_table
 
         code = super().report()
         found = read_landscapes(self.out)
@@ -158,7 +158,7 @@ TABLE = GoalsTable("goals", "docs/GOALS.md", 9, out=OUT, scale=SCREEN, rows=(
 ), measures=(  # under skills, on the paper-scale runs of the reproduction and others' runs, found by key (EE-ES
     # learns nothing: its paper run is its only one); H3's cuts: LE-LS-like
     # childhoods to a third (LE-LS's to a tenth too: no genome scores then), EE-LS-like adult selectors to nothing
-    # (imrl_jax.landscape.learning_cut)
+    # (imrl_jax.evolution.landscape.learning_cut)
     landscape("EE-ES", Row("EE-ES", "EE-ES", "skills", scale=PAPER), LIFE["EE-LS"], None, *KEPT),
     landscape("EE-LS-T", "EE-LS-T", LIFE["EE-LS"], "0"),
     landscape("EE-LS", Row("EE-LS", "EE-LS", "skills", scale=PAPER), LIFE["EE-LS"], "0", *KEPT),

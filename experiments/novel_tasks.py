@@ -17,11 +17,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from experiments.figures import finish
-from experiments.loading import write_json
-from experiments.reproduce import test_command, test_cost
-from experiments.study import REPRODUCTION, RESULTS, SCALES, SCREEN
-from experiments.table import Measure, Row, Table
+from experiments.harness.figures import finish
+from experiments.harness.loading import write_json
+from experiments.harness.reproduce import test_command, test_cost
+from experiments.harness.study import REPRODUCTION, RESULTS, SCALES, SCREEN
+from experiments.harness.table import Measure, Row, Table
 from imrl_jax import conditions
 
 #: The study's manifest, task sets, tests on other task sets and report (its runs lie wherever their keys find them).
@@ -81,8 +81,8 @@ def colour_summary(followed: list[list[int]]) -> dict:
 def advantage_table(measured: dict, evolutions: str) -> str:
     """The report's markdown: learning's advantage per row and set of tasks, brax's agents, the held-out evolutions
     (``evolutions``: their table) and their probes, then the verdicts."""
-    from experiments.claims import UNSEEN_RULE
-    from experiments.markdown import table
+    from experiments.harness.claims import UNSEEN_RULE
+    from experiments.harness.markdown import table
 
     lines = [table(("comparison", "tasks", "runs", "steady state", "EE-ES", "advantage", "se"), [
         (r["name"], r["tasks"], r["runs"], f"{r['steady']:.3f}", f"{r['ee_es']:.3f}", f"{r['advantage']:+.3f}",
@@ -110,7 +110,7 @@ def advantage_table(measured: dict, evolutions: str) -> str:
 
 def draw_tests(ax, measured: dict, rows, name: str, title: str) -> None:
     """The learning curves of the tests ``name`` ("{}": the row's own) of ``rows``, one per condition."""
-    from experiments.figures import _draw_curves
+    from experiments.harness.figures import _draw_curves
 
     _draw_curves(ax, {r.condition: (t["steps"], t["mean"], t["sd"], r.condition) for r in rows
                       if (t := measured["tests"].get(name.format(r.name))) is not None}, title,
@@ -119,7 +119,7 @@ def draw_tests(ax, measured: dict, rows, name: str, title: str) -> None:
 
 def draw_bars(ax, groups: dict, labels, title: str, ylabel: str, colours=("0.35", "tab:orange")) -> None:
     """Bars of each group's values side by side, a (value, error) pair or None; a colour per place in the group."""
-    from imrl_jax.plotting import style_axis
+    from imrl_jax.analysis.plotting import style_axis
 
     width = 0.8 / len(labels)
     for j, (label, colour) in enumerate(zip(labels, colours)):
@@ -143,7 +143,7 @@ def draw_advantages(ax, measured: dict, question: Question) -> None:
 
 def novel_figure(measured: dict, path: str) -> str:
     """The novel set: curves per preset, learning's advantage, and evolved skills beside learning from scratch."""
-    from imrl_jax.plotting import new_figure
+    from imrl_jax.analysis.plotting import new_figure
 
     (skills, paper), (advantages, scratch) = (fig := new_figure(11.0, 7.4)).subplots(2, 2)
     for ax, preset in ((skills, "skills"), (paper, "paper")):
@@ -162,8 +162,8 @@ def novel_figure(measured: dict, path: str) -> str:
 def held_out_figure(measured: dict, path: str) -> str:
     """The held-out tasks: learning tests on both sets, learning's advantage, the evolutions' best fitness and the
     colours the evolved experts follow."""
-    from experiments.figures import _draw_curves, _fitness_series
-    from imrl_jax.plotting import FLOOR_COLOURS, new_figure
+    from experiments.harness.figures import _draw_curves, _fitness_series
+    from imrl_jax.analysis.plotting import FLOOR_COLOURS, new_figure
 
     grid = (fig := new_figure(13.0, 7.4)).add_gridspec(2, 6)
     for k, (which, name) in enumerate(zip(HELD_OUT, QUESTIONS[1].tests)):
@@ -187,9 +187,9 @@ class NovelTasksTable(Table):
     def advantages(self) -> dict:
         """Learning's advantage per row and set of tasks, the verdicts, brax's agents, the held-out evolutions (the
         table's measure of their rows) and their probes, and the tests drawn."""
-        from experiments.claims import advantage, claim_unseen
-        from experiments.loading import read_json, read_test
-        from experiments.relive import run_probe
+        from experiments.harness.claims import advantage, claim_unseen
+        from experiments.harness.loading import read_json, read_test
+        from experiments.harness.relive import run_probe
 
         folders = {**self.tests(), **{m.name: self.measure_folder(m) for m in self.measures}}
         tests = {name: test for name, folder in folders.items() if (test := read_test(folder)) is not None}
@@ -221,7 +221,7 @@ class NovelTasksTable(Table):
 
     def report(self) -> int:
         """Measure; write advantage.json and a figure per question under ``out``, and the table into the document."""
-        from experiments.study import write_table
+        from experiments.harness.study import write_table
 
         measured = self.advantages()
         os.makedirs(self.out, exist_ok=True)

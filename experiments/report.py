@@ -13,12 +13,12 @@ and cpu-scale runs). The document labels every number with the run's scale, give
 ends with the table's hand-written ``discussion.md`` when it exists.
 
 The best individual of an evolution (the fittest of the last generation over all seeds) lives again the very life
-that earned its fitness (:func:`imrl_jax.render.life_key`), then drives each task for a while from the weights it
+that earned its fitness (:func:`imrl_jax.commands.render.life_key`), then drives each task for a while from the weights it
 ended that task with: the trajectory figures, the expert-specialisation table and EE-ES's stereotypy per task (claim
 4). Claim 7 probes the experts of the 10 best LE-LS and EE-LS individuals of every seed
-(:func:`imrl_jax.behaviour.specialisation`; LE-LS after a fresh childhood). ``behaviour=False`` skips both.
+(:func:`imrl_jax.analysis.behaviour.specialisation`; LE-LS after a fresh childhood). ``behaviour=False`` skips both.
 Those lives take minutes: before any is drawn or compiled the report says on stderr what it will live and its
-estimated time (``experiments.relive.Reliving``), then a line as each part compiles and a progress line with an ETA.
+estimated time (``experiments.harness.relive.Reliving``), then a line as each part compiles and a progress line with an ETA.
 """
 
 from __future__ import annotations
@@ -31,14 +31,14 @@ import os
 
 import numpy as np
 
-from experiments.study import RESULTS
-from experiments.claims import CLAIMS, EVOLVED, PAPER, RULES, SEEN, TESTED, measure
+from experiments.harness.study import RESULTS
+from experiments.harness.claims import CLAIMS, EVOLVED, PAPER, RULES, SEEN, TESTED, measure
 from experiments.document import (ROOT, figures_of, pipeline_command, scale_label, sharers, specialisation_rows,
                                   write_document)
-from experiments.figures import fig3, fig_baselines, fig_curves, fig_paths, fig_steady
-from experiments.loading import read_baselines, update_best_genomes
-from imrl_jax.rundir import write_atomic
-from experiments.relive import (DRAWN_STEPS, PATH_STEPS, Reliving, fresh_fitness, probe_best, relive_best,
+from experiments.harness.figures import fig3, fig_baselines, fig_curves, fig_paths, fig_steady
+from experiments.harness.loading import read_baselines, update_best_genomes
+from imrl_jax.runs.rundir import write_atomic
+from experiments.harness.relive import (DRAWN_STEPS, PATH_STEPS, Reliving, fresh_fitness, probe_best, relive_best,
                                  relive_parts)
 from imrl_jax import conditions
 
@@ -59,9 +59,9 @@ BASELINES = os.path.join(ROOT, RESULTS, "baselines")
 
 def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
     """Write a reproduction table's figures, summaries and document from what has finished; the paths written."""
-    from imrl_jax.checkpoint import git_commit
+    from imrl_jax.runs.checkpoint import git_commit
     from imrl_jax.config import make_config
-    from imrl_jax.plotting import plot_arena, save
+    from imrl_jax.analysis.plotting import plot_arena, save
 
     data, doc = table.data(), os.path.abspath(table.document)
     manifest, figures, label = data["manifest"], figures_of(doc), scale_label(data["manifest"])

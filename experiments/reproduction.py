@@ -10,12 +10,12 @@ A variant is a preset of ``imrl_jax.config``: ``skills`` (the rules docs/CHILDHO
 unstated values, SLE's noise over the whole test: the claims map's ``paper-selector-sle-test``,
 docs/CLAIMS.md) and ``extension`` (MODEL.md's learning extensions). Its rows are the paper's
 conditions under it, evolved (LE-LS, EE-LS, EE-ES) and learning-tested (and SLE, tested from
-scratch); each run is found by its key (``imrl_jax.runspec``), so rows that live the same lives
+scratch); each run is found by its key (``imrl_jax.runs.runspec``), so rows that live the same lives
 share one run: EE-ES learns nothing (one run for every variant), faithful's EE-LS is skills'.
 The report (``experiments.report``) draws Fig. 1 and Fig. 3, relives the best individuals and
 judges the seven claims.
 
-Scales (``experiments.study.SCALES``; what ``cpu`` shrinks is the whole difference): the paper's, with the
+Scales (``experiments.harness.study.SCALES``; what ``cpu`` shrinks is the whole difference): the paper's, with the
 variants skills, paper and faithful; ``cpu``, paper and extension with 5 seeds x 40 generations, lives, tests and
 their steady state a fifth of the paper's, 2 tests per best individual. Each document opens with its sizes beside the
 paper's.
@@ -28,8 +28,8 @@ import functools
 import os
 import sys
 
-from experiments.study import REPRODUCTION, RESULTS, SCALES
-from experiments.table import Row, Table, dispatch, studies_of
+from experiments.harness.study import REPRODUCTION, RESULTS, SCALES
+from experiments.harness.table import Row, Table, dispatch, studies_of
 from imrl_jax import conditions
 
 
@@ -56,8 +56,8 @@ class ReproductionTable(Table):
         """What the report reads: each variant's finished evolutions and tests, the variant whose folder holds each
         run (where it lies in none, the first variant that has it), the stages left, the manifest of their commands."""
         from experiments.claims_study import reproduction_variant
-        from experiments.loading import read_evolution, read_json, read_test
-        from experiments.reproduce import stage_done
+        from experiments.harness.loading import read_evolution, read_json, read_test
+        from experiments.harness.reproduce import stage_done
         from imrl_jax.config import PRESETS
 
         stages, scale = self.all_stages()

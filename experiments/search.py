@@ -8,7 +8,7 @@ Each row is a search strategy (``python -m imrl_jax.evolve --strategy NAME``) ev
 paper under ``skills`` at the screen's sizes (5 seeds x 100 generations of 50 lives, paper lengths), then a
 learning test of its 5 best x 4 tests. The GA's rows are the reproduction's ``skills`` runs at the paper's
 sizes (10 seeds; their keys find them): the search is the only difference. The report adds claims 1-4 and 6
-recomputed per strategy with the verdict rules of :mod:`experiments.claims`, and the experts, paths and
+recomputed per strategy with the verdict rules of :mod:`experiments.harness.claims`, and the experts, paths and
 learning tests behind them.
 """
 
@@ -20,13 +20,13 @@ import sys
 
 import numpy as np
 
-from experiments.figures import not_run
-from experiments.loading import write_json
-from experiments.study import RESULTS, SCALES, SCREEN
-from experiments.table import Row, Table
-from experiments.markdown import head, line, mean_sd
+from experiments.harness.figures import not_run
+from experiments.harness.loading import write_json
+from experiments.harness.study import RESULTS, SCALES, SCREEN
+from experiments.harness.table import Row, Table
+from experiments.harness.markdown import head, line, mean_sd
 from imrl_jax import conditions
-from imrl_jax.strategies import GA_NAME
+from imrl_jax.evolution.strategies import GA_NAME
 
 PRESET = "skills"
 CONDITIONS = ("EE-LS", "EE-ES", "LE-LS")
@@ -51,7 +51,7 @@ def strategy_of(row: Row) -> str:
 
 def judge(strategies, rows: list[dict], sle_per_run: list[float] | None, paths: dict) -> dict:
     """Claims 1-4 and 6 per strategy from its rows (finished evolutions only), SLE's test and its EE-ES's path."""
-    from experiments.claims import evolved_claims
+    from experiments.harness.claims import evolved_claims
 
     claims = {}
     for strategy in strategies:
@@ -65,7 +65,7 @@ def judge(strategies, rows: list[dict], sle_per_run: list[float] | None, paths: 
 
 def steady(tested: str) -> dict | None:
     """A learning test's steady state: mean and sd over runs (ddof 0, as learning_test writes them); None: not run."""
-    from experiments.loading import read_test
+    from experiments.harness.loading import read_test
 
     if (test := read_test(tested)) is None:
         return None
@@ -77,7 +77,7 @@ def steady(tested: str) -> dict | None:
 def table(measured: dict) -> str:
     """The report's markdown beyond the rows' table: each row's fresh lives and experts, then the claims' verdicts
     per strategy."""
-    from experiments.claims import CLAIMS
+    from experiments.harness.claims import CLAIMS
 
     lines = head("strategy", "condition", "fresh lives (sd over seeds)", "colours followed (share with 3)")
     lines += [line(r["strategy"], r["condition"],
@@ -99,8 +99,8 @@ def table(measured: dict) -> str:
                               claim["measured"] + note))
     lines += ["", "Claim 4's path: for the GA, the path is that of the reproduction's relived best EE-ES individual "
               "(docs/reproduction/summary.json); for the others, the fittest genome of the last generation relived, "
-              "then each task driven (`experiments.relive.run_path`, kept in the run's `path.json`). The rules are "
-              "`experiments.claims.RULES`, as in [REPRODUCTION.md](REPRODUCTION.md); the claims judge finished "
+              "then each task driven (`experiments.harness.relive.run_path`, kept in the run's `path.json`). The rules are "
+              "`experiments.harness.claims.RULES`, as in [REPRODUCTION.md](REPRODUCTION.md); the claims judge finished "
               "evolutions only (n/a: a condition not finished), and a strategy with nothing run yet is left out."]
     return "\n".join(lines)
 
@@ -108,8 +108,8 @@ def table(measured: dict) -> str:
 def claims_figure(measured: dict, path: str) -> str:
     """What the claims judge, per strategy: the experts' colours (claim 3's explanation), EE-ES's path (claim 4)
     and the learning tests' steady states (claim 6)."""
-    from experiments.claims import STEREOTYPED_TURNS
-    from imrl_jax.plotting import new_figure, save, style_axis
+    from experiments.harness.claims import STEREOTYPED_TURNS
+    from imrl_jax.analysis.plotting import new_figure, save, style_axis
 
     fig = new_figure(13.0, 3.8)
     ax_colours, ax_path, ax_steady = fig.subplots(1, 3)
@@ -152,9 +152,9 @@ class SearchTable(Table):
         """Per strategy and condition the evolution's and learning test's numbers, and claims 1-4 and 6 per
         strategy; the GA's fresh lives, junction probes and relived best EE-ES (claim 4's path) are the reproduction's
         report's."""
-        from experiments.claims import final_best
+        from experiments.harness.claims import final_best
         from experiments.claims_study import probed, reproduction_summary, reproduction_variant
-        from experiments.relive import reproduction_fresh, run_fresh, run_path
+        from experiments.harness.relive import reproduction_fresh, run_fresh, run_path
 
         summary = reproduction_summary(self.document) or {}
         rows, paths = [], {}
@@ -193,8 +193,8 @@ class SearchTable(Table):
         per strategy."""
         from matplotlib.ticker import MaxNLocator
 
-        from experiments.figures import _band
-        from imrl_jax.plotting import new_figure, save, style_axis
+        from experiments.harness.figures import _band
+        from imrl_jax.analysis.plotting import new_figure, save, style_axis
 
         fig = new_figure(13.0, 3.8)
         axes = fig.subplots(1, len(CONDITIONS), sharey=True)  # one y-axis: the conditions' levels compare across panels
@@ -220,7 +220,7 @@ class SearchTable(Table):
 
     def report(self) -> int:
         """The rows' table and curves; then report.json, the claims' figure and the study's tables."""
-        from experiments.study import write_table
+        from experiments.harness.study import write_table
 
         code = super().report()
         measured = self.measure_search()

@@ -4,7 +4,7 @@
     python -m experiments.selector_sweep --out experiments/results/selector_sweep sweep [--lambdas 0 ...]   # by hand
 
 EE-LS without evolution: the three experts are fixed perceptron colour-followers
-(:func:`imrl_jax.controllers.perceptron_followers`) and only the selector learns, once per
+(:func:`imrl_jax.analysis.controllers.perceptron_followers`) and only the selector learns, once per
 task, for a whole adult task (100,000 steps). The sweep is a full grid over the eligibility
 trace lambda and the selector's actor and critic learning rates; every point lives the same
 lanes with the same keys. The winner (highest mean task performance over the whole task,
@@ -27,10 +27,10 @@ import time
 
 import numpy as np
 
-from experiments.measures import check_out_dir
-from experiments.study import MEASURED, RESULTS
-from experiments.table import Measure, Table
-from imrl_jax import cli
+from experiments.harness.measures import check_out_dir
+from experiments.harness.study import MEASURED, RESULTS
+from experiments.harness.table import Measure, Table
+from imrl_jax.runs import cli
 
 OUT = os.path.join(RESULTS, "selector_sweep")
 #: The grid's axes (the command line's defaults): trace decay, selector actor rate, selector critic rate.
@@ -73,7 +73,7 @@ MAX_TURN_GAIN = 100.0
 
 def plan(argv: list[str]) -> cli.Call:
     """Parse and check every value, the grid's points, the memory and --out: the call that sweeps (nothing written)."""
-    from imrl_jax import devices
+    from imrl_jax.evolution import devices
     from imrl_jax.config import ConfigError, make_config
 
     args = parser().parse_args(argv)
@@ -108,11 +108,11 @@ def sweep(args, argv: list[str], grid: list[dict]) -> int:
     import jax
     import jax.numpy as jnp
 
-    from imrl_jax import sweeps
-    from imrl_jax.checkpoint import git_commit
+    from imrl_jax.evolution import sweeps
+    from imrl_jax.runs.checkpoint import git_commit
     from imrl_jax.config import make_config
-    from imrl_jax.controllers import perceptron_followers
-    from imrl_jax.rundir import csv_bytes, make_dir, write_atomic
+    from imrl_jax.analysis.controllers import perceptron_followers
+    from imrl_jax.runs.rundir import csv_bytes, make_dir, write_atomic
 
     config = make_config("paper", condition="EE-LS", task_steps=args.task_steps, num_bins=10)
     genome = perceptron_followers(config, args.turn_gain).reshape(-1)
@@ -152,7 +152,7 @@ def sweep(args, argv: list[str], grid: list[dict]) -> int:
 
 def figure(rows: list[dict], path: str, task_steps: int) -> str:
     """One panel per lambda: task performance over (selector actor rate, selector critic rate)."""
-    from imrl_jax.plotting import new_figure, save
+    from imrl_jax.analysis.plotting import new_figure, save
 
     lambdas, actor_rates, critic_rates = (sorted({r[k] for r in rows}) for k in FIELDS)
     fig = new_figure(3.0 * len(lambdas), 3.2)

@@ -21,19 +21,20 @@ import jax.numpy as jnp
 import numpy as np
 
 from experiments import claims_study
-from experiments.claims import CLAIMS
-from experiments.figures import _band
-from experiments.loading import read_evolution, read_json, read_test, write_json
-from experiments.markdown import head, line, mean_sd
+from experiments.harness.claims import CLAIMS
+from experiments.harness.figures import _band
+from experiments.harness.loading import read_evolution, read_json, read_test, write_json
+from experiments.harness.markdown import head, line, mean_sd
 from experiments.rule_sets import BY_NAME
-from experiments.measures import write_measure  # atomic: a kill leaves a measurement not done
-from experiments.study import MEASURED, REPRODUCTION, RESULTS, SCREEN, Study, write_table
-from experiments.table import Measure, Row, Table
-from imrl_jax import cli, sweeps
-from imrl_jax.cli import Parser, UsageError, check_at_least, exit_codes
+from experiments.harness.measures import write_measure  # atomic: a kill leaves a measurement not done
+from experiments.harness.study import MEASURED, REPRODUCTION, RESULTS, SCREEN, Study, write_table
+from experiments.harness.table import Measure, Row, Table
+from imrl_jax.runs import cli
+from imrl_jax.evolution import sweeps
+from imrl_jax.runs.cli import Parser, UsageError, check_at_least, exit_codes
 from imrl_jax.config import ADULT_SELECTOR, make_config
-from imrl_jax.controllers import composition_ceiling, perceptron_followers
-from imrl_jax.plotting import new_figure, save, style_axis, wrap_title
+from imrl_jax.analysis.controllers import composition_ceiling, perceptron_followers
+from imrl_jax.analysis.plotting import new_figure, save, style_axis, wrap_title
 
 OUT = os.path.join(RESULTS, "timescale")
 DOCUMENT = os.path.join("docs", "TIMESCALE.md")
@@ -364,7 +365,7 @@ def read_rates(out_dir: str) -> list[dict]:
     """The rate sweep's rows beside the confirmation's folder ``out_dir``, checked (raises a user error naming the
     file): a point of every option of RATE_OPTIONS, its rates in the config's bounds, its fitness a number."""
     from imrl_jax.config import ConfigError
-    from imrl_jax.rundir import RunDirError, read_json
+    from imrl_jax.runs.rundir import RunDirError, read_json
 
     path = os.path.join(os.path.dirname(os.path.normpath(out_dir)), "rates", MEASURED)
     if not os.path.isfile(path):
@@ -390,8 +391,8 @@ def read_rates(out_dir: str) -> list[dict]:
 
 def measure_plan(argv: list[str]) -> cli.Call:
     """Parse and check a measurement: every value bounded, the sweep it reads, the memory, --out; nothing written."""
-    from experiments.measures import check_out_dir
-    from imrl_jax.devices import check_memory
+    from experiments.harness.measures import check_out_dir
+    from imrl_jax.evolution.devices import check_memory
 
     options = {k: v for k, v in vars(measure_parser().parse_args(argv)).items() if v is not None}
     name = options["measurement"]

@@ -39,6 +39,10 @@ SELECTOR_TERMINATIONS = ("period", "colour")
 _S = 20.0 * math.sqrt(3.0)
 
 
+class UsageError(Exception):
+    """Bad input to a command (an option, a sweep, a memory estimate): one line, exit code 2, nothing written."""
+
+
 class ConfigError(ValueError):
     """A configuration value is impossible; the message names the field (also kept as ``field``)."""
 

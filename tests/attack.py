@@ -1,6 +1,6 @@
 """The suite's attacks on the commands: hostile values and files, and the check-then-write contract checked.
 
-A command is built as parse, plan, :func:`imrl_jax.cli.execute` (``imrl_jax/cli.py``). :func:`attack` runs a
+A command is built as parse, plan, :func:`imrl_jax.runs.cli.execute` (``imrl_jax/runs/cli.py``). :func:`attack` runs a
 command's ``main`` in this process with ``cli.execute`` stubbed (so that a plan that passes is not carried out:
 no compilation, no lives), with a byte-for-byte snapshot of a folder before and after, and returns what
 happened. The contract (:func:`assert_contract`): either the command refuses, with exit code 2 and one line
@@ -71,7 +71,7 @@ def attack(main: Callable[[Sequence[str]], int], argv: Sequence[str], root: str,
 
     The current directory is ``root`` meanwhile, so that a default output folder lands where it is watched.
     """
-    from imrl_jax import cli
+    from imrl_jax.runs import cli
 
     reached = []
 

@@ -32,7 +32,7 @@ def x64():
 @pytest.fixture(scope="session")
 def tiny_run(tmp_path_factory):
     """The run directory of ``python -m imrl_jax.evolve`` with TINY_RUN (made once, in this process)."""
-    from imrl_jax import evolve
+    from imrl_jax.commands import evolve
 
     out = str(tmp_path_factory.mktemp("tiny_run") / "run")
     assert evolve.main([*TINY_RUN, "--out", out]) == 0

@@ -22,7 +22,7 @@ import time
 import jax
 import numpy as np
 
-from imrl_jax import reference as numpy_reference
+from imrl_jax.agent import reference as numpy_reference
 from imrl_jax.config import Task, make_config
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -41,7 +41,7 @@ def tiny_config(condition: str = "LE-LS", **overrides):
 
 
 def evolve_args(cond: str = "EE-LS", preset: str = "small", **options) -> list[str]:
-    """Quiet ``imrl_jax.evolve`` arguments; ``task_steps=200`` becomes ``--task-steps 200``."""
+    """Quiet ``imrl_jax.commands.evolve`` arguments; ``task_steps=200`` becomes ``--task-steps 200``."""
     args = ["--cond", cond, "--preset", preset]
     for name, value in options.items():
         args += [f"--{name.replace('_', '-')}", str(value)]
@@ -119,7 +119,7 @@ def interruptible_command(module: str, args) -> list[str]:
 
 def write_lock(run_dir: str, pid: int, host: str | None = None, start: int = 0) -> str:
     """A lock file in ``run_dir`` naming ``pid`` on ``host`` (default: this one) as its writer; its path."""
-    from imrl_jax.rundir import LOCK
+    from imrl_jax.runs.rundir import LOCK
 
     os.makedirs(run_dir, exist_ok=True)
     path = os.path.join(run_dir, LOCK)
@@ -140,7 +140,7 @@ def devices_seen(module: str, args) -> int:
     """The devices ``python -m module args`` has once its plan is made (``cli.execute`` replaced: nothing runs), in
     a fresh interpreter on CPU with no device count forced (the command asks for its own)."""
     code = (f"import sys, jax, {module} as command\n"
-            "from imrl_jax import cli\n"
+            "from imrl_jax.runs import cli\n"
             "def execute(plan):\n"
             "    print(len(jax.devices()))\n"
             "    return 0\n"
@@ -278,8 +278,8 @@ def reference(args: tuple[str, ...]) -> dict:
 
 
 def tiny_baseline(agent: str = "ppo", **overrides):
-    """A brax baseline of a few thousand steps with tiny networks and evaluations (imrl_jax.brax_agents)."""
-    from imrl_jax.brax_agents import Baseline
+    """A brax baseline of a few thousand steps with tiny networks and evaluations (imrl_jax.agent.brax_agents)."""
+    from imrl_jax.agent.brax_agents import Baseline
 
     sizes = dict(steps=3000, seeds=1, tasks=(1,), num_evals=3, eval_lanes=4, eval_steps=300, hidden=(16,),
                  num_envs=8, unroll_length=10, batch_size=8, num_minibatches=4, updates_per_batch=2,
@@ -289,7 +289,7 @@ def tiny_baseline(agent: str = "ppo", **overrides):
 
 def reference_life(config, key, genome) -> dict:
     """The NumPy reference's whole life of ``genome`` with the draws ``lifetime.live(key, ...)`` makes (float64)."""
-    from imrl_jax import lifetime, reference
+    from imrl_jax.agent import lifetime, reference
 
     return reference.live_with(config, genome, lifetime.life_draws(key, config, np.float64))
 

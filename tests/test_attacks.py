@@ -37,12 +37,12 @@ class Command(NamedTuple):
 
 
 def _commands() -> list[Command]:
-    from imrl_jax import (baselines, bench, compare, demo, evolve, gpu_check, landscape_run, learning_test, render,
-                          runspec)
+    from imrl_jax.commands import (baselines, bench, compare, demo, evolve, gpu_check, landscape_run, learning_test,
+                                   render, runspec)
     from experiments import __main__ as experiments_main, circular_paths, selector_sweep
-    from experiments.study import studies
-    from imrl_jax.evolve_options import parser as evolve_parser
-    from imrl_jax.learning_test_options import parser as learning_test_parser
+    from experiments.harness.study import studies
+    from imrl_jax.commands.evolve_options import parser as evolve_parser
+    from imrl_jax.commands.learning_test_options import parser as learning_test_parser
 
     return [
         Command("evolve", evolve.main, evolve_parser, ("--cond", "EE-LS", "--preset", "small", "--out", "out")),
@@ -103,7 +103,7 @@ def hostile_value(draw, action: argparse.Action) -> str:
     else:
         pool = st.one_of(st.sampled_from(HOSTILE_TEXTS), st.text(min_size=0, max_size=12))
     if action.dest in ("set", "sweep", "strategy_set"):  # FIELD=VALUE: a real field with a hostile value, or junk
-        from imrl_jax.cli import settable_fields
+        from imrl_jax.runs.cli import settable_fields
 
         field = st.sampled_from(settable_fields() + ["eta", "trace_lambda", "no_such_field"])
         value = st.one_of(st.sampled_from(HOSTILE_FLOATS + HOSTILE_INTS + HOSTILE_TEXTS), st.text(max_size=8))
@@ -138,7 +138,7 @@ def hostile_argv(draw, command: Command) -> tuple[list[str], str]:
 
 def _fields(flag: str) -> tuple[str, ...]:
     """The config fields an option sets (a refusal of the field's value may name the field)."""
-    from imrl_jax.evolve_options import OPTION_FIELDS
+    from imrl_jax.commands.evolve_options import OPTION_FIELDS
 
     return (flag.lstrip("-").replace("-", "_"), *(f for f, option in OPTION_FIELDS.items() if option == flag))
 
@@ -377,7 +377,7 @@ def test_every_resumable_command_killed_anywhere_ends_as_an_uninterrupted_run(ti
     if name == "learning_test SWEEP":  # a finished sweep of 2 points to test
         from helpers import evolve_args
 
-        from imrl_jax import evolve
+        from imrl_jax.commands import evolve
 
         assert evolve.main([*evolve_args(seeds=2, population=4, parents=2, generations=1, task_steps=200, bins=1),
                             "--sweep", "eta=0.1,0.2", "--out", sweep]) == 0

@@ -1,4 +1,4 @@
-"""Baselines from brax.training (imrl_jax.brax_agents, imrl_jax.baselines): the pipeline end to end at a tiny scale, the
+"""Baselines from brax.training (imrl_jax.agent.brax_agents, imrl_jax.commands.baselines): the pipeline end to end at a tiny scale, the
 measure and the command (the committed study: test_baselines_study.py)."""
 
 import csv
@@ -12,8 +12,9 @@ import pytest
 pytest.importorskip("brax", reason="the brax extra: pip install -e '.[brax]'")
 
 from helpers import ROOT, SHORT_TASK, tiny_baseline  # noqa: E402
-from imrl_jax import baselines, brax_agents  # noqa: E402
-from imrl_jax.brax_env import TaskEnv, wrap_for_training  # noqa: E402
+from imrl_jax.commands import baselines
+from imrl_jax.agent import brax_agents  # noqa: E402
+from imrl_jax.agent.brax_env import TaskEnv, wrap_for_training  # noqa: E402
 from imrl_jax.config import Config  # noqa: E402
 
 
@@ -145,7 +146,7 @@ def test_run_refuses_a_task_the_task_set_lacks(tmp_path):
 
 
 def test_the_tasks_default_to_every_task_of_the_task_set(tmp_path, monkeypatch):
-    from imrl_jax import tasks
+    from imrl_jax.world import tasks
 
     two = tmp_path / "two.json"
     two.write_text(tasks.to_json(Config().tasks[2:4], "two"))

@@ -5,14 +5,14 @@ import os
 
 from helpers import ROOT
 
-from imrl_jax import baselines
+from imrl_jax.commands import baselines
 
 
 def test_the_study_finds_every_committed_baseline_and_its_commands_made_them():
     """python -m experiments list baselines: 0 stages left, each the committed folder; each stage's command, parsed,
     asks for the settings its summary.json recorded."""
     from experiments.baselines import TABLE
-    from experiments.reproduce import stage_done
+    from experiments.harness.reproduce import stage_done
 
     stages, scale = TABLE.all_stages()
     assert [s.out_dir for s in stages] == [os.path.join("experiments", "results", "baselines", name)

@@ -2,7 +2,7 @@
 
 import pytest
 
-from imrl_jax import bench
+from imrl_jax.commands import bench
 
 
 @pytest.mark.parametrize("argv, field", [

@@ -1,4 +1,4 @@
-"""The arena as brax environments (imrl_jax.brax_env): the project's own step, bitwise; jit, vmap, wrappers, the shim."""
+"""The arena as brax environments (imrl_jax.agent.brax_env): the project's own step, bitwise; jit, vmap, wrappers, the shim."""
 
 import subprocess
 import sys
@@ -13,13 +13,13 @@ brax = pytest.importorskip("brax", reason="the brax extra: pip install -e '.[bra
 import brax.envs  # noqa: E402
 
 from helpers import ROOT  # noqa: E402
-from imrl_jax import brax_env  # noqa: E402
+from imrl_jax.agent import brax_env  # noqa: E402
 from imrl_jax.config import Config  # noqa: E402
-from imrl_jax.controllers import perceptron_followers  # noqa: E402
-from imrl_jax.learning import take_row  # noqa: E402
-from imrl_jax.lifetime import random_pose, step, task_spec, task_start  # noqa: E402
-from imrl_jax.networks import reinforce, with_bias, zero_agent  # noqa: E402
-from imrl_jax.retina import observe  # noqa: E402
+from imrl_jax.analysis.controllers import perceptron_followers  # noqa: E402
+from imrl_jax.agent.learning import take_row  # noqa: E402
+from imrl_jax.agent.lifetime import random_pose, step, task_spec, task_start  # noqa: E402
+from imrl_jax.agent.networks import reinforce, with_bias, zero_agent  # noqa: E402
+from imrl_jax.world.retina import observe  # noqa: E402
 from imrl_jax.conditions import ADULT_EVOLVED_SELECTOR  # noqa: E402
 
 STEPS = 2000
@@ -178,8 +178,8 @@ def test_device_put_replicated_shim(monkeypatch):
 
 
 def test_the_core_package_does_not_import_brax():
-    code = ("import sys, imrl_jax, imrl_jax.lifetime, imrl_jax.evolve, imrl_jax.learning_test, imrl_jax.baselines, "
-            "imrl_jax.brax_agents; "
+    code = ("import sys, imrl_jax, imrl_jax.agent.lifetime, imrl_jax.commands.evolve, imrl_jax.commands.learning_test, imrl_jax.commands.baselines, "
+            "imrl_jax.agent.brax_agents; "
             "print(sorted(m for m in ('brax', 'flax', 'mujoco') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
@@ -189,18 +189,18 @@ def test_the_core_package_does_not_import_brax():
 def test_without_brax_the_import_and_the_command_say_how_to_install_it(tmp_path):
     """With brax unimportable: a clear ImportError, and the command exits 2 with one line."""
     code = ("import sys; sys.modules['brax'] = None\n"
-            "try:\n    import imrl_jax.brax_env\nexcept ImportError as error:\n    print(error)\n"
-            "from imrl_jax import baselines\n"
+            "try:\n    import imrl_jax.agent.brax_env\nexcept ImportError as error:\n    print(error)\n"
+            "from imrl_jax.commands import baselines\n"
             f"sys.exit(baselines.main(['--steps', '10', '--out', {str(tmp_path / 'out')!r}]))")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert out.returncode == 2, out.stderr
-    assert out.stdout.strip() == "imrl_jax.brax_env needs brax: pip install -e '.[brax]' (docs/BASELINES.md)"
+    assert out.stdout.strip() == "imrl_jax.agent.brax_env needs brax: pip install -e '.[brax]' (docs/BASELINES.md)"
     assert out.stderr.strip() == "error: " + out.stdout.strip()
     assert not (tmp_path / "out").exists()
 
 
 def test_importing_the_environments_and_agents_prints_nothing():
-    code = ("import imrl_jax.brax_env, brax.training.agents.ppo.train, brax.training.agents.es.train")
+    code = ("import imrl_jax.agent.brax_env, brax.training.agents.ppo.train, brax.training.agents.es.train")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert done.stdout == ""  # mujoco prints "Failed to import warp" without its GPU extra

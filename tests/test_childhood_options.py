@@ -11,13 +11,14 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from imrl_jax import evolve, ga
+from imrl_jax.commands import evolve
+from imrl_jax.evolution import ga
 from imrl_jax import conditions as C
-from imrl_jax import state as S
-from imrl_jax import lifetime as L
-from imrl_jax.arena import Pose
+from imrl_jax.agent import state as S
+from imrl_jax.agent import lifetime as L
+from imrl_jax.world.arena import Pose
 from imrl_jax.config import make_config
-from imrl_jax.networks import decode
+from imrl_jax.agent.networks import decode
 
 
 def test_robot_pinned_on_a_wall_is_put_at_a_random_pose_after_n_steps(tiny):
@@ -119,7 +120,7 @@ def test_bad_childhood_settings_exit_2_naming_the_field(tmp_path, capsys, settin
 
 @pytest.mark.parametrize("condition", ["LE-LS", "EE-LS", "EE-ES", "SLE"])
 def test_learned_actors_start_with_the_speed_bias_and_evolved_ones_do_not(tiny, condition):
-    from imrl_jax import reference
+    from imrl_jax.agent import reference
 
     config = tiny(condition, initial_speed_bias=2.5)
     genome = jax.random.uniform(jax.random.key(4), (config.num_genes,), jnp.float32, -1.0, 1.0)
@@ -136,7 +137,7 @@ def test_learned_actors_start_with_the_speed_bias_and_evolved_ones_do_not(tiny, 
 
 def test_childhood_trajectory_lives_the_configs_childhood(tiny):
     """The pictures' childhood (behaviour.childhood_trajectory) has the config's respawns, drawn as breaks."""
-    from imrl_jax import behaviour
+    from imrl_jax.analysis import behaviour
 
     config = tiny("LE-LS", childhood_walls="respawn", wall_respawn_steps=5)
     genome = np.asarray(behaviour.colour_reinforcers(config))

@@ -8,7 +8,7 @@ import pytest
 from helpers import ROOT
 
 from experiments import childhood_study as study
-from experiments.reproduce import stage_done
+from experiments.harness.reproduce import stage_done
 
 
 @pytest.fixture
@@ -85,7 +85,7 @@ def test_a_measure_writes_its_csv_then_its_result(tmp_path):
     (["hand", "--seeds", "0"], "--seeds: must be at least 1"),
 ])
 def test_bad_input_exits_2_naming_it(tmp_path, capsys, monkeypatch, argv, field):
-    monkeypatch.setattr("imrl_jax.devices.use_host_cores", lambda count=None: None)  # leave the suite's devices
+    monkeypatch.setattr("imrl_jax.evolution.devices.use_host_cores", lambda count=None: None)  # leave the suite's devices
     out = tmp_path / "study"
     code = study.main(argv + ["--out", str(out)])
     err = capsys.readouterr().err.strip().splitlines()
@@ -143,7 +143,7 @@ def test_hostile_values_are_refused_or_planned_with_nothing_written(tmp_path, mo
     word: one line and exit 2, or a plan; nothing written."""
     from attack import assert_contract
 
-    monkeypatch.setattr("imrl_jax.devices.use_host_cores", lambda count=None: None)  # leave the suite's devices
+    monkeypatch.setattr("imrl_jax.evolution.devices.use_host_cores", lambda count=None: None)  # leave the suite's devices
     run = fake_run(tmp_path / "run")
     if flag == "RUN":
         argv = [value, "--out", "m/evolved", "evolved", "--best", "2"]
@@ -166,7 +166,7 @@ def test_a_damaged_run_is_one_line_naming_its_file(tmp_path, monkeypatch, name, 
     """evolved and heritability read a run's config.json and final_population.npz: damaged, one line names it."""
     from attack import assert_refused, damage
 
-    monkeypatch.setattr("imrl_jax.devices.use_host_cores", lambda count=None: None)
+    monkeypatch.setattr("imrl_jax.evolution.devices.use_host_cores", lambda count=None: None)
     run = fake_run(tmp_path / "run")
     damage(os.path.join(run, name), how)
     for stage in ("evolved", "heritability"):
@@ -180,7 +180,7 @@ def test_a_run_of_bad_arrays_is_refused(tmp_path, monkeypatch, case):
     import numpy as np
     from attack import assert_refused
 
-    monkeypatch.setattr("imrl_jax.devices.use_host_cores", lambda count=None: None)
+    monkeypatch.setattr("imrl_jax.evolution.devices.use_host_cores", lambda count=None: None)
     run = fake_run(tmp_path / "run", fitness=np.full((2, 4), np.nan, np.float32) if case == "nan fitness" else None)
     if case == "genes of another width":
         path = os.path.join(run, "final_population.npz")
@@ -194,7 +194,7 @@ def test_a_run_of_bad_arrays_is_refused(tmp_path, monkeypatch, case):
 def test_a_measure_into_a_folder_of_other_files_is_refused(tmp_path, monkeypatch):
     from attack import assert_contract, assert_refused
 
-    monkeypatch.setattr("imrl_jax.devices.use_host_cores", lambda count=None: None)
+    monkeypatch.setattr("imrl_jax.evolution.devices.use_host_cores", lambda count=None: None)
     (tmp_path / "ceiling").mkdir()
     (tmp_path / "ceiling" / "ceiling.csv").write_text("old")
     assert assert_contract(_attack(tmp_path, "--out", "ceiling", "ceiling")) == "planned"
@@ -226,7 +226,7 @@ def test_a_reproductions_kept_best_is_read_checked(tmp_path, monkeypatch, fitnes
     or no such file, is one line naming the run (a traceback or arbitrary ranks before)."""
     from attack import assert_contract, assert_refused
 
-    monkeypatch.setattr("imrl_jax.devices.use_host_cores", lambda count=None: None)
+    monkeypatch.setattr("imrl_jax.evolution.devices.use_host_cores", lambda count=None: None)
     run = _kept_run(tmp_path, fitness)
     if fitness == "file removed":
         os.remove(tmp_path / "results" / "best_genomes.npz")

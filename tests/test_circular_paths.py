@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from experiments import circular_paths as study
-from imrl_jax import controllers
+from imrl_jax.analysis import controllers
 from imrl_jax.config import Task, make_config
-from imrl_jax.env import make_env, task_spec
+from imrl_jax.world.env import make_env, task_spec
 
 
 def _one_edge_config():

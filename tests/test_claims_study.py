@@ -8,11 +8,12 @@ import numpy as np
 import pytest
 from helpers import write_evolution, write_learning_test
 
-from experiments import claims, claims_study as study
-from experiments import study as S
-from experiments.reproduce import stage_done
-from experiments.study import SCALES, SCREEN
-from experiments.table import evolution_spec, scratch_test_key
+from experiments.harness import claims
+from experiments import claims_study as study
+from experiments.harness import study as S
+from experiments.harness.reproduce import stage_done
+from experiments.harness.study import SCALES, SCREEN
+from experiments.harness.table import evolution_spec, scratch_test_key
 
 
 #: Where the map was measured: each rule set's run of each condition, by the owner whose folder holds it (a rule
@@ -135,7 +136,7 @@ def test_the_table_goes_between_its_markers(tmp_path):
 
 
 def test_claim_experts_on_hand_made_numbers():
-    from experiments.claims import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY, claim_experts
+    from experiments.harness.claims import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY, claim_experts
 
     three, same, lower = [0.40, 0.44], [0.41, 0.45], [0.20, 0.22]
     claim = claim_experts({("LE-LS", 3): three, ("LE-LS", 4): same, ("LE-LS", 6): same})
@@ -270,7 +271,7 @@ def test_claim_8_runs_table_shows_each_run_once_with_its_probe():
 def test_run_probe_keeps_its_probe_until_the_population_moves_on(tmp_path, monkeypatch):
     """run_probe probes each seed's best of final_population.npz once, keeps it in probe.json, probes again for
     another generation or key; without a population there is nothing to probe."""
-    from experiments import relive
+    from experiments.harness import relive
 
     calls = []
 
@@ -300,7 +301,7 @@ def test_run_probe_keeps_its_probe_until_the_population_moves_on(tmp_path, monke
 def test_a_rows_own_run_is_probed_once_for_claim_7_and_kept(tmp_path, monkeypatch):
     """measure_runs probes a row's own LE-LS (claim 7's 10 best per seed, key 0) through run_probe: kept in
     probe.json, so a second table probes nothing."""
-    from experiments import relive
+    from experiments.harness import relive
 
     folder = tmp_path / "evolve" / "LE-LS"
     write_evolution(folder, [[0.4, 0.4]] * 2, {"config": {"num_generations": 2}})

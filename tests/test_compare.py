@@ -5,18 +5,19 @@ import re
 
 import pytest
 
-from imrl_jax import compare
+from imrl_jax.commands import compare
 
 
 def test_export_renames_every_import(tmp_path):
     target = compare.export_package("HEAD", "imrl_old", str(tmp_path))
-    assert os.path.isfile(os.path.join(target, "lifetime.py"))
+    lifetime = os.path.join(target, "agent", "lifetime.py")
+    assert os.path.isfile(lifetime)
     for folder, _, files in os.walk(target):
         for file in files:
             if file.endswith(".py"):
                 text = open(os.path.join(folder, file)).read()
                 assert not re.search(r"^\s*(from|import) imrl_jax\b", text, re.MULTILINE), file
-    assert "from imrl_old.arena import" in open(os.path.join(target, "lifetime.py")).read()
+    assert "from imrl_old.world.arena import" in open(lifetime).read()
 
 
 def test_export_of_an_unknown_revision_names_it(tmp_path):

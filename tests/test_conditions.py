@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 from helpers import reference_life
 from imrl_jax import conditions
-from imrl_jax import lifetime as L
-from imrl_jax import reference
+from imrl_jax.agent import lifetime as L
+from imrl_jax.agent import reference
 from imrl_jax import config as config_module
-from imrl_jax import state as S
+from imrl_jax.agent import state as S
 from imrl_jax.config import ConfigError, Task, make_config
-from imrl_jax.networks import decode, encode
+from imrl_jax.agent.networks import decode, encode
 
 #: A target 40 cm ahead, off the floor's lattice: a robot driving straight from the lattice's exact points
 #: meets retina points exactly 3 cm from a line, where the reference and JAX may see different colours.
@@ -177,7 +177,7 @@ def test_a_registered_row_works_with_every_command(tmp_path, monkeypatch, capsys
     """evolve, its resume, learning_test and render take a row of one's own with --register (each a fresh table)."""
     import sys
 
-    from imrl_jax import evolve, learning_test, render
+    from imrl_jax.commands import evolve, learning_test, render
 
     (tmp_path / "my_rows.py").write_text(ROWS_MODULE)
     monkeypatch.chdir(tmp_path)
@@ -237,7 +237,7 @@ def test_a_registered_row_works_with_every_command(tmp_path, monkeypatch, capsys
 def test_a_bad_register_is_one_line(tmp_path, monkeypatch, capsys, spec, message):
     import sys
 
-    from imrl_jax import evolve
+    from imrl_jax.commands import evolve
 
     (tmp_path / "my_rows.py").write_text("import dataclasses\nfrom imrl_jax import conditions\nNAME = 'x'\n"
                                          "TAKEN = dataclasses.replace(conditions.get('EE-ES'), name='EE-LS')\n"
@@ -315,7 +315,7 @@ def test_an_unexpressed_expert_is_never_chosen_and_never_learns(tiny):
 
 
 def test_the_gpu_kernel_refuses_expression_genes(tiny):
-    from imrl_jax import kernel
+    from imrl_jax.agent import kernel
 
     config = tiny("LE-LS-N", num_experts=4)
     task = L.task_spec(config, 0)

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from helpers import EXTENDED, SHORT_TASK, reference_life
 
-from imrl_jax import kernel
-from imrl_jax import lifetime as L
+from imrl_jax.agent import kernel
+from imrl_jax.agent import lifetime as L
 from imrl_jax.config import make_config
-from imrl_jax.networks import decode, encode
+from imrl_jax.agent.networks import decode, encode
 
 _live = jax.jit(L.live, static_argnums=1)
 
@@ -81,7 +81,7 @@ def test_reinforcer_sized_controls_have_ee_ls_size():
 
 def test_two_reinforcer_units_reward_their_mean():
     """r_k = (r1 + r2) / 2 with r = 2 sigmoid(w.x~) - 1: units of activations 0 and log 3 give (0 + 0.5) / 2."""
-    from imrl_jax.networks import internal_rewards
+    from imrl_jax.agent.networks import internal_rewards
 
     config = make_config("paper", condition="LE-LS-2R")
     agent = decode(config, jnp.zeros(222).at[111 + 36].set(np.log(3.0)))  # expert 0's second unit: its bias

@@ -6,7 +6,8 @@ import os
 import numpy as np
 import pytest
 
-from imrl_jax import controllers, demo, plotting
+from imrl_jax.analysis import controllers, plotting
+from imrl_jax.commands import demo
 
 
 def test_demo_shows_the_tasks_solved_beside_a_random_individual(tiny, tmp_path):
@@ -96,7 +97,7 @@ def test_a_long_title_is_wrapped_inside_the_figure():
 
 
 def test_demo_writes_only_into_a_new_empty_or_own_directory(tiny, tmp_path, capsys):
-    from imrl_jax.rundir import RunDirError
+    from imrl_jax.runs.rundir import RunDirError
 
     config = tiny("EE-LS")
     own = tmp_path / "demo"

@@ -5,7 +5,7 @@ import os
 import jax
 import pytest
 
-from imrl_jax.devices import HOST_DEVICE_FLAG, use_host_cores
+from imrl_jax.evolution.devices import HOST_DEVICE_FLAG, use_host_cores
 
 
 def test_user_flag_is_left_alone(monkeypatch):
@@ -25,7 +25,7 @@ def test_fresh_process_gets_the_devices_asked_for():
     import subprocess
     import sys
 
-    code = "from imrl_jax.devices import use_host_cores; n = use_host_cores(2); import jax; print(n, len(jax.devices()))"
+    code = "from imrl_jax.evolution.devices import use_host_cores; n = use_host_cores(2); import jax; print(n, len(jax.devices()))"
     env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
     out = subprocess.run([sys.executable, "-c", code], env={**env, "JAX_PLATFORMS": "cpu"}, capture_output=True,
                          text=True, timeout=120)
@@ -35,10 +35,10 @@ def test_fresh_process_gets_the_devices_asked_for():
 def test_the_host_estimate_holds_the_record_every_generation_adds(monkeypatch):
     """The history (and history.csv's text) grows with generations x seeds: it was left out, and a million
     generations of a thousand seeds passed the estimate, then failed at 36 GB."""
-    from imrl_jax import devices
-    from imrl_jax.cli import UsageError
+    from imrl_jax.evolution import devices
+    from imrl_jax.runs.cli import UsageError
     from imrl_jax.config import make_config
-    from imrl_jax.run_state import history_bytes
+    from imrl_jax.runs.run_state import history_bytes
 
     config = make_config("small", condition="LE-LS")
     row = history_bytes(config, 1) // config.num_generations

@@ -36,7 +36,7 @@ def test_two_processes_match_one(axis):
 
 
 def _args(*argv):
-    from imrl_jax.evolve import parser
+    from imrl_jax.commands.evolve import parser
 
     return parser().parse_args(["--cond", "EE-LS", *argv])
 
@@ -44,8 +44,8 @@ def _args(*argv):
 def test_init_distributed_rejects_bad_flags(monkeypatch):
     import jax
 
-    from imrl_jax.cli import UsageError
-    from imrl_jax.devices import init_distributed as start
+    from imrl_jax.runs.cli import UsageError
+    from imrl_jax.evolution.devices import init_distributed as start
 
     def init_distributed(args):  # the evolve command's call
         return start(args.coordinator, args.num_processes, args.process_id)

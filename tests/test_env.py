@@ -1,4 +1,4 @@
-"""The environment (imrl_jax.env): reset, observe and step on hand-computed cases, as the lifetime uses it."""
+"""The environment (imrl_jax.world.env): reset, observe and step on hand-computed cases, as the lifetime uses it."""
 
 import math
 
@@ -7,11 +7,11 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from imrl_jax import env as E
-from imrl_jax import lifetime as L
-from imrl_jax.arena import Pose
+from imrl_jax.world import env as E
+from imrl_jax.agent import lifetime as L
+from imrl_jax.world.arena import Pose
 from imrl_jax.config import ConfigError, make_config
-from imrl_jax.retina import observe
+from imrl_jax.world.retina import observe
 
 
 def _config(**overrides):
@@ -76,7 +76,7 @@ def test_a_step_count_the_bins_do_not_divide_is_refused():
     config = _config(task_steps=30, num_bins=3)
     task = E.task_spec(config, 0)
     state = L.init_state(config, L.adult_agent(config, L.decode(config, jnp.zeros(config.num_genes))), task.start)
-    from imrl_jax import kernel
+    from imrl_jax.agent import kernel
     from imrl_jax.conditions import ADULT_LEARNING_SELECTOR
 
     for run in (L.run_phase, kernel.run_phase):

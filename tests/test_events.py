@@ -1,4 +1,4 @@
-"""Progress as one structured stream of events (imrl_jax.events): the runner's file, and TensorBoard."""
+"""Progress as one structured stream of events (imrl_jax.runs.events): the runner's file, and TensorBoard."""
 
 import csv
 import io
@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from helpers import evolve_args
 
-from imrl_jax import events
-from imrl_jax.progress import Progress
+from imrl_jax.runs import events
+from imrl_jax.runs.progress import Progress
 
 
 def test_the_reader_returns_each_event_once_and_waits_for_a_whole_line(tmp_path):
@@ -72,7 +72,7 @@ def _scalars(folder) -> dict:
 
 def test_evolve_writes_its_progress_for_tensorboard(tmp_path):
     pytest.importorskip("tensorboardX")
-    from imrl_jax import evolve
+    from imrl_jax.commands import evolve
 
     out = tmp_path / "run"
     args = evolve_args(seeds=2, population=4, parents=2, generations=2, task_steps=200, bins=1)
@@ -88,7 +88,7 @@ def test_evolve_writes_its_progress_for_tensorboard(tmp_path):
 
 
 def test_a_log_that_cannot_be_written_is_refused_before_anything_is(tmp_path, capsys):
-    from imrl_jax import evolve
+    from imrl_jax.commands import evolve
 
     out = tmp_path / "run"
     assert evolve.main([*evolve_args(generations=1), "--out", str(out), "--log", "wandb"]) == 2
@@ -122,7 +122,7 @@ def test_a_resumed_run_does_not_show_its_redone_generations_twice_in_tensorboard
     pytest.importorskip("tensorboardX")
     import shutil
 
-    from imrl_jax import evolve
+    from imrl_jax.commands import evolve
 
     out = tmp_path / "run"
     args = evolve_args(seeds=1, population=4, parents=2, generations=2, task_steps=200, bins=1)

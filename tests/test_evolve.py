@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 from helpers import evolve_args, evolve_command, interruptible_command, read_population, snapshot
 
-from imrl_jax import evolve, tasks
+from imrl_jax.commands import evolve
+from imrl_jax.world import tasks
 from imrl_jax.config import make_config
 
 
@@ -127,8 +128,8 @@ def test_corrupt_checkpoint_falls_back_to_the_previous_one(finished_run, tmp_pat
     assert lines[cost[0] + 1].startswith("compiling the generation") and lines[cost[0] + 2].startswith("gen 5 (6/6)")
     import jax
 
-    from imrl_jax.devices import memory_needed  # the memory the plan's check estimated: lanes and the records
-    from imrl_jax.run_state import history_bytes
+    from imrl_jax.evolution.devices import memory_needed  # the memory the plan's check estimated: lanes and the records
+    from imrl_jax.runs.run_state import history_bytes
 
     config = evolve.read_config(out)[0]
     gib = memory_needed(config, 12, jax.device_count(), history_bytes(config, 2)) / 2**30
@@ -170,7 +171,7 @@ def test_asyncio_drops_the_unretrieved_errors_of_orbax_reads_and_no_other(caplog
     import logging
     import threading
 
-    from imrl_jax import checkpoint
+    from imrl_jax.runs import checkpoint
 
     namespace = {}
     exec(compile("def read():\n    raise ValueError('truncated shard')\n",
@@ -325,7 +326,7 @@ def test_bad_values_exit_2_naming_the_field(tmp_path, capsys, args, message):
 
 def test_a_run_that_cannot_fit_in_memory_is_refused_before_anything_is_written(tmp_path, capsys, monkeypatch):
     """A thousand experts took a 24 GB machine down: the memory a run needs is estimated before it starts."""
-    from imrl_jax import devices
+    from imrl_jax.evolution import devices
 
     monkeypatch.setattr(devices, "available_memory", lambda: 2**30)  # a machine with 1 GiB free
     monkeypatch.setattr(devices, "accelerator_memory", lambda: None)
@@ -388,7 +389,7 @@ def test_help_shows_each_default_once_and_no_none(capsys):
 def test_progress_line_names_generations_from_0_and_leaves_compilation_out():
     import io
 
-    from imrl_jax.progress import Progress
+    from imrl_jax.runs.progress import Progress
 
     stream = io.StringIO()
     progress = Progress(4, done=2, stream=stream, first_index=0, elapsed=100.0)
@@ -401,7 +402,7 @@ def test_progress_line_names_generations_from_0_and_leaves_compilation_out():
 
 
 def test_unreadable_checkpoint_reason_is_one_short_line():
-    from imrl_jax.checkpoint import unreadable_reason
+    from imrl_jax.runs.checkpoint import unreadable_reason
 
     error = ValueError('DATA_LOSS: Error reading "/runs/x/checkpoints/6/state/manifest.ocdbt": '
                        '<tensorstore.KvStore object at 0x7f3a2c1d9e70> failed\n  with more words ' + "x " * 200
@@ -488,7 +489,7 @@ def test_notes_and_warnings(finished_run, tmp_path, capsys):
 def test_the_gpu_kernel_off_a_gpu_is_warned_about(monkeypatch):
     import jax
 
-    from imrl_jax.cli import device_warnings
+    from imrl_jax.runs.cli import device_warnings
     from imrl_jax.config import make_config
 
     monkeypatch.setattr(jax, "default_backend", lambda: "cpu")  # as on a CPU host, whichever this one is
@@ -523,7 +524,7 @@ def test_ctrl_c_stops_with_one_line_and_exit_code_130(tmp_path):
 
 def test_a_full_disk_mid_run_is_one_line_exit_1_and_resumable(tmp_path, monkeypatch, capsys):
     """history.csv cannot be written after generation 1: one line naming it, no temporary file left; --resume writes it."""
-    from imrl_jax import rundir
+    from imrl_jax.runs import rundir
 
     out = tmp_path / "full"
     out.mkdir()  # an empty directory is as good as a new one
@@ -594,8 +595,8 @@ def test_the_task_set_is_checked_against_the_geometry_the_command_line_sets(tmp_
 def test_a_checkpoint_that_records_no_strategy_is_taken_for_the_gas(tmp_path):
     """Checkpoints made before --strategy existed hold no "search": resuming one with another strategy is refused."""
     from imrl_jax.config import make_config
-    from imrl_jax.progress import Progress
-    from imrl_jax.strategies import Evosax
+    from imrl_jax.runs.progress import Progress
+    from imrl_jax.evolution.strategies import Evosax
 
     class Restores:  # a checkpoint of such a run (its state does not matter before the strategy is checked)
         directory = str(tmp_path)
@@ -613,7 +614,7 @@ def test_a_checkpoint_that_records_no_strategy_is_taken_for_the_gas(tmp_path):
 
 def test_search_states_of_more_than_a_thousand_arrays_come_back_in_order():
     """Their leaves are saved as "000", "001", ...: "1000" sorts before "101" as text."""
-    from imrl_jax.checkpoint import RunState, _saved, _search_from_saved
+    from imrl_jax.runs.checkpoint import RunState, _saved, _search_from_saved
 
     leaves = [np.float32(i) for i in range(1001)]
     saved = _saved(RunState(np.asarray(1), None, None, None, None, None, search=leaves))
@@ -621,9 +622,9 @@ def test_search_states_of_more_than_a_thousand_arrays_come_back_in_order():
 
 
 def test_the_options_build_the_config_seeds_and_search_without_running_anything():
-    """evolve_options holds the command line; evolve keeps its names (experiments/table.py keys rows with them)."""
-    from imrl_jax import evolve_options
-    from imrl_jax.strategies import describe
+    """evolve_options holds the command line; evolve keeps its names (experiments/harness/table.py keys rows with them)."""
+    from imrl_jax.commands import evolve_options
+    from imrl_jax.evolution.strategies import describe
 
     assert (evolve.parser, evolve.build_config, evolve.build_strategy) == (
         evolve_options.parser, evolve_options.build_config, evolve_options.build_strategy)
@@ -644,7 +645,7 @@ def test_the_options_build_the_config_seeds_and_search_without_running_anything(
     ([], "--cond: required (or --resume --out RUN to continue a run with its own config)"),
 ])
 def test_the_condition_check_names_the_option(argv, message):
-    from imrl_jax import evolve_options
+    from imrl_jax.commands import evolve_options
 
     with pytest.raises(evolve.UsageError) as error:
         evolve_options.check_condition(evolve_options.parser().parse_args(argv))
@@ -719,7 +720,7 @@ def test_the_time_a_run_will_take_is_read_from_the_benchmarks_speeds(tmp_path):
     """The speed measured nearest the run's lives on this backend; none measured there: said, no time made up."""
     import json
 
-    from imrl_jax import progress
+    from imrl_jax.runs import progress
 
     folder = tmp_path / "bench"
     folder.mkdir()

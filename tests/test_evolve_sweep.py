@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from helpers import assert_same_outputs, evolve_args, evolve_command, outputs
 
-from imrl_jax import evolve, evolve_sweep
-from imrl_jax.runspec import RunSpec
+from imrl_jax.commands import evolve, evolve_sweep
+from imrl_jax.runs.runspec import RunSpec
 
 #: EE-LS at a tiny scale; a 40 cm target makes reaches common, so fitness is not all 0.
 BASE = evolve_args(seeds=2, population=6, parents=2, task_steps=1000, bins=2) + ["--set", "target_radius=40"]
@@ -145,7 +145,7 @@ def test_parse_takes_the_product_or_the_values_in_step():
 
 def test_a_sweeps_learning_test_tests_every_point_as_its_own_test_would(finished_sweep, tmp_path, capsys):
     """``learning_test SWEEP`` tests each point into OUT/KEY (one program for all), each bitwise the point's own."""
-    from imrl_jax import learning_test
+    from imrl_jax.commands import learning_test
 
     lengths = ["--best", "2", "--tests", "1", "--task-steps", "400", "--bins", "2", "--steady-steps", "200",
                "--chunks", "1", "--quiet"]
@@ -286,7 +286,7 @@ def test_set_of_a_swept_field_is_refused_not_dropped(tmp_path):
 
 
 def test_sweep_csv_prints_values_round_trip_exact():
-    from imrl_jax.checkpoint import RunState, empty_history
+    from imrl_jax.runs.checkpoint import RunState, empty_history
     from imrl_jax.config import make_config
 
     config = make_config("small", condition="EE-LS")
@@ -341,7 +341,7 @@ def test_ctrl_c_in_a_sweeps_checkpoint_ends_in_one_line_without_orbaxs_thread_tr
     """Ctrl-C while a sweep saved a point: one of orbax's threads ended with its traceback after the one line."""
     import threading
 
-    from imrl_jax import checkpoint
+    from imrl_jax.runs import checkpoint
 
     real, saves, hooks = checkpoint.Checkpointer.save, [], []
     orbax_code = compile("def work():\n    raise RuntimeError('a write of orbax cut short')\n",
@@ -373,7 +373,7 @@ def test_a_damaged_sweep_json_is_one_line_naming_it_for_every_command_that_reads
     written (the points' own files as they were)."""
     from attack import assert_refused, attack, damage
 
-    from imrl_jax import learning_test
+    from imrl_jax.commands import learning_test
 
     root = str(tmp_path / "sweep")
     _made_sweep(root)

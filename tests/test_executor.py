@@ -1,4 +1,4 @@
-"""Stages fanned out (experiments.executor): what waits for what, local jobs and submitit's local executor give the
+"""Stages fanned out (experiments.harness.executor): what waits for what, local jobs and submitit's local executor give the
 sequential runner's files, and a killed fan-out goes on where it stopped."""
 
 import json
@@ -12,8 +12,8 @@ import time
 import pytest
 from helpers import ROOT
 
-from experiments import executor as X
-from experiments.reproduce import Stage, load_manifest, run_stages
+from experiments.harness import executor as X
+from experiments.harness.reproduce import Stage, load_manifest, run_stages
 
 #: A resumable stand-in for the package's commands: an "evolution" appends one generation at a time to its
 #: history.csv (going on from what it holds, as evolve --resume does), a "test" refuses to start before its

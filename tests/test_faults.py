@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 from helpers import assert_same_outputs, evolve_args, evolve_command, outputs
 
-from imrl_jax import evolve, learning_test
+from imrl_jax.commands import evolve, learning_test
 
 pytestmark = pytest.mark.slow
 
@@ -198,7 +198,7 @@ def test_a_fall_back_in_a_fresh_process_prints_one_line_and_no_traceback(referen
 
 @pytest.mark.parametrize("how", ["truncated", "garbage", "emptied"])
 def test_a_learning_tests_kept_runs_corrupted_are_run_again_or_exit_2(reference, tmp_path, capsys, monkeypatch, how):
-    from imrl_jax import learning_test_state as lt
+    from imrl_jax.runs import learning_test_state as lt
 
     out = str(tmp_path / "test")
     with monkeypatch.context() as patch:  # a test interrupted before its outputs: every run kept in partial/

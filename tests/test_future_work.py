@@ -11,8 +11,8 @@ import pytest
 from helpers import ROOT, write_evolution, write_learning_test
 
 from experiments import future_work as study
-from experiments.reproduce import stage_done
-from experiments.study import SCALES
+from experiments.harness.reproduce import stage_done
+from experiments.harness.study import SCALES
 from imrl_jax.conditions import EVOLVED_FIELDS
 
 
@@ -57,7 +57,7 @@ def test_the_table_evolves_the_evolved_rows_and_tests_the_others_from_scratch():
 
 def test_the_fixed_six_experts_rows_are_the_claims_studys_runs_found_by_key():
     from experiments import claims_study
-    from imrl_jax.cli import parse_sets
+    from imrl_jax.runs.cli import parse_sets
     from imrl_jax.config import make_config
 
     evolutions, tests = study.TABLE.evolutions(), study.TABLE.tests()
@@ -94,7 +94,7 @@ def test_an_unknown_option_is_refused(capsys):
 def test_traits_of_a_hand_made_genome():
     import numpy as np
 
-    from imrl_jax import networks
+    from imrl_jax.agent import networks
     from imrl_jax.config import make_config
 
     config = make_config("skills", condition="LE-LS-P")
@@ -117,9 +117,9 @@ def test_traits_of_a_hand_made_genome():
 def test_the_traits_figure_has_a_panel_for_each_evolved_value():
     import numpy as np
 
-    from imrl_jax import networks
+    from imrl_jax.agent import networks
     from imrl_jax.config import make_config
-    from imrl_jax.plotting import plot_traits
+    from imrl_jax.analysis.plotting import plot_traits
 
     config = make_config("skills", condition="LE-LS-PC")
     names = networks.trait_names(config)
@@ -141,7 +141,8 @@ def test_history_records_the_evolved_values_and_they_survive_a_resume(tmp_path):
     import numpy as np
     from helpers import evolve_args, read_population
 
-    from imrl_jax import evolve, networks
+    from imrl_jax.commands import evolve
+    from imrl_jax.agent import networks
     from imrl_jax.config import make_config
 
     out = str(tmp_path / "run")
@@ -169,8 +170,8 @@ def test_history_records_the_evolved_values_and_they_survive_a_resume(tmp_path):
 def test_record_traits_and_their_history_columns_by_hand():
     import numpy as np
 
-    from imrl_jax import evolve
-    from imrl_jax.checkpoint import empty_history
+    from imrl_jax.commands import evolve
+    from imrl_jax.runs.checkpoint import empty_history
 
     traits = np.full((2, 1, 2, 2), np.nan, np.float32)
     values = np.asarray([[[1.0, 10.0], [3.0, 30.0], [2.0, 20.0]]])  # 1 seed x 3 individuals x 2 traits
@@ -266,7 +267,7 @@ def test_measure_reads_every_finished_row_and_the_reproductions(tmp_path):
 
 
 def test_colour_sets_count_the_colours_each_probed_genome_follows():
-    from experiments.relive import expressed_followed
+    from experiments.harness.relive import expressed_followed
 
     # an expert left out by its genome follows nothing, whatever its untrained actor does alone
     assert expressed_followed([2, 2, 0, 1], [1, 0, 1, 0]) == [2, -1, 0, -1]
@@ -343,7 +344,7 @@ def test_the_report_of_the_committed_runs_is_the_documents(tmp_path, monkeypatch
 def test_criteria_are_easier_when_much_faster_and_higher():
     """(a): LE-LS plateaus at 7 against EE-LS's 50 (<= 25) and ends 0.34 higher (se 0.051): easier; EV-LS at 30
     (> 25) and 0.1 higher with se 0.071 (< 2 se): not easier."""
-    from experiments import claims
+    from experiments.harness import claims
 
     actors = dict(plateau=50, final_per_seed=[0.4, 0.5], fresh=0.4, genes=222)
     le_ls = dict(plateau=7, final_per_seed=[0.8, 0.78], fresh=0.7, genes=111)
@@ -362,7 +363,7 @@ def test_motivation_is_needed_when_skills_learn_much_faster_and_end_higher():
     """(b): from the start 0.5 (LE-LS's first bin) the level is 0.5 + 0.9 x (0.6 - 0.5) = 0.59; LE-LS reaches it at
     2,000 cycles, EXT-LS at 4,000 (2x): much faster, and 0.85 against 0.6 is in order; with EXT-LS at 0.6 by 2,000
     only the steady state differs; an EXT-LS that ends below LE-LS's start never reaches a level."""
-    from experiments import claims
+    from experiments.harness import claims
 
     steps = [1000, 2000, 3000, 4000]
     skilled = dict(steps=steps, mean=[0.5, 0.8, 0.85, 0.85], per_run=[0.84, 0.86])
@@ -391,7 +392,7 @@ def test_motivation_is_needed_when_skills_learn_much_faster_and_end_higher():
 def test_map_positions_and_which_hand_values_evolution_finds():
     """(c): positions in the genes' ranges by hand (MODEL.md's maps), then trace_lambda evolved nearer skills'
     0.98 and the speed bias nearer the paper's 0: partly; gamma, the same in both, is not judged."""
-    from experiments import claims
+    from experiments.harness import claims
 
     assert claims.map_position("gamma", 0.99) == pytest.approx(0.4)  # log10(0.01) = -2 in [-3, -0.5]
     assert claims.map_position("trace_lambda", 0.0) == 1.0 and claims.map_position("eta_actor", 1e-6) == 0.0
@@ -411,7 +412,7 @@ def test_map_positions_and_which_hand_values_evolution_finds():
 
 def test_three_experts_are_enough_when_evolution_keeps_about_three_and_more_do_not_pay():
     """(d): 3.5 kept is about three; 0.81 against 0.79 is +0.02 with se 0.014 (< 2 se): no gain."""
-    from experiments import claims
+    from experiments.harness import claims
 
     claim = claims.claim_three_enough([3, 4], [0.8, 0.82], [0.78, 0.8], [0.6, 0.6])
     assert claim["verdict"] == "holds" and claim["numbers"]["standard_error"] == pytest.approx(0.0002 ** 0.5)

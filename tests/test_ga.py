@@ -5,7 +5,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from imrl_jax import ga
+from imrl_jax.evolution import ga
 from imrl_jax.config import make_config
 
 
@@ -96,8 +96,8 @@ def test_the_ga_behind_ask_and_tell():
 @pytest.mark.slow  # lives_per_fitness 2; the one-life relive is checked by test_render and the report's tests
 def test_render_relives_each_of_several_lives_the_ga_lived(tiny, tmp_path):
     """With lives_per_fitness 2 the recorded fitness is the mean of the two lives render's keys relive."""
-    from imrl_jax import evolve, render
-    from imrl_jax.lifetime import live
+    from imrl_jax.commands import evolve, render
+    from imrl_jax.agent.lifetime import live
 
     config = tiny("EE-ES", task_steps=300, num_bins=1, lives_per_fitness=2, num_generations=1,
                   target_radius=40.0)  # reaches are common: the two lives differ

@@ -19,9 +19,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from imrl_jax.arena import BLUE, GREEN, NONE, RED, Pose, advance, floor_colour, move, on_wall, spawn_pose, trial_ends
+from imrl_jax.world.arena import BLUE, GREEN, NONE, RED, Pose, advance, floor_colour, move, on_wall, spawn_pose, trial_ends
 from imrl_jax.config import Config, ConfigError
-from imrl_jax.retina import observe, sample_points
+from imrl_jax.world.retina import observe, sample_points
 
 S = 20.0 * math.sqrt(3.0)
 R3 = math.sqrt(3.0)

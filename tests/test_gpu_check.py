@@ -7,7 +7,7 @@ import jax
 import numpy as np
 import pytest
 
-from imrl_jax import gpu_check as G
+from imrl_jax.commands import gpu_check as G
 
 
 def test_dry_run_checks_and_times_every_step(tmp_path, capsys):
@@ -170,8 +170,10 @@ def test_the_study_counts_each_distinct_program_of_the_claims_map():
     """Every evolved row of the map in one run, rows of one run together, runs of one static part (and seed count)
     in one program: the programs' static parts differ, and a program's runs differ only in dynamic values."""
     from experiments.claims_study import SCREEN_TABLE
-    from experiments.table import evolution_spec
-    from imrl_jax import gpu_study, runspec, sweeps
+    from experiments.harness.table import evolution_spec
+    from imrl_jax.commands import gpu_study
+    from imrl_jax.runs import runspec
+    from imrl_jax.evolution import sweeps
 
     programs = gpu_study.claims_programs()
     names = [name for p in programs for names, _ in p.runs for name in names]
@@ -198,7 +200,7 @@ def test_the_study_counts_each_distinct_program_of_the_claims_map():
 def test_the_map_hours_are_generations_times_a_generation_plus_tests_at_their_speed():
     """Made-up timings, the hours by hand: 100 x 2 s + 10 s and 50 x 0.5 s + 5 s of evolution; 6e9 lane-steps at
     1e9/s + 2 s of tests."""
-    from imrl_jax.gpu_study import extrapolate
+    from imrl_jax.commands.gpu_study import extrapolate
 
     programs = [{"generations": 100, "generation_s": 2.0, "compile_s": 10.0},
                 {"generations": 50, "generation_s": 0.5, "compile_s": 5.0}]
@@ -216,7 +218,7 @@ def test_the_map_hours_are_generations_times_a_generation_plus_tests_at_their_sp
 def test_a_program_is_timed_at_a_fraction_when_a_whole_generation_would_not_fit(tmp_path, monkeypatch):
     """At 1e6 lane-steps/s a generation of 2 runs x 10 seeds x 50 of 750,000 steps takes 750 s; with 100 s left of
     the step's share for 2 programs, each may take 25 s timed (half for compiling): 1/30 of its lives."""
-    from imrl_jax import gpu_study
+    from imrl_jax.commands import gpu_study
     from imrl_jax.config import make_config
 
     check = G.Check(str(tmp_path), 1000.0, G.Sizes(), log=lambda line: None)
@@ -239,9 +241,9 @@ def test_the_kernels_work_per_step_is_counted_from_its_code_and_the_sizes():
     148. The traced loop body makes as many matrix-vector products (reductions of a Kp x N matrix's rows) as the
     count's forward terms, and reads the draws alone from global memory each step (float32 u, and z when noisy)."""
     from imrl_jax import conditions as C
-    from imrl_jax import kernel_work as W
+    from imrl_jax.agent import kernel_work as W
     from imrl_jax.config import make_config
-    from imrl_jax.state import childhood_phase
+    from imrl_jax.agent.state import childhood_phase
 
     config = make_config("paper", condition="LE-LS")
     childhood = childhood_phase(config)
@@ -267,7 +269,7 @@ def test_the_retina_per_point_would_spare_most_of_observes_instructions():
     """The planned variant's count: observe on 16 points and broadcast to the 64 entries takes about half the warp
     instructions of today's 64 entries, and today's is most of an EE-ES step's (PERFORMANCE.md's 392 of 688)."""
     from imrl_jax import conditions as C
-    from imrl_jax import kernel_work as W
+    from imrl_jax.agent import kernel_work as W
     from imrl_jax.config import make_config
 
     config = make_config("paper", condition="LE-LS")

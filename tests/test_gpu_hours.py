@@ -7,8 +7,8 @@ import os
 import pytest
 
 from experiments import __main__ as experiments_main
-from experiments import gpu_hours
-from experiments.reproduce import Stage
+from experiments.harness import gpu_hours
+from experiments.harness.reproduce import Stage
 from helpers import RESULTS
 
 SPEED = gpu_hours.GpuSpeed("GPU X", {"pallas": [(500, 1e9, 6.0), (5000, 2e9, 7.0)], "xla": [(500, 4e7, 5.0)]}, "x")
@@ -95,9 +95,9 @@ def _study_check(tmp_path, key, status="ok"):
 def test_a_stage_whose_program_the_study_step_timed_takes_that_speed(tmp_path):
     """The claims map's skills-bias0 LE-LS run (done: its recorded model) at its program's measured speed; a run of
     another program at the generation step's; a learning test at its condition's phase speed, nearest lanes."""
-    from experiments.study import SCREEN
-    from imrl_jax.gpu_study import program_key
-    from imrl_jax.rundir import read_config
+    from experiments.harness.study import SCREEN
+    from imrl_jax.commands.gpu_study import program_key
+    from imrl_jax.runs.rundir import read_config
 
     done = os.path.join(RESULTS, "claims", "skills-bias0", "evolve", "LE-LS")
     speed = _study_check(tmp_path, program_key(read_config(done)[0]))

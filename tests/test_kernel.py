@@ -13,11 +13,11 @@ import numpy as np
 import pytest
 from helpers import EXTENDED, SHORT_TASK, assert_trees_close, hand_experts
 
-from imrl_jax import kernel as K
+from imrl_jax.agent import kernel as K
 from imrl_jax import conditions as C
-from imrl_jax import lifetime as L
-from imrl_jax.arena import Pose
-from imrl_jax.networks import decode
+from imrl_jax.agent import lifetime as L
+from imrl_jax.world.arena import Pose
+from imrl_jax.agent.networks import decode
 
 STEPS = 2000
 

@@ -1,4 +1,4 @@
-"""The landscape measures (imrl_jax.landscape, docs/GOALS.md "Measures") on hand-made landscapes whose answer is
+"""The landscape measures (imrl_jax.evolution.landscape, docs/GOALS.md "Measures") on hand-made landscapes whose answer is
 known: flat, a needle, a slope, white noise, a slope with per-life noise; and one tiny check on the model's lives."""
 
 import functools
@@ -8,9 +8,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from imrl_jax import landscape as ls
+from imrl_jax.evolution import landscape as ls
 from imrl_jax.config import make_config
-from imrl_jax.lifetime import make_evaluate
+from imrl_jax.agent.lifetime import make_evaluate
 
 from helpers import tiny_config
 

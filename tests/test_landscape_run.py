@@ -12,8 +12,10 @@ from attack import HOSTILE_FILE_BYTES, HOSTILE_INTS, HOSTILE_TEXTS, assert_contr
     edit_json
 from helpers import evolve_args
 
-from imrl_jax import cli, conditions, evolve, landscape_run
-from imrl_jax.rundir import best_genomes, load_run
+from imrl_jax.runs import cli
+from imrl_jax import conditions
+from imrl_jax.commands import evolve, landscape_run
+from imrl_jax.runs.rundir import best_genomes, load_run
 
 SIZES = dict(seeds=2, population=6, parents=2, task_steps=1000, bins=2)
 RUN = evolve_args(**SIZES, generations=3) + ["--set", "target_radius=40"]

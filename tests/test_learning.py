@@ -4,7 +4,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from imrl_jax.learning import accumulate, ascend_row, pick_row
+from imrl_jax.agent.learning import accumulate, ascend_row, pick_row
 
 
 def test_accumulate_by_hand():
@@ -50,7 +50,7 @@ def test_pick_row_is_the_row_bit_for_bit():
 def test_after_choice_is_the_flag_itself():
     import jax.numpy as jnp
 
-    from imrl_jax.learning import after_choice
+    from imrl_jax.agent.learning import after_choice
 
     for flag in (True, False):
         for k in range(3):

@@ -9,9 +9,12 @@ import numpy as np
 import pytest
 from helpers import stop_after_first
 
-from imrl_jax import cli, conditions, learning_test, learning_test_state, plotting, rundir, steady_state
-from imrl_jax.ga import init_population
-from imrl_jax.lifetime import live
+from imrl_jax.runs import cli, learning_test_state, rundir
+from imrl_jax import conditions
+from imrl_jax.commands import learning_test
+from imrl_jax.analysis import plotting, steady_state
+from imrl_jax.evolution.ga import init_population
+from imrl_jax.agent.lifetime import live
 
 
 @pytest.mark.parametrize("condition, options", [("LE-LS", {}), ("SLE", {}),
@@ -193,7 +196,7 @@ def test_bad_input(tmp_path, capsys, argv, message):
 
 
 def test_a_test_that_cannot_fit_in_memory_is_refused(tmp_path, capsys, monkeypatch):
-    from imrl_jax import devices
+    from imrl_jax.evolution import devices
 
     monkeypatch.setattr(devices, "available_memory", lambda: 2**30)
     monkeypatch.setattr(devices, "accelerator_memory", lambda: None)
@@ -210,7 +213,7 @@ def test_the_progress_names_each_runs_chunks_within_it():
     """With --chunks 10 the tenth chunk of a test's first run said "chunk 10 (10/20)", the eleventh "chunk 11"."""
     import io
 
-    from imrl_jax.progress import Progress
+    from imrl_jax.runs.progress import Progress
 
     progress = Progress(20, quiet=False, stream=io.StringIO(), unit="chunk", group=("run", 10))
     assert progress.update(10, 0.0, 0.0, 1.0, scores="s").startswith("run 1 chunk 10/10 (10/20) | s")
@@ -305,7 +308,7 @@ def test_the_step_counter_is_shared_so_block_draws_stay_a_branch(tiny):
 #: On 2 devices: 3 tests are padded with a copy of the last; the copy changes no real lane.
 ODD_COUNTS = """
 import jax, jax.numpy as jnp, numpy as np
-from imrl_jax import learning_test
+from imrl_jax.commands import learning_test
 from imrl_jax.config import make_config
 assert len(jax.devices()) == 2
 argv = ["--cond", "SLE", "--runs", "1", "--best", "1", "--tests", "3", "--task-steps", "200", "--bins", "2",

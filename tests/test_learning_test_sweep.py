@@ -15,9 +15,10 @@ from attack import (HOSTILE_FILE_BYTES, HOSTILE_INTS, HOSTILE_TEXTS, assert_cont
                     edit_json, tree)
 from helpers import tiny_config
 
-from imrl_jax import learning_test, rundir
+from imrl_jax.commands import learning_test
+from imrl_jax.runs import rundir
 from imrl_jax.config import make_config
-from imrl_jax.learning_test_sweep import SWEEP_TESTS
+from imrl_jax.commands.learning_test_sweep import SWEEP_TESTS
 
 #: The lengths of a tiny test of a hand-made run (its tasks of 200 cycles in 2 bins).
 LENGTHS = ["--best", "2", "--tests", "1", "--task-steps", "400", "--bins", "2", "--steady-steps", "200",

@@ -7,9 +7,9 @@ import pytest
 from helpers import assert_trees_close, random_genomes
 
 from imrl_jax import conditions as C
-from imrl_jax import lifetime as L
+from imrl_jax.agent import lifetime as L
 from imrl_jax.config import CONDITIONS
-from imrl_jax.networks import decode, encode
+from imrl_jax.agent.networks import decode, encode
 
 
 # The future-work rows' lives follow the NumPy reference (test_reference.py); their contracts are slow.

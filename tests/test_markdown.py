@@ -1,10 +1,10 @@
-"""The studies' shared helpers: markdown rows (experiments.markdown), a history.csv's columns (loading) and a measure's CSV and result.json (study)."""
+"""The studies' shared helpers: markdown rows (experiments.harness.markdown), a history.csv's columns (loading) and a measure's CSV and result.json (study)."""
 
 import json
 
 import numpy as np
 
-from experiments import loading, markdown, study
+from experiments.harness import loading, markdown, study
 
 
 def test_markdown_rows_and_mean_sd():

@@ -7,8 +7,8 @@ import helpers
 from helpers import write_evolution, write_learning_test
 
 from experiments import novel_tasks as study
-from experiments.reproduce import stage_done
-from imrl_jax import tasks
+from experiments.harness.reproduce import stage_done
+from imrl_jax.world import tasks
 from imrl_jax.config import paper_tasks
 
 

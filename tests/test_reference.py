@@ -15,11 +15,11 @@ import pytest
 from helpers import EXTENDED, SHORT_TASK, hand_experts, reference_life
 
 from imrl_jax import conditions as C
-from imrl_jax import state as S
-from imrl_jax import lifetime as L
-from imrl_jax import reference
-from imrl_jax.arena import Pose
-from imrl_jax.networks import Agent, decode
+from imrl_jax.agent import state as S
+from imrl_jax.agent import lifetime as L
+from imrl_jax.agent import reference
+from imrl_jax.world.arena import Pose
+from imrl_jax.agent.networks import Agent, decode
 
 STEPS = 2000
 PAPER = {}

@@ -1,4 +1,4 @@
-"""The report's claim rules on hand-made numbers (experiments.claims); the report of a made-up reproduction's runs."""
+"""The report's claim rules on hand-made numbers (experiments.harness.claims); the report of a made-up reproduction's runs."""
 
 import json
 import math
@@ -9,12 +9,12 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from experiments import claims
-from experiments import reproduce
-from experiments.claims import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY
+from experiments.harness import claims
+from experiments.harness import reproduce
+from experiments.harness.claims import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY
 from experiments.report import run, share_probes, shared_once
 from experiments.reproduction import ReproductionTable, variant_rows
-from experiments.table import evolution_spec
+from experiments.harness.table import evolution_spec
 from imrl_jax import conditions
 
 
@@ -297,11 +297,11 @@ def test_paper_and_cpu_reports_each_name_the_other_and_an_unfinished_run_says_so
 
 
 def _write_baselines(root):
-    """A baselines directory as imrl_jax.baselines writes it: PPO, 1M cycles, 2 seeds at 0.5 and 0.7 on every task."""
-    from imrl_jax.baselines import summarise
-    from imrl_jax.brax_agents import Baseline
+    """A baselines directory as imrl_jax.commands.baselines writes it: PPO, 1M cycles, 2 seeds at 0.5 and 0.7 on every task."""
+    from imrl_jax.commands.baselines import summarise
+    from imrl_jax.agent.brax_agents import Baseline
     from imrl_jax.config import Config
-    from imrl_jax.rundir import csv_bytes
+    from imrl_jax.runs.rundir import csv_bytes
 
     b = Baseline(agent="ppo", steps=1_000_000, seeds=2)
     rows = [dict(agent="ppo", task=t, seed=s, steps=1_024_000, performance=0.5 + 0.2 * s,
@@ -337,9 +337,9 @@ def test_report_shows_the_baselines_beside_the_learning_tests(tmp_path):
 
 def test_probe_best_counts_the_colours_each_best_individual_follows(tiny):
     """Claim 7's probes: ideal colour followers follow 3 colours, a straight driver none; LE-LS grows up first."""
-    from experiments.relive import probe_best
-    from imrl_jax.behaviour import colour_reinforcers
-    from imrl_jax.controllers import perceptron_followers
+    from experiments.harness.relive import probe_best
+    from imrl_jax.analysis.behaviour import colour_reinforcers
+    from imrl_jax.analysis.controllers import perceptron_followers
 
     config = tiny("EE-LS")
     followers = np.asarray(perceptron_followers(config)).reshape(-1)
@@ -354,9 +354,9 @@ def test_probe_best_counts_the_colours_each_best_individual_follows(tiny):
 
 def test_fresh_lives_of_each_seeds_best_genome(tiny):
     """fresh_fitness lives each seed's best genome with keys of its own seed: reproducible, other keys other lives."""
-    from experiments.relive import fresh_fitness
-    from imrl_jax.controllers import perceptron_followers
-    from imrl_jax.lifetime import make_evaluate
+    from experiments.harness.relive import fresh_fitness
+    from imrl_jax.analysis.controllers import perceptron_followers
+    from imrl_jax.agent.lifetime import make_evaluate
 
     config = tiny("EE-LS", task_steps=300, num_bins=1, target_radius=30.0)  # reaches are common: lives differ
     followers = np.asarray(perceptron_followers(config)).reshape(-1)
@@ -375,7 +375,7 @@ def test_fresh_lives_of_each_seeds_best_genome(tiny):
 def test_run_fresh_keeps_its_lives_until_the_population_moves_on(tmp_path, monkeypatch):
     """run_fresh lives each seed's best of final_population.npz once, keeps the result, and lives again when the
     population has another generation; without a population there is nothing to live."""
-    from experiments import relive
+    from experiments.harness import relive
 
     calls = []
 
@@ -415,8 +415,8 @@ def test_run_fresh_keeps_its_lives_until_the_population_moves_on(tmp_path, monke
 
 def test_a_childhood_that_stays_put_is_marked_and_said(tiny):
     """fig_paths: a childhood path under 2 cm across is drawn as a mark, and its title says where the robot stays."""
-    from experiments.figures import fig_paths
-    from imrl_jax.behaviour import Trajectory
+    from experiments.harness.figures import fig_paths
+    from imrl_jax.analysis.behaviour import Trajectory
 
     config = tiny("LE-LS")
 
@@ -440,7 +440,7 @@ def test_a_childhood_that_stays_put_is_marked_and_said(tiny):
 
 def test_fig3_has_the_papers_three_panels():
     """(a) the three evolved conditions, (b) the three that learn (no EE-ES, as in the paper), (c) four bar pairs."""
-    from experiments.figures import fig3
+    from experiments.harness.figures import fig3
 
     best = np.linspace(0.1, 0.5, 12).reshape(4, 3)  # (generations, seeds)
     evolutions = {c: best for c in reproduce.EVOLVED}
@@ -458,7 +458,7 @@ def test_fig3_has_the_papers_three_panels():
 
 
 def test_reproduction_fresh_reads_the_reports_lives():
-    from experiments import relive
+    from experiments.harness import relive
 
     summary = {"best_individuals": {"skills/LE-LS": dict(fresh_mean_per_seed=[0.7, 0.8, 0.9], fresh_lives=7)}}
     fresh = relive.reproduction_fresh(summary, "skills", "LE-LS")

@@ -13,10 +13,10 @@ import time
 import pytest
 from helpers import ROOT, evolve_args, outputs, write_lock
 
-from experiments import reproduce
+from experiments.harness import reproduce
 from experiments.reproduction import TABLES, ReproductionTable, variant_rows
-from experiments.study import SCALES
-from imrl_jax import evolve
+from experiments.harness.study import SCALES
+from imrl_jax.commands import evolve
 
 
 def tiny_table(results, variants=("paper", "extension")) -> ReproductionTable:
@@ -126,7 +126,7 @@ def test_stage_progress_is_shown_with_the_whole_pipelines(tmp_path, capfd):
     stream = io.StringIO()
     overall = reproduce.Overall(stages, manifest, stream=stream)
     # The stage reports through Progress; a line of its own that looks like progress is not taken for it.
-    child = ("import sys, time\nfrom imrl_jax.progress import Progress\np = Progress(4, unit='chunk')\n"
+    child = ("import sys, time\nfrom imrl_jax.runs.progress import Progress\np = Progress(4, unit='chunk')\n"
              "print('not progress (3/4)', file=sys.stderr)\n"
              "for i in range(1, 5):\n    p.update(i, 0.5, 0.25, 1e6, scores='performance')\n    time.sleep(0.2)\n"
              "p.note('a note')")
@@ -177,7 +177,7 @@ def test_a_fresh_clone_continues_from_the_published_checkpoint(tmp_path):
 
 def test_a_stage_is_done_when_its_last_file_exists(tmp_path):
     """Each kind of stage is done by the file its command writes last."""
-    from experiments import reproduce
+    from experiments.harness import reproduce
 
     scale = dict(generations=3)
     for kind, last in (("test", "steady.json"), ("measure", "result.json"), ("baseline", "summary.json")):
@@ -244,13 +244,13 @@ def test_a_stage_another_command_is_writing_is_waited_for(tmp_path, monkeypatch,
     assert reproduce.run_stages([stage], {}, manifest, path, command_for) == 0 and ran == ["measure shared"]
 
 
-#: A made-up study on the runner (experiments.runner.study_main): ``python TINY OUT PAUSE [runner options]``, three
+#: A made-up study on the runner (experiments.harness.runner.study_main): ``python TINY OUT PAUSE [runner options]``, three
 #: measures, each a small python script that writes its pid, sleeps PAUSE seconds and writes its result.json.
 TINY_STUDY = f"""
 import os, sys
 sys.path[:0] = [{ROOT!r}]
-from experiments.reproduce import Stage
-from experiments.runner import study_main
+from experiments.harness.reproduce import Stage
+from experiments.harness.runner import study_main
 out, pause = sys.argv[1], sys.argv[2]
 stages = [Stage(f"measure {{i}}", "measure", "", "", os.path.join(out, f"m{{i}}"), 1.0, needs=()) for i in range(3)]
 STAGE = ("import os, sys, time\\nos.makedirs(sys.argv[1], exist_ok=True)\\n"
@@ -277,7 +277,7 @@ def _wait_for(path, seconds: float = 60.0) -> None:
 
 
 def _gone(pid: int) -> bool:
-    from imrl_jax.rundir import _proc_stat
+    from imrl_jax.runs.rundir import _proc_stat
 
     stat = _proc_stat(pid)
     return stat is None or stat.state == "Z"  # ended (a zombie until whoever adopted it reaps it)

@@ -9,8 +9,8 @@ import subprocess
 import pytest
 from helpers import write_lock
 
-from imrl_jax import rundir
-from imrl_jax.rundir import LOCK, RunDirError, lock_run_dir
+from imrl_jax.runs import rundir
+from imrl_jax.runs.rundir import LOCK, RunDirError, lock_run_dir
 
 
 def _dead_pid() -> int:

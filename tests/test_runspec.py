@@ -1,4 +1,4 @@
-"""Runs named by what they compute (imrl_jax.runspec): the key follows the model, committed runs keep theirs."""
+"""Runs named by what they compute (imrl_jax.runs.runspec): the key follows the model, committed runs keep theirs."""
 
 import json
 import os
@@ -7,9 +7,11 @@ import shutil
 import pytest
 from helpers import RESULTS, stop_after_first
 
-from imrl_jax import conditions, runspec
+from imrl_jax import conditions
+from imrl_jax.runs import runspec
+from imrl_jax.commands import runspec as runspec_command
 from imrl_jax.config import PRESETS, make_config
-from imrl_jax.runspec import DuplicateRunError, RunSpec
+from imrl_jax.runs.runspec import DuplicateRunError, RunSpec
 
 
 def test_every_committed_run_keeps_its_recorded_key_and_no_two_share_one():
@@ -83,10 +85,10 @@ def test_two_directories_of_one_run_are_refused_naming_both(tmp_path, capsys):
     _copy_run(folder, tmp_path / "b")
     with pytest.raises(DuplicateRunError, match=f"{tmp_path / 'b'} and {tmp_path / 'a'} hold the same run"):
         runspec.index(str(tmp_path))
-    assert runspec.main([str(tmp_path)]) == 2
+    assert runspec_command.main([str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and err.count("\n") == 1 and "hold the same run" in err
-    assert runspec.main([str(tmp_path / "missing")]) == 2
+    assert runspec_command.main([str(tmp_path / "missing")]) == 2
     assert capsys.readouterr().err == f"error: root: {str(tmp_path / 'missing')!r} is not a folder\n"
 
 
@@ -107,7 +109,7 @@ def test_tests_from_scratch_are_indexed_by_what_they_compute(tmp_path):
 def test_an_unreadable_test_or_two_folders_of_one_run_are_one_line_and_exit_2(tmp_path, capsys):
     """A steady.json of a test from scratch that is not JSON, or whose config names no field of ours, is a
     RunDirError naming the file; the command reports two folders of one run in one line, exit 2."""
-    from imrl_jax.rundir import RunDirError
+    from imrl_jax.runs.rundir import RunDirError
 
     folder = tmp_path / "t"
     folder.mkdir()
@@ -121,16 +123,16 @@ def test_an_unreadable_test_or_two_folders_of_one_run_are_one_line_and_exit_2(tm
     for copy in ("a", "b"):
         shutil.copytree(os.path.join(RESULTS, "goals", "EE-LS-T", "evolve"), tmp_path / "runs" / copy,
                         ignore=shutil.ignore_patterns("checkpoints", "resume_checkpoint", "*.npz", "*.png"))
-    assert runspec.main([str(tmp_path / "runs")]) == 2
+    assert runspec_command.main([str(tmp_path / "runs")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and "hold the same run" in err and err.count("\n") == 1
-    assert runspec.main([str(tmp_path / "none")]) == 2 and "not a folder" in capsys.readouterr().err
+    assert runspec_command.main([str(tmp_path / "none")]) == 2 and "not a folder" in capsys.readouterr().err
 
 
 def test_a_test_from_scratch_is_found_by_its_key_while_it_runs(tmp_path, monkeypatch):
     """Interrupted after its first run, an SLE test is indexed (its partial/spec.json) under the key its finished
     steady.json gives, so a second study asking for it goes on with it; a second begun copy is refused."""
-    from imrl_jax import learning_test
+    from imrl_jax.commands import learning_test
 
     argv = ["--cond", "SLE", "--runs", "2", "--best", "1", "--tests", "1", "--task-steps", "200", "--bins", "2",
             "--steady-steps", "100", "--chunks", "1", "--quiet", "--out", str(tmp_path / "results" / "sle")]

@@ -9,9 +9,9 @@ import pytest
 from helpers import ROOT, relocated, write_evolution, write_learning_test
 
 from experiments import search as study
-from experiments.claims import final_best, plateau_generation
-from experiments.reproduce import stage_done
-from experiments.table import evolution_spec
+from experiments.harness.claims import final_best, plateau_generation
+from experiments.harness.reproduce import stage_done
+from experiments.harness.table import evolution_spec
 
 RESULTS = os.path.join("experiments", "results")
 
@@ -115,7 +115,7 @@ def test_run_path_relives_the_fittest_once_until_the_population_moves_on(tmp_pat
     path.json; a later generation is relived again; without a population there is nothing to relive."""
     import numpy as np
 
-    from experiments import relive
+    from experiments.harness import relive
 
     calls = []
 

@@ -6,7 +6,7 @@ import os
 
 import pytest
 
-from experiments import reproduce
+from experiments.harness import reproduce
 from experiments import selector_sweep as sweep
 
 

@@ -32,9 +32,9 @@ def test_two_devices_match_one(axis):
 KEEPS_SHARDING = """
 import jax, numpy as np
 from imrl_jax.config import make_config
-from imrl_jax.devices import make_mesh, population_sharding, replicated, to_global
-from imrl_jax.run_state import evolution_keys, initial_state
-from imrl_jax.ga import make_generation
+from imrl_jax.evolution.devices import make_mesh, population_sharding, replicated, to_global
+from imrl_jax.runs.run_state import evolution_keys, initial_state
+from imrl_jax.evolution.ga import make_generation
 config = make_config("small", condition="EE-ES", task_steps=20, num_bins=1, population_size=4, num_parents=2)
 mesh = make_mesh()
 for seeds in (2, 1):  # the seeds axis sharded, then the population axis
@@ -66,11 +66,11 @@ def test_next_populations_keep_their_sharding():
 KERNEL_LANES = """
 import importlib.util, json, re, jax, numpy as np
 from imrl_jax.config import make_config
-from imrl_jax.devices import make_mesh, population_sharding, replicated, to_global
-from imrl_jax.run_state import evolution_keys, initial_state
-from imrl_jax.ga import make_generation
-from imrl_jax.evolve_sweep import batched_values, make_points, make_sweep_step
-from imrl_jax import kernel as K
+from imrl_jax.evolution.devices import make_mesh, population_sharding, replicated, to_global
+from imrl_jax.runs.run_state import evolution_keys, initial_state
+from imrl_jax.evolution.ga import make_generation
+from imrl_jax.commands.evolve_sweep import batched_values, make_points, make_sweep_step
+from imrl_jax.agent import kernel as K
 # A 40 cm target: reaches (and so resets) in 100 steps; one bin: the fewest kernel calls.
 config = make_config("small", condition="EE-LS", task_steps=100, num_bins=1, population_size=4, num_parents=2,
                      target_radius=40, step_kernel="pallas")
@@ -116,8 +116,8 @@ points = make_points(config, [0], [dict(mutation_scale=1.0), dict(mutation_scale
 sweep_values = list(batched_values(points, 1))
 cases["sweep"] = [run(make_mesh(1), 2, "sweep"), run(make_mesh(), 2, "sweep")]
 if importlib.util.find_spec("evosax"):  # the evosax extra installed: SNES, 1 seed of 4 (the population axis)
-    from imrl_jax import search, strategies
-    from imrl_jax.lifetime import live
+    from imrl_jax.evolution import search, strategies
+    from imrl_jax.agent.lifetime import live
     strategy = strategies.make_strategy("snes", config)
     cases["snes"] = [run(make_mesh(1), 1, "snes"), run(make_mesh(), 1, "snes")]
 print(json.dumps(cases))

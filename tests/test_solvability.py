@@ -1,6 +1,6 @@
 """The six tasks are solvable with MODEL.md's retina and kinematics, and pairs need a choice.
 
-A hand-written composition of colour followers (imrl_jax.controllers) drives every task's
+A hand-written composition of colour followers (imrl_jax.analysis.controllers) drives every task's
 colour route. MODEL.md: such a composition scores about 0.88-0.90 per task; a fixed
 controller can solve at most one task of each pair (1-2, 3-4, 5-6), because every junction
 reached along a colour looks the same.
@@ -13,9 +13,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from imrl_jax.arena import BLUE, GREEN, RED
+from imrl_jax.world.arena import BLUE, GREEN, RED
 from imrl_jax.config import Config
-from imrl_jax.controllers import performance, run_controller, run_many, zigzag_route
+from imrl_jax.analysis.controllers import performance, run_controller, run_many, zigzag_route
 
 NUM_STEPS = 3000
 #: Runs of one compiled batch: every task on its own route, then every task on its partner's.

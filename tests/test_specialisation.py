@@ -3,17 +3,17 @@
 import jax.numpy as jnp
 import numpy as np
 
-from imrl_jax import behaviour as B
+from imrl_jax.analysis import behaviour as B
 from imrl_jax.config import make_config
-from imrl_jax.controllers import perceptron_followers
-from imrl_jax.networks import decode
+from imrl_jax.analysis.controllers import perceptron_followers
+from imrl_jax.agent.networks import decode
 
 
 def test_probe_starts_lie_on_their_colour_before_a_junction():
     config = make_config("paper", condition="EE-LS")
     starts = B.probe_starts(config, per_colour=4)
     colours = B.retina_colours(config, starts.pos[:, None, :], starts.heading[:, None])  # what the retina sees
-    from imrl_jax.arena import floor_colour
+    from imrl_jax.world.arena import floor_colour
     under = np.asarray(floor_colour(config, starts.pos))
     np.testing.assert_array_equal(under, np.repeat([0, 1, 2], 4))  # the robot stands on an edge of its colour
     # 20 cm ahead is a vertex: a point of all three colours' edges, so the retina (17-21 cm) sees two colours.

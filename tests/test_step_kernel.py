@@ -7,9 +7,10 @@ import os
 import jax
 import pytest
 
-from imrl_jax import evolve, kernel_choice
+from imrl_jax.commands import evolve
+from imrl_jax.agent import kernel_choice
 from imrl_jax.config import Config, make_config
-from imrl_jax.runspec import RunSpec
+from imrl_jax.runs.runspec import RunSpec
 from attack import attack
 from helpers import evolve_args, tiny_config
 
@@ -69,7 +70,7 @@ def test_a_config_recorded_before_the_field_is_the_xla_step():
 
 def test_auto_on_cpu_is_the_xla_program():
     """Bitwise nothing changes on CPU: a life under "auto" is the same program as under "xla" (no compile)."""
-    from imrl_jax.lifetime import live
+    from imrl_jax.agent.lifetime import live
 
     assert jax.default_backend() == "cpu"
     programs = []
@@ -135,7 +136,7 @@ def test_the_cuda_extra_is_jax_for_cuda_at_a_tested_version():
 
 def test_a_learning_test_chooses_its_kernel_for_this_machine(tmp_path, monkeypatch):
     """A test is computed anew: auto on a GPU, the fallback noted, unless --set step_kernel chooses."""
-    from imrl_jax import learning_test
+    from imrl_jax.commands import learning_test
 
     monkeypatch.setattr(kernel_choice, "default_backend", lambda: "gpu")
     argv = ["--cond", "SLE", "--tests", "1", "--task-steps", "400", "--bins", "4", "--steady-steps", "200",

@@ -5,7 +5,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from imrl_jax import search, strategies
+from imrl_jax.evolution import search, strategies
 from imrl_jax.config import ConfigError, make_config
 
 pytest.importorskip("evosax")
@@ -60,7 +60,7 @@ def test_every_strategy_starts_at_the_papers_spread(name):
 
 def test_without_evosax_an_evosax_strategy_says_how_to_install_it(tmp_path, capsys, monkeypatch):
     """evosax unimportable: --strategy snes exits 2 with one line naming the extra, writing nothing; the GA runs on."""
-    from imrl_jax import evolve
+    from imrl_jax.commands import evolve
 
     monkeypatch.setitem(__import__("sys").modules, "evosax.algorithms", None)
     strategies._algorithm.cache_clear()
@@ -88,7 +88,7 @@ def test_strategies_by_name_and_bad_input():
 
 def test_an_evosax_strategy_runs_the_shared_generation_step(tiny):
     """search.generation with Sep-CMA-ES: one tiny generation of lives, the state's generation counter moves on."""
-    from imrl_jax.lifetime import live
+    from imrl_jax.agent.lifetime import live
 
     config = tiny("EE-ES", population_size=4, num_parents=2, task_steps=60, num_bins=1)
     strategy = strategies.make_strategy("sep_cma_es", config)
@@ -113,7 +113,7 @@ def test_evolve_with_an_evosax_strategy_resumes_and_extends_bitwise(tmp_path, ca
     """--strategy snes: 2 generations then --resume to 3 end as 3 uninterrupted (the strategy's state checkpointed)."""
     from helpers import assert_same_outputs, outputs
 
-    from imrl_jax import evolve
+    from imrl_jax.commands import evolve
 
     whole, split = str(tmp_path / "whole"), str(tmp_path / "split")
     assert evolve.main([*_evolve_args(3, "snes", "--strategy-set", "lr_std_init=0.2"), "--out", whole]) == 0
@@ -149,7 +149,7 @@ def test_evolve_with_an_evosax_strategy_resumes_and_extends_bitwise(tmp_path, ca
      "error: strategy open_es: lr_std_init is not a parameter (choose from std_init)"),
 ])
 def test_bad_strategies_exit_2_with_one_line_and_write_nothing(tmp_path, capsys, argv, message):
-    from imrl_jax import evolve
+    from imrl_jax.commands import evolve
 
     out = tmp_path / "run"
     assert evolve.main([*_evolve_args(1), *argv, "--out", str(out)]) == 2
@@ -163,11 +163,11 @@ def test_bad_strategies_exit_2_with_one_line_and_write_nothing(tmp_path, capsys,
 def test_a_tiny_evolution_with_each_offered_strategy(tiny, name):
     """Two generations of each strategy through evolve's own step equal search.generation run generation by generation:
     the populations asked (bitwise) and their fitness."""
-    from imrl_jax import evolve
-    from imrl_jax.lifetime import live
+    from imrl_jax.commands import evolve
+    from imrl_jax.agent.lifetime import live
 
     config = tiny("EE-LS", population_size=4, num_parents=2, task_steps=60, num_bins=1, num_generations=2)
-    from imrl_jax.devices import make_mesh, population_sharding
+    from imrl_jax.evolution.devices import make_mesh, population_sharding
 
     strategy = strategies.make_strategy(name, config)
     mesh = make_mesh()

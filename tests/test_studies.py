@@ -9,9 +9,9 @@ from attack import HOSTILE_INTS, HOSTILE_TEXTS, assert_contract, assert_refused,
 from helpers import write_lock
 
 from experiments import __main__ as cli
-from experiments import runner
-from experiments import study as S
-from imrl_jax.cli import UsageError
+from experiments.harness import runner
+from experiments.harness import study as S
+from imrl_jax.runs.cli import UsageError
 
 ORDER = ["selector-sweep", "timescale", "novel-tasks", "claims-screen", "reproduction", "claims-experts", "search",
          "future-work", "reproduction-cpu", "goals", "childhood", "baselines"]
@@ -37,7 +37,7 @@ def test_each_study_plans_and_lists_its_stages(name, capsys):
 
 
 def test_the_goals_tests_wait_for_their_own_evolution():
-    from experiments import executor
+    from experiments.harness import executor
 
     stages, _ = S.studies()["goals"].stages()
     waits = executor.needs(stages)
@@ -61,7 +61,7 @@ def test_a_new_study_is_its_module_alone(tmp_path, monkeypatch):
     import experiments
 
     (tmp_path / "my_study.py").write_text(
-        "from experiments.study import Study\n"
+        "from experiments.harness.study import Study\n"
         "STUDIES = (Study('mine', 'my_study', 'docs/MINE.md', 0.5),)\n"
         "def all_stages():\n    return [], {}\n")
     monkeypatch.setattr(experiments, "__path__", [*experiments.__path__, str(tmp_path)])
@@ -193,7 +193,7 @@ def _made_up_study(folder, monkeypatch, name="my_study", body=None):
     for module in (name, f"experiments.{name}"):  # one made by an earlier test of its name
         monkeypatch.delitem(sys.modules, module, raising=False)
     (folder / f"{name}.py").write_text(body if body is not None else (
-        "from experiments.study import Study\n"
+        "from experiments.harness.study import Study\n"
         f"STUDIES = (Study('mine', {name!r}, 'docs/MINE.md', 0.5, out='mine'),)\n"
         "def all_stages():\n    return [], {}\n"))
     monkeypatch.setattr(experiments, "__path__", [*experiments.__path__, str(folder)])
@@ -262,7 +262,7 @@ def test_run_plans_every_study_it_will_run_and_refuses_one_another_runner_holds(
 
 
 def test_a_studys_own_command_takes_hostile_values_in_one_line_or_plans(tmp_path):
-    """``python -m experiments.MODULE``'s options (experiments.runner) given each hostile value: refused in one line
+    """``python -m experiments.MODULE``'s options (experiments.harness.runner) given each hostile value: refused in one line
     naming the option, or planned; nothing written (its folder, lock and manifest included)."""
     def own(argv):
         return runner.study_main(argv, "mine", "mine", lambda: ([], {}), None, lambda: 0)

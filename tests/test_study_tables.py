@@ -1,9 +1,9 @@
-"""Every study that is a table, planned, listed and reported on results made by hand (experiments.table).
+"""Every study that is a table, planned, listed and reported on results made by hand (experiments.harness.table).
 
 Each study module that declares ``TABLE`` is run here against a results folder of its own: first
 empty (every stage to run, a report that says so), then with an evolution and a learning test written
 by hand for every row (every stage done, the report's table showing exactly the numbers written). Last, what a
-report says before and while it relives the best individuals (experiments.relive.Reliving).
+report says before and while it relives the best individuals (experiments.harness.relive.Reliving).
 """
 
 import importlib
@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 from helpers import relocated, write_evolution, write_learning_test
 
-from experiments import study as S
-from experiments.reproduce import stage_done
-from experiments.table import Table, evolution_spec
+from experiments.harness import study as S
+from experiments.harness.reproduce import stage_done
+from experiments.harness.table import Table, evolution_spec
 
 
 def table_studies() -> dict[str, Table]:
@@ -132,8 +132,8 @@ def test_reliving_says_what_it_costs_before_the_first_compile_then_counts_with_a
     import re
     import time
 
-    from experiments.relive import Part, Reliving
-    from imrl_jax.events import EventLog
+    from experiments.harness.relive import Part, Reliving
+    from imrl_jax.runs.events import EventLog
 
     bench = tmp_path / "bench"
     bench.mkdir()
@@ -167,7 +167,7 @@ def test_reliving_says_what_it_costs_before_the_first_compile_then_counts_with_a
 def test_reliving_without_a_measured_speed_says_so():
     import io
 
-    from experiments.relive import Part, Reliving
+    from experiments.harness.relive import Part, Reliving
 
     stream = io.StringIO()
     Reliving([Part("one life", 1, 1000)], stream=stream, backend="tpu")
@@ -201,7 +201,7 @@ def test_the_report_says_what_reliving_costs_before_it_relives(tmp_path, monkeyp
 
 
 def test_a_kept_relived_result_says_so_and_is_not_lived_again(tmp_path, capsys):
-    from experiments.relive import kept
+    from experiments.harness.relive import kept
 
     calls = []
     compute = lambda: calls.append(1) or dict(value=1)  # noqa: E731
@@ -213,7 +213,7 @@ def test_a_kept_relived_result_says_so_and_is_not_lived_again(tmp_path, capsys):
 
 def test_a_study_reports_fresh_lives_say_their_cost_before_they_are_lived(tmp_path, monkeypatch, capsys):
     """run_fresh (the claims, future-work and search reports) says its lives and lane-steps before it lives them."""
-    from experiments import relive
+    from experiments.harness import relive
     from helpers import tiny_config
 
     def fake_fresh(config_dict, best, num_lives, seed):

@@ -6,11 +6,13 @@ import numpy as np
 import pytest
 from helpers import random_genomes
 
-from imrl_jax import behaviour, evolve, render, sweeps
+from imrl_jax.analysis import behaviour
+from imrl_jax.commands import evolve, render
+from imrl_jax.evolution import sweeps
 from imrl_jax.config import Config, ConfigError
-from imrl_jax.ga import reproduce
-from imrl_jax.search import generation_keys
-from imrl_jax.networks import decode
+from imrl_jax.evolution.ga import reproduce
+from imrl_jax.evolution.search import generation_keys
+from imrl_jax.agent.networks import decode
 
 
 def test_points(tiny):
@@ -114,7 +116,7 @@ def test_a_life_reads_its_dynamic_values_from_its_params_not_its_config():
 
     from helpers import random_genomes, tiny_config
 
-    from imrl_jax.lifetime import live
+    from imrl_jax.agent.lifetime import live
 
     own = tiny_config("LE-LS-P", childhood_selector_reward="progress", progress_rate=0.2, noise_std=0.1)
     other = sweeps.static_part(own)

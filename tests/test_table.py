@@ -1,4 +1,4 @@
-"""A study as a table over shared runs (experiments.table): rows find their runs by key, wherever they lie."""
+"""A study as a table over shared runs (experiments.harness.table): rows find their runs by key, wherever they lie."""
 
 import os
 
@@ -6,10 +6,10 @@ import pytest
 
 from helpers import RESULTS
 
-from experiments.study import SCALES, SCREEN
-from experiments.reproduce import stage_done
-from experiments.table import Measure, Row, Table, evolution_spec, learning_test_dir
-from imrl_jax import runspec
+from experiments.harness.study import SCALES, SCREEN
+from experiments.harness.reproduce import stage_done
+from experiments.harness.table import Measure, Row, Table, evolution_spec, learning_test_dir
+from imrl_jax.runs import runspec
 
 
 def test_a_row_is_exactly_what_its_command_computes():
@@ -63,8 +63,8 @@ def test_new_runs_that_differ_only_in_dynamic_values_are_one_sweep(tmp_path):
     goes on as one; a measure of a row waits for the sweep that makes its run."""
     import json
 
-    from experiments.reproduce import generations_done
-    from experiments.study import SCALES
+    from experiments.harness.reproduce import generations_done
+    from experiments.harness.study import SCALES
 
     scale = dict(SCALES["tiny"], task_steps=1000)
     rows = (Row("a", "EE-LS", "skills", ("target_radius=40",)),
@@ -115,7 +115,7 @@ def test_rows_of_a_search_strategy_of_their_own_sizes_and_not_evolved_find_their
     map's SLE test of skills-bias0 for paper-selector's rules (SLE reads neither the childhood nor the preset's
     selector values, which differ)."""
     from experiments.rule_sets import SELECTOR_SETS
-    from experiments.study import SCALES
+    from experiments.harness.study import SCALES
 
     table = Table("mine", "docs/MINE.md", 99, scale=SCREEN, out=os.path.join(RESULTS, "future_work"), results=RESULTS,
                   rows=(Row("snes", "EE-LS", "skills", options=("--strategy", "snes")),
@@ -158,7 +158,7 @@ def test_a_measure_of_no_run_goes_where_it_is_told(tmp_path):
 
 def test_a_row_of_fewer_generations_of_its_own_is_done_at_its_own_length():
     """The childhood study's equal-compute run (2 lives a fitness, 15 generations) is done, though the table's are 30."""
-    from experiments.study import SCALES
+    from experiments.harness.study import SCALES
 
     scale = dict(SCALES["paper"], seeds=3, generations=30)
     table = Table("t", "docs/T.md", 99, scale=scale, out="unused", results=RESULTS, rows=(
@@ -190,7 +190,7 @@ def test_a_learning_test_of_its_own_options_waits_for_its_row_and_two_rows_of_on
 def test_rows_of_one_run_make_the_longest_and_a_measure_cannot_take_a_rows_name_or_read_a_test(tmp_path):
     """Two rows of one run asking for 2 and 3 generations: one stage of 3, whose command asks for 3; a test stage
     counts its row's runs; a measure named as a row, or reading a row that is not evolved, is refused."""
-    from experiments.study import SCALES
+    from experiments.harness.study import SCALES
 
     tiny = SCALES["tiny"]
     table = Table("t", "docs/T.md", 99, scale=tiny, out=str(tmp_path), results=str(tmp_path / "results"),

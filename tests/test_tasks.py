@@ -7,7 +7,9 @@ import numpy as np
 import pytest
 from helpers import evolve_args
 
-from imrl_jax import controllers, evolve, learning_test, tasks
+from imrl_jax.analysis import controllers
+from imrl_jax.commands import evolve, learning_test
+from imrl_jax.world import tasks
 from imrl_jax.config import Config, ConfigError, paper_tasks
 
 
@@ -89,7 +91,7 @@ def test_evolve_records_its_task_set_and_a_resume_on_another_is_refused(tmp_path
 def test_a_learning_test_on_another_task_set_tests_the_evolved_genomes_on_its_tasks(tiny_run, tmp_path, monkeypatch):
     import collections
 
-    from imrl_jax import learning_test
+    from imrl_jax.commands import learning_test
 
     seen = {}
 

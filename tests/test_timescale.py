@@ -9,13 +9,13 @@ import pytest
 from helpers import EXTENDED, SHORT_TASK, evolve_args, hand_experts
 
 from imrl_jax import conditions as C
-from imrl_jax import evolve
-from imrl_jax import lifetime as L
-from imrl_jax import timescale
-from imrl_jax.arena import Pose
+from imrl_jax.commands import evolve
+from imrl_jax.agent import lifetime as L
+from imrl_jax.agent import timescale
+from imrl_jax.world.arena import Pose
 from imrl_jax.config import ConfigError
-from imrl_jax.networks import decode
-from imrl_jax.state import Previous
+from imrl_jax.agent.networks import decode
+from imrl_jax.agent.state import Previous
 
 
 def _xb(points):

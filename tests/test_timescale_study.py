@@ -6,9 +6,9 @@ import os
 import pytest
 from helpers import RESULTS, write_evolution, write_learning_test
 
-from experiments import reproduce
+from experiments.harness import reproduce
 from experiments import timescale as study
-from experiments.table import evolution_spec
+from experiments.harness.table import evolution_spec
 
 
 def _write(out, name, rows):

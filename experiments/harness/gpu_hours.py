@@ -1,0 +1,145 @@
+"""What a study takes on one GPU, from the speeds ``gpu_check`` measured there (docs/gpu/gpu_check.json).
+
+A stage's lane-steps run at the speed its ``generation`` step measured, with the step kernel that
+``step_kernel=auto`` would choose for the stage (:mod:`imrl_jax.agent.kernel_choice`: its run's recorded model
+where the run is done, else its condition's), at the number of individuals measured nearest the stage's,
+and each stage pays one compilation as measured there. Where the check's ``study`` step timed the stage's own
+program (:func:`imrl_jax.commands.gpu_study.program_key`: the claims map's) or its learning test's phase, that speed is
+used instead. Writing checkpoints and histories is not counted.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from typing import NamedTuple
+
+from experiments.harness.reproduce import Stage
+
+from experiments.harness.study import ROOT
+GPU_CHECK = os.path.join("docs", "gpu", "gpu_check.json")
+
+
+class GpuSpeed(NamedTuple):
+    """The speeds one gpu_check measured: its generations' {kernel: [(individuals, lane-steps/s, compile s)]}, its
+    study's programs {program key: (lane-steps/s, compile s)} and tests {condition: [(lanes, lane-steps/s,
+    compile s)]}."""
+
+    device: str
+    rows: dict
+    source: str
+    programs: dict | None = None
+    tests: dict | None = None
+
+
+def _speed(row: dict, *fields: str) -> tuple | None:
+    """``row``'s fields and its speed and compilation seconds, or None where one is missing or not a number."""
+    try:
+        values = tuple(row[f] for f in fields)
+        rate, compile_s = float(row["lane_steps_per_s"]), float(row.get("compile_s") or 0.0)
+    except (KeyError, TypeError, ValueError):
+        return None
+    return (*values, rate, max(compile_s, 0.0)) if math.isfinite(rate) and rate > 0 and math.isfinite(compile_s) \
+        else None
+
+
+def read_speed(path: str | None = None) -> GpuSpeed | None:
+    """The speeds of ``path`` (relative to the project; default :data:`GPU_CHECK`), or None where it holds none
+    (missing, unreadable, a dry run's)."""
+    path = GPU_CHECK if path is None else path
+    try:
+        with open(os.path.join(ROOT, path), "rb") as f:
+            data = json.loads(f.read(2**24))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(data, dict) or data.get("dry") or not isinstance(data.get("steps"), list):
+        return None
+    rows: dict[str, list] = {}
+    for step in data["steps"]:
+        for row in step.get("rows", []) if isinstance(step, dict) and step.get("step") == "generation" else []:
+            try:
+                kernel, individuals = str(row["kernel"]), int(row["individuals"])
+                rate, compile_s = float(row["lane_steps_per_s"]), float(row.get("compile_s", 0.0))
+            except (KeyError, TypeError, ValueError):
+                continue
+            if individuals > 0 and math.isfinite(rate) and rate > 0 and math.isfinite(compile_s):
+                rows.setdefault(kernel, []).append((individuals, rate, max(compile_s, 0.0)))
+    programs: dict[str, tuple] = {}
+    tests: dict[str, list] = {}
+    for step in data["steps"]:
+        for row in step.get("rows", []) if isinstance(step, dict) and step.get("step") == "study" else []:
+            if not isinstance(row, dict) or row.get("status") != "ok":
+                continue
+            if row.get("part") == "evolution" and (found := _speed(row, "program")):
+                programs[str(found[0])] = found[1:]
+            elif row.get("part") == "test" and (found := _speed(row, "condition", "lanes")):
+                tests.setdefault(str(found[0]), []).append((int(found[1]), *found[2:]))
+    machine = data.get("machine") if isinstance(data.get("machine"), dict) else {}
+    return GpuSpeed(str(machine.get("device") or "a GPU"), rows, path, programs, tests) if rows or programs else None
+
+
+def stage_config(stage: Stage):
+    """The model ``stage`` lives: its run's recorded one where it is done, else its condition's (None for a measure
+    of several runs)."""
+    from imrl_jax import conditions
+    from imrl_jax.config import ConfigError, make_config
+    from imrl_jax.runs.rundir import RunDirError, read_config
+
+    config = None
+    if stage.kind == "evolve" and os.path.isfile(os.path.join(stage.out_dir, "config.json")):
+        try:  # the model the run recorded (a time-scale option, a preset's values), its own choice set aside
+            config = read_config(stage.out_dir)[0].replace(step_kernel="auto")
+        except (ConfigError, RunDirError, OSError, ValueError):
+            config = None
+    if config is None:
+        if stage.condition not in conditions.CONDITIONS:
+            return None
+        config = make_config("paper", condition=stage.condition)
+    return config
+
+
+def stage_kernel(stage: Stage) -> str:
+    """The step kernel ``auto`` lives ``stage`` with on a GPU: "pallas" or "xla"."""
+    from imrl_jax.agent import kernel_choice
+
+    config = stage_config(stage)
+    if config is None:
+        return "xla"  # a measure of several runs: the slower step, to be safe
+    return kernel_choice.resolve(config, "gpu")[0].step_kernel
+
+
+def studied_seconds(stage: Stage, scale: dict, speed: GpuSpeed) -> float | None:
+    """Seconds ``stage`` takes at the speed the study step measured for its own program (an evolution) or its
+    condition's test phase at the lane count nearest its own (a learning test); None where it measured neither."""
+    from experiments.harness.reproduce import life_steps
+    from imrl_jax.commands.gpu_study import program_key
+
+    if stage.kind == "evolve" and speed.programs and (config := stage_config(stage)) is not None:
+        measured = speed.programs.get(program_key(config))
+        return None if measured is None else stage.cost / measured[0] + measured[1]
+    if stage.kind == "test" and (speed.tests or {}).get(stage.condition) and "test_steps" in scale:
+        lanes = 6 * max(1.0, stage.cost / life_steps(scale, stage.condition, scale["test_steps"]))
+        _, rate, compile_s = min(speed.tests[stage.condition], key=lambda row: abs(math.log(row[0] / lanes)))
+        return stage.cost / rate + compile_s
+    return None
+
+
+def stage_seconds(stage: Stage, scale: dict, speed: GpuSpeed) -> float:
+    """Seconds ``stage`` takes whole on the measured GPU (0 for a stage that lives no lane-steps)."""
+    if stage.cost <= 0:
+        return 0.0
+    studied = studied_seconds(stage, scale, speed)
+    if studied is not None:
+        return studied
+    if not speed.rows:  # a check of the study alone: its slowest program's speed, to be safe
+        return stage.cost / min(rate for rate, _ in speed.programs.values())
+    measured = speed.rows.get(stage_kernel(stage)) or speed.rows.get("xla") or next(iter(speed.rows.values()))
+    individuals = max(1, int(scale.get("seeds", 1)) * int(scale.get("population", 50)))
+    _, rate, compile_s = min(measured, key=lambda row: abs(math.log(row[0] / individuals)))
+    return stage.cost / rate + compile_s
+
+
+def study_hours(stages: list[Stage], scale: dict, speed: GpuSpeed | None) -> float | None:
+    """Hours a whole study takes on the measured GPU (None without a measurement)."""
+    return None if speed is None else sum(stage_seconds(s, scale, speed) for s in stages) / 3600

@@ -1,0 +1,178 @@
+"""The state a phase carries from step to step, and what it records (section 2, MODEL.md "Acting").
+
+A phase (:class:`Phase`: who learns, from which reward, with or without a target) runs a
+scan whose carry is a :class:`State`: the agent's weights, the eligibility traces, the pose,
+the retina of the last two steps, what the previous step left for learning
+(:class:`Previous`), and the random numbers of the current block of steps (:class:`Draws`).
+Every step records a :class:`StepRecord`; a phase returns per-bin :class:`Curves`. Both the
+XLA step (``lifetime.step``) and the GPU kernel (``kernel.py``) use these types.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from imrl_jax.world.arena import Pose, heading_vector
+from imrl_jax.conditions import CHILDHOOD, Phase
+from imrl_jax.config import Config, ConfigError, LearningParams
+from imrl_jax.agent.networks import Agent
+from imrl_jax.agent.timescale import Option, init_option
+
+
+def bin_steps(num_steps: int, num_bins: int) -> int:
+    """Steps per bin of a phase of ``num_steps`` steps; a count the bins do not divide is refused, not cut."""
+    if num_bins < 1 or num_steps % num_bins:
+        raise ConfigError(f"num_steps, num_bins: {num_steps} steps cannot be split into {num_bins} equal bins "
+                          f"(steps must be a multiple of the bins)")
+    return num_steps // num_bins
+
+
+def childhood_phase(config: Config) -> Phase:
+    """The condition's childhood phase (LE-LS's by default) with the config's options (docs/CHILDHOOD.md)."""
+    phase = config.spec.childhood if config.spec.has_childhood else CHILDHOOD
+    return phase._replace(respawn=config.childhood_walls == "respawn",
+                          progress=config.childhood_selector_reward == "progress")
+
+
+def phase_params(phase: Phase, params: LearningParams) -> LearningParams:
+    """The learning values a phase uses: childhood (intrinsic rewards) has its own."""
+    return params.in_childhood() if phase.intrinsic else params
+
+
+def learning_until(params: LearningParams, learning) -> LearningParams:
+    """The values with every learning rate and the noise 0 where ``learning`` is false (the end of an evolved
+    childhood: the weights stay as they are, w + 0 = w, and the actions are the actors' outputs)."""
+    off = lambda v: jnp.where(learning, v, jnp.zeros_like(v))  # noqa: E731
+    return params._replace(eta_actor=off(params.eta_actor), eta_evaluator=off(params.eta_evaluator),
+                           eta_selector_actor=off(params.eta_selector_actor),
+                           eta_selector_critic=off(params.eta_selector_critic), noise_std=off(params.noise_std))
+
+
+class Draws(NamedTuple):
+    """The random numbers of one step: expert choice u ~ U[0, 1), action noise z ~ N(0, I2),
+    and (phases with respawns only) a random pose's (x, y, heading) as U[0, 1)^3."""
+
+    u: jnp.ndarray
+    z: jnp.ndarray
+    spawn: jnp.ndarray | None = None
+
+
+class Traces(NamedTuple):
+    """Eligibility traces. Only the expert in control has a non-zero trace, so one suffices.
+
+    A trace that ends is not zeroed at once: its flag makes the next step read it as 0.
+    Zeroing it there would take one more pass over it, after the update that reads it.
+    """
+
+    actor: jnp.ndarray  # (2, n+1)
+    evaluator: jnp.ndarray  # (n+1,)
+    selector_actor: jnp.ndarray  # (K, n+1)
+    selector_critic: jnp.ndarray  # (n+1,)
+    experts_ended: jnp.ndarray  # (): the expert traces ended last step (read as 0)
+    selector_ended: jnp.ndarray  # (): the selector traces ended last step (read as 0)
+
+
+class Previous(NamedTuple):
+    """What step t-1 left for learning its transition at step t."""
+
+    k: jnp.ndarray  # expert in control
+    action: jnp.ndarray  # a_{t-1}, executed (noisy) action
+    output: jnp.ndarray  # o_{t-1}, actor output
+    selection: jnp.ndarray  # s_{t-1}, selector outputs used for the choice
+    valid: jnp.ndarray  # False at a phase start and after a timeout: nothing to learn
+    terminal: jnp.ndarray  # the transition reached the target: reward 1, no bootstrap
+
+
+class State(NamedTuple):
+    """Scan carry of a phase."""
+
+    agent: Agent
+    traces: Traces
+    pose: Pose
+    # (cos, sin) of pose.heading. Carried, so that the retina's kernels read it rather
+    # than compute it again for each of their sample points.
+    direction: jnp.ndarray
+    xbs: jnp.ndarray  # (2, n+1): x~_t in row t % 2 (written by the step), x~_{t-1} in the other
+    prev: Previous
+    trial_step: jnp.ndarray  # steps since the current trial started
+    t: jnp.ndarray  # step within the phase
+    block: Draws  # the random numbers of the current block of steps
+    pinned: jnp.ndarray  # steps on a wall in a row (childhood with respawns)
+    baseline: jnp.ndarray  # (K,): each expert's running mean surprise (childhood "progress" reward)
+    option: Option | None = None  # the selector's running choice (a selector on its own time-scale only)
+
+
+class StepRecord(NamedTuple):
+    """What one step produced: the pose after it, the expert in control, its events."""
+
+    pose: Pose
+    k: jnp.ndarray
+    reached: jnp.ndarray
+    timeout: jnp.ndarray
+    respawned: jnp.ndarray  # put at a random pose after too long on a wall
+
+
+class Curves(NamedTuple):
+    """Per-bin counts of a phase."""
+
+    reaches: jnp.ndarray  # (bins,)
+    timeouts: jnp.ndarray  # (bins,)
+    selections: jnp.ndarray  # (bins, K): steps each expert was in control
+    respawns: jnp.ndarray | None = None  # (bins,): random poses after a wall (phases with respawns only)
+
+
+def draw_block(key: jax.Array, block, block_steps: int, noisy: bool = True, spawn: bool = False) -> Draws:
+    """The draws of steps block*B .. block*B + B-1 of a phase whose key is ``key``.
+
+    Random numbers are made ``block_steps`` at a time (one vectorised call instead of
+    one per step). Phases without action noise get zeros for z; the expert-choice
+    numbers are the same either way, and so are both with or without ``spawn`` draws.
+    """
+    key_block = jax.random.fold_in(key, block)
+    key_u, key_z = jax.random.split(key_block)
+    u = jax.random.uniform(key_u, (block_steps,))
+    z = jax.random.normal(key_z, (block_steps, 2)) if noisy else jnp.zeros((block_steps, 2), u.dtype)
+    spawned = jax.random.uniform(jax.random.fold_in(key_block, 2), (block_steps, 3)) if spawn else None
+    return Draws(u, z, spawned)
+
+
+def draw_many(key: jax.Array, num_steps: int, block_steps: int, spawn: bool = False) -> Draws:
+    """The draws of steps 0 .. num_steps-1 (for the reference and tests)."""
+    num_blocks = -(-num_steps // block_steps)
+    blocks = jax.vmap(draw_block, (None, 0, None, None, None))(key, jnp.arange(num_blocks), block_steps, True,
+                                                               spawn)
+    return jax.tree.map(lambda x: x.reshape((-1,) + x.shape[2:])[:num_steps], blocks)
+
+
+def init_state(config: Config, agent: Agent, pose: Pose) -> State:
+    """A phase's first carry: zero traces, nothing to learn from, step 0."""
+    dtype = agent.actor.dtype
+    k, n = agent.selector_actor.shape
+    zeros = lambda *shape: jnp.zeros(shape, dtype)  # noqa: E731
+    return State(
+        agent=agent,
+        traces=Traces(zeros(2, n), zeros(n), zeros(k, n), zeros(n), jnp.bool_(False), jnp.bool_(False)),
+        pose=pose,
+        direction=heading_vector(pose.heading),
+        xbs=zeros(2, n),
+        prev=Previous(jnp.int32(0), zeros(2), zeros(2), zeros(k), jnp.bool_(False), jnp.bool_(False)),
+        trial_step=jnp.int32(0),
+        t=jnp.int32(0),
+        block=Draws(zeros(config.draw_block), zeros(config.draw_block, 2)),
+        pinned=jnp.int32(0),
+        baseline=zeros(k),
+        option=init_option(k, n, dtype) if config.selector_options else None,
+    )
+
+
+def for_phase(config: Config, phase: Phase, state: State) -> State:
+    """``state`` whose carried draws have the phase's structure (respawn draws only where used)."""
+    if phase.respawn and state.block.spawn is None:
+        return state._replace(block=state.block._replace(spawn=jnp.zeros((config.draw_block, 3),
+                                                                          state.block.u.dtype)))
+    if not phase.respawn and state.block.spawn is not None:
+        return state._replace(block=state.block._replace(spawn=None))
+    return state

@@ -1,0 +1,204 @@
+"""``python -m imrl_jax.render``: the best individual of an evolution on one task, animated (section 3, Fig. 1).
+
+    python -m imrl_jax.render RUN_DIR --task K --out FILE.gif [--steps 300] [--every 2] [--fps 20]
+
+RUN_DIR is a run directory of ``python -m imrl_jax.evolve`` (``config.json`` and
+``final_population.npz``). The individual is the fittest of all seeds in the last
+evaluated generation. It lives the very life that earned its fitness (the run's keys),
+which trains its experts in childhood (LE-LS) and its selector on every task; then it
+drives task K (1-6) from the weights it ended that task with, for ``--steps`` steps,
+recorded with :func:`imrl_jax.agent.lifetime.simulate`. The animation shows the arena with the
+task, the path coloured by the expert in control, the robot with its retina patch, a
+zoom on the robot and the retina's 2 x 6 view. ``.gif`` is written with Pillow; ``.mp4``
+needs ffmpeg on PATH.
+
+Bad input (a missing or incomplete run directory, a task out of range, an unknown
+extension, an output that exists, without ``--overwrite``) gets a one-line error and exit
+code 2, and nothing is written. Only FILE is ever written (through a temporary file in
+its directory, renamed when complete).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import sys
+import time
+from typing import NamedTuple
+
+import numpy as np
+
+from imrl_jax.runs.cli import HelpFormatter, Parser, UsageError, add_register, exit_codes, register
+from imrl_jax.runs import cli
+from imrl_jax.runs.rundir import check_writable, load_run
+
+FORMATS = (".gif", ".mp4")
+
+
+class Best(NamedTuple):
+    """The fittest individual of a run's last evaluated generation and where it came from."""
+
+    config: object  # Config
+    genome: np.ndarray
+    seed: int
+    index: int  # in its seed's population
+    generation: int  # 0-based generation it was evaluated in
+    fitness: float
+
+
+def best_individual(run_dir: str) -> Best:
+    """The fittest individual over all seeds of the last evaluated generation of a run."""
+    run = load_run(run_dir)
+    s, i = np.unravel_index(int(np.argmax(run.fitness)), run.fitness.shape)
+    return Best(run.config, run.evaluated[s, i], run.seeds[s], int(i), run.generation - 1, float(run.fitness[s, i]))
+
+
+def life_key(config, seed: int, generation: int, index: int, life: int = 0):
+    """The key of life ``life`` (of ``config.lives_per_fitness``) of individual ``index`` of ``seed`` in
+    ``generation`` of an evolve run: the key the GA lived it with."""
+    import jax
+
+    from imrl_jax.runs.run_state import evolution_keys, seed_keys
+    from imrl_jax.evolution.search import generation_keys, life_keys
+
+    key = evolution_keys(np.asarray(jax.random.key_data(seed_keys([seed]))))[0]
+    key_life, _ = generation_keys(key, generation)
+    return life_keys(key_life, config.population_size, config.lives_per_fitness)[index, life]
+
+
+def check_output(out_path: str, overwrite: bool = False) -> str:
+    """The output's extension after checking the path can be written; raises UsageError."""
+    ext = os.path.splitext(out_path)[1].lower()
+    if ext not in FORMATS:
+        raise UsageError(f"--out: unknown extension {ext or '(none)'!r} (use {' or '.join(FORMATS)})")
+    if ext == ".mp4" and shutil.which("ffmpeg") is None:
+        raise UsageError("--out: writing .mp4 needs ffmpeg on PATH (not found); write a .gif instead")
+    if os.path.isdir(out_path):
+        raise UsageError(f"--out: {out_path} is a directory")
+    if os.path.exists(out_path) and not overwrite:
+        raise UsageError(f"--out: {out_path} exists (pass --overwrite to replace it)")
+    check_writable(os.path.dirname(os.path.abspath(out_path)))
+    return ext
+
+
+#: The most steps an animation follows, frames it draws (each is a matplotlib figure) and frames per second.
+MAX_STEPS = 100_000
+MAX_FRAMES = 5_000
+MAX_FPS = 100
+
+
+def check_sizes(steps: int, every: int, fps: int) -> None:
+    """Refuse sizes that would run for hours or overflow (raises UsageError naming the option and its limit)."""
+    if steps < 1 or every < 1 or fps < 1:
+        raise UsageError("--steps, --every and --fps must be at least 1")
+    for flag, value, limit in (("--steps", steps, MAX_STEPS), ("--every", every, MAX_STEPS), ("--fps", fps, MAX_FPS)):
+        if value > limit:
+            raise UsageError(f"{flag}: {value:,} is above the limit of {limit:,}")
+    frames = -(-steps // every)
+    if frames > MAX_FRAMES:
+        raise UsageError(f"--steps / --every: {frames:,} frames is above the limit of {MAX_FRAMES:,} (raise --every)")
+
+
+class Plan(NamedTuple):
+    """An animation checked and ready to draw: nothing written yet (``imrl_jax.runs.cli``)."""
+
+    run_dir: str
+    task: int  # 1-based
+    out_path: str
+    steps: int
+    every: int
+    fps: int
+    best: Best
+
+    def execute(self) -> int:
+        """Draw the animation into ``out_path`` (through a temporary file renamed when complete) and say so."""
+        summary = animate(self)
+        print(f"wrote {summary['out']}: {summary['frames']} frames of task {summary['task']} "
+              f"(best individual: seed {summary['seed']}, generation {summary['generation']}, fitness "
+              f"{summary['fitness']:.3f}, relived {summary['relived_fitness']:.3f}; "
+              f"{summary['reaches_in_animation']} reaches shown) in {summary['seconds']:.1f} s")
+        return 0
+
+
+def plan(run_dir: str, task: int, out_path: str, steps: int = 300, every: int = 2, fps: int = 20,
+         overwrite: bool = False) -> Plan:
+    """Every check of an animation (sizes, output, the run, the task), nothing written; raises UsageError."""
+    check_sizes(steps, every, fps)
+    check_output(out_path, overwrite)
+    best = best_individual(run_dir)
+    if not 1 <= task <= best.config.num_tasks:
+        raise UsageError(f"--task: must be in 1..{best.config.num_tasks} (got {task})")
+    return Plan(run_dir, task, out_path, steps, every, fps, best)
+
+
+def run(run_dir: str, task: int, out_path: str, steps: int = 300, every: int = 2, fps: int = 20,
+        overwrite: bool = False) -> dict:
+    """Animate the best individual of ``run_dir`` on task ``task`` (1-based) into ``out_path``; return a summary."""
+    return animate(plan(run_dir, task, out_path, steps, every, fps, overwrite))
+
+
+def animate(checked: Plan) -> dict:
+    """The animation of a checked plan, written; its summary."""
+    run_dir, task, out_path, steps, every, fps, best = checked
+    config = best.config
+
+    import jax
+    import jax.numpy as jnp
+
+    from imrl_jax.analysis.behaviour import task_trajectory
+    from imrl_jax.agent.lifetime import live
+    from imrl_jax.analysis.plotting import write_animation
+
+    start = time.perf_counter()
+    params = config.learning_params()
+    key = life_key(config, best.seed, best.generation, best.index)
+    result = jax.jit(live, static_argnums=1)(key, config, params, jnp.asarray(best.genome, jnp.float32))
+    agent = jax.tree.map(lambda x: x[task - 1], result.adult_agents)
+    trajectory = task_trajectory(jax.random.fold_in(key, task), config, params, agent, task - 1, steps)
+
+    title = (f"{config.condition}, best individual of {os.path.basename(os.path.normpath(run_dir))} "
+             f"(seed {best.seed}, generation {best.generation}, fitness {best.fitness:.3f})\n"
+             f"task {task}: {steps} steps after its {config.task_steps:,}-step learning period")
+    directory = os.path.dirname(os.path.abspath(out_path))
+    os.makedirs(directory, exist_ok=True)
+    base, ext = os.path.splitext(os.path.basename(out_path))
+    tmp = os.path.join(directory, f".{base}.tmp-{os.getpid()}{ext}")
+    try:
+        frames = write_animation(config, trajectory, tmp, task=task - 1, every=every, fps=fps, title=title,
+                                 expressed=agent.expressed)
+        os.replace(tmp, out_path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+    return {"out": out_path, "frames": frames, "task": task, "seed": best.seed, "index": best.index,
+            "generation": best.generation, "fitness": best.fitness, "relived_fitness": float(result.fitness),
+            "task_performance": float(result.performance[task - 1]),
+            "reaches_in_animation": int(trajectory.reached.sum()), "seconds": time.perf_counter() - start}
+
+
+def parser() -> argparse.ArgumentParser:
+    p = Parser(prog="python -m imrl_jax.render",
+               description="Animate the best individual of an evolve run on one task.",
+               formatter_class=HelpFormatter)
+    p.add_argument("run_dir", metavar="RUN_DIR", help="run directory of python -m imrl_jax.evolve")
+    p.add_argument("--task", type=int, required=True, help="task to show, 1-6")
+    p.add_argument("--out", required=True, help="animation file, .gif (or .mp4 with ffmpeg on PATH)")
+    p.add_argument("--steps", type=int, default=300, help=f"steps of the task to show (at most {MAX_STEPS:,})")
+    p.add_argument("--every", type=int, default=2,
+                   help=f"one frame every this many steps (at most {MAX_FRAMES:,} frames in all)")
+    p.add_argument("--fps", type=int, default=20, help=f"frames per second (at most {MAX_FPS})")
+    p.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
+    add_register(p)
+    return p
+
+
+@exit_codes
+def main(argv=None) -> int:
+    args = parser().parse_args(argv)
+    register(args.register)
+    return cli.execute(plan(args.run_dir, args.task, args.out, args.steps, args.every, args.fps, args.overwrite))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
