@@ -2,10 +2,11 @@
 
 import os
 import re
+import subprocess
 
 import pytest
 
-from imrl_jax.commands import compare
+from imrl_jax.commands import bench, compare
 
 
 def test_export_renames_every_import(tmp_path):
@@ -44,3 +45,30 @@ def test_a_revision_against_this_checkout():
     assert result["base_lane_steps_per_s"] > 0 and result["lane_steps_per_s"] > 0
     assert 0 <= result["pairs_won"] <= 2 and result["median_ratio"] > 0
     assert len(lines) == 2 and lines[-1].startswith("pair 2/2")
+
+
+@pytest.mark.parametrize("layout", ["flat", "layers"])
+def test_a_revision_s_modules_are_found_in_either_layout(tmp_path, monkeypatch, layout):
+    """Revisions before the sub-packages kept lifetime.py beside config.py; later ones in agent/."""
+    package = tmp_path / f"imrl_{layout}"
+    folder = package / "agent" if layout == "layers" else package
+    folder.mkdir(parents=True)
+    for path in {package, folder}:
+        (path / "__init__.py").write_text("")
+    (package / "config.py").write_text("WHERE = 'top'\n")
+    (folder / "lifetime.py").write_text(f"WHERE = {layout!r}\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert bench._module(package.name, "lifetime").WHERE == layout
+    assert bench._module(package.name, "config").WHERE == "top"
+    with pytest.raises(ModuleNotFoundError, match="has no module networks"):
+        bench._module(package.name, "networks")
+
+
+@pytest.mark.slow
+def test_a_revision_before_the_layers_against_this_checkout():
+    """The last revision of one flat folder (the bench builds its program from either layout)."""
+    before = "83834b5"
+    if subprocess.run(["git", "-C", compare.REPO, "cat-file", "-e", f"{before}^{{commit}}"]).returncode:
+        pytest.skip(f"{before} is not in this clone's history")
+    result = compare.compare(before, "childhood", lanes=2, steps=20, pairs=1, log=lambda line: None)
+    assert result["base_lane_steps_per_s"] > 0 and result["lane_steps_per_s"] > 0
