@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 
 from imrl_jax.commands import gpu_check as G
+from imrl_jax.commands import gpu_harness as H
+from imrl_jax.commands import gpu_steps as S
 
 
 def test_dry_run_checks_and_times_every_step(tmp_path, capsys):
@@ -76,7 +78,7 @@ def _steps(log):
 
 def test_a_failure_is_kept_to_its_step_or_piece_and_the_check_goes_on(tmp_path):
     log = []
-    results = G.run(str(tmp_path), 60, G.DRY, log=lambda line: None, steps=_steps(log))
+    results = G.run(str(tmp_path), 60, H.DRY, log=lambda line: None, steps=_steps(log))
     steps = {s["step"]: s for s in results["steps"]}
     assert steps["environment"]["status"] == "ok"
     assert (steps["broken"]["status"], steps["broken"]["stage"]) == ("failed", "lowering")
@@ -96,7 +98,7 @@ def test_what_does_not_fit_the_budget_is_skipped_and_said(tmp_path):
     """At the real sizes (scale 1) a step that needs more than is left is skipped; the files are still written."""
     log = []
     steps = (("environment", lambda check: {}, 0), ("long", lambda check: log.append("ran") or {}, 120))
-    results = G.run(str(tmp_path), 30, G.Sizes(), log=lambda line: None, steps=steps)
+    results = G.run(str(tmp_path), 30, H.Sizes(), log=lambda line: None, steps=steps)
     long = results["steps"][1]
     assert log == [] and long["status"] == "skipped" and "about 120 s needed" in long["error"]
     assert results["summary"] == {"failed": [], "skipped": ["long"]}
@@ -104,14 +106,14 @@ def test_what_does_not_fit_the_budget_is_skipped_and_said(tmp_path):
 
 
 def test_a_step_with_a_share_of_the_budget_stops_when_it_has_used_it(tmp_path, monkeypatch):
-    check = G.Check(str(tmp_path), 100.0, G.Sizes(), log=lambda line: None)
+    check = H.Check(str(tmp_path), 100.0, H.Sizes(), log=lambda line: None)
     monkeypatch.setattr(check, "remaining", lambda: 90.0)
-    assert check.share_left(G.LIVES_SHARE) == pytest.approx(60.0)  # 30 of the budget's 100 s from now
+    assert check.share_left(S.LIVES_SHARE) == pytest.approx(60.0)  # 30 of the budget's 100 s from now
 
 
 def test_life_cases_one_per_model_and_the_kernels_first():
     """A preset that gives the same lives as one before it (Config.model_differences) is not checked again."""
-    cases = G.life_cases(G.Sizes(conditions=("EE-ES", "EV-LS", "LE-LS")))
+    cases = S.life_cases(H.Sizes(conditions=("EE-ES", "EV-LS", "LE-LS")))
     names = [(name, preset) for name, preset, _, _ in cases]
     # EE-ES learns nothing: every preset lives the same. LE-LS: four models. EV-LS: not in the kernel, so last.
     assert names == [("EE-ES", "paper"), ("LE-LS", "paper"), ("LE-LS", "extension"), ("LE-LS", "faithful"),
@@ -125,9 +127,9 @@ def test_weights_excess_is_the_tolerance_test():
     """max |a - b| and how far it is past atol + rtol |b| (hand-computed)."""
     want = {"actor": np.array([1.0, -2.0]), "selector_critic": np.array([10.0])}
     got = {"actor": np.array([1.001, -2.0]), "selector_critic": np.array([10.0]), "evaluator": np.array([5.0])}
-    largest, excess = G.weights_excess(got, want, rtol=1e-4, atol=1e-5)
+    largest, excess = S.weights_excess(got, want, rtol=1e-4, atol=1e-5)
     assert largest == pytest.approx(1e-3) and excess == pytest.approx(1e-3 - 1e-5 - 1e-4)
-    assert G.weights_excess(got, want, rtol=1e-3, atol=1e-5)[1] <= 0
+    assert S.weights_excess(got, want, rtol=1e-3, atol=1e-5)[1] <= 0
 
 
 @pytest.mark.parametrize("args, message", [
@@ -151,7 +153,7 @@ def test_an_out_that_cannot_be_written_is_one_line(tmp_path, capsys):
 
 
 def test_the_json_is_strict(tmp_path):
-    check = G.Check(str(tmp_path), 10.0, G.DRY, log=lambda line: None)
+    check = H.Check(str(tmp_path), 10.0, H.DRY, log=lambda line: None)
     check.results["steps"].append({"step": "x", "rho": float("nan"), "rows": [{"v": np.float32("inf")}]})
     check.write()
     assert json.loads((tmp_path / "gpu_check.json").read_text())["steps"][0] == {"step": "x", "rho": None,
@@ -221,7 +223,7 @@ def test_a_program_is_timed_at_a_fraction_when_a_whole_generation_would_not_fit(
     from imrl_jax.commands import gpu_study
     from imrl_jax.config import make_config
 
-    check = G.Check(str(tmp_path), 1000.0, G.Sizes(), log=lambda line: None)
+    check = H.Check(str(tmp_path), 1000.0, H.Sizes(), log=lambda line: None)
     monkeypatch.setattr(check, "remaining", lambda: 300.0)
     program = gpu_study.Program("k", "LE-LS", make_config("paper", condition="LE-LS"), ((("a",), {}), (("b",), {})),
                                 10, 100)

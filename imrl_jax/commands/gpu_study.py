@@ -19,6 +19,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from imrl_jax.commands.gpu_harness import compile_once, fastest_rate, timed
+
 #: The target: the whole claims map within this many hours on one GPU (issue 57).
 TARGET_HOURS = 1.0
 #: The share of the check's budget the study step may use from its start.
@@ -140,7 +142,7 @@ def time_program(check, program: Program, fraction: float) -> dict:
     populations = to_global(np.tile(np.asarray(state.populations), (len(points), 1, 1)), sharding)
     kernel = kernel_choice.chosen(config)
     key = ("sweep", program_key(config), kernel, len(points), len(seeds))  # the sweep step's, if it is the same
-    executable, compile_s = check.compile_once(key, evolve_sweep.make_sweep_step(config, sharding), keys, params,
+    executable, compile_s = compile_once(check, key, evolve_sweep.make_sweep_step(config, sharding), keys, params,
                                          ga, populations, 0)
     start = time.perf_counter()
     jax.block_until_ready(executable(keys, params, ga, populations, 0))
@@ -164,8 +166,8 @@ def time_test(check, condition: str, lanes: int) -> dict:
     kernel = kernel_choice.chosen(make_config("paper", condition=bench_condition))
     program = bench.phase_program(bench_condition, phase, lanes, check.sizes.study_test_steps, step_kernel=kernel)
     key = ("phase", bench_condition, phase, lanes, check.sizes.study_test_steps, kernel)  # the phases step's too
-    executable, compile_s = check.compile_once(key, program.fn, *program.args)
-    seconds, _ = check.timed(executable, program.args, check.sizes.repeats)
+    executable, compile_s = compile_once(check, key, program.fn, *program.args)
+    seconds, _ = timed(executable, program.args, check.sizes.repeats)
     return {"kernel": kernel, "steps": check.sizes.study_test_steps, "compile_s": compile_s,
             "lane_steps_per_s": program.lane_steps / seconds, "status": "ok"}
 
@@ -186,7 +188,7 @@ def study(check) -> dict:
     check.stage = "api"
     programs, tests = claims_programs(), claims_tests()
     stop, limit = check.share_left(STUDY_SHARE), check.sizes.study_limit
-    rows, rate = [], check.fastest_rate()
+    rows, rate = [], fastest_rate(check)
     for i, program in enumerate(programs):
         row = {"part": "evolution", "program": program.key, "condition": program.condition,
                "runs": [list(names) for names, _ in program.runs], "seeds": program.seeds,
