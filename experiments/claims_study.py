@@ -24,8 +24,6 @@ import sys
 
 import numpy as np
 
-from experiments.harness.claims import (ABOUT, DOES_NOT, HOLDS, NOT_AVAILABLE, NUM_BEST, PARTLY, claim_experts, final_best,
-                                measure as measure_claims)
 from experiments.harness.loading import read_evolution, read_json, read_test, write_json
 from experiments.harness.markdown import table
 from experiments.harness.relive import colours_followed, reproduction_fresh, run_fresh, run_probe
@@ -34,6 +32,9 @@ from experiments.rule_sets import BY_NAME, RULE_SETS, RuleSet
 from experiments.harness.study import REPRODUCTION, RESULTS, SCALES, SCREEN, write_table
 from experiments.harness.table import Measure, Row, Table, dispatch, studies_of
 from imrl_jax import conditions
+from imrl_jax.analysis.claims import (ABOUT, DOES_NOT, HOLDS, NOT_AVAILABLE, NUM_BEST, PARTLY, final_best,
+                                      measure as measure_claims)
+from imrl_jax.analysis.further_claims import claim_experts
 from imrl_jax.analysis.plotting import new_figure, save
 
 OUT = os.path.join(RESULTS, "claims")

@@ -8,7 +8,7 @@ Each row is a condition (``imrl_jax.conditions``) under a preset and ``--set`` o
 lengths (5 seeds x 100 generations, then its 5 best x 4 learning tests) or tested from scratch (5 runs x 5 x 4),
 beside the reproduction's paper runs (10 seeds); each run is found by its key wherever a study made it. The report
 measures every finished row, (c)'s evolved learning values and (d)'s expressed experts, judges the paper's four
-questions (``claims.FUTURE``) and draws a figure per question.
+questions (``further_claims.FUTURE``) and draws a figure per question.
 """
 
 from __future__ import annotations
@@ -20,12 +20,12 @@ import numpy as np
 
 # NUM_BEST: the junction probe drives claim 7's number of each seed's fittest genomes, so that a run shared with
 # the claims study (LE-LS-6) keeps one probe.json
-from experiments.harness.claims import NUM_BEST
 from experiments.harness.figures import not_run
 from experiments.harness.loading import write_json
 from experiments.harness.markdown import head, line, mean_sd
 from experiments.harness.study import REPRODUCTION, RESULTS, SCALES, SCREEN
 from experiments.harness.table import Row, Table
+from imrl_jax.analysis.claims import NUM_BEST
 
 OUT = os.path.join(RESULTS, "future_work")
 DOCUMENT = os.path.join("docs", "FUTURE_WORK.md")
@@ -62,8 +62,8 @@ STUDIED = (
      "(d)'s comparison under `faithful` (the claims study's claim-8 run of paper-selector, the same lives)"))
 #: Every row the report shows, in order, with what it is: the reproduction's first, then the study's.
 ABOUT = {row.name: about for row, about in REFERENCES + STUDIED}
-#: The report's verdicts: a question of the paper's (``claims.FUTURE``), its rule set in words, and its rows: (a)
-#: EE-LS, then the criterion rows; (b) EXT-LS, LE-LS, SLE; (c) the row; (d) the evolved number, 3 experts, 6 all
+#: The report's verdicts: a question of the paper's (``further_claims.FUTURE``), its rule set in words, and its rows:
+#: (a) EE-LS, then the criterion rows; (b) EXT-LS, LE-LS, SLE; (c) the row; (d) the evolved number, 3 experts, 6 all
 #: expressed.
 JUDGED = (
     ("a", "skills", ("skills EE-LS", "skills LE-LS", "EV-LS", "EV-LS-diff")),
@@ -102,7 +102,7 @@ def read_traits(run_dir: str | None) -> dict | None:
 
 def _evolution(run_dir: str | None) -> dict | None:
     """A row's evolution as the report shows it: its size and, once finished, its final best, spread and plateau."""
-    from experiments.harness.claims import final_best, plateau_generation
+    from imrl_jax.analysis.claims import final_best, plateau_generation
     from experiments.harness.loading import read_evolution
 
     run = read_evolution(run_dir)
@@ -167,7 +167,7 @@ def colour_sets(followed: list[list[int]] | None) -> dict | None:
 def measure(rows: dict[str, Row], evolutions: dict, tests: dict, summary: dict,
             reproduction: str = REPRODUCTION) -> dict:
     """Every row of :data:`ABOUT`, (c)'s values and (d)'s experts; ``summary``: the reproduction's report."""
-    from experiments.harness.claims import _difference
+    from imrl_jax.analysis.claims import _difference
     from experiments.claims_study import reproduction_variant
     from experiments.harness.relive import reproduction_fresh, run_fresh, run_probe
     from imrl_jax.agent import networks
@@ -220,7 +220,7 @@ def measure(rows: dict[str, Row], evolutions: dict, tests: dict, summary: dict,
 
 def judge(measured: dict) -> list[dict]:
     """The verdicts of :data:`JUDGED` from :func:`measure`'s rows, (c)'s evolved values and (d)'s experts."""
-    from experiments.harness import claims
+    from imrl_jax.analysis import further_claims
     from imrl_jax.config import make_config
 
     rows, values = {r["name"]: r for r in measured["rows"]}, measured["learning_values"]
@@ -239,17 +239,18 @@ def judge(measured: dict) -> list[dict]:
     def hand_values(row):
         """(c) of a row: its seeds' best's evolved values against the presets'."""
         evolved = values["evolved"].get(row) or {}
-        return claims.claim_hand_values({n: v["best_per_seed"] for n, v in evolved.items()}, values["hand"]["skills"],
-                                        values["hand"]["paper"])
+        return further_claims.claim_hand_values({n: v["best_per_seed"] for n, v in evolved.items()},
+                                                values["hand"]["skills"], values["hand"]["paper"])
 
     def three_enough(row, *others):
         """(d) of a row: its best's expressed experts, its final best against 3 experts' and 6 all expressed."""
         kept = experts.get(row)
-        return claims.claim_three_enough(kept[-1]["best_per_seed"] if kept else None, final(row), *map(final, others))
+        return further_claims.claim_three_enough(kept[-1]["best_per_seed"] if kept else None, final(row),
+                                                 *map(final, others))
 
-    rules = dict(a=lambda actors, *criteria: claims.claim_criteria_easier(  # the criterion rows that finished
+    rules = dict(a=lambda actors, *criteria: further_claims.claim_criteria_easier(  # the criterion rows that finished
         {n: evolution(n) for n in criteria if final(n)}, evolution(actors)),
-        b=lambda *names: claims.claim_motivation_needed(*map(test, names)), c=hand_values, d=three_enough)
+        b=lambda *names: further_claims.claim_motivation_needed(*map(test, names)), c=hand_values, d=three_enough)
     # (a) names the criterion rows not finished until they have
     return [dict(question=q, rules=rule, rows=list(names), missing=[n for n in names[1:] if q == "a" and not final(n)],
                  **rules[q](*names)) for q, rule, names in JUDGED]
@@ -257,7 +258,8 @@ def judge(measured: dict) -> list[dict]:
 
 def table(measured: dict) -> str:
     """The report's markdown: every row's fitness and steady state, (c)'s evolved learning values, (d)'s experts."""
-    from experiments.harness.claims import FUTURE, FUTURE_RULES, LAST_GENERATIONS, PLATEAU_FRACTION
+    from imrl_jax.analysis.claims import LAST_GENERATIONS, PLATEAU_FRACTION
+    from imrl_jax.analysis.further_claims import FUTURE, FUTURE_RULES
 
     lines = head("row", "condition", "what", "seeds x generations",
                  "final best fitness (best of a generation's noisy lives)", "sd over seeds",
@@ -388,7 +390,7 @@ def _steady(ax, rows: list[dict], measured: dict) -> bool:
 
 def _values(ax, rows: list[dict], measured: dict) -> bool:
     """(c): each seed's best's evolved values (dots; their mean, a bar) in their genes' ranges, beside the hand-set."""
-    from experiments.harness.claims import map_position
+    from imrl_jax.analysis.further_claims import map_position
     from imrl_jax.conditions import EVOLVED_FIELDS
 
     values = measured["learning_values"]
@@ -434,7 +436,7 @@ def figure(measured: dict, question: str, path: str) -> str:
     """The figure of one of the paper's questions (:data:`PANELS`), written to ``path``."""
     import textwrap
 
-    from experiments.harness.claims import FUTURE
+    from imrl_jax.analysis.further_claims import FUTURE
     from imrl_jax.analysis.plotting import new_figure, save, style_axis
 
     rows = [r for r in measured["rows"] if any(r["name"] in names for q, _, names in JUDGED if q == question)]

@@ -8,7 +8,7 @@ The novel set: the finished paper-scale runs learn the ``novel`` tasks (5 of the
 ``best_genomes.npz``), beside their tests on the paper's six, SLE and brax's PPO and ES from scratch. Held-out
 tasks: LE-LS, EE-LS and EE-ES evolved under ``skills`` on the paper's tasks 1, 3, 4 and 6 (``tasks_seen.json``),
 tested on those and on tasks 2 and 5 (``tasks_unseen.json``), whose partners turn the other way. Learning's
-advantage is a steady state minus EE-ES's (which learns nothing); ``claims.claim_unseen`` judges it.
+advantage is a steady state minus EE-ES's (which learns nothing); ``further_claims.claim_unseen`` judges it.
 """
 
 import os
@@ -81,7 +81,7 @@ def colour_summary(followed: list[list[int]]) -> dict:
 def advantage_table(measured: dict, evolutions: str) -> str:
     """The report's markdown: learning's advantage per row and set of tasks, brax's agents, the held-out evolutions
     (``evolutions``: their table) and their probes, then the verdicts."""
-    from experiments.harness.claims import UNSEEN_RULE
+    from imrl_jax.analysis.further_claims import UNSEEN_RULE
     from experiments.harness.markdown import table
 
     lines = [table(("comparison", "tasks", "runs", "steady state", "EE-ES", "advantage", "se"), [
@@ -187,7 +187,7 @@ class NovelTasksTable(Table):
     def advantages(self) -> dict:
         """Learning's advantage per row and set of tasks, the verdicts, brax's agents, the held-out evolutions (the
         table's measure of their rows) and their probes, and the tests drawn."""
-        from experiments.harness.claims import advantage, claim_unseen
+        from imrl_jax.analysis.further_claims import advantage, claim_unseen
         from experiments.harness.loading import read_json, read_test
         from experiments.harness.relive import run_probe
 

@@ -32,7 +32,6 @@ import os
 import numpy as np
 
 from experiments.harness.study import RESULTS
-from experiments.harness.claims import CLAIMS, EVOLVED, PAPER, RULES, SEEN, TESTED, measure
 from experiments.document import (ROOT, figures_of, pipeline_command, scale_label, sharers, specialisation_rows,
                                   write_document)
 from experiments.harness.figures import fig3, fig_baselines, fig_curves, fig_paths, fig_steady
@@ -40,6 +39,7 @@ from experiments.harness.loading import read_baselines, update_best_genomes
 from imrl_jax.runs.rundir import write_atomic
 from experiments.harness.relive import (DRAWN_STEPS, PATH_STEPS, Reliving, fresh_fitness, probe_best, relive_best,
                                  relive_parts)
+from imrl_jax.analysis.claims import CLAIMS, EVOLVED, PAPER, RULES, SEEN, TESTED, measure
 from imrl_jax import conditions
 
 

@@ -8,7 +8,7 @@ Each row is a search strategy (``python -m imrl_jax.evolve --strategy NAME``) ev
 paper under ``skills`` at the screen's sizes (5 seeds x 100 generations of 50 lives, paper lengths), then a
 learning test of its 5 best x 4 tests. The GA's rows are the reproduction's ``skills`` runs at the paper's
 sizes (10 seeds; their keys find them): the search is the only difference. The report adds claims 1-4 and 6
-recomputed per strategy with the verdict rules of :mod:`experiments.harness.claims`, and the experts, paths and
+recomputed per strategy with the verdict rules of :mod:`imrl_jax.analysis.claims`, and the experts, paths and
 learning tests behind them.
 """
 
@@ -51,7 +51,7 @@ def strategy_of(row: Row) -> str:
 
 def judge(strategies, rows: list[dict], sle_per_run: list[float] | None, paths: dict) -> dict:
     """Claims 1-4 and 6 per strategy from its rows (finished evolutions only), SLE's test and its EE-ES's path."""
-    from experiments.harness.claims import evolved_claims
+    from imrl_jax.analysis.claims import evolved_claims
 
     claims = {}
     for strategy in strategies:
@@ -77,7 +77,7 @@ def steady(tested: str) -> dict | None:
 def table(measured: dict) -> str:
     """The report's markdown beyond the rows' table: each row's fresh lives and experts, then the claims' verdicts
     per strategy."""
-    from experiments.harness.claims import CLAIMS
+    from imrl_jax.analysis.claims import CLAIMS
 
     lines = head("strategy", "condition", "fresh lives (sd over seeds)", "colours followed (share with 3)")
     lines += [line(r["strategy"], r["condition"],
@@ -100,7 +100,7 @@ def table(measured: dict) -> str:
     lines += ["", "Claim 4's path: for the GA, the path is that of the reproduction's relived best EE-ES individual "
               "(docs/reproduction/summary.json); for the others, the fittest genome of the last generation relived, "
               "then each task driven (`experiments.harness.relive.run_path`, kept in the run's `path.json`). The rules are "
-              "`experiments.harness.claims.RULES`, as in [REPRODUCTION.md](REPRODUCTION.md); the claims judge finished "
+              "`imrl_jax.analysis.claims.RULES`, as in [REPRODUCTION.md](REPRODUCTION.md); the claims judge finished "
               "evolutions only (n/a: a condition not finished), and a strategy with nothing run yet is left out."]
     return "\n".join(lines)
 
@@ -108,7 +108,7 @@ def table(measured: dict) -> str:
 def claims_figure(measured: dict, path: str) -> str:
     """What the claims judge, per strategy: the experts' colours (claim 3's explanation), EE-ES's path (claim 4)
     and the learning tests' steady states (claim 6)."""
-    from experiments.harness.claims import STEREOTYPED_TURNS
+    from imrl_jax.analysis.claims import STEREOTYPED_TURNS
     from imrl_jax.analysis.plotting import new_figure, save, style_axis
 
     fig = new_figure(13.0, 3.8)
@@ -152,7 +152,7 @@ class SearchTable(Table):
         """Per strategy and condition the evolution's and learning test's numbers, and claims 1-4 and 6 per
         strategy; the GA's fresh lives, junction probes and relived best EE-ES (claim 4's path) are the reproduction's
         report's."""
-        from experiments.harness.claims import final_best
+        from imrl_jax.analysis.claims import final_best
         from experiments.claims_study import probed, reproduction_summary, reproduction_variant
         from experiments.harness.relive import reproduction_fresh, run_fresh, run_path
 

@@ -21,7 +21,6 @@ import jax.numpy as jnp
 import numpy as np
 
 from experiments import claims_study
-from experiments.harness.claims import CLAIMS
 from experiments.harness.figures import _band
 from experiments.harness.loading import read_evolution, read_json, read_test, write_json
 from experiments.harness.markdown import head, line, mean_sd
@@ -29,6 +28,7 @@ from experiments.rule_sets import BY_NAME
 from experiments.harness.measures import write_measure  # atomic: a kill leaves a measurement not done
 from experiments.harness.study import MEASURED, REPRODUCTION, RESULTS, SCREEN, Study, write_table
 from experiments.harness.table import Measure, Row, Table
+from imrl_jax.analysis.claims import CLAIMS
 from imrl_jax.runs import cli
 from imrl_jax.evolution import sweeps
 from imrl_jax.runs.cli import Parser, UsageError, check_at_least, exit_codes

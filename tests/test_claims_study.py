@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 from helpers import write_evolution, write_learning_test
 
-from experiments.harness import claims
 from experiments import claims_study as study
 from experiments.harness import study as S
 from experiments.harness.reproduce import stage_done
 from experiments.harness.study import SCALES, SCREEN
 from experiments.harness.table import evolution_spec, scratch_test_key
+from imrl_jax.analysis import claims
 
 
 #: Where the map was measured: each rule set's run of each condition, by the owner whose folder holds it (a rule
@@ -136,7 +136,8 @@ def test_the_table_goes_between_its_markers(tmp_path):
 
 
 def test_claim_experts_on_hand_made_numbers():
-    from experiments.harness.claims import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY, claim_experts
+    from imrl_jax.analysis.claims import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY
+    from imrl_jax.analysis.further_claims import claim_experts
 
     three, same, lower = [0.40, 0.44], [0.41, 0.45], [0.20, 0.22]
     claim = claim_experts({("LE-LS", 3): three, ("LE-LS", 4): same, ("LE-LS", 6): same})

@@ -344,82 +344,82 @@ def test_the_report_of_the_committed_runs_is_the_documents(tmp_path, monkeypatch
 def test_criteria_are_easier_when_much_faster_and_higher():
     """(a): LE-LS plateaus at 7 against EE-LS's 50 (<= 25) and ends 0.34 higher (se 0.051): easier; EV-LS at 30
     (> 25) and 0.1 higher with se 0.071 (< 2 se): not easier."""
-    from experiments.harness import claims
+    from imrl_jax.analysis import further_claims
 
     actors = dict(plateau=50, final_per_seed=[0.4, 0.5], fresh=0.4, genes=222)
     le_ls = dict(plateau=7, final_per_seed=[0.8, 0.78], fresh=0.7, genes=111)
     ev_ls = dict(plateau=30, final_per_seed=[0.5, 0.6], fresh=None, genes=111)
-    both = claims.claim_criteria_easier({"LE-LS": le_ls, "EV-LS": ev_ls}, actors)
+    both = further_claims.claim_criteria_easier({"LE-LS": le_ls, "EV-LS": ev_ls}, actors)
     assert both["verdict"] == "partly" and both["numbers"]["compared"]["LE-LS"]["much_faster"]
     assert both["numbers"]["compared"]["LE-LS"]["standard_error"] == pytest.approx(0.0026 ** 0.5)
     assert not both["numbers"]["compared"]["EV-LS"]["higher"]
     assert "LE-LS (111 genes): plateau 7, final 0.790, fresh 0.700; d = +0.340 +- 0.051 (easier)" in both["measured"]
-    assert claims.claim_criteria_easier({"LE-LS": le_ls}, actors)["verdict"] == "holds"
-    assert claims.claim_criteria_easier({"EV-LS": ev_ls}, actors)["verdict"] == "does not hold"
-    assert claims.claim_criteria_easier({"LE-LS": le_ls}, None)["verdict"] == "n/a"
+    assert further_claims.claim_criteria_easier({"LE-LS": le_ls}, actors)["verdict"] == "holds"
+    assert further_claims.claim_criteria_easier({"EV-LS": ev_ls}, actors)["verdict"] == "does not hold"
+    assert further_claims.claim_criteria_easier({"LE-LS": le_ls}, None)["verdict"] == "n/a"
 
 
 def test_motivation_is_needed_when_skills_learn_much_faster_and_end_higher():
     """(b): from the start 0.5 (LE-LS's first bin) the level is 0.5 + 0.9 x (0.6 - 0.5) = 0.59; LE-LS reaches it at
     2,000 cycles, EXT-LS at 4,000 (2x): much faster, and 0.85 against 0.6 is in order; with EXT-LS at 0.6 by 2,000
     only the steady state differs; an EXT-LS that ends below LE-LS's start never reaches a level."""
-    from experiments.harness import claims
+    from imrl_jax.analysis import further_claims
 
     steps = [1000, 2000, 3000, 4000]
     skilled = dict(steps=steps, mean=[0.5, 0.8, 0.85, 0.85], per_run=[0.84, 0.86])
     extrinsic = dict(steps=steps, mean=[0.1, 0.3, 0.5, 0.6], per_run=[0.59, 0.61])
-    claim = claims.claim_motivation_needed(extrinsic, skilled, dict(per_run=[0.4, 0.4]))
+    claim = further_claims.claim_motivation_needed(extrinsic, skilled, dict(per_run=[0.4, 0.4]))
     assert claim["verdict"] == "holds" and claim["numbers"]["cycles"] == {"LE-LS": 2000, "EXT-LS": 4000}
     assert claim["numbers"]["level"] == pytest.approx(0.59) and claim["numbers"]["against_flat"] == "in order"
     # At chance and below where LE-LS starts (as at 0.03 against 0.32): it never reaches; LE-LS reaches 0.5 + 0.9 x
     # (0.85 - 0.5) = 0.815 at 3,000 cycles.
     flat = dict(steps=steps, mean=[0.02, 0.03, 0.0, 0.0], per_run=[0.0, 0.0])
-    claim = claims.claim_motivation_needed(flat, skilled)
+    claim = further_claims.claim_motivation_needed(flat, skilled)
     assert claim["verdict"] == "holds" and claim["numbers"]["cycles"] == {"LE-LS": 3000, "EXT-LS": None}
     assert claim["numbers"]["level"] == pytest.approx(0.815) and "EXT-LS never" in claim["measured"]
     # Neither above the start: no speed to compare; only the steady states (in order) count.
     stuck = dict(skilled, mean=[0.5, 0.5, 0.5, 0.5], per_run=[0.5, 0.5])
-    claim = claims.claim_motivation_needed(flat, stuck)
+    claim = further_claims.claim_motivation_needed(flat, stuck)
     assert claim["numbers"]["level"] is None and claim["verdict"] == "partly"
     quick = dict(extrinsic, mean=[0.1, 0.6, 0.6, 0.6])
-    assert claims.claim_motivation_needed(quick, skilled)["verdict"] == "partly"
+    assert further_claims.claim_motivation_needed(quick, skilled)["verdict"] == "partly"
     level = dict(quick, per_run=[0.84, 0.86])  # as high and as fast: the hierarchy alone is enough
-    assert claims.claim_motivation_needed(dict(level, mean=[0.5, 0.8, 0.85, 0.85]), skilled)["verdict"] == \
+    assert further_claims.claim_motivation_needed(dict(level, mean=[0.5, 0.8, 0.85, 0.85]), skilled)["verdict"] == \
         "does not hold"
-    assert claims.claim_motivation_needed(None, skilled)["verdict"] == "n/a"
+    assert further_claims.claim_motivation_needed(None, skilled)["verdict"] == "n/a"
 
 
 def test_map_positions_and_which_hand_values_evolution_finds():
     """(c): positions in the genes' ranges by hand (MODEL.md's maps), then trace_lambda evolved nearer skills'
     0.98 and the speed bias nearer the paper's 0: partly; gamma, the same in both, is not judged."""
-    from experiments.harness import claims
+    from imrl_jax.analysis import further_claims
 
-    assert claims.map_position("gamma", 0.99) == pytest.approx(0.4)  # log10(0.01) = -2 in [-3, -0.5]
-    assert claims.map_position("trace_lambda", 0.0) == 1.0 and claims.map_position("eta_actor", 1e-6) == 0.0
-    assert claims.map_position("eta_selector_actor", 0.3) == pytest.approx((4 + math.log10(0.3)) / 4)
-    assert claims.map_position("initial_speed_bias", 4.0) == pytest.approx(0.75)
+    assert further_claims.map_position("gamma", 0.99) == pytest.approx(0.4)  # log10(0.01) = -2 in [-3, -0.5]
+    assert further_claims.map_position("trace_lambda", 0.0) == 1.0 and further_claims.map_position("eta_actor", 1e-6) == 0.0
+    assert further_claims.map_position("eta_selector_actor", 0.3) == pytest.approx((4 + math.log10(0.3)) / 4)
+    assert further_claims.map_position("initial_speed_bias", 4.0) == pytest.approx(0.75)
     skills = dict(trace_lambda=0.98, initial_speed_bias=4.0, gamma=0.99, childhood_length=150_000.0)
     paper = dict(skills, trace_lambda=0.0, initial_speed_bias=0.0)
-    claim = claims.claim_hand_values(dict(trace_lambda=[0.97, 0.99], initial_speed_bias=[0.5, 1.0], gamma=[0.9],
+    claim = further_claims.claim_hand_values(dict(trace_lambda=[0.97, 0.99], initial_speed_bias=[0.5, 1.0], gamma=[0.9],
                                           childhood_length=[100_000, 120_000]), skills, paper)
     assert claim["verdict"] == "partly"
     assert claim["numbers"]["nearer"] == {"trace_lambda": "skills", "initial_speed_bias": "paper"}
     assert "childhood length 110,000 of 150,000" in claim["measured"]
-    assert claims.claim_hand_values(dict(trace_lambda=[0.98]), skills, paper)["verdict"] == "holds"
-    assert claims.claim_hand_values(dict(gamma=[0.9]), skills, paper)["verdict"] == "n/a"  # nothing to tell apart
-    assert claims.claim_hand_values({}, skills, paper)["verdict"] == "n/a"
+    assert further_claims.claim_hand_values(dict(trace_lambda=[0.98]), skills, paper)["verdict"] == "holds"
+    assert further_claims.claim_hand_values(dict(gamma=[0.9]), skills, paper)["verdict"] == "n/a"  # nothing to tell apart
+    assert further_claims.claim_hand_values({}, skills, paper)["verdict"] == "n/a"
 
 
 def test_three_experts_are_enough_when_evolution_keeps_about_three_and_more_do_not_pay():
     """(d): 3.5 kept is about three; 0.81 against 0.79 is +0.02 with se 0.014 (< 2 se): no gain."""
-    from experiments.harness import claims
+    from imrl_jax.analysis import further_claims
 
-    claim = claims.claim_three_enough([3, 4], [0.8, 0.82], [0.78, 0.8], [0.6, 0.6])
+    claim = further_claims.claim_three_enough([3, 4], [0.8, 0.82], [0.78, 0.8], [0.6, 0.6])
     assert claim["verdict"] == "holds" and claim["numbers"]["standard_error"] == pytest.approx(0.0002 ** 0.5)
     assert claim["numbers"]["difference_six"] == pytest.approx(0.21)
-    assert claims.claim_three_enough([4, 5], [0.8, 0.82], [0.78, 0.8])["verdict"] == "partly"
-    assert claims.claim_three_enough([4, 5], [0.9, 0.92], [0.78, 0.8])["verdict"] == "does not hold"
-    assert claims.claim_three_enough(None, [0.9], [0.8])["verdict"] == "n/a"
+    assert further_claims.claim_three_enough([4, 5], [0.8, 0.82], [0.78, 0.8])["verdict"] == "partly"
+    assert further_claims.claim_three_enough([4, 5], [0.9, 0.92], [0.78, 0.8])["verdict"] == "does not hold"
+    assert further_claims.claim_three_enough(None, [0.9], [0.8])["verdict"] == "n/a"
 
 
 def test_the_report_judges_each_question_from_its_rows(tmp_path):

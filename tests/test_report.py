@@ -1,4 +1,4 @@
-"""The report's claim rules on hand-made numbers (experiments.harness.claims); the report of a made-up reproduction's runs."""
+"""The report's claim rules on hand-made numbers (imrl_jax.analysis.claims); the report of a made-up reproduction's runs."""
 
 import json
 import math
@@ -9,12 +9,12 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from experiments.harness import claims
 from experiments.harness import reproduce
-from experiments.harness.claims import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY
 from experiments.report import run, share_probes, shared_once
 from experiments.reproduction import ReproductionTable, variant_rows
 from experiments.harness.table import evolution_spec
+from imrl_jax.analysis import claims
+from imrl_jax.analysis.claims import DOES_NOT, HOLDS, NOT_AVAILABLE, PARTLY
 from imrl_jax import conditions
 
 

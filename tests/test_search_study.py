@@ -9,9 +9,9 @@ import pytest
 from helpers import ROOT, relocated, write_evolution, write_learning_test
 
 from experiments import search as study
-from experiments.harness.claims import final_best, plateau_generation
 from experiments.harness.reproduce import stage_done
 from experiments.harness.table import evolution_spec
+from imrl_jax.analysis.claims import final_best, plateau_generation
 
 RESULTS = os.path.join("experiments", "results")
 

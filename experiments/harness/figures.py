@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from experiments.harness.claims import SEEN, TESTED
 from experiments.harness.relive import DRAWN_STEPS
+from imrl_jax.analysis.claims import SEEN, TESTED
 from imrl_jax.analysis.plotting import (CONDITION_STYLES, EXPERT_COLOURS, SEEN_COLOURS, draw_arena, draw_path, expert_legend,
                                new_figure, style_axis)
 

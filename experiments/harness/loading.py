@@ -9,7 +9,7 @@ import os
 
 import numpy as np
 
-from experiments.harness.claims import NUM_BEST  # genomes kept per seed in best_genomes.npz: those claim 7 probes
+from imrl_jax.analysis.claims import NUM_BEST  # genomes kept per seed in best_genomes.npz: those claim 7 probes
 from imrl_jax.config import Config
 from imrl_jax.analysis.steady_state import pairs_both_ways, performance_curve, steady_bins
 

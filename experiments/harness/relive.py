@@ -11,9 +11,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from experiments.harness.claims import mean_speed, turn_consistency
 from experiments.harness.loading import best_of_population, read_json, write_json
 from experiments.harness import study
+from imrl_jax.analysis.claims import mean_speed, turn_consistency
 
 PATH_STEPS = 1000  # steps each task is driven after its learning period (shares, stereotypy)
 DRAWN_STEPS = 300  # of which the last ones are drawn

@@ -21,11 +21,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from experiments.harness.claims import final_best, plateau_generation
 from experiments.harness.loading import read_evolution, read_test
 from experiments.harness.markdown import head, line, mean_sd
 from experiments.harness.reproduce import Stage, evolution_cost, evolve_command, test_command, test_cost
 from experiments.harness.study import REPRODUCTION, RESULTS, Study, write_table
+from imrl_jax.analysis.claims import final_best, plateau_generation
 from imrl_jax import conditions
 from imrl_jax.runs import runspec
 
