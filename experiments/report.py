@@ -61,7 +61,8 @@ def run(table, behaviour: bool = True, baselines_dir: str = BASELINES) -> dict:
     """Write a reproduction table's figures, summaries and document from what has finished; the paths written."""
     from imrl_jax.runs.checkpoint import git_commit
     from imrl_jax.config import make_config
-    from imrl_jax.analysis.plotting import plot_arena, save
+    from imrl_jax.analysis.arena_figures import plot_arena
+    from imrl_jax.analysis.plotting import save
 
     data, doc = table.data(), os.path.abspath(table.document)
     manifest, figures, label = data["manifest"], figures_of(doc), scale_label(data["manifest"])

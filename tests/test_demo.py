@@ -6,7 +6,7 @@ import os
 import numpy as np
 import pytest
 
-from imrl_jax.analysis import controllers, plotting
+from imrl_jax.analysis import arena_figures, charts, controllers, plotting
 from imrl_jax.commands import demo
 
 
@@ -68,11 +68,11 @@ def test_figures_are_returned_not_drawn_with_pyplot(tiny, tmp_path):
     steps = 5
     record = dict(pos=np.tile(np.asarray(config.tasks[0].start), (steps, 1)), k=np.zeros(steps, int),
                   breaks=np.zeros(steps, bool))
-    fig = plotting.plot_paths(config, [dict(name="row", tasks=[record] * 6, experts=["a", "b", "c"])], "title")
+    fig = arena_figures.plot_paths(config, [dict(name="row", tasks=[record] * 6, experts=["a", "b", "c"])], "title")
     assert isinstance(fig, Figure)
     labels = [t.get_text() for legend in fig.subfigs[0].legends for t in legend.get_texts()]
     assert labels == ["a", "b", "c", "start", "target"]
-    fitness = plotting.plot_fitness({"EE-LS": np.ones((2, 3)), "other": np.ones(3)})
+    fitness = charts.plot_fitness({"EE-LS": np.ones((2, 3)), "other": np.ones(3)})
     lines = fitness.axes[0].get_lines()
     assert [line.get_label() for line in lines] == ["EE-LS", "other"] and lines[0].get_color() == "0.55"
     path = plotting.save(fitness, str(tmp_path / "fitness.png"))
@@ -87,7 +87,7 @@ def test_a_long_title_is_wrapped_inside_the_figure():
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     title = "EE-LS: best fitness per generation, mean and std over 1 seed(s), reduced scale"
-    fig = plotting.plot_fitness({"EE-LS": np.ones((1, 2))}, title=title, ylabel="best fitness of the population")
+    fig = charts.plot_fitness({"EE-LS": np.ones((1, 2))}, title=title, ylabel="best fitness of the population")
     canvas = FigureCanvasAgg(fig)
     canvas.draw()
     text = fig.axes[0].title

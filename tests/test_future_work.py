@@ -119,7 +119,7 @@ def test_the_traits_figure_has_a_panel_for_each_evolved_value():
 
     from imrl_jax.agent import networks
     from imrl_jax.config import make_config
-    from imrl_jax.analysis.plotting import plot_traits
+    from imrl_jax.analysis.charts import plot_traits
 
     config = make_config("skills", condition="LE-LS-PC")
     names = networks.trait_names(config)

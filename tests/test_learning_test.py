@@ -12,7 +12,7 @@ from helpers import stop_after_first
 from imrl_jax.runs import cli, learning_test_state, rundir
 from imrl_jax import conditions
 from imrl_jax.commands import learning_test
-from imrl_jax.analysis import plotting, steady_state
+from imrl_jax.analysis import charts, steady_state
 from imrl_jax.evolution.ga import init_population
 from imrl_jax.agent.lifetime import live
 
@@ -392,9 +392,9 @@ def test_absurd_sizes_and_sets_of_options_are_refused(tmp_path, capsys, argv, me
 
 def test_a_test_smaller_or_shorter_than_the_papers_is_labelled_reduced_scale(tiny):
     config = tiny("EE-LS")
-    assert plotting.scale_label(config.replace(task_steps=1_000_000), (10, 10, 10)) == ""
-    assert plotting.scale_label(config.replace(task_steps=1_000_000), (5, 4, 5)) == ", reduced scale (100 tests)"
-    assert (plotting.scale_label(config.replace(task_steps=20), (10, 10, 10))
+    assert charts.scale_label(config.replace(task_steps=1_000_000), (10, 10, 10)) == ""
+    assert charts.scale_label(config.replace(task_steps=1_000_000), (5, 4, 5)) == ", reduced scale (100 tests)"
+    assert (charts.scale_label(config.replace(task_steps=20), (10, 10, 10))
             == ", reduced scale (20 cycles)")
 
 

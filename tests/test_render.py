@@ -83,7 +83,7 @@ def test_absurd_sizes_are_refused_before_the_run_is_read(tmp_path, capsys, optio
 
 def test_the_path_legend_names_only_expressed_experts():
     """LE-LS-N: an unexpressed expert never drives, so the legend leaves it out and keeps the others' numbers."""
-    from imrl_jax.analysis.plotting import legend_experts
+    from imrl_jax.analysis.arena_figures import legend_experts
 
     assert legend_experts(3) == [0, 1, 2]
     assert legend_experts(6, np.array([1.0, 0.0, 0.0, 1.0, 0.0, 0.0])) == [0, 3]

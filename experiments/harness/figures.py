@@ -6,8 +6,8 @@ import numpy as np
 
 from experiments.harness.relive import DRAWN_STEPS
 from imrl_jax.analysis.claims import SEEN, TESTED
-from imrl_jax.analysis.plotting import (CONDITION_STYLES, EXPERT_COLOURS, SEEN_COLOURS, draw_arena, draw_path, expert_legend,
-                               new_figure, style_axis)
+from imrl_jax.analysis.arena_figures import draw_arena, draw_path, expert_legend
+from imrl_jax.analysis.plotting import CONDITION_STYLES, EXPERT_COLOURS, SEEN_COLOURS, new_figure, style_axis
 
 
 def _draw_curves(ax, series: dict, title: str, xlabel: str, ylabel: str, integer_x: bool = False) -> None:

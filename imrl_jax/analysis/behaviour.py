@@ -52,7 +52,7 @@ class Trajectory(NamedTuple):
         return self.reached | self.timeout | self.respawned
 
     def as_path(self) -> dict:
-        """The dict :func:`imrl_jax.analysis.plotting.plot_life` draws (pos, k, breaks)."""
+        """The dict :func:`imrl_jax.analysis.arena_figures.plot_life` draws (pos, k, breaks)."""
         return {"pos": self.pos, "k": self.k, "breaks": self.breaks}
 
     def window(self, start: int, stop: int) -> "Trajectory":

@@ -110,7 +110,7 @@ def summarise(b: Baseline, config: Config, rows: list[dict], curves: list[dict])
 
 def plot_learning_curve(b: Baseline, curves: list[dict]):
     """Performance against cycles of experience per task, the mean over seeds (learning_curve.png)."""
-    from imrl_jax.analysis.plotting import plot_baseline
+    from imrl_jax.analysis.charts import plot_baseline
 
     # brax trains whole updates: the last point lies past b.steps
     return plot_baseline(curves, b.tasks, steps_trained(b),

@@ -40,7 +40,8 @@ def run(config: Config, out_dir: str, seed: int = 0, overwrite: bool = False) ->
     """
     from imrl_jax.analysis import behaviour, controllers
     from imrl_jax.agent.lifetime import live
-    from imrl_jax.analysis.plotting import plot_paths, save
+    from imrl_jax.analysis.arena_figures import plot_paths
+    from imrl_jax.analysis.plotting import save
 
     check_writable(out_dir)
     check_outputs_dir(out_dir, OUTPUTS, "demo output", overwrite)

@@ -457,7 +457,8 @@ def summary_csv(points: Sequence[Point], states: Sequence[RunState], last: int =
 
 def write_summary(out_dir: str, config: Config, points: Sequence[Point], states: Sequence[RunState]) -> None:
     """Rewrite sweep.csv and sweep.png (every point's best fitness per generation, mean and std over seeds)."""
-    from imrl_jax.analysis.plotting import plot_fitness, save
+    from imrl_jax.analysis.charts import plot_fitness
+    from imrl_jax.analysis.plotting import save
 
     write_atomic(os.path.join(out_dir, "sweep.csv"), summary_csv(points, states).encode())
     done = int(states[0].generation)

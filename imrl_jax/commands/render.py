@@ -148,7 +148,7 @@ def animate(checked: Plan) -> dict:
 
     from imrl_jax.analysis.behaviour import task_trajectory
     from imrl_jax.agent.lifetime import live
-    from imrl_jax.analysis.plotting import write_animation
+    from imrl_jax.analysis.arena_figures import write_animation
 
     start = time.perf_counter()
     params = config.learning_params()

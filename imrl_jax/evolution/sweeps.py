@@ -340,7 +340,7 @@ def fields(sweep: Sweep) -> list[str]:
 
 
 def summary(sweep: Sweep, curves: EvolutionCurves, generation: int = -1) -> dict:
-    """``{field: (values (n,), best fitness (n, seeds))}`` at a generation, for :func:`plotting.plot_sweep_summary`."""
+    """``{field: (values (n,), best fitness (n, seeds))}`` at a generation, for :func:`charts.plot_sweep_summary`."""
     best = np.asarray(curves.best)[..., generation]  # (V, S)
     out = {}
     for name in fields(sweep):

@@ -187,7 +187,8 @@ def write_outputs(out_dir: str, config: Config, reaches: np.ndarray, selections:
                   summary: dict) -> None:
     """Write a finished test's outputs from its counts and performance ``curve`` (both (runs, best, tests, tasks,
     bins)) and ``summary``; steady.json last (it marks the test finished), then remove ``partial/``."""
-    from imrl_jax.analysis.plotting import plot_learning_test, save
+    from imrl_jax.analysis.charts import plot_learning_test
+    from imrl_jax.analysis.plotting import save
 
     write_atomic(os.path.join(out_dir, "curves.npz"), _curves_npz(reaches, selections))
     write_atomic(os.path.join(out_dir, "curve.csv"),

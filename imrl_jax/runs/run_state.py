@@ -125,7 +125,8 @@ def history_csv(history: History, generations: int, seeds: Sequence[int], traits
 
 def write_outputs(out_dir: str, config: Config, seeds: Sequence[int], state: RunState) -> None:
     """Rewrite history.csv, fitness.png and final_population.npz from a state."""
-    from imrl_jax.analysis.plotting import plot_fitness, save
+    from imrl_jax.analysis.charts import plot_fitness
+    from imrl_jax.analysis.plotting import save
 
     done = int(state.generation)
     names = trait_names(config)
@@ -142,7 +143,7 @@ def write_outputs(out_dir: str, config: Config, seeds: Sequence[int], state: Run
                                 f"{len(seeds)} seed(s){scale}", ylabel="best fitness of the population"),
              os.path.join(out_dir, "fitness.png"))
         if names:
-            from imrl_jax.analysis.plotting import plot_traits
+            from imrl_jax.analysis.charts import plot_traits
 
             save(plot_traits(config, names, np.asarray(state.traits)[:done],
                              title=f"{config.condition}: evolved values per generation, mean over {len(seeds)} "
