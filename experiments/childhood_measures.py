@@ -12,9 +12,9 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from experiments.harness.measures import check_out_dir, checked_config, listed
+from experiments.harness.measures import check_counts, check_out_dir, checked_config, listed
 from imrl_jax.runs import cli
-from imrl_jax.runs.cli import HelpFormatter, Parser, UsageError, check_at_least, exit_codes
+from imrl_jax.runs.cli import HelpFormatter, Parser, UsageError, exit_codes
 from imrl_jax.config import CHILDHOOD_SELECTOR_REWARDS, CHILDHOOD_WALLS
 
 
@@ -125,10 +125,8 @@ def measure_plan(argv, study: Study) -> cli.Call:
     stage, key, lives = STAGES[args.stage]
     args.key = key if args.key is None else args.key
     args.lives = lives if args.lives is None else args.lives
-    for flag, limit in (("lives", cli.MAX_SEEDS), ("seeds", cli.MAX_SEEDS), ("best", cli.MAX_POPULATION),
-                        ("individuals", cli.MAX_LANES), ("respawn_steps", cli.MAX_STEPS)):
-        check_at_least(f"--{flag.replace('_', '-')}", getattr(args, flag))
-        cli.check_at_most(f"--{flag.replace('_', '-')}", getattr(args, flag), limit)
+    check_counts(args, dict(lives=cli.MAX_SEEDS, seeds=cli.MAX_SEEDS, best=cli.MAX_POPULATION,
+                            individuals=cli.MAX_LANES, respawn_steps=cli.MAX_STEPS))
     cli.check_key("--key", args.key, MAX_KEY)
     unknown = [r for r in args.rules.split(",") if r not in RULES]
     if unknown:

@@ -348,7 +348,7 @@ class ChildhoodTable(Table):
     def report(self) -> int:
         from experiments.harness.loading import history_columns, read_evolution
         from experiments.harness.markdown import head, line
-        from experiments.harness.study import write_table
+        from experiments.harness.study import markers, write_table
         from imrl_jax import conditions
         from imrl_jax.analysis.plotting import new_figure, save, style_axis
 
@@ -392,8 +392,7 @@ class ChildhoodTable(Table):
         drawn = [save(fig, os.path.join(self.out, "evolve.png"))]
         drawn += [plot_hand(read_rows(folders[name]), os.path.join(self.out, f"{name}.png"))
                   for name in ("hand", "hand_fast") if read_rows(folders[name])]
-        write_table(self.document, "\n".join(lines), f"<!-- {self.name} table: python -m experiments report "
-                    f"{self.name} -->", f"<!-- end of {self.name} table -->")
+        write_table(self.document, "\n".join(lines), *markers(f"{self.name} table", self.name))
         print(f"{len(lines) - 2} evolutions; wrote {', '.join(drawn)} and the table of {self.document}")
         return 0
 

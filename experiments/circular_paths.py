@@ -16,7 +16,7 @@ import sys
 
 import numpy as np
 
-from experiments.harness.measures import check_out_dir, check_steps, write_measure
+from experiments.harness.measures import check_counts, check_out_dir, write_measure
 from experiments.harness.study import MEASURED, RESULTS
 from imrl_jax.runs import cli
 from imrl_jax.runs.cli import HelpFormatter, Parser, UsageError, exit_codes
@@ -117,7 +117,7 @@ def check_grid_memory(task_steps: int) -> None:
 def plan(argv) -> cli.Call:
     """Parse and check: the call that measures the grid (nothing written before it)."""
     args = parser().parse_args(argv)
-    check_steps("--task-steps", args.task_steps)
+    check_counts(args, dict(task_steps=cli.MAX_STEPS))
     check_grid_memory(args.task_steps)
     check_out_dir(args.out, ("circles.png", "circles.csv", MEASURED), "circular-path measure")
     return cli.Call(lambda: report(args), out=args.out, task_steps=args.task_steps)

@@ -29,7 +29,7 @@ from experiments.harness.markdown import table
 from experiments.harness.relive import colours_followed, reproduction_fresh, run_fresh, run_probe
 from experiments.harness.reproduce import EVOLVED, TESTED
 from experiments.rule_sets import BY_NAME, RULE_SETS, RuleSet
-from experiments.harness.study import REPRODUCTION, RESULTS, SCALES, SCREEN, write_table
+from experiments.harness.study import REPRODUCTION, RESULTS, SCALES, SCREEN, markers, write_table
 from experiments.harness.table import Measure, Row, Table, dispatch, studies_of
 from imrl_jax import conditions
 from imrl_jax.analysis.claims import (ABOUT, DOES_NOT, HOLDS, NOT_AVAILABLE, NUM_BEST, PARTLY, final_best,
@@ -56,12 +56,9 @@ DIAL_ROWS = ("skills-bias0", "skills-bias1", "skills-bias2", "skills")
 
 #: Where the report's tables go in docs/CLAIMS.md (the text around them is written by hand), and claim 8's figure.
 TABLE_START, TABLE_END = "<!-- claims table: python -m experiments report claims-screen -->", "<!-- end of table -->"
-FRESH_START = "<!-- fresh-life table: python -m experiments report claims-screen -->"
-FRESH_END = "<!-- end of fresh-life table -->"
-EXPERTS_START = "<!-- claim 8 table: python -m experiments report claims-experts -->"
-EXPERTS_END = "<!-- end of claim 8 table -->"
-EXPERTS_RUNS_START = "<!-- claim 8 runs: python -m experiments report claims-experts -->"
-EXPERTS_RUNS_END = "<!-- end of claim 8 runs -->"
+FRESH_START, FRESH_END = markers("fresh-life table", "claims-screen")
+EXPERTS_START, EXPERTS_END = markers("claim 8 table", "claims-experts")
+EXPERTS_RUNS_START, EXPERTS_RUNS_END = markers("claim 8 runs", "claims-experts")
 EXPERTS_FIGURE = os.path.join("docs", "claims", "experts.png")
 #: A verdict in one word and its colour, as the map's table and figure show it; the figures' resolution.
 SHORT = {HOLDS: "holds", PARTLY: "partly", DOES_NOT: "no", NOT_AVAILABLE: "n/a"}
@@ -151,15 +148,19 @@ def config_of(rule: RuleSet, condition: str, num_experts: int | None = None):
     return make_config(rule.preset, condition=condition, **overrides)
 
 
+def verdict_cell(claim: dict) -> str:
+    """A claim's verdict in one word (holds in bold) and its first number, as the studies' tables show it."""
+    return f"{'**holds**' if claim['verdict'] == HOLDS else SHORT[claim['verdict']]}: {claim['measured'].split(';')[0]}"
+
+
 def table_markdown(measured: dict, names) -> str:
     """The claims map as markdown: rule sets as rows, the seven claims as columns (verdict, then the numbers)."""
     def cells(name: str) -> tuple:
         """A measured rule set's sizes (LE-LS's seeds x generations, SLE's runs x best x tests), then each claim's
         verdict in one word and its first number."""
         le_ls, sle = (SCALES["paper"] if c in BY_NAME[name].full else SCREEN for c in ("LE-LS", "SLE"))
-        return (f"{le_ls['seeds']}x{le_ls['generations']}, {sle['seeds']}x{sle['best']}x{sle['tests']}", *(
-            f"{'**holds**' if c['verdict'] == HOLDS else SHORT[c['verdict']]}: {c['measured'].split(';')[0]}"
-            for c in (measured[name]["claims"][k] for k in range(1, 8))))
+        return (f"{le_ls['seeds']}x{le_ls['generations']}, {sle['seeds']}x{sle['best']}x{sle['tests']}",
+                *(verdict_cell(measured[name]["claims"][k]) for k in range(1, 8)))
 
     return table(("rule set", "runs (LE-LS, SLE)", *(f"claim {k}" for k in range(1, 8))), [
         (f"`{name}`", *(cells(name) if name in measured else ("not finished", *["-"] * 7))) for name in names])

@@ -23,7 +23,7 @@ import numpy as np
 from experiments.harness.figures import not_run
 from experiments.harness.loading import write_json
 from experiments.harness.markdown import head, line, mean_sd
-from experiments.harness.study import REPRODUCTION, RESULTS, SCALES, SCREEN
+from experiments.harness.study import REPRODUCTION, RESULTS, SCALES, SCREEN, markers
 from experiments.harness.table import Row, Table
 from imrl_jax.analysis.claims import NUM_BEST
 
@@ -78,8 +78,7 @@ JUDGED = (
     ("d", "faithful", ("LE-LS-N6-faithful", "faithful LE-LS", "LE-LS-6-faithful")))
 NOT_RUN = "not run yet"
 #: Where the report's tables go in docs/FUTURE_WORK.md.
-TABLE_START = "<!-- future-work tables: python -m experiments report future-work -->"
-TABLE_END = "<!-- end of future-work tables -->"
+TABLE_START, TABLE_END = markers("future-work tables", "future-work")
 #: Line styles of the rows that share their condition with another drawn row (the rest take their condition's).
 STYLES = {"LE-LS-6": dict(color="0.3", lw=1.2, ls="-."), "EXT-LS-whole": dict(color="tab:purple", lw=1.0, ls=":"),
           "skills SLE-whole": dict(color="tab:blue", lw=1.2, ls="-."),

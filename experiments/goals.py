@@ -137,14 +137,13 @@ class GoalsTable(Table):
     """The goals study's table, whose report also writes the landscape measures' tables and figure."""
 
     def report(self) -> int:
-        from experiments.harness.study import write_table
+        from experiments.harness.study import markers, write_table
 
         code = super().report()
         found = read_landscapes(self.out)
         if found:
             drawn = landscape_figure(found, os.path.join(self.out, "landscape.png"))
-            write_table(self.document, landscape_tables(found), "<!-- goals landscape: python -m experiments "
-                        "report goals -->", "<!-- end of goals landscape -->")
+            write_table(self.document, landscape_tables(found), *markers("goals landscape", self.name))
             print(f"landscape measures of {len(found)} condition(s); wrote {drawn}")
         return code
 

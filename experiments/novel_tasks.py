@@ -221,7 +221,7 @@ class NovelTasksTable(Table):
 
     def report(self) -> int:
         """Measure; write advantage.json and a figure per question under ``out``, and the table into the document."""
-        from experiments.harness.study import write_table
+        from experiments.harness.study import markers, write_table
 
         measured = self.advantages()
         os.makedirs(self.out, exist_ok=True)
@@ -229,8 +229,8 @@ class NovelTasksTable(Table):
                    {k: measured[k] for k in ("rows", "verdicts", "scratch", "evolved", "probes")}, indent=2)
         drawn = [novel_figure(measured, os.path.join(self.out, "novel.png")),
                  held_out_figure(measured, os.path.join(self.out, "held_out.png"))]
-        write_table(self.document, advantage_table(measured, self.table(measured["evolutions"])), f"<!-- advantage "
-                    f"table: python -m experiments report {self.name} -->", "<!-- end of advantage table -->")
+        write_table(self.document, advantage_table(measured, self.table(measured["evolutions"])),
+                    *markers("advantage table", self.name))
         print(f"{len(measured['rows'])} comparisons measured; wrote {', '.join(drawn)} and the table of "
               f"{self.document}")
         return 0

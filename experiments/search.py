@@ -220,15 +220,14 @@ class SearchTable(Table):
 
     def report(self) -> int:
         """The rows' table and curves; then report.json, the claims' figure and the study's tables."""
-        from experiments.harness.study import write_table
+        from experiments.harness.study import markers, write_table
 
         code = super().report()
         measured = self.measure_search()
         write_json(os.path.join(self.out, "report.json"),
                    {k: measured[k] for k in ("rows", "sle", "claims")}, indent=2)  # claim numbers as keys: "1"
         drawn = claims_figure(measured, os.path.join(self.out, "claims.png"))
-        write_table(self.document, table(measured), "<!-- search tables: python -m experiments report search -->",
-                    "<!-- end of search tables -->")
+        write_table(self.document, table(measured), *markers("search tables", self.name))
         print(f"wrote {os.path.join(self.out, 'report.json')}, {drawn} and the claims of {self.document}")
         return code
 

@@ -27,7 +27,7 @@ import time
 
 import numpy as np
 
-from experiments.harness.measures import check_out_dir
+from experiments.harness.measures import check_counts, check_out_dir
 from experiments.harness.study import MEASURED, RESULTS
 from experiments.harness.table import Measure, Table
 from imrl_jax.runs import cli
@@ -77,10 +77,7 @@ def plan(argv: list[str]) -> cli.Call:
     from imrl_jax.config import ConfigError, make_config
 
     args = parser().parse_args(argv)
-    cli.check_at_least("--task-steps", args.task_steps)
-    cli.check_at_most("--task-steps", args.task_steps, cli.MAX_STEPS)
-    cli.check_at_least("--seeds", args.seeds)
-    cli.check_at_most("--seeds", args.seeds, cli.MAX_SEEDS)
+    check_counts(args, dict(task_steps=cli.MAX_STEPS, seeds=cli.MAX_SEEDS))
     if not math.isfinite(args.turn_gain) or abs(args.turn_gain) > MAX_TURN_GAIN:
         raise cli.UsageError(f"--turn-gain: {args.turn_gain} is not a number in [-{MAX_TURN_GAIN:g}, "
                              f"{MAX_TURN_GAIN:g}]")

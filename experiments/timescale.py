@@ -26,12 +26,12 @@ from experiments.harness.loading import read_evolution, read_json, read_test, wr
 from experiments.harness.markdown import head, line, mean_sd
 from experiments.rule_sets import BY_NAME
 from experiments.harness.measures import write_measure  # atomic: a kill leaves a measurement not done
-from experiments.harness.study import MEASURED, REPRODUCTION, RESULTS, SCREEN, Study, write_table
+from experiments.harness.study import MEASURED, REPRODUCTION, RESULTS, SCREEN, Study, markers, write_table
 from experiments.harness.table import Measure, Row, Table
 from imrl_jax.analysis.claims import CLAIMS
 from imrl_jax.runs import cli
 from imrl_jax.evolution import sweeps
-from imrl_jax.runs.cli import Parser, UsageError, check_at_least, exit_codes
+from imrl_jax.runs.cli import Parser, UsageError, exit_codes
 from imrl_jax.config import ADULT_SELECTOR, make_config
 from imrl_jax.analysis.controllers import composition_ceiling, perceptron_followers
 from imrl_jax.analysis.plotting import new_figure, save, style_axis, wrap_title
@@ -62,8 +62,7 @@ EVOLVED = ("LE-LS", "EE-LS")
 #: The per-step selector the evolutions are compared with: the reproduction's run of this rule set (10 x 100).
 BASELINE = "skills"
 #: Where the report's tables go in docs/TIMESCALE.md.
-REPORT_START = "<!-- timescale evolutions: python -m experiments report timescale -->"
-REPORT_END = "<!-- end of timescale evolutions -->"
+REPORT_START, REPORT_END = markers("timescale evolutions", "timescale")
 
 
 def read_measure(out: str, name: str) -> list[dict] | None:
@@ -225,12 +224,10 @@ def report_table(rows: dict) -> str:
     lines = head("selector", "condition", "seeds x generations", "final best fitness (recorded)",
                  "fresh lives of each seed's best", "plateau generation", "steady state (learning test)")
     lines += [line(row["label"], condition, *_cells(row, condition)) for row in rows.values() for condition in EVOLVED]
-    short = {"holds": "**holds**", "partly": "partly", "does not hold": "no", "n/a": "n/a"}
     claims = [None if row["measured"] is None else row["measured"]["claims"] for row in rows.values()]
     lines += ["", *head("claim", *(row["label"] for row in rows.values()))]
-    lines += [line(f"{k}: {CLAIMS[k]}", *("not finished" if c is None else
-                                         f"{short[c[k]['verdict']]}: {c[k]['measured'].split(';')[0]}" for c in claims))
-              for k in range(1, 8)]
+    lines += [line(f"{k}: {CLAIMS[k]}", *("not finished" if c is None else claims_study.verdict_cell(c[k])
+                                         for c in claims)) for k in range(1, 8)]
     return "\n".join(lines)
 
 
@@ -358,8 +355,6 @@ def measure_parser() -> Parser:
     return p
 
 
-#: The largest random key: jax.random.key takes 32 bits here (64 under x64; the same keys either way).
-
 
 def read_rates(out_dir: str) -> list[dict]:
     """The rate sweep's rows beside the confirmation's folder ``out_dir``, checked (raises a user error naming the
@@ -391,14 +386,12 @@ def read_rates(out_dir: str) -> list[dict]:
 
 def measure_plan(argv: list[str]) -> cli.Call:
     """Parse and check a measurement: every value bounded, the sweep it reads, the memory, --out; nothing written."""
-    from experiments.harness.measures import check_out_dir
+    from experiments.harness.measures import check_counts, check_out_dir
     from imrl_jax.evolution.devices import check_memory
 
     options = {k: v for k, v in vars(measure_parser().parse_args(argv)).items() if v is not None}
     name = options["measurement"]
-    for flag, limit in (("lives", cli.MAX_SEEDS), ("task_steps", cli.MAX_STEPS)):
-        check_at_least(f"--{flag.replace('_', '-')}", options.get(flag))
-        cli.check_at_most(f"--{flag.replace('_', '-')}", options.get(flag), limit)
+    check_counts(options, dict(lives=cli.MAX_SEEDS, task_steps=cli.MAX_STEPS))
     cli.check_key("--key", options.get("key"))
     if name == "confirm":
         read_rates(options["out_dir"])

@@ -16,8 +16,8 @@ import os
 from typing import NamedTuple
 
 from experiments.harness.reproduce import Stage
-
 from experiments.harness.study import ROOT
+
 GPU_CHECK = os.path.join("docs", "gpu", "gpu_check.json")
 
 
@@ -33,10 +33,11 @@ class GpuSpeed(NamedTuple):
     tests: dict | None = None
 
 
-def _speed(row: dict, *fields: str) -> tuple | None:
-    """``row``'s fields and its speed and compilation seconds, or None where one is missing or not a number."""
+def _speed(row: dict, **fields) -> tuple | None:
+    """``row``'s ``fields``, each read as its type, then its speed and compilation seconds; None where one is missing
+    or not of its type or number."""
     try:
-        values = tuple(row[f] for f in fields)
+        values = tuple(kind(row[f]) for f, kind in fields.items())
         rate, compile_s = float(row["lane_steps_per_s"]), float(row.get("compile_s") or 0.0)
     except (KeyError, TypeError, ValueError):
         return None
@@ -55,26 +56,20 @@ def read_speed(path: str | None = None) -> GpuSpeed | None:
         return None
     if not isinstance(data, dict) or data.get("dry") or not isinstance(data.get("steps"), list):
         return None
-    rows: dict[str, list] = {}
-    for step in data["steps"]:
-        for row in step.get("rows", []) if isinstance(step, dict) and step.get("step") == "generation" else []:
-            try:
-                kernel, individuals = str(row["kernel"]), int(row["individuals"])
-                rate, compile_s = float(row["lane_steps_per_s"]), float(row.get("compile_s", 0.0))
-            except (KeyError, TypeError, ValueError):
-                continue
-            if individuals > 0 and math.isfinite(rate) and rate > 0 and math.isfinite(compile_s):
-                rows.setdefault(kernel, []).append((individuals, rate, max(compile_s, 0.0)))
-    programs: dict[str, tuple] = {}
+    rows: dict[str, list] = {}  # the generation step's
+    programs: dict[str, tuple] = {}  # the study step's
     tests: dict[str, list] = {}
     for step in data["steps"]:
-        for row in step.get("rows", []) if isinstance(step, dict) and step.get("step") == "study" else []:
-            if not isinstance(row, dict) or row.get("status") != "ok":
+        kind = step.get("step") if isinstance(step, dict) else None
+        for row in step.get("rows", []) if kind in ("generation", "study") else []:
+            if not isinstance(row, dict) or kind == "study" and row.get("status") != "ok":
                 continue
-            if row.get("part") == "evolution" and (found := _speed(row, "program")):
-                programs[str(found[0])] = found[1:]
-            elif row.get("part") == "test" and (found := _speed(row, "condition", "lanes")):
-                tests.setdefault(str(found[0]), []).append((int(found[1]), *found[2:]))
+            if kind == "generation" and (found := _speed(row, kernel=str, individuals=int)) and found[1] > 0:
+                rows.setdefault(found[0], []).append(found[1:])
+            elif kind == "study" and row.get("part") == "evolution" and (found := _speed(row, program=str)):
+                programs[found[0]] = found[1:]
+            elif kind == "study" and row.get("part") == "test" and (found := _speed(row, condition=str, lanes=int)):
+                tests.setdefault(found[0], []).append(found[1:])
     machine = data.get("machine") if isinstance(data.get("machine"), dict) else {}
     return GpuSpeed(str(machine.get("device") or "a GPU"), rows, path, programs, tests) if rows or programs else None
 

@@ -12,6 +12,7 @@ import numpy as np
 from imrl_jax.analysis.claims import NUM_BEST  # genomes kept per seed in best_genomes.npz: those claim 7 probes
 from imrl_jax.config import Config
 from imrl_jax.analysis.steady_state import pairs_both_ways, performance_curve, steady_bins
+from imrl_jax.runs.rundir import write_atomic
 
 
 def read_json(path: str) -> dict | None:
@@ -24,8 +25,6 @@ def read_json(path: str) -> dict | None:
 
 def write_json(path: str, data, **dumps) -> None:
     """``data`` as ``path``'s JSON (``json.dumps``'s options), written atomically: a kill leaves the old file whole."""
-    from imrl_jax.runs.rundir import write_atomic
-
     write_atomic(path, json.dumps(data, **dumps).encode())
 
 
@@ -117,9 +116,7 @@ def update_best_genomes(data: dict, num_best: int = NUM_BEST) -> dict:
     if fresh:
         buffer = io.BytesIO()
         np.savez_compressed(buffer, **stored)
-        with open(path + ".tmp", "wb") as f:
-            f.write(buffer.getvalue())
-        os.replace(path + ".tmp", path)
+        write_atomic(path, buffer.getvalue())
     return found
 
 

@@ -26,10 +26,13 @@ def check_out_dir(out: str, outputs: tuple[str, ...], kind: str) -> None:
     rundir.check_outputs_dir(out, outputs, kind, overwrite=True)
 
 
-def check_steps(flag: str, value: int) -> None:
-    """Raise UsageError naming ``flag`` unless ``value`` steps are at least 1 and at most cli.MAX_STEPS."""
-    cli.check_at_least(flag, value)
-    cli.check_at_most(flag, value, cli.MAX_STEPS)
+def check_counts(options, limits: dict) -> None:
+    """Raise UsageError naming ``--NAME`` unless each count ``NAME`` of ``limits`` in ``options`` (a namespace or a
+    dict; None: not given) is at least 1 and at most its limit."""
+    values = options if isinstance(options, dict) else vars(options)
+    for name, limit in limits.items():
+        cli.check_at_least(f"--{name.replace('_', '-')}", values.get(name))
+        cli.check_at_most(f"--{name.replace('_', '-')}", values.get(name), limit)
 
 
 def listed(flag: str, text: str, kind=int) -> list:

@@ -322,7 +322,7 @@ def compile_seconds(source: str) -> float | None:
 def plan_line(parts: list[Part], backend: str, bench_dir: str | None = None) -> str:
     """What reliving ``parts`` will cost, in one line: lives and lane-steps on ``backend``, and its time at the
     speed and compile time the benchmark measured there (the largest part's number of lives), if it did."""
-    from imrl_jax.runs.progress import _amount, _clock, measured_speed
+    from imrl_jax.runs.progress import _amount, clock, measured_speed
 
     lives, lane_steps = sum(p.lives for p in parts), sum(p.lane_steps for p in parts)
     line = (f"reliving the best individuals: {len(parts)} part(s), {lives:,} lives' worth, "
@@ -334,7 +334,7 @@ def plan_line(parts: list[Part], backend: str, bench_dir: str | None = None) -> 
     compiled = compile_seconds(os.path.join(bench_dir, os.path.basename(source)) if bench_dir else source)
     compiles = sum(p.compiles for p in parts)
     seconds = lane_steps / rate + compiles * (compiled or 0)
-    return line + (f"; about {_clock(seconds)} (ETA) at the {rate / 1e6:.1f} M lane-steps/s {source} measured on "
+    return line + (f"; about {clock(seconds)} (ETA) at the {rate / 1e6:.1f} M lane-steps/s {source} measured on "
                    f"{backend}" + (f" and {compiles} compilations of {compiled:.0f} s" if compiled else
                                    ", compilation aside"))
 

@@ -26,6 +26,7 @@ from typing import NamedTuple
 
 from experiments.harness.study import MEASURED
 from imrl_jax import conditions  # the condition table (no JAX)
+from imrl_jax.runs.progress import clock
 from imrl_jax.runs.rundir import RunDirError, read_json, saved_steps, sweep_points, write_atomic
 
 #: The paper's conditions (rows of imrl_jax.conditions): those evolved, and those learning-tested.
@@ -191,11 +192,6 @@ def eta_seconds(remaining: list[Stage], rate: float, fraction: float = 0.0, stag
         return 0.0
     first = (1.0 - fraction) * remaining[0].cost / (stage_rate or rate)
     return first + sum(s.cost for s in remaining[1:]) / rate
-
-
-def clock(seconds: float) -> str:
-    seconds = int(max(seconds, 0))
-    return f"{seconds // 3600:d}:{seconds // 60 % 60:02d}:{seconds % 60:02d}"
 
 
 def publish_checkpoint(run_dir: str, at_most: int | None = None) -> int | None:

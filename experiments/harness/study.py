@@ -7,7 +7,8 @@ new study is its module and its document: nothing else registers it (docs/STUDIE
 
 It also holds what every study shares: where the results lie (``RESULTS``, the reproduction's
 ``REPRODUCTION``), the sizes of their runs (``SCALES``, ``SCREEN``), and the writers of a document's
-table (:func:`write_table`) and of a measure's rows and result.json (:func:`write_measure`, ``MEASURED``).
+table (:func:`write_table`, between its :func:`markers`) and of a measure's rows and result.json
+(:func:`write_measure`, ``MEASURED``).
 """
 
 from __future__ import annotations
@@ -41,6 +42,11 @@ SCALES = {
 }
 #: A screen: the paper's lengths with 5 seeds, whose 5 best are learning-tested 4 times each.
 SCREEN = dict(SCALES["paper"], seeds=5, best=5, tests=4)
+
+
+def markers(what: str, study: str) -> tuple[str, str]:
+    """The comments around a document's ``what`` that ``study``'s report writes: the first names its command."""
+    return f"<!-- {what}: python -m experiments report {study} -->", f"<!-- end of {what} -->"
 
 
 def write_table(path: str, text: str, start_marker: str, end_marker: str) -> None:

@@ -24,7 +24,7 @@ import numpy as np
 from experiments.harness.loading import read_evolution, read_test
 from experiments.harness.markdown import head, line, mean_sd
 from experiments.harness.reproduce import Stage, evolution_cost, evolve_command, test_command, test_cost
-from experiments.harness.study import REPRODUCTION, RESULTS, Study, write_table
+from experiments.harness.study import REPRODUCTION, RESULTS, Study, markers, write_table
 from imrl_jax.analysis.claims import final_best, plateau_generation
 from imrl_jax import conditions
 from imrl_jax.runs import runspec
@@ -401,8 +401,7 @@ class Table:
         measured = self.measure()
         os.makedirs(self.out, exist_ok=True)
         drawn = self.figure(measured, os.path.join(self.out, f"{self.name}.png"))
-        write_table(self.document, self.table(measured), f"<!-- {self.name} table: python -m experiments report "
-                    f"{self.name} -->", f"<!-- end of {self.name} table -->")
+        write_table(self.document, self.table(measured), *markers(f"{self.name} table", self.name))
         print(f"{len(measured)} rows ({sum('final_mean' in m for m in measured)} finished); wrote {drawn} and the "
               f"table of {self.document}")
         return 0

@@ -12,7 +12,8 @@ from imrl_jax import files
 from imrl_jax.runs.events import EventLog, make_log
 
 
-def _clock(seconds: float) -> str:
+def clock(seconds: float) -> str:
+    """``seconds`` as H:MM:SS (none below 0)."""
     seconds = int(max(seconds, 0))
     return f"{seconds // 3600:d}:{seconds // 60 % 60:02d}:{seconds % 60:02d}"
 
@@ -50,12 +51,12 @@ class Progress:
         eta_s, compiling = None, self.warm is None
         if self.warm is None:
             self.warm = (done, now)
-            timing = f"{_clock(self.elapsed())} elapsed, first {self.unit} with compilation"
+            timing = f"{clock(self.elapsed())} elapsed, first {self.unit} with compilation"
         else:
             rate = (done - self.warm[0]) / (now - self.warm[1]) if now > self.warm[1] else 0.0
             eta_s = (self.total - done) / rate if rate > 0 else None
-            eta = "?" if eta_s is None else _clock(eta_s)
-            timing = f"{_clock(self.elapsed())} elapsed, ETA {eta} | {lane_steps_per_s / 1e6:.2f} M lane-steps/s"
+            eta = "?" if eta_s is None else clock(eta_s)
+            timing = f"{clock(self.elapsed())} elapsed, ETA {eta} | {lane_steps_per_s / 1e6:.2f} M lane-steps/s"
         scores = f"best {best:.4f} mean {mean:.4f}" if scores is None else scores
         if self.group is None:
             line = f"{self.unit} {self.first_index + done - 1} ({done}/{self.total}) | {scores} | {timing}"
@@ -137,6 +138,6 @@ def cost_line(what: str, individuals: int, lane_steps: int, generations: int, ba
         line += f"; no speed measured on {backend} in docs/bench to estimate its time"
     else:
         rate, source = speed
-        line += (f"; about {_clock(total / rate)} at the {rate / 1e6:.1f} M lane-steps/s {source} measured on "
+        line += (f"; about {clock(total / rate)} at the {rate / 1e6:.1f} M lane-steps/s {source} measured on "
                  f"{backend}, compilation aside")
     return line + (f"; at most about {memory / 2**30:.1f} GiB of memory (an estimate)" if memory is not None else "")
