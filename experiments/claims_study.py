@@ -26,7 +26,8 @@ import numpy as np
 
 from experiments.harness.loading import read_evolution, read_json, read_test, write_json
 from experiments.harness.markdown import table
-from experiments.harness.relive import colours_followed, reproduction_fresh, run_fresh, run_probe
+from imrl_jax.analysis.relive import colours_followed
+from experiments.harness.relive import reproduction_fresh, run_fresh, run_probe
 from experiments.harness.reproduce import EVOLVED, TESTED
 from experiments.rule_sets import BY_NAME, RULE_SETS, RuleSet
 from experiments.harness.study import REPRODUCTION, RESULTS, SCALES, SCREEN, markers, write_table

@@ -10,7 +10,7 @@ import numpy as np
 from experiments.harness.markdown import mean_sd, table
 from experiments.harness.study import SCALES
 from experiments.harness.loading import read_json
-from experiments.harness.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEPS, FRESH_LIVES, PATH_STEPS
+from imrl_jax.analysis.relive import CHILDHOOD_DRAWN_STEPS, CHILDHOOD_TAIL, DRAWN_STEPS, FRESH_LIVES, PATH_STEPS
 from imrl_jax.analysis.claims import CLAIMS, EVOLVED, LAST_GENERATIONS, PAPER, PLATEAU_FRACTION, RULES, SEEN, _fmt
 from imrl_jax import conditions
 

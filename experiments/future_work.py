@@ -152,7 +152,7 @@ def colour_sets(followed: list[list[int]] | None) -> dict | None:
     (``"blue + red"``, ``"none"``), the mean number of experts following one and of colours followed (claim 7's)."""
     from collections import Counter
 
-    from experiments.harness.relive import colours_followed
+    from imrl_jax.analysis.relive import colours_followed
     from imrl_jax.analysis.behaviour import SEEN
 
     if not followed:

@@ -13,7 +13,7 @@ and cpu-scale runs). The document labels every number with the run's scale, give
 ends with the table's hand-written ``discussion.md`` when it exists.
 
 The best individual of an evolution (the fittest of the last generation over all seeds) lives again the very life
-that earned its fitness (:func:`imrl_jax.commands.render.life_key`), then drives each task for a while from the weights it
+that earned its fitness (:func:`imrl_jax.evolution.search.life_key`), then drives each task for a while from the weights it
 ended that task with: the trajectory figures, the expert-specialisation table and EE-ES's stereotypy per task (claim
 4). Claim 7 probes the experts of the 10 best LE-LS and EE-LS individuals of every seed
 (:func:`imrl_jax.analysis.behaviour.specialisation`; LE-LS after a fresh childhood). ``behaviour=False`` skips both.
@@ -37,8 +37,8 @@ from experiments.document import (ROOT, figures_of, pipeline_command, scale_labe
 from experiments.harness.figures import fig3, fig_baselines, fig_curves, fig_paths, fig_steady
 from experiments.harness.loading import read_baselines, update_best_genomes
 from imrl_jax.runs.rundir import write_atomic
-from experiments.harness.relive import (DRAWN_STEPS, PATH_STEPS, Reliving, fresh_fitness, probe_best, relive_best,
-                                 relive_parts)
+from imrl_jax.analysis.relive import DRAWN_STEPS, PATH_STEPS, fresh_fitness, probe_best, relive_best
+from experiments.harness.relive import Reliving, relive_parts
 from imrl_jax.analysis.claims import CLAIMS, EVOLVED, PAPER, RULES, SEEN, TESTED, measure
 from imrl_jax import conditions
 

@@ -8,6 +8,7 @@ import pytest
 
 from imrl_jax.analysis import arena_figures, charts, controllers, plotting
 from imrl_jax.commands import demo
+from imrl_jax.world import tasks
 
 
 def test_demo_shows_the_tasks_solved_beside_a_random_individual(tiny, tmp_path):
@@ -54,7 +55,7 @@ def test_composition_trajectories_agree_with_its_reaches(tiny):
     reaches = np.asarray(controllers.run_many(config, 300, np.arange(6), np.arange(6)))
     assert [int(p.reached.sum()) for p in paths] == list(reaches)
     for path, task in zip(paths, config.tasks):
-        route, _ = controllers.zigzag_route(config, task)
+        route, _ = tasks.zigzag_route(config, task)
         first_trial = path.k[:int(np.argmax(path.breaks)) + 1]
         changes = first_trial[np.r_[True, first_trial[1:] != first_trial[:-1]]]
         assert tuple(changes) == route  # one colour per edge of the route, in order

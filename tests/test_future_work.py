@@ -267,7 +267,7 @@ def test_measure_reads_every_finished_row_and_the_reproductions(tmp_path):
 
 
 def test_colour_sets_count_the_colours_each_probed_genome_follows():
-    from experiments.harness.relive import expressed_followed
+    from imrl_jax.analysis.relive import expressed_followed
 
     # an expert left out by its genome follows nothing, whatever its untrained actor does alone
     assert expressed_followed([2, 2, 0, 1], [1, 0, 1, 0]) == [2, -1, 0, -1]

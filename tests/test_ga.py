@@ -96,7 +96,8 @@ def test_the_ga_behind_ask_and_tell():
 @pytest.mark.slow  # lives_per_fitness 2; the one-life relive is checked by test_render and the report's tests
 def test_render_relives_each_of_several_lives_the_ga_lived(tiny, tmp_path):
     """With lives_per_fitness 2 the recorded fitness is the mean of the two lives render's keys relive."""
-    from imrl_jax.commands import evolve, render
+    from imrl_jax.commands import evolve
+    from imrl_jax.evolution import search
     from imrl_jax.agent.lifetime import live
 
     config = tiny("EE-ES", task_steps=300, num_bins=1, lives_per_fitness=2, num_generations=1,
@@ -106,7 +107,7 @@ def test_render_relives_each_of_several_lives_the_ga_lived(tiny, tmp_path):
     with np.load(f"{out}/final_population.npz") as data:
         evaluated, fitness = data["evaluated"][0], data["fitness"][0]
     best = int(np.argmax(fitness))
-    lives = [float(jax.jit(live, static_argnums=1)(render.life_key(config, 3, 0, best, life), config,
+    lives = [float(jax.jit(live, static_argnums=1)(search.life_key(config, 3, 0, best, life), config,
                                                    config.learning_params(), jnp.asarray(evaluated[best])).fitness)
              for life in range(2)]
     assert lives[0] != lives[1]

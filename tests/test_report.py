@@ -337,7 +337,7 @@ def test_report_shows_the_baselines_beside_the_learning_tests(tmp_path):
 
 def test_probe_best_counts_the_colours_each_best_individual_follows(tiny):
     """Claim 7's probes: ideal colour followers follow 3 colours, a straight driver none; LE-LS grows up first."""
-    from experiments.harness.relive import probe_best
+    from imrl_jax.analysis.relive import probe_best
     from imrl_jax.analysis.behaviour import colour_reinforcers
     from imrl_jax.analysis.controllers import perceptron_followers
 
@@ -354,7 +354,7 @@ def test_probe_best_counts_the_colours_each_best_individual_follows(tiny):
 
 def test_fresh_lives_of_each_seeds_best_genome(tiny):
     """fresh_fitness lives each seed's best genome with keys of its own seed: reproducible, other keys other lives."""
-    from experiments.harness.relive import fresh_fitness
+    from imrl_jax.analysis.relive import fresh_fitness
     from imrl_jax.analysis.controllers import perceptron_followers
     from imrl_jax.agent.lifetime import make_evaluate
 

@@ -33,7 +33,8 @@ KEEPS_SHARDING = """
 import jax, numpy as np
 from imrl_jax.config import make_config
 from imrl_jax.evolution.devices import make_mesh, population_sharding, replicated, to_global
-from imrl_jax.runs.run_state import evolution_keys, initial_state
+from imrl_jax.evolution.search import evolution_keys
+from imrl_jax.runs.run_state import initial_state
 from imrl_jax.evolution.ga import make_generation
 config = make_config("small", condition="EE-ES", task_steps=20, num_bins=1, population_size=4, num_parents=2)
 mesh = make_mesh()
@@ -67,7 +68,8 @@ KERNEL_LANES = """
 import importlib.util, json, re, jax, numpy as np
 from imrl_jax.config import make_config
 from imrl_jax.evolution.devices import make_mesh, population_sharding, replicated, to_global
-from imrl_jax.runs.run_state import evolution_keys, initial_state
+from imrl_jax.evolution.search import evolution_keys
+from imrl_jax.runs.run_state import initial_state
 from imrl_jax.evolution.ga import make_generation
 from imrl_jax.commands.evolve_sweep import batched_values, make_points, make_sweep_step
 from imrl_jax.agent import kernel as K

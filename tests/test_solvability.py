@@ -15,7 +15,8 @@ import pytest
 
 from imrl_jax.world.arena import BLUE, GREEN, RED
 from imrl_jax.config import Config
-from imrl_jax.analysis.controllers import performance, run_controller, run_many, zigzag_route
+from imrl_jax.analysis.controllers import performance, run_controller, run_many
+from imrl_jax.world.tasks import zigzag_route
 
 NUM_STEPS = 3000
 #: Runs of one compiled batch: every task on its own route, then every task on its partner's.

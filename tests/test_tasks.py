@@ -18,7 +18,7 @@ def test_built_in_sets_pass_their_checks_and_round_trip_through_json(tmp_path):
     novel = tasks.load("novel")
     assert len(novel) == 6 and not set(t.start for t in novel) & set(t.start for t in paper_tasks())
     # 5- and 6-edge zigzags (the six have 2 to 4), two per first colour turning the other way first
-    routes = [controllers.zigzag_route(Config(), t) for t in novel]
+    routes = [tasks.zigzag_route(Config(), t) for t in novel]
     assert [len(colours) for colours, _ in routes] == [5, 6, 6, 5, 5, 6]
     assert [(colours[0], first) for colours, first in routes] == [(0, "L"), (0, "R"), (1, "L"), (1, "R"), (2, "L"),
                                                                   (2, "R")]

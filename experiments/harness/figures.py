@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from experiments.harness.relive import DRAWN_STEPS
+from imrl_jax.analysis.relive import DRAWN_STEPS
 from imrl_jax.analysis.claims import SEEN, TESTED
 from imrl_jax.analysis.arena_figures import draw_arena, draw_path, expert_legend
 from imrl_jax.analysis.plotting import CONDITION_STYLES, EXPERT_COLOURS, SEEN_COLOURS, new_figure, style_axis

@@ -53,10 +53,11 @@ from imrl_jax.runs.progress import Progress, cost_line
 from imrl_jax.runs.rundir import (RunDirError, check_unlocked, check_writable, lock_run_dir, make_dir,
                              read_config, write_atomic, write_errno)
 # history_csv, initial_state, seed_keys, evolution_keys and record_traits: evolve's names for them (notebooks use them).
-from imrl_jax.runs.run_state import (RunInterrupted, check_run_dir, check_run_options, evolution_keys,  # noqa: F401
-                                 extend_config_json, generations_recorded, history_bytes, history_csv, initial_state,
-                                 read_search,
-                                 record, record_traits, resume_command, seed_keys, write_failed, write_outputs)
+from imrl_jax.evolution.search import evolution_keys, seed_keys  # noqa: F401
+from imrl_jax.runs.run_state import (RunInterrupted, check_run_dir, check_run_options,  # noqa: F401
+                                     extend_config_json, generations_recorded, history_bytes, history_csv,
+                                     initial_state, read_search, record, record_traits, resume_command, write_failed,
+                                     write_outputs)
 from imrl_jax.evolution.strategies import GA_RECORD, describe
 
 __all__ = ["UsageError", "parse_sets", "write_atomic", "parser", "build_config", "build_strategy",  # re-exported

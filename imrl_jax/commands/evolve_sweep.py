@@ -50,7 +50,8 @@ from imrl_jax.runs.progress import Progress, cost_line
 from imrl_jax.runs.rundir import (RunDirError, check_unlocked, check_writable, entries, lock_run_dir, make_dir, not_empty,
                              read_json, recorded_points, saved_steps, write_atomic, write_errno)
 from imrl_jax.runs.rundir import SWEEP_FILE, is_sweep  # noqa: F401 - the sweep's names for them
-from imrl_jax.runs.run_state import (RunInterrupted, check_run_dir, check_run_options, evolution_keys, extend_config_json,
+from imrl_jax.evolution.search import evolution_keys
+from imrl_jax.runs.run_state import (RunInterrupted, check_run_dir, check_run_options, extend_config_json,
                                  history_bytes, initial_state, record, record_traits, write_failed, write_outputs)
 from imrl_jax.runs.runspec import RunSpec
 from imrl_jax.evolution.search import over_seeds

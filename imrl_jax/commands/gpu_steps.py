@@ -301,7 +301,8 @@ def sweep(check: Check) -> dict:
     from imrl_jax.commands import evolve_sweep
     from imrl_jax.config import make_config
     from imrl_jax.evolution.devices import make_mesh, population_sharding, replicated, to_global
-    from imrl_jax.runs.run_state import evolution_keys, initial_state
+    from imrl_jax.evolution.search import evolution_keys
+    from imrl_jax.runs.run_state import initial_state
 
     kernel = fastest_kernel(check)
     check.stage = "api"

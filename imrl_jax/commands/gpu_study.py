@@ -128,7 +128,8 @@ def time_program(check, program: Program, fraction: float) -> dict:
     from imrl_jax.commands import evolve_sweep
     from imrl_jax.agent import kernel_choice
     from imrl_jax.evolution.devices import make_mesh, population_sharding, replicated, to_global
-    from imrl_jax.runs.run_state import evolution_keys, initial_state
+    from imrl_jax.evolution.search import evolution_keys
+    from imrl_jax.runs.run_state import initial_state
 
     check.stage = "api"
     seeds = list(range(min(program.seeds, check.sizes.study_seeds or program.seeds)))

@@ -54,19 +54,6 @@ def best_individual(run_dir: str) -> Best:
     return Best(run.config, run.evaluated[s, i], run.seeds[s], int(i), run.generation - 1, float(run.fitness[s, i]))
 
 
-def life_key(config, seed: int, generation: int, index: int, life: int = 0):
-    """The key of life ``life`` (of ``config.lives_per_fitness``) of individual ``index`` of ``seed`` in
-    ``generation`` of an evolve run: the key the GA lived it with."""
-    import jax
-
-    from imrl_jax.runs.run_state import evolution_keys, seed_keys
-    from imrl_jax.evolution.search import generation_keys, life_keys
-
-    key = evolution_keys(np.asarray(jax.random.key_data(seed_keys([seed]))))[0]
-    key_life, _ = generation_keys(key, generation)
-    return life_keys(key_life, config.population_size, config.lives_per_fitness)[index, life]
-
-
 def check_output(out_path: str, overwrite: bool = False) -> str:
     """The output's extension after checking the path can be written; raises UsageError."""
     ext = os.path.splitext(out_path)[1].lower()
@@ -149,10 +136,11 @@ def animate(checked: Plan) -> dict:
     from imrl_jax.analysis.behaviour import task_trajectory
     from imrl_jax.agent.lifetime import live
     from imrl_jax.analysis.arena_figures import write_animation
+    from imrl_jax.evolution import search
 
     start = time.perf_counter()
     params = config.learning_params()
-    key = life_key(config, best.seed, best.generation, best.index)
+    key = search.life_key(config, best.seed, best.generation, best.index)
     result = jax.jit(live, static_argnums=1)(key, config, params, jnp.asarray(best.genome, jnp.float32))
     agent = jax.tree.map(lambda x: x[task - 1], result.adult_agents)
     trajectory = task_trajectory(jax.random.fold_in(key, task), config, params, agent, task - 1, steps)

@@ -13,16 +13,17 @@ Within a generation ``ask`` and ``tell`` receive the same search key: a strategy
 both splits it (:func:`split_search_key`), one that draws in one of them uses it whole (the
 paper's GA draws only in ``tell``). :func:`generation` is the one generation step that
 ``evolve`` and ``sweeps`` share, and :func:`life_keys` the one place a generation's life keys
-come from (``render`` relives the key the GA used with it).
+come from (:func:`life_key`: the key the GA lived an individual with, which ``render`` relives).
 """
 
 from __future__ import annotations
 
 import contextvars
-from typing import Any, Callable, NamedTuple, Protocol
+from typing import Any, Callable, NamedTuple, Protocol, Sequence
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from imrl_jax.evolution.devices import AXIS, sharded_axis
 
@@ -61,6 +62,25 @@ def performance(result: Generation) -> jnp.ndarray:
 def generation_keys(key: jax.Array, generation) -> tuple[jax.Array, jax.Array]:
     """The keys of one generation of a seed: its lives, its search (ask and tell)."""
     return tuple(jax.random.split(jax.random.fold_in(key, generation)))
+
+
+def seed_keys(seeds: Sequence[int]) -> jax.Array:
+    """One typed key per seed."""
+    return jax.vmap(jax.random.key)(np.asarray(seeds, np.uint32))
+
+
+def evolution_keys(key_data: np.ndarray) -> jax.Array:
+    """The keys the generations of each seed draw from (distinct from the initial population's)."""
+    keys = jax.random.wrap_key_data(np.asarray(key_data))
+    return jax.vmap(lambda k: jax.random.fold_in(k, 1))(keys)
+
+
+def life_key(config, seed: int, generation: int, index: int, life: int = 0):
+    """The key of life ``life`` (of ``config.lives_per_fitness``) of individual ``index`` of ``seed`` in
+    ``generation`` of an evolve run: the key the GA lived it with."""
+    key = evolution_keys(np.asarray(jax.random.key_data(seed_keys([seed]))))[0]
+    key_life, _ = generation_keys(key, generation)
+    return life_keys(key_life, config.population_size, config.lives_per_fitness)[index, life]
 
 
 def split_search_key(key: jax.Array) -> tuple[jax.Array, jax.Array]:

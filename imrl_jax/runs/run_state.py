@@ -34,11 +34,6 @@ from imrl_jax.evolution.strategies import GA_RECORD
 # ----------------------------------------------------------------------------- state
 
 
-def seed_keys(seeds: Sequence[int]) -> jax.Array:
-    """One typed key per seed."""
-    return jax.vmap(jax.random.key)(np.asarray(seeds, np.uint32))
-
-
 def initial_state(config: Config, seeds: Sequence[int], sharding, strategy=None, mesh=None) -> RunState:
     """Generation 0 of every seed (drawn from the seed's own key).
 
@@ -46,7 +41,7 @@ def initial_state(config: Config, seeds: Sequence[int], sharding, strategy=None,
     initialised with the same key and asked for generation 0 with the generations' keys (its state,
     replicated over ``mesh``, is the run's ``search``).
     """
-    keys = seed_keys(seeds)
+    keys = search.seed_keys(seeds)
     init_keys = jax.vmap(lambda k: jax.random.fold_in(k, 0))(keys)
     key_data = np.asarray(jax.random.key_data(keys))
     search_state = ()
@@ -56,7 +51,7 @@ def initial_state(config: Config, seeds: Sequence[int], sharding, strategy=None,
         params = strategy.default_params()
         states = jax.vmap(lambda k: strategy.init(k, params))(init_keys)
         populations, states = jax.jit(jax.vmap(lambda k, s: search.ask(k, strategy, s, params, 0)))(
-            evolution_keys(key_data), states)
+            search.evolution_keys(key_data), states)
         populations = np.asarray(populations, np.float32)
         search_state = jax.tree.map(lambda x: to_global(np.asarray(x), replicated(mesh or make_mesh())), states)
     shape = populations.shape
@@ -73,12 +68,6 @@ def initial_state(config: Config, seeds: Sequence[int], sharding, strategy=None,
         search=search_state,
         traits=traits,
     )
-
-
-def evolution_keys(key_data: np.ndarray) -> jax.Array:
-    """The keys the generations of each seed draw from (distinct from the initial population's)."""
-    keys = jax.random.wrap_key_data(np.asarray(key_data))
-    return jax.vmap(lambda k: jax.random.fold_in(k, 1))(keys)
 
 
 def record_traits(traits: np.ndarray, generation: int, fitness: np.ndarray, values: np.ndarray) -> np.ndarray:
