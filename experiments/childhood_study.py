@@ -249,6 +249,7 @@ def stage_speed(args) -> int:
     from imrl_jax.agent.lifetime import childhood_task, lifetime_keys, random_pose, run_phase, task_spec, task_start
     from imrl_jax.agent.networks import decode
     from imrl_jax.agent.state import childhood_phase, for_phase, init_state
+    from imrl_jax.world.env import at
 
     config = make_config(args.preset, condition="LE-LS")
     params = config.learning_params()
@@ -260,7 +261,7 @@ def stage_speed(args) -> int:
         agent = decode(config, genome)
         agent = agent._replace(actor=agent.actor.at[:, 1, -1].set(bias))  # the speed unit's bias
         phase = childhood_phase(config)
-        state = for_phase(config, phase, init_state(config, agent, random_pose(keys.pose, config)))
+        state = for_phase(config, phase, init_state(config, agent, at(random_pose(keys.pose, config))))
         state, _ = run_phase(keys.childhood, config, phase, params, childhood_task(config), state,
                              config.childhood_steps)
 

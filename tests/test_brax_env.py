@@ -36,7 +36,7 @@ def project_steps(config, task: int, key):
 
     def one(state, _):
         new, record = step(key, config, ADULT_EVOLVED_SELECTOR, config.learning_params(), spec, STEPS, state)
-        return new, (take_row(new.xbs, state.t % 2)[:-1], new.prev.action, record.pose, record.reached,
+        return new, (take_row(new.xbs, state.t % 2)[:-1], new.prev.action, record.world.pose, record.reached,
                      record.timeout)
 
     return jax.lax.scan(one, task_start(config, agent, task - 1), None, length=STEPS)[1]

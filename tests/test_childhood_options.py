@@ -19,6 +19,7 @@ from imrl_jax.agent import lifetime as L
 from imrl_jax.world.arena import Pose
 from imrl_jax.config import make_config
 from imrl_jax.agent.networks import decode
+from imrl_jax.world.env import at
 
 
 def test_robot_pinned_on_a_wall_is_put_at_a_random_pose_after_n_steps(tiny):
@@ -31,33 +32,33 @@ def test_robot_pinned_on_a_wall_is_put_at_a_random_pose_after_n_steps(tiny):
     agent = decode(config, jnp.asarray(actor.reshape(-1)))
     phase = L.Phase(experts_learn=False, selector_learns=False, intrinsic=False, has_target=False, noisy=False,
                     respawn=True)
-    state = L.init_state(config, agent, Pose(jnp.array([20.0, 200.0]), jnp.array(math.pi)))
+    state = L.init_state(config, agent, at(Pose(jnp.array([20.0, 200.0]), jnp.array(math.pi))))
     key = jax.random.key(0)
     _, record = jax.jit(L.simulate, static_argnums=(1, 2, 6))(key, config, phase, config.learning_params(),
                                                               L.childhood_task(config), state, 40)
     respawned = np.flatnonzero(np.asarray(record.respawned))
     assert respawned[0] == 6
-    x = np.asarray(record.pose.pos[:, 0])
+    x = np.asarray(record.world.pose.pos[:, 0])
     np.testing.assert_allclose(x[:6], [18, 16, 15, 15, 15, 15], atol=1e-4)
     # The new pose is the step's spawn draw, scaled to the arena.
-    draws = S.draw_many(key, 40, config.draw_block, spawn=True)
+    draws = S.draw_many(key, 40, config.draw_block, spawn=3)
     r, size = config.robot_radius, config.arena_size
-    np.testing.assert_allclose(np.asarray(record.pose.pos[6]), r + (size - 2 * r) * np.asarray(draws.spawn[6, :2]),
+    np.testing.assert_allclose(np.asarray(record.world.pose.pos[6]), r + (size - 2 * r) * np.asarray(draws.spawn[6, :2]),
                                rtol=1e-6)
-    np.testing.assert_allclose(float(record.pose.heading[6]), 2 * math.pi * float(draws.spawn[6, 2]), rtol=1e-6)
+    np.testing.assert_allclose(float(record.world.pose.heading[6]), 2 * math.pi * float(draws.spawn[6, 2]), rtol=1e-6)
     # Clamped (the default), the same robot stays on the wall.
     clamped = config.replace(childhood_walls="clamp")
     _, held = jax.jit(L.simulate, static_argnums=(1, 2, 6))(key, clamped, phase._replace(respawn=False),
                                                            clamped.learning_params(), L.childhood_task(clamped),
-                                                           L.init_state(clamped, agent, state.pose), 40)
-    np.testing.assert_allclose(np.asarray(held.pose.pos[2:, 0]), 15.0)
+                                                           L.init_state(clamped, agent, at(state.world.pose)), 40)
+    np.testing.assert_allclose(np.asarray(held.world.pose.pos[2:, 0]), 15.0)
     assert not np.asarray(held.respawned).any()
 
 
 def test_paper_childhood_draws_are_unchanged_by_the_respawn_draws():
     """The expert-choice and noise numbers of a block are the same with or without spawn draws."""
     key = jax.random.key(5)
-    plain, spawn = L.draw_block(key, 3, 100), L.draw_block(key, 3, 100, spawn=True)
+    plain, spawn = L.draw_block(key, 3, 100), L.draw_block(key, 3, 100, spawn=3)
     np.testing.assert_array_equal(plain.u, spawn.u)
     np.testing.assert_array_equal(plain.z, spawn.z)
     assert plain.spawn is None and spawn.spawn.shape == (100, 3)

@@ -16,6 +16,7 @@ from imrl_jax import config as config_module
 from imrl_jax.agent import state as S
 from imrl_jax.config import ConfigError, Task, make_config
 from imrl_jax.agent.networks import decode, encode
+from imrl_jax.world.env import at
 
 #: A target 40 cm ahead, off the floor's lattice: a robot driving straight from the lattice's exact points
 #: meets retina points exactly 3 cm from a line, where the reference and JAX may see different colours.
@@ -319,7 +320,7 @@ def test_the_gpu_kernel_refuses_expression_genes(tiny):
 
     config = tiny("LE-LS-N", num_experts=4)
     task = L.task_spec(config, 0)
-    state = L.init_state(config, L.adult_agent(config, decode(config, jnp.zeros(config.num_genes))), task.start)
+    state = L.init_state(config, L.adult_agent(config, decode(config, jnp.zeros(config.num_genes))), at(task.start))
     with pytest.raises(ConfigError, match="does not implement an evolved number of experts"):
         kernel.run_phase(jax.random.key(0), config, config.spec.adult, config.learning_params(), task, state,
                          config.task_steps)

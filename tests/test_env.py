@@ -75,7 +75,7 @@ def test_a_step_count_the_bins_do_not_divide_is_refused():
     """10 steps in 3 bins is an error naming both, in the XLA step and the kernel, not 9 steps."""
     config = _config(task_steps=30, num_bins=3)
     task = E.task_spec(config, 0)
-    state = L.init_state(config, L.adult_agent(config, L.decode(config, jnp.zeros(config.num_genes))), task.start)
+    state = L.init_state(config, L.adult_agent(config, L.decode(config, jnp.zeros(config.num_genes))), E.at(task.start))
     from imrl_jax.agent import kernel
     from imrl_jax.conditions import ADULT_LEARNING_SELECTOR
 

@@ -18,6 +18,7 @@ from imrl_jax import conditions as C
 from imrl_jax.agent import lifetime as L
 from imrl_jax.world.arena import Pose
 from imrl_jax.agent.networks import decode
+from imrl_jax.world.env import at
 
 STEPS = 2000
 
@@ -61,7 +62,7 @@ def test_phase_in_pieces_matches_xla(tiny, condition, options):
             agent = agent._replace(actor=jnp.asarray(hand_experts(n)))
         phase, task = C.get(condition).adult, L.task_spec(config, 0, jnp.float64)
         pose = task.start
-    state = L.for_phase(config, phase, L.init_state(config, agent, pose))
+    state = L.for_phase(config, phase, L.init_state(config, agent, at(pose)))
     pallas = config.replace(step_kernel="pallas")
 
     @jax.jit
@@ -109,7 +110,7 @@ def test_kernel_lowers_to_triton_for_gpu(tiny):
 
     def lanes(key, genome):
         agent = decode(config, genome)
-        child = L.init_state(config, agent, Pose(jnp.array([40.0, 60.0]), jnp.array(math.pi)))
+        child = L.init_state(config, agent, at(Pose(jnp.array([40.0, 60.0]), jnp.array(math.pi))))
         child, _ = K.run_phase(key, config, L.childhood_phase(config), params, L.childhood_task(config), child,
                                config.childhood_steps, interpret=False)
         adult = L.task_start(config, child.agent, 0)

@@ -10,6 +10,7 @@ from imrl_jax import conditions as C
 from imrl_jax.agent import lifetime as L
 from imrl_jax.config import CONDITIONS
 from imrl_jax.agent.networks import decode, encode
+from imrl_jax.world.env import at
 
 
 # The future-work rows' lives follow the NumPy reference (test_reference.py); their contracts are slow.
@@ -63,7 +64,7 @@ def test_binned_phase_equals_step_by_step_loop(tiny):
     params = config.learning_params()
     agent = decode(config, random_genomes(config, 1)[0])
     task = L.task_spec(config, 2)
-    state = L.init_state(config, L.adult_agent(config, agent), task.start)
+    state = L.init_state(config, L.adult_agent(config, agent), at(task.start))
     key = jax.random.key(5)
     phase = C.ADULT_LEARNING_SELECTOR
 

@@ -20,6 +20,7 @@ from imrl_jax.agent import lifetime as L
 from imrl_jax.agent import reference
 from imrl_jax.world.arena import Pose
 from imrl_jax.agent.networks import Agent, decode
+from imrl_jax.world.env import at
 
 STEPS = 2000
 PAPER = {}
@@ -40,9 +41,9 @@ def _assert_weights_close(jax_agent: Agent, ref: dict):
 
 def _compare_phase(config, phase, phase_name, agent, pose, task_index, params, seed=0, learning_steps=None):
     key = jax.random.key(seed)
-    draws = S.draw_many(key, STEPS, config.draw_block, spawn=phase.respawn)
+    draws = S.draw_many(key, STEPS, config.draw_block, spawn=S.spawn_draws(config, phase))
     task = L.childhood_task(config, jnp.float64) if task_index is None else L.task_spec(config, task_index, jnp.float64)
-    state = L.init_state(config, agent, pose)
+    state = L.init_state(config, agent, at(pose))
     final, record = jax.jit(L.simulate, static_argnums=(1, 2, 6))(key, config, phase, params, task, state, STEPS)
     ref = reference.run_phase(config.replace(**params._asdict()), phase_name, _to_numpy(agent),
                               (float(pose.pos[0]), float(pose.pos[1]), float(pose.heading)),
@@ -53,11 +54,11 @@ def _compare_phase(config, phase, phase_name, agent, pose, task_index, params, s
     np.testing.assert_array_equal(np.asarray(record.reached), ref["reached"])
     np.testing.assert_array_equal(np.asarray(record.timeout), ref["timeout"])
     np.testing.assert_array_equal(np.asarray(record.respawned), ref["respawned"])
-    np.testing.assert_allclose(np.asarray(record.pose.pos[:, 0]), ref["x"], atol=1e-8)
-    np.testing.assert_allclose(np.asarray(record.pose.pos[:, 1]), ref["y"], atol=1e-8)
-    np.testing.assert_allclose(np.asarray(record.pose.heading), ref["heading"], atol=1e-8)
+    np.testing.assert_allclose(np.asarray(record.world.pose.pos[:, 0]), ref["x"], atol=1e-8)
+    np.testing.assert_allclose(np.asarray(record.world.pose.pos[:, 1]), ref["y"], atol=1e-8)
+    np.testing.assert_allclose(np.asarray(record.world.pose.heading), ref["heading"], atol=1e-8)
     _assert_weights_close(final.agent, ref["weights"])
-    pos = np.asarray(record.pose.pos)
+    pos = np.asarray(record.world.pose.pos)
     r = config.robot_radius
     walls = np.sum((pos <= r + 1e-9) | (pos >= config.arena_size - r - 1e-9))
     return dict(reaches=int(ref["reached"].sum()), timeouts=int(ref["timeout"].sum()), walls=int(walls),
@@ -206,14 +207,14 @@ def test_float32_lifetime_tracks_float64_reference(tiny):
     task = L.task_spec(config, 0)
     key = jax.random.key(0)
     final, record = jax.jit(L.simulate, static_argnums=(1, 2, 6))(
-        key, config, C.ADULT_LEARNING_SELECTOR, params, task, L.init_state(config, agent, task.start), STEPS)
+        key, config, C.ADULT_LEARNING_SELECTOR, params, task, L.init_state(config, agent, at(task.start)), STEPS)
     draws = S.draw_many(key, STEPS, config.draw_block)
     ref = reference.run_phase(config, "adult-ls", _to_numpy(agent), (300.0, 200.0, 0.0),
                               np.asarray(draws.u, np.float64), np.asarray(draws.z, np.float64), task=0)
     np.testing.assert_array_equal(np.asarray(record.k), ref["k"])
     np.testing.assert_array_equal(np.asarray(record.reached), ref["reached"])
-    np.testing.assert_allclose(np.asarray(record.pose.pos[:, 0]), ref["x"], atol=1e-3)
-    np.testing.assert_allclose(np.asarray(record.pose.pos[:, 1]), ref["y"], atol=1e-3)
+    np.testing.assert_allclose(np.asarray(record.world.pose.pos[:, 0]), ref["x"], atol=1e-3)
+    np.testing.assert_allclose(np.asarray(record.world.pose.pos[:, 1]), ref["y"], atol=1e-3)
     for name, value in final.agent._asdict().items():
         if value is not None:
             np.testing.assert_allclose(np.asarray(value), ref["weights"][name], rtol=1e-4, atol=1e-5, err_msg=name)
@@ -281,7 +282,7 @@ def test_evolved_selector_keeps_its_choice_for_the_period(tiny):
     task = L.task_spec(config, 0, jnp.float64)
     key = jax.random.key(0)
     final, record = jax.jit(L.simulate, static_argnums=(1, 2, 6))(
-        key, config, C.ADULT_EVOLVED_SELECTOR, config.learning_params(), task, L.init_state(config, agent, task.start),
+        key, config, C.ADULT_EVOLVED_SELECTOR, config.learning_params(), task, L.init_state(config, agent, at(task.start)),
         STEPS)
     events = _compare_phase(config, C.ADULT_EVOLVED_SELECTOR, "adult-es", agent, task.start, 0,
                             config.learning_params())

@@ -16,6 +16,7 @@ from imrl_jax.world.arena import Pose
 from imrl_jax.config import ConfigError
 from imrl_jax.agent.networks import decode
 from imrl_jax.agent.state import Previous
+from imrl_jax.world.env import at
 
 
 def _xb(points):
@@ -65,7 +66,7 @@ def test_one_step_options_are_the_papers_rules(tiny, phase_name):
         phase, task = C.ADULT_LEARNING_SELECTOR, L.task_spec(config, 0, jnp.float64)
         pose = task.start
     params = config.replace(**EXTENDED).learning_params()
-    start = L.init_state(config, agent, pose)
+    start = L.init_state(config, agent, at(pose))
     assert start.option is None  # period 1: the paper's path
     run = jax.jit(L.simulate, static_argnums=(1, 2, 6))
     key = jax.random.key(0)

@@ -29,9 +29,9 @@ from imrl_jax.agent.learning import ascend, ascend_row, selector_features, td_er
 from imrl_jax.agent.networks import Agent, explore, internal_reward, pick, select
 from imrl_jax.conditions import Phase
 from imrl_jax.genome import PARTS, GenomePart, get_part
-from imrl_jax.world.env import TaskSpec
+from imrl_jax.world.env import EnvState, TaskSpec
 from imrl_jax.agent.state import (Curves, Draws, Previous, State, Traces, bin_steps, childhood_phase, draw_block,
-                            phase_params)
+                                  phase_params, spawn_draws)
 
 # Slots of the per-lane scalar vectors.
 _X, _Y, _HEADING, _COS, _SIN, _A0, _A1, _O0, _O1 = range(9)  # floats
@@ -74,10 +74,11 @@ def pack(state: State) -> Packed:
     dtype = agent.actor.dtype
     now = state.t % 2
     xbs = jnp.stack([state.xbs[1 - now], state.xbs[now]])  # x~_{t-1}, x~_{t-2}
-    floats = jnp.stack([state.pose.pos[0], state.pose.pos[1], state.pose.heading, *state.direction,
+    robot = state.world  # the arena's EnvState: the kernel lives the arena only
+    floats = jnp.stack([robot.pose.pos[0], robot.pose.pos[1], robot.pose.heading, *robot.direction,
                         *prev.action, *prev.output]).astype(dtype)
-    ints = jnp.stack([prev.k, prev.valid, prev.terminal, state.trial_step, state.t, traces.experts_ended,
-                      traces.selector_ended, state.pinned]).astype(jnp.int32)
+    ints = jnp.stack([prev.k, prev.valid, prev.terminal, robot.trial_step, state.t, traces.experts_ended,
+                      traces.selector_ended, robot.pinned]).astype(jnp.int32)
     return Packed(
         weights=jnp.stack([rows(agent.reinforcer), rows(agent.actor[:, 0]), rows(agent.actor[:, 1]),
                            rows(agent.evaluator), rows(agent.selector_actor)]),
@@ -118,9 +119,9 @@ def unpack(packed: Packed, like: State, block: Draws) -> State:
     )
     prev = Previous(k=i[_K], action=f[jnp.array([_A0, _A1])], output=f[jnp.array([_O0, _O1])],
                     selection=packed.selection[:k], valid=i[_VALID] != 0, terminal=i[_TERMINAL] != 0)
-    pose = like.pose._replace(pos=f[jnp.array([_X, _Y])], heading=f[_HEADING])
-    return State(agent, traces, pose, f[jnp.array([_COS, _SIN])], xbs, prev, i[_TRIAL_STEP], t, block,
-                 i[_PINNED], packed.baseline[:k])
+    pose = like.world.pose._replace(pos=f[jnp.array([_X, _Y])], heading=f[_HEADING])
+    robot = EnvState(pose, f[jnp.array([_COS, _SIN])], i[_TRIAL_STEP], i[_PINNED])
+    return State(agent, traces, robot, xbs, prev, t, block, packed.baseline[:k])
 
 
 def retina_layout(config: Config, dtype=jnp.float32) -> jnp.ndarray:
@@ -395,7 +396,7 @@ def run_bin(config: Config, phase: Phase, params: LearningParams, task: TaskSpec
     return Packed(*state), counts, selections
 
 
-def draw_range(key: jax.Array, start, num_steps: int, block_steps: int, noisy: bool, spawn: bool = False) -> Draws:
+def draw_range(key: jax.Array, start, num_steps: int, block_steps: int, noisy: bool, spawn: int = 0) -> Draws:
     """The draws of steps start .. start + num_steps - 1 of a phase (the XLA program's stream)."""
     num_blocks = -(-num_steps // block_steps) + 1
     first = start // block_steps
@@ -463,7 +464,8 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
     params = phase_params(phase, params)
 
     def one_bin(packed, _):
-        draws = draw_range(key, packed.ints[_T], steps_per_bin, config.draw_block, phase.noisy, phase.respawn)
+        draws = draw_range(key, packed.ints[_T], steps_per_bin, config.draw_block, phase.noisy,
+                           spawn_draws(config, phase))
         packed, counts, selections = run_bin(config, phase, params, task, phase_steps, draws, packed, num_experts,
                                              interpret)
         return packed, Curves(counts[0], counts[1], selections[:num_experts], counts[2] if phase.respawn else None)
@@ -471,5 +473,5 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
     packed, curves = jax.lax.scan(one_bin, pack(state), None, length=num_bins)
     # The block of the last step, as the XLA program leaves it.
     block = draw_block(key, (packed.ints[_T] - 1) // config.draw_block, config.draw_block, phase.noisy,
-                       phase.respawn)
+                       spawn_draws(config, phase))
     return unpack(packed, state, block), curves

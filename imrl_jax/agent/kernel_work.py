@@ -76,9 +76,9 @@ def kernel_jaxpr(config, phase, steps: int = 8):
 
     from imrl_jax.agent import kernel as K
     from imrl_jax.agent import lifetime as L
-    from imrl_jax.world.env import Pose
+    from imrl_jax.world.env import Pose, at
     from imrl_jax.agent.networks import decode
-    from imrl_jax.agent.state import phase_params
+    from imrl_jax.agent.state import phase_params, spawn_draws
 
     agent = decode(config, jnp.zeros((config.num_genes,)))
     if not phase.intrinsic:
@@ -86,8 +86,8 @@ def kernel_jaxpr(config, phase, steps: int = 8):
     task = L.childhood_task(config) if phase.intrinsic else L.task_spec(config, 0)
 
     def one_bin(key):
-        state = L.init_state(config, agent, Pose(jnp.array([40.0, 60.0]), jnp.array(math.pi)))
-        draws = K.draw_range(key, 0, steps, config.draw_block, phase.noisy, phase.respawn)
+        state = L.init_state(config, agent, at(Pose(jnp.array([40.0, 60.0]), jnp.array(math.pi))))
+        draws = K.draw_range(key, 0, steps, config.draw_block, phase.noisy, spawn_draws(config, phase))
         return K.run_bin(config, phase, phase_params(phase, config.learning_params()), task, steps, draws,
                          K.pack(state), agent.selector_actor.shape[0], interpret=False)
 

@@ -17,16 +17,17 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from imrl_jax.world.arena import Pose, task_arrays
+from imrl_jax.world.arena import Pose
 from imrl_jax.conditions import Phase
 from imrl_jax.config import Config, LearningParams
 from imrl_jax.agent import kernel_choice
 from imrl_jax.genome import EVOLVED_FIELDS
-from imrl_jax.world.env import EnvState, TaskSpec, childhood_task, make_env, random_pose, task_spec
+from imrl_jax.world.env import TaskSpec, childhood_task, random_pose, task_spec  # noqa: F401 (lifetime's names for them)
+from imrl_jax.world.worlds import world_of
 from imrl_jax.agent.learning import learn_experts, learn_selector, learn_selector_over_option, pick_row, take_row
 from imrl_jax.agent.networks import Agent, act, decode, explore, expressed_only, select, with_bias, zero_agent
 from imrl_jax.agent.state import (Curves, Draws, Previous, State, StepRecord, bin_steps, childhood_phase, draw_block,
-                            draw_many, for_phase, init_state, learning_until, phase_params)
+                                  draw_many, for_phase, init_state, learning_until, phase_params, spawn_draws)
 from imrl_jax.agent.timescale import ends, next_option
 
 
@@ -70,7 +71,7 @@ def _draws(config: Config, phase: Phase, key: jax.Array, state: State) -> tuple[
     offset = state.t % config.draw_block
     block = jax.lax.cond(offset == 0,
                          lambda: draw_block(key, state.t // config.draw_block, config.draw_block, phase.noisy,
-                                            phase.respawn),
+                                            spawn_draws(config, phase)),
                          lambda: state.block)
     return block, jax.tree.map(lambda x: x[offset], block)
 
@@ -90,8 +91,8 @@ def step(key: jax.Array, config: Config, phase: Phase, params: LearningParams, t
     ``key`` is the phase's key: the step takes its random numbers from the block of draws it
     makes from it every ``config.draw_block`` steps.
     """
-    env = make_env(config, phase.has_target, phase.respawn)
-    robot = EnvState(state.pose, state.direction, state.trial_step, state.pinned)
+    env = world_of(config).make_env(config, phase.has_target, phase.respawn)
+    robot = state.world
     block, draws = _draws(config, phase, key, state)
     # An individual with learning values of its own (evolved learning parameters) learns with them.
     params = phase_params(phase, params if state.agent.params is None else state.agent.params)
@@ -135,9 +136,8 @@ def step(key: jax.Array, config: Config, phase: Phase, params: LearningParams, t
     # 5: turn, move, clamp; then walls (respawn), the target and the timeout.
     robot, events = env.transition(robot, action, task, draws.spawn)
     prev = Previous(k, action, output, selection, ~(events.timeout | events.respawned), events.reached)
-    state = State(agent, traces, robot.pose, robot.direction, xbs, prev, robot.trial_step, state.t + 1, block,
-                  robot.pinned, baseline, option)
-    return state, StepRecord(robot.pose, k, events.reached, events.timeout, events.respawned)
+    state = State(agent, traces, robot, xbs, prev, state.t + 1, block, baseline, option)
+    return state, StepRecord(robot, k, events.reached, events.timeout, events.respawned)
 
 
 def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningParams, task: TaskSpec,
@@ -219,16 +219,20 @@ def grow_up(keys: LifetimeKeys, config: Config, params: LearningParams, genome: 
     dtype = agent.actor.dtype
     childhood_selections = jnp.zeros((config.num_bins, agent.selector_actor.shape[0]), jnp.int32)
     if config.spec.has_childhood:
-        state = init_state(config, agent, random_pose(keys.pose, config, dtype))
-        state, curves = run_phase(keys.childhood, config, childhood_phase(config), params, childhood_task(config, dtype),
-                                  state, config.childhood_steps)
+        world, phase = world_of(config), childhood_phase(config)
+        task = world.childhood_task(config, dtype)
+        start = world.make_env(config, phase.has_target, phase.respawn).reset(keys.pose, task, dtype)
+        state, curves = run_phase(keys.childhood, config, phase, params, task, init_state(config, agent, start),
+                                  config.childhood_steps)
         agent, childhood_selections = state.agent, curves.selections
     return agent, childhood_selections
 
 
 def task_start(config: Config, agent: Agent, index) -> State:
     """The first carry of task ``index`` for the experts ``agent`` (selector reset as the condition says)."""
-    return init_state(config, adult_agent(config, agent), task_spec(config, index, agent.actor.dtype).start)
+    world, dtype = world_of(config), agent.actor.dtype
+    start = world.make_env(config).reset(None, world.task(config, index, dtype), dtype)
+    return init_state(config, adult_agent(config, agent), start)
 
 
 def live(key: jax.Array, config: Config, params: LearningParams, genome: jnp.ndarray) -> LifetimeResult:
@@ -240,13 +244,13 @@ def live(key: jax.Array, config: Config, params: LearningParams, genome: jnp.nda
     phase = config.spec.adult
 
     def live_task(task_key, index):
-        state, curves = run_phase(task_key, config, phase, params, task_spec(config, index, dtype),
+        state, curves = run_phase(task_key, config, phase, params, world_of(config).task(config, index, dtype),
                                   task_start(config, agent, index), config.task_steps,
                                   phase_steps=config.adult_noise_steps)
         return state.agent, curves
 
     adult_agents, curves = jax.vmap(live_task)(keys.tasks, jnp.arange(config.num_tasks))
-    _, _, best = task_arrays(config, dtype)
+    best = world_of(config).max_reaches(config, dtype)
     reaches = curves.reaches.sum(-1)
     performance = reaches / best
     return LifetimeResult(
@@ -273,8 +277,8 @@ class LifeDraws(NamedTuple):
 def life_draws(key: jax.Array, config: Config, dtype=jnp.float32) -> LifeDraws:
     """The draws ``live(key, config, ...)`` makes, step by step (for :func:`imrl_jax.agent.reference.live`)."""
     keys = lifetime_keys(key, config.num_tasks)
-    respawn = config.spec.has_childhood and childhood_phase(config).respawn
-    child = draw_many(keys.childhood, config.childhood_steps, config.draw_block, spawn=respawn)
+    spawn = spawn_draws(config, childhood_phase(config)) if config.spec.has_childhood else 0
+    child = draw_many(keys.childhood, config.childhood_steps, config.draw_block, spawn=spawn)
     tasks = jax.vmap(draw_many, (0, None, None))(keys.tasks, config.task_steps, config.draw_block)
     return LifeDraws(random_pose(keys.pose, config, dtype), child, tasks)
 

@@ -1,8 +1,8 @@
 """The state a phase carries from step to step, and what it records (section 2, MODEL.md "Acting").
 
 A phase (:class:`Phase`: who learns, from which reward, with or without a target) runs a
-scan whose carry is a :class:`State`: the agent's weights, the eligibility traces, the pose,
-the retina of the last two steps, what the previous step left for learning
+scan whose carry is a :class:`State`: the agent's weights, the eligibility traces, the world's
+state (the arena's: the robot's pose), the observations of the last two steps, what the previous step left for learning
 (:class:`Previous`), and the random numbers of the current block of steps (:class:`Draws`).
 Every step records a :class:`StepRecord`; a phase returns per-bin :class:`Curves`. Both the
 XLA step (``lifetime.step``) and the GPU kernel (``kernel.py``) use these types.
@@ -10,16 +10,16 @@ XLA step (``lifetime.step``) and the GPU kernel (``kernel.py``) use these types.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
 
-from imrl_jax.world.arena import Pose, heading_vector
 from imrl_jax.conditions import CHILDHOOD, Phase
 from imrl_jax.config import Config, ConfigError, LearningParams
 from imrl_jax.agent.networks import Agent
 from imrl_jax.agent.timescale import Option, init_option
+from imrl_jax.world.worlds import world_of
 
 
 def bin_steps(num_steps: int, num_bins: int) -> int:
@@ -53,7 +53,8 @@ def learning_until(params: LearningParams, learning) -> LearningParams:
 
 class Draws(NamedTuple):
     """The random numbers of one step: expert choice u ~ U[0, 1), action noise z ~ N(0, I2),
-    and (phases with respawns only) a random pose's (x, y, heading) as U[0, 1)^3."""
+    and (phases with respawns only) the world's ``num_spawn_draws`` U[0, 1) numbers of a random start (the arena's:
+    a pose's x, y, heading)."""
 
     u: jnp.ndarray
     z: jnp.ndarray
@@ -91,24 +92,20 @@ class State(NamedTuple):
 
     agent: Agent
     traces: Traces
-    pose: Pose
-    # (cos, sin) of pose.heading. Carried, so that the retina's kernels read it rather
-    # than compute it again for each of their sample points.
-    direction: jnp.ndarray
+    world: Any  # the world's state (the arena's ``env.EnvState``: pose, direction, trial step, steps on a wall)
     xbs: jnp.ndarray  # (2, n+1): x~_t in row t % 2 (written by the step), x~_{t-1} in the other
     prev: Previous
-    trial_step: jnp.ndarray  # steps since the current trial started
     t: jnp.ndarray  # step within the phase
     block: Draws  # the random numbers of the current block of steps
-    pinned: jnp.ndarray  # steps on a wall in a row (childhood with respawns)
     baseline: jnp.ndarray  # (K,): each expert's running mean surprise (childhood "progress" reward)
     option: Option | None = None  # the selector's running choice (a selector on its own time-scale only)
 
 
 class StepRecord(NamedTuple):
-    """What one step produced: the pose after it, the expert in control, its events."""
+    """What one step produced: the world's state after it (the arena's: the pose), the expert in control, its
+    events."""
 
-    pose: Pose
+    world: Any
     k: jnp.ndarray
     reached: jnp.ndarray
     timeout: jnp.ndarray
@@ -124,22 +121,25 @@ class Curves(NamedTuple):
     respawns: jnp.ndarray | None = None  # (bins,): random poses after a wall (phases with respawns only)
 
 
-def draw_block(key: jax.Array, block, block_steps: int, noisy: bool = True, spawn: bool = False) -> Draws:
+def draw_block(key: jax.Array, block, block_steps: int, noisy: bool = True, spawn: int = 0) -> Draws:
     """The draws of steps block*B .. block*B + B-1 of a phase whose key is ``key``.
 
     Random numbers are made ``block_steps`` at a time (one vectorised call instead of
     one per step). Phases without action noise get zeros for z; the expert-choice
-    numbers are the same either way, and so are both with or without ``spawn`` draws.
+    numbers are the same either way, and so are both with or without ``spawn`` draws (a random start's
+    ``spawn`` numbers a step, 0: none).
     """
+    if isinstance(spawn, bool):  # a count, not a flag: True would draw one number where a start needs several
+        raise TypeError("draw_block: spawn is the number of draws of a random start (World.num_spawn_draws), or 0")
     key_block = jax.random.fold_in(key, block)
     key_u, key_z = jax.random.split(key_block)
     u = jax.random.uniform(key_u, (block_steps,))
     z = jax.random.normal(key_z, (block_steps, 2)) if noisy else jnp.zeros((block_steps, 2), u.dtype)
-    spawned = jax.random.uniform(jax.random.fold_in(key_block, 2), (block_steps, 3)) if spawn else None
+    spawned = jax.random.uniform(jax.random.fold_in(key_block, 2), (block_steps, spawn)) if spawn else None
     return Draws(u, z, spawned)
 
 
-def draw_many(key: jax.Array, num_steps: int, block_steps: int, spawn: bool = False) -> Draws:
+def draw_many(key: jax.Array, num_steps: int, block_steps: int, spawn: int = 0) -> Draws:
     """The draws of steps 0 .. num_steps-1 (for the reference and tests)."""
     num_blocks = -(-num_steps // block_steps)
     blocks = jax.vmap(draw_block, (None, 0, None, None, None))(key, jnp.arange(num_blocks), block_steps, True,
@@ -147,31 +147,33 @@ def draw_many(key: jax.Array, num_steps: int, block_steps: int, spawn: bool = Fa
     return jax.tree.map(lambda x: x.reshape((-1,) + x.shape[2:])[:num_steps], blocks)
 
 
-def init_state(config: Config, agent: Agent, pose: Pose) -> State:
-    """A phase's first carry: zero traces, nothing to learn from, step 0."""
+def init_state(config: Config, agent: Agent, world) -> State:
+    """A phase's first carry in the world's state ``world``: zero traces, nothing to learn from, step 0."""
     dtype = agent.actor.dtype
     k, n = agent.selector_actor.shape
     zeros = lambda *shape: jnp.zeros(shape, dtype)  # noqa: E731
     return State(
         agent=agent,
         traces=Traces(zeros(2, n), zeros(n), zeros(k, n), zeros(n), jnp.bool_(False), jnp.bool_(False)),
-        pose=pose,
-        direction=heading_vector(pose.heading),
+        world=world,
         xbs=zeros(2, n),
         prev=Previous(jnp.int32(0), zeros(2), zeros(2), zeros(k), jnp.bool_(False), jnp.bool_(False)),
-        trial_step=jnp.int32(0),
         t=jnp.int32(0),
         block=Draws(zeros(config.draw_block), zeros(config.draw_block, 2)),
-        pinned=jnp.int32(0),
         baseline=zeros(k),
         option=init_option(k, n, dtype) if config.selector_options else None,
     )
 
 
+def spawn_draws(config: Config, phase: Phase) -> int:
+    """The uniform numbers a step of ``phase`` draws for a random start: the world's, in phases with respawns."""
+    return world_of(config).num_spawn_draws if phase.respawn else 0
+
+
 def for_phase(config: Config, phase: Phase, state: State) -> State:
-    """``state`` whose carried draws have the phase's structure (respawn draws only where used)."""
+    """``state`` whose carried draws have the phase's structure (a world's respawn draws only where used)."""
     if phase.respawn and state.block.spawn is None:
-        return state._replace(block=state.block._replace(spawn=jnp.zeros((config.draw_block, 3),
+        return state._replace(block=state.block._replace(spawn=jnp.zeros((config.draw_block, spawn_draws(config, phase)),
                                                                           state.block.u.dtype)))
     if not phase.respawn and state.block.spawn is not None:
         return state._replace(block=state.block._replace(spawn=None))

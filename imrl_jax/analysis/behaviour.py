@@ -25,6 +25,7 @@ from imrl_jax.agent.lifetime import childhood_task, lifetime_keys, random_pose, 
 from imrl_jax.agent.state import childhood_phase, for_phase, init_state
 from imrl_jax.agent.networks import Agent, decode
 from imrl_jax.world.retina import sample_points
+from imrl_jax.world.env import at
 
 #: Names of the columns of :func:`colour_shares`.
 SEEN = ("red", "green", "blue", "nothing")
@@ -62,7 +63,7 @@ class Trajectory(NamedTuple):
 
 def _trajectory(start: Pose, record) -> Trajectory:
     """A Trajectory from a start pose and simulate's records (jnp in, numpy out; batched too)."""
-    pos, heading = record.pose.pos, record.pose.heading
+    pos, heading = record.world.pose.pos, record.world.pose.heading
     seen_pos = jnp.concatenate([start.pos[..., None, :], pos[..., :-1, :]], -2)
     seen_heading = jnp.concatenate([start.heading[..., None], heading[..., :-1]], -1)
     return Trajectory(*(np.asarray(x) for x in (seen_pos, seen_heading, pos, heading, record.k, record.reached,
@@ -73,7 +74,7 @@ def _trajectory(start: Pose, record) -> Trajectory:
 def _childhood(key, config, params, genome, num_steps, phase_steps):
     keys = lifetime_keys(key, config.num_tasks)
     start = random_pose(keys.pose, config)
-    state = init_state(config, decode(config, genome), start)
+    state = init_state(config, decode(config, genome), at(start))
     _, record = simulate(keys.childhood, config, childhood_phase(config), params, childhood_task(config), state,
                          num_steps, phase_steps)
     return start, record
@@ -88,7 +89,7 @@ def childhood_trajectory(key: jax.Array, config: Config, params: LearningParams,
 
 def _task(key, config, params, agent, index, num_steps):
     task = task_spec(config, index)
-    state = init_state(config, agent, task.start)
+    state = init_state(config, agent, at(task.start))
     _, record = simulate(key, config, config.spec.adult, params, task, state, num_steps,
                          config.task_steps)
     return task.start, record
@@ -309,7 +310,7 @@ def _probe_from(config, agent, poses, num_steps):
     key = jax.random.key(0)  # unused: no choice is random under a forced selector, and no noise
 
     def run(expert, pose):
-        state = init_state(config, force_expert(agent, expert), pose)
+        state = init_state(config, force_expert(agent, expert), at(pose))
         _, record = simulate(key, config, PROBE, params, childhood_task(config), state, num_steps)
         return record
 
@@ -370,12 +371,12 @@ def make_childhoods(config, num_pieces: int = NUM_PIECES, jit: bool = True):
 
     def one(key, params, genome):
         keys = lifetime_keys(key, config.num_tasks)
-        state = for_phase(config, phase, init_state(config, decode(config, genome), random_pose(keys.pose, config)))
+        state = for_phase(config, phase, init_state(config, decode(config, genome), at(random_pose(keys.pose, config))))
 
         def piece(state, _):
             state, curves = run_phase(keys.childhood, config, phase, params, childhood_task(config), state,
                                       piece_steps, phase_steps=config.childhood_steps, num_bins=1)
-            on_wall = jnp.any((state.pose.pos <= r + 1e-3) | (state.pose.pos >= size - r - 1e-3))
+            on_wall = jnp.any((state.world.pose.pos <= r + 1e-3) | (state.world.pose.pos >= size - r - 1e-3))
             respawns = jnp.int32(0) if curves.respawns is None else curves.respawns[0]
             return state, (curves.selections[0], on_wall, respawns)
 

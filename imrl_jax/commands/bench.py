@@ -90,9 +90,9 @@ class Program(NamedTuple):
 
 
 def _module(package: str, name: str):
-    """A package's module by its name, where the revision keeps it: ``agent/lifetime.py``, or (revisions before the
-    sub-packages) ``lifetime.py``."""
-    for path in (f"{package}.{name}", f"{package}.agent.{name}"):
+    """A package's module by its name, where the revision keeps it: ``agent/lifetime.py`` (or ``world/env.py``), or
+    (revisions before the sub-packages) ``lifetime.py``."""
+    for path in (f"{package}.{name}", f"{package}.agent.{name}", f"{package}.world.{name}"):
         try:
             return importlib.import_module(path)
         except ModuleNotFoundError as missing:
@@ -128,6 +128,9 @@ def phase_program(condition: str, phase_name: str, lanes: int, steps: int, packa
     passes an earlier revision's, imported under another name).
     """
     config_module, L, networks = _modules(package)
+    env = _module(package, "env")
+    # A phase starts in the world's state (the arena's at a pose), or (revisions before worlds) at the pose.
+    start = env.at if hasattr(env, "at") else (lambda pose: pose)
     config = config_module.make_config("paper", condition=condition, childhood_steps=steps, task_steps=steps,
                                        num_bins=1, **_kernel_field(step_kernel, config_module))
     phase = _phase(package, phase_name)
@@ -142,7 +145,7 @@ def phase_program(condition: str, phase_name: str, lanes: int, steps: int, packa
             agent = L.adult_agent(config, agent)
             task = L.task_spec(config, 0)
             pose = task.start
-        state, curves = L.run_phase(key, config, phase, params, task, L.init_state(config, agent, pose), steps)
+        state, curves = L.run_phase(key, config, phase, params, task, L.init_state(config, agent, start(pose)), steps)
         return curves.reaches, curves.selections
 
     return Program(jax.jit(jax.vmap(lane)), _lane_inputs(config, lanes), lanes * steps, config)

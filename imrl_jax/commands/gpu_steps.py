@@ -177,6 +177,7 @@ def float32_phase(check: Check) -> dict:
     from imrl_jax.config import Task, make_config
     from imrl_jax.agent.networks import decode
     from imrl_jax.agent.state import draw_many
+    from imrl_jax.world.env import at
 
     steps = check.sizes.float32_steps
     config = make_config("paper", condition="EE-LS", tasks=(Task(**reference.SHORT_TASK_FIELDS),), task_steps=steps,
@@ -185,7 +186,7 @@ def float32_phase(check: Check) -> dict:
     agent = decode(config, jnp.zeros((config.num_genes,)))._replace(
         actor=jnp.asarray(reference.hand_experts(config.num_inputs + 1), jnp.float32))
     task, key, params = L.task_spec(config, 0), jax.random.key(0), config.learning_params()
-    state = L.init_state(config, agent, task.start)
+    state = L.init_state(config, agent, at(task.start))
     draws = draw_many(key, steps, config.draw_block)
     weights = {k: np.asarray(v, np.float64) for k, v in agent._asdict().items() if v is not None}
     ref = reference.run_phase(config, "adult-ls", weights, (*reference.SHORT_TASK_FIELDS["start"], 0.0),
@@ -199,7 +200,7 @@ def float32_phase(check: Check) -> dict:
             executable, _ = compile_program(check, fn, key, params, state)
             final, curves = jax.block_until_ready(executable(key, params, state))
             check.stage = "numbers"
-            pose = np.asarray(final.pose.pos, np.float64)
+            pose = np.asarray(final.world.pose.pos, np.float64)
             largest, excess = weights_excess(final.agent, ref["weights"], **TOLERANCES["float32"])
             row.update(reaches=int(curves.reaches.sum()), max_weight_diff=largest,
                        pose_diff_cm=float(np.abs(pose - [ref["x"][-1], ref["y"][-1]]).max()))

@@ -24,8 +24,9 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 
-from imrl_jax.world.arena import Pose, heading_vector, move, on_wall, spawn_pose, task_arrays, trial_ends
 from imrl_jax.config import Config
+from imrl_jax.world.arena import Pose, heading_vector, move, on_wall, spawn_pose, task_arrays, trial_ends
+from imrl_jax.world.base import CONTINUOUS, Actions, Events
 from imrl_jax.world.retina import observe
 
 
@@ -50,12 +51,9 @@ class EnvState(NamedTuple):
     pinned: jnp.ndarray  # steps on a wall in a row (with respawns)
 
 
-class Events(NamedTuple):
-    """What one step of the environment produced."""
-
-    reached: jnp.ndarray  # the target was reached (reward 1)
-    timeout: jnp.ndarray  # the trial's steps were used up
-    respawned: jnp.ndarray  # put at a random pose after too long on a wall
+def at(pose: Pose) -> EnvState:
+    """The arena's state with the robot at ``pose``, a trial just started (no steps on a wall)."""
+    return EnvState(pose, heading_vector(pose.heading), jnp.int32(0), jnp.int32(0))
 
 
 def random_pose(key: jax.Array, config: Config, dtype=jnp.float32) -> Pose:
@@ -113,7 +111,7 @@ class Environment:
 
     def at(self, pose: Pose) -> EnvState:
         """The robot at ``pose``, a trial just started."""
-        return EnvState(pose, heading_vector(pose.heading), jnp.int32(0), jnp.int32(0))
+        return at(pose)
 
     def observe(self, state: EnvState) -> jnp.ndarray:
         """The retina's view of the floor ahead (section 2: 6 x 2 points x RGB)."""
@@ -141,3 +139,44 @@ class Environment:
 def make_env(config: Config, has_target: bool = True, respawn: bool = False) -> Environment:
     """The environment of a phase: adult tasks have a target; childhood has none and may respawn."""
     return Environment(config, has_target, respawn)
+
+
+@dataclasses.dataclass(frozen=True)
+class Arena:
+    """The paper's arena as a world (:class:`imrl_jax.world.base.World`): the retina's 36 inputs, the (turn, speed)
+    command, the config's task set; its settings are the config's geometry fields."""
+
+    name: str = "arena"
+    num_spawn_draws: int = 3  # a random pose's (x, y, heading) as U[0, 1)^3
+
+    def num_inputs(self, config: Config) -> int:
+        """The retina's points x 3 receptors."""
+        return config.num_inputs
+
+    def actions(self, config: Config) -> Actions:
+        """Turn and speed, each in [0, 1]."""
+        return Actions(CONTINUOUS, 2)
+
+    def num_tasks(self, config: Config) -> int:
+        """The config's task set."""
+        return config.num_tasks
+
+    def task(self, config: Config, index, dtype=jnp.float32) -> TaskSpec:
+        """Task ``index``'s start pose and target."""
+        return task_spec(config, index, dtype)
+
+    def childhood_task(self, config: Config, dtype=jnp.float32) -> TaskSpec:
+        """No target (a placeholder of a task's structure)."""
+        return childhood_task(config, dtype)
+
+    def max_reaches(self, config: Config, dtype=jnp.float32) -> jnp.ndarray:
+        """Each task's theoretical maximum: the straight line at full speed."""
+        return task_arrays(config, dtype)[2]
+
+    def make_env(self, config: Config, has_target: bool = True, respawn: bool = False) -> Environment:
+        """:func:`make_env`."""
+        return make_env(config, has_target, respawn)
+
+
+#: The paper's arena, the world every config lives in until a config names another.
+ARENA = Arena()
