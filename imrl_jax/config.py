@@ -59,6 +59,9 @@ MAX_GENERATIONS = 1_000_000
 #: Experts an individual may have: the paper has 3. Compiling a life grows with them (about 3 MB each on a CPU);
 #: a thousand took a 24 GB machine down.
 MAX_EXPERTS = 64
+#: The most inputs and discrete actions another world may give (a perceptron's weights grow with both).
+MAX_INPUTS = 10_000
+MAX_ACTIONS = 64
 #: Any length of the arena, the floor, the robot or its retina, in cm (the paper's arena is 400 cm wide).
 MAX_LENGTH = 10_000.0
 
@@ -156,6 +159,14 @@ class Config:
     # implements the model, else xla (kernel_choice.py: a command records the choice in the run's config.json).
     step_kernel: str = dataclasses.field(default="auto", metadata={"compute": True})
 
+    # --- the world the agent lives in (docs/WORLDS.md): "arena" is section 2's, with the geometry below. Another
+    # world's settings are its own (NAME=VALUE pairs its World reads); its observation size and discrete actions
+    # are recorded here, so that a genome is sized without the world (imrl_jax.world.worlds.configure sets them).
+    world: str = "arena"
+    world_settings: tuple = ()
+    world_inputs: int = _bounded(0, 0, MAX_INPUTS)  # 0: the arena's retina
+    world_actions: int = _bounded(0, 0, MAX_ACTIONS)  # 0: the arena's (turn, speed); else discrete actions
+
     # --- arena and floor (fixed here)
     arena_size: float = _bounded(400.0, 0.0, MAX_LENGTH, lo_open=True)
     edge_length: float = _bounded(40.0, 0.0, MAX_LENGTH, lo_open=True)  # and at most arena_size
@@ -227,8 +238,13 @@ class Config:
     # ------------------------------------------------------------------ derived values
     @property
     def num_inputs(self) -> int:
-        """Retina size: points x 3 receptors (36 in the paper)."""
-        return 3 * len(self.retina_lateral) * len(self.retina_forward)
+        """The observation's size: the retina's points x 3 receptors (36 in the paper), or another world's."""
+        return self.world_inputs or 3 * len(self.retina_lateral) * len(self.retina_forward)
+
+    @property
+    def num_actor_units(self) -> int:
+        """Each actor's outputs: the arena's (turn, speed), or one per discrete action of another world."""
+        return self.world_actions or 2
 
     @property
     def num_tasks(self) -> int:
@@ -322,6 +338,8 @@ class Config:
                 data[child] = data[adult]
         # Runs recorded before the field existed lived the XLA step: a resume keeps it (never "auto").
         data.setdefault("step_kernel", "xla")
+        if "world_settings" in data:  # JSON's lists of [name, value]
+            data["world_settings"] = tuple(tuple(pair) for pair in data["world_settings"])
         if "tasks" in data:
             data["tasks"] = tuple(
                 t if isinstance(t, Task) else Task(tuple(t["start"]), t["heading_deg"], tuple(t["target"]))
@@ -500,3 +518,15 @@ def _validate(c: Config) -> None:
                           f"over the target)")
     if not c.retina_lateral or not c.retina_forward:
         fail("retina_lateral", "the retina needs at least one point")
+    if not isinstance(c.world, str) or not c.world.isidentifier():
+        fail("world", "must be a world's name (imrl_jax.world.worlds.WORLDS)")
+    if c.world == "arena" and (c.world_settings or c.world_inputs or c.world_actions):
+        fail("world_settings" if c.world_settings else "world_inputs" if c.world_inputs else "world_actions",
+             "is another world's: the arena's settings are the geometry fields")
+    if c.world != "arena" and (c.world_inputs < 1 or c.world_actions < 2):
+        fail("world_inputs" if c.world_inputs < 1 else "world_actions",
+             f"must be world {c.world}'s (imrl_jax.world.worlds.configure sets them)")
+    if not isinstance(c.world_settings, tuple) or not all(
+            isinstance(p, tuple) and len(p) == 2 and isinstance(p[0], str) and isinstance(p[1], (str, int, float))
+            for p in c.world_settings):
+        fail("world_settings", "must be (name, value) pairs, each value a number or a text")

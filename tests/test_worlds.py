@@ -22,7 +22,7 @@ def test_the_arena_is_a_world():
     assert E.ARENA.num_inputs(config) == 36 and E.ARENA.actions(config) == base.Actions(base.CONTINUOUS, 2)
     assert E.ARENA.num_tasks(config) == 6 and E.ARENA.num_spawn_draws == 3
     np.testing.assert_allclose(E.ARENA.max_reaches(config), config.theoretical_max(), rtol=1e-6)
-    assert worlds.world_of(config) is E.ARENA and worlds.WORLDS == {"arena": E.ARENA}
+    assert worlds.world_of(config) is E.ARENA and worlds.WORLDS == {"arena": E.ARENA, "xland": "imrl_jax.world.xland"}
 
 
 def test_a_respawn_draws_the_world_s_count_of_numbers_and_a_flag_is_refused():
@@ -73,3 +73,78 @@ def test_a_life_reaches_the_world_only_through_it(tiny, monkeypatch):
     # Seeing nothing, every perceptron reads only its bias: the reinforcers pay the same reward everywhere.
     assert not np.array_equal(np.asarray(blind.agent.actor), np.asarray(plain.agent.actor))
     np.testing.assert_array_equal(np.asarray(blind.agent.actor)[..., :-1], 0.0)
+
+
+xland = pytest.importorskip  # the second world's tests need the worlds extra (skipped in the minimum environment)
+
+
+def _xland_config(tiny, **settings):
+    xland("xminigrid")
+    return worlds.configure(tiny("LE-LS", childhood_steps=300, task_steps=200), "xland", **settings)
+
+
+def test_a_config_moves_into_another_world_with_its_sizes(tiny):
+    from imrl_jax.config import Config
+    from imrl_jax.runs import runspec
+
+    config = _xland_config(tiny, arm_length=5)
+    assert (config.world, config.world_settings, config.world_inputs, config.world_actions) == (
+        "xland", (("arm_length", 5),), 55, 5)
+    assert config.num_inputs == 55 and config.num_actor_units == 5 and config.num_genes == 3 * 56
+    assert Config.from_dict(config.to_dict()) == config  # config.json's lists of pairs read back
+    arena = worlds.configure(config, "arena")
+    assert arena == tiny("LE-LS", childhood_steps=300, task_steps=200)
+    # A world's name and settings are part of a run's key; the arena's keys are as before worlds.
+    keys = {runspec.RunSpec(c, (0,)).key for c in (arena, config, _xland_config(tiny))}
+    assert len(keys) == 3 and "world" not in runspec.model(arena) and runspec.model(config)["world"] == "xland"
+
+
+@pytest.mark.parametrize("change, field", [
+    (dict(world="nowhere", world_inputs=5, world_actions=2), "world: unknown world 'nowhere'"),
+    (dict(world_settings=(("arm_length", 9),), world_inputs=0, world_actions=0, world="arena"), "world_settings"),
+    (dict(world_settings=(("colour", 1),)), "world_settings: unknown setting 'colour'"),
+    (dict(world_settings=(("task_set", "paper"),)), "world_settings: task_set"),
+    (dict(world_settings=(("arm_length", 1),)), "world_settings: XLandSettings.arm_length"),
+    (dict(world_inputs=36), "world_inputs: 36 inputs and 5 actions are not world xland's"),
+    (dict(condition="EE-ES"), "condition: EE-ES evolves the arena's actor"),
+])
+def test_a_world_a_config_cannot_live_in_is_refused_naming_the_field(tiny, change, field):
+    from imrl_jax.config import ConfigError
+
+    config = _xland_config(tiny)
+    with pytest.raises(ConfigError) as refused:
+        worlds.world_of(dataclasses.replace(config, **change))
+    assert str(refused.value).startswith(field)
+
+
+def test_a_discrete_action_is_drawn_in_proportion_to_its_unit_and_is_the_largest_without_noise():
+    from imrl_jax import conditions as C
+
+    output = jnp.asarray([0.1, 0.6, 0.2, 0.05, 0.05])
+    z = jax.random.normal(jax.random.key(4), (20_000, 2))
+    drawn = jax.vmap(lambda zz: L.choose_action(C.CHILDHOOD, output, zz))(z)
+    np.testing.assert_allclose(np.bincount(np.asarray(drawn), minlength=5) / 20_000, output / output.sum(), atol=0.01)
+    assert int(L.choose_action(C.CHILDHOOD._replace(noisy=False), output, z[0])) == 1
+
+
+def test_a_life_in_another_world_learns_its_discrete_actions(tiny):
+    """LE-LS in XLand: childhood moves the experts' actors (one unit per action, the selector's rule), every
+    step's action is one of the world's, and the kernel refuses the world."""
+    from imrl_jax import conditions as C
+    from imrl_jax.agent import kernel
+    from imrl_jax.config import ConfigError
+
+    config = _xland_config(tiny)
+    genome = jax.random.uniform(jax.random.key(0), (config.num_genes,), minval=-1.0, maxval=1.0)
+    life = jax.jit(L.live, static_argnums=1)(jax.random.key(1), config, config.learning_params(), genome)
+    assert life.agent.actor.shape == (3, 5, 56) and np.all(np.isfinite(np.asarray(life.agent.actor)))
+    assert np.abs(np.asarray(life.agent.actor)).sum() > 0 and 0.0 <= float(life.fitness) <= 1.0
+    world = worlds.world_of(config)
+    agent = L.decode(config, genome)
+    start = world.make_env(config, False, False).reset(jax.random.key(2), world.childhood_task(config))
+    _, record = L.simulate(jax.random.key(3), config, C.CHILDHOOD._replace(respawn=False), config.learning_params(),
+                           world.childhood_task(config), S.init_state(config, agent, start), 50)
+    assert record.world.position.shape == (50, 2)  # the world's own state, recorded
+    assert "world xland" in kernel.unsupported(config)
+    with pytest.raises(ConfigError, match="world xland"):
+        kernel.run_phase(jax.random.key(0), config, C.CHILDHOOD, config.learning_params(), None, None, 10)

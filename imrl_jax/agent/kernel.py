@@ -440,6 +440,9 @@ def check_agent(agent: Agent) -> None:
 
 def unsupported(config: Config) -> str | None:
     """Why the kernel cannot live ``config``'s condition (one line), or None when it can."""
+    if config.world != "arena":  # the kernel's loop is the arena's step
+        return (f"step_kernel: the pallas kernel does not implement world {config.world} (the arena's only); use "
+                f"step_kernel=xla")
     try:
         if config.spec.has_childhood:
             check_supported(childhood_phase(config))
@@ -454,6 +457,8 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
               state: State, num_steps: int, phase_steps: int | None = None,
               num_bins: int | None = None, interpret: bool | None = None) -> tuple[State, Curves]:
     """:func:`imrl_jax.agent.lifetime.run_phase`, each bin one kernel call (``interpret``: default off a GPU)."""
+    if config.world != "arena":
+        raise ConfigError(unsupported(config), "step_kernel")
     check_supported(phase)
     check_parts(config.spec.genome)
     check_agent(state.agent)

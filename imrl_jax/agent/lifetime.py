@@ -23,6 +23,7 @@ from imrl_jax.config import Config, LearningParams
 from imrl_jax.agent import kernel_choice
 from imrl_jax.genome import EVOLVED_FIELDS
 from imrl_jax.world.env import TaskSpec, childhood_task, random_pose, task_spec  # noqa: F401 (lifetime's names for them)
+from imrl_jax.world.base import DISCRETE
 from imrl_jax.world.worlds import world_of
 from imrl_jax.agent.learning import learn_experts, learn_selector, learn_selector_over_option, pick_row, take_row
 from imrl_jax.agent.networks import Agent, act, decode, explore, expressed_only, select, with_bias, zero_agent
@@ -84,6 +85,15 @@ def _action(phase: Phase, params: LearningParams, output, z, t, phase_steps: int
     return explore(output, z, params.noise_std, t, phase_steps) if phase.noisy else output
 
 
+def choose_action(phase: Phase, output, z):
+    """A discrete world's action: drawn with probability o_a / sum(o) where the phase explores (the paper's rule for
+    its one discrete choice, the selector's; the draw's uniform is Phi(z_0) of the step's action noise), else the
+    largest o_a. Learned as the selector is: e_W <- gamma lambda e_W + ((e_a - o) o (1 - o)) x~^T."""
+    if not phase.noisy:
+        return jnp.argmax(output).astype(jnp.int32)
+    return select(jax.scipy.special.ndtr(z[0]), output)
+
+
 def step(key: jax.Array, config: Config, phase: Phase, params: LearningParams, task: TaskSpec, phase_steps: int,
          state: State) -> tuple[State, StepRecord]:
     """One control cycle (MODEL.md "Acting, each time step t of a phase"): observe, choose, learn, act, move.
@@ -91,7 +101,8 @@ def step(key: jax.Array, config: Config, phase: Phase, params: LearningParams, t
     ``key`` is the phase's key: the step takes its random numbers from the block of draws it
     makes from it every ``config.draw_block`` steps.
     """
-    env = world_of(config).make_env(config, phase.has_target, phase.respawn)
+    world = world_of(config)
+    env = world.make_env(config, phase.has_target, phase.respawn)
     robot = state.world
     block, draws = _draws(config, phase, key, state)
     # An individual with learning values of its own (evolved learning parameters) learns with them.
@@ -129,12 +140,16 @@ def step(key: jax.Array, config: Config, phase: Phase, params: LearningParams, t
     if option is not None:
         option = next_option(option, choose, xb, selection)
 
-    # 4: act: the expert in control's output, with noise where the phase has it.
+    # 4: act: the expert in control's output, with noise where the phase has it (a discrete world: one action).
     output = act(pick_row(agent.actor, k), xb)
-    action = _action(phase, params, output, draws.z, state.t, phase_steps)
+    if world.actions(config).kind == DISCRETE:
+        index = choose_action(phase, output, draws.z)
+        action, command = jax.nn.one_hot(index, output.shape[0], dtype=output.dtype), index
+    else:
+        action = command = _action(phase, params, output, draws.z, state.t, phase_steps)
 
-    # 5: turn, move, clamp; then walls (respawn), the target and the timeout.
-    robot, events = env.transition(robot, action, task, draws.spawn)
+    # 5: the world's step (the arena's: turn, move, clamp; then walls (respawn), the target and the timeout).
+    robot, events = env.transition(robot, command, task, draws.spawn)
     prev = Previous(k, action, output, selection, ~(events.timeout | events.respawned), events.reached)
     state = State(agent, traces, robot, xbs, prev, state.t + 1, block, baseline, option)
     return state, StepRecord(robot, k, events.reached, events.timeout, events.respawned)

@@ -108,12 +108,15 @@ def evaluate_both(v: jnp.ndarray, xbs: jnp.ndarray) -> jnp.ndarray:
 
 
 def zero_agent(config: Config, dtype=jnp.float32) -> Agent:
-    """An agent before evolution and learning: weights 0 (MODEL.md), except the actors' speed
+    """An agent before evolution and learning: weights 0 (MODEL.md), except (in the arena) the actors' speed
     unit's bias, ``config.initial_speed_bias`` (0 by default; docs/CHILDHOOD.md)."""
-    k, n = config.num_lane_experts, config.num_inputs + 1
+    k, n, units = config.num_lane_experts, config.num_inputs + 1, config.num_actor_units
+    actor = jnp.zeros((k, units, n), dtype)
+    if config.world == "arena":  # the speed unit's bias: a discrete world's actions start alike
+        actor = actor.at[:, 1, -1].set(config.initial_speed_bias)
     agent = Agent(
         reinforcer=jnp.zeros((k, n), dtype),
-        actor=jnp.zeros((k, 2, n), dtype).at[:, 1, -1].set(config.initial_speed_bias),
+        actor=actor,
         evaluator=jnp.zeros((k, n), dtype),
         selector_actor=jnp.zeros((k, n), dtype),
         selector_critic=jnp.zeros((n,), dtype),

@@ -151,13 +151,14 @@ def init_state(config: Config, agent: Agent, world) -> State:
     """A phase's first carry in the world's state ``world``: zero traces, nothing to learn from, step 0."""
     dtype = agent.actor.dtype
     k, n = agent.selector_actor.shape
+    units = agent.actor.shape[1]  # the arena's (turn, speed), or a discrete world's actions
     zeros = lambda *shape: jnp.zeros(shape, dtype)  # noqa: E731
     return State(
         agent=agent,
-        traces=Traces(zeros(2, n), zeros(n), zeros(k, n), zeros(n), jnp.bool_(False), jnp.bool_(False)),
+        traces=Traces(zeros(units, n), zeros(n), zeros(k, n), zeros(n), jnp.bool_(False), jnp.bool_(False)),
         world=world,
         xbs=zeros(2, n),
-        prev=Previous(jnp.int32(0), zeros(2), zeros(2), zeros(k), jnp.bool_(False), jnp.bool_(False)),
+        prev=Previous(jnp.int32(0), zeros(units), zeros(units), zeros(k), jnp.bool_(False), jnp.bool_(False)),
         t=jnp.int32(0),
         block=Draws(zeros(config.draw_block), zeros(config.draw_block, 2)),
         baseline=zeros(k),

@@ -44,9 +44,16 @@ class DuplicateRunError(RunDirError):
     """Two run directories hold the same run (the same key)."""
 
 
+#: The fields naming another world than the arena: a run in the arena is keyed without them, as before worlds were.
+WORLD_FIELDS = ("world", "world_settings", "world_inputs", "world_actions")
+
+
 def model(config: Config) -> dict:
-    """A config's model: its fields less the compute choices, the run's length and those its condition never reads."""
+    """A config's model: its fields less the compute choices, the run's length and those its condition never reads
+    (and, in the arena, the fields of other worlds)."""
     skip = set(COMPUTE_FIELDS) | set(PROGRESS_FIELDS) | config.spec.ignored_fields()
+    if config.world == "arena":
+        skip |= set(WORLD_FIELDS)
     return {k: v for k, v in config.to_dict().items() if k not in skip}
 
 

@@ -1,14 +1,64 @@
-"""The worlds by name, and the world a config lives in (the paper's arena is one world; docs/WORLDS.md)."""
+"""The worlds by name, the world a config lives in, and a config moved into another world (docs/WORLDS.md)."""
 
 from __future__ import annotations
 
-from imrl_jax.world.base import World
+import dataclasses
+import importlib
+
+from imrl_jax.config import Config, ConfigError
+from imrl_jax.world.base import DISCRETE, World
 from imrl_jax.world.env import ARENA
 
-#: Every world by its name.
-WORLDS: dict[str, World] = {ARENA.name: ARENA}
+#: Every world by its name: the arena, or where another one's ``make_world(settings)`` lives (imported when asked
+#: for: an optional library's world costs nothing until then).
+WORLDS: dict[str, World | str] = {ARENA.name: ARENA, "xland": "imrl_jax.world.xland"}
+#: The genome parts that are the arena's (its actors' two units; evolved values with the speed unit's bias): not in
+#: another world.
+ARENA_PARTS = ("actor", "actor_turn", "parameters")
 
 
-def world_of(config) -> World:
-    """The world ``config`` lives in: every config lives in the arena until ``Config`` names its world."""
-    return WORLDS["arena"]
+def make(name: str, settings: tuple = ()) -> World:
+    """World ``name`` with its settings (``(name, value)`` pairs); raises ConfigError naming what is wrong."""
+    if name not in WORLDS:
+        raise ConfigError(f"world: unknown world {name!r} (known: {', '.join(WORLDS)})", "world")
+    found = WORLDS[name]
+    if not isinstance(found, str):
+        if settings:
+            raise ConfigError(f"world_settings: the {name} world's settings are the config's own fields",
+                              "world_settings")
+        return found
+    try:
+        return importlib.import_module(found).make_world(dict(settings))
+    except (TypeError, ValueError) as error:  # an unknown or impossible setting, named by the world
+        raise ConfigError(f"world_settings: {error}", "world_settings") from None
+
+
+def world_of(config: Config) -> World:
+    """The world ``config`` lives in, checked against the sizes the config records (raises ConfigError)."""
+    world = make(config.world, config.world_settings)
+    if config.world != ARENA.name:
+        actions = world.actions(config)
+        if (config.world_inputs, config.world_actions) != (world.num_inputs(config), actions.size):
+            raise ConfigError(f"world_inputs: {config.world_inputs} inputs and {config.world_actions} actions are not "
+                              f"world {config.world}'s (use imrl_jax.world.worlds.configure)", "world_inputs")
+        if world.num_tasks(config) != config.num_tasks:
+            raise ConfigError(f"world: {config.world}'s {world.num_tasks(config)} tasks are not the config's "
+                              f"{config.num_tasks}", "world")
+        arena = [p for p in config.spec.genome if p in ARENA_PARTS]
+        if arena:
+            raise ConfigError(f"condition: {config.condition} evolves the arena's {arena[0]}: not a gene of world "
+                              f"{config.world}", "condition")
+        assert actions.kind == DISCRETE, "another world's actions are discrete (the arena's are its own)"
+    return world
+
+
+def configure(config: Config, name: str, **settings) -> Config:
+    """``config`` living in world ``name`` with ``settings``: its observation size and actions recorded."""
+    pairs = tuple(sorted(settings.items()))
+    world = make(name, pairs)
+    if name == ARENA.name:
+        return dataclasses.replace(config, world=name, world_settings=(), world_inputs=0, world_actions=0)
+    moved = dataclasses.replace(config, world=name, world_settings=pairs, world_inputs=world.num_inputs(config),
+                                world_actions=world.actions(config).size)
+    world_of(moved)  # every check, before the config is used
+    return moved

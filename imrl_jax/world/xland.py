@@ -362,3 +362,15 @@ class XLand:
     def make_env(self, config, has_target: bool = True, respawn: bool = False) -> XLandEnv:
         """A task's trials (with a target), or the open room of childhood (respawns or not)."""
         return XLandEnv(self.settings, self.settings.trial_timeout or config.trial_timeout, has_target, respawn)
+
+
+def make_world(settings: dict) -> XLand:
+    """The world of a config's ``world_settings`` (raises TypeError or ValueError naming a setting that is wrong)."""
+    known = {f.name for f in dataclasses.fields(XLandSettings)}
+    unknown = sorted(set(settings) - known)
+    if unknown:
+        raise TypeError(f"unknown setting {unknown[0]!r} of world xland (settable: arm_length, view_size, pocket, "
+                        f"task_set, trial_timeout, stuck_steps)")
+    if "task_set" in settings and settings["task_set"] not in XLAND_TASK_SETS:
+        raise ValueError(f"task_set: {settings['task_set']!r} is not one of {', '.join(XLAND_TASK_SETS)}")
+    return XLand(XLandSettings(**settings))
