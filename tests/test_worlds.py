@@ -148,3 +148,13 @@ def test_a_life_in_another_world_learns_its_discrete_actions(tiny):
     assert "world xland" in kernel.unsupported(config)
     with pytest.raises(ConfigError, match="world xland"):
         kernel.run_phase(jax.random.key(0), config, C.CHILDHOOD, config.learning_params(), None, None, 10)
+
+
+@pytest.mark.parametrize("item", ["world=xland", "world_inputs=55", "world_actions=5"])
+def test_the_world_is_not_set_field_by_field(item):
+    """A config's world fields are set together (worlds.configure): --set of one is refused before anything runs."""
+    from imrl_jax.runs import cli
+
+    with pytest.raises(cli.UsageError, match="the world is not set field by field"):
+        cli.parse_sets([item])
+    assert not set(cli.WORLD_FIELDS) & set(cli.settable_fields())

@@ -129,7 +129,12 @@ def settable_fields(settings=None) -> list[str]:
     if settings is None:
         from imrl_jax.config import Config as settings
 
-    return [f.name for f in dataclasses.fields(settings) if isinstance(f.default, (bool, int, float, str))]
+    return [f.name for f in dataclasses.fields(settings) if isinstance(f.default, (bool, int, float, str))
+            and f.name not in WORLD_FIELDS]
+
+
+#: Config's fields of the world: set together by ``imrl_jax.world.worlds.configure``, never one by one with --set.
+WORLD_FIELDS = ("world", "world_settings", "world_inputs", "world_actions")
 
 
 def parse_sets(items: Sequence[str] | None, settings=None) -> dict:
@@ -146,6 +151,9 @@ def parse_sets(items: Sequence[str] | None, settings=None) -> dict:
         if not sep:
             raise UsageError(f"--set {item}: expected FIELD=VALUE, e.g. --set eta_actor=0.02")
         if name not in settable:
+            if name in WORLD_FIELDS and settings.__name__ == "Config":
+                raise UsageError(f"--set {item}: the world is not set field by field (another world than the arena: "
+                                 f"imrl_jax.world.worlds.configure, docs/WORLDS.md)")
             if name in fields:
                 raise UsageError(f"--set {item}: {name} is not a scalar field; fields: {', '.join(settable)}")
             close = [f for f in settable if name and f.startswith(name)] or \
