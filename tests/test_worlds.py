@@ -158,3 +158,16 @@ def test_the_world_is_not_set_field_by_field(item):
     with pytest.raises(cli.UsageError, match="the world is not set field by field"):
         cli.parse_sets([item])
     assert not set(cli.WORLD_FIELDS) & set(cli.settable_fields())
+
+
+def test_a_run_whose_config_names_an_impossible_world_is_refused_naming_its_file(tmp_path):
+    import json
+
+    from imrl_jax.config import Config
+    from imrl_jax.runs import rundir
+
+    saved = Config().to_dict()
+    saved.update(world="nowhere", world_inputs=5, world_actions=2)  # each field valid alone; no such world
+    (tmp_path / "config.json").write_text(json.dumps({"config": saved, "seeds": [0]}))
+    with pytest.raises(rundir.RunDirError, match=r"config.json is unreadable \(world: unknown world 'nowhere'"):
+        rundir.read_config(str(tmp_path))

@@ -181,9 +181,14 @@ def read_config(run_dir: str) -> tuple[Config, list[int]]:
     path = os.path.join(run_dir, "config.json")
     saved = read_json(path, "")
     try:
-        return Config.from_dict(saved["config"]), [int(s) for s in saved["seeds"]]
+        config = Config.from_dict(saved["config"])
+        if config.world != "arena":  # a world, its settings and sizes that belong together (a damaged file's not)
+            from imrl_jax.world.worlds import world_of
+
+            world_of(config)
+        return config, [int(s) for s in saved["seeds"]]
     except ConfigError as error:
-        if error.field == "condition":  # a row of one's own, not registered in this process
+        if error.field == "condition" and "not a gene of world" not in str(error):  # a row of one's own, not registered in this process
             made_with = " ".join(f"--register {spec}" for spec in saved.get("register", [])) or \
                 "--register MODULE:ATTRIBUTE naming its row"
             raise RunDirError(f"{path}: condition {saved['config']['condition']!r} is not a row of the condition table; "
