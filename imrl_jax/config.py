@@ -59,6 +59,9 @@ MAX_GENERATIONS = 1_000_000
 #: Experts an individual may have: the paper has 3. Compiling a life grows with them (about 3 MB each on a CPU);
 #: a thousand took a 24 GB machine down.
 MAX_EXPERTS = 64
+#: Config's fields of the world (docs/WORLDS.md): set together by ``imrl_jax.world.worlds.configure``; a run in the
+#: arena is keyed without them.
+WORLD_FIELDS = ("world", "world_settings", "world_inputs", "world_actions")
 #: The most inputs and discrete actions another world may give (a perceptron's weights grow with both).
 MAX_INPUTS = 10_000
 MAX_ACTIONS = 64

@@ -75,11 +75,8 @@ def test_a_life_reaches_the_world_only_through_it(tiny, monkeypatch):
     np.testing.assert_array_equal(np.asarray(blind.agent.actor)[..., :-1], 0.0)
 
 
-xland = pytest.importorskip  # the second world's tests need the worlds extra (skipped in the minimum environment)
-
-
 def _xland_config(tiny, **settings):
-    xland("xminigrid")
+    pytest.importorskip("xminigrid")  # the worlds extra (not in the minimum environment)
     return worlds.configure(tiny("LE-LS", childhood_steps=300, task_steps=200), "xland", **settings)
 
 
@@ -153,11 +150,12 @@ def test_a_life_in_another_world_learns_its_discrete_actions(tiny):
 @pytest.mark.parametrize("item", ["world=xland", "world_inputs=55", "world_actions=5"])
 def test_the_world_is_not_set_field_by_field(item):
     """A config's world fields are set together (worlds.configure): --set of one is refused before anything runs."""
+    from imrl_jax.config import WORLD_FIELDS
     from imrl_jax.runs import cli
 
     with pytest.raises(cli.UsageError, match="the world is not set field by field"):
         cli.parse_sets([item])
-    assert not set(cli.WORLD_FIELDS) & set(cli.settable_fields())
+    assert not set(WORLD_FIELDS) & set(cli.settable_fields())
 
 
 def test_a_run_whose_config_names_an_impossible_world_is_refused_naming_its_file(tmp_path):

@@ -27,7 +27,7 @@ import sys
 from typing import Callable, Mapping, Protocol, Sequence
 
 from imrl_jax import config as config_bounds  # imports no JAX
-from imrl_jax.config import UsageError  # defined below every layer that raises it; every command's error
+from imrl_jax.config import WORLD_FIELDS, UsageError  # defined below every layer that raises it; every command's error
 
 
 def user_errors() -> tuple[type[Exception], ...]:
@@ -132,9 +132,6 @@ def settable_fields(settings=None) -> list[str]:
     return [f.name for f in dataclasses.fields(settings) if isinstance(f.default, (bool, int, float, str))
             and f.name not in WORLD_FIELDS]
 
-
-#: Config's fields of the world: set together by ``imrl_jax.world.worlds.configure``, never one by one with --set.
-WORLD_FIELDS = ("world", "world_settings", "world_inputs", "world_actions")
 
 
 def parse_sets(items: Sequence[str] | None, settings=None) -> dict:

@@ -181,14 +181,9 @@ def read_config(run_dir: str) -> tuple[Config, list[int]]:
     path = os.path.join(run_dir, "config.json")
     saved = read_json(path, "")
     try:
-        config = Config.from_dict(saved["config"])
-        if config.world != "arena":  # a world, its settings and sizes that belong together (a damaged file's not)
-            from imrl_jax.world.worlds import world_of
-
-            world_of(config)
-        return config, [int(s) for s in saved["seeds"]]
+        config, seeds = Config.from_dict(saved["config"]), [int(s) for s in saved["seeds"]]
     except ConfigError as error:
-        if error.field == "condition" and "not a gene of world" not in str(error):  # a row of one's own, not registered in this process
+        if error.field == "condition":  # a row of one's own, not registered in this process
             made_with = " ".join(f"--register {spec}" for spec in saved.get("register", [])) or \
                 "--register MODULE:ATTRIBUTE naming its row"
             raise RunDirError(f"{path}: condition {saved['config']['condition']!r} is not a row of the condition table; "
@@ -196,6 +191,14 @@ def read_config(run_dir: str) -> tuple[Config, list[int]]:
         raise RunDirError(f"{path} is unreadable ({error})") from None
     except (ValueError, KeyError, TypeError) as error:
         raise RunDirError(f"{path} is unreadable ({error})") from None
+    if config.world != "arena":  # a world, its settings and sizes that belong together (a damaged file's may not)
+        from imrl_jax.world.worlds import world_of
+
+        try:
+            world_of(config)
+        except ConfigError as error:
+            raise RunDirError(f"{path} is unreadable ({error})") from None
+    return config, seeds
 
 
 def load_run(run_dir: str) -> Run:

@@ -22,7 +22,7 @@ import json
 import os
 from typing import Iterable
 
-from imrl_jax.config import COMPUTE_FIELDS, Config, ConfigError
+from imrl_jax.config import COMPUTE_FIELDS, WORLD_FIELDS, Config, ConfigError
 from imrl_jax.runs.rundir import RunDirError, read_json
 
 #: The search a run records when it records none: the paper's GA (``strategies.GA_RECORD``).
@@ -42,10 +42,6 @@ def canonical(value) -> str:
 
 class DuplicateRunError(RunDirError):
     """Two run directories hold the same run (the same key)."""
-
-
-#: The fields naming another world than the arena: a run in the arena is keyed without them, as before worlds were.
-WORLD_FIELDS = ("world", "world_settings", "world_inputs", "world_actions")
 
 
 def model(config: Config) -> dict:
