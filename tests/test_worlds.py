@@ -59,17 +59,17 @@ def test_a_life_reaches_the_world_only_through_it(tiny, monkeypatch):
     """Performance is reaches over the world's max_reaches, and the agent sees only what its env observes."""
     config = tiny("LE-LS", task_steps=300, childhood_steps=300, num_bins=2)
     genome = jax.random.uniform(jax.random.key(1), (config.num_genes,), minval=-1.0, maxval=1.0)
-    life = jax.jit(L.live, static_argnums=1)
+    # The world is read when a life is traced: each life its own function, traced anew (clearing jax's caches
+    # would make every later test in this process compile again).
+    life = lambda: jax.jit(lambda *args: L.live(*args), static_argnums=1)  # noqa: E731
     key, params = jax.random.key(2), config.learning_params()
-    plain = life(key, config, params, genome)
+    plain = life()(key, config, params, genome)
     monkeypatch.setitem(worlds.WORLDS, "arena", HalfAsHard())
-    jax.clear_caches()  # the world is read when the life is traced: trace it again
-    half = jax.jit(L.live, static_argnums=1)(key, config, params, genome)
+    half = life()(key, config, params, genome)
     np.testing.assert_array_equal(half.reaches, plain.reaches)
     np.testing.assert_allclose(half.performance, plain.performance / 2, rtol=1e-6)
     monkeypatch.setitem(worlds.WORLDS, "arena", Blind())
-    jax.clear_caches()
-    blind = jax.jit(L.live, static_argnums=1)(key, config, params, genome)
+    blind = life()(key, config, params, genome)
     # Seeing nothing, every perceptron reads only its bias: the reinforcers pay the same reward everywhere.
     assert not np.array_equal(np.asarray(blind.agent.actor), np.asarray(plain.agent.actor))
     np.testing.assert_array_equal(np.asarray(blind.agent.actor)[..., :-1], 0.0)
