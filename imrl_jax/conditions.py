@@ -58,11 +58,6 @@ GA_FIELDS = ("population_size", "num_generations", "num_parents", "mutation_prob
              "num_elites", "lives_per_fitness")
 
 
-def network_shape(network: str, num_experts: int, num_weights: int) -> tuple[int, ...]:
-    """The genes of one genome part for ``num_experts`` experts reading ``num_weights`` inputs (bias included)."""
-    return get_part(network).shape(num_experts, num_weights)
-
-
 @dataclasses.dataclass(frozen=True)
 class Condition:
     """One row of the condition table."""
@@ -82,9 +77,10 @@ class Condition:
         """Experts an individual has, given the config's ``num_experts``."""
         return 1 if self.single_expert else num_experts
 
-    def num_genes(self, num_experts: int, num_inputs: int) -> int:
-        """Genome length: the sizes of the encoded networks (LE-LS 111, EE-LS 222, EE-ES 333, SLE 0)."""
-        return sum(get_part(name).size(self.num_experts(num_experts), num_inputs + 1) for name in self.genome)
+    def num_genes(self, num_experts: int, num_inputs: int, num_actor_units: int = 2) -> int:
+        """Genome length: the sizes of the encoded networks (LE-LS 111, EE-LS 222, EE-ES 333, SLE 0 in the arena)."""
+        return sum(get_part(name).size(self.num_experts(num_experts), num_inputs + 1, num_actor_units)
+                   for name in self.genome)
 
     @property
     def has_childhood(self) -> bool:

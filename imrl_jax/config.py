@@ -266,7 +266,7 @@ class Config:
     @property
     def num_genes(self) -> int:
         """Genome length of the condition (111, 222, 333; 0 for SLE)."""
-        return self.spec.num_genes(self.num_experts, self.num_inputs)
+        return self.spec.num_genes(self.num_experts, self.num_inputs, self.num_actor_units)
 
     @property
     def offspring_per_parent(self) -> int:

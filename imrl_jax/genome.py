@@ -44,7 +44,8 @@ class GenomePart:
 
     name: str
     what: str  # in words, for messages ("the pallas kernel does not implement <what>")
-    shape: Callable[[int, int], tuple[int, ...]]  # (num_experts, num_weights with the bias) -> its genes' shape
+    shape: Callable[[int, int, int], tuple[int, ...]]  # (num_experts, num_weights with the bias, num_actor_units) -> its
+    # genes' shape
     # (config, agent, genes of that shape) -> the agent with them in place (the agent so far: zero_agent, then the
     # genome's earlier parts)
     decode: Callable
@@ -62,9 +63,9 @@ class GenomePart:
     kernel: bool = True  # the pallas kernel implements it
     field: str | None = None  # the Agent field only it sets (the kernel refuses an agent holding one it lacks)
 
-    def size(self, num_experts: int, num_weights: int) -> int:
+    def size(self, num_experts: int, num_weights: int, num_actor_units: int) -> int:
         """Its number of genes."""
-        return int(np.prod(self.shape(num_experts, num_weights), dtype=np.int64))
+        return int(np.prod(self.shape(num_experts, num_weights, num_actor_units), dtype=np.int64))
 
 
 #: The parts by name, in the order they were registered.
@@ -194,27 +195,28 @@ def _raw(name: str) -> Callable:
 
 
 for _part in (
-    _network("reinforcer", lambda k, n: (k, n), "evolved reinforcers"),
-    # Evolved actors replace the learned actors' start: the speed bias is never read.
-    _network("actor", lambda k, n: (k, 2, n), "evolved actors", ignores=("initial_speed_bias",)),
-    _network("evaluator", lambda k, n: (k, n), "evolved evaluators"),
-    _network("selector_actor", lambda k, n: (k, n), "an evolved selector"),
-    _network("selector_critic", lambda k, n: (n,), "an evolved selector critic"),
+    _network("reinforcer", lambda k, n, a: (k, n), "evolved reinforcers"),
+    # Evolved actors replace the learned actors' start: the speed bias is never read. One row per actor unit: the
+    # arena's turn and speed, or another world's discrete actions.
+    _network("actor", lambda k, n, a: (k, a, n), "evolved actors", ignores=("initial_speed_bias",)),
+    _network("evaluator", lambda k, n, a: (k, n), "evolved evaluators"),
+    _network("selector_actor", lambda k, n, a: (k, n), "an evolved selector"),
+    _network("selector_critic", lambda k, n, a: (n,), "an evolved selector critic"),
     # One expression gene per expert (an evolved number of experts): expert k is expressed when its gene is
     # positive; the largest gene's expert always is.
-    GenomePart("expressed", "an evolved number of experts", lambda k, n: (k,),
+    GenomePart("expressed", "an evolved number of experts", lambda k, n, a: (k,),
                decode=lambda config, agent, genes: agent._replace(expressed=express(genes)),
                reference_decode=_reference_express, encode=lambda agent: agent.expressed,
                start=lambda config, dtype: {"expressed": _jnp().ones((config.num_lane_experts,), dtype)},
                trait_names=_expression_names, trait_values=_expression_traits, kernel=False, field="expressed"),
     # The learning values (evolved learning parameters): the genome's values replace the config's.
-    GenomePart("parameters", "evolved learning parameters", lambda k, n: (len(EVOLVED_PARAMETERS),),
+    GenomePart("parameters", "evolved learning parameters", lambda k, n, a: (len(EVOLVED_PARAMETERS),),
                decode=_decode_parameters, reference_decode=_raw("parameters"), reference_life=_parameters_life,
                ignores=EVOLVED_FIELDS, trait_names=lambda config: EVOLVED_FIELDS, trait_values=_parameter_traits,
                kernel=False, field="params"),
     # The childhood's length (one gene): learning and noise stop after round(u x childhood_steps) steps of it,
     # u = clip((g + 1) / 2, 0, 1); childhood_steps is the maximum.
-    GenomePart("childhood_length", "an evolved childhood length", lambda k, n: (1,),
+    GenomePart("childhood_length", "an evolved childhood length", lambda k, n, a: (1,),
                decode=lambda config, agent, genes: agent._replace(
                    childhood_length=_jnp().round(unit(genes[0]) * config.childhood_steps)),
                reference_decode=_raw("childhood_length"), reference_life=_childhood_length_life,
@@ -222,12 +224,12 @@ for _part in (
                trait_values=lambda config, agent: [agent.childhood_length], kernel=False, field="childhood_length"),
     # Each actor's orientation (turn) unit only (EE-LS-T): the speed unit keeps zero_agent's start, weights 0 and
     # bias config.initial_speed_bias.
-    GenomePart("actor_turn", "evolved turn units", lambda k, n: (k, n),
+    GenomePart("actor_turn", "evolved turn units", lambda k, n, a: (k, n),
                decode=lambda config, agent, genes: agent._replace(actor=agent.actor.at[:, 0].set(genes)),
                reference_decode=_reference_turn, encode=lambda agent: agent.actor[:, 0]),
     # A second reinforcer unit per expert (LE-LS-2R): the expert's internal reward is the mean of its two units',
     # r_k = (r1 + r2) / 2 (networks.internal_rewards). A new quantity of the agent: the kernel lacks it.
-    GenomePart("second_reinforcer", "second reinforcer units", lambda k, n: (k, n),
+    GenomePart("second_reinforcer", "second reinforcer units", lambda k, n, a: (k, n),
                decode=lambda config, agent, genes: agent._replace(second_reinforcer=genes),
                reference_decode=_reference_second_reinforcer, encode=lambda agent: agent.second_reinforcer,
                start=lambda config, dtype: {"second_reinforcer": _jnp().zeros(
@@ -235,7 +237,7 @@ for _part in (
                kernel=False, field="second_reinforcer"),
     # Neutral genes (LE-LS-Z): as many as the reinforcers' (K x 37), decoded into nothing; they lengthen the genome
     # only.
-    GenomePart("neutral", "neutral genes", lambda k, n: (k, n), decode=lambda config, agent, genes: agent,
+    GenomePart("neutral", "neutral genes", lambda k, n, a: (k, n), decode=lambda config, agent, genes: agent,
                reference_decode=lambda config, weights, genes: None),
 ):
     register_part(_part)

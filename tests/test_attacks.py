@@ -49,6 +49,8 @@ def _commands() -> list[Command]:
         Command("evolve --sweep", evolve.main, evolve_parser,
                 ("--cond", "EE-LS", "--preset", "small", "--sweep", "eta=0.1,0.2", "--out", "out")),
         Command("evolve --resume", evolve.main, evolve_parser, ("--resume", "--out", "RUN")),
+        Command("evolve --world", evolve.main, evolve_parser,
+                ("--cond", "LE-LS", "--preset", "small", "--world", "xland", "--out", "out")),
         Command("learning_test", learning_test.main, learning_test_parser,
                 ("RUN", "--best", "2", "--tests", "1", "--task-steps", "200", "--bins", "2", "--steady-steps", "100",
                  "--chunks", "1", "--out", "out")),
@@ -106,6 +108,13 @@ def hostile_value(draw, action: argparse.Action) -> str:
         from imrl_jax.runs.cli import settable_fields
 
         field = st.sampled_from(settable_fields() + ["eta", "trace_lambda", "no_such_field"])
+        value = st.one_of(st.sampled_from(HOSTILE_FLOATS + HOSTILE_INTS + HOSTILE_TEXTS), st.text(max_size=8))
+        pool = st.one_of(pool, st.builds(lambda f, v: f"{f}={v}", field, value))
+    if action.dest == "world_set":  # a setting of XLand's with a hostile value, or junk
+        from imrl_jax.runs.cli import settable_fields
+        from imrl_jax.world.xland import XLandSettings
+
+        field = st.sampled_from(settable_fields(XLandSettings) + ["colours", "no_such_setting"])
         value = st.one_of(st.sampled_from(HOSTILE_FLOATS + HOSTILE_INTS + HOSTILE_TEXTS), st.text(max_size=8))
         pool = st.one_of(pool, st.builds(lambda f, v: f"{f}={v}", field, value))
     return draw(pool)

@@ -103,7 +103,8 @@ def test_a_config_moves_into_another_world_with_its_sizes(tiny):
     (dict(world_settings=(("task_set", "paper"),)), "world_settings: task_set"),
     (dict(world_settings=(("arm_length", 1),)), "world_settings: XLandSettings.arm_length"),
     (dict(world_inputs=36), "world_inputs: 36 inputs and 5 actions are not world xland's"),
-    (dict(condition="EE-ES"), "condition: EE-ES evolves the arena's actor"),
+    (dict(condition="EE-LS-T"), "condition: EE-LS-T evolves the arena's actor_turn"),
+    (dict(condition="LE-LS-P"), "condition: LE-LS-P evolves the arena's parameters"),
 ])
 def test_a_world_a_config_cannot_live_in_is_refused_naming_the_field(tiny, change, field):
     from imrl_jax.config import ConfigError
@@ -169,3 +170,43 @@ def test_a_run_whose_config_names_an_impossible_world_is_refused_naming_its_file
     (tmp_path / "config.json").write_text(json.dumps({"config": saved, "seeds": [0]}))
     with pytest.raises(rundir.RunDirError, match=r"config.json is unreadable \(world: unknown world 'nowhere'"):
         rundir.read_config(str(tmp_path))
+
+
+def test_evolved_actors_in_another_world_have_a_row_per_action(tiny):
+    """EE-ES in XLand: the genome holds K actors of one unit per action and the selector; a genome's actor genes
+    are the agent's actors as they are, and nothing learns in its life."""
+    from imrl_jax.agent import networks
+
+    config = worlds.configure(tiny("EE-ES", task_steps=200), "xland")
+    assert config.num_genes == 3 * 5 * 56 + 3 * 56  # the actors, then the selector
+    genome = jax.random.uniform(jax.random.key(0), (config.num_genes,), minval=-1.0, maxval=1.0)
+    agent = networks.decode(config, genome)
+    np.testing.assert_array_equal(np.asarray(agent.actor), np.asarray(genome[:3 * 5 * 56]).reshape(3, 5, 56))
+    np.testing.assert_array_equal(np.asarray(networks.encode(config, agent)), np.asarray(genome))
+    life = jax.jit(L.live, static_argnums=1)(jax.random.key(1), config, config.learning_params(), genome)
+    np.testing.assert_array_equal(np.asarray(life.agent.actor), np.asarray(agent.actor))
+    assert 0.0 <= float(life.fitness) <= 1.0
+
+
+def test_evolve_lives_in_the_world_its_command_line_names_and_resumes_there(tmp_path, capsys):
+    """``evolve --world xland``: config.json records the world; ``--resume`` keeps it and ends bitwise as one run of
+    as many generations; a resume naming another world is refused, the run as it was."""
+    pytest.importorskip("xminigrid")
+    from imrl_jax.commands import evolve
+    from imrl_jax.runs.rundir import read_config
+
+    line = ["--cond", "LE-LS", "--world", "xland", "--world-set", "arm_length=3", "--preset", "small", "--population",
+            "4", "--parents", "2", "--childhood-steps", "60", "--task-steps", "40", "--bins", "2", "--quiet"]
+    run, whole = str(tmp_path / "run"), str(tmp_path / "whole")
+    assert evolve.main([*line, "--generations", "1", "--out", run]) == 0
+    config = read_config(run)[0]
+    assert (config.world, config.world_settings, config.world_inputs) == ("xland", (("arm_length", 3),), 55)
+    assert evolve.main(["--resume", "--out", run, "--generations", "2", "--quiet"]) == 0
+    assert evolve.main([*line, "--generations", "2", "--out", whole]) == 0
+    with open(f"{run}/history.csv") as resumed, open(f"{whole}/history.csv") as uninterrupted:
+        assert resumed.read() == uninterrupted.read()
+    before = {name: open(f"{run}/{name}", "rb").read() for name in ("config.json", "history.csv")}
+    capsys.readouterr()
+    assert evolve.main(["--resume", "--out", run, "--world", "arena", "--generations", "3"]) == 2
+    assert "error:" in capsys.readouterr().err
+    assert before == {name: open(f"{run}/{name}", "rb").read() for name in before}

@@ -9,7 +9,7 @@ The step kernel is a compute field: the run's content key is the same whichever 
 
 from __future__ import annotations
 
-from imrl_jax.config import Config
+from imrl_jax.config import Config, ConfigError
 
 
 def unsupported(config: Config) -> str | None:
@@ -34,7 +34,14 @@ def default_backend() -> str:
 
 def resolve(config: Config, backend: str | None = None) -> tuple[Config, str | None]:
     """``config`` with an "auto" step kernel made "pallas" or "xla" on ``backend`` (default JAX's), and the note
-    that says why a GPU run falls back to the XLA step (else None); an explicit choice is kept as it is."""
+    that says why a GPU run falls back to the XLA step (else None); an explicit choice is kept as it is, but an
+    explicit pallas for a model the kernel does not implement is refused here (ConfigError), before a command writes."""
+    if config.step_kernel == "pallas":
+        from imrl_jax.agent import kernel
+
+        why = kernel.unsupported(config)
+        if why is not None:
+            raise ConfigError(why, "step_kernel")
     if config.step_kernel != "auto":
         return config, None
     backend = default_backend() if backend is None else backend

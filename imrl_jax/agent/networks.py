@@ -153,7 +153,7 @@ def decode(config: Config, genome: jnp.ndarray) -> Agent:
     agent, start = zero_agent(config, genome.dtype), 0
     for name in config.spec.genome:  # each part puts its genes in place (genome.PARTS)
         part = get_part(name)
-        shape = part.shape(config.num_lane_experts, config.num_inputs + 1)
+        shape = part.shape(config.num_lane_experts, config.num_inputs + 1, config.num_actor_units)
         size = math.prod(shape)
         agent = part.decode(config, agent, genome[start:start + size].reshape(shape))
         start += size

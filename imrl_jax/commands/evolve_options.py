@@ -11,7 +11,7 @@ import argparse
 from imrl_jax.runs import cli
 from imrl_jax import conditions
 from imrl_jax.runs.cli import HelpFormatter, UsageError, parse_sets
-from imrl_jax.config import EVOLVED_CONDITIONS, PRESETS, Config, make_config
+from imrl_jax.config import EVOLVED_CONDITIONS, PRESETS, WORLD_FIELDS, Config, make_config
 from imrl_jax.evolution.strategies import GA_NAME, make_strategy, parse_settings
 
 
@@ -80,14 +80,16 @@ def build_config(args, saved: tuple[Config, list[int]] | None = None) -> tuple[C
             make = lambda **tasks: saved_config.replace(**overrides, **tasks)  # noqa: E731
         else:  # the preset's values, on the run's condition and length (only --cond, --generations change those)
             kept = {"condition": saved_config.condition, "num_generations": saved_config.num_generations,
-                    "step_kernel": saved_config.step_kernel}  # a compute choice, not the preset's: the run's own
+                    "step_kernel": saved_config.step_kernel,  # a compute choice, not the preset's: the run's own
+                    **{field: getattr(saved_config, field) for field in WORLD_FIELDS}}  # and its world
             make = lambda **tasks: make_config(args.preset, **{**kept, **overrides, **tasks})  # noqa: E731
         if args.first_seed is not None or args.seeds is not None:
             first = seeds[0] if args.first_seed is None else args.first_seed
             count = len(seeds) if args.seeds is None else args.seeds
             seeds = list(range(first, first + count))
-    # The tasks are checked against the geometry of this config (its preset and --set), made with them.
-    return cli.apply_task_set(make, args), seeds
+    # The tasks are checked against the geometry of this config (its preset and --set), made with them; then the
+    # config moves into --world (which brings its own tasks).
+    return cli.apply_world(cli.apply_task_set(make, args), args), seeds
 
 
 def _dest(flag: str) -> str:
@@ -138,6 +140,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--set", action="append", metavar="FIELD=VALUE",
                    help="set any other scalar Config field, e.g. --set trace_lambda=0.9 (repeatable)")
     cli.add_task_set(p, "the tasks of adulthood (default: paper, or the run's)")
+    cli.add_world(p)
     p.add_argument("--strategy", metavar="NAME",
                    help="the search: ga (the paper's genetic algorithm, the default) or an evolution strategy of "
                         "evosax (the evosax extra): sep_cma_es, cma_es, snes, xnes, open_es, pgpe; docs/SEARCH.md")

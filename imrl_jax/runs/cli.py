@@ -134,34 +134,35 @@ def settable_fields(settings=None) -> list[str]:
 
 
 
-def parse_sets(items: Sequence[str] | None, settings=None) -> dict:
-    """``--set FIELD=VALUE`` options as overrides of a settings dataclass (default: Config), each value of its
-    field's type (raises UsageError)."""
+def parse_sets(items: Sequence[str] | None, settings=None, flag: str = "--set") -> dict:
+    """``--set FIELD=VALUE`` options (``flag``) as overrides of a settings dataclass (default: Config), each value of
+    its field's type (raises UsageError)."""
     if settings is None:
         from imrl_jax.config import Config as settings
 
     fields = {f.name: f for f in dataclasses.fields(settings)}
     settable = settable_fields(settings)
     overrides = {}
+    example = "--set eta_actor=0.02" if flag == "--set" else f"{flag} {settable[0]}={fields[settable[0]].default}"
     for item in items or []:
         name, sep, text = item.partition("=")
         if not sep:
-            raise UsageError(f"--set {item}: expected FIELD=VALUE, e.g. --set eta_actor=0.02")
+            raise UsageError(f"{flag} {item}: expected FIELD=VALUE, e.g. {example}")
         if name not in settable:
             if name in WORLD_FIELDS and settings.__name__ == "Config":
-                raise UsageError(f"--set {item}: the world is not set field by field (another world than the arena: "
+                raise UsageError(f"{flag} {item}: the world is not set field by field (another world than the arena: "
                                  f"imrl_jax.world.worlds.configure, docs/WORLDS.md)")
             if name in fields:
-                raise UsageError(f"--set {item}: {name} is not a scalar field; fields: {', '.join(settable)}")
+                raise UsageError(f"{flag} {item}: {name} is not a scalar field; fields: {', '.join(settable)}")
             close = [f for f in settable if name and f.startswith(name)] or \
                 difflib.get_close_matches(name, settable, n=1, cutoff=0.5)
             hint = f"did you mean {' or '.join(close)}? " if close else ""
-            raise UsageError(f"--set {item}: {name} is not a {settings.__name__} field; {hint}fields: "
+            raise UsageError(f"{flag} {item}: {name} is not a {settings.__name__} field; {hint}fields: "
                              f"{', '.join(settable)}")
         try:
             overrides[name] = _parse_value(fields[name], text)
         except ValueError:
-            raise UsageError(f"--set {item}: {name} cannot take the value {text!r}") from None
+            raise UsageError(f"{flag} {item}: {name} cannot take the value {text!r}") from None
     return overrides
 
 
@@ -244,6 +245,48 @@ def register(specs: Sequence[str] | None) -> list[str]:
             except ValueError as error:
                 raise UsageError(f"--register {spec}: {error}") from None
     return list(specs or [])
+
+
+def add_world(parser: argparse.ArgumentParser, what: str = "the world the agent lives in") -> None:
+    """The ``--world NAME`` and ``--world-set FIELD=VALUE`` options (:func:`apply_world`; docs/WORLDS.md)."""
+    from imrl_jax.world.worlds import WORLDS  # names only: a world's library is imported when it is made
+
+    parser.add_argument("--world", metavar="NAME",
+                        help=f"{what}: {', '.join(WORLDS)} (default: arena, the paper's; or the run's own; "
+                             f"docs/WORLDS.md)")
+    parser.add_argument("--world-set", action="append", metavar="FIELD=VALUE",
+                        help="set one of the world's own settings, e.g. --world-set task_set=xland-novel "
+                             "(repeatable; with --world)")
+
+
+def apply_world(config, args):
+    """``config`` in the world ``args.world`` with the ``--world-set`` settings (None: its own); raises UsageError.
+
+    Another world than the arena brings its tasks: ``--task-set`` (the arena's) is refused there."""
+    from imrl_jax.config import ConfigError
+    from imrl_jax.world import worlds
+
+    name, items = getattr(args, "world", None), getattr(args, "world_set", None)
+    if name is None:
+        if items:
+            raise UsageError(f"--world-set {items[0]}: give the world too (--world NAME)")
+        return config
+    if name not in worlds.WORLDS:
+        raise UsageError(f"--world: unknown world {name!r} (choose from {', '.join(worlds.WORLDS)})")
+    if name != "arena" and getattr(args, "task_set", None) is not None:
+        raise UsageError(f"--task-set: the {name} world's tasks are its own (choose them with --world-set task_set=NAME)")
+    try:
+        settings_type = worlds.settings_type(name)
+    except ImportError as error:  # an optional library that is not installed: its install command, in one line
+        raise UsageError(f"--world {name}: {one_line(error)}") from None
+    if items and settings_type is None:
+        raise UsageError(f"--world-set {items[0]}: the {name} world has no settings of its own (its geometry is the "
+                         f"config's: --set)")
+    settings = parse_sets(items, settings_type, "--world-set") if items else {}
+    try:
+        return worlds.configure(config, name, **settings)
+    except ConfigError as error:
+        raise UsageError(f"--world {name}: {one_line(error)}") from None
 
 
 def add_task_set(parser: argparse.ArgumentParser, what: str, default: str | None = None) -> None:

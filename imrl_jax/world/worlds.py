@@ -12,9 +12,9 @@ from imrl_jax.world.env import ARENA
 #: Every world by its name: the arena, or where another one's ``make_world(settings)`` lives (imported when asked
 #: for: an optional library's world costs nothing until then).
 WORLDS: dict[str, World | str] = {ARENA.name: ARENA, "xland": "imrl_jax.world.xland"}
-#: The genome parts that are the arena's (its actors' two units; evolved values with the speed unit's bias): not in
-#: another world.
-ARENA_PARTS = ("actor", "actor_turn", "parameters")
+#: The genome parts that are the arena's (its actors' turn units; evolved values with the speed unit's bias): not in
+#: another world. (Evolved actors, part "actor", have a row per actor unit: per action in another world.)
+ARENA_PARTS = ("actor_turn", "parameters")
 
 
 def make(name: str, settings: tuple = ()) -> World:
@@ -31,6 +31,13 @@ def make(name: str, settings: tuple = ()) -> World:
         return importlib.import_module(found).make_world(dict(settings))
     except (TypeError, ValueError) as error:  # an unknown or impossible setting, named by the world
         raise ConfigError(f"world_settings: {error}", "world_settings") from None
+
+
+def settings_type(name: str):
+    """The dataclass of world ``name``'s own settings (None: the arena's are the config's fields); ImportError if
+    the world's optional library is missing."""
+    found = WORLDS[name]
+    return None if not isinstance(found, str) else getattr(importlib.import_module(found), "SETTINGS", None)
 
 
 def world_of(config: Config) -> World:

@@ -38,12 +38,17 @@ try:
 except ImportError as error:  # the core package runs without the extra
     raise ImportError("imrl_jax.world.xland needs xminigrid: pip install -e '.[worlds]'") from error
 
+from imrl_jax.config import MAX_STEPS
 from imrl_jax.world.base import DISCRETE, Actions, Events
 
 #: xminigrid's action ids (its ``take_action``): put down (4) is left out, no task needs it.
 FORWARD, TURN_RIGHT, TURN_LEFT, PICK_UP, TOGGLE = 0, 1, 2, 3, 5
 #: xminigrid's directions: 0 up (north), 1 right, 2 down, 3 left.
 UP, RIGHT, DOWN, LEFT = 0, 1, 2, 3
+
+
+MAX_ARM_LENGTH = 20  # a room of 43 x 43 cells
+MAX_VIEW_SIZE = 9
 
 
 @dataclasses.dataclass(frozen=True)
@@ -65,14 +70,15 @@ class XLandSettings:
     stuck_steps: int = 20  # with respawns: steps in a row without moving before a random start
 
     def __post_init__(self):
-        if self.arm_length < 3:
-            raise ValueError(f"XLandSettings.arm_length must be at least 3 (the door and a start lie past it), "
-                             f"got {self.arm_length}")
-        if self.view_size < 3 or self.view_size % 2 == 0:
-            raise ValueError(f"XLandSettings.view_size must be odd and at least 3, got {self.view_size}")
-        if self.trial_timeout < 0 or self.stuck_steps < 1:
-            raise ValueError(f"XLandSettings: trial_timeout must be at least 0 and stuck_steps at least 1, got "
-                             f"{self.trial_timeout} and {self.stuck_steps}")
+        # Upper bounds too: a room or a view of absurd size would be built (and fill the memory) before a life.
+        if not 3 <= self.arm_length <= MAX_ARM_LENGTH:
+            raise ValueError(f"XLandSettings.arm_length must be from 3 (the door and a start lie past it) to "
+                             f"{MAX_ARM_LENGTH}, got {self.arm_length}")
+        if not 3 <= self.view_size <= MAX_VIEW_SIZE or self.view_size % 2 == 0:
+            raise ValueError(f"XLandSettings.view_size must be odd, from 3 to {MAX_VIEW_SIZE}, got {self.view_size}")
+        if not 0 <= self.trial_timeout <= MAX_STEPS or not 1 <= self.stuck_steps <= MAX_STEPS:
+            raise ValueError(f"XLandSettings: trial_timeout must be from 0 and stuck_steps from 1, both to "
+                             f"{MAX_STEPS:,}, got {self.trial_timeout} and {self.stuck_steps}")
 
     @property
     def size(self) -> int:
@@ -252,7 +258,10 @@ class XLandState(NamedTuple):
 
 
 def _agent(state: XLandState) -> AgentState:
-    return AgentState(position=state.position, direction=state.direction, pocket=state.pocket)
+    # In jax's default integer type, as xminigrid's literals: 64-bit where jax runs with 64-bit numbers (a float64
+    # life), else int32 as the state's.
+    return AgentState(position=jnp.asarray(state.position, int), direction=jnp.asarray(state.direction, int),
+                      pocket=state.pocket)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -362,6 +371,10 @@ class XLand:
     def make_env(self, config, has_target: bool = True, respawn: bool = False) -> XLandEnv:
         """A task's trials (with a target), or the open room of childhood (respawns or not)."""
         return XLandEnv(self.settings, self.settings.trial_timeout or config.trial_timeout, has_target, respawn)
+
+
+#: The dataclass of a config's ``world_settings`` in this world (``--world-set`` parses them by its fields).
+SETTINGS = XLandSettings
 
 
 def make_world(settings: dict) -> XLand:
