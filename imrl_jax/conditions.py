@@ -174,8 +174,8 @@ CONDITIONS: dict[str, Condition] = {c.name: c for c in (
               "expert's internal reward is the mean of its two units' rewards, (r1 + r2) / 2",
               genome=("reinforcer", "second_reinforcer"), adult=ADULT_LEARNING_SELECTOR, childhood=CHILDHOOD,
               style=dict(color="black", lw=1.8, ls=":")),
-    Condition("LE-LS-Z", "LE-LS with 3 x 37 = 111 neutral genes after its reinforcers (222 genes, EE-LS's size); "
-              "they decode into nothing", genome=("reinforcer", "neutral"), adult=ADULT_LEARNING_SELECTOR,
+    Condition("LE-LS-Z", "LE-LS with 3 x 37 = 111 neutral genes after its reinforcers (222 genes, EE-LS's size; "
+              "in another world K x (A - 1) x (n + 1): EE-LS's size there); they decode into nothing", genome=("reinforcer", "neutral"), adult=ADULT_LEARNING_SELECTOR,
               childhood=CHILDHOOD, style=dict(color="black", lw=1.2, ls="-.")),
     # The paper's future work (b): the whole hierarchy trained on the task's reward only; no evolution, no
     # childhood, everything reset at each task as SLE is (MODEL.md "Future-work conditions").

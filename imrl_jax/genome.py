@@ -235,9 +235,10 @@ for _part in (
                start=lambda config, dtype: {"second_reinforcer": _jnp().zeros(
                    (config.num_lane_experts, config.num_inputs + 1), dtype)},
                kernel=False, field="second_reinforcer"),
-    # Neutral genes (LE-LS-Z): as many as the reinforcers' (K x 37), decoded into nothing; they lengthen the genome
-    # only.
-    GenomePart("neutral", "neutral genes", lambda k, n, a: (k, n), decode=lambda config, agent, genes: agent,
+    # Neutral genes (LE-LS-Z): as many as the actors' rows but one (K x (A - 1) x n: the arena's K x 37, so that
+    # with the reinforcers the genome is EE-LS's length in any world), decoded into nothing; they lengthen the
+    # genome only.
+    GenomePart("neutral", "neutral genes", lambda k, n, a: (k, a - 1, n), decode=lambda config, agent, genes: agent,
                reference_decode=lambda config, weights, genes: None),
 ):
     register_part(_part)

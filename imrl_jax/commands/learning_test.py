@@ -51,7 +51,8 @@ from imrl_jax.config import Config, ConfigError, LearningParams
 from imrl_jax.runs import cli, runspec
 from imrl_jax.agent import kernel_choice
 from imrl_jax.runs.cli import UsageError, exit_codes, parse_sets
-from imrl_jax.agent.lifetime import grow_up, lifetime_keys, run_phase, task_spec, task_start
+from imrl_jax.agent.lifetime import grow_up, lifetime_keys, run_phase, task_start
+from imrl_jax.world.worlds import world_of
 from imrl_jax.agent.state import State
 from imrl_jax.runs.events import check_log, log_for
 from imrl_jax.commands.learning_test_options import (OPTION_FIELDS, check_condition, check_sizes, evolved_genomes, from_scratch,
@@ -103,7 +104,7 @@ def advance(config: Config, params: LearningParams, test: TestState, num_chunks:
         # The carried t is batched (begin's output is per task and test); an unbatched one keeps the
         # step's block draws a real branch instead of a select that draws on every step (3x slower).
         state = state._replace(t=t)
-        state, curves = run_phase(key, config, phase, params, task_spec(config, index, dtype), state,
+        state, curves = run_phase(key, config, phase, params, world_of(config).task(config, index, dtype), state,
                                   config.task_steps // num_chunks, phase_steps=config.adult_noise_steps,
                                   num_bins=config.num_bins // num_chunks)
         return state, TestCurves(curves.reaches, curves.selections)

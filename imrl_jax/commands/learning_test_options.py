@@ -48,6 +48,7 @@ def parser() -> argparse.ArgumentParser:
                    help="take the best genomes from a report's best_genomes.npz (the 10 best of each seed), for a run "
                         "whose final_population.npz was not kept; the run directory gives the config")
     cli.add_task_set(p, "the tasks to learn (default: the run's, or paper)")
+    cli.add_world(p, "the world it learns in (a run's genomes: one of the same sizes)")
     p.add_argument("--allow-unfinished", action="store_true",
                    help="test a run whose evolution has not reached its last generation (killed, or still running): "
                         "its last evaluated generation, with a warning (steady.json records which)")
@@ -147,6 +148,13 @@ def tested_config(args, base: Config, source: str) -> tuple[Config, str]:
         raise
     if args.task_set is not None:
         source += f", task set {args.task_set}"
+    moved = cli.apply_world(config, args)  # another world, or other settings of its own (tasks: task_set=...)
+    if moved.num_genes != base.num_genes:  # a test from scratch has none; evolved genomes must fit
+        raise UsageError(f"--world: genomes of {base.num_genes} genes evolved in world {base.world} cannot live in "
+                         f"world {moved.world} ({moved.num_genes} genes)")
+    if (moved.world, moved.world_settings) != (config.world, config.world_settings):
+        source += f", world {moved.world}" + "".join(f", {k}={v}" for k, v in moved.world_settings)
+    config = moved
     if config.num_bins % lengths.chunks:
         raise UsageError(f"--chunks: {lengths.bins} bins cannot be split into {lengths.chunks} chunks")
     try:

@@ -260,17 +260,20 @@ def add_world(parser: argparse.ArgumentParser, what: str = "the world the agent 
 
 
 def apply_world(config, args):
-    """``config`` in the world ``args.world`` with the ``--world-set`` settings (None: its own); raises UsageError.
+    """``config`` in the world ``args.world`` with the ``--world-set`` settings; raises UsageError.
 
-    Another world than the arena brings its tasks: ``--task-set`` (the arena's) is refused there."""
+    Without ``--world`` the config's own world (a run's), whose settings ``--world-set`` changes; ``--world`` naming
+    the config's world starts from its settings too. Another world than the arena brings its tasks: ``--task-set``
+    (the arena's) is refused there."""
     from imrl_jax.config import ConfigError
     from imrl_jax.world import worlds
 
     name, items = getattr(args, "world", None), getattr(args, "world_set", None)
-    if name is None:
-        if items:
-            raise UsageError(f"--world-set {items[0]}: give the world too (--world NAME)")
+    if name is None and not items:
         return config
+    if name is None and config.world == "arena":
+        raise UsageError(f"--world-set {items[0]}: give the world too (--world NAME)")
+    name = config.world if name is None else name
     if name not in worlds.WORLDS:
         raise UsageError(f"--world: unknown world {name!r} (choose from {', '.join(worlds.WORLDS)})")
     if name != "arena" and getattr(args, "task_set", None) is not None:
@@ -282,7 +285,8 @@ def apply_world(config, args):
     if items and settings_type is None:
         raise UsageError(f"--world-set {items[0]}: the {name} world has no settings of its own (its geometry is the "
                          f"config's: --set)")
-    settings = parse_sets(items, settings_type, "--world-set") if items else {}
+    settings = dict(config.world_settings) if name == config.world else {}
+    settings.update(parse_sets(items, settings_type, "--world-set") if items else {})
     try:
         return worlds.configure(config, name, **settings)
     except ConfigError as error:
