@@ -10,7 +10,8 @@ in the XLand world of ``imrl_jax/world/xland.py`` (``--world xland``) under the 
 (the paper's 150,000 and 100,000 scaled to two CPU cores: a task's shortest solution is 12-14 steps, so 10,000
 steps still hold 700-800 of them), then a learning test of each seed's 5 best x 2 tests at 10 x the task length.
 SLE learns each task from scratch there. The measures test the evolved rows on the world's novel tasks
-(``--world-set task_set=xland-novel``), SLE beside them.
+(``--world-set task_set=xland-novel``), SLE beside them, and measure the landscapes of goals and behaviours (H1, H2,
+H4 of docs/GOALS.md: ``imrl_jax.landscape_run`` on each row's seed 0).
 """
 
 from __future__ import annotations
@@ -33,6 +34,22 @@ SCALE = dict(seeds=5, generations=50, childhood_steps=20_000, task_steps=10_000,
 EVOLVED = ("LE-LS", "EE-LS", "EE-ES", "LE-LS-Z")
 
 
+#: A life of each condition in steps (childhood, six tasks), for the measures' costs.
+LIFE = {"LE-LS": 20_000 + 6 * 10_000, "EE-LS": 6 * 10_000, "EE-ES": 6 * 10_000}
+#: Lives of a landscape measure (imrl_jax.landscape_run's defaults, as the goals study): 3 generations x (10 parents
+#: x 10 + 5 walks x 10) genomes x 4 lives, 50 random genomes x 4, and replays; twice with a learning cut.
+LIVES, CUT_LIVES = 3 * 150 * 4 + 200 + 550, 3 * 150 * 4 + 200
+#: The learning cuts of the landscape measures (H4: how much of a goal's value needs learning), as the goals study's.
+CUTS = {"LE-LS": "0.1,0.33", "EE-LS": "0", "EE-ES": None}
+
+
+def landscape(row: Row) -> Measure:
+    """The landscape measures (H1, H2, H4) of a row's seed 0 at generations 0, 10 and the last (docs/GOALS.md)."""
+    cut = CUTS[row.condition]
+    return Measure(f"landscape-{row.name}", row.name, ("--cut", cut) if cut else (),
+                   cost=float(LIFE[row.condition] * (LIVES + (CUT_LIVES if cut else 0))))
+
+
 def novel_test(row: Row) -> Measure:
     """A learning test of ``row``'s run on the world's novel tasks, at the table's sizes."""
     runner = tuple(test_command(SCALE, "paper", "EE-ES", "RUN", "OUT")[4:-2])  # the runner's options, at SCALE
@@ -43,7 +60,8 @@ def novel_test(row: Row) -> Measure:
 ROWS = tuple(Row(condition, condition, "paper", options=WORLD) for condition in EVOLVED)
 TABLE = Table("worlds", "docs/WORLDS.md", 10, out=OUT, scale=SCALE, rows=(
     *ROWS, Row("SLE", "SLE", "paper", options=WORLD), Row("SLE on novel", "SLE", "paper", options=WORLD + NOVEL),
-), measures=tuple(novel_test(row) for row in ROWS if row.condition != "LE-LS-Z"))
+), measures=(*(novel_test(row) for row in ROWS if row.condition in LIFE),
+             *(landscape(row) for row in ROWS if row.condition in LIFE)))
 all_stages, main = TABLE.all_stages, TABLE.main
 #: The studies of this module (python -m experiments finds them).
 STUDIES = (TABLE.study(__name__.rsplit(".", 1)[-1]),)
