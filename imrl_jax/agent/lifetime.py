@@ -117,7 +117,8 @@ def step(key: jax.Array, config: Config, phase: Phase, params: LearningParams, t
     # computed here from the carried pose, not at the end of the previous step, its kernels
     # read the pose instead of computing the move again for every sample point.
     now = state.t % 2
-    xbs = _set_row(state.xbs, now, with_bias(env.observe(robot)))
+    # In the agent's float type: a world may observe in another (XLand's float32 in a float64 life).
+    xbs = _set_row(state.xbs, now, with_bias(env.observe(robot).astype(state.xbs.dtype)))
     xb, prev_xb = take_row(xbs, now), take_row(xbs, 1 - now)
     selection = expressed_only(agent, act(agent.selector_actor, xb))
     k = select(draws.u, selection) if selection.shape[0] > 1 else jnp.int32(0)
