@@ -7,12 +7,12 @@ can serve as an independent check of the JAX implementation. It follows MODEL.md
   point to every edge segment of the hexagons around it;
 * the retina samples that colour at its 12 points;
 * the robot turns, moves and is clamped to the walls;
-* each step picks an expert, learns from the previous transition, acts and moves.
+* each step picks an expert, learns from the previous transition, acts and moves (:class:`Arena`; a world
+  of discrete actions: :mod:`imrl_jax.agent.reference_discrete`).
 
-Public functions: :func:`floor_colour`, :func:`observe`, :func:`move`, :func:`run_phase`,
-:func:`live`. Weights are dicts of float64 arrays with keys ``reinforcer`` (K, 37),
-``actor`` (K, 2, 37), ``evaluator`` (K, 37), ``selector_actor`` (K, 37) and
-``selector_critic`` (37,).
+Public: :func:`floor_colour`, :func:`observe`, :func:`move`, :class:`Arena`, :func:`run_phase`, :func:`live`.
+Weights are dicts of float64 arrays with keys ``reinforcer`` (K, 37), ``actor`` (K, 2, 37), ``evaluator``
+(K, 37), ``selector_actor`` (K, 37) and ``selector_critic`` (37,).
 """
 
 from __future__ import annotations
@@ -192,11 +192,12 @@ def _copy_weights(weights):
 
 
 def zero_weights(config, num_experts):
-    """All weights 0 for ``num_experts`` experts (MODEL.md: learned weights start at 0), but
-    the actors' speed unit's bias: config.initial_speed_bias."""
+    """All weights 0 for ``num_experts`` experts (MODEL.md: learned weights start at 0), but (in the arena)
+    the actors' speed unit's bias: config.initial_speed_bias; a discrete world's actors have a unit per action."""
     n = config.num_inputs + 1
-    actor = np.zeros((num_experts, 2, n))
-    actor[:, 1, -1] = config.initial_speed_bias
+    actor = np.zeros((num_experts, config.num_actor_units, n))
+    if config.world == "arena":  # a discrete world's actions start alike
+        actor[:, 1, -1] = config.initial_speed_bias
     return {
         "reinforcer": np.zeros((num_experts, n)),
         "actor": actor,
@@ -215,7 +216,7 @@ def decode(config, genome):
     start = 0
     for name in config.spec.genome:  # each part's NumPy twin puts its genes in place (genome.PARTS)
         part = get_part(name)
-        shape = part.shape(config.num_lane_experts, config.num_inputs + 1)
+        shape = part.shape(config.num_lane_experts, config.num_inputs + 1, config.num_actor_units)
         size = int(np.prod(shape))
         part.reference_decode(config, weights, genome[start:start + size].reshape(shape))
         start += size
@@ -225,8 +226,67 @@ def decode(config, genome):
 # --------------------------------------------------------------------------- one phase
 
 
+class Arena:
+    """The robot in the arena, as :func:`run_phase` moves it: its retina, its noisy command, its move, the walls
+    (respawns in childhood), the target and the timeout. Another world's twin has the same methods."""
+
+    def __init__(self, config, phase, pose, task, spawn, phase_steps):
+        self.config, self.phase_steps, self.trial_steps, self.pinned = config, phase_steps, 0, 0
+        self.respawn = phase.intrinsic and config.childhood_walls == "respawn"
+        self.spawn = np.asarray(spawn, dtype=np.float64) if self.respawn else None
+        self.start = self.target = None
+        if phase.has_target:
+            if task is None:
+                raise ValueError("adult phases need a task")
+            spec = config.tasks[task]
+            self.start = (float(spec.start[0]), float(spec.start[1]), math.radians(spec.heading_deg))
+            self.target = (float(spec.target[0]), float(spec.target[1]))
+        self.x, self.y, self.heading = float(pose[0]), float(pose[1]), float(pose[2])
+        self.path = {"x": [], "y": [], "heading": []}  # the pose after each step
+
+    def observe(self):
+        return observe(self.config, self.x, self.y, self.heading)
+
+    def act(self, o, explores, t, z):
+        """a = clip(o + sigma_t z, 0, 1), sigma_t = noise_std * max(1 - t / phase_steps, 0) where it explores."""
+        sigma = self.config.noise_std * max(1.0 - t / self.phase_steps, 0.0) if explores else 0.0
+        return np.clip(o + sigma * z, 0.0, 1.0)
+
+    def step(self, a, t):
+        """Turn, move, clamp; then the walls (respawn), the target and the timeout: (reached, timeout, respawned)."""
+        config = self.config
+        x, y, heading = move(config, self.x, self.y, self.heading, float(a[0]), float(a[1]))
+        reached = timeout = respawned = False
+        if self.respawn:
+            r, size = config.robot_radius, config.arena_size
+            on_wall = x <= r or x >= size - r or y <= r or y >= size - r
+            self.pinned = self.pinned + 1 if on_wall else 0
+            if self.pinned >= config.wall_respawn_steps:
+                respawned = True
+                self.pinned = 0
+                x = r + (size - 2.0 * r) * self.spawn[t, 0]
+                y = r + (size - 2.0 * r) * self.spawn[t, 1]
+                heading = 2.0 * math.pi * self.spawn[t, 2]
+        if self.target is not None:
+            self.trial_steps += 1
+            if math.hypot(x - self.target[0], y - self.target[1]) <= config.target_radius:
+                reached = True
+            elif self.trial_steps >= config.trial_timeout:
+                timeout = True
+            if reached or timeout:
+                x, y, heading = self.start
+                self.trial_steps = 0
+        self.x, self.y, self.heading = x, y, heading
+        for name, value in zip(("x", "y", "heading"), (x, y, heading)):
+            self.path[name].append(value)
+        return reached, timeout, respawned
+
+    def record(self) -> dict:
+        return {name: np.array(values, dtype=np.float64) for name, values in self.path.items()}
+
+
 def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, spawn=None,
-              learning_steps=None) -> dict:
+              learning_steps=None, body=None) -> dict:
     """Run one phase step by step (MODEL.md "Acting" and "Learning"; docs/CHILDHOOD.md options).
 
     phase: a :class:`~imrl_jax.conditions.Phase` or its name in :data:`PHASES` ("childhood",
@@ -236,9 +296,10 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
     spawn (T, 3) uniform draws of a random pose (childhood with config.childhood_walls
     "respawn" only). task: task index for the adult phases (None in childhood).
     phase_steps: the length of the noise annealing (default T). learning_steps: steps after which
-    nothing learns or explores (an evolved childhood length; default all). Returns the pose after each
-    step, the experts chosen, the reach/timeout/respawn flags, the final weights and the
-    number of reaches.
+    nothing learns or explores (an evolved childhood length; default all). body: the agent in its world
+    (:class:`Arena` at pose by default; another world's twin holds its own start, task and draws). Returns the
+    body's record after each step (the arena's: the pose), the experts chosen, the reach/timeout/respawn
+    flags, the final weights and the number of reaches.
     """
     if not isinstance(phase, Phase):
         if phase not in PHASES:
@@ -256,7 +317,6 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
 
     experts_learn, selector_learns = phase.experts_learn, phase.selector_learns
     learning = lambda t: learning_steps is None or t < learning_steps  # noqa: E731
-    noisy, has_target = phase.noisy, phase.has_target
 
     gamma = config.gamma
     childhood = phase.intrinsic
@@ -264,45 +324,25 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
     decay = config.gamma * (config.childhood_trace_lambda if childhood else config.trace_lambda)
     eta_selector_actor = config.childhood_eta_selector_actor if childhood else config.eta_selector_actor
     eta_selector_critic = config.childhood_eta_selector_critic if childhood else config.eta_selector_critic
-    respawn = childhood and config.childhood_walls == "respawn"
     progress = childhood and config.childhood_selector_reward == "progress"
-    if respawn:
-        spawn = np.asarray(spawn, dtype=np.float64)
     baseline = np.zeros(num_experts)  # each expert's running mean surprise ("progress")
-    pinned = 0  # steps on a wall in a row ("respawn")
-
-    if has_target:
-        if task is None:
-            raise ValueError("adult phases need a task")
-        spec = config.tasks[task]
-        start = (float(spec.start[0]), float(spec.start[1]), math.radians(spec.heading_deg))
-        target = (float(spec.target[0]), float(spec.target[1]))
-    else:
-        start = None
-        target = None
-
-    x, y, heading = float(pose[0]), float(pose[1]), float(pose[2])
+    if body is None:
+        body = Arena(config, phase, pose, task, spawn, phase_steps)
+    units = w["actor"].shape[1]  # the arena's (turn, speed), or a discrete world's actions
 
     # Traces: one set for the expert in control, one for the selector; 0 at the phase start.
     trace_v = np.zeros(n)
-    trace_w = np.zeros((2, n))
+    trace_w = np.zeros((units, n))
     trace_u = np.zeros(n)
     trace_s = np.zeros((num_experts, n))
 
     # What the previous step left behind.
-    prev_valid = False
+    prev_valid = prev_reached = False
     prev_xb = prev_a = prev_o = None
     prev_k = -1
-    prev_reached = False
-    trial_steps = 0
 
-    out_x = np.zeros(num_steps)
-    out_y = np.zeros(num_steps)
-    out_heading = np.zeros(num_steps)
     out_k = np.zeros(num_steps, dtype=np.int64)
-    out_reached = np.zeros(num_steps, dtype=bool)
-    out_timeout = np.zeros(num_steps, dtype=bool)
-    out_respawned = np.zeros(num_steps, dtype=bool)
+    out_reached, out_timeout, out_respawned = (np.zeros(num_steps, dtype=bool) for _ in range(3))
 
     # The selector's option (docs/TIMESCALE.md): chosen at x~ opt_xb with outputs opt_s; its reward so far
     # sum_i gamma^i r_{i+1}, gamma^tau for its tau transitions, whether its expert learned on one of them (the
@@ -314,7 +354,7 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
 
     for t in range(num_steps):
         # 1. What the robot sees now.
-        xb = _with_bias(observe(config, x, y, heading))
+        xb = _with_bias(body.observe())
 
         # 2. The selector picks an expert (weights before this step's learning), where its option ends.
         s = _sigmoid(w["selector_actor"] @ xb)
@@ -391,47 +431,18 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
         # Trace clears after this step's learning.
         if (not prev_valid) or (not same_expert) or terminal:
             trace_v = np.zeros(n)
-            trace_w = np.zeros((2, n))
+            trace_w = np.zeros((units, n))
         if (not prev_valid) or terminal:
             trace_u = np.zeros(n)
             trace_s = np.zeros((num_experts, n))
 
-        # 4. Act with the expert in control (weights after this step's learning).
+        # 4. Act with the expert in control (weights after this step's learning), exploring where the phase does.
         o = _sigmoid(w["actor"][k] @ xb)
-        # sigma_t = noise_std * max(1 - t / phase_steps, 0), in float64 like everything here.
-        sigma = config.noise_std * max(1.0 - t / phase_steps, 0.0) if noisy and learning(t) else 0.0
-        a = np.clip(o + sigma * z[t], 0.0, 1.0)
+        a = body.act(o, phase.noisy and learning(t), t, z[t])
 
-        # 5. Turn, move, clamp; in adulthood check the target and the timeout.
-        x, y, heading = move(config, x, y, heading, float(a[0]), float(a[1]))
-        reached = False
-        timeout = False
-        respawned = False
-        if respawn:
-            r, size = config.robot_radius, config.arena_size
-            on_wall = x <= r or x >= size - r or y <= r or y >= size - r
-            pinned = pinned + 1 if on_wall else 0
-            if pinned >= config.wall_respawn_steps:
-                respawned = True
-                pinned = 0
-                x = r + (size - 2.0 * r) * spawn[t, 0]
-                y = r + (size - 2.0 * r) * spawn[t, 1]
-                heading = 2.0 * math.pi * spawn[t, 2]
-        if has_target:
-            trial_steps += 1
-            if math.hypot(x - target[0], y - target[1]) <= config.target_radius:
-                reached = True
-            elif trial_steps >= config.trial_timeout:
-                timeout = True
-            if reached or timeout:
-                x, y, heading = start
-                trial_steps = 0
-
-        out_x[t], out_y[t], out_heading[t] = x, y, heading
-        out_k[t] = k
-        out_reached[t] = reached
-        out_timeout[t] = timeout
-        out_respawned[t] = respawned
+        # 5. The world's step (the arena's: turn, move, clamp; then the walls, the target and the timeout).
+        reached, timeout, respawned = body.step(a, t)
+        out_k[t], out_reached[t], out_timeout[t], out_respawned[t] = k, reached, timeout, respawned
 
         prev_valid = not (timeout or respawned)
         prev_xb, prev_k, prev_a, prev_o = xb, k, a, o
@@ -443,9 +454,7 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
         prev_reached = reached
 
     return {
-        "x": out_x,
-        "y": out_y,
-        "heading": out_heading,
+        **body.record(),
         "k": out_k,
         "reached": out_reached,
         "timeout": out_timeout,
