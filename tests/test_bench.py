@@ -1,4 +1,6 @@
-"""The benchmark command's input checks (the measurements themselves are not timed in tests)."""
+"""The benchmark command: its input checks, and the world section measured at a tiny size."""
+
+import json
 
 import pytest
 
@@ -47,3 +49,52 @@ def test_the_sweep_benchmark_times_both_programs_on_the_same_generation():
     result = bench.sweep_benchmark(2, num_seeds=1, task_steps=20, pairs=1, log=lambda text: None)
     assert result["points"] == 2 and result["single_generation_s"] > 0 and result["sweep_generation_s"] > 0
     assert result["ratio"] == pytest.approx(result["sweep_generation_s"] / (2 * result["single_generation_s"]))
+
+
+@pytest.mark.parametrize("argv, field", [
+    (["--world", "nowhere"], "--world: unknown world 'nowhere'"),
+    (["--world-set", "arm_length=5"], "--world-set arm_length=5: give the world too"),
+    (["--only-world"], "--only-world"),
+    (["--world", "xland", "--sweep-points", "2"], "--world"),
+])
+def test_a_world_section_it_cannot_measure_is_refused(argv, field, capsys):
+    assert bench.main(argv) == 2
+    assert capsys.readouterr().err.startswith(f"error: {field}")
+
+
+def test_the_world_section_times_the_agent_against_the_world_stepped_alone(tmp_path, monkeypatch):
+    """``--world xland --only-world``: the JSON's world section holds positive rates and their quotient; the world
+    alone really steps the world (random actions move the agents; every step observes)."""
+    pytest.importorskip("xminigrid")  # the worlds extra (not in the minimum environment)
+    import jax
+    import numpy as np
+    from imrl_jax.commands import bench_worlds
+
+    monkeypatch.setattr(bench_worlds, "WORLD_PHASES", bench_worlds.WORLD_PHASES[:1])  # childhood: two compilations
+    timed = []  # (program, its compiled executable)
+    compile_once = bench_worlds._compiled
+
+    def recorded(program):
+        compiled = compile_once(program)
+        timed.append((program, compiled[0]))
+        return compiled
+
+    monkeypatch.setattr(bench_worlds, "_compiled", recorded)
+    out = tmp_path / "bench.json"
+    argv = ["--world", "xland", "--world-set", "arm_length=3", "--only-world", "--lanes", "2", "--steps", "16",
+            "--repeats", "1", "--json", str(out)]
+    assert bench.main(argv) == 0
+    section = json.loads(out.read_text())["world"]
+    assert (section["name"], section["settings"], section["inputs"], section["actions"]) == (
+        "xland", {"arm_length": 3}, 55, 5)
+    (row,) = section["rows"]
+    assert row["phase"] == "LE-LS childhood" and row["lanes"] == 2 and row["steps"] == 16
+    assert row["agent_lane_steps_per_s"] > 0 and row["world_lane_steps_per_s"] > 0
+    assert row["ratio"] == pytest.approx(row["world_lane_steps_per_s"] / row["agent_lane_steps_per_s"])
+
+    _, (world, compiled) = timed  # the world alone's program, run again
+    state, seen, _ = compiled(*world.args)
+    start = bench_worlds._phase_setup(world.config, False)[3]
+    starts = [start(jax.random.split(key, 3)[0]) for key in world.args[0]]
+    assert any(np.any(np.asarray(state.position[i]) != np.asarray(s.position)) for i, s in enumerate(starts))
+    assert np.all(np.asarray(seen).sum(-1) > 0)  # every step observed

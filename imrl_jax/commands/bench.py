@@ -1,7 +1,7 @@
 """Benchmarks of the lifetime kernel (section 2's lives) against the NumPy reference.
 
     python -m imrl_jax.bench [--lanes 1,50,300,3000] [--steps 1000] [--repeats 5] [--json PATH]
-                             [--kernel xla,pallas]
+                             [--kernel xla,pallas] [--world NAME [--world-set FIELD=VALUE] [--only-world]]
 
 One lane is one individual on one task (in childhood, one individual). For every phase
 (LE-LS childhood; the adult phases of LE-LS/EE-LS, EE-ES and SLE) and lane count, it
@@ -13,7 +13,9 @@ phase, and the speed-up measured in the same run. Last, the headline: whole LE-L
 On CPU the lanes are split over one XLA device per core (``--cpu-devices``).
 ``--kernel`` names the step kernels to measure (``Config.step_kernel``; default xla): on a
 GPU, ``--kernel xla,pallas`` measures both in one run. Off a GPU the Pallas kernel is
-interpreted, which measures nothing useful.
+interpreted, which measures nothing useful. ``--world NAME`` adds another world's section
+(:mod:`imrl_jax.commands.bench_worlds`: the agent's childhood and adulthood there against the world stepped alone
+with random actions, at ``--lanes`` and ``--steps``); ``--only-world`` measures that section alone.
 """
 
 from __future__ import annotations
@@ -26,11 +28,10 @@ import resource
 import statistics
 import sys
 import time
-from typing import NamedTuple
-
 import jax
 import numpy as np
 
+from imrl_jax.commands.bench_lanes import Program, lane_inputs
 from imrl_jax.config import make_config
 from imrl_jax.evolution.devices import use_host_cores
 
@@ -41,16 +42,6 @@ PHASES = (
     ("EE-ES adulthood", "EE-ES", "ADULT_EVOLVED_SELECTOR", "adult-es"),
     ("SLE adulthood", "SLE", "ADULT_SINGLE_EXPERT", "sle"),
 )
-
-
-def _shard(array, lanes: int):
-    """Split the lane axis over the devices when they divide it."""
-    from jax.sharding import Mesh, NamedSharding, PartitionSpec
-
-    devices = jax.devices()
-    if lanes % len(devices):
-        return array
-    return jax.device_put(array, NamedSharding(Mesh(np.asarray(devices), ("lanes",)), PartitionSpec("lanes")))
 
 
 def _time(fn, *args, repeats: int, once_over: float | None = None) -> tuple[float, float]:
@@ -71,22 +62,6 @@ def _time(fn, *args, repeats: int, once_over: float | None = None) -> tuple[floa
         jax.block_until_ready(fn(*args))
         times.append(time.perf_counter() - start)
     return statistics.median(times), min(times)
-
-
-def _lane_inputs(config, lanes: int):
-    genome_size = max(config.num_genes, 1)
-    genomes = jax.random.uniform(jax.random.key(1), (lanes, genome_size), minval=-1, maxval=1)[:, : config.num_genes]
-    keys = jax.random.split(jax.random.key(0), lanes)
-    return _shard(keys, lanes), _shard(genomes, lanes)
-
-
-class Program(NamedTuple):
-    """A timed program: call ``fn(*args)``; each call does ``lane_steps`` lane-steps."""
-
-    fn: object
-    args: tuple
-    lane_steps: int
-    config: object
 
 
 def _module(package: str, name: str):
@@ -148,7 +123,7 @@ def phase_program(condition: str, phase_name: str, lanes: int, steps: int, packa
         state, curves = L.run_phase(key, config, phase, params, task, L.init_state(config, agent, start(pose)), steps)
         return curves.reaches, curves.selections
 
-    return Program(jax.jit(jax.vmap(lane)), _lane_inputs(config, lanes), lanes * steps, config)
+    return Program(jax.jit(jax.vmap(lane)), lane_inputs(config, lanes), lanes * steps, config)
 
 
 def lifetime_program(lanes: int, task_steps: int, package: str = "imrl_jax", step_kernel: str = "xla") -> Program:
@@ -157,7 +132,7 @@ def lifetime_program(lanes: int, task_steps: int, package: str = "imrl_jax", ste
     config = config_module.make_config("paper", condition="LE-LS", task_steps=task_steps,
                                        childhood_steps=task_steps * 3 // 2, num_bins=10, **_kernel_field(step_kernel, config_module))
     individuals = max(1, lanes // config.num_tasks)
-    _, genomes = _lane_inputs(config, individuals)
+    _, genomes = lane_inputs(config, individuals)
     return Program(L.make_evaluate(config), (jax.random.key(0), config.learning_params(), genomes),
                    individuals * config.lifetime_steps, config)
 
@@ -350,6 +325,8 @@ def parser():
     p.add_argument("--sweep-points", type=int, default=0,
                    help="instead: a generation of a sweep of this many points (evolve --sweep) against as many "
                         "generations of a single run, alternating (--repeats pairs, --lifetime-task-steps)")
+    cli.add_world(p, "also measure the agent in this world against the world stepped alone with random actions")
+    p.add_argument("--only-world", action="store_true", help="measure only the --world section")
     p.add_argument("--json", help="also write the results to this JSON file")
     return p
 
@@ -389,17 +366,35 @@ def _main(argv=None) -> int:
             raise UsageError(f"--json: {args.json} is a directory")
         check_writable(os.path.dirname(os.path.abspath(args.json)), "--json")
     cli.check_cpu_devices(args.cpu_devices)  # at most 4 per core: each device holds its own runtime
-    return cli.execute(cli.Call(lambda: measure(args, counts, kernels), counts=counts, kernels=kernels))
+    world, world_given = None, args.world is not None or bool(args.world_set)
+    if world_given and args.sweep_points:
+        raise UsageError("--world: a world's section is not measured with --sweep-points")
+    if args.only_world and not world_given:
+        raise UsageError("--only-world: give the world (--world NAME)")
+    if world_given:
+        from imrl_jax.commands import bench_worlds
+
+        use_host_cores(args.cpu_devices or None)  # now: importing the world's library starts the backend
+        world = cli.apply_world(bench_worlds.base_config(args.steps), args)
+    return cli.execute(cli.Call(lambda: measure(args, counts, kernels, world), counts=counts, kernels=kernels,
+                                world=world))
 
 
-def measure(args, counts: dict, kernels: list[str]) -> int:
-    """The benchmark the command line checked; its results written to ``--json`` if given."""
+def measure(args, counts: dict, kernels: list[str], world=None) -> int:
+    """The benchmark the command line checked (``world``: the config of the ``--world`` section); its results written
+    to ``--json`` if given."""
     use_host_cores(args.cpu_devices or None)
     if args.sweep_points:
         result = sweep_benchmark(args.sweep_points, task_steps=args.lifetime_task_steps, pairs=args.repeats)
+    elif args.only_world:
+        result = {**machine(), "repeats": args.repeats}
     else:
         result = run(counts["lanes"], args.steps, args.repeats, args.reference_steps, counts["lifetime_lanes"],
                      args.lifetime_task_steps, kernels=kernels)
+    if world is not None:
+        from imrl_jax.commands import bench_worlds
+
+        result["world"] = bench_worlds.run(world, counts["lanes"], args.repeats)
     if args.json:
         from imrl_jax.runs.rundir import write_atomic
 
