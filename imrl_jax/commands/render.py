@@ -1,19 +1,25 @@
-"""``python -m imrl_jax.render``: the best individual of an evolution on one task, animated (section 3, Fig. 1).
+"""``python -m imrl_jax.render``: a life of the best individual of an evolution on one task, drawn (section 3, Fig. 1).
 
     python -m imrl_jax.render RUN_DIR --task K --out FILE.gif [--steps 300] [--every 2] [--fps 20]
+    python -m imrl_jax.render RUN_DIR --task K --out FILE.png [--steps 300]     (a still: another world's run)
 
 RUN_DIR is a run directory of ``python -m imrl_jax.evolve`` (``config.json`` and
 ``final_population.npz``). The individual is the fittest of all seeds in the last
 evaluated generation. It lives the very life that earned its fitness (the run's keys),
 which trains its experts in childhood (LE-LS) and its selector on every task; then it
-drives task K (1-6) from the weights it ended that task with, for ``--steps`` steps,
-recorded with :func:`imrl_jax.agent.lifetime.simulate`. The animation shows the arena with the
+drives task K (1 to the world's number of tasks) from the weights it ended that task with, for ``--steps`` steps,
+recorded with :func:`imrl_jax.agent.lifetime.simulate`. The world the run lived in (``config.json``'s ``world``)
+chooses the drawing, in one table (:data:`DRAWERS`): the arena's animation shows the arena with the
 task, the path coloured by the expert in control, the robot with its retina patch, a
-zoom on the robot and the retina's 2 x 6 view. ``.gif`` is written with Pillow; ``.mp4``
-needs ffmpeg on PATH.
+zoom on the robot and the retina's 2 x 6 view (``.gif``, ``.mp4``); XLand's
+(:mod:`imrl_jax.analysis.xland_figures`) shows the room as the world's state has it (an opened door, a picked key),
+the agent as a triangle pointing its way, its path coloured by the expert in control, its 3 x 3 view and the expert
+at every step, as a still of the whole path (``.png``) or animated (``.gif``, ``.mp4``). ``.gif`` is written with
+Pillow; ``.mp4`` needs ffmpeg on PATH.
 
 Bad input (a missing or incomplete run directory, a task out of range, an unknown
-extension, an output that exists, without ``--overwrite``) gets a one-line error and exit
+extension or one the run's world is not drawn in, ``--every`` or ``--fps`` for a still, an output that exists,
+without ``--overwrite``) gets a one-line error and exit
 code 2, and nothing is written. Only FILE is ever written (through a temporary file in
 its directory, renamed when complete).
 """
@@ -21,6 +27,7 @@ its directory, renamed when complete).
 from __future__ import annotations
 
 import argparse
+import importlib
 import os
 import shutil
 import sys
@@ -33,7 +40,45 @@ from imrl_jax.runs.cli import HelpFormatter, Parser, UsageError, add_register, e
 from imrl_jax.runs import cli
 from imrl_jax.runs.rundir import check_writable, load_run
 
-FORMATS = (".gif", ".mp4")
+FORMATS = (".gif", ".mp4", ".png")
+#: Formats that hold one picture (no frames: ``--every`` and ``--fps`` make no sense there).
+STILLS = (".png",)
+#: ``--every`` and ``--fps`` when not given.
+DEFAULT_EVERY, DEFAULT_FPS = 2, 20
+
+
+class Drawer(NamedTuple):
+    """How a life in one world is recorded and drawn: ``"module:function"`` names, imported when used."""
+
+    formats: tuple[str, ...]
+    # (key, config, params, agent, task (0-based), steps) -> the recorded steps (with ``reached``)
+    record: str
+    # (config, life, path, task=, every=, fps=, title=, expressed=) -> frames written
+    draw: str
+
+
+#: Each world's drawing by its name (``config.world``): the one place render tells the worlds apart.
+DRAWERS = {
+    "arena": Drawer((".gif", ".mp4"), "imrl_jax.analysis.behaviour:task_trajectory",
+                    "imrl_jax.analysis.arena_figures:write_animation"),
+    "xland": Drawer((".png", ".gif", ".mp4"), "imrl_jax.analysis.xland_figures:task_life",
+                    "imrl_jax.analysis.xland_figures:write_life"),
+}
+
+
+def _function(name: str):
+    module, attribute = name.split(":")
+    return getattr(importlib.import_module(module), attribute)
+
+
+def drawer(world: str, ext: str) -> Drawer:
+    """The drawing of a life in ``world`` as a file of extension ``ext``; raises UsageError if there is none."""
+    if world not in DRAWERS:
+        raise UsageError(f"run_dir: render draws no life in world {world!r} (it draws: {', '.join(DRAWERS)})")
+    found = DRAWERS[world]
+    if ext not in found.formats:
+        raise UsageError(f"--out: a life in world {world} is drawn as {' or '.join(found.formats)}, not {ext}")
+    return found
 
 
 class Best(NamedTuple):
@@ -75,15 +120,16 @@ MAX_FRAMES = 5_000
 MAX_FPS = 100
 
 
-def check_sizes(steps: int, every: int, fps: int) -> None:
-    """Refuse sizes that would run for hours or overflow (raises UsageError naming the option and its limit)."""
+def check_sizes(steps: int, every: int, fps: int, still: bool = False) -> None:
+    """Refuse sizes that would run for hours or overflow (raises UsageError naming the option and its limit); a
+    still has no frames to count."""
     if steps < 1 or every < 1 or fps < 1:
         raise UsageError("--steps, --every and --fps must be at least 1")
     for flag, value, limit in (("--steps", steps, MAX_STEPS), ("--every", every, MAX_STEPS), ("--fps", fps, MAX_FPS)):
         if value > limit:
             raise UsageError(f"{flag}: {value:,} is above the limit of {limit:,}")
     frames = -(-steps // every)
-    if frames > MAX_FRAMES:
+    if frames > MAX_FRAMES and not still:
         raise UsageError(f"--steps / --every: {frames:,} frames is above the limit of {MAX_FRAMES:,} (raise --every)")
 
 
@@ -99,43 +145,52 @@ class Plan(NamedTuple):
     best: Best
 
     def execute(self) -> int:
-        """Draw the animation into ``out_path`` (through a temporary file renamed when complete) and say so."""
+        """Draw the picture into ``out_path`` (through a temporary file renamed when complete) and say so."""
         summary = animate(self)
-        print(f"wrote {summary['out']}: {summary['frames']} frames of task {summary['task']} "
+        shown = ("a still" if os.path.splitext(summary["out"])[1].lower() in STILLS else
+                 f"{summary['frames']} frames")
+        print(f"wrote {summary['out']}: {shown} of task {summary['task']} "
               f"(best individual: seed {summary['seed']}, generation {summary['generation']}, fitness "
               f"{summary['fitness']:.3f}, relived {summary['relived_fitness']:.3f}; "
               f"{summary['reaches_in_animation']} reaches shown) in {summary['seconds']:.1f} s")
         return 0
 
 
-def plan(run_dir: str, task: int, out_path: str, steps: int = 300, every: int = 2, fps: int = 20,
+def plan(run_dir: str, task: int, out_path: str, steps: int = 300, every: int | None = None, fps: int | None = None,
          overwrite: bool = False) -> Plan:
-    """Every check of an animation (sizes, output, the run, the task), nothing written; raises UsageError."""
-    check_sizes(steps, every, fps)
-    check_output(out_path, overwrite)
+    """Every check of a drawing (sizes, output, the run, its world, the task), nothing written; raises UsageError.
+    ``every`` and ``fps`` (None: not given) are an animation's: refused for a still."""
+    still = os.path.splitext(out_path)[1].lower() in STILLS
+    for flag, value in (("--every", every), ("--fps", fps)):
+        if still and value is not None:
+            raise UsageError(f"{flag}: {os.path.basename(out_path)} is a still, it has no frames (leave {flag} out, "
+                             f"or write a .gif)")
+    every, fps = DEFAULT_EVERY if every is None else every, DEFAULT_FPS if fps is None else fps
+    check_sizes(steps, every, fps, still)
+    ext = check_output(out_path, overwrite)
     best = best_individual(run_dir)
+    drawer(best.config.world, ext)
     if not 1 <= task <= best.config.num_tasks:
         raise UsageError(f"--task: must be in 1..{best.config.num_tasks} (got {task})")
     return Plan(run_dir, task, out_path, steps, every, fps, best)
 
 
-def run(run_dir: str, task: int, out_path: str, steps: int = 300, every: int = 2, fps: int = 20,
+def run(run_dir: str, task: int, out_path: str, steps: int = 300, every: int | None = None, fps: int | None = None,
         overwrite: bool = False) -> dict:
-    """Animate the best individual of ``run_dir`` on task ``task`` (1-based) into ``out_path``; return a summary."""
+    """Draw the best individual of ``run_dir`` on task ``task`` (1-based) into ``out_path``; return a summary."""
     return animate(plan(run_dir, task, out_path, steps, every, fps, overwrite))
 
 
 def animate(checked: Plan) -> dict:
-    """The animation of a checked plan, written; its summary."""
+    """The drawing of a checked plan, written; its summary."""
     run_dir, task, out_path, steps, every, fps, best = checked
     config = best.config
+    drawing = drawer(config.world, os.path.splitext(out_path)[1].lower())
 
     import jax
     import jax.numpy as jnp
 
-    from imrl_jax.analysis.behaviour import task_trajectory
     from imrl_jax.agent.lifetime import live
-    from imrl_jax.analysis.arena_figures import write_animation
     from imrl_jax.evolution import search
 
     start = time.perf_counter()
@@ -143,7 +198,7 @@ def animate(checked: Plan) -> dict:
     key = search.life_key(config, best.seed, best.generation, best.index)
     result = jax.jit(live, static_argnums=1)(key, config, params, jnp.asarray(best.genome, jnp.float32))
     agent = jax.tree.map(lambda x: x[task - 1], result.adult_agents)
-    trajectory = task_trajectory(jax.random.fold_in(key, task), config, params, agent, task - 1, steps)
+    trajectory = _function(drawing.record)(jax.random.fold_in(key, task), config, params, agent, task - 1, steps)
 
     title = (f"{config.condition}, best individual of {os.path.basename(os.path.normpath(run_dir))} "
              f"(seed {best.seed}, generation {best.generation}, fitness {best.fitness:.3f})\n"
@@ -153,8 +208,8 @@ def animate(checked: Plan) -> dict:
     base, ext = os.path.splitext(os.path.basename(out_path))
     tmp = os.path.join(directory, f".{base}.tmp-{os.getpid()}{ext}")
     try:
-        frames = write_animation(config, trajectory, tmp, task=task - 1, every=every, fps=fps, title=title,
-                                 expressed=agent.expressed)
+        frames = _function(drawing.draw)(config, trajectory, tmp, task=task - 1, every=every, fps=fps, title=title,
+                                         expressed=agent.expressed)
         os.replace(tmp, out_path)
     finally:
         if os.path.exists(tmp):
@@ -167,15 +222,20 @@ def animate(checked: Plan) -> dict:
 
 def parser() -> argparse.ArgumentParser:
     p = Parser(prog="python -m imrl_jax.render",
-               description="Animate the best individual of an evolve run on one task.",
+               description="Draw (animate, or for a run in another world than the arena also a still) the best "
+                           "individual of an evolve run on one task.",
                formatter_class=HelpFormatter)
     p.add_argument("run_dir", metavar="RUN_DIR", help="run directory of python -m imrl_jax.evolve")
-    p.add_argument("--task", type=int, required=True, help="task to show, 1-6")
-    p.add_argument("--out", required=True, help="animation file, .gif (or .mp4 with ffmpeg on PATH)")
+    p.add_argument("--task", type=int, required=True, help="task to show, 1 to the world's number of tasks (6)")
+    p.add_argument("--out", required=True,
+                   help="animation file, .gif (or .mp4 with ffmpeg on PATH); or, for a run in another world than the "
+                        "arena, a still .png")
     p.add_argument("--steps", type=int, default=300, help=f"steps of the task to show (at most {MAX_STEPS:,})")
-    p.add_argument("--every", type=int, default=2,
-                   help=f"one frame every this many steps (at most {MAX_FRAMES:,} frames in all)")
-    p.add_argument("--fps", type=int, default=20, help=f"frames per second (at most {MAX_FPS})")
+    p.add_argument("--every", type=int,
+                   help=f"one frame every this many steps (at most {MAX_FRAMES:,} frames in all; default "
+                        f"{DEFAULT_EVERY}; an animation's only)")
+    p.add_argument("--fps", type=int, help=f"frames per second (at most {MAX_FPS}; default {DEFAULT_FPS}; an "
+                                           f"animation's only)")
     p.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
     add_register(p)
     return p
