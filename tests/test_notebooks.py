@@ -14,7 +14,7 @@ from jupyter_client.manager import KernelManager  # noqa: E402  (a dependency of
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 NOTEBOOKS = os.path.join(ROOT, "notebooks")
-NAMES = ["01_tour.ipynb", "02_sweeps.ipynb", "03_studies.ipynb"]
+NAMES = ["01_tour.ipynb", "02_sweeps.ipynb", "03_studies.ipynb", "04_world_of_ones_own.ipynb"]
 #: Seconds a cell may take at the tiny scale before the test fails.
 TIMEOUT = 120
 
@@ -40,7 +40,7 @@ def test_stored_without_outputs(name):
 
 @pytest.mark.parametrize("name, task_set", [(NAMES[0], "paper"), pytest.param(NAMES[1], "novel",
                                                                                marks=pytest.mark.slow),
-                                            (NAMES[2], "paper")])
+                                            (NAMES[2], "paper"), (NAMES[3], "paper")])
 def test_runs_at_tiny_scale(name, task_set, monkeypatch):
     monkeypatch.setenv("IMRL_NOTEBOOK_SCALE", "tiny")
     monkeypatch.setenv("IMRL_TASK_SET", task_set)

@@ -210,3 +210,84 @@ def test_evolve_lives_in_the_world_its_command_line_names_and_resumes_there(tmp_
     assert evolve.main(["--resume", "--out", run, "--world", "arena", "--generations", "3"]) == 2
     assert "error:" in capsys.readouterr().err
     assert before == {name: open(f"{run}/{name}", "rb").read() for name in before}
+
+
+# ----------------------------------------------------------------------------- a world of one's own
+
+
+@pytest.fixture
+def own_worlds(monkeypatch):
+    """worlds.WORLDS as a copy the test may register into, and notebooks/ importable (corridor_world.py)."""
+    from helpers import ROOT
+
+    monkeypatch.setattr(worlds, "WORLDS", dict(worlds.WORLDS))
+    monkeypatch.syspath_prepend(f"{ROOT}/notebooks")
+    return worlds.WORLDS
+
+
+def test_a_world_is_registered_under_a_free_name_only(own_worlds):
+    from imrl_jax.config import ConfigError
+
+    worlds.register("blind", Blind())
+    worlds.register("blind", Blind())  # the same world again (a notebook run twice)
+    assert own_worlds["blind"] == Blind() and worlds.make("blind") == Blind()
+    for name, world in (("blind", HalfAsHard()), ("arena", Blind()), ("xland", "corridor_world")):
+        with pytest.raises(ValueError, match=f"register: the name '{name}' is taken by another world"):
+            worlds.register(name, world)
+    with pytest.raises(ValueError, match="an identifier"):
+        worlds.register("two words", Blind())
+    with pytest.raises(ConfigError, match="registered as an object"):
+        worlds.make("blind", (("view", 4),))
+
+
+def test_the_corridor_world_implements_the_interface_and_a_controller_solves_its_tasks(own_worlds, tiny):
+    """notebooks/corridor_world.py (docs/WORLDS.md, "A world of one's own"): every method, an observation of
+    num_inputs numbers, and a controller that turns towards the goal and walks reaches each task's max_reaches."""
+    import corridor_world as cw
+    from imrl_jax.config import ConfigError
+
+    worlds.register("corridor", "corridor_world")
+    config = worlds.configure(tiny("LE-LS", childhood_steps=300, task_steps=200), "corridor")
+    world = worlds.world_of(config)
+    assert world == cw.Corridor() and (config.num_inputs, config.num_actor_units, config.num_genes) == (9, 2, 30)
+    for name, _ in inspect.getmembers(base.World, inspect.isfunction):
+        assert callable(getattr(world, name)), name
+    for name, _ in inspect.getmembers(base.Env, inspect.isfunction):
+        assert callable(getattr(world.make_env(config), name)), name
+    env, open_env = world.make_env(config), world.make_env(config, has_target=False, respawn=True)
+    start = env.reset(None, world.task(config, 0))
+    np.testing.assert_array_equal(env.observe(start), [1, 0, 0] * 3)  # cell 1 facing right: red, red, red
+    wide = worlds.world_of(worlds.configure(config, "corridor", view=5))
+    assert wide.make_env(config).observe(start).shape == (wide.num_inputs(config),) == (15,)
+    child = open_env.reset(jax.random.key(0), world.childhood_task(config))
+    assert open_env.observe(child).shape == (world.num_inputs(config),)
+
+    def reaches(index):
+        params = world.task(config, index)  # a traced index
+
+        def step(state, _):
+            away = (params.goal - state.position) * state.facing < 0
+            return env.transition(state, jnp.where(away, cw.TURN, cw.FORWARD).astype(jnp.int32), params)
+
+        return jax.lax.scan(step, env.reset(None, params), None, config.task_steps)[1].reached.sum()
+
+    found = jax.jit(jax.vmap(reaches))(jnp.arange(world.num_tasks(config)))
+    np.testing.assert_allclose(found, world.max_reaches(config), atol=1)
+    assert np.all(np.asarray(found) >= 20)  # 200 steps, shortest solutions of 2 to 10 steps
+
+    def turning(state, u):  # childhood: turning round never moves, so a random start follows stuck_steps turns
+        return open_env.transition(state, jnp.int32(cw.TURN), world.childhood_task(config), u)
+
+    _, events = jax.lax.scan(turning, child, jax.random.uniform(jax.random.key(1), (45, world.num_spawn_draws)))
+    assert np.flatnonzero(events.respawned).tolist() == [19, 39] and not events.reached.any()
+    with pytest.raises(ConfigError, match="world_settings: CorridorSettings"):
+        worlds.configure(config, "corridor", cells="rgx")
+
+    @dataclasses.dataclass(frozen=True)
+    class Miscounted(cw.Corridor):
+        def num_inputs(self, config=None):  # one more than it observes: refused before any life
+            return 10
+
+    worlds.register("miscounted", Miscounted())
+    with pytest.raises(ConfigError, match=r"world_inputs: world miscounted observes an array of shape \(9,\), not"):
+        worlds.configure(config, "miscounted")

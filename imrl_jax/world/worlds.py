@@ -5,6 +5,8 @@ from __future__ import annotations
 import dataclasses
 import importlib
 
+import jax
+
 from imrl_jax.config import Config, ConfigError
 from imrl_jax.world.base import DISCRETE, World
 from imrl_jax.world.env import ARENA
@@ -17,6 +19,16 @@ WORLDS: dict[str, World | str] = {ARENA.name: ARENA, "xland": "imrl_jax.world.xl
 ARENA_PARTS = ("actor_turn", "parameters")
 
 
+def register(name: str, world: World | str) -> None:
+    """Make ``world`` (a World, or the path of a module with ``make_world(settings)``) world ``name``; a name another
+    world holds is refused (ValueError). A world of one's own: docs/WORLDS.md."""
+    if not isinstance(name, str) or not name.isidentifier():
+        raise ValueError(f"register: a world's name is an identifier, got {name!r}")
+    if WORLDS.get(name, world) != world:
+        raise ValueError(f"register: the name {name!r} is taken by another world ({WORLDS[name]!r})")
+    WORLDS[name] = world
+
+
 def make(name: str, settings: tuple = ()) -> World:
     """World ``name`` with its settings (``(name, value)`` pairs); raises ConfigError naming what is wrong."""
     if name not in WORLDS:
@@ -24,8 +36,9 @@ def make(name: str, settings: tuple = ()) -> World:
     found = WORLDS[name]
     if not isinstance(found, str):
         if settings:
-            raise ConfigError(f"world_settings: the {name} world's settings are the config's own fields",
-                              "world_settings")
+            where = ("the config's own fields" if name == ARENA.name else
+                     "none: it was registered as an object (register a module's path for settings)")
+            raise ConfigError(f"world_settings: the {name} world's settings are {where}", "world_settings")
         return found
     try:
         return importlib.import_module(found).make_world(dict(settings))
@@ -68,4 +81,15 @@ def configure(config: Config, name: str, **settings) -> Config:
     moved = dataclasses.replace(config, world=name, world_settings=pairs, world_inputs=world.num_inputs(config),
                                 world_actions=world.actions(config).size)
     world_of(moved)  # every check, before the config is used
+    _check_observation(world, moved)
     return moved
+
+
+def _check_observation(world: World, config: Config) -> None:
+    """Refuse a world whose observation is not ``num_inputs`` numbers (a life would write it, silently, into a row of
+    another length); traced, not run."""
+    env = world.make_env(config)
+    seen = jax.eval_shape(lambda: env.observe(env.reset(jax.random.key(0), world.task(config, 0))))
+    if seen.shape != (world.num_inputs(config),):
+        raise ConfigError(f"world_inputs: world {config.world} observes an array of shape {seen.shape}, not its "
+                          f"num_inputs ({world.num_inputs(config)},)", "world_inputs")
