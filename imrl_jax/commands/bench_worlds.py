@@ -124,7 +124,8 @@ def run(config: Config, lane_counts, repeats: int, log=print) -> dict:
     steps = config.task_steps
     section = {"name": config.world, "settings": dict(config.world_settings), "inputs": world.num_inputs(config),
                "actions": world.actions(config).size, "steps": steps, "repeats": repeats, "rows": []}
-    log(f"world {config.world} {section['settings'] or ''}: {section['inputs']} inputs, {section['actions']} actions; "
+    settings = "".join(f" {name}={value}" for name, value in section["settings"].items())
+    log(f"world {config.world}{settings}: {section['inputs']} inputs, {section['actions']} actions; "
         f"{steps:,} steps, medians of {repeats} alternating runs")
     log(f"{'phase':24s} {'lanes':>6s} {'agent lane-steps/s':>19s} {'world alone':>14s} {'ratio':>7s} "
         f"{'compile s':>10s}")
