@@ -19,8 +19,10 @@ from __future__ import annotations
 import os
 import sys
 
+from experiments.harness.loading import read_json, read_test, write_json
+from experiments.harness.markdown import head, line, mean_sd
 from experiments.harness.reproduce import test_command, test_cost
-from experiments.harness.study import RESULTS
+from experiments.harness.study import RESULTS, markers, write_table
 from experiments.harness.table import Measure, Row, Table
 
 #: The study's manifest, logs and measures (its runs lie wherever their keys find them).
@@ -57,8 +59,144 @@ def novel_test(row: Row) -> Measure:
                    test_cost(SCALE, row.condition), os.path.join("novel", row.condition), kind="test")
 
 
+#: The variant name the report's claims and figures file this world's numbers under.
+VARIANT = "xland"
+
+
+def claims_of(rows: dict, tests: dict) -> dict:
+    """The seven claims judged on this world's finished evolutions and tests, by the arena's rules
+    (``imrl_jax.analysis.claims.RULES``); claim 4's path and claim 7's junction probe are the arena's: not measured."""
+    from imrl_jax.analysis.claims import (NOT_AVAILABLE, STEADY_ORDER, claim_learning_speed, evolved_claims,
+                                          final_best)
+
+    done = {c: dict(final_best_mean=m["final_mean"], final_best_sd=m["final_sd"], plateau_generation=m["plateau"],
+                    final_best_per_seed=final_best(m["best"]).tolist())
+            for c, m in rows.items() if "final_mean" in m}
+    per_run = {c: tests[c]["steady"]["steady_per_run"] if tests.get(c) else None for c in STEADY_ORDER}
+    claims = evolved_claims(done, per_run, None)
+    learning = {c: tests[c] for c in ("LE-LS", "EE-LS", "SLE") if tests.get(c)}
+    sle_noise = (learning["SLE"]["steady"].get("config") or {}).get("sle_noise_steps") if "SLE" in learning else None
+    claims[5] = claim_learning_speed({c: (t["steps"], t["mean"]) for c, t in learning.items()},
+                                     {c: t["steady"]["steady_mean"] for c, t in learning.items()}, sle_noise)
+    claims[7] = dict(verdict=NOT_AVAILABLE, measured="not measured: its probe (experts at the arena's junctions) is "
+                                                     "the arena's")
+    claims[4]["measured"] += " (path: the arena's measure, not taken here; the verdict is the ratio's)"
+    return dict(sorted(claims.items()))
+
+
+def landscapes(out: str) -> dict:
+    """Each landscape measure's numbers as far as it has come: random genomes (H4) and its generations' mutations."""
+    found = {}
+    for condition in LIFE:
+        folder = os.path.join(out, "measures", f"landscape-{condition}")
+        measured = read_json(os.path.join(folder, "result.json")) or read_json(os.path.join(folder, "landscape.json"))
+        if measured is not None:
+            found[condition] = dict(done=os.path.exists(os.path.join(folder, "result.json")),
+                                    pieces=measured["pieces"])
+    return found
+
+
+def landscape_table(found: dict) -> str:
+    """H4 (random genomes' fitness) and the mutations around each measured generation's parents, per condition."""
+    lines = head("condition", "genes", "pieces", "random genomes: mean (sd)", "at 0",
+                 "generation: parents, mutants' mean effect, deleterious, rho(1)")
+    for condition, entry in found.items():
+        pieces = entry["pieces"]
+        random = pieces.get("random genomes, learning") or {}
+        generations = [p for name, p in pieces.items() if name.startswith("generation") and
+                       name.endswith("learning")]
+        text = "; ".join(f"{p['generation']}: {p['parent_mean']:.3f}, "
+                         f"{(p['mutant_mean'] - p['parent_mean']) / p['parent_mean']:+.1%}" if p["parent_mean"] > 0
+                         else f"{p['generation']}: {p['parent_mean']:.3f}, -" for p in generations)
+        text += "" if not generations else ", " + ", ".join(
+            f"{p['share_deleterious']:.0%}, {p['rho'][0]:.2f}" for p in generations[-1:])
+        lines.append(line(condition, GENES.get(condition, "-"), f"{len(pieces)}{'' if entry['done'] else ' (running)'}",
+                          f"{random['mean']:.3f} ({random['std']:.3f})" if random else "-",
+                          f"{random['share_zero']:.0%}" if random else "-", text or "-"))
+    return "\n".join(lines)
+
+
+#: Genes of each condition in this world (3 experts, 55 inputs and a bias, 5 actions).
+GENES = {"LE-LS": 168, "EE-LS": 840, "EE-ES": 1008, "LE-LS-Z": 840}
+
+
+class WorldsTable(Table):
+    """The worlds study's table: its rows' table and curves, then Fig. 3 in this world, the claims, the novel tasks
+    and the landscapes."""
+
+    def measure_world(self) -> dict:
+        """Every number of the report: the rows, fresh lives of each finished run's best, the claims, the novel
+        tasks' tests beside the tasks' own, and the landscape measures."""
+        from experiments.harness.relive import run_fresh
+
+        rows = {m["row"]: m for m in self.measure()}
+        tests = {name: read_test(folder) for name, folder in self.tests().items()}
+        novel = {m.name.removesuffix(" on novel"): read_test(self.measure_folder(m)) for m in self.measures
+                 if m.kind == "test"}
+        novel["SLE"] = tests.pop("SLE on novel", None)
+        fresh = {}
+        for name, m in rows.items():
+            if "final_mean" in m and (lives := run_fresh(m["dir"])) is not None:
+                fresh[name] = lives
+        return dict(rows=rows, tests=tests, novel=novel, fresh=fresh, claims=claims_of(rows, tests),
+                    landscapes=landscapes(self.out))
+
+    def report(self) -> int:
+        """The rows' table and curves; then Fig. 3, the claims, the novel tasks, the landscapes and report.json."""
+        from experiments.harness.figures import fig3, finish
+
+        code = super().report()
+        measured = self.measure_world()
+        rows, tests = measured["rows"], measured["tests"]
+        evolutions = {c: rows[c]["best"] for c in EVOLVED if c != "LE-LS-Z" and rows[c]["generations"]}
+        steady = {(VARIANT, c): t["steady"] for c, t in tests.items() if t}
+        drawn = finish(fig3(evolutions, {c: t for c, t in tests.items() if t}, steady, VARIANT,
+                            "The paper's Fig. 3 in XLand (reduced scale: docs/WORLDS.md)"),
+                       os.path.join(self.out, "fig3.png"))
+        write_table(self.document, results_text(measured), *markers("worlds results", self.name))
+        write_json(os.path.join(self.out, "report.json"), dict(
+            claims=measured["claims"], fresh=measured["fresh"],
+            final_best={c: {k: m[k] for k in ("final_mean", "final_sd", "plateau")} for c, m in rows.items()
+                        if "final_mean" in m},
+            steady={c: {k: t["steady"][k] for k in ("steady_mean", "steady_sd", "steady_per_run")}
+                    for c, t in tests.items() if t},
+            novel={c: {k: t["steady"][k] for k in ("steady_mean", "steady_sd", "steady_per_run")}
+                   for c, t in measured["novel"].items() if t},
+            landscapes={c: {name: {k: v for k, v in p.items() if k != "fitness"} for name, p in e["pieces"].items()}
+                        for c, e in measured["landscapes"].items()}), indent=2)
+        print(f"wrote {drawn}, {os.path.join(self.out, 'report.json')} and the results of {self.document}")
+        return code
+
+
+def results_text(measured: dict) -> str:
+    """The report's markdown: fresh lives, the claims' verdicts, the novel tasks and the landscapes."""
+    from imrl_jax.analysis.claims import CLAIMS
+
+    lines = ["**Fresh lives** (the mean of 10 fresh lives of each seed's best genome of the last generation; mean "
+             "and sd over seeds):", "", *head("condition", "final best fitness (best of a generation's lives)",
+                                               "fresh lives of the best")]
+    for c, m in measured["rows"].items():
+        if m["generations"] and m["row"] in EVOLVED:
+            f = measured["fresh"].get(c)
+            lines.append(line(c, mean_sd(m["final_mean"], m["final_sd"]) if "final_mean" in m else "running",
+                              mean_sd(f["mean"], f["sd_over_seeds"]) if f else "-"))
+    lines += ["", "**The claims** (the arena's rules, `imrl_jax.analysis.claims.RULES`):", "",
+              *head("claim", "verdict", "measured")]
+    lines += [line(f"{n}: {CLAIMS[n]}", f"**{c['verdict']}**", c["measured"]) for n, c in measured["claims"].items()]
+    lines += ["", "**Novel tasks** (learning tests on `xland-novel`, beside the tests on the six of evolution; "
+              "steady state, mean +- sd over runs):", "", *head("condition", "own tasks", "novel tasks")]
+    for c in ("LE-LS", "EE-LS", "EE-ES", "SLE"):
+        own, new = measured["tests"].get(c), measured["novel"].get(c)
+        lines.append(line(c, *(mean_sd(t["steady"]["steady_mean"], t["steady"]["steady_sd"]) if t else "-"
+                               for t in (own, new))))
+    lines += ["", "**Landscapes** (seed 0; `imrl_jax.landscape_run`'s measures, docs/GOALS.md; mean effect relative "
+              "to the parents' fitness):", "", landscape_table(measured["landscapes"]) if measured["landscapes"]
+              else "not measured yet"]
+    return "\n".join(lines)
+
+
 ROWS = tuple(Row(condition, condition, "paper", options=WORLD) for condition in EVOLVED)
-TABLE = Table("worlds", "docs/WORLDS.md", 10, out=OUT, scale=SCALE, rows=(
+TABLE = WorldsTable("worlds", "docs/WORLDS.md", 12, out=OUT, scale=SCALE, rows=(
     *ROWS, Row("SLE", "SLE", "paper", options=WORLD), Row("SLE on novel", "SLE", "paper", options=WORLD + NOVEL),
 ), measures=(*(novel_test(row) for row in ROWS if row.condition in LIFE),
              *(landscape(row) for row in ROWS if row.condition in LIFE)))

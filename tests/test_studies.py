@@ -14,7 +14,7 @@ from experiments.harness import study as S
 from imrl_jax.runs.cli import UsageError
 
 ORDER = ["selector-sweep", "timescale", "novel-tasks", "claims-screen", "reproduction", "claims-experts", "search",
-         "future-work", "reproduction-cpu", "goals", "childhood", "baselines"]
+         "future-work", "reproduction-cpu", "goals", "childhood", "baselines", "worlds"]
 
 
 def test_every_study_is_found_in_order():
@@ -122,7 +122,7 @@ def test_report_writes_each_studys_tables(monkeypatch):
                    "experiments.claims_study experts --report", "experiments.search --report",
                    "experiments.future_work --report", "experiments.reproduction cpu --report",
                    "experiments.goals --report", "experiments.childhood_study --report",
-                   "experiments.baselines --report"]
+                   "experiments.baselines --report", "experiments.worlds --report"]
 
 
 def test_ctrl_c_waits_for_the_study_to_stop_and_stops_with_one_line(monkeypatch, capsys):

@@ -291,3 +291,21 @@ def test_the_corridor_world_implements_the_interface_and_a_controller_solves_its
     worlds.register("miscounted", Miscounted())
     with pytest.raises(ConfigError, match=r"world_inputs: world miscounted observes an array of shape \(9,\), not"):
         worlds.configure(config, "miscounted")
+
+
+def test_a_learning_tests_performance_is_reaches_over_the_worlds_own_maximum(tiny):
+    """A test's performance per bin divides by the world's own most reaches per task (XLand's differ by task), not
+    the arena's: reaching a task's maximum in every bin is 1 in every task."""
+    pytest.importorskip("xminigrid")
+    from imrl_jax.analysis.steady_state import performance_curve
+    from imrl_jax.evolution.sweeps import normalised_curve
+
+    config = worlds.configure(tiny("LE-LS", task_steps=2_800, num_bins=2), "xland")
+    most = np.asarray(worlds.world_of(config).max_reaches(config))
+    np.testing.assert_array_equal(worlds.task_maxima(config), most)
+    assert len(set(most.tolist())) > 1  # the tasks' shortest solutions differ
+    full = np.repeat(most[:, None] / 2, 2, axis=1)
+    np.testing.assert_allclose(performance_curve(config, full), 1.0)
+    np.testing.assert_allclose(normalised_curve(config, full), 1.0)
+    arena = tiny("LE-LS", task_steps=2_800, num_bins=2)
+    np.testing.assert_array_equal(worlds.task_maxima(arena), np.asarray(arena.theoretical_max()))

@@ -5,13 +5,14 @@ from __future__ import annotations
 import numpy as np
 
 from imrl_jax.config import Config, ConfigError
+from imrl_jax.world.worlds import task_maxima
 
 PAIR_LEVEL = 0.2  # a task counts as solved in a test at this steady-state performance
 
 
 def performance_curve(config: Config, reaches: np.ndarray) -> np.ndarray:
     """Reaches per bin (..., tasks, bins) as task performance per bin (the paper's normalised reward)."""
-    per_bin = np.asarray(config.theoretical_max()) / config.num_bins
+    per_bin = task_maxima(config) / config.num_bins
     return np.asarray(reaches, float) / per_bin[:, None]
 
 

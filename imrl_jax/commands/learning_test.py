@@ -52,7 +52,7 @@ from imrl_jax.runs import cli, runspec
 from imrl_jax.agent import kernel_choice
 from imrl_jax.runs.cli import UsageError, exit_codes, parse_sets
 from imrl_jax.agent.lifetime import grow_up, lifetime_keys, run_phase, task_start
-from imrl_jax.world.worlds import world_of
+from imrl_jax.world.worlds import task_maxima, world_of
 from imrl_jax.agent.state import State
 from imrl_jax.runs.events import check_log, log_for
 from imrl_jax.commands.learning_test_options import (OPTION_FIELDS, check_condition, check_sizes, evolved_genomes, from_scratch,
@@ -150,7 +150,7 @@ def run_tests(keys: jax.Array, config: Config, params: LearningParams, genomes, 
     sharding = NamedSharding(make_mesh(), PartitionSpec("lanes"))
     tests = begin_all(jax.device_put(keys, sharding), params, jax.device_put(np.asarray(genomes), sharding))
     reaches, selections = [], []
-    best = np.asarray(config.theoretical_max())
+    best = task_maxima(config)
     lane_steps = num_tests * config.num_tasks * config.task_steps / num_chunks  # per chunk
     for chunk in range(num_chunks):
         start = time.perf_counter()

@@ -36,6 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from imrl_jax.config import UsageError
+from imrl_jax.world.worlds import task_maxima
 from imrl_jax.config import Config, LearningParams
 from imrl_jax.evolution import search
 from imrl_jax.evolution.ga import GA, GAParams
@@ -321,7 +322,7 @@ def evolve_static(config: Config, field: str, values: Sequence, seeds: Sequence[
 
 def bin_maximum(config: Config) -> np.ndarray:
     """(tasks,) the theoretical maximum of reaches in one bin of a task."""
-    return np.asarray(config.theoretical_max()) / config.num_bins
+    return task_maxima(config) / config.num_bins
 
 
 def normalised_curve(config: Config, reward_curve) -> np.ndarray:

@@ -72,6 +72,16 @@ def world_of(config: Config) -> World:
     return world
 
 
+def task_maxima(config: Config):
+    """(tasks,) each task's most reaches in ``config.task_steps`` steps, as NumPy floats: performance's denominator
+    (the arena's ``config.theoretical_max()``, another world's ``max_reaches``)."""
+    import numpy as np
+
+    if config.world == ARENA.name:  # as the arena's reports always divided, to the last bit
+        return np.asarray(config.theoretical_max())
+    return np.asarray(world_of(config).max_reaches(config), np.float64)
+
+
 def configure(config: Config, name: str, **settings) -> Config:
     """``config`` living in world ``name`` with ``settings``: its observation size and actions recorded."""
     pairs = tuple(sorted(settings.items()))
