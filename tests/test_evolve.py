@@ -733,6 +733,16 @@ def test_the_time_a_run_will_take_is_read_from_the_benchmarks_speeds(tmp_path):
     assert progress.measured_speed("cpu", 400, str(folder))[0] == 8e6
     assert progress.measured_speed("gpu", 40, str(folder)) is None
     assert progress.measured_speed("cpu", 40, str(tmp_path / "none")) is None
+    # Another world: its agent's adult rate from bench --world's section (the arena's lives are not its speed)
+    (folder / "world-xland.json").write_text(json.dumps({"backend": "cpu", "world": {"name": "xland", "settings": {},
+        "rows": [{"phase": "LE-LS childhood", "lanes": 50, "agent_lane_steps_per_s": 1e5},
+                 {"phase": "LE-LS/EE-LS adulthood", "lanes": 50, "agent_lane_steps_per_s": 3e5},
+                 {"phase": "LE-LS/EE-LS adulthood", "lanes": 300, "agent_lane_steps_per_s": 6e5}]}}))
+    assert progress.measured_speed("cpu", 40, str(folder), world="xland") == (
+        3e5, os.path.join("docs", "bench", "world-xland.json"))
+    assert progress.measured_speed("cpu", 250, str(folder), world="xland")[0] == 6e5
+    assert progress.measured_speed("cpu", 40, str(folder), world="corridor") is None
+    assert progress.measured_speed("cpu", 40, str(folder)) == (2e6, os.path.join("docs", "bench", "cpu.json"))
     assert progress.cost_line("x", 50, 10**7, 20, "tpu").endswith("; no speed measured on tpu in docs/bench to "
                                                                   "estimate its time")
     line = progress.cost_line("x", 50, 10**7, 20, "cpu")

@@ -244,7 +244,8 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], state: RunState, sha
             progress.note(cost_line(f"evolving {config.condition}: {len(seeds)} seed(s) x {config.population_size} "
                                     f"individuals x {config.num_generations - first} generation(s)", lives, lane_steps,
                                     config.num_generations - first, jax.default_backend(),
-                                    memory_needed(config, lives, jax.device_count(), history_bytes(config, len(seeds))))
+                                    memory_needed(config, lives, jax.device_count(), history_bytes(config, len(seeds))),
+                                    world=config.world)
                           + f"; step_kernel={kernel_choice.chosen(config)}")
             progress.note("compiling the generation (its first line comes once it is compiled and run) ...")
         if trait_names(config):

@@ -385,7 +385,7 @@ def _evolve(config: Config, out_dir: str, seeds: list[int], points: Sequence[Poi
                                 f"individuals x {config.num_generations - first} generation(s)", lives, lane_steps,
                                 config.num_generations - first, jax.default_backend(),
                                 memory_needed(config, lives, jax.device_count(),
-                                              len(points) * history_bytes(config, num_seeds))))
+                                              len(points) * history_bytes(config, num_seeds)), world=config.world))
         progress.note("compiling the generation of every point (its first line comes once it is compiled and run) ...")
     names = trait_names(config)
     trait_values = jax.jit(jax.vmap(jax.vmap(lambda genome: traits(config, genome)))) if names else None

@@ -434,7 +434,8 @@ def plan(run_dir: str, out_dir: str, *, generations: str = "0,10,last", seed: in
     host = HOST_COPIES * genomes * 4 * (config.num_genes + 2) * (1 + len(cut_configs))
     cost = cost_line(f"measuring generation(s) {', '.join(map(str, wanted))} of seed {seed}", lives * genomes
                      * (1 + len(cut_configs)), lives * genomes * (1 + len(cut_configs)) * config.lifetime_steps, 1,
-                     jax.default_backend(), memory_needed(config, lanes, jax.device_count(), host), unit="call")
+                     jax.default_backend(), memory_needed(config, lanes, jax.device_count(), host), unit="call",
+                     world=config.world)
     try:
         check_memory(config, lanes, "the landscape measures", host_bytes=host)
     except UsageError as error:  # its advice is an evolution's: say this command's sizes instead

@@ -271,7 +271,8 @@ def _test_runs(config: Config, genomes: np.ndarray, out_dir: str, num_tests: int
         progress.note(cost_line(f"testing {num_runs - len(done)} run(s)", num_best * num_tests,
                                 num_best * num_tests * config.lifetime_steps, num_runs - len(done),
                                 jax.default_backend(), memory_needed(config, num_best * num_tests * config.num_tasks,
-                                jax.device_count(), curves_bytes(config, num_runs * num_best * num_tests)), unit="run"))
+                                jax.device_count(), curves_bytes(config, num_runs * num_best * num_tests)), unit="run",
+                                world=config.world))
     start = time.perf_counter()
     params = config.learning_params()
     sizes = dict(num_runs=num_runs, num_best=num_best, num_tests=num_tests, steady_steps=steady_steps, seed=seed)

@@ -98,9 +98,13 @@ class Progress:
 BENCH_DIR = os.path.join(files.REPO, "docs", "bench")
 
 
-def measured_speed(backend: str, individuals: int, folder: str | None = None) -> tuple[float, str] | None:
+def measured_speed(backend: str, individuals: int, folder: str | None = None,
+                   world: str = "arena") -> tuple[float, str] | None:
     """The speed of whole lives (lane-steps per second) the benchmark measured on ``backend`` with the number of
-    individuals nearest ``individuals``, and the file that says so; None if no file of ``folder`` does."""
+    individuals nearest ``individuals``, and the file that says so; None if no file of ``folder`` does.
+
+    In another ``world`` than the arena: the speed ``bench --world`` measured of an agent's adult task there (its
+    lanes nearest ``individuals``), the most of a life."""
     found, folder = None, folder or BENCH_DIR
     for name in sorted(os.listdir(folder)) if os.path.isdir(folder) else []:
         try:
@@ -108,18 +112,34 @@ def measured_speed(backend: str, individuals: int, folder: str | None = None) ->
                 data = json.loads(f.read(2**20)) if name.endswith(".json") else None
         except (OSError, ValueError):
             continue
-        if not isinstance(data, dict) or data.get("backend") != backend or not isinstance(data.get("lifetimes"), list):
+        if not isinstance(data, dict) or data.get("backend") != backend:
             continue
-        for life in data["lifetimes"]:
-            try:
-                rate, measured = float(life["lane_steps_per_s"]), int(life["individuals"])
-            except (KeyError, TypeError, ValueError):
-                continue
+        for rate, measured in _rates(data, world):
             if math.isfinite(rate) and rate > 0 and measured > 0:
                 distance = abs(math.log(measured / max(individuals, 1)))
                 if found is None or distance < found[0]:
                     found = (distance, rate, os.path.join("docs", "bench", name))
     return None if found is None else found[1:]
+
+
+def _rates(data: dict, world: str) -> list[tuple[float, int]]:
+    """(lane-steps per second, individuals) of a bench file's whole lives (the arena), or of its ``world`` section's
+    agent in an adult task (another world); nothing that does not parse."""
+    if world == "arena":
+        rows, rate, count = data.get("lifetimes"), "lane_steps_per_s", "individuals"
+    else:
+        section = data.get("world")
+        ok = isinstance(section, dict) and section.get("name") == world and not section.get("settings")
+        rows = [r for r in section.get("rows") or [] if isinstance(r, dict) and "adulthood" in str(r.get("phase"))
+                ] if ok else None
+        rate, count = "agent_lane_steps_per_s", "lanes"
+    found = []
+    for row in rows if isinstance(rows, list) else []:
+        try:
+            found.append((float(row[rate]), int(row[count])))
+        except (KeyError, TypeError, ValueError):
+            continue
+    return found
 
 
 def _amount(count: int) -> str:
@@ -128,14 +148,16 @@ def _amount(count: int) -> str:
 
 
 def cost_line(what: str, individuals: int, lane_steps: int, generations: int, backend: str,
-              memory: int | None = None, unit: str = "generation") -> str:
+              memory: int | None = None, unit: str = "generation", world: str = "arena") -> str:
     """What a run will cost, in one line: its lives and lane-steps, its time at the speed the benchmark measured on
-    ``backend`` (if it did), compilation aside, and the ``memory`` (bytes) its check estimated, if given."""
+    ``backend`` (if it did; in its ``world``), compilation aside, and the ``memory`` (bytes) its check estimated, if
+    given."""
     total = lane_steps * generations
     line = f"{what}: {individuals:,} lives a {unit}, {_amount(lane_steps)} lane-steps a {unit}, {_amount(total)} in all"
-    speed = measured_speed(backend, individuals)
+    speed = measured_speed(backend, individuals, world=world)
     if speed is None:
-        line += f"; no speed measured on {backend} in docs/bench to estimate its time"
+        where = "" if world == "arena" else f" in world {world}"
+        line += f"; no speed measured on {backend}{where} in docs/bench to estimate its time"
     else:
         rate, source = speed
         line += (f"; about {clock(total / rate)} at the {rate / 1e6:.1f} M lane-steps/s {source} measured on "
