@@ -28,6 +28,13 @@ def test_two_devices_match_one(axis):
     assert got["fitness"].any(), "the check is weak if every individual has fitness 0"
 
 
+def unoptimised(env: dict) -> dict:
+    """``env`` with XLA's backend optimisations off (JAX_DISABLE_MOST_OPTIMIZATIONS): these scripts compile many
+    programs that each run in moments, and compare only programs compiled alike (one device, two; the shardings and
+    the all-gathers are chosen by the partitioner before the backend), so the optimiser's time is spared."""
+    return {**env, "JAX_DISABLE_MOST_OPTIMIZATIONS": "1"}
+
+
 #: Two generations on 2 forced devices: do the next populations keep the input's sharding?
 KEEPS_SHARDING = """
 import jax, numpy as np
@@ -57,7 +64,7 @@ def test_next_populations_keep_their_sharding():
 
     from helpers import ROOT, environment
 
-    done = subprocess.run([sys.executable, "-c", KEEPS_SHARDING], cwd=ROOT, env=environment(devices=2),
+    done = subprocess.run([sys.executable, "-c", KEEPS_SHARDING], cwd=ROOT, env=unoptimised(environment(devices=2)),
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.split("\n")[:4] == ["2 0 True 2", "2 1 True 2", "1 0 True 2", "1 1 True 2"], done.stdout
@@ -142,7 +149,7 @@ def test_kernel_lanes_shard_over_devices():
 
     from helpers import ROOT, environment
 
-    done = subprocess.run([sys.executable, "-c", KERNEL_LANES], cwd=ROOT, env=environment(devices=2),
+    done = subprocess.run([sys.executable, "-c", KERNEL_LANES], cwd=ROOT, env=unoptimised(environment(devices=2)),
                           capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-2000:]
     cases = json.loads(done.stdout.strip().splitlines()[-1])
