@@ -364,11 +364,12 @@ class Table:
                      "steady state")
         for m in measured:
             final = (mean_sd(m["final_mean"], m["final_sd"]) if "final_mean" in m else
-                     "running" if m["generations"] else "not started")
+                     "running" if m["generations"] else "not evolved" if m["dir"] is None else "not started")
             steady = (f"{mean_sd(m['steady_mean'], m['steady_sd'])} ({m['test_runs']} runs)" if "steady_mean" in m
                       else "-")
             lines.append(line(m["row"], m["condition"], m["preset"], m.get("seeds", "-"),
-                              f"{m['generations']} of {m['target']}", final, m.get("plateau", "-"), steady))
+                              "-" if m["dir"] is None else f"{m['generations']} of {m['target']}", final,
+                              m.get("plateau", "-"), steady))
         return "\n".join(lines)
 
     def figure(self, measured: list[dict], path: str) -> str:
