@@ -19,6 +19,8 @@ from __future__ import annotations
 import os
 import sys
 
+import numpy as np
+
 from experiments.harness.loading import read_json, read_test, write_json
 from experiments.harness.markdown import head, line, mean_sd
 from experiments.harness.reproduce import test_command, test_cost
@@ -153,6 +155,7 @@ class WorldsTable(Table):
         drawn = finish(fig3(evolutions, {c: t for c, t in tests.items() if t}, steady, VARIANT,
                             "The paper's Fig. 3 in XLand (reduced scale: docs/WORLDS.md)"),
                        os.path.join(self.out, "fig3.png"))
+        drawn += ", " + questions_figure(measured, os.path.join(self.out, "questions.png"))
         write_table(self.document, results_text(measured), *markers("worlds results", self.name))
         write_json(os.path.join(self.out, "report.json"), dict(
             claims=measured["claims"], fresh=measured["fresh"],
@@ -166,6 +169,57 @@ class WorldsTable(Table):
                         for c, e in measured["landscapes"].items()}), indent=2)
         print(f"wrote {drawn}, {os.path.join(self.out, 'report.json')} and the results of {self.document}")
         return code
+
+
+def questions_figure(measured: dict, path: str) -> str:
+    """Goals against behaviours and the novel tasks in one figure: (a) the best of a generation's lives against fresh
+    lives of the best, (b) the learning tests on the tasks of evolution and on novel ones, (c) random genomes and
+    mutations around the last generation's parents (seed 0's landscape)."""
+    from experiments.harness.figures import finish
+    from imrl_jax.analysis.plotting import new_figure, style_axis
+
+    fig = new_figure(14.0, 3.8)
+    a, b, c = fig.subplots(1, 3)
+    rows, width = measured["rows"], 0.38
+    shown = [r for r in EVOLVED if "final_mean" in rows.get(r, {})]
+    x = np.arange(len(shown))
+    a.bar(x - width / 2, [rows[r]["final_mean"] for r in shown], width, yerr=[rows[r]["final_sd"] for r in shown],
+          color="0.7", capsize=3, label="best of a generation's lives (last 10)")
+    fresh = [measured["fresh"].get(r) for r in shown]
+    a.bar(x + width / 2, [f["mean"] if f else np.nan for f in fresh], width,
+          yerr=[f["sd_over_seeds"] if f else 0 for f in fresh], color="0.3", capsize=3,
+          label="fresh lives of each seed's best")
+    a.axhline(0.01, color="tab:red", lw=1, ls=":", label="random actions")
+    a.set_xticks(x, shown)
+    style_axis(a, "(a) selected lives against fresh ones", "", "fitness (mean +- sd over seeds)")
+    tested = [c for c in ("LE-LS", "EE-LS", "EE-ES", "SLE") if measured["tests"].get(c)]
+    x = np.arange(len(tested))
+    for shift, which, colour, label in ((-width / 2, measured["tests"], "0.3", "tasks of evolution"),
+                                        (width / 2, measured["novel"], "tab:blue", "novel tasks")):
+        found = [which.get(c) for c in tested]
+        b.bar(x + shift, [t["steady"]["steady_mean"] if t else np.nan for t in found], width,
+              yerr=[t["steady"]["steady_sd"] if t else 0 for t in found], color=colour, capsize=3, label=label)
+    b.set_xticks(x, tested)
+    style_axis(b, "(b) learning tests: steady state", "", "performance (mean +- sd over runs)")
+    found = measured["landscapes"]
+    names = [n for n in LIFE if n in found]
+    x = np.arange(len(names))
+    last = [max((p for k, p in found[n]["pieces"].items() if k.startswith("generation") and k.endswith("learning")),
+                key=lambda p: p["generation"], default=None) for n in names]
+    effect = [(p["mutant_mean"] - p["parent_mean"]) / p["parent_mean"] if p and p["parent_mean"] > 0 else np.nan
+              for p in last]
+    c.bar(x - width / 2, effect, width, color="0.3", label="a mutation's mean effect, relative")
+    c.bar(x + width / 2, [p["share_deleterious"] if p else np.nan for p in last], width, color="tab:orange",
+          label="share of mutants deleterious")
+    c.axhline(0, color="0.2", lw=0.8)
+    c.set_xticks(x, [f"{n}\n(random {found[n]['pieces'].get('random genomes, learning', {}).get('mean', np.nan):.3f})"
+                     for n in names])
+    style_axis(c, "(c) mutations of the last parents, seed 0", "", "relative effect; share")
+    a.set_ylim(top=max(0.3, a.get_ylim()[1]))  # room for the legend above the bars
+    for ax in (a, b, c):
+        if ax.patches:
+            ax.legend(fontsize=7, loc="upper right")
+    return finish(fig, path)
 
 
 def results_text(measured: dict) -> str:
