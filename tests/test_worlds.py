@@ -213,6 +213,19 @@ def test_evolve_lives_in_the_world_its_command_line_names_and_resumes_there(tmp_
     assert before == {name: open(f"{run}/{name}", "rb").read() for name in before}
 
 
+# ----------------------------------------------------------------------------- a world of one's own
+
+
+@pytest.fixture
+def own_worlds(monkeypatch):
+    """worlds.WORLDS as a copy the test may register into, and notebooks/ importable (corridor_world.py)."""
+    from helpers import ROOT
+
+    monkeypatch.setattr(worlds, "WORLDS", dict(worlds.WORLDS))
+    monkeypatch.syspath_prepend(f"{ROOT}/notebooks")
+    return worlds.WORLDS
+
+
 def test_a_world_is_registered_under_a_free_name_only(own_worlds):
     from imrl_jax.config import ConfigError
 
