@@ -254,7 +254,9 @@ from experiments.harness.runner import study_main
 out, pause = sys.argv[1], sys.argv[2]
 stages = [Stage(f"measure {{i}}", "measure", "", "", os.path.join(out, f"m{{i}}"), 1.0, needs=()) for i in range(3)]
 STAGE = ("import os, sys, time\\nos.makedirs(sys.argv[1], exist_ok=True)\\n"
-         "open(os.path.join(sys.argv[1], 'pid'), 'w').write(str(os.getpid()))\\ntime.sleep(float(sys.argv[2]))\\n"
+         # the pid written whole, then renamed: a test reading it as soon as it appears reads all of it
+         "p = os.path.join(sys.argv[1], 'pid')\\nopen(p + '.tmp', 'w').write(str(os.getpid()))\\n"
+         "os.replace(p + '.tmp', p)\\ntime.sleep(float(sys.argv[2]))\\n"
          "open(os.path.join(sys.argv[1], 'r.tmp'), 'w').write('{{}}')\\n"
          "os.replace(os.path.join(sys.argv[1], 'r.tmp'), os.path.join(sys.argv[1], 'result.json'))\\n")
 command_for = lambda stage: ([sys.executable, "-c", STAGE, stage.out_dir, pause], None)
