@@ -21,7 +21,7 @@ import sys
 
 import numpy as np
 
-from experiments.harness.loading import read_json, read_test, write_json
+from experiments.harness.loading import read_test, write_json
 from experiments.harness.markdown import head, line, mean_sd
 from experiments.harness.reproduce import test_command, test_cost
 from experiments.harness.study import RESULTS, markers, write_table
@@ -87,39 +87,43 @@ def claims_of(rows: dict, tests: dict) -> dict:
 
 
 def landscapes(out: str) -> dict:
-    """Each landscape measure's numbers as far as it has come: random genomes (H4) and its generations' mutations."""
-    found = {}
-    for condition in LIFE:
-        folder = os.path.join(out, "measures", f"landscape-{condition}")
-        measured = read_json(os.path.join(folder, "result.json")) or read_json(os.path.join(folder, "landscape.json"))
-        if measured is not None:
-            found[condition] = dict(done=os.path.exists(os.path.join(folder, "result.json")),
-                                    pieces=measured["pieces"])
-    return found
+    """Each landscape measure's numbers as far as it has come, read as the goals study reads its own: random genomes
+    by learning (H4) and the measured generations' mutations, in the order measured."""
+    from experiments.goals import read_landscapes
+
+    return {condition: entry for condition, entry in read_landscapes(out).items() if condition in LIFE}
+
+
+def learned(entry: dict) -> list[dict]:
+    """A landscape measure's generations with learning as it is (not cut), in order."""
+    return sorted((g for g in entry["generations"] if g["learning"] == "learning"), key=lambda g: g["generation"])
+
+
+def relative_effect(piece: dict) -> float | None:
+    """A mutation's mean effect relative to its parents' fitness (None: parents at 0)."""
+    return (piece["mutant_mean"] - piece["parent_mean"]) / piece["parent_mean"] if piece["parent_mean"] > 0 else None
+
+
+def genes(condition: str) -> int:
+    """The genome length of the table's row of ``condition`` (its evolution's config)."""
+    from experiments.harness.table import evolution_spec
+
+    return evolution_spec(next(r for r in ROWS if r.condition == condition), SCALE).config.num_genes
 
 
 def landscape_table(found: dict) -> str:
     """H4 (random genomes' fitness) and the mutations around each measured generation's parents, per condition."""
-    lines = head("condition", "genes", "pieces", "random genomes: mean (sd)", "at 0",
-                 "generation: parents, mutants' mean effect, deleterious, rho(1)")
+    lines = head("condition", "genes", "random genomes: mean (sd)", "at 0",
+                 "generation: parents, mutants' mean effect; the last: deleterious, rho(1)")
     for condition, entry in found.items():
-        pieces = entry["pieces"]
-        random = pieces.get("random genomes, learning") or {}
-        generations = [p for name, p in pieces.items() if name.startswith("generation") and
-                       name.endswith("learning")]
-        text = "; ".join(f"{p['generation']}: {p['parent_mean']:.3f}, "
-                         f"{(p['mutant_mean'] - p['parent_mean']) / p['parent_mean']:+.1%}" if p["parent_mean"] > 0
-                         else f"{p['generation']}: {p['parent_mean']:.3f}, -" for p in generations)
-        text += "" if not generations else ", " + ", ".join(
-            f"{p['share_deleterious']:.0%}, {p['rho'][0]:.2f}" for p in generations[-1:])
-        lines.append(line(condition, GENES.get(condition, "-"), f"{len(pieces)}{'' if entry['done'] else ' (running)'}",
+        random, generations = entry["random"].get("learning"), learned(entry)
+        text = "; ".join(f"{g['generation']}: {g['parent_mean']:.3f}, " + (
+            "-" if relative_effect(g) is None else f"{relative_effect(g):+.1%}") for g in generations)
+        text += "".join(f", {g['share_deleterious']:.0%}, {g['rho'][0]:.2f}" for g in generations[-1:])
+        lines.append(line(condition + ("" if entry["done"] else " (running)"), genes(condition),
                           f"{random['mean']:.3f} ({random['std']:.3f})" if random else "-",
                           f"{random['share_zero']:.0%}" if random else "-", text or "-"))
     return "\n".join(lines)
-
-
-#: Genes of each condition in this world (3 experts, 55 inputs and a bias, 5 actions).
-GENES = {"LE-LS": 168, "EE-LS": 840, "EE-ES": 1008, "LE-LS-Z": 840}
 
 
 class WorldsTable(Table):
@@ -165,7 +169,8 @@ class WorldsTable(Table):
                     for c, t in tests.items() if t},
             novel={c: {k: t["steady"][k] for k in ("steady_mean", "steady_sd", "steady_per_run")}
                    for c, t in measured["novel"].items() if t},
-            landscapes={c: {name: {k: v for k, v in p.items() if k != "fitness"} for name, p in e["pieces"].items()}
+            landscapes={c: dict(done=e["done"], random={k: {f: v for f, v in r.items() if f != "fitness"}
+                                                        for k, r in e["random"].items()}, generations=e["generations"])
                         for c, e in measured["landscapes"].items()}), indent=2)
         print(f"wrote {drawn}, {os.path.join(self.out, 'report.json')} and the results of {self.document}")
         return code
@@ -204,15 +209,13 @@ def questions_figure(measured: dict, path: str) -> str:
     found = measured["landscapes"]
     names = [n for n in LIFE if n in found]
     x = np.arange(len(names))
-    last = [max((p for k, p in found[n]["pieces"].items() if k.startswith("generation") and k.endswith("learning")),
-                key=lambda p: p["generation"], default=None) for n in names]
-    effect = [(p["mutant_mean"] - p["parent_mean"]) / p["parent_mean"] if p and p["parent_mean"] > 0 else np.nan
-              for p in last]
+    last = [(learned(found[n]) or [None])[-1] for n in names]
+    effect = [np.nan if p is None or relative_effect(p) is None else relative_effect(p) for p in last]
     c.bar(x - width / 2, effect, width, color="0.3", label="a mutation's mean effect, relative")
     c.bar(x + width / 2, [p["share_deleterious"] if p else np.nan for p in last], width, color="tab:orange",
           label="share of mutants deleterious")
     c.axhline(0, color="0.2", lw=0.8)
-    c.set_xticks(x, [f"{n}\n(random {found[n]['pieces'].get('random genomes, learning', {}).get('mean', np.nan):.3f})"
+    c.set_xticks(x, [f"{n}\n(random {found[n]['random'].get('learning', {}).get('mean', np.nan):.3f})"
                      for n in names])
     style_axis(c, "(c) mutations of the last parents, seed 0", "", "relative effect; share")
     a.set_ylim(top=max(0.3, a.get_ylim()[1]))  # room for the legend above the bars
