@@ -223,6 +223,23 @@ def decode(config, genome):
     return weights
 
 
+
+def start_life(config, genome):
+    """The decoded genome, and the config and childhood options its parts set before a life (``reference_life``)."""
+    grown, options = decode(config, genome), {}
+    for part in (get_part(name) for name in config.spec.genome):
+        if part.reference_life is not None:
+            config, more = part.reference_life(config, grown)
+            options.update(more)
+    return config, grown, options
+
+
+def task_weights(config, grown):
+    """The weights a task starts from: ``grown``, with the networks the condition resets back at their start."""
+    weights, fresh = _copy_weights(grown), zero_weights(config, config.num_lane_experts)
+    weights.update({network: fresh[network] for network in config.spec.reset})
+    return weights
+
 # --------------------------------------------------------------------------- one phase
 
 
@@ -453,15 +470,8 @@ def run_phase(config, phase, weights, pose, u, z, task=None, phase_steps=None, s
             opt_steps += 1
         prev_reached = reached
 
-    return {
-        **body.record(),
-        "k": out_k,
-        "reached": out_reached,
-        "timeout": out_timeout,
-        "respawned": out_respawned,
-        "weights": w,
-        "reaches": int(out_reached.sum()),
-    }
+    return {**body.record(), "k": out_k, "reached": out_reached, "timeout": out_timeout, "respawned": out_respawned,
+            "weights": w, "reaches": int(out_reached.sum())}
 
 
 # --------------------------------------------------------------------------- one life
@@ -480,14 +490,8 @@ def live(config, genome, start_pose, childhood_u, childhood_z, task_u, task_z, c
     childhood_spawn (childhood_steps, 3) with config.childhood_walls "respawn".
     task_u (tasks, task_steps), task_z (tasks, task_steps, 2): the draws of each task.
     """
+    config, grown, options = start_life(config, genome)  # evolved values: the config; a childhood's length
     spec = config.spec
-    grown = decode(config, genome)
-    options = {}
-    for name in spec.genome:  # what a part does before the life (evolved values: the config; a childhood's length)
-        part = get_part(name)
-        if part.reference_life is not None:
-            config, more = part.reference_life(config, grown)
-            options.update(more)
     if spec.has_childhood:
         child = run_phase(config, spec.childhood, grown, start_pose, childhood_u, childhood_z,
                           task=None, phase_steps=config.childhood_steps, spawn=childhood_spawn,
@@ -498,25 +502,16 @@ def live(config, genome, start_pose, childhood_u, childhood_z, task_u, task_z, c
     task_z = np.asarray(task_z, dtype=np.float64)
     theoretical = config.theoretical_max()
     reaches = np.zeros(config.num_tasks, dtype=np.int64)
-    task_weights = []
+    ended = []  # each task's weights at its end
     for i in range(config.num_tasks):
-        start_weights = _copy_weights(grown)
-        fresh = zero_weights(config, config.num_lane_experts)
-        for network in spec.reset:  # what the condition sets back to its start at each task
-            start_weights[network] = fresh[network]
-        result = run_phase(config, spec.adult, start_weights, _task_pose(config, i), task_u[i], task_z[i],
-                           task=i, phase_steps=config.adult_noise_steps)
+        result = run_phase(config, spec.adult, task_weights(config, grown), _task_pose(config, i), task_u[i],
+                           task_z[i], task=i, phase_steps=config.adult_noise_steps)
         reaches[i] = result["reaches"]
-        task_weights.append(result["weights"])
+        ended.append(result["weights"])
 
     performance = reaches / np.asarray(theoretical, dtype=np.float64)
-    return {
-        "reaches": reaches,
-        "performance": performance,
-        "fitness": float(performance.mean()),
-        "childhood_weights": _copy_weights(grown),
-        "task_weights": task_weights,
-    }
+    return {"reaches": reaches, "performance": performance, "fitness": float(performance.mean()),
+            "childhood_weights": _copy_weights(grown), "task_weights": ended}
 
 
 def live_with(config, genome, draws) -> dict:

@@ -21,9 +21,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from imrl_jax.agent.reference import PHASES, _choose_expert, _copy_weights, decode, run_phase, zero_weights
+from imrl_jax.agent.reference import PHASES, _choose_expert, _copy_weights, run_phase, start_life, task_weights
 from imrl_jax.conditions import Phase
-from imrl_jax.genome import get_part
 from imrl_jax.world.worlds import world_of
 
 
@@ -90,13 +89,8 @@ def live(config, genome, start, childhood_u, childhood_z, task_u, task_z, childh
     task_u (tasks, task_steps), task_z (tasks, task_steps, 2): the draws of each task. Returns reference.live's
     numbers, the timeouts, and each phase's own record ("childhood": None without one; "tasks"): its actions.
     """
+    config, grown, options = start_life(config, genome)  # evolved values: the config; a childhood's length
     spec, world, dtype = config.spec, world_of(config), jnp.float64
-    grown, options = decode(config, genome), {}
-    for name in spec.genome:  # what a part does before the life (evolved values: the config; a childhood's length)
-        part = get_part(name)
-        if part.reference_life is not None:
-            config, more = part.reference_life(config, grown)
-            options.update(more)
     child = None
     if spec.has_childhood:
         child = run_phase_discrete(config, spec.childhood, grown, start, childhood_u, childhood_z,
@@ -108,13 +102,10 @@ def live(config, genome, start, childhood_u, childhood_z, task_u, task_z, childh
     timeouts = np.zeros(config.num_tasks, dtype=np.int64)
     phases = []
     for i in range(config.num_tasks):
-        start_weights = _copy_weights(grown)
-        fresh = zero_weights(config, config.num_lane_experts)
-        for network in spec.reset:  # what the condition sets back to its start at each task
-            start_weights[network] = fresh[network]
         task = world.task(config, i, dtype)
-        result = run_phase_discrete(config, spec.adult, start_weights, world.make_env(config).reset(None, task, dtype),
-                                    task_u[i], task_z[i], task, config.adult_noise_steps)
+        result = run_phase_discrete(config, spec.adult, task_weights(config, grown),
+                                    world.make_env(config).reset(None, task, dtype), task_u[i], task_z[i], task,
+                                    config.adult_noise_steps)
         reaches[i], timeouts[i] = result["reaches"], int(result["timeout"].sum())
         phases.append(result)
 

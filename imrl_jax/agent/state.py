@@ -174,8 +174,8 @@ def spawn_draws(config: Config, phase: Phase) -> int:
 def for_phase(config: Config, phase: Phase, state: State) -> State:
     """``state`` whose carried draws have the phase's structure (a world's respawn draws only where used)."""
     if phase.respawn and state.block.spawn is None:
-        return state._replace(block=state.block._replace(spawn=jnp.zeros((config.draw_block, spawn_draws(config, phase)),
-                                                                          state.block.u.dtype)))
+        spawn = jnp.zeros((config.draw_block, spawn_draws(config, phase)), state.block.u.dtype)
+        return state._replace(block=state.block._replace(spawn=spawn))
     if not phase.respawn and state.block.spawn is not None:
         return state._replace(block=state.block._replace(spawn=None))
     return state
