@@ -79,6 +79,8 @@ class XLandSettings:
         if not 0 <= self.trial_timeout <= MAX_STEPS or not 1 <= self.stuck_steps <= MAX_STEPS:
             raise ValueError(f"XLandSettings: trial_timeout must be from 0 and stuck_steps from 1, both to "
                              f"{MAX_STEPS:,}, got {self.trial_timeout} and {self.stuck_steps}")
+        if self.task_set not in XLAND_TASK_SETS:  # defined below: read when settings are made, after this module
+            raise ValueError(f"task_set: {self.task_set!r} is not one of {', '.join(XLAND_TASK_SETS)}")
 
     @property
     def size(self) -> int:
@@ -144,9 +146,7 @@ XLAND_TASK_SETS = {"xland": paper_tasks, "xland-novel": novel_tasks}
 
 
 def tasks(s: XLandSettings) -> tuple[XTask, ...]:
-    """The settings' task set."""
-    if s.task_set not in XLAND_TASK_SETS:
-        raise ValueError(f"unknown xland task set {s.task_set!r} (choose from {', '.join(XLAND_TASK_SETS)})")
+    """The settings' task set (a name XLandSettings checked)."""
     return XLAND_TASK_SETS[s.task_set](s)
 
 
@@ -244,6 +244,12 @@ def shortest_solution(s: XLandSettings, task: XTask) -> list[int]:
                     return path[::-1]
                 queue.append(new)
     raise ValueError(f"no solution to {task}")
+
+
+@functools.lru_cache(maxsize=16)
+def _shortest(s: XLandSettings) -> np.ndarray:
+    # Searched once per settings: every life and report that scores a task divides by it.
+    return np.asarray([len(shortest_solution(s, t)) for t in tasks(s)])
 
 
 class XLandState(NamedTuple):
@@ -362,7 +368,7 @@ class XLand:
 
     def shortest(self) -> np.ndarray:
         """(tasks,) each task's shortest solution in steps."""
-        return np.asarray([len(shortest_solution(self.settings, t)) for t in tasks(self.settings)])
+        return _shortest(self.settings)
 
     def max_reaches(self, config, dtype=jnp.float32) -> jnp.ndarray:
         """(tasks,) the whole shortest solutions that fit in ``config.task_steps`` steps (a reach's step restarts)."""
@@ -379,11 +385,9 @@ SETTINGS = XLandSettings
 
 def make_world(settings: dict) -> XLand:
     """The world of a config's ``world_settings`` (raises TypeError or ValueError naming a setting that is wrong)."""
-    known = {f.name for f in dataclasses.fields(XLandSettings)}
-    unknown = sorted(set(settings) - known)
+    fields = dataclasses.fields(XLandSettings)
+    unknown = sorted(set(settings) - {f.name for f in fields})
     if unknown:
-        raise TypeError(f"unknown setting {unknown[0]!r} of world xland (settable: arm_length, view_size, pocket, "
-                        f"task_set, trial_timeout, stuck_steps)")
-    if "task_set" in settings and settings["task_set"] not in XLAND_TASK_SETS:
-        raise ValueError(f"task_set: {settings['task_set']!r} is not one of {', '.join(XLAND_TASK_SETS)}")
+        settable = ", ".join(f.name for f in fields if isinstance(f.default, (bool, int, str)))
+        raise TypeError(f"unknown setting {unknown[0]!r} of world xland (settable: {settable})")
     return XLand(XLandSettings(**settings))
