@@ -439,7 +439,6 @@ DERIVED_BOUNDS = {
     "population_size": "a multiple of num_parents",
     "num_parents": "at most population_size",
     "num_elites": "at most num_parents",
-    "selector_period": "1 with step_kernel=pallas",
 }
 
 
@@ -483,8 +482,6 @@ def _validate(c: Config) -> None:
         if not all(_real(v) and bound.holds(v) for v in values):
             fail(field.name, f"must be in {bound}" + (" (each value)" if isinstance(value, (tuple, list)) else ""))
     # Derived bounds (DERIVED_BOUNDS): between fields.
-    if c.selector_options and c.step_kernel == "pallas":
-        fail("selector_period", "the pallas kernel's selector chooses every step; use step_kernel=xla")
     if c.task_steps % c.num_bins:
         fail("task_steps", f"must be a multiple of num_bins={c.num_bins}")
     if c.spec.has_childhood and (c.childhood_steps == 0 or c.childhood_steps % c.num_bins):

@@ -3,7 +3,7 @@
 A part is one :class:`GenomePart` in :data:`PARTS`: the shape of its genes, how they decode into
 the JAX ``networks.Agent`` (and back), the config fields it makes ignored, the evolved values it
 reports to ``history.csv``, its NumPy-reference twin (how ``reference`` decodes it and what a
-reference life does with it) and whether the GPU kernel implements it. A condition's genome
+reference life does with it). A condition's genome
 (``conditions.Condition.genome``) lists parts by name, and every module that reads a genome reads
 this table; a new part is :func:`register_part` (a size-matched control is a part plus a row).
 
@@ -43,7 +43,7 @@ class GenomePart:
     """One part of a genome: its genes' shape, decoding (JAX and the NumPy reference), ignored fields, traits."""
 
     name: str
-    what: str  # in words, for messages ("the pallas kernel does not implement <what>")
+    what: str  # in words, for messages
     shape: Callable[[int, int, int], tuple[int, ...]]  # (num_experts, num_weights with the bias, num_actor_units) -> its
     # genes' shape
     # (config, agent, genes of that shape) -> the agent with them in place (the agent so far: zero_agent, then the
@@ -60,8 +60,6 @@ class GenomePart:
     ignores: tuple[str, ...] = ()  # config fields its genes replace: changing one changes no life
     trait_names: Callable = lambda config: ()  # config -> the names of its values in history.csv
     trait_values: Callable = lambda config, agent: []  # (config, decoded agent) -> one () value per name
-    kernel: bool = True  # the pallas kernel implements it
-    field: str | None = None  # the Agent field only it sets (the kernel refuses an agent holding one it lacks)
 
     def size(self, num_experts: int, num_weights: int, num_actor_units: int) -> int:
         """Its number of genes."""
@@ -208,12 +206,12 @@ for _part in (
                decode=lambda config, agent, genes: agent._replace(expressed=express(genes)),
                reference_decode=_reference_express, encode=lambda agent: agent.expressed,
                start=lambda config, dtype: {"expressed": _jnp().ones((config.num_lane_experts,), dtype)},
-               trait_names=_expression_names, trait_values=_expression_traits, kernel=False, field="expressed"),
+               trait_names=_expression_names, trait_values=_expression_traits),
     # The learning values (evolved learning parameters): the genome's values replace the config's.
     GenomePart("parameters", "evolved learning parameters", lambda k, n, a: (len(EVOLVED_PARAMETERS),),
                decode=_decode_parameters, reference_decode=_raw("parameters"), reference_life=_parameters_life,
                ignores=EVOLVED_FIELDS, trait_names=lambda config: EVOLVED_FIELDS, trait_values=_parameter_traits,
-               kernel=False, field="params"),
+               ),
     # The childhood's length (one gene): learning and noise stop after round(u x childhood_steps) steps of it,
     # u = clip((g + 1) / 2, 0, 1); childhood_steps is the maximum.
     GenomePart("childhood_length", "an evolved childhood length", lambda k, n, a: (1,),
@@ -221,20 +219,19 @@ for _part in (
                    childhood_length=_jnp().round(unit(genes[0]) * config.childhood_steps)),
                reference_decode=_raw("childhood_length"), reference_life=_childhood_length_life,
                trait_names=lambda config: ("childhood_length",),
-               trait_values=lambda config, agent: [agent.childhood_length], kernel=False, field="childhood_length"),
+               trait_values=lambda config, agent: [agent.childhood_length]),
     # Each actor's orientation (turn) unit only (EE-LS-T): the speed unit keeps zero_agent's start, weights 0 and
     # bias config.initial_speed_bias.
     GenomePart("actor_turn", "evolved turn units", lambda k, n, a: (k, n),
                decode=lambda config, agent, genes: agent._replace(actor=agent.actor.at[:, 0].set(genes)),
                reference_decode=_reference_turn, encode=lambda agent: agent.actor[:, 0]),
     # A second reinforcer unit per expert (LE-LS-2R): the expert's internal reward is the mean of its two units',
-    # r_k = (r1 + r2) / 2 (networks.internal_rewards). A new quantity of the agent: the kernel lacks it.
+    # r_k = (r1 + r2) / 2 (networks.internal_rewards).
     GenomePart("second_reinforcer", "second reinforcer units", lambda k, n, a: (k, n),
                decode=lambda config, agent, genes: agent._replace(second_reinforcer=genes),
                reference_decode=_reference_second_reinforcer, encode=lambda agent: agent.second_reinforcer,
                start=lambda config, dtype: {"second_reinforcer": _jnp().zeros(
-                   (config.num_lane_experts, config.num_inputs + 1), dtype)},
-               kernel=False, field="second_reinforcer"),
+                   (config.num_lane_experts, config.num_inputs + 1), dtype)}),
     # Neutral genes (LE-LS-Z): as many as the actors' rows but one (K x (A - 1) x n: the arena's K x 37, so that
     # with the reinforcers the genome is EE-LS's length in any world), decoded into nothing; they lengthen the
     # genome only.

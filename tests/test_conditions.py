@@ -16,7 +16,6 @@ from imrl_jax import config as config_module
 from imrl_jax.agent import state as S
 from imrl_jax.config import ConfigError, Task, make_config
 from imrl_jax.agent.networks import decode, encode
-from imrl_jax.world.env import at
 
 #: A target 40 cm ahead, off the floor's lattice: a robot driving straight from the lattice's exact points
 #: meets retina points exactly 3 cm from a line, where the reference and JAX may see different colours.
@@ -313,17 +312,6 @@ def test_an_unexpressed_expert_is_never_chosen_and_never_learns(tiny):
                                    rtol=1e-8, atol=1e-10, err_msg=name)
         np.testing.assert_allclose(np.asarray(getattr(result.adult_agents, name)[2]), ref["task_weights"][2][name],
                                    rtol=1e-8, atol=1e-10, err_msg=name)
-
-
-def test_the_gpu_kernel_refuses_expression_genes(tiny):
-    from imrl_jax.agent import kernel
-
-    config = tiny("LE-LS-N", num_experts=4)
-    task = L.task_spec(config, 0)
-    state = L.init_state(config, L.adult_agent(config, decode(config, jnp.zeros(config.num_genes))), at(task.start))
-    with pytest.raises(ConfigError, match="does not implement an evolved number of experts"):
-        kernel.run_phase(jax.random.key(0), config, config.spec.adult, config.learning_params(), task, state,
-                         config.task_steps)
 
 
 def test_evolved_learning_parameters_decode_by_their_maps():

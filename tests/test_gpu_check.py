@@ -7,6 +7,7 @@ import jax
 import numpy as np
 import pytest
 
+from imrl_jax import conditions as C
 from imrl_jax.commands import gpu_check as G
 from imrl_jax.commands import gpu_harness as H
 from imrl_jax.commands import gpu_steps as S
@@ -32,8 +33,10 @@ def test_dry_run_checks_and_times_every_step(tmp_path):
     assert all(s["status"] == "ok" for s in steps.values()), {n: s.get("failures") for n, s in steps.items()}
     assert results["machine"]["backend"] == jax.default_backend() and results["dry"] is True
     lives = steps["lives"]["rows"]
-    assert [(r["condition"], r["preset"]) for r in lives] == [("EE-LS", "paper")]
-    assert lives[0]["pallas_vs_xla"]["events_equal"] and lives[0]["xla_vs_reference"]["max_weight_diff"] < 1e-10
+    assert [(r["condition"], r["preset"]) for r in lives] == [("EE-LS", "paper"), ("EE-LS", "paper+colour")]
+    for row in lives:  # the selector's options too: on the kernel, against the reference
+        assert row["pallas_vs_xla"]["events_equal"] and row["pallas_vs_reference"]["ok"]
+        assert row["xla_vs_reference"]["max_weight_diff"] < 1e-10
     assert lives[0]["auto"] == ("pallas" if jax.default_backend() == "gpu" else "xla")  # step_kernel=auto's choice
     assert {r["kernel"]: r["reaches"] for r in steps["float32"]["rows"]} == {"xla": 2, "pallas": 2}
     assert {(r["kernel"], r["seeds"]) for r in steps["generation"]["rows"]} == {("xla", 2), ("pallas", 2)}
@@ -47,6 +50,11 @@ def test_dry_run_checks_and_times_every_step(tmp_path):
                                                                   * kernel_row["warp_instructions"])
     assert kernel_row["warp_instructions"] > 500
     assert steps["sweep"]["points"] == 2 and len(steps["sweep"]["best_fitness"]) == 2
+    # Every model's whole lives on the kernel (here the checked condition and its selector on its own time-scale).
+    models = steps["models"]["rows"]
+    assert [(r["condition"], r["options"], r["status"]) for r in models] == [("EE-LS", "", "ok"),
+                                                                             ("EE-LS", "colour", "ok")]
+    assert models[0]["over_first"] == 1.0 and models[1]["over_first"] > 0
     # The study: every distinct program of the claims map counted, --dry times the first (a sweep of two runs) and
     # the first kind of learning test; the estimate is then incomplete and the target not judged.
     study = steps["study"]
@@ -59,7 +67,7 @@ def test_dry_run_checks_and_times_every_step(tmp_path):
     assert timed[0]["generation_s"] > 0 and timed[1]["lane_steps_per_s"] > 0
     assert study["complete"] is False and study["meets_target"] is None and study["hours"] > 0
     text = (out / "gpu_check.txt").read_text()
-    assert "done: 8 steps ok, failed: none, skipped: none" in text
+    assert "done: 9 steps ok, failed: none, skipped: none" in text
     assert (out / "gpu_check.png").stat().st_size > 10_000
 
 
@@ -122,15 +130,19 @@ def test_a_step_with_a_share_of_the_budget_stops_when_it_has_used_it(tmp_path, m
 
 
 def test_life_cases_one_per_model_and_the_kernels_first():
-    """A preset that gives the same lives as one before it (Config.model_differences) is not checked again."""
-    cases = S.life_cases(H.Sizes(conditions=("EE-ES", "EV-LS", "LE-LS")))
+    """A preset that gives the same lives as one before it (Config.model_differences) is not checked again; the
+    selector's options follow a condition's presets where it has a selector; every case is on the kernel."""
+    cases = S.life_cases(H.Sizes(conditions=("EE-ES", "EV-LS", "SLE")))
     names = [(name, preset) for name, preset, _, _ in cases]
-    # EE-ES learns nothing: every preset lives the same. LE-LS: four models. EV-LS: not in the kernel, so last.
-    assert names == [("EE-ES", "paper"), ("LE-LS", "paper"), ("LE-LS", "extension"), ("LE-LS", "faithful"),
-                     ("LE-LS", "skills"), ("EV-LS", "paper"), ("EV-LS", "extension"), ("EV-LS", "faithful"),
-                     ("EV-LS", "skills")]
-    assert [reason is None for *_, reason in cases] == [True] * 5 + [False] * 4
-    assert "evaluation='discounted'" in cases[-1][3]
+    # EE-ES learns nothing: every preset lives the same. EV-LS: four models. SLE: one expert, nothing to choose.
+    assert names == [("EE-ES", "paper"), ("EE-ES", "paper+period"), ("EE-ES", "paper+colour"), ("EV-LS", "paper"),
+                     ("EV-LS", "extension"), ("EV-LS", "faithful"), ("EV-LS", "skills"), ("EV-LS", "paper+period"),
+                     ("EV-LS", "paper+colour"), ("SLE", "paper"), ("SLE", "extension"), ("SLE", "skills")]
+    assert [reason for *_, reason in cases] == [None] * len(cases)
+    colour = cases[2][2]
+    assert (colour.selector_period, colour.selector_termination, colour.condition) == (4, "colour", "EE-ES")
+    every = S.life_cases(H.Sizes())
+    assert {name for name, *_ in every} == set(C.NAMES) and all(reason is None for *_, reason in every)
 
 
 def test_weights_excess_is_the_tolerance_test():

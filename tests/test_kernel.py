@@ -5,6 +5,7 @@ events exactly and its weights to rounding. That it lowers to a Triton kernel fo
 checked by lowering for CUDA (compiling it needs a GPU).
 """
 
+import dataclasses
 import math
 
 import jax
@@ -103,6 +104,82 @@ def test_life_matches_xla(tiny):
     assert int(xla.timeouts.sum()) > 0 and np.count_nonzero(xla.childhood_selections) == 3 * 3
 
 
+#: Every model beyond the paper's on the kernel, one program: all the genome's optional parts, the selector's options
+#: (ending at a colour come into view), the childhood options; five experts (Triton pads them to eight rows).
+EVERYTHING = dict(genome=("reinforcer", "second_reinforcer", "expressed", "parameters", "childhood_length"))
+EVERYTHING_OPTIONS = dict(num_experts=5, selector_period=4, selector_termination="colour", **OPTIONS)
+
+
+@pytest.fixture
+def everything():
+    """A row of one's own whose genome holds every part the paper's LE-LS lacks (the table's rows take them apart)."""
+    row = C.register(dataclasses.replace(C.get("LE-LS-PC"), name="LE-LS-everything", **EVERYTHING))
+    yield row
+    del C.CONDITIONS[row.name]
+
+
+def _lives_agree(config, genomes, key=11):
+    """Whole lives of ``genomes`` (vmapped: each lane its own genes) with the kernel and the XLA step: every event
+    equal, weights to 1e-9 (float64). Returns the XLA step's lives."""
+    params = config.learning_params()
+
+    def lives(config):
+        keys = jax.random.split(jax.random.key(key), genomes.shape[0])
+        return jax.jit(jax.vmap(lambda k, g: L.live(k, config, params, g)))(keys, genomes)
+
+    xla, pallas = lives(config), lives(config.replace(step_kernel="pallas"))
+    for name in ("reaches", "timeouts", "reward_curve", "adult_selections", "childhood_selections"):
+        np.testing.assert_array_equal(np.asarray(getattr(pallas, name)), np.asarray(getattr(xla, name)),
+                                      err_msg=name)
+    for name in ("agent", "adult_agents"):
+        assert_trees_close(getattr(pallas, name), getattr(xla, name), rtol=1e-9, atol=1e-9, name=name)
+    return xla
+
+
+@pytest.mark.usefixtures("x64")
+def test_every_model_lives_on_the_kernel_as_on_the_xla_step(tiny, everything):
+    """Two lanes, each its own second reinforcers, expressed experts, learning values and childhood length, with
+    the selector on its own time-scale: whole lives, the kernel against the XLA step."""
+    config = tiny(everything.name, tasks=(SHORT_TASK,), childhood_steps=600, task_steps=300, num_bins=3, **EXTENDED,
+                  **EVERYTHING_OPTIONS)
+    genomes = jax.random.uniform(jax.random.key(12), (2, config.num_genes), jnp.float64, -1.0, 1.0)
+    k, n = 5, config.num_inputs + 1
+    genomes = genomes.at[:, 2 * k * n:2 * k * n + k].set(jnp.array([[0.5, -0.3, 0.8, -0.9, 0.1],
+                                                                    [-0.5, 0.3, 0.8, 0.9, -0.1]]))
+    genomes = genomes.at[:, -1].set(jnp.array([0.0, 0.6]))  # childhood stops at step 300 and 480 of 600
+    agents = jax.vmap(lambda g: decode(config, g))(genomes)
+    assert agents.params.eta_actor[0] != agents.params.eta_actor[1]  # each lane learns at its own rates
+    xla = _lives_agree(config, genomes)
+    assert xla.reaches.sum() > 0
+    used = np.asarray(xla.childhood_selections).sum(1) > 0
+    np.testing.assert_array_equal(used, [[1, 0, 1, 0, 1], [0, 1, 1, 1, 0]])  # the expressed experts only
+
+
+@pytest.mark.usefixtures("x64")
+@pytest.mark.parametrize("case", [
+    "EV-LS-diff:period",
+    pytest.param("EV-LS", marks=pytest.mark.slow),
+    pytest.param("LE-LS-N", marks=pytest.mark.slow),
+    pytest.param("LE-LS-P", marks=pytest.mark.slow),
+    pytest.param("LE-LS-PC", marks=pytest.mark.slow),
+    pytest.param("LE-LS-2R", marks=pytest.mark.slow),
+    pytest.param("LE-LS:period", marks=pytest.mark.slow),
+    pytest.param("LE-LS:colour", marks=pytest.mark.slow),
+    pytest.param("EE-ES:colour", marks=pytest.mark.slow),
+    pytest.param("SLE:period", marks=pytest.mark.slow),
+    pytest.param("EXT-LS:colour", marks=pytest.mark.slow),
+])
+def test_each_row_lives_on_the_kernel_as_on_the_xla_step(tiny, case):
+    """Each row of the condition table beyond the paper's (and the selector's options, "ROW:termination") alone."""
+    condition, _, termination = case.partition(":")
+    options = dict(selector_period=4, selector_termination=termination) if termination else {}
+    config = tiny(condition, tasks=(SHORT_TASK,), childhood_steps=600, task_steps=300, num_bins=3, **EXTENDED,
+                  **options)
+    genomes = jax.random.uniform(jax.random.key(12), (2, config.num_genes), jnp.float64, -1.0, 1.0)
+    xla = _lives_agree(config, genomes)
+    assert xla.reaches.sum() > 0
+
+
 def test_kernel_lowers_to_triton_for_gpu(tiny):
     """Childhood (with its options), adulthood and SLE kernels, vmapped over lanes, lower to Triton for CUDA."""
     config = tiny("LE-LS", childhood_steps=400, task_steps=200, num_bins=2, **OPTIONS)
@@ -128,10 +205,31 @@ def test_kernel_lowers_to_triton_for_gpu(tiny):
     assert text.count("__gpu$xla.gpu.triton") == 3
 
 
-def test_a_phase_option_the_kernel_does_not_implement_is_refused():
-    """A later condition's phase option (here a made-up field value) gets a one-line error, not wrong results."""
-    from imrl_jax.config import ConfigError
+@pytest.mark.parametrize("case", ["everything", "EV-LS-diff:period", "EV-LS:colour", "EE-ES:colour", "EXT-LS:period"])
+def test_every_model_lowers_to_triton_for_gpu(tiny, everything, monkeypatch, case):
+    """Whole lives of each model beyond the paper's, vmapped over lanes, lower to one Triton kernel a phase."""
+    monkeypatch.setattr(K, "_interpret", lambda: False)  # what a GPU runs, lowered on the CPU
+    condition, _, termination = case.partition(":")
+    if condition == "everything":
+        condition, options = everything.name, EVERYTHING_OPTIONS
+    else:
+        options = dict(selector_period=4, selector_termination=termination)
+    config = tiny(condition, childhood_steps=400, task_steps=200, num_bins=2, step_kernel="pallas", **options)
+    params = config.learning_params()
+    keys = jax.random.split(jax.random.key(0), 3)
+    genomes = jnp.zeros((3, config.num_genes))
+    lives = jax.jit(jax.vmap(lambda k, g: L.live(k, config, params, g)))
+    text = lives.trace(keys, genomes).lower(lowering_platforms=("cuda",)).as_text()
+    assert text.count("__gpu$xla.gpu.triton") == 1 + config.spec.has_childhood
 
-    K.check_supported(C.CHILDHOOD._replace(respawn=True, progress=True))  # implemented: no error
+
+def test_a_phase_option_the_kernel_does_not_implement_is_refused(monkeypatch):
+    """A later rule's phase option that the kernel lacks gets a one-line error, not wrong results (here the
+    evolved evaluators' option, taken out of the kernel's list)."""
+    from imrl_jax.config import ConfigError, make_config
+
+    K.check_supported(C.get("EV-LS").childhood)  # implemented: no error
+    monkeypatch.setattr(K, "SUPPORTED", tuple(f for f in K.SUPPORTED if f != "evaluation"))
     with pytest.raises(ConfigError, match="does not implement the phase option evaluation='discounted'"):
         K.check_supported(C.get("EV-LS").childhood)
+    assert "evaluation='discounted'" in K.unsupported(make_config("small", condition="EV-LS"))

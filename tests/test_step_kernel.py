@@ -7,15 +7,22 @@ import os
 import jax
 import pytest
 
+from imrl_jax import conditions
 from imrl_jax.commands import evolve
+from imrl_jax.world import worlds
 from imrl_jax.agent import kernel_choice
 from imrl_jax.config import Config, make_config
 from imrl_jax.runs.runspec import RunSpec
 from attack import attack
 from helpers import evolve_args, tiny_config
 
-ON_KERNEL = ("LE-LS", "EE-LS", "EE-ES", "SLE", "EE-LS-T", "LE-LS-Z", "EXT-LS")
-OFF_KERNEL = ("EV-LS", "EV-LS-diff", "LE-LS-N", "LE-LS-P", "LE-LS-PC", "LE-LS-2R")
+#: In the arena the kernel lives every condition; another world lives on the XLA step.
+ON_KERNEL = conditions.NAMES
+OFF_KERNEL = ("LE-LS", "EE-LS", "EE-ES", "SLE")
+
+
+def _in_xland(config):
+    return worlds.configure(config, "xland")
 
 
 def test_auto_is_the_default_and_the_paper_preset_states_no_kernel():
@@ -29,18 +36,17 @@ def test_auto_is_the_kernel_on_a_gpu_for_a_model_it_implements(condition):
 
 
 @pytest.mark.parametrize("condition", OFF_KERNEL)
-def test_auto_falls_back_to_xla_on_a_gpu_with_a_note_for_a_model_the_kernel_lacks(condition):
-    config, note = kernel_choice.resolve(make_config("small", condition=condition), "gpu")
+def test_auto_falls_back_to_xla_on_a_gpu_with_a_note_in_another_world(condition):
+    config, note = kernel_choice.resolve(_in_xland(make_config("small", condition=condition)), "gpu")
     assert config.step_kernel == "xla"
-    assert note.startswith(f"note: step_kernel=auto: the XLA step on this GPU, as the Pallas kernel does not "
-                           f"implement {condition}'s ") and "\n" not in note
+    assert note == (f"note: step_kernel=auto: {condition} lives on the XLA step on this GPU, as the Pallas kernel "
+                    f"does not implement world xland (the arena's only)")
 
 
 @pytest.mark.parametrize("termination", ["period", "colour"])
-def test_auto_falls_back_for_the_selector_on_its_own_time_scale(termination):
+def test_auto_is_the_kernel_for_the_selector_on_its_own_time_scale(termination):
     config = make_config("small", condition="LE-LS", selector_period=10, selector_termination=termination)
-    resolved, note = kernel_choice.resolve(config, "gpu")
-    assert resolved.step_kernel == "xla" and "selector's options (selector_period=10)" in note
+    assert kernel_choice.resolve(config, "gpu") == (config.replace(step_kernel="pallas"), None)
 
 
 @pytest.mark.parametrize("backend", ["cpu", "tpu"])
@@ -93,11 +99,9 @@ def test_evolve_records_the_resolved_kernel(tmp_path, monkeypatch):
     args = evolve_args("EE-LS", seeds=1, population=4, parents=2, generations=1, task_steps=200, bins=1)
     assert _plan(tmp_path, monkeypatch, "cpu", *args, "--out", "a").plan.config.step_kernel == "xla"
     assert _plan(tmp_path, monkeypatch, "gpu", *args, "--out", "a").plan.config.step_kernel == "pallas"
-    fallback = _plan(tmp_path, monkeypatch, "gpu", *evolve_args("EV-LS", seeds=1, population=4, parents=2,
-                                                                generations=1, task_steps=200, bins=1)[:-1],
-                     "--out", "b")
+    fallback = _plan(tmp_path, monkeypatch, "gpu", *args[:-1], "--world", "xland", "--out", "b")
     assert fallback.plan.config.step_kernel == "xla"
-    assert any("does not implement EV-LS's" in note for note in fallback.plan.notes)
+    assert any("does not implement world xland" in note for note in fallback.plan.notes)
 
 
 @pytest.mark.parametrize("recorded", ["xla", None])
@@ -149,15 +153,17 @@ def test_a_learning_test_chooses_its_kernel_for_this_machine(tmp_path, monkeypat
 
     assert planned().config.step_kernel == "pallas"
     assert planned("--set", "step_kernel=xla").config.step_kernel == "xla"
-    options = planned("--set", "selector_period=5")
-    assert options.config.step_kernel == "xla" and any("selector's options" in n for n in options.notes)
+    assert planned("--set", "selector_period=5").config.step_kernel == "pallas"  # the selector's options too
+    elsewhere = planned("--world", "xland")
+    assert elsewhere.config.step_kernel == "xla" and any("world xland" in n for n in elsewhere.notes)
 
 
-@pytest.mark.parametrize("condition, kernel", [("LE-LS", "pallas"), ("EV-LS", "xla")])
-def test_a_sweep_records_the_resolved_kernel_in_every_point(tmp_path, monkeypatch, condition, kernel):
+@pytest.mark.parametrize("world, kernel", [("arena", "pallas"), ("xland", "xla")])
+def test_a_sweep_records_the_resolved_kernel_in_every_point(tmp_path, monkeypatch, world, kernel):
     """A sweep's points differ in dynamic values only (one program): the base's choice is every point's."""
-    args = evolve_args(condition, seeds=1, population=4, parents=2, generations=1, task_steps=200, bins=1)[:-1]
-    outcome = _plan(tmp_path, monkeypatch, "gpu", *args, "--sweep", "gamma=0.9,0.99", "--out", "s")
+    args = evolve_args("EV-LS" if world == "arena" else "LE-LS", seeds=1, population=4, parents=2, generations=1,
+                       task_steps=200, bins=1)[:-1]
+    outcome = _plan(tmp_path, monkeypatch, "gpu", *args, "--world", world, "--sweep", "gamma=0.9,0.99", "--out", "s")
     assert outcome.plan.config.step_kernel == kernel
     assert {p.config.step_kernel for p in outcome.plan.points} == {kernel}
-    assert any("does not implement EV-LS's" in line for line in outcome.plan.lines) == (kernel == "xla")
+    assert any("does not implement world xland" in line for line in outcome.plan.lines) == (kernel == "xla")

@@ -85,7 +85,6 @@ def test_one_step_options_are_the_papers_rules(tiny, phase_name):
     (dict(selector_period=0), "selector_period"),
     (dict(selector_period=2.5), "selector_period"),
     (dict(selector_termination="junction"), "selector_termination"),
-    (dict(selector_period=5, step_kernel="pallas"), "selector_period"),
 ])
 def test_bad_timescale_values_name_the_field(tiny, changes, field):
     with pytest.raises(ConfigError, match=f"^{field}:"):

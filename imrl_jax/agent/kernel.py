@@ -8,10 +8,17 @@ their launches whatever the number of lanes; here a step is one iteration of a w
 loop. The random numbers are the same stream as the XLA program's, drawn by XLA for a
 bin at a time and read by the kernel.
 
+Every model of the condition table lives on it in the arena: evolved evaluators (``Phase.evaluation``), an
+evolved number of experts (the expression mask), evolved learning values and childhood length (per lane),
+two reinforcer units, and the selector's options (``Config.selector_period``, docs/TIMESCALE.md). What a
+model adds that the paper's does not is an input or a carried vector only where the model has it, so the
+paper's kernels are the same program as before.
+
 Selected with ``Config.step_kernel = "pallas"``. Off a GPU the kernel runs in Pallas's
 interpreter (slow; for tests): float64 lives then agree with the XLA program to rounding.
 Each lane is one kernel instance; ``vmap`` (over tasks, individuals and seeds) makes the
-grid. Vectors are padded to powers of two (Triton's rule): experts K to Kp, x~ (n+1) to N.
+grid. Vectors are padded to powers of two (Triton's rule): experts K to Kp, x~ (n+1) to N
+(:mod:`imrl_jax.agent.kernel_layout`).
 """
 
 from __future__ import annotations
@@ -20,122 +27,18 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from imrl_jax.agent import learning
 from imrl_jax.world.arena import advance, floor_colour_xy, on_wall, spawn_pose, trial_ends, turn
 from imrl_jax.config import Config, ConfigError, LearningParams
+from imrl_jax.agent.kernel_layout import (NUM_FLOATS, OPTION_DISCOUNT, OPTION_LEARNED, OPTION_REWARD,
+                                          OPTION_STEPS, OPTION_TRACE_DISCOUNT, T_SLOT, Fixed, Packed, fixed, pack,
+                                          retina_layout, unpack)
 from imrl_jax.agent.learning import ascend, ascend_row, selector_features, td_error, unit_features
-from imrl_jax.agent.networks import Agent, explore, internal_reward, pick, select
+from imrl_jax.agent.networks import explore, internal_reward, pick, select
 from imrl_jax.conditions import Phase
-from imrl_jax.genome import PARTS, GenomePart, get_part
-from imrl_jax.world.env import EnvState, TaskSpec
-from imrl_jax.agent.state import (Curves, Draws, Previous, State, Traces, bin_steps, childhood_phase, draw_block,
-                                  phase_params, spawn_draws)
-
-# Slots of the per-lane scalar vectors.
-_X, _Y, _HEADING, _COS, _SIN, _A0, _A1, _O0, _O1 = range(9)  # floats
-_K, _VALID, _TERMINAL, _TRIAL_STEP, _T, _EXPERTS_ENDED, _SELECTOR_ENDED, _PINNED = range(8)  # int32
-_NUM_FLOATS, _NUM_INTS = 16, 8
-# Rows of the packed weights and traces.
-_REINFORCER, _ACTOR0, _ACTOR1, _EVALUATOR, _SELECTOR = range(5)
-_TRACE_ACTOR0, _TRACE_ACTOR1, _TRACE_EVALUATOR, _TRACE_CRITIC = range(4)
-
-
-class Packed(NamedTuple):
-    """One lane's phase state in the kernel's padded layout (K -> Kp rows, n+1 -> N columns)."""
-
-    weights: jnp.ndarray  # (5, Kp, N): reinforcer, actor unit 0, actor unit 1, evaluator, selector actor
-    critic: jnp.ndarray  # (N,): selector critic
-    traces: jnp.ndarray  # (4, N): actor unit 0, actor unit 1, evaluator, selector critic
-    selector_trace: jnp.ndarray  # (Kp, N)
-    xbs: jnp.ndarray  # (2, N): x~_{t-1}, x~_{t-2}
-    selection: jnp.ndarray  # (Kp,): s_{t-1} (0 in padded rows)
-    floats: jnp.ndarray  # (16,): pose, (cos, sin), a_{t-1}, o_{t-1}
-    ints: jnp.ndarray  # (8,): k, valid, terminal, trial step, t, ended flags, steps on a wall
-    baseline: jnp.ndarray  # (Kp,): each expert's running mean surprise (0 in padded rows)
-
-
-def _pow2(n: int) -> int:
-    return 1 << max(0, (n - 1).bit_length())
-
-
-def _pad(x, shape):
-    return jnp.pad(x, [(0, s - d) for s, d in zip(shape, x.shape)])
-
-
-def pack(state: State) -> Packed:
-    """The kernel's layout of a phase state."""
-    agent, traces, prev = state.agent, state.traces, state.prev
-    k, n = agent.selector_actor.shape
-    kp, big_n = _pow2(k), _pow2(n)
-    rows = lambda m: _pad(m, (kp, big_n))  # noqa: E731
-    vec = lambda v: _pad(v, (big_n,))  # noqa: E731
-    dtype = agent.actor.dtype
-    now = state.t % 2
-    xbs = jnp.stack([state.xbs[1 - now], state.xbs[now]])  # x~_{t-1}, x~_{t-2}
-    robot = state.world  # the arena's EnvState: the kernel lives the arena only
-    floats = jnp.stack([robot.pose.pos[0], robot.pose.pos[1], robot.pose.heading, *robot.direction,
-                        *prev.action, *prev.output]).astype(dtype)
-    ints = jnp.stack([prev.k, prev.valid, prev.terminal, robot.trial_step, state.t, traces.experts_ended,
-                      traces.selector_ended, robot.pinned]).astype(jnp.int32)
-    return Packed(
-        weights=jnp.stack([rows(agent.reinforcer), rows(agent.actor[:, 0]), rows(agent.actor[:, 1]),
-                           rows(agent.evaluator), rows(agent.selector_actor)]),
-        critic=vec(agent.selector_critic),
-        traces=jnp.stack([vec(traces.actor[0]), vec(traces.actor[1]), vec(traces.evaluator),
-                          vec(traces.selector_critic)]),
-        selector_trace=rows(traces.selector_actor),
-        xbs=jax.vmap(vec)(xbs),
-        selection=_pad(prev.selection, (kp,)),
-        floats=_pad(floats, (_NUM_FLOATS,)),
-        ints=_pad(ints, (_NUM_INTS,)),
-        baseline=_pad(state.baseline, (kp,)),
-    )
-
-
-def unpack(packed: Packed, like: State, block: Draws) -> State:
-    """The phase state that ``packed`` holds (``like`` gives the shapes; ``block`` the current draws)."""
-    k, n = like.agent.selector_actor.shape
-    w, f, i = packed.weights, packed.floats, packed.ints
-    t = i[_T]
-    now = t % 2
-    # x~_t goes in row t % 2: at step t the last observation x~_{t-1} sits in row 1 - t % 2.
-    xbs = jnp.where(now == 0, packed.xbs[::-1], packed.xbs)[:, :n]
-    agent = Agent(
-        reinforcer=w[_REINFORCER, :k, :n],
-        actor=jnp.stack([w[_ACTOR0, :k, :n], w[_ACTOR1, :k, :n]], axis=1),
-        evaluator=w[_EVALUATOR, :k, :n],
-        selector_actor=w[_SELECTOR, :k, :n],
-        selector_critic=packed.critic[:n],
-    )
-    traces = Traces(
-        actor=packed.traces[jnp.array([_TRACE_ACTOR0, _TRACE_ACTOR1]), :n],
-        evaluator=packed.traces[_TRACE_EVALUATOR, :n],
-        selector_actor=packed.selector_trace[:k, :n],
-        selector_critic=packed.traces[_TRACE_CRITIC, :n],
-        experts_ended=i[_EXPERTS_ENDED] != 0,
-        selector_ended=i[_SELECTOR_ENDED] != 0,
-    )
-    prev = Previous(k=i[_K], action=f[jnp.array([_A0, _A1])], output=f[jnp.array([_O0, _O1])],
-                    selection=packed.selection[:k], valid=i[_VALID] != 0, terminal=i[_TERMINAL] != 0)
-    pose = like.world.pose._replace(pos=f[jnp.array([_X, _Y])], heading=f[_HEADING])
-    robot = EnvState(pose, f[jnp.array([_COS, _SIN])], i[_TRIAL_STEP], i[_PINNED])
-    return State(agent, traces, robot, xbs, prev, t, block, packed.baseline[:k])
-
-
-def retina_layout(config: Config, dtype=jnp.float32) -> jnp.ndarray:
-    """(4, N): for each entry of x~, its point's forward and lateral offset, its colour (3: none), its bias."""
-    forward, lateral = np.meshgrid(config.retina_forward, config.retina_lateral, indexing="ij")
-    n = config.num_inputs
-    big_n = _pow2(n + 1)
-    layout = np.zeros((4, big_n))
-    layout[0, :n] = np.repeat(forward.ravel(), 3)
-    layout[1, :n] = np.repeat(lateral.ravel(), 3)
-    layout[2] = 3.0
-    layout[2, :n] = np.tile(np.arange(3.0), n // 3)
-    layout[3, n] = 1.0
-    return jnp.asarray(layout, dtype)
+from imrl_jax.world.env import TaskSpec
+from imrl_jax.agent.state import Curves, Draws, State, bin_steps, childhood_phase, draw_block, phase_params, spawn_draws
 
 
 def round_even(x):
@@ -169,29 +72,47 @@ class _Carry(NamedTuple):
     timeouts: jnp.ndarray
     respawns: jnp.ndarray
     selections: jnp.ndarray  # (Kp,) int32
+    option: tuple | None = None  # start x~, selection, reward, discount, trace discount, learned, steps; or None
 
 
-def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int, num_experts: int):
-    """The kernel body: ``num_steps`` steps of one lane (refs: inputs, then outputs).
+class _Model(NamedTuple):
+    """What a lane's model adds to the paper's, static: it decides which inputs the kernel reads."""
+
+    options: bool = False  # the selector chooses options (Config.selector_options)
+    expressed: bool = False  # an expression mask (an evolved number of experts)
+    second_reinforcer: bool = False  # two reinforcer units per expert
+    childhood_length: bool = False  # an evolved childhood length (learning and noise stop at it)
+
+
+#: The kernel's inputs, in order; a None field of Packed or Fixed is not passed.
+_INPUTS = ("layout", "params", "task", "u", "z", "spawn") + Fixed._fields + tuple(f"in_{f}" for f in Packed._fields)
+
+
+def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int, num_experts: int, model: _Model,
+                 inputs: tuple[str, ...], outputs: tuple[str, ...]):
+    """The kernel body: ``num_steps`` steps of one lane (refs: the ``inputs``, then the ``outputs``, by name).
 
     The step is lifetime.step's control cycle on the lane's registers; the rules it applies
-    are the XLA program's functions (networks, learning, arena), written so that Triton
+    are the XLA program's functions (networks, learning, timescale, arena), written so that Triton
     lowers them (no gather, no scatter: rows are read and written through one-hot masks).
     """
 
-    def kernel(layout_ref, params_ref, task_ref, u_ref, z_ref, spawn_ref, weights_ref, critic_ref, traces_ref,
-               selector_trace_ref, xbs_ref, selection_ref, floats_ref, ints_ref, baseline_ref,
-               weights_out, critic_out, traces_out, selector_trace_out, xbs_out, selection_out,
-               floats_out, ints_out, baseline_out, counts_out, selections_out):
+    def kernel(*refs):
+        ref = dict(zip(inputs + outputs, refs))
+        weights_ref, params_ref, task_ref, u_ref, z_ref, spawn_ref = (
+            ref["in_weights"], ref["params"], ref["task"], ref["u"], ref["z"], ref["spawn"])
+        layout_ref, selection_ref = ref["layout"], ref["in_selection"]
         dtype = weights_ref.dtype
         p = LearningParams(*(params_ref[j] for j in range(len(LearningParams._fields))))
-        gamma, lam, noise_std = p.gamma, p.trace_lambda, p.noise_std
-        eta_actor, eta_evaluator = p.eta_actor, p.eta_evaluator
-        eta_selector_actor, eta_selector_critic = p.eta_selector_actor, p.eta_selector_critic
+        gamma, lam = p.gamma, p.trace_lambda
         progress_rate = p.progress_rate
+        # An evolved childhood's length: the entry after the learning values.
+        length = params_ref[len(LearningParams._fields)] if model.childhood_length else None
         start_x, start_y, start_heading, target_x, target_y = (task_ref[j] for j in range(5))
         start_cos, start_sin = jnp.cos(start_heading), jnp.sin(start_heading)
         forward, lateral, colours, bias = (layout_ref[j] for j in range(4))
+        expressed = ref["expressed"][...] if model.expressed else None
+        second_reinforcer = ref["second_reinforcer"][...] if model.second_reinforcer else None
         kp = selection_ref.shape[0]
         rows = jax.lax.broadcasted_iota(jnp.int32, (kp,), 0)
         expert_rows = rows < num_experts
@@ -202,8 +123,16 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                                      round_even)
             return (colour.astype(dtype) == colours).astype(dtype) + bias
 
-        def accumulate(trace, phi, learn, ended):
-            return learning.accumulate(trace, phi, gamma, lam, learn, ended)
+        def seen(xb, colour):
+            """1 where some retina point of x~ sees ``colour`` (timescale.colours_seen's entry)."""
+            return jnp.max(jnp.where(colours == colour, xb, 0.0))
+
+        def reinforcement(reinforcer, xb, k):
+            """The expert k's internal reward (networks.internal_rewards): one unit's, or two units' mean."""
+            reward = internal_reward(pick(_dot_rows(reinforcer, xb), k))
+            if second_reinforcer is None:
+                return reward
+            return 0.5 * (reward + internal_reward(pick(_dot_rows(second_reinforcer, xb), k)))
 
         def one_step(i, carry: _Carry) -> _Carry:
             reinforcer, actor0, actor1, evaluator, selector = carry.weights
@@ -213,14 +142,32 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
             valid, terminal = valid != 0, terminal != 0
             critic, selector_trace, prev_xb = carry.critic, carry.selector_trace, carry.prev_xb
             baseline = carry.baseline
+            eta_actor, eta_evaluator = p.eta_actor, p.eta_evaluator
+            eta_selector_actor, eta_selector_critic = p.eta_selector_actor, p.eta_selector_critic
+            noise_std = p.noise_std
+            if length is not None:  # state.learning_until: after the evolved childhood, no learning and no noise
+                learning = t.astype(dtype) < length
+                eta_actor, eta_evaluator, eta_selector_actor, eta_selector_critic, noise_std = (
+                    jnp.where(learning, v, 0.0)
+                    for v in (eta_actor, eta_evaluator, eta_selector_actor, eta_selector_critic, noise_std))
 
-            # 1-2: observe, choose the expert.
+            # 1-2: observe, choose the expert (where the option ends, if the selector has options).
             xb = observe(x, y, c, s)
             selection = jnp.where(expert_rows, jax.nn.sigmoid(_dot_rows(selector, xb)), 0.0)
+            if expressed is not None:  # networks.expressed_only: an unexpressed expert is never chosen
+                selection = selection * expressed
             # One expert: k is 0, computed from the carry (Triton's lowering cannot return a constant from the loop).
             k = select(u_ref[i], selection, num_experts) if num_experts > 1 else jnp.minimum(prev_k, 0)
-            same = k == prev_k
             ends = terminal | ~valid
+            if model.options:  # timescale.ends: a trial's end, the period, or (colour) a colour come into view
+                option_xb, option_selection, option_reward, option_discount, option_trace_discount, \
+                    option_learned, option_steps = carry.option
+                choose = ends | (option_steps + 1 >= config.selector_period)
+                if config.selector_termination == "colour":
+                    for colour in range(3):
+                        choose = choose | (seen(xb, colour) > seen(prev_xb, colour))
+                k = jnp.where(choose, k, prev_k)
+            same = k == prev_k
             extrinsic = terminal.astype(dtype)
             held = rows == prev_k
 
@@ -228,20 +175,22 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
             surprise = zero
             if phase.experts_learn:
                 learn = valid & same
-                if phase.intrinsic:
-                    reward = internal_reward(pick(_dot_rows(reinforcer, xb), prev_k))
-                else:
-                    reward = extrinsic
                 value_before = pick(_dot_rows(evaluator, prev_xb), prev_k)
                 value_now = pick(_dot_rows(evaluator, xb), prev_k)
-                surprise = td_error(reward, value_before, value_now, gamma, terminal)
+                if phase.evaluation:  # learning.learn_experts: the change of the innate evaluation alone
+                    discount = gamma if phase.evaluation == "discounted" else 1.0
+                    surprise = td_error(zero, value_before, value_now, discount, terminal)
+                else:
+                    reward = reinforcement(reinforcer, xb, prev_k) if phase.intrinsic else extrinsic
+                    surprise = td_error(reward, value_before, value_now, gamma, terminal)
                 delta = jnp.where(learn, surprise, 0.0)
                 ended = experts_ended != 0
-                trace_evaluator = accumulate(trace_evaluator, prev_xb, learn, ended)
-                trace_actor0 = accumulate(trace_actor0, unit_features(a0, o0, prev_xb), learn, ended)
-                trace_actor1 = accumulate(trace_actor1, unit_features(a1, o1, prev_xb), learn, ended)
                 row = held.astype(dtype)
-                evaluator = ascend_row(evaluator, row, trace_evaluator, delta, eta_evaluator)
+                if not phase.evaluation:  # an evolved evaluation is innate: it does not learn
+                    trace_evaluator = accumulate(trace_evaluator, prev_xb, gamma, learn, ended)
+                    evaluator = ascend_row(evaluator, row, trace_evaluator, delta, eta_evaluator)
+                trace_actor0 = accumulate(trace_actor0, unit_features(a0, o0, prev_xb), gamma, learn, ended)
+                trace_actor1 = accumulate(trace_actor1, unit_features(a1, o1, prev_xb), gamma, learn, ended)
                 actor0 = ascend_row(actor0, row, trace_actor0, delta, eta_actor)
                 actor1 = ascend_row(actor1, row, trace_actor1, delta, eta_actor)
                 experts_ended = (~same | ends).astype(jnp.int32)
@@ -254,17 +203,42 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                         baseline = baseline + progress_rate * mine * (surprise - baseline)
                 else:
                     learn, reward = valid, extrinsic
-                value_before = jnp.sum(critic * prev_xb)
-                value_now = jnp.sum(critic * xb)
-                delta = td_error(reward, value_before, value_now, gamma, terminal)
-                delta = jnp.where(learn, delta, 0.0)
                 ended = selector_ended != 0
-                trace_critic = accumulate(trace_critic, prev_xb, learn, ended)
-                phi = selector_features(prev_k, carry.selection, prev_xb)
-                selector_trace = accumulate(selector_trace, phi, learn, ended)
+                if model.options:  # learning.learn_selector_over_option: semi-Markov TD when the option ends
+                    if phase.intrinsic:
+                        reward = jnp.where(learn, reward, 0.0)
+                        worth = (option_learned != 0) | learn
+                    else:
+                        worth = valid | ~valid  # True, computed (Triton's loop cannot return a constant)
+                    total, discount = option_reward + option_discount * reward, option_discount * gamma
+                    learn = choose & valid & worth
+                    delta = (total + jnp.where(terminal, 0.0, discount * jnp.sum(critic * xb))
+                             - jnp.sum(critic * option_xb))
+                    delta = jnp.where(learn, delta, 0.0)
+                    trace_critic = accumulate(trace_critic, option_xb, option_trace_discount, learn, ended)
+                    phi = selector_features(prev_k, option_selection, option_xb)
+                    selector_trace = accumulate(selector_trace, phi, option_trace_discount, learn, ended)
+                    selector_ended = jnp.where(choose, ends.astype(jnp.int32), selector_ended)
+                    option_reward, option_discount = total, discount
+                    option_learned = worth.astype(jnp.int32)
+                    option_trace_discount = jnp.where(learn, discount, option_trace_discount)
+                else:
+                    value_before = jnp.sum(critic * prev_xb)
+                    value_now = jnp.sum(critic * xb)
+                    delta = td_error(reward, value_before, value_now, gamma, terminal)
+                    delta = jnp.where(learn, delta, 0.0)
+                    trace_critic = accumulate(trace_critic, prev_xb, gamma, learn, ended)
+                    phi = selector_features(prev_k, carry.selection, prev_xb)
+                    selector_trace = accumulate(selector_trace, phi, gamma, learn, ended)
+                    selector_ended = ends.astype(jnp.int32)
                 critic = ascend(critic, trace_critic, delta, eta_selector_critic)
                 selector = ascend(selector, selector_trace, delta, eta_selector_actor)
-                selector_ended = ends.astype(jnp.int32)
+            option = None
+            if model.options:  # timescale.next_option: a new option where the selector chose, else one step longer
+                option = (jnp.where(choose, xb, option_xb), jnp.where(choose, selection, option_selection),
+                          jnp.where(choose, 0.0, option_reward), jnp.where(choose, 1.0, option_discount),
+                          option_trace_discount, jnp.where(choose, 0, option_learned),
+                          jnp.where(choose, 0, option_steps + 1))
 
             # 4: act.
             out0 = jax.nn.sigmoid(pick(_dot_rows(actor0, xb), k))
@@ -318,45 +292,65 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                 timeouts=carry.timeouts + timeout.astype(jnp.int32),
                 respawns=carry.respawns + respawned.astype(jnp.int32),
                 selections=carry.selections + (rows == k).astype(jnp.int32),
+                option=option,
             )
 
+        def accumulate(trace, phi, discount, learn, ended):
+            return learning.accumulate(trace, phi, discount, lam, learn, ended)
+
+        traces_ref, floats_ref, ints_ref, xbs_ref = ref["in_traces"], ref["in_floats"], ref["in_ints"], ref["in_xbs"]
+        option = None
+        if model.options:
+            of, oi = ref["in_option_floats"], ref["in_option_ints"]
+            option = (ref["in_option_xb"][...], ref["in_option_selection"][...], of[OPTION_REWARD],
+                      of[OPTION_DISCOUNT], of[OPTION_TRACE_DISCOUNT], oi[OPTION_LEARNED], oi[OPTION_STEPS])
         carry = _Carry(
             weights=tuple(weights_ref[j] for j in range(5)),
-            critic=critic_ref[...],
+            critic=ref["in_critic"][...],
             traces=tuple(traces_ref[j] for j in range(4)),
-            selector_trace=selector_trace_ref[...],
+            selector_trace=ref["in_selector_trace"][...],
             prev_xb=xbs_ref[0],
             before_xb=xbs_ref[1],
             selection=selection_ref[...],
             floats=tuple(floats_ref[j] for j in range(9)),
             ints=tuple(ints_ref[j] for j in range(8)),
-            baseline=baseline_ref[...],
+            baseline=ref["in_baseline"][...],
             reaches=jnp.int32(0),
             timeouts=jnp.int32(0),
             respawns=jnp.int32(0),
             selections=jnp.zeros((kp,), jnp.int32),
+            option=option,
         )
         carry = jax.lax.fori_loop(0, num_steps, one_step, carry)
         for j in range(5):
-            weights_out[j] = carry.weights[j]
-        critic_out[...] = carry.critic
+            ref["out_weights"][j] = carry.weights[j]
+        ref["out_critic"][...] = carry.critic
         for j in range(4):
-            traces_out[j] = carry.traces[j]
-        selector_trace_out[...] = carry.selector_trace
-        xbs_out[0] = carry.prev_xb
-        xbs_out[1] = carry.before_xb
-        selection_out[...] = carry.selection
+            ref["out_traces"][j] = carry.traces[j]
+        ref["out_selector_trace"][...] = carry.selector_trace
+        ref["out_xbs"][0] = carry.prev_xb
+        ref["out_xbs"][1] = carry.before_xb
+        ref["out_selection"][...] = carry.selection
         for j, value in enumerate(carry.floats):
-            floats_out[j] = value
-        for j in range(9, _NUM_FLOATS):
-            floats_out[j] = zero
+            ref["out_floats"][j] = value
+        for j in range(9, NUM_FLOATS):
+            ref["out_floats"][j] = zero
         for j, value in enumerate(carry.ints):
-            ints_out[j] = value
-        baseline_out[...] = carry.baseline
-        counts_out[0] = carry.reaches
-        counts_out[1] = carry.timeouts
-        counts_out[2] = carry.respawns
-        selections_out[...] = carry.selections
+            ref["out_ints"][j] = value
+        ref["out_baseline"][...] = carry.baseline
+        if model.options:
+            option_xb, option_selection, reward, discount, trace_discount, learned, steps = carry.option
+            ref["out_option_xb"][...] = option_xb
+            ref["out_option_selection"][...] = option_selection
+            for j, value in ((OPTION_REWARD, reward), (OPTION_DISCOUNT, discount),
+                             (OPTION_TRACE_DISCOUNT, trace_discount), (3, zero)):
+                ref["out_option_floats"][j] = value
+            ref["out_option_ints"][OPTION_LEARNED] = learned
+            ref["out_option_ints"][OPTION_STEPS] = steps
+        ref["counts"][0] = carry.reaches
+        ref["counts"][1] = carry.timeouts
+        ref["counts"][2] = carry.respawns
+        ref["selections"][...] = carry.selections
 
     return kernel
 
@@ -367,33 +361,46 @@ def _interpret() -> bool:
 
 
 def run_bin(config: Config, phase: Phase, params: LearningParams, task: TaskSpec, phase_steps: int,
-            draws: Draws, packed: Packed, num_experts: int, interpret: bool | None = None):
-    """Steps ``len(draws.u)`` of one lane from ``packed``: the new state and (reaches, timeouts), selections."""
+            draws: Draws, packed: Packed, num_experts: int, interpret: bool | None = None,
+            lane: Fixed = Fixed(), childhood_length=None):
+    """Steps ``len(draws.u)`` of one lane from ``packed``: the new state and (reaches, timeouts), selections.
+
+    ``lane``: what the lane reads beyond the paper's model (:func:`fixed`); ``childhood_length``: the step at
+    which an evolved childhood stops learning and exploring (None: it does not).
+    """
     from jax.experimental import pallas as pl
     from jax.experimental.pallas import triton as pltriton
 
     dtype = packed.weights.dtype
     num_steps = draws.u.shape[0]
-    params_vector = jnp.stack([jnp.asarray(p, dtype) for p in params])
+    values = list(params) + ([] if childhood_length is None else [childhood_length])
+    params_vector = jnp.stack([jnp.asarray(p, dtype) for p in values])
     task_vector = jnp.stack([task.start.pos[0], task.start.pos[1], task.start.heading,
                              task.target[0], task.target[1]]).astype(dtype)
     kp = packed.selection.shape[0]
-    out_shape = (*(jax.ShapeDtypeStruct(x.shape, x.dtype) for x in packed),
+    model = _Model(options=packed.option_xb is not None, expressed=lane.expressed is not None,
+                   second_reinforcer=lane.second_reinforcer is not None,
+                   childhood_length=childhood_length is not None)
+    # Without noise the kernel reads no z: a stand-in spares the lanes x steps zeros.
+    z = draws.z.T.astype(dtype) if phase.noisy else jnp.zeros((2, 1), dtype)
+    spawn = draws.spawn.T.astype(dtype) if phase.respawn else jnp.zeros((3, 1), dtype)
+    given = dict(layout=retina_layout(config, dtype), params=params_vector, task=task_vector, u=draws.u.astype(dtype),
+                 z=z, spawn=spawn, **lane._asdict(), **{f"in_{f}": v for f, v in packed._asdict().items()})
+    inputs = tuple(name for name in _INPUTS if given[name] is not None)
+    state_fields = tuple(f for f, v in packed._asdict().items() if v is not None)
+    outputs = tuple(f"out_{f}" for f in state_fields) + ("counts", "selections")
+    out_shape = (*(jax.ShapeDtypeStruct(getattr(packed, f).shape, getattr(packed, f).dtype) for f in state_fields),
                  jax.ShapeDtypeStruct((3,), jnp.int32), jax.ShapeDtypeStruct((kp,), jnp.int32))
     call = pl.pallas_call(
-        _make_kernel(config, phase, phase_steps, num_steps, num_experts),
+        _make_kernel(config, phase, phase_steps, num_steps, num_experts, model, inputs, outputs),
         out_shape=out_shape,
         interpret=_interpret() if interpret is None else interpret,
         # One warp per lane: every reduction stays within the warp.
         compiler_params=pltriton.CompilerParams(num_warps=1, num_stages=1),
         name="imrl_steps",
     )
-    # Without noise the kernel reads no z: a stand-in spares the lanes x steps zeros.
-    z = draws.z.T.astype(dtype) if phase.noisy else jnp.zeros((2, 1), dtype)
-    spawn = draws.spawn.T.astype(dtype) if phase.respawn else jnp.zeros((3, 1), dtype)
-    *state, counts, selections = call(retina_layout(config, dtype), params_vector, task_vector,
-                                      draws.u.astype(dtype), z, spawn, *packed)
-    return Packed(*state), counts, selections
+    *state, counts, selections = call(*(given[name] for name in inputs))
+    return Packed(**dict(zip(state_fields, state))), counts, selections
 
 
 def draw_range(key: jax.Array, start, num_steps: int, block_steps: int, noisy: bool, spawn: int = 0) -> Draws:
@@ -406,8 +413,9 @@ def draw_range(key: jax.Array, start, num_steps: int, block_steps: int, noisy: b
     return jax.tree.map(lambda x: jax.lax.dynamic_slice_in_dim(x, offset, num_steps), flat)
 
 
-#: The fields of a Phase the kernel implements; a phase that sets any other (a later condition's rule) is refused.
-SUPPORTED = ("experts_learn", "selector_learns", "intrinsic", "has_target", "noisy", "respawn", "progress")
+#: The fields of a Phase the kernel implements; a phase that sets any other (a later rule) is refused.
+SUPPORTED = ("experts_learn", "selector_learns", "intrinsic", "has_target", "noisy", "respawn", "progress",
+             "evaluation")
 
 
 def check_supported(phase: Phase) -> None:
@@ -419,25 +427,6 @@ def check_supported(phase: Phase) -> None:
                               f"{getattr(phase, name)!r}; use step_kernel=xla")
 
 
-def refusal(part: GenomePart) -> str:
-    """The one line refusing a genome part the kernel does not implement (``GenomePart.kernel`` False)."""
-    return f"step_kernel: the pallas kernel does not implement {part.what} (genome part {part.name!r}); use step_kernel=xla"
-
-
-def check_parts(genome: tuple[str, ...]) -> None:
-    """Refuse a genome with a part the kernel does not implement (ConfigError naming it)."""
-    for name in genome:
-        if not get_part(name).kernel:
-            raise ConfigError(refusal(get_part(name)))
-
-
-def check_agent(agent: Agent) -> None:
-    """Refuse an agent holding what only a part the kernel does not implement sets (ConfigError naming it)."""
-    for part in PARTS.values():
-        if not part.kernel and part.field is not None and getattr(agent, part.field) is not None:
-            raise ConfigError(refusal(part))
-
-
 def unsupported(config: Config) -> str | None:
     """Why the kernel cannot live ``config``'s condition (one line), or None when it can."""
     if config.world != "arena":  # the kernel's loop is the arena's step
@@ -447,7 +436,6 @@ def unsupported(config: Config) -> str | None:
         if config.spec.has_childhood:
             check_supported(childhood_phase(config))
         check_supported(config.spec.adult)
-        check_parts(config.spec.genome)
     except ConfigError as error:
         return str(error)
     return None
@@ -460,23 +448,25 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
     if config.world != "arena":
         raise ConfigError(unsupported(config), "step_kernel")
     check_supported(phase)
-    check_parts(config.spec.genome)
-    check_agent(state.agent)
     phase_steps = num_steps if phase_steps is None else phase_steps
     num_bins = config.num_bins if num_bins is None else num_bins
     steps_per_bin = bin_steps(num_steps, num_bins)
     num_experts = state.agent.selector_actor.shape[0]
-    params = phase_params(phase, params)
+    # As lifetime.step: an individual with learning values of its own learns with them; an evolved childhood's
+    # length stops its learning and noise.
+    params = phase_params(phase, params if state.agent.params is None else state.agent.params)
+    length = state.agent.childhood_length if phase.intrinsic else None
+    lane = fixed(state.agent)
 
     def one_bin(packed, _):
-        draws = draw_range(key, packed.ints[_T], steps_per_bin, config.draw_block, phase.noisy,
+        draws = draw_range(key, packed.ints[T_SLOT], steps_per_bin, config.draw_block, phase.noisy,
                            spawn_draws(config, phase))
         packed, counts, selections = run_bin(config, phase, params, task, phase_steps, draws, packed, num_experts,
-                                             interpret)
+                                             interpret, lane, length)
         return packed, Curves(counts[0], counts[1], selections[:num_experts], counts[2] if phase.respawn else None)
 
     packed, curves = jax.lax.scan(one_bin, pack(state), None, length=num_bins)
     # The block of the last step, as the XLA program leaves it.
-    block = draw_block(key, (packed.ints[_T] - 1) // config.draw_block, config.draw_block, phase.noisy,
+    block = draw_block(key, (packed.ints[T_SLOT] - 1) // config.draw_block, config.draw_block, phase.noisy,
                        spawn_draws(config, phase))
     return unpack(packed, state, block), curves

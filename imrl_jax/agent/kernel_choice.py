@@ -1,7 +1,7 @@
 """Which step kernel lives a run: ``Config.step_kernel = "auto"`` resolved (docs/PERFORMANCE.md).
 
 "auto" is the Pallas kernel (:mod:`imrl_jax.agent.kernel`) where JAX's backend is a GPU and the kernel implements the
-run's model, and the XLA step otherwise (off a GPU the kernel would only be interpreted, several times slower).
+run's model (every condition and option in the arena, not another world), and the XLA step otherwise (off a GPU the kernel would only be interpreted, several times slower).
 A command resolves it where it plans a run, so that the run's ``config.json`` records the choice and a resumed
 run keeps it; :func:`imrl_jax.agent.lifetime.run_phase` resolves an unresolved config the same way (library use).
 The step kernel is a compute field: the run's content key is the same whichever is chosen.
@@ -14,8 +14,6 @@ from imrl_jax.config import Config, ConfigError
 
 def unsupported(config: Config) -> str | None:
     """Why the kernel cannot live ``config`` (one line), or None when it can."""
-    if config.selector_options:  # config.py refuses them with an explicit pallas
-        return f"the selector's options (selector_period={config.selector_period})"
     from imrl_jax.agent import kernel  # imports lifetime, which imports this module
 
     why = kernel.unsupported(config)
@@ -50,8 +48,8 @@ def resolve(config: Config, backend: str | None = None) -> tuple[Config, str | N
     why = unsupported(config)
     if why is None:
         return config.replace(step_kernel="pallas"), None
-    return config.replace(step_kernel="xla"), (f"note: step_kernel=auto: the XLA step on this GPU, as the Pallas "
-                                               f"kernel does not implement {config.condition}'s {why}")
+    return config.replace(step_kernel="xla"), (f"note: step_kernel=auto: {config.condition} lives on the XLA step on "
+                                               f"this GPU, as the Pallas kernel does not implement {why}")
 
 
 def chosen(config: Config) -> str:

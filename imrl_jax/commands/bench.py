@@ -126,11 +126,14 @@ def phase_program(condition: str, phase_name: str, lanes: int, steps: int, packa
     return Program(jax.jit(jax.vmap(lane)), lane_inputs(config, lanes), lanes * steps, config)
 
 
-def lifetime_program(lanes: int, task_steps: int, package: str = "imrl_jax", step_kernel: str = "xla") -> Program:
-    """Whole LE-LS lives of ``lanes / 6`` individuals (childhood 1.5 x task steps); ``package`` as above."""
+def lifetime_program(lanes: int, task_steps: int, package: str = "imrl_jax", step_kernel: str = "xla",
+                     condition: str = "LE-LS", fields: tuple = ()) -> Program:
+    """Whole lives of ``condition`` (LE-LS) of ``lanes / 6`` individuals (childhood 1.5 x task steps), with the Config
+    ``fields`` (name, value) pairs (none); ``package`` as above."""
     config_module, L, _ = _modules(package)
-    config = config_module.make_config("paper", condition="LE-LS", task_steps=task_steps,
-                                       childhood_steps=task_steps * 3 // 2, num_bins=10, **_kernel_field(step_kernel, config_module))
+    config = config_module.make_config("paper", condition=condition, task_steps=task_steps,
+                                       childhood_steps=task_steps * 3 // 2, num_bins=10,
+                                       **_kernel_field(step_kernel, config_module), **dict(fields))
     individuals = max(1, lanes // config.num_tasks)
     _, genomes = lane_inputs(config, individuals)
     return Program(L.make_evaluate(config), (jax.random.key(0), config.learning_params(), genomes),

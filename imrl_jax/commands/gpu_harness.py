@@ -36,9 +36,14 @@ class Sizes:
     life_target_radius: float = 40.0
     presets: tuple[str, ...] = ("paper", "extension", "faithful", "skills")
     conditions: tuple[str, ...] | None = None  # None: every row of the condition table
+    # The selector on its own time-scale (docs/TIMESCALE.md), lived under the first preset by every condition whose
+    # selector chooses: (name, Config fields)
+    selector_options: tuple = (("period", (("selector_period", 4),)),
+                               ("colour", (("selector_period", 4), ("selector_termination", "colour"))))
     float32_steps: int = 2000
     lanes: tuple[int, ...] = (3_000, 30_000, 300_000)
     life_task_steps: int = 2000  # the whole-life benchmark's task steps (childhood 1.5 times that)
+    model_lanes: int = 30_000  # the adult lanes of each model's whole lives (the ``models`` step)
     phase_steps: int = 1000
     repeats: int = 3
     generation_seeds: tuple[int, ...] = (10, 100)
@@ -53,8 +58,10 @@ class Sizes:
     study_test_lanes: int | None = None  # at most this many lanes of a test timed (None: its own)
 
 
-DRY = Sizes(life_steps=(60, 30, 3), presets=("paper",), conditions=("EE-LS",), float32_steps=200,
-            lanes=(6,), life_task_steps=20, phase_steps=20, repeats=1, generation_seeds=(2,),
+DRY = Sizes(life_steps=(60, 30, 3), presets=("paper",), conditions=("EE-LS",),
+            selector_options=(("colour", (("selector_period", 4), ("selector_termination", "colour"))),),
+            float32_steps=200,
+            lanes=(6,), life_task_steps=20, model_lanes=6, phase_steps=20, repeats=1, generation_seeds=(2,),
             generation_condition="EE-LS",
             generation_sizes=(("childhood_steps", 40), ("task_steps", 20), ("num_bins", 2), ("population_size", 4),
                               ("num_parents", 2)),

@@ -50,8 +50,9 @@ def environment(check: Check) -> dict:
 
 
 def life_cases(sizes: Sizes):
-    """(condition, preset, config) of every condition under every preset that makes another model
-    (``Config.model_differences``), with the kernel's reason where it does not implement the condition."""
+    """(condition, preset, config, why the kernel lacks it or None) of every condition under every preset that makes
+    another model (``Config.model_differences``), then under the first preset with each of the selector's options
+    (``Sizes.selector_options``: "paper+colour") where its selector chooses; the kernel's cases first."""
     from imrl_jax import conditions
     from imrl_jax.agent import kernel
     from imrl_jax.config import make_config
@@ -67,6 +68,10 @@ def life_cases(sizes: Sizes):
                 continue  # the same lives as a preset before it
             seen.append(config)
             cases.append((name, preset, config, kernel.unsupported(config)))
+        if not conditions.get(name).single_expert:
+            for option, fields in sizes.selector_options:
+                config = seen[0].replace(**dict(fields))
+                cases.append((name, f"{sizes.presets[0]}+{option}", config, kernel.unsupported(config)))
     # The kernel's cases first: the XLA-only ones check what the CPU tests check already.
     return sorted(cases, key=lambda case: case[3] is not None)
 
@@ -373,4 +378,39 @@ def phases(check: Check) -> dict:
                                    warp_instructions_per_s=row["lane_steps_per_s"] * counted[condition, phase])
                     check.say(f"  {name:22s} {kernel:6s} {lanes:8,d} lanes: {row['lane_steps_per_s']:14,.0f} "
                               f"lane-steps/s, compile {compile_s:5.1f} s")
+    return {"rows": rows}
+
+
+def models(check: Check) -> dict:
+    """Whole lives of every model on the kernel at one lane count: each row of the condition table, then the first
+    condition's selector on its own time-scale (``Sizes.selector_options``); each one's speed beside LE-LS's."""
+    from imrl_jax import conditions
+    from imrl_jax.commands import bench
+
+    names = check.sizes.conditions or conditions.NAMES
+    cases = [(name, "", ()) for name in names] + [(names[0] if check.sizes.conditions else "LE-LS", option, fields)
+                                                  for option, fields in check.sizes.selector_options]
+    rows = []
+    for name, option, fields in cases:
+        row = {"condition": name, "options": option, "kernel": "pallas", "lanes": check.sizes.model_lanes}
+        if not check.fits(10):
+            rows.append({**row, "status": "skipped (budget)"})
+            continue
+        with check.piece(row, rows):
+            check.stage = "api"
+            program = bench.lifetime_program(check.sizes.model_lanes, check.sizes.life_task_steps,
+                                             step_kernel="pallas", condition=name, fields=fields)
+            executable, compile_s = compile_program(check, program.fn, *program.args)
+            seconds, shortest = timed(executable, program.args, check.sizes.repeats)
+            row.update(individuals=program.args[2].shape[0], compile_s=compile_s, seconds=seconds,
+                       lane_steps_per_s=program.lane_steps / seconds,
+                       best_lane_steps_per_s=program.lane_steps / shortest, status="ok")
+            check.say(f"  {name + (' +' + option if option else ''):18s} pallas {check.sizes.model_lanes:8,d} lanes: "
+                      f"{row['lane_steps_per_s']:14,.0f} lane-steps/s, compile {compile_s:5.1f} s")
+    base = next((r for r in rows if r.get("status") == "ok" and r["condition"] == "LE-LS" and not r["options"]),
+                next((r for r in rows if r.get("status") == "ok"), None))
+    for row in rows:
+        if base is not None and row.get("status") == "ok":
+            row["over_le_ls" if base["condition"] == "LE-LS" else "over_first"] = (
+                row["lane_steps_per_s"] / base["lane_steps_per_s"])
     return {"rows": rows}
