@@ -158,16 +158,16 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                 selection = selection * expressed
             # One expert: k is 0, computed from the carry (Triton's lowering cannot return a constant from the loop).
             k = select(u_ref[i], selection, num_experts) if num_experts > 1 else jnp.minimum(prev_k, 0)
-            ends = terminal | ~valid
             if model.options:  # timescale.ends: a trial's end, the period, or (colour) a colour come into view
                 option_xb, option_selection, option_reward, option_discount, option_trace_discount, \
                     option_learned, option_steps = carry.option
-                choose = ends | (option_steps + 1 >= config.selector_period)
+                choose = terminal | ~valid | (option_steps + 1 >= config.selector_period)
                 if config.selector_termination == "colour":
                     for colour in range(3):
                         choose = choose | (seen(xb, colour) > seen(prev_xb, colour))
                 k = jnp.where(choose, k, prev_k)
             same = k == prev_k
+            ends = terminal | ~valid
             extrinsic = terminal.astype(dtype)
             held = rows == prev_k
 
@@ -175,22 +175,24 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
             surprise = zero
             if phase.experts_learn:
                 learn = valid & same
-                value_before = pick(_dot_rows(evaluator, prev_xb), prev_k)
-                value_now = pick(_dot_rows(evaluator, xb), prev_k)
                 if phase.evaluation:  # learning.learn_experts: the change of the innate evaluation alone
-                    discount = gamma if phase.evaluation == "discounted" else 1.0
-                    surprise = td_error(zero, value_before, value_now, discount, terminal)
+                    reward, discount = zero, gamma if phase.evaluation == "discounted" else 1.0
                 else:
                     reward = reinforcement(reinforcer, xb, prev_k) if phase.intrinsic else extrinsic
-                    surprise = td_error(reward, value_before, value_now, gamma, terminal)
+                    discount = gamma
+                value_before = pick(_dot_rows(evaluator, prev_xb), prev_k)
+                value_now = pick(_dot_rows(evaluator, xb), prev_k)
+                surprise = td_error(reward, value_before, value_now, discount, terminal)
                 delta = jnp.where(learn, surprise, 0.0)
                 ended = experts_ended != 0
-                row = held.astype(dtype)
-                if not phase.evaluation:  # an evolved evaluation is innate: it does not learn
+                learns_value = not phase.evaluation  # an evolved evaluation is innate: it does not learn
+                if learns_value:
                     trace_evaluator = accumulate(trace_evaluator, prev_xb, gamma, learn, ended)
-                    evaluator = ascend_row(evaluator, row, trace_evaluator, delta, eta_evaluator)
                 trace_actor0 = accumulate(trace_actor0, unit_features(a0, o0, prev_xb), gamma, learn, ended)
                 trace_actor1 = accumulate(trace_actor1, unit_features(a1, o1, prev_xb), gamma, learn, ended)
+                row = held.astype(dtype)
+                if learns_value:
+                    evaluator = ascend_row(evaluator, row, trace_evaluator, delta, eta_evaluator)
                 actor0 = ascend_row(actor0, row, trace_actor0, delta, eta_actor)
                 actor1 = ascend_row(actor1, row, trace_actor1, delta, eta_actor)
                 experts_ended = (~same | ends).astype(jnp.int32)
@@ -203,7 +205,6 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                         baseline = baseline + progress_rate * mine * (surprise - baseline)
                 else:
                     learn, reward = valid, extrinsic
-                ended = selector_ended != 0
                 if model.options:  # learning.learn_selector_over_option: semi-Markov TD when the option ends
                     if phase.intrinsic:
                         reward = jnp.where(learn, reward, 0.0)
@@ -215,6 +216,7 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                     delta = (total + jnp.where(terminal, 0.0, discount * jnp.sum(critic * xb))
                              - jnp.sum(critic * option_xb))
                     delta = jnp.where(learn, delta, 0.0)
+                    ended = selector_ended != 0
                     trace_critic = accumulate(trace_critic, option_xb, option_trace_discount, learn, ended)
                     phi = selector_features(prev_k, option_selection, option_xb)
                     selector_trace = accumulate(selector_trace, phi, option_trace_discount, learn, ended)
@@ -227,12 +229,14 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                     value_now = jnp.sum(critic * xb)
                     delta = td_error(reward, value_before, value_now, gamma, terminal)
                     delta = jnp.where(learn, delta, 0.0)
+                    ended = selector_ended != 0
                     trace_critic = accumulate(trace_critic, prev_xb, gamma, learn, ended)
                     phi = selector_features(prev_k, carry.selection, prev_xb)
                     selector_trace = accumulate(selector_trace, phi, gamma, learn, ended)
-                    selector_ended = ends.astype(jnp.int32)
                 critic = ascend(critic, trace_critic, delta, eta_selector_critic)
                 selector = ascend(selector, selector_trace, delta, eta_selector_actor)
+                if not model.options:
+                    selector_ended = ends.astype(jnp.int32)
             option = None
             if model.options:  # timescale.next_option: a new option where the selector chose, else one step longer
                 option = (jnp.where(choose, xb, option_xb), jnp.where(choose, selection, option_selection),
