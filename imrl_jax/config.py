@@ -30,6 +30,7 @@ CHILDHOOD_WALLS = ("clamp", "respawn")
 CHILDHOOD_SELECTOR_REWARDS = ("surprise", "progress")
 EVOLVED_CONDITIONS = conditions.EVOLVED
 STEP_KERNELS = ("auto", "xla", "pallas")
+KERNEL_RETINAS = ("entries", "points")
 #: When the selector's choice ends (docs/TIMESCALE.md): "period" (after ``selector_period`` steps) or "colour"
 #: (when a colour comes into view that the retina did not see the step before, as at a junction, or after
 #: ``selector_period`` steps at most). A trial's end always ends it. With a period of 1 every choice lasts one step.
@@ -161,6 +162,10 @@ class Config:
     # (kernel.py; same results up to rounding, interpreted off a GPU); "auto": pallas on a GPU where the kernel
     # implements the model, else xla (kernel_choice.py: a command records the choice in the run's config.json).
     step_kernel: str = dataclasses.field(default="auto", metadata={"compute": True})
+    # How the kernel observes (kernel_layout.columns; docs/PERFORMANCE.md "How far from the hardware"): "entries",
+    # each of x~'s padded entries computes its own point's colour; "points", each retina point once, x~'s columns
+    # colour-major. The same products in another order: results to rounding.
+    kernel_retina: str = dataclasses.field(default="entries", metadata={"compute": True})
 
     # --- the world the agent lives in (docs/WORLDS.md): "arena" is section 2's, with the geometry below. Another
     # world's settings are its own (NAME=VALUE pairs its World reads); its observation size and discrete actions
@@ -464,6 +469,8 @@ def _validate(c: Config) -> None:
         fail("condition", f"must be one of {', '.join(conditions.CONDITIONS)}")
     if c.step_kernel not in STEP_KERNELS:
         fail("step_kernel", f"must be one of {', '.join(STEP_KERNELS)}")
+    if c.kernel_retina not in KERNEL_RETINAS:
+        fail("kernel_retina", f"must be one of {', '.join(KERNEL_RETINAS)}")
     if c.childhood_walls not in CHILDHOOD_WALLS:
         fail("childhood_walls", f"must be one of {', '.join(CHILDHOOD_WALLS)}")
     if c.childhood_selector_reward not in CHILDHOOD_SELECTOR_REWARDS:

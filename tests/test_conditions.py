@@ -149,7 +149,7 @@ def test_a_field_the_condition_ignores_changes_no_life(name):
 
 def test_compute_fields_are_not_model_differences():
     config = make_config("paper", condition="LE-LS")
-    assert config.model_differences(config.replace(step_kernel="pallas", scan_unroll=4)) == []
+    assert config.model_differences(config.replace(step_kernel="pallas", kernel_retina="points", scan_unroll=4)) == []
     assert config.model_differences(config.replace(draw_block=50)) == ["draw_block"]  # it sets the random stream
 
 

@@ -308,6 +308,7 @@ def test_bad_arguments(tmp_path, capsys, args, message):
     (["--set", "max_speed=1e30"], "max_speed: must be in (0, 10000] (got 1e+30)"),
     (["--set", "max_speed=25"], "max_speed: must be at most 2 x target_radius = 20 cm"),
     (["--set", "scan_unroll=100000"], "scan_unroll: must be in [1, 64] (got 100000)"),
+    (["--set", "kernel_retina=pixels"], "kernel_retina: must be one of entries, points (got 'pixels')"),
     (["--set", "num_experts=1000"], "num_experts: must be in [1, 64] (got 1000)"),
     (["--set", "line_half_width=25"], "line_half_width: must be below edge_length / 2 = 20"),
     (["--set", "arena_size=20"], "edge_length: must be at most arena_size=20"),

@@ -42,13 +42,17 @@ def test_dry_run_checks_and_times_every_step(tmp_path):
     assert {(r["kernel"], r["seeds"]) for r in steps["generation"]["rows"]} == {("xla", 2), ("pallas", 2)}
     for row in steps["life"]["rows"] + steps["generation"]["rows"] + steps["phases"]["rows"]:
         assert row["lane_steps_per_s"] > 0 and row["compile_s"] > 0, row
-    # Only the phases of the checked conditions (EE-LS: the learning selector's adulthood), both kernels.
-    assert {(r["phase"], r["kernel"]) for r in steps["phases"]["rows"]} == {
-        ("LE-LS/EE-LS adulthood", "xla"), ("LE-LS/EE-LS adulthood", "pallas")}
-    kernel_row = next(r for r in steps["phases"]["rows"] if r["kernel"] == "pallas")  # its counted instructions
-    assert kernel_row["warp_instructions_per_s"] == pytest.approx(kernel_row["lane_steps_per_s"]
-                                                                  * kernel_row["warp_instructions"])
-    assert kernel_row["warp_instructions"] > 500
+    # Only the phases of the checked conditions (EE-LS: the learning selector's adulthood), the XLA step and the
+    # kernel observing either way (kernel_retina).
+    assert {(r["phase"], r["kernel"], r.get("retina")) for r in steps["phases"]["rows"]} == {
+        ("LE-LS/EE-LS adulthood", "xla", None), ("LE-LS/EE-LS adulthood", "pallas", "entries"),
+        ("LE-LS/EE-LS adulthood", "pallas", "points")}
+    counts = {}
+    for kernel_row in (r for r in steps["phases"]["rows"] if r["kernel"] == "pallas"):  # its counted instructions
+        assert kernel_row["warp_instructions_per_s"] == pytest.approx(kernel_row["lane_steps_per_s"]
+                                                                      * kernel_row["warp_instructions"])
+        counts[kernel_row["retina"]] = kernel_row["warp_instructions"]
+    assert counts["entries"] - counts["points"] == 186 and counts["points"] > 500
     assert steps["sweep"]["points"] == 2 and len(steps["sweep"]["best_fitness"]) == 2
     # Every model's whole lives on the kernel (here the checked condition and its selector on its own time-scale).
     models = steps["models"]["rows"]

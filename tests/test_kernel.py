@@ -15,6 +15,7 @@ import pytest
 from helpers import EXTENDED, SHORT_TASK, assert_trees_close, hand_experts
 
 from imrl_jax.agent import kernel as K
+from imrl_jax.agent import kernel_layout as KL
 from imrl_jax import conditions as C
 from imrl_jax.agent import lifetime as L
 from imrl_jax.world.arena import Pose
@@ -137,11 +138,12 @@ def _lives_agree(config, genomes, key=11):
 
 
 @pytest.mark.usefixtures("x64")
-def test_every_model_lives_on_the_kernel_as_on_the_xla_step(tiny, everything):
+@pytest.mark.parametrize("retina", ["entries", "points"])
+def test_every_model_lives_on_the_kernel_as_on_the_xla_step(tiny, everything, retina):
     """Two lanes, each its own second reinforcers, expressed experts, learning values and childhood length, with
-    the selector on its own time-scale: whole lives, the kernel against the XLA step."""
+    the selector on its own time-scale: whole lives, the kernel (observing either way) against the XLA step."""
     config = tiny(everything.name, tasks=(SHORT_TASK,), childhood_steps=600, task_steps=300, num_bins=3, **EXTENDED,
-                  **EVERYTHING_OPTIONS)
+                  kernel_retina=retina, **EVERYTHING_OPTIONS)
     genomes = jax.random.uniform(jax.random.key(12), (2, config.num_genes), jnp.float64, -1.0, 1.0)
     k, n = 5, config.num_inputs + 1
     genomes = genomes.at[:, 2 * k * n:2 * k * n + k].set(jnp.array([[0.5, -0.3, 0.8, -0.9, 0.1],
@@ -205,15 +207,20 @@ def test_kernel_lowers_to_triton_for_gpu(tiny):
     assert text.count("__gpu$xla.gpu.triton") == 3
 
 
-@pytest.mark.parametrize("case", ["everything", "EV-LS-diff:period", "EV-LS:colour", "EE-ES:colour", "EXT-LS:period"])
+@pytest.mark.parametrize("case", ["everything", "everything/points", "EV-LS-diff:period", "EV-LS:colour",
+                                  "EE-ES:colour", "EXT-LS:period", "SLE/points"])
 def test_every_model_lowers_to_triton_for_gpu(tiny, everything, monkeypatch, case):
-    """Whole lives of each model beyond the paper's, vmapped over lanes, lower to one Triton kernel a phase."""
+    """Whole lives of each model beyond the paper's, vmapped over lanes, lower to one Triton kernel a phase (also
+    observing by points, "/points")."""
     monkeypatch.setattr(K, "_interpret", lambda: False)  # what a GPU runs, lowered on the CPU
+    case, _, retina = case.partition("/")
     condition, _, termination = case.partition(":")
+    options = dict(kernel_retina=retina or "entries")
     if condition == "everything":
-        condition, options = everything.name, EVERYTHING_OPTIONS
-    else:
-        options = dict(selector_period=4, selector_termination=termination)
+        condition = everything.name
+        options.update(EVERYTHING_OPTIONS)
+    elif termination:
+        options.update(selector_period=4, selector_termination=termination)
     config = tiny(condition, childhood_steps=400, task_steps=200, num_bins=2, step_kernel="pallas", **options)
     params = config.learning_params()
     keys = jax.random.split(jax.random.key(0), 3)
@@ -221,6 +228,38 @@ def test_every_model_lowers_to_triton_for_gpu(tiny, everything, monkeypatch, cas
     lives = jax.jit(jax.vmap(lambda k, g: L.live(k, config, params, g)))
     text = lives.trace(keys, genomes).lower(lowering_platforms=("cuda",)).as_text()
     assert text.count("__gpu$xla.gpu.triton") == 1 + config.spec.has_childhood
+
+
+def test_observing_by_points_puts_the_columns_colour_major(tiny):
+    """kernel_retina="points": column c x 16 + p holds colour c of point p (x~'s entry 3 p + c), the bias column 48;
+    the layout's rows give each point's offsets once and each column's colour (3 where it holds none)."""
+    config = tiny("LE-LS", kernel_retina="points")
+    cols = KL.columns(config)
+    assert cols.shape == (64,) and KL.columns(tiny("LE-LS")).tolist() == list(range(37)) + [-1] * 27
+    assert cols[[0, 1, 11, 16, 17, 32, 43, 48]].tolist() == [0, 3, 33, 1, 4, 2, 35, 36]
+    assert (cols[12:16] == -1).all() and (cols[49:] == -1).all() and sorted(cols[cols >= 0]) == list(range(37))
+    layout = np.asarray(KL.retina_layout(config))
+    assert layout[0, :12].tolist() == [17.0] * 6 + [21.0] * 6 and layout[0, 12:].tolist() == [0.0] * 52
+    assert layout[1, :6].tolist() == [-10.0, -6.0, -2.0, 2.0, 6.0, 10.0]
+    assert layout[2, [0, 11, 12, 16, 32, 43, 44, 48]].tolist() == [0.0, 0.0, 3.0, 1.0, 2.0, 2.0, 3.0, 3.0]
+    assert layout[3].nonzero()[0].tolist() == [48]
+
+
+@pytest.mark.parametrize("retina", ["entries", "points"])
+def test_a_state_packed_and_unpacked_is_itself(tiny, retina):
+    """pack then unpack gives the phase state back exactly (every weight, trace, observation and option), with the
+    second reinforcers laid out alike (the kernel's columns in either order)."""
+    config = tiny("LE-LS-2R", selector_period=4, kernel_retina=retina)
+    genome = jax.random.uniform(jax.random.key(3), (config.num_genes,), jnp.float32, -1.0, 1.0)
+    state = L.init_state(config, decode(config, genome), at(L.task_spec(config, 0).start))
+    noise = iter(jax.random.split(jax.random.key(4), 64))
+    state = jax.tree.map(lambda x: jax.random.normal(next(noise), x.shape, x.dtype)
+                         if jnp.issubdtype(x.dtype, jnp.floating) else x, state)._replace(t=jnp.int32(5))
+    back = KL.unpack(KL.pack(state, config), state, state.block, config)
+    assert jax.tree.all(jax.tree.map(lambda a, b: bool(jnp.array_equal(a, b)), back, state))
+    second = np.asarray(KL.fixed(state.agent, config).second_reinforcer)
+    cols = KL.columns(config)
+    np.testing.assert_array_equal(second[:3, cols >= 0], np.asarray(state.agent.second_reinforcer)[:, cols[cols >= 0]])
 
 
 def test_a_phase_option_the_kernel_does_not_implement_is_refused(monkeypatch):

@@ -51,7 +51,8 @@ def test_what_is_and_is_not_part_of_a_run():
     config = make_config("paper", condition="EE-LS")
     key = RunSpec.make(config, [0, 1]).key()
     # How it is computed, and how far it has come, are not.
-    assert RunSpec.make(config.replace(step_kernel="pallas", scan_unroll=2, num_generations=7), [0, 1]).key() == key
+    assert RunSpec.make(config.replace(step_kernel="pallas", kernel_retina="points", scan_unroll=2, num_generations=7),
+                        [0, 1]).key() == key
     assert RunSpec.make(config.replace(childhood_steps=10), [0, 1]).key() == key  # EE-LS has no childhood
     assert RunSpec.make(config, [0, 1], {"strategy": "ga", "settings": {}}).key() == key  # the GA, recorded
     # The model, the seeds and the search are.

@@ -32,8 +32,8 @@ from imrl_jax.agent import learning
 from imrl_jax.world.arena import advance, floor_colour_xy, on_wall, spawn_pose, trial_ends, turn
 from imrl_jax.config import Config, ConfigError, LearningParams
 from imrl_jax.agent.kernel_layout import (NUM_FLOATS, OPTION_DISCOUNT, OPTION_LEARNED, OPTION_REWARD,
-                                          OPTION_STEPS, OPTION_TRACE_DISCOUNT, T_SLOT, Fixed, Packed, fixed, pack,
-                                          retina_layout, unpack)
+                                          OPTION_STEPS, OPTION_TRACE_DISCOUNT, T_SLOT, Fixed, Packed, pow2, fixed,
+                                          num_points, pack, retina_layout, unpack)
 from imrl_jax.agent.learning import ascend, ascend_row, selector_features, td_error, unit_features
 from imrl_jax.agent.networks import explore, internal_reward, pick, select
 from imrl_jax.conditions import Phase
@@ -48,6 +48,19 @@ def round_even(x):
     frac = x - low
     odd = low - 2.0 * jnp.floor(0.5 * low)
     return jnp.where(frac > 0.5, low + 1.0, jnp.where(frac < 0.5, low, low + odd))
+
+
+def observe_points(config: Config, pose, offsets, colours, bias):
+    """x~ in the colour-major columns of ``kernel_retina="points"`` (:func:`kernel_layout.columns`): each retina
+    point's floor colour computed once (P points, a power of two), copied to each of the four blocks of P
+    columns and compared with the column's colour (the bias's block sees none). What ``observe`` computes, with
+    the point's work done once instead of once per colour and padding column."""
+    x, y, c, s = pose
+    forward, lateral = offsets
+    width, big_n = forward.shape[0], colours.shape[0]
+    colour = floor_colour_xy(config, x + forward * c - lateral * s, y + forward * s + lateral * c, round_even)
+    wide = jnp.broadcast_to(colour.astype(colours.dtype)[None, :], (big_n // width, width)).reshape(big_n)
+    return (wide == colours).astype(colours.dtype) + bias
 
 
 def _dot_rows(matrix, vector):
@@ -111,6 +124,9 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
         start_x, start_y, start_heading, target_x, target_y = (task_ref[j] for j in range(5))
         start_cos, start_sin = jnp.cos(start_heading), jnp.sin(start_heading)
         forward, lateral, colours, bias = (layout_ref[j] for j in range(4))
+        if config.kernel_retina == "points":  # each point's offsets: the first P columns
+            width = pow2(num_points(config))
+            point_forward, point_lateral = layout_ref[0, :width], layout_ref[1, :width]
         expressed = ref["expressed"][...] if model.expressed else None
         second_reinforcer = ref["second_reinforcer"][...] if model.second_reinforcer else None
         kp = selection_ref.shape[0]
@@ -119,6 +135,8 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
         zero = jnp.zeros((), dtype)
 
         def observe(x, y, c, s):
+            if config.kernel_retina == "points":
+                return observe_points(config, (x, y, c, s), (point_forward, point_lateral), colours, bias)
             colour = floor_colour_xy(config, x + forward * c - lateral * s, y + forward * s + lateral * c,
                                      round_even)
             return (colour.astype(dtype) == colours).astype(dtype) + bias
@@ -460,7 +478,7 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
     # length stops its learning and noise.
     params = phase_params(phase, params if state.agent.params is None else state.agent.params)
     length = state.agent.childhood_length if phase.intrinsic else None
-    lane = fixed(state.agent)
+    lane = fixed(state.agent, config)
 
     def one_bin(packed, _):
         draws = draw_range(key, packed.ints[T_SLOT], steps_per_bin, config.draw_block, phase.noisy,
@@ -469,8 +487,8 @@ def run_phase(key: jax.Array, config: Config, phase: Phase, params: LearningPara
                                              interpret, lane, length)
         return packed, Curves(counts[0], counts[1], selections[:num_experts], counts[2] if phase.respawn else None)
 
-    packed, curves = jax.lax.scan(one_bin, pack(state), None, length=num_bins)
+    packed, curves = jax.lax.scan(one_bin, pack(state, config), None, length=num_bins)
     # The block of the last step, as the XLA program leaves it.
     block = draw_block(key, (packed.ints[T_SLOT] - 1) // config.draw_block, config.draw_block, phase.noisy,
                        spawn_draws(config, phase))
-    return unpack(packed, state, block), curves
+    return unpack(packed, state, block, config), curves

@@ -61,7 +61,8 @@ class Fixed(NamedTuple):
     second_reinforcer: jnp.ndarray | None = None  # (Kp, N): the second reinforcer units (LE-LS-2R)
 
 
-def _pow2(n: int) -> int:
+def pow2(n: int) -> int:
+    """The least power of two at least n (Triton's block sizes)."""
     return 1 << max(0, (n - 1).bit_length())
 
 
@@ -69,13 +70,54 @@ def _pad(x, shape):
     return jnp.pad(x, [(0, s - d) for s, d in zip(shape, x.shape)])
 
 
-def pack(state: State) -> Packed:
+def num_points(config: Config) -> int:
+    """The retina's points (each sees three colours: x~ holds 3 entries a point, then the bias)."""
+    return config.num_inputs // 3
+
+
+def columns(config: Config) -> np.ndarray:
+    """(N,): the entry of x~ (bias included) that each of the kernel's columns holds; -1 for a padding column.
+
+    ``kernel_retina="entries"``: x~'s own order (entry 3 p + c for colour c of point p), padded to N =
+    2^ceil(log2(n + 1)). ``"points"``: colour-major, column c P + p for colour c of point p (P the points padded
+    to a power of two), the bias in column 3 P, N = 4 P: x~ is then the points' colours compared with each block's
+    colour (:func:`imrl_jax.agent.kernel.observe_points`), and a permutation changes no product.
+    """
+    n = config.num_inputs
+    if config.kernel_retina == "entries":
+        cols = np.full(pow2(n + 1), -1)
+        cols[:n + 1] = np.arange(n + 1)
+        return cols
+    points, width = num_points(config), pow2(num_points(config))
+    cols = np.full(4 * width, -1)
+    for colour in range(3):
+        cols[colour * width:colour * width + points] = 3 * np.arange(points) + colour
+    cols[3 * width] = n
+    return cols
+
+
+def _to_columns(x, cols: np.ndarray, identity: bool):
+    """``x``'s last axis (x~'s entries) in the kernel's columns, padding 0."""
+    if identity:
+        return _pad(x, x.shape[:-1] + (cols.shape[0],))
+    padded = jnp.concatenate([x, jnp.zeros(x.shape[:-1] + (1,), x.dtype)], axis=-1)  # entry -1: the zero
+    return padded[..., np.where(cols >= 0, cols, x.shape[-1])]
+
+
+def _from_columns(x, cols: np.ndarray, num_entries: int):
+    """The entries of x~ from the kernel's columns (the last axis)."""
+    where = np.argsort(np.where(cols >= 0, cols, cols.shape[0] + num_entries))[:num_entries]
+    return x[..., :num_entries] if np.array_equal(where, np.arange(num_entries)) else x[..., where]
+
+
+def pack(state: State, config: Config) -> Packed:
     """The kernel's layout of a phase state."""
     agent, traces, prev = state.agent, state.traces, state.prev
     k, n = agent.selector_actor.shape
-    kp, big_n = _pow2(k), _pow2(n)
-    rows = lambda m: _pad(m, (kp, big_n))  # noqa: E731
-    vec = lambda v: _pad(v, (big_n,))  # noqa: E731
+    kp, cols = pow2(k), columns(config)
+    identity = config.kernel_retina == "entries"
+    rows = lambda m: _pad(_to_columns(m, cols, identity), (kp, cols.shape[0]))  # noqa: E731
+    vec = lambda v: _to_columns(v, cols, identity)  # noqa: E731
     dtype = agent.actor.dtype
     now = state.t % 2
     xbs = jnp.stack([state.xbs[1 - now], state.xbs[now]])  # x~_{t-1}, x~_{t-2}
@@ -106,37 +148,40 @@ def pack(state: State) -> Packed:
     )
 
 
-def fixed(agent: Agent) -> Fixed:
+def fixed(agent: Agent, config: Config) -> Fixed:
     """The kernel's layout of what ``agent`` holds beyond the paper's networks and never changes."""
-    k, n = agent.selector_actor.shape
-    kp, big_n = _pow2(k), _pow2(n)
+    kp, cols = pow2(agent.selector_actor.shape[0]), columns(config)
+    second = agent.second_reinforcer
     return Fixed(
         expressed=None if agent.expressed is None else _pad(agent.expressed, (kp,)),
-        second_reinforcer=None if agent.second_reinforcer is None else _pad(agent.second_reinforcer, (kp, big_n)),
+        second_reinforcer=None if second is None else _pad(
+            _to_columns(second, cols, config.kernel_retina == "entries"), (kp, cols.shape[0])),
     )
 
 
-def unpack(packed: Packed, like: State, block: Draws) -> State:
+def unpack(packed: Packed, like: State, block: Draws, config: Config) -> State:
     """The phase state that ``packed`` holds (``like`` gives the shapes and what the lane never changes; ``block``
     the current draws)."""
     k, n = like.agent.selector_actor.shape
+    cols = columns(config)
+    entries = lambda x: _from_columns(x, cols, n)  # noqa: E731
     w, f, i = packed.weights, packed.floats, packed.ints
     t = i[T_SLOT]
     now = t % 2
     # x~_t goes in row t % 2: at step t the last observation x~_{t-1} sits in row 1 - t % 2.
-    xbs = jnp.where(now == 0, packed.xbs[::-1], packed.xbs)[:, :n]
+    xbs = entries(jnp.where(now == 0, packed.xbs[::-1], packed.xbs))
     agent = like.agent._replace(  # expression, learning values, childhood length, second reinforcers: as they were
-        reinforcer=w[_REINFORCER, :k, :n],
-        actor=jnp.stack([w[_ACTOR0, :k, :n], w[_ACTOR1, :k, :n]], axis=1),
-        evaluator=w[_EVALUATOR, :k, :n],
-        selector_actor=w[_SELECTOR, :k, :n],
-        selector_critic=packed.critic[:n],
+        reinforcer=entries(w[_REINFORCER, :k]),
+        actor=jnp.stack([entries(w[_ACTOR0, :k]), entries(w[_ACTOR1, :k])], axis=1),
+        evaluator=entries(w[_EVALUATOR, :k]),
+        selector_actor=entries(w[_SELECTOR, :k]),
+        selector_critic=entries(packed.critic),
     )
     traces = Traces(
-        actor=packed.traces[jnp.array([_TRACE_ACTOR0, _TRACE_ACTOR1]), :n],
-        evaluator=packed.traces[_TRACE_EVALUATOR, :n],
-        selector_actor=packed.selector_trace[:k, :n],
-        selector_critic=packed.traces[_TRACE_CRITIC, :n],
+        actor=entries(packed.traces[jnp.array([_TRACE_ACTOR0, _TRACE_ACTOR1])]),
+        evaluator=entries(packed.traces[_TRACE_EVALUATOR]),
+        selector_actor=entries(packed.selector_trace[:k]),
+        selector_critic=entries(packed.traces[_TRACE_CRITIC]),
         experts_ended=i[_EXPERTS_ENDED] != 0,
         selector_ended=i[_SELECTOR_ENDED] != 0,
     )
@@ -147,7 +192,7 @@ def unpack(packed: Packed, like: State, block: Draws) -> State:
     option = None
     if like.option is not None:
         of, oi = packed.option_floats, packed.option_ints
-        option = Option(start_xb=packed.option_xb[:n], selection=packed.option_selection[:k],
+        option = Option(start_xb=entries(packed.option_xb), selection=packed.option_selection[:k],
                         reward=of[OPTION_REWARD], discount=of[OPTION_DISCOUNT],
                         learned=oi[OPTION_LEARNED] != 0, steps=oi[OPTION_STEPS],
                         trace_discount=of[OPTION_TRACE_DISCOUNT])
@@ -155,14 +200,20 @@ def unpack(packed: Packed, like: State, block: Draws) -> State:
 
 
 def retina_layout(config: Config, dtype=jnp.float32) -> jnp.ndarray:
-    """(4, N): for each entry of x~, its point's forward and lateral offset, its colour (3: none), its bias."""
+    """(4, N): for each of the kernel's columns, its point's forward and lateral offset (``"points"``: in the
+    first P columns, one a point), its colour (3: none, so a padding column never sees one), its bias (1 in the
+    bias's column)."""
     forward, lateral = np.meshgrid(config.retina_forward, config.retina_lateral, indexing="ij")
-    n = config.num_inputs
-    big_n = _pow2(n + 1)
-    layout = np.zeros((4, big_n))
-    layout[0, :n] = np.repeat(forward.ravel(), 3)
-    layout[1, :n] = np.repeat(lateral.ravel(), 3)
-    layout[2] = 3.0
-    layout[2, :n] = np.tile(np.arange(3.0), n // 3)
-    layout[3, n] = 1.0
+    n, cols = config.num_inputs, columns(config)
+    layout = np.zeros((4, cols.shape[0]))
+    holds = (cols >= 0) & (cols < n)
+    point = np.where(holds, cols // 3, 0)
+    if config.kernel_retina == "entries":
+        layout[0] = np.where(holds, forward.ravel()[point], 0.0)
+        layout[1] = np.where(holds, lateral.ravel()[point], 0.0)
+    else:
+        layout[0, :num_points(config)] = forward.ravel()
+        layout[1, :num_points(config)] = lateral.ravel()
+    layout[2] = np.where(holds, cols % 3, 3.0)
+    layout[3] = cols == n
     return jnp.asarray(layout, dtype)

@@ -89,7 +89,7 @@ def kernel_jaxpr(config, phase, steps: int = 8):
         state = L.init_state(config, agent, at(Pose(jnp.array([40.0, 60.0]), jnp.array(math.pi))))
         draws = K.draw_range(key, 0, steps, config.draw_block, phase.noisy, spawn_draws(config, phase))
         return K.run_bin(config, phase, phase_params(phase, config.learning_params()), task, steps, draws,
-                         K.pack(state), agent.selector_actor.shape[0], interpret=False)
+                         K.pack(state, config), agent.selector_actor.shape[0], interpret=False)
 
     traced = jax.make_jaxpr(one_bin)(jax.random.key(0))
     return next(e.params["jaxpr"] for e in traced.jaxpr.eqns if e.primitive.name == "pallas_call")
@@ -112,7 +112,7 @@ def observe_work(config, points: bool = False) -> collections.Counter:
     from imrl_jax.world.arena import floor_colour_xy
     from imrl_jax.agent.kernel import round_even
 
-    big_n = 1 << config.num_inputs.bit_length()  # n + 1 entries to a power of two, as kernel._pow2
+    big_n = 1 << config.num_inputs.bit_length()  # n + 1 entries to a power of two, as kernel_layout.pow2
     width = 1 << (config.num_inputs // 3 - 1).bit_length() if points else big_n
 
     def observe(x, y, c, s, forward, lateral, colours, bias):
@@ -164,11 +164,13 @@ def report(config=None) -> list[str]:
     for name, phase in (("childhood", childhood_phase(config)), ("adulthood", C.ADULT_LEARNING_SELECTOR),
                         ("EE-ES adulthood", C.ADULT_EVOLVED_SELECTOR)):
         macs, work = network_macs(config, phase), loop_work(config, phase)
+        points = loop_work(config.replace(kernel_retina="points"), phase)["warp_instructions"]
         lines.append(f"{name}: networks {sum(macs.values())} multiply-adds at K={config.num_experts}, n+1="
                      f"{config.num_inputs + 1} ({sum(network_macs(config, phase, padded=True).values())} padded); loop body: {work['flops']} "
                      f"flops, {work['transcendental']} transcendental, {work['other']} other element ops, "
                      f"{work['reduced']} reduced; {work['global_read_bytes']} B read a step; ~{work['warp_instructions']}"
                      f" warp instructions a step; state {state_bytes(config, phase)} B a bin")
+        lines.append(f"{name}, observing by points (kernel_retina=points): ~{points} warp instructions a step")
     return lines
 
 

@@ -96,8 +96,9 @@ def _kernel_field(step_kernel: str, config_module) -> dict:
 
 
 def phase_program(condition: str, phase_name: str, lanes: int, steps: int, package: str = "imrl_jax",
-                  step_kernel: str = "xla") -> Program:
-    """One phase (a name of the condition table, e.g. ``CHILDHOOD``) run for ``steps`` steps on ``lanes`` lanes.
+                  step_kernel: str = "xla", fields: tuple = ()) -> Program:
+    """One phase (a name of the condition table, e.g. ``CHILDHOOD``) run for ``steps`` steps on ``lanes`` lanes, with
+    the Config ``fields`` (name, value) pairs (none).
 
     ``package`` names the imrl_jax whose modules build it (``python -m imrl_jax.compare``
     passes an earlier revision's, imported under another name).
@@ -107,7 +108,7 @@ def phase_program(condition: str, phase_name: str, lanes: int, steps: int, packa
     # A phase starts in the world's state (the arena's at a pose), or (revisions before worlds) at the pose.
     start = env.at if hasattr(env, "at") else (lambda pose: pose)
     config = config_module.make_config("paper", condition=condition, childhood_steps=steps, task_steps=steps,
-                                       num_bins=1, **_kernel_field(step_kernel, config_module))
+                                       num_bins=1, **_kernel_field(step_kernel, config_module), **dict(fields))
     phase = _phase(package, phase_name)
     params = config.learning_params()
 

@@ -7,6 +7,7 @@ import json
 import os
 
 from imrl_jax.commands.gpu_harness import KERNELS
+from imrl_jax.commands.gpu_steps import PHASE_KERNELS
 
 
 def figure(results: dict, path: str, cpu_bench: str | None = None) -> bool:
@@ -46,12 +47,16 @@ def figure(results: dict, path: str, cpu_bench: str | None = None) -> bool:
     if "phases" in axes:
         ax = axes["phases"]
         styles = dict(zip([p[0] for p in bench.PHASES], ("o-", "s-", "^-", "v-")))
-        for kernel in KERNELS:
+        for kernel, retina in PHASE_KERNELS:  # the kernel observing by points: dashed, a lighter red
+            label = kernel if retina in (None, "entries") else f"{kernel}, by points"
             for phase, style in styles.items():
-                rows = [r for r in done["phases"] if r["kernel"] == kernel and r["phase"] == phase]
+                rows = [r for r in done["phases"] if r["kernel"] == kernel and r["phase"] == phase
+                        and r.get("retina", "entries" if kernel == "pallas" else None) == retina]
                 if rows:
-                    ax.plot([r["lanes"] for r in rows], [r["lane_steps_per_s"] for r in rows], style,
-                            color=colours[kernel], label=f"{phase} ({kernel})", ms=4, lw=1)
+                    ax.plot([r["lanes"] for r in rows], [r["lane_steps_per_s"] for r in rows],
+                            style if retina != "points" else style[0] + "--",
+                            color=colours[kernel] if retina != "points" else "tab:orange",
+                            label=f"{phase} ({label})", ms=4, lw=1)
         ax.set(xscale="log", yscale="log", xlabel="lanes", ylabel="lane-steps per second", title="Each phase")
     if "generation" in axes:
         ax = axes["generation"]

@@ -343,8 +343,13 @@ def sweep(check: Check) -> dict:
             "best_fitness": np.asarray(stats.fitness).max(-1).reshape(len(points), len(seeds)).tolist()}
 
 
+#: The kernels the ``phases`` step times: (step kernel, how the kernel observes; None: the XLA step).
+PHASE_KERNELS = (("xla", None), ("pallas", "entries"), ("pallas", "points"))
+
+
 def phases(check: Check) -> dict:
-    """Every phase of the benchmark, both kernels, at every lane count."""
+    """Every phase of the benchmark, the XLA step and the kernel (both ways of observing, ``kernel_retina``), at
+    every lane count."""
     from imrl_jax.commands import bench
     from imrl_jax import conditions
     from imrl_jax.agent import kernel_work
@@ -353,17 +358,18 @@ def phases(check: Check) -> dict:
     for name, condition, phase, _ in bench.PHASES:
         if check.sizes.conditions and condition not in check.sizes.conditions:
             continue
-        for kernel in KERNELS:
+        for kernel, retina in PHASE_KERNELS:
+            fields = () if retina is None else (("kernel_retina", retina),)
             for lanes in check.sizes.lanes:
-                row = {"phase": name, "kernel": kernel, "lanes": lanes}
+                row = {"phase": name, "kernel": kernel, "lanes": lanes, **({"retina": retina} if retina else {})}
                 if not check.fits(10 + lanes / 30_000):
                     rows.append({**row, "status": "skipped (budget)"})
                     continue
                 with check.piece(row, rows):
                     check.stage = "api"
                     program = bench.phase_program(condition, phase, lanes, check.sizes.phase_steps,
-                                                  step_kernel=kernel)
-                    key = ("phase", condition, phase, lanes, check.sizes.phase_steps, kernel)
+                                                  step_kernel=kernel, fields=fields)
+                    key = ("phase", condition, phase, lanes, check.sizes.phase_steps, kernel, retina)
                     executable, compile_s = compile_once(check, key, program.fn, *program.args)
                     seconds, shortest = timed(executable, program.args, check.sizes.repeats)
                     row.update(steps=check.sizes.phase_steps, compile_s=compile_s,
@@ -371,12 +377,13 @@ def phases(check: Check) -> dict:
                                best_lane_steps_per_s=program.lane_steps / shortest,
                                program_bytes=program_bytes(executable), status="ok")
                     if kernel == "pallas":  # the issue rate it reaches (PERFORMANCE.md "How far from the hardware")
-                        if (condition, phase) not in counted:
-                            counted[condition, phase] = kernel_work.loop_work(
+                        if (condition, phase, retina) not in counted:
+                            counted[condition, phase, retina] = kernel_work.loop_work(
                                 program.config, getattr(conditions, phase))["warp_instructions"]
-                        row.update(warp_instructions=counted[condition, phase],
-                                   warp_instructions_per_s=row["lane_steps_per_s"] * counted[condition, phase])
-                    check.say(f"  {name:22s} {kernel:6s} {lanes:8,d} lanes: {row['lane_steps_per_s']:14,.0f} "
+                        count = counted[condition, phase, retina]
+                        row.update(warp_instructions=count, warp_instructions_per_s=row["lane_steps_per_s"] * count)
+                    label = kernel if retina in (None, "entries") else f"{kernel}/{retina}"
+                    check.say(f"  {name:22s} {label:13s} {lanes:8,d} lanes: {row['lane_steps_per_s']:14,.0f} "
                               f"lane-steps/s, compile {compile_s:5.1f} s")
     return {"rows": rows}
 

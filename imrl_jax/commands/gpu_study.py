@@ -166,7 +166,9 @@ def time_test(check, condition: str, lanes: int) -> dict:
     bench_condition, phase = TEST_PHASES[condition]
     kernel = kernel_choice.chosen(make_config("paper", condition=bench_condition))
     program = bench.phase_program(bench_condition, phase, lanes, check.sizes.study_test_steps, step_kernel=kernel)
-    key = ("phase", bench_condition, phase, lanes, check.sizes.study_test_steps, kernel)  # the phases step's too
+    # the phases step's key too (its kernel observing as by default)
+    key = ("phase", bench_condition, phase, lanes, check.sizes.study_test_steps, kernel,
+           "entries" if kernel == "pallas" else None)
     executable, compile_s = compile_once(check, key, program.fn, *program.args)
     seconds, _ = timed(executable, program.args, check.sizes.repeats)
     return {"kernel": kernel, "steps": check.sizes.study_test_steps, "compile_s": compile_s,
