@@ -133,6 +133,25 @@ def test_a_step_with_a_share_of_the_budget_stops_when_it_has_used_it(tmp_path, m
     assert check.share_left(S.LIVES_SHARE) == pytest.approx(60.0)  # 30 of the budget's 100 s from now
 
 
+@pytest.mark.slow  # every row's lives on both steps, the kernel interpreted: 3 min 30 s on 2 cores
+def test_dry_lives_and_models_of_every_row(tmp_path):
+    """``gpu_check --dry --only lives,models --conditions <every row>``: every condition of the table and its
+    selector's options live on both steps as the reference does, and every one's whole lives run on the kernel."""
+    import dataclasses
+
+    sizes = dataclasses.replace(H.DRY, conditions=C.NAMES)
+    steps = [step for step in G.STEPS if step[0] in ("lives", "models")]
+    results = G.run(str(tmp_path), 900, sizes, log=lambda line: None, steps=steps)
+    assert results["summary"] == {"failed": [], "skipped": []}
+    lives = {(r["condition"], r["preset"]): r for r in results["steps"][0]["rows"]}
+    assert {name for name, _ in lives} == set(C.NAMES)
+    assert all(r["status"] == "ok" and r["kernels"] == ["xla", "pallas"] and r["pallas_vs_xla"]["events_equal"]
+               for r in lives.values())
+    assert ("LE-LS-2R", "paper+colour") in lives and ("SLE", "paper+colour") not in lives
+    models = results["steps"][1]["rows"]
+    assert [r["condition"] for r in models] == [*C.NAMES, "LE-LS"] and all(r["status"] == "ok" for r in models)
+
+
 def test_life_cases_one_per_model_and_the_kernels_first():
     """A preset that gives the same lives as one before it (Config.model_differences) is not checked again; the
     selector's options follow a condition's presets where it has a selector; every case is on the kernel."""
