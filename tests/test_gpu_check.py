@@ -152,18 +152,25 @@ def test_dry_lives_and_models_of_every_row(tmp_path):
     assert [r["condition"] for r in models] == [*C.NAMES, "LE-LS"] and all(r["status"] == "ok" for r in models)
 
 
-def test_life_cases_one_per_model_and_the_kernels_first():
+def test_life_cases_one_per_model_breadth_first(monkeypatch):
     """A preset that gives the same lives as one before it (Config.model_differences) is not checked again; the
-    selector's options follow a condition's presets where it has a selector; every case is on the kernel."""
+    selector's options where a condition has a selector; every condition first, then the options, then the other
+    presets (a budget that runs out cuts presets, not models); every case is on the kernel."""
     cases = S.life_cases(H.Sizes(conditions=("EE-ES", "EV-LS", "SLE")))
     names = [(name, preset) for name, preset, _, _ in cases]
     # EE-ES learns nothing: every preset lives the same. EV-LS: four models. SLE: one expert, nothing to choose.
-    assert names == [("EE-ES", "paper"), ("EE-ES", "paper+period"), ("EE-ES", "paper+colour"), ("EV-LS", "paper"),
-                     ("EV-LS", "extension"), ("EV-LS", "faithful"), ("EV-LS", "skills"), ("EV-LS", "paper+period"),
-                     ("EV-LS", "paper+colour"), ("SLE", "paper"), ("SLE", "extension"), ("SLE", "skills")]
+    assert names == [("EE-ES", "paper"), ("EV-LS", "paper"), ("SLE", "paper"), ("EE-ES", "paper+period"),
+                     ("EE-ES", "paper+colour"), ("EV-LS", "paper+period"), ("EV-LS", "paper+colour"),
+                     ("EV-LS", "extension"), ("EV-LS", "faithful"), ("EV-LS", "skills"), ("SLE", "extension"),
+                     ("SLE", "skills")]
     assert [reason for *_, reason in cases] == [None] * len(cases)
-    colour = cases[2][2]
+    colour = cases[4][2]
     assert (colour.selector_period, colour.selector_termination, colour.condition) == (4, "colour", "EE-ES")
+    from imrl_jax.agent import kernel  # a model the kernel lacked would come after all the kernel's cases
+
+    monkeypatch.setattr(kernel, "unsupported", lambda config: "lacks it" if config.condition == "EE-ES" else None)
+    assert [name for name, *_ in S.life_cases(H.Sizes(conditions=("EE-ES", "EV-LS")))][-3:] == ["EE-ES"] * 3
+    monkeypatch.undo()
     every = S.life_cases(H.Sizes())
     assert {name for name, *_ in every} == set(C.NAMES) and all(reason is None for *_, reason in every)
 

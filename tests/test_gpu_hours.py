@@ -69,6 +69,34 @@ def test_a_stage_takes_its_lane_steps_at_the_nearest_measured_speed_and_one_comp
     assert gpu_hours.study_hours([_stage("LE-LS")], scale, None) is None
 
 
+def test_a_model_the_models_step_timed_runs_at_its_ratio_to_le_ls(tmp_path):
+    """EV-LS measured at half LE-LS's speed on the kernel takes twice the lane-steps' time; the time-scale study's
+    period-option run at its option's ratio; an unmeasured model and the XLA step's stages as before."""
+    data = {"machine": {"device": "GPU Z"}, "steps": [
+        {"step": "generation", "rows": [{"kernel": "pallas", "individuals": 500, "lane_steps_per_s": 1e9,
+                                         "compile_s": 6.0},
+                                        {"kernel": "xla", "individuals": 500, "lane_steps_per_s": 4e7,
+                                         "compile_s": 5.0}]},
+        {"step": "models", "rows": [
+            {"condition": "LE-LS", "options": "", "status": "ok", "over_le_ls": 1.0},
+            {"condition": "EV-LS", "options": "", "status": "ok", "over_le_ls": 0.5},
+            {"condition": "LE-LS", "options": "period", "status": "ok", "over_le_ls": 0.8},
+            {"condition": "EE-ES", "options": "", "status": "skipped (budget)"},
+            {"condition": "LE-LS-2R", "options": "", "status": "ok", "over_le_ls": "nan"}]}]}
+    path = tmp_path / "gpu_check.json"
+    path.write_text(json.dumps(data))
+    speed = gpu_hours.read_speed(str(path))
+    assert speed.models == {("LE-LS", ""): 1.0, ("EV-LS", ""): 0.5, ("LE-LS", "period"): 0.8}
+    scale = {"seeds": 10, "population": 50}
+    assert gpu_hours.stage_seconds(_stage("EV-LS"), scale, speed) == pytest.approx(3.6e12 / 0.5e9 + 6.0)
+    assert gpu_hours.stage_seconds(_stage("EE-ES"), scale, speed) == pytest.approx(3.6e12 / 1e9 + 6.0)
+    period = os.path.join(RESULTS, "timescale", "skills+period-10", "LE-LS", "evolve")
+    assert gpu_hours.stage_seconds(_stage("LE-LS", out_dir=period), scale, speed) == pytest.approx(
+        3.6e12 / 0.8e9 + 6.0)
+    assert gpu_hours.stage_seconds(_stage("LE-LS", out_dir=XLAND_RUN), scale, speed) == pytest.approx(
+        3.6e12 / 4e7 + 5.0)
+
+
 def test_list_shows_each_study_on_this_cpu_and_on_a_gpu(capsys, monkeypatch):
     assert experiments_main.main(["list"]) == 0
     lines = capsys.readouterr().out.splitlines()

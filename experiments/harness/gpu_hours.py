@@ -3,7 +3,8 @@
 A stage's lane-steps run at the speed its ``generation`` step measured, with the step kernel that
 ``step_kernel=auto`` would choose for the stage (:mod:`imrl_jax.agent.kernel_choice`: its run's recorded model
 where the run is done, else its condition's), at the number of individuals measured nearest the stage's,
-and each stage pays one compilation as measured there. Where the check's ``study`` step timed the stage's own
+and each stage pays one compilation as measured there. On the kernel, a condition whose whole lives the
+``models`` step timed runs at that step's ratio to LE-LS's (the selector's options at theirs where measured). Where the check's ``study`` step timed the stage's own
 program (:func:`imrl_jax.commands.gpu_study.program_key`: the claims map's) or its learning test's phase, that speed is
 used instead. Writing checkpoints and histories is not counted.
 """
@@ -31,6 +32,7 @@ class GpuSpeed(NamedTuple):
     source: str
     programs: dict | None = None
     tests: dict | None = None
+    models: dict | None = None  # the models step's {(condition, options): its lives' speed over LE-LS's}
 
 
 def _speed(row: dict, **fields) -> tuple | None:
@@ -59,8 +61,13 @@ def read_speed(path: str | None = None) -> GpuSpeed | None:
     rows: dict[str, list] = {}  # the generation step's
     programs: dict[str, tuple] = {}  # the study step's
     tests: dict[str, list] = {}
+    models: dict[tuple, float] = {}
     for step in data["steps"]:
         kind = step.get("step") if isinstance(step, dict) else None
+        for row in step.get("rows", []) if kind == "models" else []:
+            ratio = row.get("over_le_ls") if isinstance(row, dict) and row.get("status") == "ok" else None
+            if isinstance(ratio, (int, float)) and math.isfinite(ratio) and ratio > 0:
+                models[str(row.get("condition")), str(row.get("options") or "")] = float(ratio)
         for row in step.get("rows", []) if kind in ("generation", "study") else []:
             if not isinstance(row, dict) or kind == "study" and row.get("status") != "ok":
                 continue
@@ -71,7 +78,8 @@ def read_speed(path: str | None = None) -> GpuSpeed | None:
             elif kind == "study" and row.get("part") == "test" and (found := _speed(row, condition=str, lanes=int)):
                 tests.setdefault(found[0], []).append(found[1:])
     machine = data.get("machine") if isinstance(data.get("machine"), dict) else {}
-    return GpuSpeed(str(machine.get("device") or "a GPU"), rows, path, programs, tests) if rows or programs else None
+    return (GpuSpeed(str(machine.get("device") or "a GPU"), rows, path, programs, tests, models)
+            if rows or programs else None)
 
 
 def stage_config(stage: Stage):
@@ -129,10 +137,21 @@ def stage_seconds(stage: Stage, scale: dict, speed: GpuSpeed) -> float:
         return studied
     if not speed.rows:  # a check of the study alone: its slowest program's speed, to be safe
         return stage.cost / min(rate for rate, _ in speed.programs.values())
-    measured = speed.rows.get(stage_kernel(stage)) or speed.rows.get("xla") or next(iter(speed.rows.values()))
+    kernel = stage_kernel(stage)
+    measured = speed.rows.get(kernel) or speed.rows.get("xla") or next(iter(speed.rows.values()))
     individuals = max(1, int(scale.get("seeds", 1)) * int(scale.get("population", 50)))
     _, rate, compile_s = min(measured, key=lambda row: abs(math.log(row[0] / individuals)))
-    return stage.cost / rate + compile_s
+    return stage.cost / (rate * model_ratio(stage, speed) if kernel == "pallas" else rate) + compile_s
+
+
+def model_ratio(stage: Stage, speed: GpuSpeed) -> float:
+    """The speed of ``stage``'s model on the kernel over LE-LS's, as the ``models`` step measured it (1 where it did
+    not: the generation step's LE-LS speed as it is)."""
+    config = stage_config(stage)
+    if not speed.models or config is None:
+        return 1.0
+    options = config.selector_termination if config.selector_options else ""
+    return speed.models.get((config.condition, options), speed.models.get((config.condition, ""), 1.0))
 
 
 def study_hours(stages: list[Stage], scale: dict, speed: GpuSpeed | None) -> float | None:

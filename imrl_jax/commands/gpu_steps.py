@@ -51,8 +51,10 @@ def environment(check: Check) -> dict:
 
 def life_cases(sizes: Sizes):
     """(condition, preset, config, why the kernel lacks it or None) of every condition under every preset that makes
-    another model (``Config.model_differences``), then under the first preset with each of the selector's options
-    (``Sizes.selector_options``: "paper+colour") where its selector chooses; the kernel's cases first."""
+    another model (``Config.model_differences``), and under the first preset with each of the selector's options
+    (``Sizes.selector_options``: "paper+colour") where its selector chooses. Breadth first, so that a budget that
+    runs out leaves the later presets unchecked rather than whole models: every condition under the first preset,
+    then the options, then the other presets; the kernel's cases before the XLA step's alone."""
     from imrl_jax import conditions
     from imrl_jax.agent import kernel
     from imrl_jax.config import make_config
@@ -73,7 +75,8 @@ def life_cases(sizes: Sizes):
                 config = seen[0].replace(**dict(fields))
                 cases.append((name, f"{sizes.presets[0]}+{option}", config, kernel.unsupported(config)))
     # The kernel's cases first: the XLA-only ones check what the CPU tests check already.
-    return sorted(cases, key=lambda case: case[3] is not None)
+    first = sizes.presets[0]
+    return sorted(cases, key=lambda case: (case[3] is not None, 0 if case[1] == first else 1 if "+" in case[1] else 2))
 
 
 def weights_excess(got, want: dict, rtol: float, atol: float) -> tuple[float, float]:
