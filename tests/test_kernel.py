@@ -39,14 +39,20 @@ OPTIONS = dict(childhood_walls="respawn", wall_respawn_steps=5, childhood_select
 # The plain childhood and SLE's horizon are slow: childhood-options and SLE run the same branches and more.
 @pytest.mark.parametrize("condition, options", [pytest.param("LE-LS", {}, marks=pytest.mark.slow), ("LE-LS", OPTIONS),
                                                ("EE-LS", {}), pytest.param("SLE", {}, marks=pytest.mark.slow),
-                                               pytest.param("SLE-horizon", {}, marks=pytest.mark.slow)],
-                         ids=["childhood", "childhood-options", "adult-LS", "SLE", "SLE-noise-horizon"])
+                                               pytest.param("SLE-horizon", {}, marks=pytest.mark.slow),
+                                               pytest.param("LE-LS", dict(OPTIONS, selector_period=4,
+                                                                          selector_termination="colour"),
+                                                            marks=pytest.mark.slow),
+                                               ("EE-LS", dict(selector_period=3))],
+                         ids=["childhood", "childhood-options", "adult-LS", "SLE", "SLE-noise-horizon",
+                              "childhood-selector-options", "adult-selector-options"])
 def test_phase_in_pieces_matches_xla(tiny, condition, options):
     """A phase run by the kernel in two pieces, against XLA in one: every branch of the step.
 
     Childhood (intrinsic rewards, noise, walls; also respawns and the progress reward), a
     learning selector, and a single learning expert (one expert, noise; also with its noise
-    over the first half only, sle_noise_steps), the adult phases with reaches and timeouts.
+    over the first half only, sle_noise_steps), the adult phases with reaches and timeouts; the
+    selector's options carried from one piece to the next (the option that runs, in the kernel's layout).
     """
     horizon = STEPS // 2 if condition.endswith("-horizon") else STEPS
     condition = condition.removesuffix("-horizon")
