@@ -54,6 +54,7 @@ def test_dry_run_checks_and_times_every_step(tmp_path):
         counts[kernel_row["retina"]] = kernel_row["warp_instructions"]
     assert counts["entries"] - counts["points"] == 186 and counts["points"] > 500
     assert steps["sweep"]["points"] == 2 and len(steps["sweep"]["best_fitness"]) == 2
+    assert steps["devices"]["devices"] == 1 and steps["devices"]["rows"] == []  # one device: nothing to shard
     # Every model's whole lives on the kernel (here the checked condition and its selector on its own time-scale).
     models = steps["models"]["rows"]
     assert [(r["condition"], r["options"], r["status"]) for r in models] == [("EE-LS", "", "ok"),
@@ -71,7 +72,7 @@ def test_dry_run_checks_and_times_every_step(tmp_path):
     assert timed[0]["generation_s"] > 0 and timed[1]["lane_steps_per_s"] > 0
     assert study["complete"] is False and study["meets_target"] is None and study["hours"] > 0
     text = (out / "gpu_check.txt").read_text()
-    assert "done: 9 steps ok, failed: none, skipped: none" in text
+    assert "done: 10 steps ok, failed: none, skipped: none" in text
     assert (out / "gpu_check.png").stat().st_size > 10_000
 
 
@@ -131,6 +132,27 @@ def test_a_step_with_a_share_of_the_budget_stops_when_it_has_used_it(tmp_path, m
     check = H.Check(str(tmp_path), 100.0, H.Sizes(), log=lambda line: None)
     monkeypatch.setattr(check, "remaining", lambda: 90.0)
     assert check.share_left(S.LIVES_SHARE) == pytest.approx(60.0)  # 30 of the budget's 100 s from now
+
+
+def test_the_devices_step_times_a_generation_sharded_over_every_device(tmp_path):
+    """On 2 forced CPU devices: the generation of the most seeds on one device and on both, the kernel's lanes
+    sharded, with the same fitness bit for bit; the speed-up recorded (not a speed here: --dry, the kernel
+    interpreted)."""
+    import subprocess
+    import sys
+
+    from helpers import ROOT, environment
+
+    out = tmp_path / "check"
+    env = {**environment(devices=2), "JAX_DISABLE_MOST_OPTIMIZATIONS": "1"}
+    done = subprocess.run([sys.executable, "-m", "imrl_jax.gpu_check", "--out", str(out), "--dry", "--only",
+                           "devices"], cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+    steps = {s["step"]: s for s in json.loads((out / "gpu_check.json").read_text())["steps"]}
+    sharded = steps["devices"]
+    assert sharded["status"] == "ok" and sharded["devices"] == 2 and sharded["same_fitness"] is True
+    assert [(r["devices"], r["seeds"], r["status"]) for r in sharded["rows"]] == [(1, 2, "ok"), (2, 2, "ok")]
+    assert sharded["speedup"] > 0 and {r["kernel"] for r in sharded["rows"]} == {"pallas"}
 
 
 @pytest.mark.slow  # every row's lives on both steps, the kernel interpreted: 3 min 30 s on 2 cores

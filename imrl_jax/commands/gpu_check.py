@@ -14,7 +14,8 @@ numbers), and the check goes on to the next. The steps, most important first:
    test, both kernels, against the reference with that test's tolerances;
 2. ``life``: whole LE-LS lives (PERFORMANCE.md's headline) at 3,000, 30,000 and 300,000 adult
    lanes, both kernels: lane-steps per second, compile time, memory;
-3. ``generation``: one paper-scale LE-LS generation of 10 seeds (both kernels) and of 100;
+3. ``generation``: one paper-scale LE-LS generation of 10 seeds (both kernels) and of 100; ``devices``: where
+   there are several GPUs, that generation of 100 seeds on all of them against one (the same fitness, the speed-up);
 4. ``sweep``: one paper-scale generation of ``evolve --sweep``'s program (6 points x 10 seeds), against the
    single run's;
 5. ``study``: one generation of each distinct program of the claims map and each kind of its learning tests,
@@ -45,13 +46,14 @@ import sys
 from imrl_jax import files
 from imrl_jax.commands.gpu_figure import figure
 from imrl_jax.commands.gpu_harness import DRY, FILES, Check, Sizes, one_line
-from imrl_jax.commands.gpu_steps import (environment, float32_phase, generations, lives, models, phases, sweep,
-                                         whole_lives)
+from imrl_jax.commands.gpu_steps import (devices, environment, float32_phase, generations, lives, models, phases,
+                                         sweep, whole_lives)
 from imrl_jax.commands.gpu_study import study
 
 #: (name, function, seconds it needs at the real sizes before it is worth starting)
 STEPS = (("environment", environment, 0), ("lives", lives, 30), ("float32", float32_phase, 20),
-         ("life", whole_lives, 30), ("generation", generations, 60), ("sweep", sweep, 60), ("study", study, 60),
+         ("life", whole_lives, 30), ("generation", generations, 60), ("devices", devices, 0), ("sweep", sweep, 60),
+         ("study", study, 60),
          ("phases", phases, 20), ("models", models, 60))
 
 

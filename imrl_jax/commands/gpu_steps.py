@@ -300,6 +300,59 @@ def generations(check: Check) -> dict:
     return {"rows": rows}
 
 
+def devices(check: Check) -> dict:
+    """One paper-scale generation of the most seeds on the kernel on every local device (its lanes under ``shard_map``,
+    :func:`imrl_jax.evolution.search.shard_lanes`) against the same generation on one: seconds, the speed-up, and
+    whether the fitness is the same (it must be, bit for bit). Nothing to time on one device."""
+    import jax
+
+    from imrl_jax.config import make_config
+    from imrl_jax.evolution.devices import make_mesh, population_sharding, replicated, to_global
+    from imrl_jax.evolution.ga import make_generation
+    from imrl_jax.evolution.search import evolution_keys
+    from imrl_jax.runs.run_state import initial_state
+
+    count = len(jax.devices())
+    if count < 2:
+        check.say(f"  {count} device: nothing to shard")
+        return {"devices": count, "rows": []}
+    kernel, seeds = "pallas", max(check.sizes.generation_seeds)  # the kernel's lanes are what shard_map splits
+    config = make_config("paper", condition=check.sizes.generation_condition, step_kernel=kernel,
+                         **dict(check.sizes.generation_sizes))
+    rows, fitness = [], {}
+    for used in (1, count):
+        row = {"kernel": kernel, "seeds": seeds, "devices": used}
+        if not check.fits(60):
+            rows.append({**row, "status": "skipped (budget)"})
+            continue
+        with check.piece(row, rows):
+            check.stage = "api"
+            mesh = make_mesh(used)
+            sharding = population_sharding(mesh, seeds, config.population_size)
+            state = initial_state(config, list(range(seeds)), sharding)
+            args = (to_global(evolution_keys(state.key_data), replicated(mesh)), config.learning_params(),
+                    state.populations, 0)
+            executable, compile_s = compile_program(check, make_generation(config, sharding), *args)
+            start = time.perf_counter()
+            _, stats = jax.block_until_ready(executable(*args))
+            seconds = time.perf_counter() - start
+            fitness[used] = np.asarray(stats.fitness)
+            individuals = seeds * config.population_size
+            row.update(individuals=individuals, compile_s=compile_s, seconds=seconds,
+                       lane_steps_per_s=individuals * config.lifetime_steps / seconds, status="ok")
+            check.say(f"  generation {kernel:6s} {seeds:3d} seeds on {used} device(s): {seconds:7.2f} s "
+                      f"(compile {compile_s:.1f} s)")
+    done = {r["devices"]: r for r in rows if r.get("status") == "ok"}
+    result = {"devices": count, "rows": rows}
+    if len(done) == 2:
+        result.update(speedup=done[1]["seconds"] / done[count]["seconds"],
+                      same_fitness=bool(np.array_equal(fitness[1], fitness[count])))
+        check.say(f"  {count} devices: {result['speedup']:.2f}x one; the same fitness: {result['same_fitness']}")
+        if not result["same_fitness"]:  # the step fails, its figures kept
+            done[count].update(status="failed", stage="numbers", error=f"another fitness on {count} devices than on one")
+    return result
+
+
 def sweep(check: Check) -> dict:
     """One generation of ``evolve --sweep``'s program (every point and seed in one batch), with the fastest kernel,
     against the generation of as many seeds of a single run timed before it (the ratio: at most the points)."""
