@@ -39,6 +39,7 @@ from imrl_jax.agent.networks import explore, internal_reward, pick, select
 from imrl_jax.conditions import Phase
 from imrl_jax.world.env import TaskSpec
 from imrl_jax.agent.state import Curves, Draws, State, bin_steps, childhood_phase, draw_block, phase_params, spawn_draws
+from imrl_jax.agent.timescale import Option
 
 
 def round_even(x):
@@ -85,7 +86,7 @@ class _Carry(NamedTuple):
     timeouts: jnp.ndarray
     respawns: jnp.ndarray
     selections: jnp.ndarray  # (Kp,) int32
-    option: tuple | None = None  # start x~, selection, reward, discount, trace discount, learned, steps; or None
+    option: Option | None = None  # the option that runs (its flag an int32: 0/1), or None without options
 
 
 class _Model(NamedTuple):
@@ -152,6 +153,9 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                 return reward
             return 0.5 * (reward + internal_reward(pick(_dot_rows(second_reinforcer, xb), k)))
 
+        def accumulate(trace, phi, discount, learn, ended):
+            return learning.accumulate(trace, phi, discount, lam, learn, ended)
+
         def one_step(i, carry: _Carry) -> _Carry:
             reinforcer, actor0, actor1, evaluator, selector = carry.weights
             trace_actor0, trace_actor1, trace_evaluator, trace_critic = carry.traces
@@ -176,10 +180,9 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                 selection = selection * expressed
             # One expert: k is 0, computed from the carry (Triton's lowering cannot return a constant from the loop).
             k = select(u_ref[i], selection, num_experts) if num_experts > 1 else jnp.minimum(prev_k, 0)
+            option = carry.option
             if model.options:  # timescale.ends: a trial's end, the period, or (colour) a colour come into view
-                option_xb, option_selection, option_reward, option_discount, option_trace_discount, \
-                    option_learned, option_steps = carry.option
-                choose = terminal | ~valid | (option_steps + 1 >= config.selector_period)
+                choose = terminal | ~valid | (option.steps + 1 >= config.selector_period)
                 if config.selector_termination == "colour":
                     for colour in range(3):
                         choose = choose | (seen(xb, colour) > seen(prev_xb, colour))
@@ -226,22 +229,21 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                 if model.options:  # learning.learn_selector_over_option: semi-Markov TD when the option ends
                     if phase.intrinsic:
                         reward = jnp.where(learn, reward, 0.0)
-                        worth = (option_learned != 0) | learn
+                        worth = (option.learned != 0) | learn
                     else:
                         worth = valid | ~valid  # True, computed (Triton's loop cannot return a constant)
-                    total, discount = option_reward + option_discount * reward, option_discount * gamma
+                    total, discount = option.reward + option.discount * reward, option.discount * gamma
                     learn = choose & valid & worth
                     delta = (total + jnp.where(terminal, 0.0, discount * jnp.sum(critic * xb))
-                             - jnp.sum(critic * option_xb))
+                             - jnp.sum(critic * option.start_xb))
                     delta = jnp.where(learn, delta, 0.0)
                     ended = selector_ended != 0
-                    trace_critic = accumulate(trace_critic, option_xb, option_trace_discount, learn, ended)
-                    phi = selector_features(prev_k, option_selection, option_xb)
-                    selector_trace = accumulate(selector_trace, phi, option_trace_discount, learn, ended)
+                    trace_critic = accumulate(trace_critic, option.start_xb, option.trace_discount, learn, ended)
+                    phi = selector_features(prev_k, option.selection, option.start_xb)
+                    selector_trace = accumulate(selector_trace, phi, option.trace_discount, learn, ended)
                     selector_ended = jnp.where(choose, ends.astype(jnp.int32), selector_ended)
-                    option_reward, option_discount = total, discount
-                    option_learned = worth.astype(jnp.int32)
-                    option_trace_discount = jnp.where(learn, discount, option_trace_discount)
+                    option = option._replace(reward=total, discount=discount, learned=worth.astype(jnp.int32),
+                                             trace_discount=jnp.where(learn, discount, option.trace_discount))
                 else:
                     value_before = jnp.sum(critic * prev_xb)
                     value_now = jnp.sum(critic * xb)
@@ -255,12 +257,14 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                 selector = ascend(selector, selector_trace, delta, eta_selector_actor)
                 if not model.options:
                     selector_ended = ends.astype(jnp.int32)
-            option = None
             if model.options:  # timescale.next_option: a new option where the selector chose, else one step longer
-                option = (jnp.where(choose, xb, option_xb), jnp.where(choose, selection, option_selection),
-                          jnp.where(choose, 0.0, option_reward), jnp.where(choose, 1.0, option_discount),
-                          option_trace_discount, jnp.where(choose, 0, option_learned),
-                          jnp.where(choose, 0, option_steps + 1))
+                option = Option(start_xb=jnp.where(choose, xb, option.start_xb),
+                                selection=jnp.where(choose, selection, option.selection),
+                                reward=jnp.where(choose, 0.0, option.reward),
+                                discount=jnp.where(choose, 1.0, option.discount),
+                                learned=jnp.where(choose, 0, option.learned),
+                                steps=jnp.where(choose, 0, option.steps + 1),
+                                trace_discount=option.trace_discount)
 
             # 4: act.
             out0 = jax.nn.sigmoid(pick(_dot_rows(actor0, xb), k))
@@ -317,15 +321,13 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
                 option=option,
             )
 
-        def accumulate(trace, phi, discount, learn, ended):
-            return learning.accumulate(trace, phi, discount, lam, learn, ended)
-
         traces_ref, floats_ref, ints_ref, xbs_ref = ref["in_traces"], ref["in_floats"], ref["in_ints"], ref["in_xbs"]
         option = None
         if model.options:
             of, oi = ref["in_option_floats"], ref["in_option_ints"]
-            option = (ref["in_option_xb"][...], ref["in_option_selection"][...], of[OPTION_REWARD],
-                      of[OPTION_DISCOUNT], of[OPTION_TRACE_DISCOUNT], oi[OPTION_LEARNED], oi[OPTION_STEPS])
+            option = Option(start_xb=ref["in_option_xb"][...], selection=ref["in_option_selection"][...],
+                            reward=of[OPTION_REWARD], discount=of[OPTION_DISCOUNT], learned=oi[OPTION_LEARNED],
+                            steps=oi[OPTION_STEPS], trace_discount=of[OPTION_TRACE_DISCOUNT])
         carry = _Carry(
             weights=tuple(weights_ref[j] for j in range(5)),
             critic=ref["in_critic"][...],
@@ -361,14 +363,14 @@ def _make_kernel(config: Config, phase: Phase, phase_steps: int, num_steps: int,
             ref["out_ints"][j] = value
         ref["out_baseline"][...] = carry.baseline
         if model.options:
-            option_xb, option_selection, reward, discount, trace_discount, learned, steps = carry.option
-            ref["out_option_xb"][...] = option_xb
-            ref["out_option_selection"][...] = option_selection
-            for j, value in ((OPTION_REWARD, reward), (OPTION_DISCOUNT, discount),
-                             (OPTION_TRACE_DISCOUNT, trace_discount), (3, zero)):
+            option = carry.option
+            ref["out_option_xb"][...] = option.start_xb
+            ref["out_option_selection"][...] = option.selection
+            for j, value in ((OPTION_REWARD, option.reward), (OPTION_DISCOUNT, option.discount),
+                             (OPTION_TRACE_DISCOUNT, option.trace_discount), (3, zero)):
                 ref["out_option_floats"][j] = value
-            ref["out_option_ints"][OPTION_LEARNED] = learned
-            ref["out_option_ints"][OPTION_STEPS] = steps
+            ref["out_option_ints"][OPTION_LEARNED] = option.learned
+            ref["out_option_ints"][OPTION_STEPS] = option.steps
         ref["counts"][0] = carry.reaches
         ref["counts"][1] = carry.timeouts
         ref["counts"][2] = carry.respawns
