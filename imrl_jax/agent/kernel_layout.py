@@ -96,9 +96,9 @@ def columns(config: Config) -> np.ndarray:
     return cols
 
 
-def _to_columns(x, cols: np.ndarray, identity: bool):
-    """``x``'s last axis (x~'s entries) in the kernel's columns, padding 0."""
-    if identity:
+def _to_columns(x, cols: np.ndarray):
+    """``x``'s last axis (x~'s entries) in the kernel's columns, padding 0 (x~'s own order: padded only)."""
+    if np.array_equal(cols[:x.shape[-1]], np.arange(x.shape[-1])):
         return _pad(x, x.shape[:-1] + (cols.shape[0],))
     padded = jnp.concatenate([x, jnp.zeros(x.shape[:-1] + (1,), x.dtype)], axis=-1)  # entry -1: the zero
     return padded[..., np.where(cols >= 0, cols, x.shape[-1])]
@@ -115,9 +115,8 @@ def pack(state: State, config: Config) -> Packed:
     agent, traces, prev = state.agent, state.traces, state.prev
     k, n = agent.selector_actor.shape
     kp, cols = pow2(k), columns(config)
-    identity = config.kernel_retina == "entries"
-    rows = lambda m: _pad(_to_columns(m, cols, identity), (kp, cols.shape[0]))  # noqa: E731
-    vec = lambda v: _to_columns(v, cols, identity)  # noqa: E731
+    rows = lambda m: _pad(_to_columns(m, cols), (kp, cols.shape[0]))  # noqa: E731
+    vec = lambda v: _to_columns(v, cols)  # noqa: E731
     dtype = agent.actor.dtype
     now = state.t % 2
     xbs = jnp.stack([state.xbs[1 - now], state.xbs[now]])  # x~_{t-1}, x~_{t-2}
@@ -154,8 +153,7 @@ def fixed(agent: Agent, config: Config) -> Fixed:
     second = agent.second_reinforcer
     return Fixed(
         expressed=None if agent.expressed is None else _pad(agent.expressed, (kp,)),
-        second_reinforcer=None if second is None else _pad(
-            _to_columns(second, cols, config.kernel_retina == "entries"), (kp, cols.shape[0])),
+        second_reinforcer=None if second is None else _pad(_to_columns(second, cols), (kp, cols.shape[0])),
     )
 
 
