@@ -60,7 +60,7 @@ def life_cases(sizes: Sizes):
     from imrl_jax.config import make_config
 
     childhood, task, bins = sizes.life_steps
-    cases = []
+    firsts, options, others = [], [], []  # the rounds, breadth first
     for name in sizes.conditions or conditions.NAMES:
         seen = []
         for preset in sizes.presets:
@@ -69,14 +69,13 @@ def life_cases(sizes: Sizes):
             if any(not config.model_differences(other) for other in seen):
                 continue  # the same lives as a preset before it
             seen.append(config)
-            cases.append((name, preset, config, kernel.unsupported(config)))
+            (others if seen[1:] else firsts).append((name, preset, config, kernel.unsupported(config)))
         if not conditions.get(name).single_expert:
             for option, fields in sizes.selector_options:
                 config = seen[0].replace(**dict(fields))
-                cases.append((name, f"{sizes.presets[0]}+{option}", config, kernel.unsupported(config)))
-    # The kernel's cases first: the XLA-only ones check what the CPU tests check already.
-    first = sizes.presets[0]
-    return sorted(cases, key=lambda case: (case[3] is not None, 0 if case[1] == first else 1 if "+" in case[1] else 2))
+                options.append((name, f"{sizes.presets[0]}+{option}", config, kernel.unsupported(config)))
+    # The kernel's cases first (a stable sort): the XLA-only ones check what the CPU tests check already.
+    return sorted(firsts + options + others, key=lambda case: case[3] is not None)
 
 
 def weights_excess(got, want: dict, rtol: float, atol: float) -> tuple[float, float]:
