@@ -4,9 +4,10 @@ A stage's lane-steps run at the speed its ``generation`` step measured, with the
 ``step_kernel=auto`` would choose for the stage (:mod:`imrl_jax.agent.kernel_choice`: its run's recorded model
 where the run is done, else its condition's), at the number of individuals measured nearest the stage's,
 and each stage pays one compilation as measured there. On the kernel, a condition whose whole lives the
-``models`` step timed runs at that step's ratio to LE-LS's (the selector's options at theirs where measured). Where the check's ``study`` step timed the stage's own
-program (:func:`imrl_jax.commands.gpu_study.program_key`: the claims map's) or its learning test's phase, that speed is
-used instead. Writing checkpoints and histories is not counted.
+``models`` step timed runs at that step's ratio to LE-LS's (the selector's options at theirs where measured).
+Where the check's ``study`` step timed the stage's own program (:func:`imrl_jax.commands.gpu_study.program_key`:
+the claims map's) or its learning test's phase, that speed is used instead. Writing checkpoints and histories is
+not counted.
 """
 
 from __future__ import annotations

@@ -1,7 +1,8 @@
 """Which step kernel lives a run: ``Config.step_kernel = "auto"`` resolved (docs/PERFORMANCE.md).
 
 "auto" is the Pallas kernel (:mod:`imrl_jax.agent.kernel`) where JAX's backend is a GPU and the kernel implements the
-run's model (every condition and option in the arena, not another world), and the XLA step otherwise (off a GPU the kernel would only be interpreted, several times slower).
+run's model (every condition and option in the arena, not another world), and the XLA step otherwise (off a GPU
+the kernel would only be interpreted, several times slower).
 A command resolves it where it plans a run, so that the run's ``config.json`` records the choice and a resumed
 run keeps it; :func:`imrl_jax.agent.lifetime.run_phase` resolves an unresolved config the same way (library use).
 The step kernel is a compute field: the run's content key is the same whichever is chosen.

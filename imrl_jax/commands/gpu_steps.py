@@ -348,7 +348,8 @@ def devices(check: Check) -> dict:
                       same_fitness=bool(np.array_equal(fitness[1], fitness[count])))
         check.say(f"  {count} devices: {result['speedup']:.2f}x one; the same fitness: {result['same_fitness']}")
         if not result["same_fitness"]:  # the step fails, its figures kept
-            done[count].update(status="failed", stage="numbers", error=f"another fitness on {count} devices than on one")
+            done[count].update(status="failed", stage="numbers",
+                               error=f"another fitness on {count} devices than on one")
     return result
 
 
