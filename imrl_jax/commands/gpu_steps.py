@@ -404,8 +404,8 @@ PHASE_KERNELS = (("xla", None), ("pallas", "entries"), ("pallas", "points"))
 
 
 def phases(check: Check) -> dict:
-    """Every phase of the benchmark, the XLA step and the kernel (both ways of observing, ``kernel_retina``), at
-    every lane count."""
+    """Every phase of the benchmark, the XLA step and the kernel at every lane count, and the kernel observing by
+    points (``kernel_retina``) at the most lanes."""
     from imrl_jax.commands import bench
     from imrl_jax import conditions
     from imrl_jax.agent import kernel_work
@@ -416,7 +416,8 @@ def phases(check: Check) -> dict:
             continue
         for kernel, retina in PHASE_KERNELS:
             fields = () if retina is None else (("kernel_retina", retina),)
-            for lanes in check.sizes.lanes:
+            # The kernel observing by points at the most lanes only, where its choice is judged (PERFORMANCE.md).
+            for lanes in check.sizes.lanes if retina != "points" else check.sizes.lanes[-1:]:
                 row = {"phase": name, "kernel": kernel, "lanes": lanes, **({"retina": retina} if retina else {})}
                 if not check.fits(10 + lanes / 30_000):
                     rows.append({**row, "status": "skipped (budget)"})
