@@ -131,7 +131,7 @@ def test_what_does_not_fit_the_budget_is_skipped_and_said(tmp_path):
 def test_a_step_with_a_share_of_the_budget_stops_when_it_has_used_it(tmp_path, monkeypatch):
     check = H.Check(str(tmp_path), 100.0, H.Sizes(), log=lambda line: None)
     monkeypatch.setattr(check, "remaining", lambda: 90.0)
-    assert check.share_left(S.LIVES_SHARE) == pytest.approx(60.0)  # 30 of the budget's 100 s from now
+    assert check.share_left(S.LIVES_SHARE) == pytest.approx(55.0)  # 35 of the budget's 100 s from now
 
 
 def test_the_devices_step_times_a_generation_sharded_over_every_device(tmp_path):
@@ -178,7 +178,7 @@ def test_life_cases_one_per_model_breadth_first(monkeypatch):
     """A preset that gives the same lives as one before it (Config.model_differences) is not checked again; the
     selector's options where a condition has a selector; every condition first, then the options, then the other
     presets (a budget that runs out cuts presets, not models); every case is on the kernel."""
-    cases = S.life_cases(H.Sizes(conditions=("EE-ES", "EV-LS", "SLE")))
+    cases = S.life_cases(H.Sizes(conditions=("EE-ES", "EV-LS", "SLE"), option_conditions=None))
     names = [(name, preset) for name, preset, _, _ in cases]
     # EE-ES learns nothing: every preset lives the same. EV-LS: four models. SLE: one expert, nothing to choose.
     assert names == [("EE-ES", "paper"), ("EV-LS", "paper"), ("SLE", "paper"), ("EE-ES", "paper+period"),
@@ -195,6 +195,9 @@ def test_life_cases_one_per_model_breadth_first(monkeypatch):
     monkeypatch.undo()
     every = S.life_cases(H.Sizes())
     assert {name for name, *_ in every} == set(C.NAMES) and all(reason is None for *_, reason in every)
+    # The real check's options: the conditions that hold every way an option meets learning, after every row.
+    assert [(name, preset) for name, preset, *_ in every[len(C.NAMES):len(C.NAMES) + 6]] == [
+        (name, f"paper+{option}") for name in ("LE-LS", "EE-ES", "EXT-LS") for option in ("period", "colour")]
 
 
 def test_weights_excess_is_the_tolerance_test():

@@ -36,10 +36,13 @@ class Sizes:
     life_target_radius: float = 40.0
     presets: tuple[str, ...] = ("paper", "extension", "faithful", "skills")
     conditions: tuple[str, ...] | None = None  # None: every row of the condition table
-    # The selector on its own time-scale (docs/TIMESCALE.md), lived under the first preset by every condition whose
-    # selector chooses: (name, Config fields)
+    # The selector on its own time-scale (docs/TIMESCALE.md), lived under the first preset: (name, Config fields),
+    # by the conditions of option_conditions (None: every one whose selector chooses). LE-LS, EE-ES and EXT-LS hold
+    # every way an option meets learning: a childhood's and an adult learning selector, one that does not learn, and
+    # experts learning beside it.
     selector_options: tuple = (("period", (("selector_period", 4),)),
                                ("colour", (("selector_period", 4), ("selector_termination", "colour"))))
+    option_conditions: tuple[str, ...] | None = ("LE-LS", "EE-ES", "EXT-LS")
     float32_steps: int = 2000
     lanes: tuple[int, ...] = (3_000, 30_000, 300_000)
     life_task_steps: int = 2000  # the whole-life benchmark's task steps (childhood 1.5 times that)
@@ -60,6 +63,7 @@ class Sizes:
 
 DRY = Sizes(life_steps=(60, 30, 3), presets=("paper",), conditions=("EE-LS",),
             selector_options=(("colour", (("selector_period", 4), ("selector_termination", "colour"))),),
+            option_conditions=None,
             float32_steps=200,
             lanes=(6,), life_task_steps=20, model_lanes=6, phase_steps=20, repeats=1, generation_seeds=(2,),
             generation_condition="EE-LS",

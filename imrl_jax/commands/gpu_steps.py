@@ -52,9 +52,10 @@ def environment(check: Check) -> dict:
 def life_cases(sizes: Sizes):
     """(condition, preset, config, why the kernel lacks it or None) of every condition under every preset that makes
     another model (``Config.model_differences``), and under the first preset with each of the selector's options
-    (``Sizes.selector_options``: "paper+colour") where its selector chooses. Breadth first, so that a budget that
-    runs out leaves the later presets unchecked rather than whole models: every condition under the first preset,
-    then the options, then the other presets; the kernel's cases before the XLA step's alone."""
+    (``Sizes.selector_options``: "paper+colour") where its selector chooses (``Sizes.option_conditions``). Breadth
+    first, so that a budget that runs out leaves the later presets unchecked rather than whole models: every
+    condition under the first preset, then the options, then the other presets; the kernel's cases before the XLA
+    step's alone."""
     from imrl_jax import conditions
     from imrl_jax.agent import kernel
     from imrl_jax.config import make_config
@@ -70,7 +71,8 @@ def life_cases(sizes: Sizes):
                 continue  # the same lives as a preset before it
             seen.append(config)
             (others if seen[1:] else firsts).append((name, preset, config, kernel.unsupported(config)))
-        if not conditions.get(name).single_expert:
+        chooses = not conditions.get(name).single_expert
+        if chooses and (sizes.option_conditions is None or name in sizes.option_conditions):
             for option, fields in sizes.selector_options:
                 config = seen[0].replace(**dict(fields))
                 options.append((name, f"{sizes.presets[0]}+{option}", config, kernel.unsupported(config)))
@@ -120,7 +122,7 @@ def compare_kernels(pallas, xla, tolerance: dict) -> dict:
 
 
 #: The share of the budget the ``lives`` step may use, so that the speed steps after it get the rest.
-LIVES_SHARE = 0.3
+LIVES_SHARE = 0.35
 
 
 def lives(check: Check) -> dict:
