@@ -15,6 +15,7 @@ code. ``all`` runs them in the order their results are needed (whole questions e
 
 from __future__ import annotations
 
+import functools
 import os
 import subprocess
 import sys
@@ -31,12 +32,25 @@ from imrl_jax.runs import cli
 RATE = 2.9e6
 
 
+@functools.lru_cache(maxsize=None)
+def _world_factor(world: str) -> float:
+    from imrl_jax.runs.progress import world_factor
+
+    return world_factor(world) or 1.0  # a world the benchmark has not measured: the arena's speed
+
+
+def stage_rate(stage, rate: float = RATE) -> float:
+    """The lane-steps per second of ``stage`` on this CPU: ``rate`` in the arena; in another world, ``rate`` times how
+    fast the agent lives there against the arena (``bench --world``'s files in docs/bench)."""
+    return rate * _world_factor(stage.world)
+
+
 def remaining(study, rate: float = RATE, planned=None) -> tuple[int, int, float]:
-    """Stages left, stages in all, and the hours what is left costs at ``rate`` (a started stage counts its part left);
-    ``planned``: the study's stages and scale, if already planned."""
+    """Stages left, stages in all, and the hours what is left costs at ``rate`` (a started stage counts its part left;
+    a stage in another world at its world's speed); ``planned``: the study's stages and scale, if already planned."""
     stages, scale = planned or study.stages()
     left = [s for s in stages if not stage_done(s, scale)]
-    return len(left), len(stages), sum(cost_left(s, scale) for s in stages) / rate / 3600
+    return len(left), len(stages), sum(cost_left(s, scale) / stage_rate(s, rate) for s in stages) / 3600
 
 
 def listing(chosen, planned) -> list[str]:
@@ -48,7 +62,7 @@ def listing(chosen, planned) -> list[str]:
     lines, total, speed = [], [0.0, 0.0, 0.0], gpu_hours.read_speed()
     for study, plan in zip(chosen, planned):
         left, count, hours = remaining(study, planned=plan)
-        whole = sum(s.cost for s in plan[0]) / RATE / 3600
+        whole = sum(s.cost / stage_rate(s) for s in plan[0]) / 3600
         gpu = gpu_hours.study_hours(*plan, speed)
         total = [total[0] + hours, total[1] + whole, total[2] + (gpu or 0.0)]
         lines.append(f"{study.name:>16}: {left:>2} of {count:>2} stages left, about {hours:5.1f} h ({study.document}); "
@@ -56,7 +70,8 @@ def listing(chosen, planned) -> list[str]:
     measured = ("no GPU measured (docs/gpu holds no gpu_check.json)" if speed is None else
                 f"{total[2]:.1f} h on one {speed.device} ({speed.source}: its generations' speeds, step_kernel=auto)")
     return lines + [f"{'in all':>16}: about {total[0]:.0f} h left at {RATE / 1e6:.1f} million lane-steps a second "
-                    f"(the claims study's evolutions on 2 cores); whole: {total[1]:.0f} h on this CPU, {measured}"]
+                    f"(the claims study's evolutions on 2 cores; another world's stages at its benchmarked share of "
+                    f"that); whole: {total[1]:.0f} h on this CPU, {measured}"]
 
 
 def run_studies(chosen, report: bool = False, options: tuple[str, ...] = ()) -> int:

@@ -97,6 +97,43 @@ def test_a_model_the_models_step_timed_runs_at_its_ratio_to_le_ls(tmp_path):
         3.6e12 / 4e7 + 5.0)
 
 
+def test_a_world_is_priced_at_the_agents_benchmarked_speed_there_against_the_arena(tmp_path):
+    """bench --world's rows of both worlds at the most lanes both measured: the geometric mean of the agent's rates
+    there over the arena's (a world with settings of its own, another backend, or fewer lanes left aside)."""
+    from imrl_jax.runs.progress import world_factor
+
+    def bench(name, world, rows, backend="cpu", settings=None):
+        (tmp_path / name).write_text(json.dumps({"backend": backend, "world": {
+            "name": world, "settings": settings or {},
+            "rows": [{"phase": p, "lanes": n, "agent_lane_steps_per_s": r} for p, n, r in rows]}}))
+
+    bench("world-arena.json", "arena", [("child", 50, 1e6), ("child", 300, 2e6), ("adult", 300, 4e6)])
+    bench("world-xland.json", "xland", [("child", 50, 9e5), ("child", 300, 5e5), ("adult", 300, 4e6 / 16)])
+    bench("world-xland-big.json", "xland", [("child", 1000, 1e9)], settings={"arm_length": 20})
+    bench("world-xland-gpu.json", "xland", [("child", 300, 1e9)], backend="gpu")
+    assert world_factor("xland", folder=str(tmp_path)) == pytest.approx((0.25 * (1 / 16)) ** 0.5)  # 1/8
+    assert world_factor("arena", folder=str(tmp_path)) == 1.0
+    assert world_factor("corridor", folder=str(tmp_path)) is None
+    assert world_factor("xland", folder=str(tmp_path / "none")) is None
+
+
+def test_a_study_in_another_world_is_priced_there(monkeypatch):
+    """The worlds study's stages live in XLand: on this CPU at the committed benchmarks' share of the arena's rate,
+    and, were they not done, on a GPU with the XLA step (the kernel lives the arena only)."""
+    from experiments import worlds
+    from imrl_jax.runs.progress import world_factor
+
+    stages, scale = worlds.TABLE.all_stages()
+    assert {s.world for s in stages} == {"xland"}
+    factor = world_factor("xland")
+    assert 0.1 < factor < 0.5  # the agent 4 to 5 times slower there on 2 cores (docs/bench/world-*-cpu-2core.json)
+    assert experiments_main.stage_rate(stages[0]) == pytest.approx(experiments_main.RATE * factor)
+    assert experiments_main.stage_rate(stages[0]._replace(world="arena")) == experiments_main.RATE
+    undone = stages[0]._replace(out_dir="nowhere")
+    assert gpu_hours.stage_kernel(undone) == "xla" and gpu_hours.stage_kernel(undone._replace(world="arena")) == "pallas"
+    assert gpu_hours.stage_config(undone._replace(condition="EE-LS-T")) is None  # a condition XLand refuses
+
+
 def test_list_shows_each_study_on_this_cpu_and_on_a_gpu(capsys, monkeypatch):
     assert experiments_main.main(["list"]) == 0
     lines = capsys.readouterr().out.splitlines()

@@ -84,8 +84,8 @@ def read_speed(path: str | None = None) -> GpuSpeed | None:
 
 
 def stage_config(stage: Stage):
-    """The model ``stage`` lives: its run's recorded one where it is done, else its condition's (None for a measure
-    of several runs)."""
+    """The model ``stage`` lives: its run's recorded one where it is done, else its condition's in its world (None for
+    a measure of several runs, or a condition its world refuses)."""
     from imrl_jax import conditions
     from imrl_jax.config import ConfigError, make_config
     from imrl_jax.runs.rundir import RunDirError, read_config
@@ -100,6 +100,13 @@ def stage_config(stage: Stage):
         if stage.condition not in conditions.CONDITIONS:
             return None
         config = make_config("paper", condition=stage.condition)
+        if stage.world != "arena":  # its world's (default settings): what auto decides by
+            from imrl_jax.world import worlds
+
+            try:
+                config = worlds.configure(config, stage.world)
+            except (ConfigError, ValueError):
+                return None
     return config
 
 

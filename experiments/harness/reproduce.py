@@ -97,6 +97,7 @@ class Stage(NamedTuple):
     runs: int = 0  # a test stage's runs when they are not the scale's seeds (0: the scale's)
     needs: tuple[str, ...] | None = None  # the stages it waits for when fanned out (None: experiments.harness.executor.needs)
     generations: int = 0  # an evolve stage's generations when they are not the scale's (0: the scale's)
+    world: str = "arena"  # the world its lives are lived in (docs/WORLDS.md)
 
 
 def life_steps(scale: dict, condition: str, task_steps: int, *, num_tasks: int = 6) -> int:

@@ -48,6 +48,12 @@ class Row:
         return conditions.get(self.condition).evolved
 
 
+def row_world(row: Row) -> str:
+    """The world a row's runs live in: its ``--world`` option's, else the arena."""
+    options = list(row.options)
+    return options[options.index("--world") + 1] if "--world" in options[:-1] else "arena"
+
+
 def evolution_command(row: Row, scale: dict, out_dir: str, sweep: tuple[str, ...] = ()) -> list[str]:
     """The row's evolve command into ``out_dir``."""
     command = evolve_command(scale, row.preset, row.condition, out_dir, sets=row.sets, sweep=sweep)
@@ -270,7 +276,8 @@ class Table:
                 if tested not in testing:
                     testing.add(tested)
                     stages.append(Stage(f"learning test {row.name}", "test", row.name, row.condition, tested,
-                                        test_cost(scale, row.condition), runs=scale["seeds"], needs=()))
+                                        test_cost(scale, row.condition), runs=scale["seeds"], needs=(),
+                                        world=row_world(row)))
                 continue
             root = os.path.dirname(evolved)
             if root in sweeps:
@@ -279,7 +286,7 @@ class Table:
                     evolving[root] = f"evolve {'+'.join(r.name for r in members)} (one sweep)"
                     stages.append(Stage(evolving[root], "evolve", row.name, row.condition, root,
                                         sum(evolution_cost(scale, r.condition) for r in members),
-                                        generations=scale["generations"]))
+                                        generations=scale["generations"], world=row_world(row)))
                 evolving[evolved] = evolving[root]
             elif evolved not in evolving:
                 evolving[evolved] = f"evolve {row.name}"
@@ -287,7 +294,7 @@ class Table:
                 longest = max(self.scale_of(r)["generations"] for r, e in zip(self.rows, evolutions.values())
                               if e == evolved)
                 stages.append(Stage(evolving[evolved], "evolve", row.name, row.condition, evolved,
-                                    evolution_cost(scale, row.condition), generations=longest))
+                                    evolution_cost(scale, row.condition), generations=longest, world=row_world(row)))
             if root in sweeps and all(r.test for r in sweeps[root].rows):  # its points tested in one program too
                 if f"test {root}" not in evolving:
                     members = sweeps[root].rows
@@ -295,19 +302,22 @@ class Table:
                     stages.append(Stage(evolving[f"test {root}"], "test", row.name, row.condition,
                                         learning_test_dir(root), sum(test_cost(scale, r.condition)
                                                                      for r in members), runs=scale["seeds"],
-                                        needs=(evolving[root],)))
+                                        needs=(evolving[root],), world=row_world(row)))
             elif row.test and tested not in testing:  # a test two rows share is one stage
                 testing.add(tested)
                 stages.append(Stage(f"learning test {row.name}", "test", row.name, row.condition, tested,
-                                    test_cost(scale, row.condition), runs=scale["seeds"], needs=(evolving[evolved],)))
+                                    test_cost(scale, row.condition), runs=scale["seeds"], needs=(evolving[evolved],),
+                                    world=row_world(row)))
         for measure in self.measures:
             run = self.measured_run(measure)
             row = next((r for r, e in zip(self.rows, evolutions.values()) if e is not None and e == run), None)
             condition = measure.run.condition if isinstance(measure.run, Row) else row.condition if row else ""
             named = [evolving[evolutions[name]] for name in measure.rows_named()]
+            lives = row or (measure.run if isinstance(measure.run, Row) else None)  # the run it measures
             stages.append(Stage(f"{measure.kind} {measure.name}", measure.kind, measure.name, condition,
                                 self.measure_folder(measure), measure.cost,
-                                needs=tuple(dict.fromkeys(([evolving[run]] if row else []) + named))))
+                                needs=tuple(dict.fromkeys(([evolving[run]] if row else []) + named)),
+                                world=row_world(lives) if lives else "arena"))
         return stages, self.scale
 
     def stage_command(self, stage: Stage) -> tuple[list[str], None]:

@@ -122,6 +122,39 @@ def measured_speed(backend: str, individuals: int, folder: str | None = None,
     return None if found is None else found[1:]
 
 
+def world_factor(world: str, backend: str = "cpu", folder: str | None = None) -> float | None:
+    """How fast the agent lives in ``world`` against the arena on ``backend``, as ``bench --world`` measured both
+    (the same phases at the same lanes, each world's default settings): the geometric mean of the agent's rate
+    there over its rate in the arena, at the most lanes both measured; 1 for the arena, None where no file says."""
+    if world == "arena":
+        return 1.0
+    folder = folder or BENCH_DIR
+    rates: dict[str, dict] = {}  # world -> {(phase, lanes): the agent's lane-steps per second}
+    for name in sorted(os.listdir(folder)) if os.path.isdir(folder) else []:
+        try:
+            with open(os.path.join(folder, name), "rb") as f:
+                data = json.loads(f.read(2**20)) if name.endswith(".json") else None
+        except (OSError, ValueError):
+            continue
+        section = data.get("world") if isinstance(data, dict) and data.get("backend") == backend else None
+        if not isinstance(section, dict) or section.get("settings") or section.get("name") not in (world, "arena"):
+            continue
+        for row in section.get("rows") or []:
+            try:
+                rate = float(row["agent_lane_steps_per_s"])
+                key = (str(row["phase"]), int(row["lanes"]))
+            except (KeyError, TypeError, ValueError):
+                continue
+            if math.isfinite(rate) and rate > 0:
+                rates.setdefault(section["name"], {})[key] = rate
+    both = set(rates.get(world, {})) & set(rates.get("arena", {}))
+    if not both:
+        return None
+    most = max(lanes for _, lanes in both)
+    ratios = [rates[world][key] / rates["arena"][key] for key in sorted(both) if key[1] == most]
+    return math.exp(sum(math.log(r) for r in ratios) / len(ratios))
+
+
 def _rates(data: dict, world: str) -> list[tuple[float, int]]:
     """(lane-steps per second, individuals) of a bench file's whole lives (the arena), or of its ``world`` section's
     agent in an adult task (another world); nothing that does not parse."""
