@@ -98,6 +98,20 @@ class Progress:
 BENCH_DIR = os.path.join(files.REPO, "docs", "bench")
 
 
+def bench_files(backend: str, folder: str | None = None):
+    """(file name, its JSON object) of each benchmark file of ``folder`` (default :data:`BENCH_DIR`) measured on
+    ``backend``; a file that is not one is passed over."""
+    folder = folder or BENCH_DIR
+    for name in sorted(os.listdir(folder)) if os.path.isdir(folder) else []:
+        try:
+            with open(os.path.join(folder, name), "rb") as f:
+                data = json.loads(f.read(2**20)) if name.endswith(".json") else None
+        except (OSError, ValueError):
+            continue
+        if isinstance(data, dict) and data.get("backend") == backend:
+            yield name, data
+
+
 def measured_speed(backend: str, individuals: int, folder: str | None = None,
                    world: str = "arena") -> tuple[float, str] | None:
     """The speed of whole lives (lane-steps per second) the benchmark measured on ``backend`` with the number of
@@ -105,15 +119,8 @@ def measured_speed(backend: str, individuals: int, folder: str | None = None,
 
     In another ``world`` than the arena: the speed ``bench --world`` measured of an agent's adult task there (its
     lanes nearest ``individuals``), the most of a life."""
-    found, folder = None, folder or BENCH_DIR
-    for name in sorted(os.listdir(folder)) if os.path.isdir(folder) else []:
-        try:
-            with open(os.path.join(folder, name), "rb") as f:
-                data = json.loads(f.read(2**20)) if name.endswith(".json") else None
-        except (OSError, ValueError):
-            continue
-        if not isinstance(data, dict) or data.get("backend") != backend:
-            continue
+    found = None
+    for name, data in bench_files(backend, folder):
         for rate, measured in _rates(data, world):
             if math.isfinite(rate) and rate > 0 and measured > 0:
                 distance = abs(math.log(measured / max(individuals, 1)))
@@ -128,15 +135,9 @@ def world_factor(world: str, backend: str = "cpu", folder: str | None = None) ->
     there over its rate in the arena, at the most lanes both measured; 1 for the arena, None where no file says."""
     if world == "arena":
         return 1.0
-    folder = folder or BENCH_DIR
     rates: dict[str, dict] = {}  # world -> {(phase, lanes): the agent's lane-steps per second}
-    for name in sorted(os.listdir(folder)) if os.path.isdir(folder) else []:
-        try:
-            with open(os.path.join(folder, name), "rb") as f:
-                data = json.loads(f.read(2**20)) if name.endswith(".json") else None
-        except (OSError, ValueError):
-            continue
-        section = data.get("world") if isinstance(data, dict) and data.get("backend") == backend else None
+    for _, data in bench_files(backend, folder):
+        section = data.get("world")
         if not isinstance(section, dict) or section.get("settings") or section.get("name") not in (world, "arena"):
             continue
         for row in section.get("rows") or []:
