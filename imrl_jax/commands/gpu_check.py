@@ -5,24 +5,25 @@
 Made for a machine where JAX with CUDA is already installed and nothing can be downloaded:
 it needs jax, numpy and matplotlib (for its figure), not brax or evosax. Each step reports
 its own failure, named by the stage it had reached (import, api, lowering, compile, run,
-numbers), and the check goes on to the next. The steps, most important first:
+numbers), and the check goes on to the next. The steps, most important (and least measured before) first:
 
 1. ``lives``: short lives on the device with the XLA step and with the Pallas kernel
    (compiled by Triton on a GPU), for every condition and preset and the selector's options
    (XLA alone where the kernel does not implement a model), in float64 against the NumPy reference and against
    each other with the CPU tests' tolerances; and the float32 adult phase of the float32 CPU
    test, both kernels, against the reference with that test's tolerances;
-2. ``life``: whole LE-LS lives (PERFORMANCE.md's headline) at 3,000, 30,000 and 300,000 adult
-   lanes, both kernels: lane-steps per second, compile time, memory;
+2. ``models``: whole lives of every row of the condition table and of the selector's options on the kernel at
+   30,000 adult lanes, each one's speed beside LE-LS's;
 3. ``generation``: one paper-scale LE-LS generation of 10 seeds (both kernels) and of 100; ``devices``: where
    there are several GPUs, that generation of 100 seeds on all of them against one (the same fitness, the speed-up);
 4. ``sweep``: one paper-scale generation of ``evolve --sweep``'s program (6 points x 10 seeds), against the
    single run's;
 5. ``study``: one generation of each distinct program of the claims map and each kind of its learning tests,
    and the whole map's hours extrapolated against the one-hour target (:mod:`imrl_jax.commands.gpu_study`);
-6. ``phases``: every phase of ``imrl_jax.commands.bench``, both kernels, at the same lane counts;
-7. ``models``: whole lives of every row of the condition table and of the selector's options on the kernel at
-   30,000 adult lanes, each one's speed beside LE-LS's.
+6. ``phases``: every phase of ``imrl_jax.commands.bench``, both kernels, at the same lane counts, and the kernel
+   observing by points (``kernel_retina``) at the most;
+7. ``life``: whole LE-LS lives (PERFORMANCE.md's headline, measured on the H200 before) at 3,000, 30,000 and
+   300,000 adult lanes, both kernels: lane-steps per second, compile time, memory.
 
 Within a time budget (``--budget-min``, default 8), checked before each piece of work: what
 would not fit is skipped and said so. ``gpu_check.json`` (every figure, the device and the
@@ -51,10 +52,9 @@ from imrl_jax.commands.gpu_steps import (devices, environment, float32_phase, ge
 from imrl_jax.commands.gpu_study import study
 
 #: (name, function, seconds it needs at the real sizes before it is worth starting)
-STEPS = (("environment", environment, 0), ("lives", lives, 30), ("float32", float32_phase, 20),
-         ("life", whole_lives, 30), ("generation", generations, 60), ("devices", devices, 0), ("sweep", sweep, 60),
-         ("study", study, 60),
-         ("phases", phases, 20), ("models", models, 60))
+STEPS = (("environment", environment, 0), ("lives", lives, 30), ("float32", float32_phase, 20), ("models", models, 60),
+         ("generation", generations, 60), ("devices", devices, 0), ("sweep", sweep, 60), ("study", study, 60),
+         ("phases", phases, 20), ("life", whole_lives, 30))
 
 
 def run(out_dir: str, budget_s: float = 480.0, sizes: Sizes = Sizes(), log=print, steps=STEPS) -> dict:
