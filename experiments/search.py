@@ -23,7 +23,7 @@ import numpy as np
 from experiments.harness.figures import not_run
 from experiments.harness.loading import write_json
 from experiments.harness.study import RESULTS, SCALES, SCREEN
-from experiments.harness.table import Row, Table
+from experiments.harness.table import Row, Table, row_option
 from experiments.harness.markdown import head, line, mean_sd
 from imrl_jax import conditions
 from imrl_jax.evolution.strategies import GA_NAME
@@ -46,7 +46,7 @@ CLAIM_NUMBERS = (1, 2, 3, 4, 6)
 
 def strategy_of(row: Row) -> str:
     """The search a row evolves with: its ``--strategy`` option, or the paper's GA."""
-    return dict(zip(row.options[::2], row.options[1::2])).get("--strategy", GA_NAME)
+    return row_option(row, "--strategy", GA_NAME)
 
 
 def judge(strategies, rows: list[dict], sle_per_run: list[float] | None, paths: dict) -> dict:

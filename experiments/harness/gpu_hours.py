@@ -112,21 +112,26 @@ def stage_config(stage: Stage):
 
 def stage_kernel(stage: Stage) -> str:
     """The step kernel ``auto`` lives ``stage`` with on a GPU: "pallas" or "xla"."""
+    return auto_kernel(stage_config(stage))
+
+
+def auto_kernel(config) -> str:
+    """The step kernel ``auto`` lives ``config`` (a stage's :func:`stage_config`) with on a GPU."""
     from imrl_jax.agent import kernel_choice
 
-    config = stage_config(stage)
     if config is None:
         return "xla"  # a measure of several runs: the slower step, to be safe
     return kernel_choice.resolve(config, "gpu")[0].step_kernel
 
 
-def studied_seconds(stage: Stage, scale: dict, speed: GpuSpeed) -> float | None:
-    """Seconds ``stage`` takes at the speed the study step measured for its own program (an evolution) or its
-    condition's test phase at the lane count nearest its own (a learning test); None where it measured neither."""
+def studied_seconds(stage: Stage, scale: dict, speed: GpuSpeed, config) -> float | None:
+    """Seconds ``stage`` (its model ``config``: :func:`stage_config`) takes at the speed the study step measured for
+    its own program (an evolution) or its condition's test phase at the lane count nearest its own (a learning
+    test); None where it measured neither."""
     from experiments.harness.reproduce import life_steps
     from imrl_jax.commands.gpu_study import program_key
 
-    if stage.kind == "evolve" and speed.programs and (config := stage_config(stage)) is not None:
+    if stage.kind == "evolve" and speed.programs and config is not None:
         measured = speed.programs.get(program_key(config))
         return None if measured is None else stage.cost / measured[0] + measured[1]
     if stage.kind == "test" and (speed.tests or {}).get(stage.condition) and "test_steps" in scale:
@@ -140,22 +145,22 @@ def stage_seconds(stage: Stage, scale: dict, speed: GpuSpeed) -> float:
     """Seconds ``stage`` takes whole on the measured GPU (0 for a stage that lives no lane-steps)."""
     if stage.cost <= 0:
         return 0.0
-    studied = studied_seconds(stage, scale, speed)
+    config = stage_config(stage)  # read once: a done run's config.json, or its condition in its world
+    studied = studied_seconds(stage, scale, speed, config)
     if studied is not None:
         return studied
     if not speed.rows:  # a check of the study alone: its slowest program's speed, to be safe
         return stage.cost / min(rate for rate, _ in speed.programs.values())
-    kernel = stage_kernel(stage)
+    kernel = auto_kernel(config)
     measured = speed.rows.get(kernel) or speed.rows.get("xla") or next(iter(speed.rows.values()))
     individuals = max(1, int(scale.get("seeds", 1)) * int(scale.get("population", 50)))
     _, rate, compile_s = min(measured, key=lambda row: abs(math.log(row[0] / individuals)))
-    return stage.cost / (rate * model_ratio(stage, speed) if kernel == "pallas" else rate) + compile_s
+    return stage.cost / (rate * model_ratio(config, speed) if kernel == "pallas" else rate) + compile_s
 
 
-def model_ratio(stage: Stage, speed: GpuSpeed) -> float:
-    """The speed of ``stage``'s model on the kernel over LE-LS's, as the ``models`` step measured it (1 where it did
-    not: the generation step's LE-LS speed as it is)."""
-    config = stage_config(stage)
+def model_ratio(config, speed: GpuSpeed) -> float:
+    """The speed of ``config``'s model (a stage's :func:`stage_config`) on the kernel over LE-LS's, as the
+    ``models`` step measured it (1 where it did not: the generation step's LE-LS speed as it is)."""
     if not speed.models or config is None:
         return 1.0
     options = config.selector_termination if config.selector_options else ""

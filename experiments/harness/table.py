@@ -48,10 +48,14 @@ class Row:
         return conditions.get(self.condition).evolved
 
 
+def row_option(row: Row, flag: str, default: str) -> str:
+    """The value of a row's option ``flag`` (``--world``, ``--strategy``), else ``default``."""
+    return dict(zip(row.options[::2], row.options[1::2])).get(flag, default)
+
+
 def row_world(row: Row) -> str:
     """The world a row's runs live in: its ``--world`` option's, else the arena."""
-    options = list(row.options)
-    return options[options.index("--world") + 1] if "--world" in options[:-1] else "arena"
+    return row_option(row, "--world", "arena")
 
 
 def evolution_command(row: Row, scale: dict, out_dir: str, sweep: tuple[str, ...] = ()) -> list[str]:
