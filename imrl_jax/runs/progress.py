@@ -135,19 +135,10 @@ def world_factor(world: str, backend: str = "cpu", folder: str | None = None) ->
     there over its rate in the arena, at the most lanes both measured; 1 for the arena, None where no file says."""
     if world == "arena":
         return 1.0
-    rates: dict[str, dict] = {}  # world -> {(phase, lanes): the agent's lane-steps per second}
+    rates: dict[str, dict] = {world: {}, "arena": {}}
     for _, data in bench_files(backend, folder):
-        section = data.get("world")
-        if not isinstance(section, dict) or section.get("settings") or section.get("name") not in (world, "arena"):
-            continue
-        for row in section.get("rows") or []:
-            try:
-                rate = float(row["agent_lane_steps_per_s"])
-                key = (str(row["phase"]), int(row["lanes"]))
-            except (KeyError, TypeError, ValueError):
-                continue
-            if math.isfinite(rate) and rate > 0:
-                rates.setdefault(section["name"], {})[key] = rate
+        for name in rates:
+            rates[name].update(world_rows(data, name))
     both = set(rates.get(world, {})) & set(rates.get("arena", {}))
     if not both:
         return None
@@ -156,21 +147,32 @@ def world_factor(world: str, backend: str = "cpu", folder: str | None = None) ->
     return math.exp(sum(math.log(r) for r in ratios) / len(ratios))
 
 
+def world_rows(data: dict, world: str) -> dict[tuple[str, int], float]:
+    """{(phase, lanes): the agent's lane-steps per second} of a bench file's ``bench --world`` section for ``world``
+    at its default settings (nothing where it holds none, or a row does not parse)."""
+    section = data.get("world")
+    if not isinstance(section, dict) or section.get("name") != world or section.get("settings"):
+        return {}
+    rows = {}
+    for row in section.get("rows") or []:
+        try:
+            rate, key = float(row["agent_lane_steps_per_s"]), (str(row["phase"]), int(row["lanes"]))
+        except (KeyError, TypeError, ValueError):
+            continue
+        if math.isfinite(rate) and rate > 0:
+            rows[key] = rate
+    return rows
+
+
 def _rates(data: dict, world: str) -> list[tuple[float, int]]:
     """(lane-steps per second, individuals) of a bench file's whole lives (the arena), or of its ``world`` section's
-    agent in an adult task (another world); nothing that does not parse."""
-    if world == "arena":
-        rows, rate, count = data.get("lifetimes"), "lane_steps_per_s", "individuals"
-    else:
-        section = data.get("world")
-        ok = isinstance(section, dict) and section.get("name") == world and not section.get("settings")
-        rows = [r for r in section.get("rows") or [] if isinstance(r, dict) and "adulthood" in str(r.get("phase"))
-                ] if ok else None
-        rate, count = "agent_lane_steps_per_s", "lanes"
+    agent in an adult task (another world: :func:`world_rows`); nothing that does not parse."""
+    if world != "arena":
+        return [(rate, lanes) for (phase, lanes), rate in world_rows(data, world).items() if "adulthood" in phase]
     found = []
-    for row in rows if isinstance(rows, list) else []:
+    for row in data.get("lifetimes") if isinstance(data.get("lifetimes"), list) else []:
         try:
-            found.append((float(row[rate]), int(row[count])))
+            found.append((float(row["lane_steps_per_s"]), int(row["individuals"])))
         except (KeyError, TypeError, ValueError):
             continue
     return found
