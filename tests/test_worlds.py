@@ -283,6 +283,9 @@ def test_the_corridor_world_implements_the_interface_and_a_controller_solves_its
     assert np.flatnonzero(events.respawned).tolist() == [19, 39] and not events.reached.any()
     with pytest.raises(ConfigError, match="world_settings: CorridorSettings"):
         worlds.configure(config, "corridor", cells="rgx")
+    # A name its SETTINGS lack is refused by worlds.make for every world, listing what it may set.
+    with pytest.raises(ConfigError, match=r"^world_settings: unknown setting 'width' of world corridor \(settable: "):
+        worlds.configure(config, "corridor", width=3)
 
     @dataclasses.dataclass(frozen=True)
     class Miscounted(cw.Corridor):

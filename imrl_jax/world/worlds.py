@@ -40,9 +40,16 @@ def make(name: str, settings: tuple = ()) -> World:
                      "none: it was registered as an object (register a module's path for settings)")
             raise ConfigError(f"world_settings: the {name} world's settings are {where}", "world_settings")
         return found
+    module = importlib.import_module(found)
+    kind = getattr(module, "SETTINGS", None)  # the world's settings dataclass: an unknown name refused here
+    unknown = sorted({n for n, _ in settings} - {f.name for f in dataclasses.fields(kind)}) if kind else []
+    if unknown:
+        settable = ", ".join(f.name for f in dataclasses.fields(kind) if isinstance(f.default, (bool, int, float, str)))
+        raise ConfigError(f"world_settings: unknown setting {unknown[0]!r} of world {name} (settable: {settable})",
+                          "world_settings")
     try:
-        return importlib.import_module(found).make_world(dict(settings))
-    except (TypeError, ValueError) as error:  # an unknown or impossible setting, named by the world
+        return module.make_world(dict(settings))
+    except (TypeError, ValueError) as error:  # an impossible setting, named by the world
         raise ConfigError(f"world_settings: {error}", "world_settings") from None
 
 
