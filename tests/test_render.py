@@ -88,3 +88,17 @@ def test_the_path_legend_names_only_expressed_experts():
     assert legend_experts(3) == [0, 1, 2]
     assert legend_experts(6, np.array([1.0, 0.0, 0.0, 1.0, 0.0, 0.0])) == [0, 3]
     assert legend_experts(4, np.array([0.0, 0.0, 1.0])) == [2, 3]  # an expert beyond the mask is named
+
+
+def test_an_animation_is_written_by_its_extensions_writer_and_another_is_refused_naming_the_ones_that_work():
+    """plotting.animation_writer, shared by the arena's and XLand's drawings (the command refuses earlier)."""
+    from matplotlib.animation import FFMpegWriter, PillowWriter
+
+    from imrl_jax.analysis.plotting import animation_writer
+
+    assert isinstance(animation_writer("a/b.GIF", 5), PillowWriter) and isinstance(animation_writer("b.mp4", 5),
+                                                                                 FFMpegWriter)
+    with pytest.raises(ValueError, match=r"^unknown format \.avi \(use \.gif or \.mp4\)$"):
+        animation_writer("x.avi", 5)
+    with pytest.raises(ValueError, match=r"^unknown format \.webm \(use \.png, \.gif or \.mp4\)$"):
+        animation_writer("x.webm", 5, stills=(".png",))

@@ -12,7 +12,8 @@ import math
 
 import numpy as np
 
-from imrl_jax.analysis.plotting import EXPERT_COLOURS, FLOOR_COLOURS, NOTHING_COLOUR, SEEN_COLOURS, new_figure
+from imrl_jax.analysis.plotting import (EXPERT_COLOURS, FLOOR_COLOURS, NOTHING_COLOUR, SEEN_COLOURS, animation_writer,
+                                       new_figure)
 from imrl_jax.config import Config
 
 
@@ -319,19 +320,12 @@ def write_animation(config: Config, trajectory, path: str, task: int | None = No
     ``.gif`` is written with Pillow, ``.mp4`` with ffmpeg (which must be on PATH).
     Returns the number of frames.
     """
-    from matplotlib.animation import FFMpegWriter, PillowWriter
     from matplotlib.collections import LineCollection
     from matplotlib.lines import Line2D
 
     from imrl_jax.analysis.behaviour import retina_colours, retina_points
 
-    ext = path.rsplit(".", 1)[-1].lower()
-    if ext == "gif":
-        writer = PillowWriter(fps=fps)
-    elif ext == "mp4":
-        writer = FFMpegWriter(fps=fps)
-    else:
-        raise ValueError(f"unknown animation format .{ext} (use .gif or .mp4)")
+    writer = animation_writer(path, fps)
     seen_pos = np.asarray(trajectory.seen_pos, float)
     seen_heading = np.asarray(trajectory.seen_heading, float)
     pos, k = np.asarray(trajectory.pos, float), np.asarray(trajectory.k)

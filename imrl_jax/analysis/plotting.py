@@ -47,6 +47,19 @@ def save(fig, path: str, dpi: int = DPI) -> str:
     return path
 
 
+def animation_writer(path: str, fps: int, stills: tuple[str, ...] = ()):
+    """The matplotlib writer of an animation into ``path``: ``.gif`` with Pillow, ``.mp4`` with ffmpeg (which must be
+    on PATH); another extension is a ValueError naming the ones that work (``stills``: a caller's still formats)."""
+    from matplotlib.animation import FFMpegWriter, PillowWriter
+
+    writers = {".gif": PillowWriter, ".mp4": FFMpegWriter}
+    ext = "." + path.rsplit(".", 1)[-1].lower()
+    if ext not in writers:
+        formats = [*stills, *writers]
+        raise ValueError(f"unknown format {ext} (use {', '.join(formats[:-1])} or {formats[-1]})")
+    return writers[ext](fps=fps)
+
+
 def style_axis(ax, title: str = "", xlabel: str = "", ylabel: str = "", grid: bool = True) -> None:
     """Title, labels, tick sizes and grid of an axis in the figures' style."""
     if title:

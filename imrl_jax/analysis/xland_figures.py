@@ -21,7 +21,7 @@ import numpy as np
 from imrl_jax.agent.lifetime import simulate
 from imrl_jax.agent.state import init_state
 from imrl_jax.analysis.arena_figures import legend_experts
-from imrl_jax.analysis.plotting import EXPERT_COLOURS, FLOOR_COLOURS, new_figure
+from imrl_jax.analysis.plotting import EXPERT_COLOURS, FLOOR_COLOURS, animation_writer, new_figure
 from imrl_jax.world.worlds import world_of
 
 #: The still's format; the others are animations.
@@ -291,18 +291,12 @@ def write_life(config, life: GridLife, path: str, task: int | None = None, every
     (Pillow) or ``.mp4`` (ffmpeg on PATH) an animation, one frame every ``every`` steps. ``task`` (0-based) marks that
     task's start and goal; ``expressed`` (1 / 0 per expert) leaves unexpressed experts out of the legend. Returns
     the number of frames (1 for a still)."""
-    from matplotlib.animation import FFMpegWriter, PillowWriter
-
-    ext = "." + path.rsplit(".", 1)[-1].lower()
-    if ext == STILL:
+    if "." + path.rsplit(".", 1)[-1].lower() == STILL:
         plot_life(config, life, task, None, title, expressed).savefig(path, dpi=dpi, format="png")
         return 1
-    writers = {".gif": PillowWriter, ".mp4": FFMpegWriter}
-    if ext not in writers:
-        raise ValueError(f"unknown format {ext} (use .png, .gif or .mp4)")
+    writer = animation_writer(path, fps, stills=(STILL,))
     picture = _picture(config, life, task, title, expressed)
     frames = list(range(0, len(life.k), every))
-    writer = writers[ext](fps=fps)
     with writer.saving(picture.fig, path, dpi):
         for t in frames:
             _show(picture, life, t)
