@@ -67,8 +67,10 @@ def test_the_world_section_times_the_agent_against_the_world_stepped_alone(tmp_p
     alone really steps the world (random actions move the agents; every step observes)."""
     pytest.importorskip("xminigrid")  # the worlds extra (not in the minimum environment)
     import jax
+    import jax.numpy as jnp
     import numpy as np
     from imrl_jax.commands import bench_worlds
+    from imrl_jax.world import worlds
 
     monkeypatch.setattr(bench_worlds, "WORLD_PHASES", bench_worlds.WORLD_PHASES[:1])  # childhood: two compilations
     timed = []  # (program, its compiled executable)
@@ -97,4 +99,15 @@ def test_the_world_section_times_the_agent_against_the_world_stepped_alone(tmp_p
     start = bench_worlds._phase_setup(world.config, False)[3]
     starts = [start(jax.random.split(key, 3)[0]) for key in world.args[0]]
     assert any(np.any(np.asarray(state.position[i]) != np.asarray(s.position)) for i, s in enumerate(starts))
-    assert np.all(np.asarray(seen).sum(-1) > 0)  # every step observed
+    # Its scan is the plain loop: each step observed (summed) and stepped with its random action, lane by lane.
+    _, env, task, _ = bench_worlds._phase_setup(world.config, False)
+    for i, key in enumerate(world.args[0]):
+        k_start, k_action, k_spawn = jax.random.split(key, 3)
+        chosen = jax.random.randint(k_action, (16,), 0, 5, jnp.int32)
+        spawn = jax.random.uniform(k_spawn, (16, worlds.world_of(world.config).num_spawn_draws))
+        lane, total = starts[i], np.zeros(55, np.float32)
+        for t in range(16):
+            total += np.asarray(env.observe(lane), np.float32)
+            lane, _ = env.transition(lane, chosen[t], task, spawn[t])
+        np.testing.assert_array_equal(np.asarray(seen[i]), total)
+        np.testing.assert_array_equal(np.asarray(state.position[i]), np.asarray(lane.position))
