@@ -31,7 +31,7 @@ import time
 import jax
 import numpy as np
 
-from imrl_jax.commands.bench_lanes import Program, lane_inputs
+from imrl_jax.commands.bench_lanes import Program, alternate, lane_inputs
 from imrl_jax.config import make_config
 from imrl_jax.evolution.devices import use_host_cores
 
@@ -282,17 +282,12 @@ def sweep_benchmark(num_points: int, num_seeds: int = 2, task_steps: int = 500, 
     params, ga = evolve_sweep.batched_values(points, num_seeds)
     sweep_args = (to_global(evolve.evolution_keys(np.tile(state.key_data, (num_points, 1))), replicated(mesh)),
                   params, ga, to_global(np.tile(np.asarray(state.populations), (num_points, 1, 1)), sweep_sharding), 0)
-    timed = {"single": [], "sweep": []}
+    timed = {}
     for name, fn, args in (("single", single, single_args), ("sweep", sweep, sweep_args)):
         start = time.perf_counter()
         jax.block_until_ready(fn(*args))
         timed[f"{name}_compile_s"] = time.perf_counter() - start
-    for i in range(pairs):
-        order = (("single", single, single_args), ("sweep", sweep, sweep_args))
-        for name, fn, args in (order if i % 2 == 0 else order[::-1]):
-            start = time.perf_counter()
-            jax.block_until_ready(fn(*args))
-            timed[name].append(time.perf_counter() - start)
+    timed.update(alternate({"single": (single, single_args), "sweep": (sweep, sweep_args)}, pairs))
     single_s, sweep_s = statistics.median(timed["single"]), statistics.median(timed["sweep"])
     result = dict(points=num_points, seeds=num_seeds, population=config.population_size, task_steps=task_steps,
                   single_generation_s=single_s, sweep_generation_s=sweep_s, ratio=sweep_s / (num_points * single_s),

@@ -33,3 +33,18 @@ class Program(NamedTuple):
     args: tuple
     lane_steps: int
     config: object
+
+
+def alternate(calls: dict, repeats: int) -> dict:
+    """Seconds of ``repeats`` timed runs of each ``name: (fn, args)`` of ``calls`` (after compilation), the programs
+    taking turns and their order reversed every other round, so that each sees the same machine."""
+    import time
+
+    order, times = list(calls), {name: [] for name in calls}
+    for i in range(repeats):
+        for name in (order if i % 2 == 0 else order[::-1]):
+            fn, args = calls[name]
+            start = time.perf_counter()
+            jax.block_until_ready(fn(*args))
+            times[name].append(time.perf_counter() - start)
+    return times

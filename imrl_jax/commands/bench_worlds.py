@@ -19,7 +19,7 @@ import jax.numpy as jnp
 
 from imrl_jax.agent import lifetime as L
 from imrl_jax.agent.state import childhood_phase, init_state
-from imrl_jax.commands.bench_lanes import Program, lane_inputs
+from imrl_jax.commands.bench_lanes import Program, alternate, lane_inputs
 from imrl_jax.config import Config, make_config
 from imrl_jax.world import worlds
 from imrl_jax.world.base import DISCRETE
@@ -103,12 +103,7 @@ def bench_pair(config: Config, adult: bool, lanes: int, steps: int, repeats: int
     """The agent's phase and the world alone on the same lanes and steps, their timed runs alternating."""
     programs = {"agent": agent_program(config, adult, lanes, steps), "world": world_program(config, adult, lanes, steps)}
     compiled = {name: _compiled(program) for name, program in programs.items()}
-    times = {name: [] for name in programs}
-    for i in range(repeats):
-        for name in (("agent", "world") if i % 2 == 0 else ("world", "agent")):
-            start = time.perf_counter()
-            jax.block_until_ready(compiled[name][0](*programs[name].args))
-            times[name].append(time.perf_counter() - start)
+    times = alternate({name: (compiled[name][0], program.args) for name, program in programs.items()}, repeats)
     row = {"lanes": lanes, "steps": steps}
     for name, program in programs.items():
         row[f"{name}_lane_steps_per_s"] = program.lane_steps / statistics.median(times[name])
